@@ -1,0 +1,122 @@
+"""Frames as text: the output formats of ``compile`` and the input formats of ``decode``.
+
+Strategy: pure functions from frames to lines and from user input to bytes, so the CLI only
+wires files to them.  ``decode`` accepts three inputs and tells them apart by content, never
+by file name: hex text (whitespace ignored), armctl's JSON-lines log (one object per line with
+a ``hex`` field), or raw bytes.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import string
+from typing import Iterable, Iterator
+
+from .protocol import Chunk, Command, StatusFrame, describe, f32_repr, scan_frames
+
+_HEX_DIGITS = frozenset(string.hexdigits.encode())
+_WHITESPACE = frozenset(string.whitespace.encode())
+
+
+def frame_hex(frame: bytes) -> str:
+    """96 lowercase hex digits, the ``compile --format hex`` line."""
+    return frame.hex()
+
+
+def json_value(value):
+    """Field values for JSON: floats in their shortest single-precision spelling."""
+    if isinstance(value, float):
+        text = f32_repr(value)
+        return float(text) if any(c in text for c in ".eE") else int(text)
+    if isinstance(value, tuple):
+        return [json_value(v) for v in value]
+    return value
+
+
+def frame_record(command: Command, frame: bytes, source: dict | None = None) -> dict:
+    """One JSON object per frame: the command, its decoded fields, the bytes and the source."""
+    record = {"command": type(command).__name__, "name": command.NAME}
+    record["fields"] = {name: json_value(v) for name, v in command.fields().items()}
+    record["hex"] = frame.hex()
+    if source is not None:
+        record["source"] = source
+    return record
+
+
+def looks_like_hex(data: bytes) -> bool:
+    """True when the input is hex text: only hex digits and whitespace, an even count of digits."""
+    digits = 0
+    for byte in data:
+        if byte in _HEX_DIGITS:
+            digits += 1
+        elif byte not in _WHITESPACE:
+            return False
+    return digits > 0 and digits % 2 == 0
+
+
+_LOG_LINE = re.compile(rb"^\s*\{")
+
+
+def looks_like_log(data: bytes) -> bool:
+    """True when the input is a JSON-lines log whose records carry frames as ``hex``."""
+    first = data.lstrip()[:1]
+    return first == b"{" and all(_LOG_LINE.match(line) for line in data.splitlines() if line.strip())
+
+
+def bytes_from_input(data: bytes) -> bytes:
+    """The byte stream ``decode`` should scan, whatever form the user gave it in."""
+    if looks_like_hex(data):
+        return bytes.fromhex(data.decode("ascii"))
+    if looks_like_log(data):
+        return b"".join(_log_bytes(data))
+    return data
+
+
+def _log_bytes(data: bytes) -> Iterator[bytes]:
+    for line in data.splitlines():
+        if not line.strip():
+            continue
+        try:
+            record = json.loads(line)
+            yield bytes.fromhex(record["hex"])
+        except (ValueError, KeyError, TypeError):
+            continue  # a log line without a frame (a note, a summary) carries no bytes
+
+
+def decode_lines(data: bytes) -> Iterator[str]:
+    """One readable line per frame found in ``data``, and one per run of bytes in no frame."""
+    for chunk in scan_frames(data):
+        yield describe_chunk(chunk)
+
+
+def describe_chunk(chunk: Chunk) -> str:
+    where = f"{chunk.offset:>6}"
+    if isinstance(chunk.frame, Command):
+        family = "motion " if chunk.data[0] == 0xEE else "control"
+        return f"{where}  {family}  {describe(chunk.frame)}"
+    if isinstance(chunk.frame, StatusFrame):
+        return f"{where}  status   {describe(chunk.frame)}"
+    if chunk.error is not None:
+        return f"{where}  invalid  {chunk.error}: {chunk.data.hex(' ')}"
+    return f"{where}  ??       {len(chunk.data)} byte(s) in no frame: {_short_hex(chunk.data)}"
+
+
+def _short_hex(data: bytes, limit: int = 24) -> str:
+    if len(data) <= limit:
+        return data.hex(" ")
+    return data[:limit].hex(" ") + f" … (+{len(data) - limit})"
+
+
+def summary_line(chunks: Iterable[Chunk]) -> str:
+    commands = statuses = invalid = junk = 0
+    for chunk in chunks:
+        if isinstance(chunk.frame, Command):
+            commands += 1
+        elif isinstance(chunk.frame, StatusFrame):
+            statuses += 1
+        elif chunk.error is not None:
+            invalid += 1
+        else:
+            junk += len(chunk.data)
+    return f"{commands} command frame(s), {statuses} status frame(s), {invalid} invalid frame(s), {junk} byte(s) in no frame"

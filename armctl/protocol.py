@@ -1,0 +1,1015 @@
+"""The arm's serial protocol: every frame as an immutable object ⇄ its exact bytes.
+
+Strategy (after h11): this module knows bytes and nothing else — no port, no clock, no I/O.
+Host→arm commands are frozen dataclasses whose fields carry their units in their names
+(``x_mm``, ``speed_mm_min``); ``encode()`` gives the 48 bytes and ``decode_command()`` is the
+one inverse.  Arm→host status frames likewise, with ``decode_status()`` and a ``StatusReader``
+that is fed arbitrary chunks and resynchronises after noise.
+
+Fields are validated and *normalised* on construction: floats are rounded to IEEE single
+precision, status values to their wire resolution.  So an object holds exactly what will be
+on the wire, and ``decode(encode(x)) == x`` for every valid ``x``.
+
+Every hypothesis PROTOCOL.md labels H1…H9 that concerns bytes lives here as one named
+constant or function, marked with its label; the README lists where each one lives.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from dataclasses import dataclass, fields
+from typing import ClassVar, Iterator, Union
+
+from .errors import FieldError, FrameError
+
+# --- the link -------------------------------------------------------------------------------
+
+FRAME_SIZE = 48  # every host→arm frame, motion or control
+STATUS_SIZE = 9  # every arm→host status frame
+CONNECTOR_BUFFER_BYTES = 9600
+CONNECTOR_BUFFER_FRAMES = CONNECTOR_BUFFER_BYTES // FRAME_SIZE  # 200
+DEFAULT_BAUD = 9600
+BITS_PER_BYTE = 10  # 8N1: start bit, 8 data bits, stop bit
+STATUS_PERIOD_S = 0.030  # one status frame every 30 ms
+
+
+def byte_seconds(baud: int = DEFAULT_BAUD) -> float:
+    """Seconds one byte occupies on the wire at ``baud`` (8N1)."""
+    return BITS_PER_BYTE / baud
+
+
+def frame_seconds(baud: int = DEFAULT_BAUD) -> float:
+    """Seconds one 48-byte command frame occupies on the wire: 50 ms at 9600 baud."""
+    return FRAME_SIZE * byte_seconds(baud)
+
+
+MOTION_HEAD, MOTION_TAIL = 0xEE, 0xEF
+CONTROL_HEAD, CONTROL_TAIL = 0xFC, 0xFD
+STATUS_HEAD, STATUS_TAIL = 0xCE, 0xCF
+
+# H1 — floats are IEEE-754 single precision, little-endian.
+FLOAT_CODEC = struct.Struct("<f")
+# H4 — the M number is a 32-bit little-endian signed integer in a[3..6].
+M_CODE_CODEC = struct.Struct("<i")
+# H8 — 16-bit status values are signed (two's complement), big-endian; the two status
+# floats (file length, run position) are little-endian like H1 (FLOAT_CODEC).
+STATUS_WORD_CODEC = struct.Struct(">h")
+# PROTOCOL.md: a[2] = 0 or 1 both select PWM channel 1 in a linear move; armctl sends 1,
+# the value the vendor's own table shows.
+LINEAR_SUBCOMMAND_FOR_CHANNEL_1 = 1
+# H5 — control frames wait in the same FIFO as motion frames.  The simulator's option and
+# the streamer's assumptions both default to this constant.
+CONTROL_FRAMES_QUEUED = True
+
+# Protocol ranges (PROTOCOL.md); a command outside them cannot be constructed.
+PWM_RANGE_US = (500.0, 2500.0)
+ACCEL_RANGE_MM_S2 = (-3200.0, 3200.0)
+SMOOTHING_RANGE = (0, 6)
+PWM_CHANNELS = (1, 2, 3, 4)
+PROGRAM_RANGE = (0, 15)
+FIXED_POSE_RANGE = (0, 3)
+JOYSTICK_JOINT_AXES = range(0, 6)  # joints 1…6
+JOYSTICK_LINEAR_AXIS = 100  # a[4..6] drive X, Y, Z
+JOYSTICK_NEUTRAL = 128
+JOYSTICK_STILL_RANGE = (108, 148)  # inclusive: values here mean "stand still"
+PAUSE_TOGGLE_ARGUMENT = 2
+STRUCTURE_MODE_ARGUMENT = {0: 0, 1: 9}  # mode → a[3]
+
+_F32_MAX = 3.4028234663852886e38
+
+
+# --- field normalisation ----------------------------------------------------------------------
+
+
+def _f32(cls_name: str, name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        raise FieldError(f"{cls_name}.{name} must be a number, not {value!r}")
+    value = float(value)
+    if not math.isfinite(value):
+        raise FieldError(f"{cls_name}.{name} must be finite, not {value!r}")
+    if abs(value) > _F32_MAX:
+        raise FieldError(f"{cls_name}.{name} = {value!r} does not fit a 32-bit float")
+    return FLOAT_CODEC.unpack(FLOAT_CODEC.pack(value))[0]
+
+
+def _int(cls_name: str, name: str, value, low: int, high: int) -> int:
+    if isinstance(value, bool) or not isinstance(value, int):
+        if isinstance(value, float) and value.is_integer():
+            value = int(value)
+        else:
+            raise FieldError(f"{cls_name}.{name} must be a whole number, not {value!r}")
+    if not low <= value <= high:
+        raise FieldError(f"{cls_name}.{name} = {value} is outside {low}…{high}")
+    return value
+
+
+def _check_range(cls_name: str, name: str, value: float, low: float, high: float) -> None:
+    if not low <= value <= high:
+        raise FieldError(f"{cls_name}.{name} = {f32_repr(value)} is outside {f32_repr(low)}…{f32_repr(high)}")
+
+
+def f32_repr(value: float) -> str:
+    """The shortest decimal that reads back as the same single-precision float."""
+    if value == int(value) and abs(value) < 1e15:
+        return str(int(value))
+    for digits in range(1, 10):
+        text = f"{value:.{digits}g}"
+        if FLOAT_CODEC.unpack(FLOAT_CODEC.pack(float(text)))[0] == value:
+            return text
+    return repr(value)
+
+
+# --- host → arm commands ----------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Command:
+    """Base of the 15 host→arm commands."""
+
+    NAME: ClassVar[str] = ""
+
+    def encode(self) -> bytes:  # pragma: no cover - every subclass overrides
+        raise NotImplementedError
+
+    def fields(self) -> dict:
+        """The command's fields by name, in declaration order."""
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+@dataclass(frozen=True)
+class _MotionCommand(Command):
+    """A 0xEE … 0xEF frame: a[1] an ASCII command character, a[2] a sub-command byte and up
+    to eleven float slots f1…f11 at a[3 + 4·(k−1)]."""
+
+    CODE: ClassVar[str] = ""
+    # field name → float slot 1…11; fields not listed are integers handled by the subclass.
+    SLOTS: ClassVar[dict[str, int]] = {}
+
+    def __post_init__(self) -> None:
+        for name in self.SLOTS:
+            object.__setattr__(self, name, _f32(type(self).__name__, name, getattr(self, name)))
+        self._validate()
+
+    def _validate(self) -> None:
+        pass
+
+    def subcommand(self) -> int:
+        return 0
+
+    def encode(self) -> bytes:
+        frame = bytearray(FRAME_SIZE)
+        frame[0], frame[1], frame[2], frame[47] = MOTION_HEAD, ord(self.CODE), self.subcommand(), MOTION_TAIL
+        for name, slot in self.SLOTS.items():
+            FLOAT_CODEC.pack_into(frame, _slot_offset(slot), getattr(self, name))
+        return bytes(frame)
+
+    @classmethod
+    def _from_frame(cls, frame: bytes) -> "_MotionCommand":
+        values = {name: FLOAT_CODEC.unpack_from(frame, _slot_offset(slot))[0] for name, slot in cls.SLOTS.items()}
+        return cls(**values, **cls._ints_from_subcommand(frame[2]))
+
+    @classmethod
+    def _ints_from_subcommand(cls, subcommand: int) -> dict:
+        return {}
+
+
+def _slot_offset(slot: int) -> int:
+    return 3 + 4 * (slot - 1)
+
+
+_POSE_SLOTS = {"x_mm": 1, "y_mm": 2, "z_mm": 3, "b0_deg": 4, "b1_deg": 5, "w_deg": 6}
+_EXTERNAL_SLOTS = {"e0_deg": 8, "e1_deg": 9}
+
+
+def _check_pwm(obj) -> None:
+    _check_range(type(obj).__name__, "pwm_us", obj.pwm_us, *PWM_RANGE_US)
+
+
+def _check_positive(obj, name: str) -> None:
+    if not getattr(obj, name) > 0:
+        raise FieldError(f"{type(obj).__name__}.{name} must be greater than 0, not {f32_repr(getattr(obj, name))}")
+
+
+def _check_not_negative(obj, name: str) -> None:
+    if getattr(obj, name) < 0:
+        raise FieldError(f"{type(obj).__name__}.{name} must not be negative, not {f32_repr(getattr(obj, name))}")
+
+
+@dataclass(frozen=True)
+class LinearMove(_MotionCommand):
+    """'1' — the tool tip moves in a straight line to the pose (G1)."""
+
+    NAME: ClassVar[str] = "linear move"
+    CODE: ClassVar[str] = "1"
+    SLOTS: ClassVar[dict[str, int]] = {**_POSE_SLOTS, "pwm_us": 7, **_EXTERNAL_SLOTS, "speed_mm_min": 11}
+
+    x_mm: float
+    y_mm: float
+    z_mm: float
+    b0_deg: float
+    b1_deg: float
+    w_deg: float
+    pwm_us: float
+    speed_mm_min: float
+    e0_deg: float = 0.0
+    e1_deg: float = 0.0
+    pwm_channel: int = 1
+
+    def _validate(self) -> None:
+        object.__setattr__(self, "pwm_channel", _int("LinearMove", "pwm_channel", self.pwm_channel, 1, 4))
+        _check_pwm(self)
+        _check_positive(self, "speed_mm_min")
+
+    def subcommand(self) -> int:
+        return LINEAR_SUBCOMMAND_FOR_CHANNEL_1 if self.pwm_channel == 1 else self.pwm_channel
+
+    @classmethod
+    def _ints_from_subcommand(cls, subcommand: int) -> dict:
+        if subcommand > 4:
+            raise FrameError(f"linear move sub-command {subcommand} is not a PWM channel (0…4)")
+        return {"pwm_channel": max(subcommand, 1)}
+
+
+@dataclass(frozen=True)
+class AccelLinearMove(_MotionCommand):
+    """'2' — linear move with acceleration; ``mode`` is a[2] (G220 / G222 / G230 → 0 / 1 / 2).
+
+    H2 — speed0 and speed1 are mm/min, like the plain linear move: the field names say so,
+    and the motion-time model reads them through these names only.
+    """
+
+    NAME: ClassVar[str] = "accelerated linear move"
+    CODE: ClassVar[str] = "2"
+    SLOTS: ClassVar[dict[str, int]] = {
+        **_POSE_SLOTS, "speed0_mm_min": 7, **_EXTERNAL_SLOTS, "accel_mm_s2": 10, "speed1_mm_min": 11,
+    }
+
+    mode: int
+    x_mm: float
+    y_mm: float
+    z_mm: float
+    b0_deg: float
+    b1_deg: float
+    w_deg: float
+    accel_mm_s2: float
+    speed1_mm_min: float
+    speed0_mm_min: float = 0.0
+    e0_deg: float = 0.0
+    e1_deg: float = 0.0
+
+    def _validate(self) -> None:
+        object.__setattr__(self, "mode", _int("AccelLinearMove", "mode", self.mode, 0, 2))
+        _check_range("AccelLinearMove", "accel_mm_s2", self.accel_mm_s2, *ACCEL_RANGE_MM_S2)
+        _check_positive(self, "speed1_mm_min")
+        _check_not_negative(self, "speed0_mm_min")
+        if self.mode != 2 and self.speed0_mm_min != 0:
+            raise FieldError(f"AccelLinearMove.speed0_mm_min is used in mode 2 only; mode {self.mode} sends 0")
+
+    def subcommand(self) -> int:
+        return self.mode
+
+    @classmethod
+    def _ints_from_subcommand(cls, subcommand: int) -> dict:
+        return {"mode": subcommand}
+
+
+@dataclass(frozen=True)
+class JointMove(_MotionCommand):
+    """'3' — all six joints move synchronously to the angles (G6); a[2] = start/stop smoothing."""
+
+    NAME: ClassVar[str] = "joint move"
+    CODE: ClassVar[str] = "3"
+    SLOTS: ClassVar[dict[str, int]] = {
+        "j1_deg": 1, "j2_deg": 2, "j3_deg": 3, "j4_deg": 4, "j5_deg": 5, "j6_deg": 6,
+        "pwm_us": 7, **_EXTERNAL_SLOTS, "speed_deg_s": 11,
+    }
+
+    j1_deg: float
+    j2_deg: float
+    j3_deg: float
+    j4_deg: float
+    j5_deg: float
+    j6_deg: float
+    pwm_us: float
+    speed_deg_s: float
+    e0_deg: float = 0.0
+    e1_deg: float = 0.0
+    smoothing: int = 0
+
+    def _validate(self) -> None:
+        object.__setattr__(self, "smoothing", _int("JointMove", "smoothing", self.smoothing, *SMOOTHING_RANGE))
+        _check_pwm(self)
+        _check_positive(self, "speed_deg_s")
+
+    def subcommand(self) -> int:
+        return self.smoothing
+
+    @classmethod
+    def _ints_from_subcommand(cls, subcommand: int) -> dict:
+        return {"smoothing": subcommand}
+
+    @property
+    def joints_deg(self) -> tuple[float, ...]:
+        return (self.j1_deg, self.j2_deg, self.j3_deg, self.j4_deg, self.j5_deg, self.j6_deg)
+
+
+@dataclass(frozen=True)
+class ArcStart(_MotionCommand):
+    """'4'/0 — first frame of an arc (G300): the intermediate point, radius and initial speed.
+
+    H3 — arc speeds are mm/min (the vendor table's deg/s is taken for a copy slip).
+    """
+
+    NAME: ClassVar[str] = "arc start"
+    CODE: ClassVar[str] = "4"
+    SLOTS: ClassVar[dict[str, int]] = {
+        **_POSE_SLOTS, "pwm_us": 7, **_EXTERNAL_SLOTS, "radius_mm": 10, "speed_mm_min": 11,
+    }
+
+    x_mm: float
+    y_mm: float
+    z_mm: float
+    b0_deg: float
+    b1_deg: float
+    w_deg: float
+    pwm_us: float
+    radius_mm: float
+    speed_mm_min: float
+    e0_deg: float = 0.0
+    e1_deg: float = 0.0
+
+    def _validate(self) -> None:
+        _check_pwm(self)
+        _check_positive(self, "radius_mm")
+        _check_positive(self, "speed_mm_min")
+
+    def subcommand(self) -> int:
+        return 0
+
+    @classmethod
+    def _ints_from_subcommand(cls, subcommand: int) -> dict:
+        return {}
+
+
+@dataclass(frozen=True)
+class ArcEnd(_MotionCommand):
+    """'4'/1 — second frame of an arc (G301): the end point and end speed (mm/min, H3)."""
+
+    NAME: ClassVar[str] = "arc end"
+    CODE: ClassVar[str] = "4"
+    SLOTS: ClassVar[dict[str, int]] = {**_POSE_SLOTS, "pwm_us": 7, **_EXTERNAL_SLOTS, "speed_mm_min": 11}
+
+    x_mm: float
+    y_mm: float
+    z_mm: float
+    b0_deg: float
+    b1_deg: float
+    w_deg: float
+    pwm_us: float
+    speed_mm_min: float
+    e0_deg: float = 0.0
+    e1_deg: float = 0.0
+
+    def _validate(self) -> None:
+        _check_pwm(self)
+        _check_not_negative(self, "speed_mm_min")
+
+    def subcommand(self) -> int:
+        return 1
+
+
+@dataclass(frozen=True)
+class Delay(_MotionCommand):
+    """'6' — wait ``delay_ms`` milliseconds (G4 P…). There is no command '5'."""
+
+    NAME: ClassVar[str] = "delay"
+    CODE: ClassVar[str] = "6"
+    SLOTS: ClassVar[dict[str, int]] = {"delay_ms": 1}
+
+    delay_ms: float
+
+    def _validate(self) -> None:
+        _check_not_negative(self, "delay_ms")
+
+
+@dataclass(frozen=True)
+class MCode(Command):
+    """'7' — an M code; the number goes verbatim into a[3..6] (H4: int32 little-endian)."""
+
+    NAME: ClassVar[str] = "M code"
+    CODE: ClassVar[str] = "7"
+
+    number: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "number", _int("MCode", "number", self.number, -(2**31), 2**31 - 1))
+
+    def encode(self) -> bytes:
+        frame = bytearray(FRAME_SIZE)
+        frame[0], frame[1], frame[47] = MOTION_HEAD, ord(self.CODE), MOTION_TAIL
+        M_CODE_CODEC.pack_into(frame, 3, self.number)
+        return bytes(frame)
+
+    @classmethod
+    def _from_frame(cls, frame: bytes) -> "MCode":
+        return cls(M_CODE_CODEC.unpack_from(frame, 3)[0])
+
+
+@dataclass(frozen=True)
+class _ControlCommand(Command):
+    """A 0xFC … 0xFD frame: a[1], a[2] binary bytes, then an argument in a[3…]."""
+
+    A1: ClassVar[int] = 0
+    A2: ClassVar[int] = 0
+
+    def _argument_bytes(self) -> bytes:
+        return b""
+
+    def encode(self) -> bytes:
+        frame = bytearray(FRAME_SIZE)
+        frame[0], frame[1], frame[2], frame[47] = CONTROL_HEAD, self.A1, self.A2, CONTROL_TAIL
+        argument = self._argument_bytes()
+        frame[3 : 3 + len(argument)] = argument
+        return bytes(frame)
+
+    @classmethod
+    def _from_frame(cls, frame: bytes) -> "_ControlCommand":
+        return cls()
+
+
+@dataclass(frozen=True)
+class ResetArm(_ControlCommand):
+    """Control 12/3 — reset the arm (RESET)."""
+
+    NAME: ClassVar[str] = "reset arm"
+    A1: ClassVar[int] = 12
+    A2: ClassVar[int] = 3
+
+
+@dataclass(frozen=True)
+class ResetConnector(_ControlCommand):
+    """Control 12/6 — reset the host connector (RESET CONNECTOR)."""
+
+    NAME: ClassVar[str] = "reset connector"
+    A1: ClassVar[int] = 12
+    A2: ClassVar[int] = 6
+
+
+@dataclass(frozen=True)
+class SetWorktableOrigin(_ControlCommand):
+    """Control 20/1 — later coordinates are relative to robot point (X0, Y0, Z0) (G54)."""
+
+    NAME: ClassVar[str] = "set worktable origin"
+    A1: ClassVar[int] = 20
+    A2: ClassVar[int] = 1
+
+    x_mm: float
+    y_mm: float
+    z_mm: float
+
+    def __post_init__(self) -> None:
+        for name in ("x_mm", "y_mm", "z_mm"):
+            object.__setattr__(self, name, _f32("SetWorktableOrigin", name, getattr(self, name)))
+
+    def _argument_bytes(self) -> bytes:
+        return b"".join(FLOAT_CODEC.pack(v) for v in (self.x_mm, self.y_mm, self.z_mm))
+
+    @classmethod
+    def _from_frame(cls, frame: bytes) -> "SetWorktableOrigin":
+        return cls(*(FLOAT_CODEC.unpack_from(frame, _slot_offset(k))[0] for k in (1, 2, 3)))
+
+
+@dataclass(frozen=True)
+class RunProgram(_ControlCommand):
+    """Control 30/2 — run an SD-card program: 0 the taught one, 1…15 Route_a…Route_o (PROGRAM n)."""
+
+    NAME: ClassVar[str] = "run SD program"
+    A1: ClassVar[int] = 30
+    A2: ClassVar[int] = 2
+
+    program: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "program", _int("RunProgram", "program", self.program, *PROGRAM_RANGE))
+
+    def _argument_bytes(self) -> bytes:
+        return bytes([self.program])
+
+    @classmethod
+    def _from_frame(cls, frame: bytes) -> "RunProgram":
+        return cls(frame[3])
+
+
+@dataclass(frozen=True)
+class PauseToggle(_ControlCommand):
+    """Control 30/3, a[3]=2 — the first frame pauses, the next resumes (PAUSE)."""
+
+    NAME: ClassVar[str] = "pause toggle"
+    A1: ClassVar[int] = 30
+    A2: ClassVar[int] = 3
+
+    def _argument_bytes(self) -> bytes:
+        return bytes([PAUSE_TOGGLE_ARGUMENT])
+
+    @classmethod
+    def _from_frame(cls, frame: bytes) -> "PauseToggle":
+        if frame[3] != PAUSE_TOGGLE_ARGUMENT:
+            raise FrameError(f"pause frame argument is {frame[3]}, expected {PAUSE_TOGGLE_ARGUMENT}")
+        return cls()
+
+
+@dataclass(frozen=True)
+class GoToPose(_ControlCommand):
+    """Control 30/5 — go to fixed pose 0…3 (POSE n)."""
+
+    NAME: ClassVar[str] = "go to fixed pose"
+    A1: ClassVar[int] = 30
+    A2: ClassVar[int] = 5
+
+    pose: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "pose", _int("GoToPose", "pose", self.pose, *FIXED_POSE_RANGE))
+
+    def _argument_bytes(self) -> bytes:
+        return bytes([self.pose])
+
+    @classmethod
+    def _from_frame(cls, frame: bytes) -> "GoToPose":
+        return cls(frame[3])
+
+
+@dataclass(frozen=True)
+class Joystick(_ControlCommand):
+    """Control 30/7 — analog joystick.
+
+    ``axis`` 0…5 turns joint 1…6 by ``values[0]``; axis 100 moves the tool in a straight line
+    with ``values`` = (X, Y, Z).  Each value is a byte: 108…148 stands still, lower turns
+    towards smaller angles (lower = faster), higher towards larger ones.
+    """
+
+    NAME: ClassVar[str] = "joystick"
+    A1: ClassVar[int] = 30
+    A2: ClassVar[int] = 7
+
+    axis: int
+    values: tuple[int, ...]
+
+    def __post_init__(self) -> None:
+        axis = _int("Joystick", "axis", self.axis, 0, JOYSTICK_LINEAR_AXIS)
+        if axis not in JOYSTICK_JOINT_AXES and axis != JOYSTICK_LINEAR_AXIS:
+            raise FieldError(f"Joystick.axis = {axis} is neither a joint (0…5) nor linear (100)")
+        values = tuple(self.values) if isinstance(self.values, (tuple, list)) else (self.values,)
+        wanted = 3 if axis == JOYSTICK_LINEAR_AXIS else 1
+        if len(values) != wanted:
+            raise FieldError(f"Joystick axis {axis} takes {wanted} value(s), not {len(values)}")
+        values = tuple(_int("Joystick", "values", v, 0, 255) for v in values)
+        object.__setattr__(self, "axis", axis)
+        object.__setattr__(self, "values", values)
+
+    @property
+    def is_still(self) -> bool:
+        low, high = JOYSTICK_STILL_RANGE
+        return all(low <= v <= high for v in self.values)
+
+    def _argument_bytes(self) -> bytes:
+        return bytes([self.axis, *self.values])
+
+    @classmethod
+    def _from_frame(cls, frame: bytes) -> "Joystick":
+        axis = frame[3]
+        count = 3 if axis == JOYSTICK_LINEAR_AXIS else 1
+        return cls(axis, tuple(frame[4 : 4 + count]))
+
+
+@dataclass(frozen=True)
+class StructureMode(_ControlCommand):
+    """Control 30/9 — structure mode 0 (a[3]=0) or 1 (a[3]=9) (MODE 0 / MODE 1)."""
+
+    NAME: ClassVar[str] = "structure mode"
+    A1: ClassVar[int] = 30
+    A2: ClassVar[int] = 9
+
+    mode: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "mode", _int("StructureMode", "mode", self.mode, 0, 1))
+
+    def _argument_bytes(self) -> bytes:
+        return bytes([STRUCTURE_MODE_ARGUMENT[self.mode]])
+
+    @classmethod
+    def _from_frame(cls, frame: bytes) -> "StructureMode":
+        for mode, argument in STRUCTURE_MODE_ARGUMENT.items():
+            if frame[3] == argument:
+                return cls(mode)
+        raise FrameError(f"structure mode argument is {frame[3]}, expected 0 or 9")
+
+
+AnyCommand = Union[
+    LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Delay, MCode, ResetArm, ResetConnector,
+    SetWorktableOrigin, RunProgram, PauseToggle, GoToPose, Joystick, StructureMode,
+]
+
+MOTION_COMMANDS = (LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Delay, MCode)
+CONTROL_COMMANDS = (
+    ResetArm, ResetConnector, SetWorktableOrigin, RunProgram, PauseToggle, GoToPose, Joystick, StructureMode,
+)
+_CONTROL_BY_CODE = {(c.A1, c.A2): c for c in CONTROL_COMMANDS}
+
+
+def decode_command(frame: bytes) -> AnyCommand:
+    """The command a 48-byte frame carries; raises FrameError or FieldError if it carries none."""
+    frame = bytes(frame)
+    if len(frame) != FRAME_SIZE:
+        raise FrameError(f"a command frame is {FRAME_SIZE} bytes, not {len(frame)}")
+    head, tail = frame[0], frame[-1]
+    if head == MOTION_HEAD:
+        if tail != MOTION_TAIL:
+            raise FrameError(f"motion frame ends with 0x{tail:02x}, expected 0x{MOTION_TAIL:02x}")
+        return _decode_motion(frame)
+    if head == CONTROL_HEAD:
+        if tail != CONTROL_TAIL:
+            raise FrameError(f"control frame ends with 0x{tail:02x}, expected 0x{CONTROL_TAIL:02x}")
+        kind = _CONTROL_BY_CODE.get((frame[1], frame[2]))
+        if kind is None:
+            raise FrameError(f"unknown control command {frame[1]}/{frame[2]}")
+        return kind._from_frame(frame)
+    raise FrameError(f"0x{head:02x} is not a frame head (0x{MOTION_HEAD:02x} or 0x{CONTROL_HEAD:02x})")
+
+
+def _decode_motion(frame: bytes) -> AnyCommand:
+    code = chr(frame[1])
+    if code == "4":
+        if frame[2] not in (0, 1):
+            raise FrameError(f"arc sub-command {frame[2]} is neither 0 (G300) nor 1 (G301)")
+        return (ArcStart if frame[2] == 0 else ArcEnd)._from_frame(frame)
+    for kind in (LinearMove, AccelLinearMove, JointMove, Delay, MCode):
+        if kind.CODE == code:
+            return kind._from_frame(frame)
+    raise FrameError(f"unknown motion command 0x{frame[1]:02x}")
+
+
+# --- arm → host status frames -----------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StatusFrame:
+    """Base of the 9 status kinds: ``0xCE d0..d5 kind 0xCF``."""
+
+    KIND: ClassVar[int] = -1
+    NAME: ClassVar[str] = ""
+
+    def encode(self) -> bytes:
+        frame = bytearray(STATUS_SIZE)
+        frame[0], frame[7], frame[8] = STATUS_HEAD, self.KIND, STATUS_TAIL
+        frame[1:7] = self._data().ljust(6, b"\0")
+        return bytes(frame)
+
+    def _data(self) -> bytes:  # pragma: no cover - every subclass overrides
+        raise NotImplementedError
+
+    def fields(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+def _word(cls_name: str, name: str, value, scale: int) -> float:
+    """A value carried as a signed 16-bit word of ``value × scale``, normalised to that grid."""
+    number = _f64(cls_name, name, value)
+    raw = round(number * scale)
+    if not -32768 <= raw <= 32767:
+        raise FieldError(f"{cls_name}.{name} = {value} does not fit a 16-bit status word at ×{scale}")
+    return raw / scale
+
+
+def _f64(cls_name: str, name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise FieldError(f"{cls_name}.{name} must be a finite number, not {value!r}")
+    return float(value)
+
+
+def _words(values, scale: int) -> bytes:
+    return b"".join(STATUS_WORD_CODEC.pack(round(v * scale)) for v in values)
+
+
+def _unwords(data: bytes, count: int, scale: int) -> list[float]:
+    return [STATUS_WORD_CODEC.unpack_from(data, 2 * k)[0] / scale for k in range(count)]
+
+
+MM_SCALE = 10  # status lengths are 0.1 mm
+DEG_SCALE = 100  # status angles are 0.01 deg (H8: kinds 3 and 5 reuse kinds 0 and 1's scales)
+
+
+@dataclass(frozen=True)
+class _ThreeWords(StatusFrame):
+    SCALE: ClassVar[int] = 1
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            object.__setattr__(self, f.name, _word(type(self).__name__, f.name, getattr(self, f.name), self.SCALE))
+
+    def _data(self) -> bytes:
+        return _words(self.fields().values(), self.SCALE)
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "StatusFrame":
+        return cls(*_unwords(data, len(fields(cls)), cls.SCALE))
+
+
+@dataclass(frozen=True)
+class PositionStatus(_ThreeWords):
+    """Kind 0 — tool position X, Y, Z in mm."""
+
+    KIND: ClassVar[int] = 0
+    NAME: ClassVar[str] = "position"
+    SCALE: ClassVar[int] = MM_SCALE
+    x_mm: float
+    y_mm: float
+    z_mm: float
+
+
+@dataclass(frozen=True)
+class JointsLowStatus(_ThreeWords):
+    """Kind 1 — joints 1, 2, 3 (a0, a1, a2) in degrees."""
+
+    KIND: ClassVar[int] = 1
+    NAME: ClassVar[str] = "joints 1-3"
+    SCALE: ClassVar[int] = DEG_SCALE
+    j1_deg: float
+    j2_deg: float
+    j3_deg: float
+
+
+@dataclass(frozen=True)
+class JointsHighStatus(_ThreeWords):
+    """Kind 2 — joints 4, 5, 6 (b0/w0, b1/w1, aw) in degrees."""
+
+    KIND: ClassVar[int] = 2
+    NAME: ClassVar[str] = "joints 4-6"
+    SCALE: ClassVar[int] = DEG_SCALE
+    j4_deg: float
+    j5_deg: float
+    j6_deg: float
+
+
+@dataclass(frozen=True)
+class WorktableStatus(_ThreeWords):
+    """Kind 3 — worktable origin X0, Y0, Z0 in mm."""
+
+    KIND: ClassVar[int] = 3
+    NAME: ClassVar[str] = "worktable origin"
+    SCALE: ClassVar[int] = MM_SCALE
+    x_mm: float
+    y_mm: float
+    z_mm: float
+
+
+@dataclass(frozen=True)
+class WristStatus(_ThreeWords):
+    """Kind 5 — w0, w1 in degrees; d4..d5 unused."""
+
+    KIND: ClassVar[int] = 5
+    NAME: ClassVar[str] = "wrist"
+    SCALE: ClassVar[int] = DEG_SCALE
+    w0_deg: float
+    w1_deg: float
+
+
+@dataclass(frozen=True)
+class PauseStatus(StatusFrame):
+    """Kind 4 — d1 = pause state (raw byte, non-zero = paused); d4..d5 = PWM in µs."""
+
+    KIND: ClassVar[int] = 4
+    NAME: ClassVar[str] = "pause and PWM"
+    pause_state: int
+    pwm_us: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "pause_state", _int("PauseStatus", "pause_state", self.pause_state, 0, 255))
+        object.__setattr__(self, "pwm_us", _int("PauseStatus", "pwm_us", self.pwm_us, -32768, 32767))
+
+    @property
+    def paused(self) -> bool:
+        return self.pause_state != 0
+
+    def _data(self) -> bytes:
+        return bytes([0, self.pause_state, 0, 0]) + STATUS_WORD_CODEC.pack(self.pwm_us)
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "PauseStatus":
+        return cls(data[1], STATUS_WORD_CODEC.unpack_from(data, 4)[0])
+
+
+@dataclass(frozen=True)
+class _FloatStatus(StatusFrame):
+    value: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "value", _f32(type(self).__name__, "value", self.value))
+
+    def _data(self) -> bytes:
+        return FLOAT_CODEC.pack(self.value)
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "StatusFrame":
+        value = FLOAT_CODEC.unpack_from(data, 0)[0]
+        if not math.isfinite(value):
+            raise FieldError(f"{cls.NAME} carries a non-finite float")
+        return cls(value)
+
+
+@dataclass(frozen=True)
+class FileLengthStatus(_FloatStatus):
+    """Kind 100 — SD program file length (float, H8: little-endian)."""
+
+    KIND: ClassVar[int] = 100
+    NAME: ClassVar[str] = "SD file length"
+
+
+@dataclass(frozen=True)
+class RunPositionStatus(_FloatStatus):
+    """Kind 103 — SD program run position (float, H8: little-endian)."""
+
+    KIND: ClassVar[int] = 103
+    NAME: ClassVar[str] = "SD run position"
+
+
+@dataclass(frozen=True)
+class FileStatus(StatusFrame):
+    """Kind 102 — SD program file status, d0..d1 as a raw big-endian 16-bit number."""
+
+    KIND: ClassVar[int] = 102
+    NAME: ClassVar[str] = "SD file status"
+    raw: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "raw", _int("FileStatus", "raw", self.raw, 0, 0xFFFF))
+
+    def _data(self) -> bytes:
+        return self.raw.to_bytes(2, "big")
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "FileStatus":
+        return cls(int.from_bytes(data[0:2], "big"))
+
+
+STATUS_KINDS: dict[int, type[StatusFrame]] = {
+    k.KIND: k
+    for k in (
+        PositionStatus, JointsLowStatus, JointsHighStatus, WorktableStatus, PauseStatus, WristStatus,
+        FileLengthStatus, FileStatus, RunPositionStatus,
+    )
+}
+# The order in which the arm rotates through the kinds, one every STATUS_PERIOD_S.
+STATUS_ROTATION = (0, 1, 2, 3, 4, 5, 100, 102, 103)
+
+
+def is_status_frame(data: bytes, offset: int = 0) -> bool:
+    """H9 — a status frame is recognised by 0xCE … 0xCF around a known kind byte; nothing else."""
+    return (
+        len(data) - offset >= STATUS_SIZE
+        and data[offset] == STATUS_HEAD
+        and data[offset + 8] == STATUS_TAIL
+        and data[offset + 7] in STATUS_KINDS
+    )
+
+
+def decode_status(frame: bytes) -> StatusFrame:
+    """The status a 9-byte frame carries; raises FrameError if it is not one."""
+    frame = bytes(frame)
+    if len(frame) != STATUS_SIZE:
+        raise FrameError(f"a status frame is {STATUS_SIZE} bytes, not {len(frame)}")
+    if not is_status_frame(frame):
+        raise FrameError(f"not a status frame: {frame.hex(' ')}")
+    return STATUS_KINDS[frame[7]]._from_data(frame[1:7])
+
+
+class StatusReader:
+    """Finds status frames in a byte stream fed in arbitrary chunks.
+
+    H9 — there is no checksum, so after noise the reader slides one byte and tries again.
+    ``skipped_bytes`` counts every byte that belonged to no frame; ``frames`` every frame
+    returned.  Plausibility (a value that jumps faster than the arm can move) is judged where
+    the arm's state is merged, not here: this reader only knows bytes.
+    """
+
+    def __init__(self) -> None:
+        self._buffer = bytearray()
+        self.frames = 0
+        self.skipped_bytes = 0
+
+    @property
+    def pending(self) -> int:
+        """Bytes held back because they may begin a frame that has not fully arrived."""
+        return len(self._buffer)
+
+    def feed(self, data: bytes) -> list[StatusFrame]:
+        buffer = self._buffer
+        buffer += data
+        found: list[StatusFrame] = []
+        start = 0
+        while True:
+            head = buffer.find(STATUS_HEAD, start)
+            if head < 0:
+                self.skipped_bytes += len(buffer) - start
+                start = len(buffer)
+                break
+            self.skipped_bytes += head - start
+            start = head
+            if len(buffer) - start < STATUS_SIZE:
+                break  # wait for the rest of a frame that may have begun here
+            if is_status_frame(buffer, start):
+                try:
+                    found.append(decode_status(buffer[start : start + STATUS_SIZE]))
+                except (FrameError, FieldError):
+                    pass  # a well-framed frame with an impossible value: treated as noise
+                else:
+                    start += STATUS_SIZE
+                    continue
+            self.skipped_bytes += 1
+            start += 1
+        del buffer[:start]
+        self.frames += len(found)
+        return found
+
+
+# --- finding frames in any byte stream (armctl decode) ----------------------------------------
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """A run of bytes at ``offset``: a frame (``frame`` set), a framed but invalid command
+    (``error`` set), or bytes that belong to no frame (both None)."""
+
+    offset: int
+    data: bytes
+    frame: AnyCommand | StatusFrame | None = None
+    error: str | None = None
+
+
+def scan_frames(data: bytes) -> Iterator[Chunk]:
+    """Split bytes holding command and status frames in any mix into chunks, in order."""
+    data = bytes(data)
+    position, junk_start = 0, 0
+
+    def junk_until(end: int) -> Iterator[Chunk]:
+        if end > junk_start:
+            yield Chunk(junk_start, data[junk_start:end])
+
+    while position < len(data):
+        chunk = _chunk_at(data, position)
+        if chunk is None:
+            position += 1
+            continue
+        yield from junk_until(position)
+        yield chunk
+        position += len(chunk.data)
+        junk_start = position
+    yield from junk_until(len(data))
+
+
+def _chunk_at(data: bytes, position: int) -> Chunk | None:
+    head = data[position]
+    if head in (MOTION_HEAD, CONTROL_HEAD) and len(data) - position >= FRAME_SIZE:
+        frame = data[position : position + FRAME_SIZE]
+        if frame[-1] == (MOTION_TAIL if head == MOTION_HEAD else CONTROL_TAIL):
+            try:
+                return Chunk(position, frame, decode_command(frame))
+            except FieldError as error:
+                return Chunk(position, frame, None, str(error))
+            except FrameError:
+                pass
+    if is_status_frame(data, position):
+        try:
+            return Chunk(position, data[position : position + STATUS_SIZE], decode_status(data[position : position + STATUS_SIZE]))
+        except (FrameError, FieldError):
+            return None
+    return None
+
+
+# --- readable form (armctl decode, logs) ------------------------------------------------------
+
+_UNIT_SUFFIXES = (
+    ("_mm_min", "mm/min"), ("_deg_s", "deg/s"), ("_mm_s2", "mm/s²"), ("_mm", "mm"), ("_deg", "deg"),
+    ("_us", "µs"), ("_ms", "ms"),
+)
+
+
+def describe(frame: Command | StatusFrame) -> str:
+    """One readable line: the frame's name and each field with its unit."""
+    parts = []
+    for name, value in frame.fields().items():
+        label, unit = name, ""
+        for suffix, suffix_unit in _UNIT_SUFFIXES:
+            if name.endswith(suffix):
+                label, unit = name[: -len(suffix)], " " + suffix_unit
+                break
+        if isinstance(value, float):
+            text = f32_repr(value)
+        elif isinstance(value, tuple):
+            text = ",".join(str(v) for v in value)
+        else:
+            text = str(value)
+        parts.append(f"{label}={text}{unit}")
+    return " ".join([frame.NAME, *parts])

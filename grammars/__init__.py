@@ -1,0 +1,1 @@
+"""The Lark grammar of the motion-script language, shipped inside the wheel as armctl.grammars."""
