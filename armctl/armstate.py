@@ -1,0 +1,157 @@
+"""What the arm last told us: the nine status kinds merged into one state, each with its age.
+
+Strategy: pure.  ``ArmState.update(frame, now)`` takes a decoded status frame and the time it
+was read; nothing here reads a clock or a port.  The status reader only knows bytes; this is
+where H9's second half lives — a value that jumps faster than the arm can move is *suspect*
+and is held back until the next frame of its kind confirms it (one corrupted frame with a
+plausible frame on either side changes nothing; a real jump, e.g. after a reset, is accepted
+one frame later).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from .protocol import (
+    STATUS_PERIOD_S,
+    STATUS_ROTATION,
+    FileLengthStatus,
+    FileStatus,
+    JointsHighStatus,
+    JointsLowStatus,
+    PauseStatus,
+    PositionStatus,
+    RunPositionStatus,
+    StatusFrame,
+    WorktableStatus,
+    WristStatus,
+)
+
+# A full rotation of the nine kinds takes 9 × 30 ms; a kind unseen for three rotations is stale.
+ROTATION_S = len(STATUS_ROTATION) * STATUS_PERIOD_S
+STALE_AFTER_S = 3 * ROTATION_S
+# Slack on top of the arm's top speed before a jump counts as suspect: the status resolution
+# (0.1 mm, 0.01 deg) and the jitter of when a frame is read.
+_JUMP_SLACK_MM = 2.0
+_JUMP_SLACK_DEG = 2.0
+
+
+@dataclass
+class ArmState:
+    """The merged view of the arm. Values are ``None`` until their kind has been seen."""
+
+    max_speed_mm_s: float | None = None  # None: do not judge plausibility
+    max_joint_speed_deg_s: float | None = None
+    x_mm: float | None = None
+    y_mm: float | None = None
+    z_mm: float | None = None
+    joints_deg: list = field(default_factory=lambda: [None] * 6)
+    worktable_mm: list = field(default_factory=lambda: [None] * 3)
+    paused: bool | None = None
+    pwm_us: int | None = None
+    w0_deg: float | None = None
+    w1_deg: float | None = None
+    file_length: float | None = None
+    file_status: int | None = None
+    run_position: float | None = None
+    last_seen: dict = field(default_factory=dict)  # kind → time it was last accepted
+    frames: int = 0
+    suspect_frames: int = 0
+    _held: dict = field(default_factory=dict)  # kind → suspect frame awaiting confirmation
+
+    @property
+    def complete(self) -> bool:
+        """True once every one of the nine kinds has been seen."""
+        return len(self.last_seen) == len(STATUS_ROTATION)
+
+    @property
+    def position_mm(self) -> tuple | None:
+        if self.x_mm is None:
+            return None
+        return (self.x_mm, self.y_mm, self.z_mm)
+
+    def age(self, kind: int, now: float) -> float | None:
+        seen = self.last_seen.get(kind)
+        return None if seen is None else now - seen
+
+    def stale_kinds(self, now: float) -> list[int]:
+        ages = {k: self.age(k, now) for k in STATUS_ROTATION}
+        return [k for k, age in ages.items() if age is None or age > STALE_AFTER_S]
+
+    def update(self, frame: StatusFrame, now: float) -> bool:
+        """Merge one status frame read at ``now``; False when it was held back as suspect."""
+        self.frames += 1
+        if self._is_jump(frame, now):
+            held = self._held.get(frame.KIND)
+            if held is None or self._jump_between(held[0], frame, now - held[1]):
+                self._held[frame.KIND] = (frame, now)
+                self.suspect_frames += 1
+                return False
+        self._held.pop(frame.KIND, None)
+        self._apply(frame)
+        self.last_seen[frame.KIND] = now
+        return True
+
+    def _is_jump(self, frame: StatusFrame, now: float) -> bool:
+        seen = self.last_seen.get(frame.KIND)
+        if seen is None:
+            return False
+        previous = self._current(frame.KIND)
+        return previous is not None and self._jump_between(previous, frame, now - seen)
+
+    def _jump_between(self, before: StatusFrame, after: StatusFrame, elapsed_s: float) -> bool:
+        elapsed_s = max(elapsed_s, 0.0)
+        if isinstance(after, (PositionStatus,)) and self.max_speed_mm_s is not None:
+            limit = self.max_speed_mm_s * elapsed_s + _JUMP_SLACK_MM
+        elif isinstance(after, (JointsLowStatus, JointsHighStatus)) and self.max_joint_speed_deg_s is not None:
+            limit = self.max_joint_speed_deg_s * elapsed_s + _JUMP_SLACK_DEG
+        else:
+            return False
+        a, b = list(before.fields().values()), list(after.fields().values())
+        return max(abs(p - q) for p, q in zip(a, b)) > limit
+
+    def _current(self, kind: int) -> StatusFrame | None:
+        if kind == PositionStatus.KIND and self.x_mm is not None:
+            return PositionStatus(self.x_mm, self.y_mm, self.z_mm)
+        if kind == JointsLowStatus.KIND and self.joints_deg[0] is not None:
+            return JointsLowStatus(*self.joints_deg[0:3])
+        if kind == JointsHighStatus.KIND and self.joints_deg[3] is not None:
+            return JointsHighStatus(*self.joints_deg[3:6])
+        return None
+
+    def _apply(self, frame: StatusFrame) -> None:
+        if isinstance(frame, PositionStatus):
+            self.x_mm, self.y_mm, self.z_mm = frame.x_mm, frame.y_mm, frame.z_mm
+        elif isinstance(frame, JointsLowStatus):
+            self.joints_deg[0:3] = [frame.j1_deg, frame.j2_deg, frame.j3_deg]
+        elif isinstance(frame, JointsHighStatus):
+            self.joints_deg[3:6] = [frame.j4_deg, frame.j5_deg, frame.j6_deg]
+        elif isinstance(frame, WorktableStatus):
+            self.worktable_mm = [frame.x_mm, frame.y_mm, frame.z_mm]
+        elif isinstance(frame, PauseStatus):
+            self.paused, self.pwm_us = frame.paused, frame.pwm_us
+        elif isinstance(frame, WristStatus):
+            self.w0_deg, self.w1_deg = frame.w0_deg, frame.w1_deg
+        elif isinstance(frame, FileLengthStatus):
+            self.file_length = frame.value
+        elif isinstance(frame, FileStatus):
+            self.file_status = frame.raw
+        elif isinstance(frame, RunPositionStatus):
+            self.run_position = frame.value
+
+    def to_json(self) -> dict:
+        """The object ``armctl status --json`` prints."""
+        return {
+            "x": self.x_mm,
+            "y": self.y_mm,
+            "z": self.z_mm,
+            "joints": list(self.joints_deg),
+            "worktable": list(self.worktable_mm),
+            "paused": self.paused,
+            "pwm": self.pwm_us,
+            "w0": self.w0_deg,
+            "w1": self.w1_deg,
+            "file_length": self.file_length,
+            "file_status": self.file_status,
+            "run_position": self.run_position,
+        }

@@ -1,0 +1,106 @@
+"""Shared test plumbing.
+
+Golden frame vectors (tests/data/golden_*.txt, written by hand from PROTOCOL.md; the format
+is described at the top of each file).  A test that takes ``command_vector`` or
+``status_vector`` runs once per record; ``all_command_vectors`` / ``all_status_vectors`` give
+the whole list.  The files are read lazily, so a broken data file fails only these tests.
+"""
+
+from __future__ import annotations
+
+import functools
+import re
+from dataclasses import dataclass
+from pathlib import Path
+
+import pytest
+
+import armctl.protocol as protocol
+
+DATA = Path(__file__).parent / "data"
+
+# "a[3..6]   00 00 c8 42   comment": a byte range, its bytes, then two spaces and free text.
+_BYTES_LINE = re.compile(r"a\[(\d+)(?:\.\.(\d+))?\]\s+([0-9a-f]{2}(?: [0-9a-f]{2})*)(?:\s{2,}.*)?")
+
+
+@dataclass(frozen=True)
+class GoldenVector:
+    name: str
+    call: str  # the constructor call exactly as written in the file
+    obj: object  # that call, evaluated with armctl.protocol's names
+    data: bytes
+    decode_only: bool  # bytes → object only (e.g. a linear move with a[2]=0)
+    where: str  # "file:line", for failure messages
+
+    def __repr__(self) -> str:
+        return f"<{self.name} at {self.where}>"
+
+
+@functools.cache
+def load_golden(filename: str, frame_size: int) -> tuple[GoldenVector, ...]:
+    path = DATA / filename
+    records: list[dict] = []
+    for number, raw in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+        line = raw.rstrip()
+        where = f"{path.name}:{number}"
+        if not line or line.startswith("#"):
+            continue
+        if line.startswith("== "):
+            name, *flags = line[3:].split()
+            if set(flags) - {"decode-only"}:
+                raise ValueError(f"{where}: unknown flag in {line!r}")
+            records.append({"name": name, "decode_only": bool(flags), "call": [], "data": bytearray(), "where": where})
+            continue
+        if not records:
+            raise ValueError(f"{where}: text before the first record")
+        record = records[-1]
+        if line.startswith("a["):
+            match = _BYTES_LINE.fullmatch(line)
+            if match is None:
+                raise ValueError(f"{where}: cannot read byte line {line!r}")
+            first = int(match[1])
+            last = int(match[2]) if match[2] else first
+            values = bytes.fromhex(match[3])
+            if first != len(record["data"]) or len(values) != last - first + 1:
+                raise ValueError(f"{where}: label a[{first}..{last}] does not fit {len(values)} byte(s) at offset {len(record['data'])}")
+            record["data"] += values
+        elif record["data"]:
+            raise ValueError(f"{where}: call text after the bytes began")
+        else:
+            record["call"].append(line.strip())
+    vectors = []
+    for record in records:
+        if len(record["data"]) != frame_size:
+            raise ValueError(f"{record['where']}: {record['name']} has {len(record['data'])} bytes, not {frame_size}")
+        call = " ".join(record["call"])
+        obj = eval(call, {"__builtins__": {}}, dict(vars(protocol)))  # noqa: S307 - our own data file
+        vectors.append(GoldenVector(record["name"], call, obj, bytes(record["data"]), record["decode_only"], record["where"]))
+    names = [v.name for v in vectors]
+    if len(set(names)) != len(names):
+        raise ValueError(f"{path.name}: duplicate record names")
+    return tuple(vectors)
+
+
+def golden_commands() -> tuple[GoldenVector, ...]:
+    return load_golden("golden_commands.txt", protocol.FRAME_SIZE)
+
+
+def golden_status() -> tuple[GoldenVector, ...]:
+    return load_golden("golden_status.txt", protocol.STATUS_SIZE)
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    for fixture, vectors in (("command_vector", golden_commands), ("status_vector", golden_status)):
+        if fixture in metafunc.fixturenames:
+            loaded = vectors()
+            metafunc.parametrize(fixture, loaded, ids=[v.name for v in loaded])
+
+
+@pytest.fixture(scope="session")
+def all_command_vectors() -> tuple[GoldenVector, ...]:
+    return golden_commands()
+
+
+@pytest.fixture(scope="session")
+def all_status_vectors() -> tuple[GoldenVector, ...]:
+    return golden_status()
