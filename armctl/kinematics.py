@@ -1,0 +1,317 @@
+"""Forward and inverse kinematics of the 6-axis arm: closed form, spherical wrist.
+
+Strategy: the arm is a base yaw (J1), a shoulder and an elbow pitching in one vertical plane
+(J2, J3), then a wrist of three intersecting axes (J4 roll, J5 pitch, J6 roll).  The first
+three joints place the wrist centre (a two-link problem in the arm's plane), the last three
+orient the tool (an X-Y-X Euler decomposition).  ``inverse`` enumerates the up to eight
+closed-form solutions (front/back, elbow up/down, wrist flip), moves each angle by whole
+turns towards the hint, drops those outside the joint limits and returns the one nearest the
+hint.  Pure functions of plain floats and tuples; no I/O, stdlib only.
+
+Frames and conventions (the vendor publishes none; these are armctl's, one place to change):
+
+- Robot frame: origin on the base axis in the mounting plane, +Z up, +X forward (the arm's
+  direction at J1 = 0), +Y to the left; right-handed; millimetres.  (The worktable frame the
+  protocol reports X/Y/Z in is this frame shifted by the worktable origin; see motion.py.)
+- Joint zeros and signs, degrees:
+  J1 base yaw about +Z, positive counter-clockwise seen from above.
+  J2 shoulder: 0 = upper arm vertical; positive leans it forward (rotation about the arm
+  plane's +Y axis, so J2, J3 and J5 all pitch "forward and down" when positive).
+  J3 elbow: 0 = forearm perpendicular to the upper arm (horizontal when J2 = 0).
+  J4 forearm roll about the forearm axis.  J5 wrist pitch: 0 = flange in line with the
+  forearm.  J6 flange roll.  So J2 = J3 = 0, J5 = 90 points the tool straight down.
+- Links (``Links``, mm): base_height (shoulder axis above the mounting plane), shoulder_offset
+  (shoulder axis ahead of the base axis), upper_arm (shoulder → elbow), elbow_offset (the
+  forearm axis sits this far from the elbow axis, along the upper arm when J3 = 0), forearm
+  (elbow → wrist centre along the forearm), tool (wrist centre → tool point along the flange).
+- Attitude B0, B1, W (deg) = roll, pitch, yaw of the tool frame relative to the robot frame:
+  R = Rz(W) · Ry(B1) · Rx(B0) — rotate about the fixed X axis by B0, then about the fixed Y by
+  B1, then about the fixed Z by W.  Tool frame: z = approach (out of the flange); at all-zero
+  joints z points along +X and x points up.  Hence B0 = 180, B1 = 0, W = 0 is "tool straight
+  down, tool x along robot +X", and W then turns the tool about the vertical.  The triple is
+  singular at B1 = ±90 (tool x axis vertical); there W is reported as 0.  ``forward`` reports
+  angles in (−180, 180].
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import NamedTuple, Sequence
+
+from .errors import ArmctlError
+
+JOINT_COUNT = 6
+_EPS = 1e-9
+
+
+class Unreachable(ArmctlError, ValueError):
+    """A Cartesian pose the arm cannot take (out of reach, or only outside its joint limits)."""
+
+
+class CartesianPose(NamedTuple):
+    """Tool point (mm) and attitude (deg, see the module docstring) in one frame."""
+
+    x_mm: float
+    y_mm: float
+    z_mm: float
+    b0_deg: float
+    b1_deg: float
+    w_deg: float
+
+
+@dataclass(frozen=True)
+class Links:
+    """Link lengths of the arm in mm (see the module docstring for where each one sits)."""
+
+    base_height_mm: float
+    shoulder_offset_mm: float
+    upper_arm_mm: float
+    elbow_offset_mm: float
+    forearm_mm: float
+    tool_mm: float
+
+
+# --- rotations as row-major 9-tuples -----------------------------------------------------------
+
+
+def _mul(a, b):
+    a0, a1, a2, a3, a4, a5, a6, a7, a8 = a
+    b0, b1, b2, b3, b4, b5, b6, b7, b8 = b
+    return (
+        a0 * b0 + a1 * b3 + a2 * b6, a0 * b1 + a1 * b4 + a2 * b7, a0 * b2 + a1 * b5 + a2 * b8,
+        a3 * b0 + a4 * b3 + a5 * b6, a3 * b1 + a4 * b4 + a5 * b7, a3 * b2 + a4 * b5 + a5 * b8,
+        a6 * b0 + a7 * b3 + a8 * b6, a6 * b1 + a7 * b4 + a8 * b7, a6 * b2 + a7 * b5 + a8 * b8,
+    )
+
+
+def _rpy_matrix(b0, b1, w):
+    """Rz(w)·Ry(b1)·Rx(b0), radians."""
+    ca, sa, cb, sb, cw, sw = math.cos(b0), math.sin(b0), math.cos(b1), math.sin(b1), math.cos(w), math.sin(w)
+    return (
+        cw * cb, cw * sb * sa - sw * ca, cw * sb * ca + sw * sa,
+        sw * cb, sw * sb * sa + cw * ca, sw * sb * ca - cw * sa,
+        -sb, cb * sa, cb * ca,
+    )
+
+
+def _rpy_of(r):
+    """(b0, b1, w) radians of a rotation, w = 0 at the B1 = ±90° singularity."""
+    cb = math.hypot(r[0], r[3])
+    b1 = math.atan2(-r[6], cb)
+    if cb < 1e-9:
+        return math.atan2(-r[5], r[4]), b1, 0.0
+    return math.atan2(r[7], r[8]), b1, math.atan2(r[3], r[0])
+
+
+def _xyx(a, b, c):
+    """Rx(a)·Ry(b)·Rx(c), radians: the wrist's rotation relative to the forearm."""
+    ca, sa, cb, sb, cc, sc = math.cos(a), math.sin(a), math.cos(b), math.sin(b), math.cos(c), math.sin(c)
+    return (
+        cb, sb * sc, sb * cc,
+        sa * sb, ca * cc - sa * cb * sc, -ca * sc - sa * cb * cc,
+        -ca * sb, sa * cc + ca * cb * sc, -sa * sc + ca * cb * cc,
+    )
+
+
+def _arm(j1, t):
+    """Rz(j1)·Ry(t): the forearm frame (t = J2 + J3)."""
+    c1, s1, ct, st = math.cos(j1), math.sin(j1), math.cos(t), math.sin(t)
+    return (c1 * ct, -s1, c1 * st, s1 * ct, c1, s1 * st, -st, 0.0, ct)
+
+
+def _tool_from_flange(r):
+    """Tool frame = flange frame · F, F = Ry(−90)·Rx(180): tool x = flange z, y = −y, z = flange x."""
+    return (r[2], -r[1], r[0], r[5], -r[4], r[3], r[8], -r[7], r[6])
+
+
+_flange_from_tool = _tool_from_flange  # F is its own inverse
+
+
+def rotation_matrix(b0_deg: float, b1_deg: float, w_deg: float) -> tuple[float, ...]:
+    """The attitude as a row-major 3×3 rotation matrix (for comparing attitudes robustly)."""
+    return _rpy_matrix(math.radians(b0_deg), math.radians(b1_deg), math.radians(w_deg))
+
+
+def wrap_deg(angle: float) -> float:
+    """An angle in (−180, 180]."""
+    angle = math.fmod(angle, 360.0)
+    if angle > 180.0:
+        angle -= 360.0
+    elif angle <= -180.0:
+        angle += 360.0
+    return angle
+
+
+# --- forward ----------------------------------------------------------------------------------
+
+
+def forward(joints_deg: Sequence[float], links: Links) -> CartesianPose:
+    """Tool pose in the robot frame for joint angles J1…J6 (deg)."""
+    j1, j2, j3, j4, j5, j6 = (math.radians(j) for j in joints_deg)
+    t = j2 + j3
+    ct, st = math.cos(t), math.sin(t)
+    radial = (
+        links.shoulder_offset_mm + links.upper_arm_mm * math.sin(j2) + links.forearm_mm * ct + links.elbow_offset_mm * st
+    )
+    z = links.base_height_mm + links.upper_arm_mm * math.cos(j2) - links.forearm_mm * st + links.elbow_offset_mm * ct
+    flange = _mul(_arm(j1, t), _xyx(j4, j5, j6))
+    d6 = links.tool_mm
+    x = radial * math.cos(j1) + d6 * flange[0]
+    y = radial * math.sin(j1) + d6 * flange[3]
+    z = z + d6 * flange[6]
+    b0, b1, w = _rpy_of(_tool_from_flange(flange))
+    return CartesianPose(x, y, z, wrap_deg(math.degrees(b0)), wrap_deg(math.degrees(b1)), wrap_deg(math.degrees(w)))
+
+
+# --- inverse ----------------------------------------------------------------------------------
+
+
+def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None = None) -> list[tuple[float, ...]]:
+    """Every closed-form solution (deg, each angle in (−180, 180]) for a robot-frame pose.
+
+    At a singularity the free angle is taken from ``near`` (J1 when the wrist centre is on the
+    base axis, J4 when J5 = 0).  An empty list means the pose is out of reach.
+    """
+    x, y, z, b0, b1, w = pose
+    near = near or (0.0,) * JOINT_COUNT
+    tool = _rpy_matrix(math.radians(b0), math.radians(b1), math.radians(w))
+    flange = _flange_from_tool(tool)
+    d6 = links.tool_mm
+    wx, wy, wz = x - d6 * flange[0], y - d6 * flange[3], z - d6 * flange[6]
+    a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
+    reach = math.hypot(d4, a3)
+    gamma = math.atan2(a3, d4)
+    if math.hypot(wx, wy) < 1e-9:
+        yaws = [math.radians(near[0])]
+        yaws.append(yaws[0] + math.pi)
+    else:
+        yaws = [math.atan2(wy, wx)]
+        yaws.append(yaws[0] + math.pi)
+    found = []
+    for j1 in yaws:
+        u = wx * math.cos(j1) + wy * math.sin(j1) - links.shoulder_offset_mm
+        v = wz - links.base_height_mm
+        cos_d = (u * u + v * v - a2 * a2 - reach * reach) / (2 * a2 * reach)
+        if abs(cos_d) > 1 + 1e-9:
+            continue
+        cos_d = max(-1.0, min(1.0, cos_d))
+        for delta in {math.acos(cos_d), -math.acos(cos_d)}:
+            alpha = math.atan2(v, u) + math.atan2(reach * math.sin(delta), a2 + reach * math.cos(delta))
+            j2 = math.pi / 2 - alpha
+            t = gamma - (alpha - delta)
+            arm = _arm(j1, t)
+            wrist = _mul((arm[0], arm[3], arm[6], arm[1], arm[4], arm[7], arm[2], arm[5], arm[8]), flange)
+            for j4, j5, j6 in _wrist_solutions(wrist, math.radians(near[3])):
+                found.append(tuple(wrap_deg(math.degrees(a)) for a in (j1, j2, t - j2, j4, j5, j6)))
+    return found
+
+
+def _wrist_solutions(m, near_j4):
+    """(j4, j5, j6) with Rx(j4)·Ry(j5)·Rx(j6) = m: the two wrist flips, or one at J5 = 0/180."""
+    j5 = math.acos(max(-1.0, min(1.0, m[0])))
+    if math.sin(j5) < 1e-7:
+        if m[0] > 0:  # J5 = 0: only J4 + J6 is fixed
+            return [(near_j4, 0.0, math.atan2(m[7], m[4]) - near_j4)]
+        return [(near_j4, math.pi, near_j4 - math.atan2(m[7], m[4]))]  # J5 = 180: J4 − J6 fixed
+    j4, j6 = math.atan2(m[3], -m[6]), math.atan2(m[1], m[2])
+    return [(j4, j5, j6), (j4 + math.pi, -j5, j6 + math.pi)]
+
+
+def _fit(angle: float, hint: float, limits: tuple[float, float] | None) -> float | None:
+    """``angle`` moved by whole turns towards ``hint``, inside ``limits`` if given (else None)."""
+    base = angle + 360.0 * round((hint - angle) / 360.0)
+    if limits is None:
+        return base
+    low, high = limits
+    if low <= base <= high:
+        return base
+    other = base - 360.0 if base > hint else base + 360.0
+    for candidate in (base, other, 2 * base - other):
+        if low - 1e-6 <= candidate <= high + 1e-6:
+            return min(max(candidate, low), high)
+    return None
+
+
+def inverse(
+    pose: Sequence[float],
+    links: Links,
+    near: Sequence[float] | None = None,
+    limits: Sequence[tuple[float, float]] | None = None,
+) -> tuple[float, ...]:
+    """Joint angles (deg) reaching the robot-frame ``pose``, nearest ``near`` (default all 0).
+
+    With ``limits`` (six (min, max) pairs) only solutions inside them count.  Raises
+    Unreachable naming the reason.
+    """
+    near = tuple(near) if near is not None else (0.0,) * JOINT_COUNT
+    raw = solutions(pose, links, near)
+    if not raw:
+        raise Unreachable(f"pose X{pose[0]:.1f} Y{pose[1]:.1f} Z{pose[2]:.1f} is out of the arm's reach")
+    best, best_cost, worst = None, math.inf, None
+    for solution in raw:
+        fitted = []
+        for k, angle in enumerate(solution):
+            value = _fit(angle, near[k], None if limits is None else limits[k])
+            if value is None:
+                if worst is None:
+                    worst = (k, angle)
+                break
+            fitted.append(value)
+        else:
+            cost = sum((a - h) ** 2 for a, h in zip(fitted, near))
+            if cost < best_cost:
+                best, best_cost = tuple(fitted), cost
+    if best is None:
+        k, angle = worst
+        low, high = limits[k]
+        raise Unreachable(
+            f"pose X{pose[0]:.1f} Y{pose[1]:.1f} Z{pose[2]:.1f} needs J{k + 1} = {angle:.1f}°,"
+            f" outside its limits {low:g}…{high:g}°"
+        )
+    return best
+
+
+@dataclass(frozen=True)
+class Kinematics:
+    """Links, joint limits and a home pose (the default IK hint) bundled for repeated use."""
+
+    links: Links
+    limits: tuple[tuple[float, float], ...] | None = None
+    home: tuple[float, ...] = (0.0,) * JOINT_COUNT
+
+    def forward(self, joints_deg: Sequence[float]) -> CartesianPose:
+        return forward(joints_deg, self.links)
+
+    def inverse(self, pose: Sequence[float], near: Sequence[float] | None = None, respect_limits: bool = True):
+        return inverse(pose, self.links, self.home if near is None else near, self.limits if respect_limits else None)
+
+
+# --- reachability (lint) ----------------------------------------------------------------------
+
+
+def reach_problem(pose: Sequence[float], profile, origin_mm: Sequence[float] = (0.0, 0.0, 0.0), near=None) -> str | None:
+    """Why the arm cannot take a worktable ``pose`` (robot = worktable + origin), or None.
+
+    Checks, in order: the profile's workspace box and reach radius (robot frame, around the
+    robot origin), then an IK solution inside the joint limits.
+    """
+    x, y, z = (pose[k] + origin_mm[k] for k in range(3))
+    box = profile.workspace
+    for name, value, (low, high) in (("X", x, box.x_mm), ("Y", y, box.y_mm), ("Z", z, box.z_mm)):
+        if not low <= value <= high:
+            return f"robot {name} = {value:.1f} mm is outside the workspace {low:g}…{high:g} mm"
+    distance = math.sqrt(x * x + y * y + z * z)
+    if distance > box.reach_mm:
+        return f"point is {distance:.1f} mm from the robot origin, beyond the reach radius {box.reach_mm:g} mm"
+    try:
+        inverse((x, y, z, *pose[3:6]), profile.links, near if near is not None else profile.poses[0],
+                profile.joint_limits_deg)
+    except Unreachable as error:
+        return str(error)
+    return None
+
+
+def reachable(pose: Sequence[float], profile, origin_mm: Sequence[float] = (0.0, 0.0, 0.0), near=None) -> bool:
+    """True when ``reach_problem`` finds nothing wrong."""
+    return reach_problem(pose, profile, origin_mm, near) is None
