@@ -1,0 +1,131 @@
+"""Run one job through one pacing strategy against the simulated arm, in virtual time.
+
+Strategy: the same loop a real host runs — read status bytes, feed them to the strategy, write
+the next frame when the strategy allows — but the clock jumps from event to event (the next
+status byte, the next moment the strategy may write), so an hour of arm time costs seconds.
+The simulator's true state (FIFO, drops, what executed when) is read only for the result,
+never by the strategy (except the omniscient baseline, which exists to be unfair).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+from ..protocol import Command, PauseToggle, StatusReader
+from ..sim.model import SimulatedArm
+
+EPSILON_S = 1e-9
+STILL_SAMPLE_S = 0.01  # how finely motion after an abort is measured
+
+
+@dataclass
+class RunResult:
+    frames: int
+    written: int
+    dropped: int
+    job_s: float  # until the arm finished its last frame (or stopped for good)
+    peak_occupancy: int  # the FIFO's true peak
+    peak_queued_s: float  # the most motion ever queued ahead of the arm when a frame landed
+    moving_after_abort_s: float | None = None
+    timed_out: bool = False
+
+
+@dataclass(frozen=True)
+class Event:
+    """Something the scenario does to the arm at a time, outside the strategy's control
+    (a pause pressed on the arm, …): ``command`` written to the line at ``at_s``."""
+
+    at_s: float
+    command: Command
+
+
+def run_job(
+    commands: Sequence[Command],
+    strategy,
+    arm: SimulatedArm,
+    *,
+    abort_after_frames: int | None = None,
+    abort_sequence: Sequence[Command] = (PauseToggle(),),
+    events: Sequence[Event] = (),
+    time_limit_s: float = 36_000.0,
+    on_write: Callable[[int, float], None] | None = None,
+) -> RunResult:
+    """Stream ``commands`` with ``strategy`` until the arm is done (or aborted and still)."""
+    reader = StatusReader()
+    pending_events = sorted(events, key=lambda e: e.at_s)
+    now = 0.0
+    written = 0
+    aborted_at: float | None = None
+    total = len(commands)
+    stop_after = total if abort_after_frames is None else min(abort_after_frames, total)
+    while True:
+        for frame in reader.feed(arm.advance(now)):
+            strategy.receive_status(frame, now)
+        while pending_events and pending_events[0].at_s <= now + EPSILON_S:
+            arm.write(pending_events.pop(0).command.encode(), now)
+        when = None
+        if written < stop_after:
+            when = strategy.next_write_time(now)
+            if when is not None and when <= now + EPSILON_S:
+                arm.write(commands[written].encode(), now)
+                strategy.wrote(commands[written], now, written)
+                if on_write is not None:
+                    on_write(written, now)
+                written += 1
+                continue
+        elif aborted_at is None and abort_after_frames is not None:
+            aborted_at = now
+            for command in abort_sequence:
+                arm.write(command.encode(), now)
+            break
+        elif arm.idle and not pending_events:
+            break
+        if now > time_limit_s:
+            return _result(arm, total, written, now, None, timed_out=True)
+        candidates = [arm.next_event_time(), when]
+        if pending_events:
+            candidates.append(pending_events[0].at_s)
+        upcoming = min((t for t in candidates if t is not None), default=None)
+        if upcoming is None:
+            break
+        now = max(upcoming, now + EPSILON_S)
+    moving_after = _motion_after(arm, aborted_at, time_limit_s) if aborted_at is not None else None
+    return _result(arm, total, written, now, moving_after)
+
+
+def _motion_after(arm: SimulatedArm, aborted_at: float, time_limit_s: float) -> float:
+    """Seconds from the abort until the arm's true position last changed."""
+    now = aborted_at
+    last = arm.snapshot()
+    last_change = aborted_at
+    still_for = 0.0
+    while now < time_limit_s and still_for < 5.0:
+        now += STILL_SAMPLE_S
+        arm.advance(now)
+        current = arm.snapshot()
+        if current.position_mm != last.position_mm or current.joints_deg != last.joints_deg:
+            last_change, still_for = now, 0.0
+        else:
+            still_for += STILL_SAMPLE_S
+            if arm.idle or (arm.paused and not arm.busy):
+                break
+        last = current
+    return last_change - aborted_at
+
+
+def _result(arm: SimulatedArm, total: int, written: int, now: float, moving_after, timed_out=False) -> RunResult:
+    log = arm.execution_log
+    ends = [e.end_s for e in log if e.end_s is not None]
+    job_s = max(ends) if ends else now
+    landed = {f.index: f.arrival_s for f in arm.frames_received if f.accepted}
+    peak_queued = 0.0
+    for execution in log:
+        arrival = landed.get(execution.index)
+        if arrival is not None and execution.end_s is not None:
+            peak_queued = max(peak_queued, execution.end_s - arrival)
+    return RunResult(
+        frames=total, written=written, dropped=arm.frames_dropped, job_s=job_s,
+        peak_occupancy=arm.peak_fifo_occupancy, peak_queued_s=peak_queued,
+        moving_after_abort_s=moving_after, timed_out=timed_out,
+    )
