@@ -11,6 +11,7 @@ not finish), 2 usage errors and unreadable files, 130 interrupted by Ctrl-C.
 
 from __future__ import annotations
 
+import json
 import sys
 
 import click
@@ -88,3 +89,221 @@ def decode(source: str):
     for chunk in chunks:
         click.echo(describe_chunk(chunk))
     click.echo(summary_line(chunks), err=True)
+
+
+def _check_readable(path: str) -> None:
+    """Fail early (exit 2) on a script that cannot be opened, before any pass over it."""
+    if path == "-":
+        return
+    try:
+        with open(path, "rb"):
+            pass
+    except OSError as error:
+        raise UsageFailure(f"cannot read {path}: {error.strerror}") from None
+
+
+def _compile_source(path: str, **options):
+    """A fresh pass over the script at ``path`` (``-``: stdin, read once and kept)."""
+    from .script import compile_file, compile_lines
+
+    if path == "-":
+        if not hasattr(_compile_source, "stdin_lines"):
+            from .script import iter_lines
+
+            _compile_source.stdin_lines = list(iter_lines(click.get_binary_stream("stdin")))
+        return compile_lines(_compile_source.stdin_lines, "<stdin>", **options)
+    return compile_file(path, **options)
+
+
+def _report_script_errors(compilation) -> None:
+    """Print every diagnostic of a failed check and exit 1; nothing else is written."""
+    for diagnostic in compilation.diagnostics:
+        click.echo(diagnostic.render(), err=True)
+    errors = compilation.error_count
+    click.echo(f"{errors} error{'s' if errors != 1 else ''}: nothing was written", err=True)
+    sys.exit(EXIT_PROBLEMS)
+
+
+@main.command(name="compile")
+@click.argument("script", metavar="SCRIPT")
+@click.option("--format", "fmt", type=click.Choice(["hex", "json", "bin"]), default="hex", show_default=True,
+              help="hex: one frame per line, 96 hex digits; json: one object per frame; bin: the raw bytes.")
+@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Write here instead of stdout.")
+def compile_command(script: str, fmt: str, output: str | None):
+    """Check a motion script, then print the exact frames the arm would receive.
+
+    The whole script is checked first; with any error nothing is written and the exit code
+    is 1. SCRIPT may be - for standard input.
+    """
+    from .formats import frame_record
+
+    _check_readable(script)
+    check = _compile_source(script)
+    check.finish()
+    if check.error_count:
+        _report_script_errors(check)
+    if fmt == "bin" and output is None and sys.stdout.isatty():
+        raise UsageFailure("refusing to write binary frames to a terminal: use -o FILE or a pipe")
+    with _output_stream(output, binary=fmt == "bin") as out:
+        for statement in _compile_source(script):
+            frame = statement.command.encode()
+            if fmt == "hex":
+                out.write(frame.hex() + "\n")
+            elif fmt == "bin":
+                out.write(frame)
+            else:
+                source = {"file": statement.span.file, "line": statement.line, "text": statement.span.text.rstrip("\r\n")}
+                out.write(json.dumps(frame_record(statement.command, frame, source)) + "\n")
+
+
+def _output_stream(path: str | None, binary: bool):
+    import contextlib
+
+    if path is None:
+        stream = click.get_binary_stream("stdout") if binary else click.get_text_stream("stdout")
+        return contextlib.nullcontext(stream)
+    return open(path, "wb" if binary else "w", encoding=None if binary else "utf-8")
+
+
+# --- commands that talk to a port -------------------------------------------------------------
+
+port_option = click.option(
+    "--port", "port", metavar="URL",
+    help="Device path or pyserial URL (socket://, rfc2217://, sim://?slowdown=1.3). "
+    "Default: ARMCTL_PORT, else `port` in armctl.toml, else the built-in simulator.",
+)
+baud_option = click.option("--baud", type=click.IntRange(300, 4_000_000), default=None, help="Line rate [default: 9600 or `baud` in armctl.toml].")
+
+
+def _config() -> dict:
+    from .profile import find_config
+
+    return find_config()[1]
+
+
+def _connect(port: str | None, baud: int | None, **link_options):
+    """Resolve the port, say so when it is the simulator, open it with a reader thread."""
+    from .link import Link, resolve_port
+    from .protocol import DEFAULT_BAUD
+
+    config = _config()
+    choice = resolve_port(port, config=config)
+    banner = choice.banner()
+    if banner:
+        click.echo(banner, err=True)
+    baud = baud or int(config.get("baud", DEFAULT_BAUD))
+    return Link.open(choice.url, baud, **link_options), baud
+
+
+@main.command()
+@port_option
+@baud_option
+@click.option("--once", is_flag=True, help="Wait until all 9 status kinds were seen, print them, exit.")
+@click.option("--watch", is_flag=True, help="A live view, refreshed 12 times a second, until Ctrl-C.")
+@click.option("--json", "as_json", is_flag=True, help="JSON (one object; with --watch, JSON lines).")
+@click.option("--timeout", type=click.FloatRange(0.05, 600), default=2.0, show_default=True, help="Seconds to wait for the arm's status.")
+def status(port, baud, once, watch, as_json, timeout):
+    """Show the arm's decoded status frames (position, joints, PWM, pause, SD program)."""
+    from .ui.status_watch import print_once, watch_status
+
+    if once and watch:
+        raise UsageFailure("choose --once or --watch, not both")
+    link, baud = _connect(port, baud)
+    with link:
+        if watch:
+            watch_status(link, baud, as_json)
+        else:
+            print_once(link, baud, timeout, as_json)
+
+
+@main.command()
+def ports():
+    """List the serial ports found on this machine (device, description, hardware id)."""
+    from serial.tools import list_ports
+
+    found = sorted(list_ports.comports(), key=lambda p: p.device)
+    if not found:
+        click.echo("no serial ports found (the built-in simulator is always there: --port sim://)")
+    for info in found:
+        click.echo(f"{info.device}\t{info.description}\t{info.hwid}")
+
+
+@main.command()
+@click.argument("script", metavar="SCRIPT")
+@port_option
+@baud_option
+@click.option("--lead", "lead_s", type=click.FloatRange(0.1, 60), default=2.0, show_default=True,
+              help="Seconds of motion kept queued ahead of the arm (how long it keeps moving after Ctrl-C).")
+@click.option("--from-line", "from_line", type=click.IntRange(1), default=1, help="Start at this line, with the modal state the lines before it set.")
+@click.option("--dry-run", is_flag=True, help="Check, print the frames and the estimate; open no port.")
+@click.option("--log", "log_path", type=click.Path(dir_okay=False, writable=True), help="JSON lines of every frame written and read (armctl decode reads it).")
+@click.option("--no-live", is_flag=True, help="Plain progress lines instead of the live panel.")
+@click.option("--abort", type=click.Choice(["pause", "reset-connector", "none"]), default="pause", show_default=True,
+              help="What Ctrl-C sends after it stops feeding (see README: Stopping a job).")
+@click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
+@click.option("--timeout", "timeout_s", type=click.FloatRange(0.1, 600), default=3.0, show_default=True, help="Seconds to wait for the arm's status before starting.")
+def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort, profile_path, timeout_s):
+    """Check a motion script, then stream it to the arm without overflowing its buffer."""
+    from .ui.run_job import JobOptions, run_job
+
+    _check_readable(script)
+    if script == "-":
+        raise UsageFailure("run needs a file (it reads the script more than once); save it first")
+    options = JobOptions(script, port, baud, lead_s, from_line, dry_run, log_path, not no_live, abort, profile_path, timeout_s)
+    sys.exit(run_job(options, _compile_source, _connect))
+
+
+@main.command()
+@click.argument("script", metavar="SCRIPT")
+@click.option("--lead", "lead_s", type=click.FloatRange(0.1, 60), default=2.0, show_default=True, help="The lead run would use.")
+@click.option("--baud", type=click.IntRange(300, 4_000_000), default=9600, show_default=True)
+@click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
+@click.option("--json", "as_json", is_flag=True, help="One JSON object.")
+def estimate(script, lead_s, baud, profile_path, as_json):
+    """How long a job takes on the arm: time, frames, path, line- vs arm-bound, peak queue."""
+    from .motion import MotionModel
+    from .profile import load_profile
+    from .ui.run_job import check_script, estimate_job, print_estimate
+
+    _check_readable(script)
+    check_script(_compile_source, script)
+    model = MotionModel(load_profile(profile_path))
+    result = estimate_job(_compile_source, script, model, model.initial_pose(), lead_s, baud)
+    if as_json:
+        click.echo(json.dumps(result.to_json()))
+    else:
+        print_estimate(result, f"{script} (from the profile's fixed pose 0; the first move depends on where the arm is):")
+
+
+@main.command()
+@click.option("--pty", "use_pty", is_flag=True, help="Serve the simulated arm on a new pseudo-terminal and print its path.")
+@click.option("--tcp", "tcp_port", type=click.IntRange(1, 65535), help="Serve one client on 127.0.0.1:PORT (socket://127.0.0.1:PORT).")
+@click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?slowdown=1.3&loss=0.05.")
+def sim(use_pty, tcp_port, sim_url):
+    """Run the built-in simulated arm for other programs to talk to."""
+    from .sim.bridge import serve_pty, serve_tcp
+    from .sim.protocol_sim import parse_sim_url
+
+    if bool(use_pty) == bool(tcp_port):
+        raise UsageFailure("choose one of --pty or --tcp PORT")
+    options, time_scale = parse_sim_url(sim_url)
+
+    def ready(where: str) -> None:
+        click.echo(f"simulated arm on {where} (Ctrl-C to stop)")
+
+    try:
+        if use_pty:
+            serve_pty(options, ready, time_scale=time_scale)
+        else:
+            serve_tcp(tcp_port, options, ready, time_scale=time_scale)
+    except KeyboardInterrupt:
+        pass
+
+
+@main.command(context_settings={"ignore_unknown_options": True, "allow_extra_args": True})
+@click.pass_context
+def bench(ctx):
+    """The streaming benchmark: scenarios × strategies in virtual time (see docs/bench.md)."""
+    from .bench.__main__ import main as bench_main
+
+    sys.exit(bench_main(ctx.args))

@@ -237,16 +237,25 @@ class Streamer:
         self._reanchor(candidates, now)
 
     def _reanchor(self, candidates: list[tuple[int, float]], now: float) -> None:
-        """Re-time the pending frames from the candidate the estimate finds most plausible."""
+        """Re-time the pending frames from the candidate the estimate finds most plausible.
+
+        Only a segment that moves says anything about time: the arm standing on a point shared
+        by a still frame tells nothing about whether that frame has run.  Seen at the very end
+        of a segment, the arm finished it at or before ``now`` (the estimate may only move
+        earlier); seen part-way, it finishes the rest from ``now``.
+        """
         first = self.pending[0].index if self.pending else 0
-        candidates = [c for c in candidates if c[0] >= first]
-        if not candidates:
+        moving = [c for c in candidates if c[0] >= first and self.pending[c[0] - first].segment.length > 0]
+        if not moving:
             return
-        index, fraction = min(candidates, key=lambda c: _distance_in_time(self.pending[c[0] - first], c[1], now))
+        index, fraction = min(moving, key=lambda c: _distance_in_time(self.pending[c[0] - first], c[1], now))
         k = index - first
         sent = self.pending[k]
         segment = sent.segment
-        sent.est_end_s = now + (segment.duration_s - segment.time_at_fraction(fraction))
+        if fraction >= 1.0:
+            sent.est_end_s = min(sent.est_end_s, now)
+        else:
+            sent.est_end_s = now + (segment.duration_s - segment.time_at_fraction(fraction))
         for j in range(k + 1, len(self.pending)):
             nxt = self.pending[j]
             nxt.est_end_s = max(nxt.wire_end_s, self.pending[j - 1].est_end_s) + nxt.segment.duration_s

@@ -1,0 +1,95 @@
+"""How long a job takes: the motion-time model played against the line and the lead.
+
+Strategy: pure and streaming.  Frames are fed in order; each one is written as early as the
+streamer would allow — the line is free and the motion queued ahead of the arm is within the
+lead — lands one frame time later, and runs when the arm is done with the one before.  What
+comes out is the job time a perfect host would reach, the time the arm spends waiting for the
+line (line-bound) against the time the line waits for the arm (arm-bound), the path length and
+the deepest queue.  Memory does not grow with the job.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+
+from .motion import ArmPose, MotionModel, Planner
+from .protocol import DEFAULT_BAUD, frame_seconds
+from .streamer import DEFAULT_LEAD_S
+
+
+@dataclass
+class Estimate:
+    frames: int = 0
+    job_s: float = 0.0  # from the first byte written to the end of the last frame
+    motion_s: float = 0.0  # the sum of every frame's duration
+    arm_waiting_s: float = 0.0  # the arm idle, waiting for the next frame (line-bound time)
+    path_mm: float = 0.0  # Cartesian path length (lines and arcs)
+    joint_path_deg: float = 0.0  # lead-joint degrees of joint moves
+    peak_queue_frames: int = 0
+    peak_queue_s: float = 0.0
+    notes: list = field(default_factory=list)  # planning notes (clamped speeds, …), first few
+
+    @property
+    def line_bound_share(self) -> float:
+        """Share of the job time the arm spent waiting for the line."""
+        return self.arm_waiting_s / self.job_s if self.job_s > 0 else 0.0
+
+    def to_json(self) -> dict:
+        return {
+            "frames": self.frames, "job_s": round(self.job_s, 3), "motion_s": round(self.motion_s, 3),
+            "line_bound_share": round(self.line_bound_share, 4), "arm_bound_share": round(1 - self.line_bound_share, 4),
+            "path_mm": round(self.path_mm, 1), "joint_path_deg": round(self.joint_path_deg, 1),
+            "peak_queue_frames": self.peak_queue_frames, "peak_queue_s": round(self.peak_queue_s, 3),
+        }
+
+
+class JobEstimator:
+    """Feed commands in order with ``add``; read ``result`` at any time."""
+
+    MAX_NOTES = 5
+
+    def __init__(self, model: MotionModel, start: ArmPose, lead_s: float = DEFAULT_LEAD_S, baud: int = DEFAULT_BAUD):
+        self.planner = Planner(model, start)
+        self.lead_s = lead_s
+        self.frame_s = frame_seconds(baud)
+        self.result = Estimate()
+        self._wire_free = 0.0
+        self._arm_free = 0.0  # when the arm finishes everything so far
+        self._ends: deque[float] = deque()  # end times of frames possibly still queued
+
+    def add(self, command) -> float:
+        """Plan one more frame; returns its duration."""
+        segment = self.planner.feed(command)
+        result = self.result
+        write = max(self._wire_free, self._arm_free - self.lead_s)
+        land = write + self.frame_s
+        self._wire_free = land
+        if result.frames and land > self._arm_free:
+            result.arm_waiting_s += land - self._arm_free
+        start = max(land, self._arm_free)
+        self._arm_free = start + segment.duration_s
+        result.frames += 1
+        result.motion_s += segment.duration_s
+        result.job_s = self._arm_free
+        if segment.kind in ("line", "arc"):
+            result.path_mm += segment.length
+        elif segment.kind == "joint":
+            result.joint_path_deg += segment.length
+        if segment.note and len(result.notes) < self.MAX_NOTES:
+            result.notes.append(segment.note)
+        ends = self._ends
+        while ends and ends[0] <= land:
+            ends.popleft()
+        ends.append(self._arm_free)
+        result.peak_queue_frames = max(result.peak_queue_frames, len(ends))
+        result.peak_queue_s = max(result.peak_queue_s, self._arm_free - land)
+        return segment.duration_s
+
+
+def estimate_commands(commands, model: MotionModel, start: ArmPose, lead_s: float = DEFAULT_LEAD_S,
+                      baud: int = DEFAULT_BAUD) -> Estimate:
+    estimator = JobEstimator(model, start, lead_s, baud)
+    for command in commands:
+        estimator.add(command)
+    return estimator.result

@@ -1,0 +1,275 @@
+"""``armctl run``'s engine: the pure Streamer driven by a clock against an open Link.
+
+Strategy: the edge where time is real.  The link's reader thread only queues status frames
+with the time they were read; this module's single thread drains that queue into the
+streamer, asks it when the next frame may go, writes it, and sleeps until the next decision
+is due.  Everything it knows is in ``RunView`` (for the live panel and the summary); every way
+a job can end — finished, Ctrl-C, a lost port — leaves a ``RunView`` that says the last line
+sent, the last line known executed and where to resume.
+"""
+
+from __future__ import annotations
+
+import json
+import queue
+import time
+from dataclasses import dataclass, field
+from typing import Callable, Iterator
+
+from .errors import ArmctlError, PortError
+from .protocol import ArcEnd, Command, PauseToggle, ResetConnector, StatusFrame
+from .streamer import Streamer
+
+ABORT_SEQUENCES = {
+    "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
+    "reset-connector": (ResetConnector(),),  # clears the FIFO when it acts (queued frames are lost)
+    "none": (),
+}
+REST_CHECK_S = 0.6  # the arm counts as at rest when it reported the same pose this long
+SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to come to rest
+POLL_S = 0.05
+
+
+@dataclass
+class RunView:
+    """What the run knows, for the panel, the plain progress lines and the summary."""
+
+    total_frames: int
+    estimated_job_s: float
+    lead_s: float
+    capacity: int
+    started_s: float = 0.0
+    now_s: float = 0.0
+    frames_sent: int = 0
+    last_sent: object = None  # the Statement of the last frame written
+    last_done: object = None  # the Statement of the last frame known finished
+    next_statement: object = None  # the first Statement not written
+    queued_frames_bound: int = 0
+    queued_s: float = 0.0
+    remaining_motion_s: float = 0.0
+    position_mm: tuple | None = None
+    status_frames: int = 0
+    finished: bool = False
+    arm_done_s: float | None = None  # when the arm came to rest at the end (model time)
+    outcome: str = "running"  # running, finished, interrupted, port lost, no confirmation
+    messages: list = field(default_factory=list)
+
+    @property
+    def elapsed_s(self) -> float:
+        return self.now_s - self.started_s
+
+    @property
+    def eta_s(self) -> float:
+        """Seconds until the arm should be done: what is queued, then what is still unsent."""
+        return self.queued_s + self.remaining_motion_s
+
+    first_not_done: object = None  # the Statement to resume at: the first not known finished
+
+    def resume_line(self) -> int | None:
+        """The line ``--from-line`` should name to continue after the last line known executed."""
+        return None if self.first_not_done is None else self.first_not_done.line
+
+
+class Aborted(ArmctlError):
+    """The user stopped the job (Ctrl-C); the view says where."""
+
+
+class JobRunner:
+    """Streams compiled statements through ``link`` with ``streamer``'s pacing."""
+
+    def __init__(
+        self,
+        link,
+        streamer: Streamer,
+        statements: Iterator,
+        view: RunView,
+        *,
+        clock: Callable[[], float] = time.monotonic,
+        time_scale: float = 1.0,
+        log=None,
+        on_update: Callable[[RunView], None] | None = None,
+        durations: Callable[[Command], float] | None = None,
+    ) -> None:
+        self.link = link
+        self.streamer = streamer
+        self.statements = iter(statements)
+        self.view = view
+        self.time_scale = time_scale
+        self._wall = clock
+        self._wall_origin = clock()
+        self.log = log
+        self.on_update = on_update or (lambda view: None)
+        self.status_queue: queue.SimpleQueue = queue.SimpleQueue()
+        self._rest: tuple | None = None  # (pose, since) of the last status position
+
+    # --- time -------------------------------------------------------------------------------
+
+    def now(self) -> float:
+        """Model time: wall seconds × the simulator's time scale (1 for a real arm)."""
+        return (self._wall() - self._wall_origin) * self.time_scale
+
+    def _sleep(self, model_s: float) -> None:
+        """Wait up to ``model_s`` for a status frame (returns early when one arrives)."""
+        try:
+            item = self.status_queue.get(timeout=max(model_s, 0.0) / self.time_scale)
+        except queue.Empty:
+            return
+        self._take_status(*item)
+
+    # --- status -----------------------------------------------------------------------------
+
+    def on_status(self, frame: StatusFrame, read_s: float) -> None:
+        """Called by the link's reader thread: queue the frame with its model time."""
+        self.status_queue.put((frame, self.now()))
+
+    def _drain(self) -> None:
+        while True:
+            try:
+                item = self.status_queue.get_nowait()
+            except queue.Empty:
+                return
+            self._take_status(*item)
+
+    def _take_status(self, frame: StatusFrame, at_s: float) -> None:
+        self.streamer.receive_status(frame, at_s)
+        self.view.status_frames += 1
+        if self.log is not None:
+            self._log("rx", frame.encode(), at_s, kind=frame.KIND)
+        if frame.KIND == 0:
+            pose = (frame.x_mm, frame.y_mm, frame.z_mm)
+            self.view.position_mm = pose
+            if self._rest is None or self._rest[0] != pose:
+                self._rest = (pose, at_s)
+
+    # --- the job ----------------------------------------------------------------------------
+
+    def run(self) -> RunView:
+        """Stream every statement, then wait for the arm to finish. Raises KeyboardInterrupt
+        (after the abort path has run) or PortError (after updating the view)."""
+        view = self.view
+        view.started_s = view.now_s = self.now()
+        view.next_statement = next(self.statements, None)
+        try:
+            while view.next_statement is not None:
+                self._step()
+            self._wait_for_finish()
+        except PortError:
+            view.outcome = "port lost"
+            self._refresh()
+            raise
+        return view
+
+    def _step(self) -> None:
+        self._drain()
+        if self.link.error is not None:
+            raise self.link.error
+        now = self.now()
+        when = self.streamer.next_write_time(now)
+        if when is not None and when <= now:
+            self._write(self.view.next_statement, now)
+            self.view.next_statement = next(self.statements, None)
+        else:
+            self._refresh()
+            self._sleep(POLL_S if when is None else min(when - now, POLL_S))
+
+    def _write(self, statement, now: float) -> None:
+        command = statement.command
+        frame = command.encode()
+        self.link.write(frame)
+        sent = self.streamer.wrote(command, now, tag=statement)
+        view = self.view
+        view.frames_sent += 1
+        view.last_sent = statement
+        view.remaining_motion_s = max(0.0, view.remaining_motion_s - sent.segment.duration_s)
+        if self.log is not None:
+            self._log("tx", frame, now, line=statement.line)
+        self._refresh()
+
+    def _refresh(self) -> None:
+        view, streamer = self.view, self.streamer
+        view.now_s = self.now()
+        view.queued_frames_bound = streamer.frames_in_flight_bound
+        view.queued_s = streamer.queued_seconds(view.now_s)
+        view.last_done = streamer.last_known_done()
+        view.first_not_done = self._first_not_done()
+        self.on_update(view)
+
+    def _first_not_done(self):
+        pending = self.streamer.pending
+        if not pending:
+            return self.view.next_statement
+        if isinstance(pending[0].command, ArcEnd) and self.view.last_done is not None:
+            return self.view.last_done  # a G301 cannot be resumed alone: resume at its G300
+        return pending[0].tag
+
+    # --- the end ----------------------------------------------------------------------------
+
+    def arm_at_rest(self, now: float) -> bool:
+        """The arm reported the same position for REST_CHECK_S and the estimate says done."""
+        finish = self.streamer.estimated_finish_s()
+        if finish is not None and now < finish:
+            return False
+        return self._rest is not None and now - self._rest[1] >= REST_CHECK_S
+
+    def _wait_for_finish(self) -> None:
+        view = self.view
+        now = self.now()
+        deadline = now + self.streamer.queued_seconds(now) * self.streamer.slowest_factor + SETTLE_SLACK_S
+        while True:
+            self._drain()
+            if self.link.error is not None:
+                raise self.link.error
+            now = self.now()
+            if self.streamer.all_consumed or self.arm_at_rest(now):
+                self._mark_all_done()
+                view.arm_done_s = self._rest[1] if self._rest is not None else now
+                view.outcome = "finished"
+                break
+            if now > deadline:
+                view.outcome = "no confirmation"
+                view.messages.append("the arm did not confirm the end of the job in time (status frames missing?)")
+                break
+            self._refresh()
+            self._sleep(POLL_S)
+        view.finished = view.outcome == "finished"
+        self._refresh()
+
+    def _mark_all_done(self) -> None:
+        """At rest after the estimate: every frame written has run."""
+        while self.streamer.pending:
+            self.streamer._consume_one()
+
+    def abort(self, sequence: tuple) -> None:
+        """Ctrl-C: stop feeding (nothing more is written after this call), send the abort
+        sequence, and wait for the arm to come to rest so the view can say what ran."""
+        view = self.view
+        view.outcome = "interrupted"
+        for command in sequence:
+            try:
+                self.link.write(command.encode())
+            except PortError:
+                view.outcome = "port lost"
+                return
+        deadline = self.now() + self.streamer.queued_seconds(self.now()) * self.streamer.slowest_factor + SETTLE_SLACK_S
+        while self.now() < deadline:
+            self._drain()
+            if self.link.error is not None:
+                break
+            if self.arm_at_rest(self.now()) and self._rest is not None:
+                if self.streamer.all_consumed or self._at_last_target():
+                    self._mark_all_done()
+                break
+            self._refresh()
+            self._sleep(POLL_S)
+        self._refresh()
+
+    def _at_last_target(self) -> bool:
+        pending = self.streamer.pending
+        if not pending or self._rest is None:
+            return False
+        target = pending[-1].segment.end.xyz
+        return max(abs(a - b) for a, b in zip(self._rest[0], target)) <= 0.5
+
+    def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
+        record = {"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra}
+        self.log.write(json.dumps(record) + "\n")

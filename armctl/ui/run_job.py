@@ -1,0 +1,241 @@
+"""``armctl run`` and ``armctl estimate``: check, connect, stream, report.
+
+Strategy: the sequence a careful operator would follow, each step a function — check the
+whole script (nothing leaves before it passes), read the arm's state, estimate, stream with a
+live view, and always end with a summary that says what ran and how to resume.  The pacing
+itself is the pure Streamer's; the clock and the port are the runner's.
+"""
+
+from __future__ import annotations
+
+import sys
+import time
+from contextlib import nullcontext
+from dataclasses import dataclass
+
+import click
+
+from ..errors import ArmctlError, PortError
+from ..protocol import PauseToggle, describe
+from ..streamer import Streamer
+
+EXIT_OK, EXIT_PROBLEMS, EXIT_INTERRUPTED = 0, 1, 130
+LIVE_REFRESH_S = 0.1
+PLAIN_PROGRESS_S = 2.0
+
+
+class JobFailed(ArmctlError):
+    """The job could not start or did not finish; nothing more to add than the message."""
+
+
+@dataclass
+class JobOptions:
+    script: str
+    port: str | None
+    baud: int | None
+    lead_s: float
+    from_line: int
+    dry_run: bool
+    log_path: str | None
+    live: bool
+    abort: str
+    profile_path: str | None
+    timeout_s: float
+
+
+def check_script(compile_source, script: str) -> None:
+    """The whole script is checked before anything is sent; on any error print them all, exit 1."""
+    check = compile_source(script)
+    check.finish()
+    if check.error_count:
+        for diagnostic in check.diagnostics:
+            click.echo(diagnostic.render(), err=True)
+        errors = check.error_count
+        click.echo(f"{errors} error{'s' if errors != 1 else ''}: nothing was sent to the arm", err=True)
+        sys.exit(EXIT_PROBLEMS)
+
+
+def estimate_job(compile_source, script, model, start, lead_s, baud, from_line=1, initial=None):
+    from ..estimate import JobEstimator
+
+    estimator = JobEstimator(model, start, lead_s, baud)
+    for statement in compile_source(script, initial=initial, from_line=from_line):
+        estimator.add(statement.command)
+    return estimator.result
+
+
+def print_estimate(result, header: str) -> None:
+    click.echo(header)
+    click.echo(f"  frames            {result.frames}")
+    click.echo(f"  job time          {result.job_s:.1f} s (motion {result.motion_s:.1f} s)")
+    click.echo(f"  line-bound share  {result.line_bound_share:.1%} (the arm waiting for the 9600-baud line)")
+    click.echo(f"  arm-bound share   {1 - result.line_bound_share:.1%}")
+    click.echo(f"  path              {result.path_mm:.1f} mm Cartesian, {result.joint_path_deg:.1f} deg of joint moves")
+    click.echo(f"  peak queue        {result.peak_queue_frames} frames, {result.peak_queue_s:.1f} s of motion")
+    for note in result.notes:
+        click.echo(f"  note: {note}")
+
+
+def dry_run(options: JobOptions, compile_source, model) -> int:
+    start = model.initial_pose()
+    for statement in compile_source(options.script, from_line=options.from_line):
+        frame = statement.command.encode()
+        click.echo(f"{statement.line:>6}  {frame.hex()}  {describe(statement.command)}")
+    result = estimate_job(compile_source, options.script, model, start, options.lead_s, options.baud or 9600, options.from_line)
+    print_estimate(result, "dry run: no port opened; estimate from the profile's fixed pose 0:")
+    return EXIT_OK
+
+
+def read_arm(link, timeout_s: float):
+    """Wait for all nine status kinds; resume a paused arm (a job was asked for)."""
+    if not link.wait_until(lambda s: s.complete, timeout_s):
+        _, received, _, frames = link.snapshot()
+        heard = "nothing" if received == 0 else f"{received} bytes, {frames} status frames"
+        raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
+    state = link.snapshot()[0]
+    if state.paused:
+        click.echo("armctl: the arm reports it is paused: sending one pause toggle to resume it", err=True)
+        link.write(PauseToggle().encode())
+        if not link.wait_until(lambda s: s.paused is False, max(timeout_s, 1.0)):
+            raise JobFailed("the arm stayed paused after a pause toggle; nothing else was sent")
+        state = link.snapshot()[0]
+    return state
+
+
+def start_from_state(model, state):
+    """The streamer's start pose and the compiler's initial state, from the arm's report."""
+    from ..script import InitialState
+
+    joints = tuple(state.joints_deg)
+    pose = model.initial_pose(joints=joints, pwm_us=float(state.pwm_us), origin_mm=tuple(state.worktable_mm))
+    initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: float(state.pwm_us)})
+    return pose, initial
+
+
+def time_scale_of(url: str) -> float:
+    if not url.startswith("sim://"):
+        return 1.0
+    from ..sim.protocol_sim import parse_sim_url
+
+    return parse_sim_url(url)[1]
+
+
+def run_job(options: JobOptions, compile_source, connect) -> int:
+    from ..motion import MotionModel
+    from ..profile import load_profile
+    from ..runner import ABORT_SEQUENCES, JobRunner, RunView
+
+    check_script(compile_source, options.script)
+    profile = load_profile(options.profile_path)
+    model = MotionModel(profile)
+    if options.dry_run:
+        return dry_run(options, compile_source, model)
+
+    link, baud = connect(options.port, options.baud)
+    with link, (open(options.log_path, "w", encoding="utf-8") if options.log_path else nullcontext()) as log:
+        state = read_arm(link, options.timeout_s)
+        start, initial = start_from_state(model, state)
+        estimate = estimate_job(compile_source, options.script, model, start, options.lead_s, baud, options.from_line, initial)
+        if estimate.frames == 0:
+            click.echo("nothing to send: the script has no frames" + (f" from line {options.from_line}" if options.from_line > 1 else ""))
+            return EXIT_OK
+        streamer = Streamer(model, start, lead_s=options.lead_s, baud=baud)
+        view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, lead_s=options.lead_s,
+                       capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
+        statements = compile_source(options.script, initial=initial, from_line=options.from_line)
+        runner = JobRunner(link, streamer, statements, view, time_scale=time_scale_of(link.url), log=log)
+        link.on_status = runner.on_status
+        wall_start = time.monotonic()
+        outcome = _stream(runner, options, view)
+        wall_s = time.monotonic() - wall_start
+        return _summary(view, outcome, wall_s, estimate, options)
+
+
+def _stream(runner, options: JobOptions, view) -> str:
+    from ..runner import ABORT_SEQUENCES
+
+    title = f"armctl run {options.script}"
+    display = _Display(title, options.live and sys.stdout.isatty())
+    runner.on_update = display.update
+    try:
+        with display:
+            try:
+                runner.run()
+            except KeyboardInterrupt:
+                click.echo("\narmctl: interrupted: no more frames are sent; sending the abort sequence "
+                           f"({options.abort}) and waiting for the arm to come to rest …", err=True)
+                try:
+                    runner.abort(ABORT_SEQUENCES[options.abort])
+                except KeyboardInterrupt:
+                    pass
+                return "interrupted"
+            except PortError as error:
+                view.messages.append(str(error))
+                return "port lost"
+    finally:
+        pass
+    return view.outcome
+
+
+class _Display:
+    """A rich Live panel on a terminal, plain progress lines elsewhere; throttled."""
+
+    def __init__(self, title: str, live: bool) -> None:
+        self.title, self.live = title, live
+        self._live = None
+        self._last = 0.0
+
+    def __enter__(self):
+        if self.live:
+            from rich.live import Live
+            from rich.text import Text
+
+            self._live = Live(Text("starting …"), refresh_per_second=10, transient=False)
+            self._live.__enter__()
+        return self
+
+    def __exit__(self, *exc):
+        if self._live is not None:
+            self._live.__exit__(*exc)
+
+    def update(self, view) -> None:
+        now = time.monotonic()
+        if self._live is not None:
+            if now - self._last >= LIVE_REFRESH_S or view.outcome != "running":
+                from .run_panel import render_run
+
+                self._live.update(render_run(view, self.title))
+                self._last = now
+        elif now - self._last >= PLAIN_PROGRESS_S:
+            from .run_panel import progress_line
+
+            click.echo(progress_line(view))
+            self._last = now
+
+
+def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions) -> int:
+    sent = view.last_sent.line if view.last_sent is not None else None
+    done = view.last_done.line if view.last_done is not None else None
+    click.echo(f"frames: {view.frames_sent} of {view.total_frames} sent")
+    click.echo(f"time: {wall_s:.1f} s wall")
+    if view.arm_done_s is not None:
+        actual = view.arm_done_s - view.started_s
+        click.echo(f"arm time: {actual:.1f} s from the first frame to the arm at rest; estimated {estimate.job_s:.1f} s "
+                   f"({actual / estimate.job_s - 1:+.1%})" if estimate.job_s else f"arm time: {actual:.1f} s")
+    for message in view.messages:
+        click.echo(f"note: {message}", err=True)
+    if outcome == "finished":
+        click.echo("done: the arm finished the job")
+        return EXIT_OK
+    click.echo(f"last line sent: {sent if sent is not None else 'none'}")
+    click.echo(f"last line known executed: {done if done is not None else 'none'}")
+    resume = view.resume_line()
+    if resume is not None:
+        loop = getattr(view.first_not_done, "loop", ())
+        where = f" (inside a repeat block, iteration {loop[-1] + 1}: --from-line restarts that block's first iteration)" if loop else ""
+        click.echo(f"resume with: armctl run {options.script} --from-line {resume}{where}")
+    if outcome == "interrupted":
+        click.echo(f"stopped: interrupted; abort sequence: {options.abort}", err=True)
+        return EXIT_INTERRUPTED
+    click.echo(f"stopped: {outcome}", err=True)
+    return EXIT_PROBLEMS

@@ -1,0 +1,56 @@
+"""The live view of ``armctl run``: a pure function of a ``RunView``.
+
+Strategy: like ``status_panel``, rendering takes a snapshot and returns a rich renderable (or a
+plain line for pipes), so tests compare text from a recording console.
+"""
+
+from __future__ import annotations
+
+from rich.console import Group
+from rich.panel import Panel
+from rich.progress_bar import ProgressBar
+from rich.table import Table
+
+from ..runner import RunView
+
+
+def _clock(seconds: float) -> str:
+    seconds = max(0, int(round(seconds)))
+    return f"{seconds // 60}:{seconds % 60:02d}"
+
+
+def _line(statement) -> str:
+    return "—" if statement is None else f"{statement.line}  {statement.span.text.strip()[:48]}"
+
+
+def render_run(view: RunView, title: str) -> Panel:
+    frames = Table.grid(padding=(0, 1))
+    frames.add_column(width=10)
+    frames.add_column()
+    frames.add_column(justify="right")
+    done = view.frames_sent / view.total_frames if view.total_frames else 1.0
+    frames.add_row("frames", ProgressBar(total=1.0, completed=done, width=40), f"{view.frames_sent}/{view.total_frames}")
+
+    facts = Table.grid(padding=(0, 2))
+    facts.add_column(style="bold")
+    facts.add_column()
+    facts.add_row("elapsed / ETA", f"{_clock(view.elapsed_s)} / {_clock(view.eta_s)} left (estimate {_clock(view.estimated_job_s)})")
+    facts.add_row(
+        "queue (estimate)",
+        f"≤ {view.queued_frames_bound} frames (limit {view.capacity}) · {view.queued_s:.1f} s of motion (lead {view.lead_s:g} s)",
+    )
+    position = "—" if view.position_mm is None else "  ".join(f"{v:.1f}" for v in view.position_mm)
+    facts.add_row("position X Y Z", position)
+    facts.add_row("last line sent", _line(view.last_sent))
+    facts.add_row("last line done", _line(view.last_done))
+    return Panel(Group(frames, facts), title=title, expand=False)
+
+
+def progress_line(view: RunView) -> str:
+    """A plain progress line for output that is not a terminal."""
+    sent = view.last_sent.line if view.last_sent is not None else "-"
+    done = view.last_done.line if view.last_done is not None else "-"
+    return (
+        f"[{_clock(view.elapsed_s)}] frames {view.frames_sent}/{view.total_frames} · line sent {sent} · "
+        f"line done {done} · queue ≤{view.queued_frames_bound} frames {view.queued_s:.1f}s · ETA {_clock(view.eta_s)}"
+    )
