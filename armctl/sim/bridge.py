@@ -1,0 +1,160 @@
+"""The simulated arm behind a pseudo-terminal or a TCP socket, in real time.
+
+Strategy: one loop per transport, both thin: wait (``poll``/``select``) until host bytes come
+in or the next status byte is due, hand what came in to the ``RealtimeArm``, send what it
+produced.  The loop ends, closing everything it opened, when
+
+- the peer goes away — the pty's slave is closed again after a program had it open (POLLHUP),
+  or the TCP client disconnects;
+- ``stop`` (a ``threading.Event``) is set — tests and embedding callers use it;
+- the user presses Ctrl-C (KeyboardInterrupt is caught here, not re-raised).
+
+Each function returns why it ended: ``"peer closed"``, ``"stopped"`` or ``"interrupted"``.
+Until a program opens the pty, the arm runs and its status bytes are discarded (a tty would
+otherwise hand the first reader a backlog of stale frames).
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import select
+import socket
+import termios
+import threading
+import tty
+from typing import Callable
+
+from .model import SimOptions, SimulatedArm
+from .realtime import RealtimeArm
+
+PEER_CLOSED, STOPPED, INTERRUPTED = "peer closed", "stopped", "interrupted"
+IDLE_WAIT_S = 0.05  # longest wait between checks of ``stop`` and the peer
+NO_PEER_WAIT_S = 0.01  # how often to look for a program opening the pty (keeps the first
+# status bytes it gets fresh: output made while nobody listened is discarded)
+READ_CHUNK = 4096
+TCP_HOST = "127.0.0.1"
+
+
+def _wait_s(arm: RealtimeArm) -> float:
+    due = arm.wall_seconds_until_output()
+    return IDLE_WAIT_S if due is None else min(IDLE_WAIT_S, due)
+
+
+def _stopped(stop: threading.Event | None) -> bool:
+    return stop is not None and stop.is_set()
+
+
+def serve_pty(
+    options: SimOptions,
+    on_ready: Callable[[str], None],
+    stop: threading.Event | None = None,
+    time_scale: float = 1.0,
+    model: SimulatedArm | None = None,
+) -> str:
+    """Run the arm on a new pseudo-terminal; ``on_ready(path)`` gets its slave path.
+
+    ``model``: an arm built by the caller (to inspect it afterwards), else one from ``options``."""
+    master_fd, slave_fd = os.openpty()
+    try:
+        tty.setraw(slave_fd, termios.TCSANOW)
+        path = os.ttyname(slave_fd)
+    except BaseException:
+        os.close(master_fd)
+        os.close(slave_fd)
+        raise
+    os.close(slave_fd)  # so that POLLHUP tells whether a program has the slave open
+    arm = RealtimeArm(model or SimulatedArm(options), time_scale)
+    try:
+        on_ready(path)
+        return _pump_pty(master_fd, arm, stop)
+    except KeyboardInterrupt:
+        return INTERRUPTED
+    finally:
+        os.close(master_fd)
+
+
+def _pump_pty(master_fd: int, arm: RealtimeArm, stop: threading.Event | None) -> str:
+    poller = select.poll()
+    poller.register(master_fd, select.POLLIN)
+    peer_seen = False
+    while not _stopped(stop):
+        events = dict(poller.poll(_wait_s(arm) * 1000.0))
+        hung_up = bool(events.get(master_fd, 0) & (select.POLLHUP | select.POLLERR))
+        if hung_up:
+            if peer_seen:
+                return PEER_CLOSED
+            arm.poll()  # nobody listens yet: the arm runs, its output is discarded
+            if stop is not None:
+                stop.wait(NO_PEER_WAIT_S)
+            else:
+                select.select([], [], [], NO_PEER_WAIT_S)
+            continue
+        peer_seen = True
+        try:
+            if events.get(master_fd, 0) & select.POLLIN:
+                arm.write(os.read(master_fd, READ_CHUNK))
+            output = arm.poll()
+            if output:
+                os.write(master_fd, output)
+        except OSError as error:
+            if error.errno in (errno.EIO, errno.EBADF):
+                return PEER_CLOSED
+            raise
+    return STOPPED
+
+
+def serve_tcp(
+    port: int,
+    options: SimOptions,
+    on_ready: Callable[[str], None],
+    stop: threading.Event | None = None,
+    time_scale: float = 1.0,
+    model: SimulatedArm | None = None,
+) -> str:
+    """Serve one client on 127.0.0.1:``port`` (0 = any free port); ``on_ready`` gets the
+    pyserial URL to open, ``socket://127.0.0.1:PORT``.  The arm's clock starts when the client
+    connects.  ``model`` as for ``serve_pty``."""
+    server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    try:
+        server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        server.bind((TCP_HOST, port))
+        server.listen(1)
+        on_ready(f"socket://{TCP_HOST}:{server.getsockname()[1]}")
+        client = _accept(server, stop)
+        if client is None:
+            return STOPPED
+        with client:
+            client.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+            arm = RealtimeArm(model or SimulatedArm(options), time_scale)
+            return _pump_tcp(client, arm, stop)
+    except KeyboardInterrupt:
+        return INTERRUPTED
+    finally:
+        server.close()
+
+
+def _accept(server: socket.socket, stop: threading.Event | None) -> socket.socket | None:
+    while not _stopped(stop):
+        readable, _, _ = select.select([server], [], [], IDLE_WAIT_S)
+        if readable:
+            client, _address = server.accept()
+            return client
+    return None
+
+
+def _pump_tcp(client: socket.socket, arm: RealtimeArm, stop: threading.Event | None) -> str:
+    while not _stopped(stop):
+        readable, _, _ = select.select([client], [], [], _wait_s(arm))
+        try:
+            if readable:
+                data = client.recv(READ_CHUNK)
+                if not data:
+                    return PEER_CLOSED
+                arm.write(data)
+            output = arm.poll()
+            if output:
+                client.sendall(output)
+        except (ConnectionError, OSError):
+            return PEER_CLOSED
+    return STOPPED

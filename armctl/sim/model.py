@@ -1,0 +1,250 @@
+"""The simulated arm: line, connector, executor and status output, driven by events.
+
+Strategy (sans-I/O, after h11): the caller owns the clock.  ``write(data, now_s)`` puts host
+bytes on the line; the connector frames them at once (framing needs no timing) and each frame
+gets the exact time its last byte lands.  ``advance(now_s)`` then processes, in time order,
+every event up to ``now_s`` — a frame landing, a segment ending, a status frame falling due —
+and returns the status bytes whose last bit has reached the host.  ``next_event_time()`` lets
+a virtual-time driver jump straight to the next moment anything changes.  Nothing here loops
+over bytes or ticks over time: a 1000-frame job costs about 1000 landings, 1000 executions and
+one status frame per 30 ms of arm time.
+
+At one instant, events run in this order: segment ends (freeing slots), then frames landing,
+then the status frame (so it reports the state after both).
+
+Time never runs backwards: a ``write`` or ``advance`` with a time before the model's current
+time is taken to happen at the current time.  No time, threading or serial imports here.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass
+
+from ..protocol import CONNECTOR_BUFFER_FRAMES, CONTROL_FRAMES_QUEUED, DEFAULT_BAUD, STATUS_PERIOD_S, STATUS_SIZE
+from .connector import Connector, Framer, ReceivedFrame, decode_received
+from .executor import Execution, Executor, LiveSnapshot
+from .faults import StatusFaults
+from .program import SdProgram
+from .status import StatusSchedule, build_status
+from .wire import TIME_EPSILON_S, Wire
+
+
+@dataclass(frozen=True)
+class SimOptions:
+    """How the simulated arm and its line behave.  ``profile``: a ``Profile``, a path to a
+    profile TOML, or None for ``load_profile()``'s choice."""
+
+    baud: int = DEFAULT_BAUD
+    speed_factor: float = 1.0  # 1.3 = every motion takes 30 % longer than the model says
+    control_on_arrival: bool = not CONTROL_FRAMES_QUEUED  # H5 alternative when True
+    fifo_frames: int = CONNECTOR_BUFFER_FRAMES
+    status_loss_rate: float = 0.0
+    status_corrupt_rate: float = 0.0
+    noise_rate: float = 0.0
+    seed: int = 0
+    profile: object = None
+
+    def __post_init__(self) -> None:
+        if not self.baud > 0:
+            raise ValueError(f"baud must be positive, not {self.baud!r}")
+        if not self.speed_factor > 0:
+            raise ValueError(f"speed_factor must be positive, not {self.speed_factor!r}")
+        if not self.fifo_frames > 0:
+            raise ValueError(f"fifo_frames must be positive, not {self.fifo_frames!r}")
+
+
+def _load_profile(profile):
+    from ..profile import Profile, load_profile
+
+    if isinstance(profile, Profile):
+        return profile
+    return load_profile(profile)
+
+
+class SimulatedArm:
+    """The arm, its connector and both directions of the line, in virtual time."""
+
+    def __init__(self, options: SimOptions = SimOptions(), start_s: float = 0.0) -> None:
+        self.options = options
+        self.profile = _load_profile(options.profile)
+        self.now_s = start_s
+        self.host_line = Wire(options.baud, keeps_bytes=False)  # host → arm: timing only
+        self.arm_line = Wire(options.baud)  # arm → host: the status bytes themselves
+        self.framer = Framer()
+        self.connector = Connector(capacity_frames=options.fifo_frames)
+        self.executor = Executor(self.profile, self.connector, options.speed_factor, options.control_on_arrival, start_s)
+        self.schedule = StatusSchedule(STATUS_PERIOD_S, first_s=start_s)
+        self.faults = StatusFaults(options.status_loss_rate, options.status_corrupt_rate, options.noise_rate, options.seed)
+        self.status_frames_built = 0
+        self._landings: deque[tuple[float, bytes]] = deque()  # frames framed, not yet landed
+
+    # --- the host's side -----------------------------------------------------------------------
+
+    def write(self, data: bytes, now_s: float) -> None:
+        """Host bytes handed to the line at ``now_s``; they land behind any still in flight."""
+        self._run_until(now_s)
+        data = bytes(data)
+        start_s = self.host_line.send(data, self.now_s)
+        for end, frame in self.framer.feed(data):
+            if frame is not None:
+                self._landings.append((self.host_line.arrival_s(start_s, end), frame))
+
+    def advance(self, now_s: float) -> bytes:
+        """Run the arm up to ``now_s``; the status bytes that reached the host by then."""
+        self._run_until(now_s)
+        return self.arm_line.take(self.now_s)
+
+    def next_event_time(self) -> float | None:
+        """When anything next changes: a frame lands, a segment ends, a status frame is built,
+        or the status bytes in flight (a frame, with any noise before it) have all reached the host."""
+        candidates = [self._next_internal_s(), self.arm_line.run_end_s()]
+        return min((t for t in candidates if t is not None), default=None)
+
+    def advance_until_idle(self, limit_s: float = float("inf")) -> bytes:
+        """Run until every frame written has landed and nothing runs (frames may still wait,
+        e.g. behind a pause), or until ``limit_s``; the status bytes produced meanwhile."""
+        out = bytearray()
+        while self.now_s < limit_s:
+            dues = [self.executor.next_event_s()]  # None when idle or frozen by a pause
+            if self._landings:
+                dues.append(self._landings[0][0])
+            due_s = min((t for t in dues if t is not None), default=None)
+            if due_s is None:
+                break
+            out += self.advance(min(limit_s, due_s))
+        return bytes(out)
+
+    def next_output_time(self) -> float:
+        """When the next status burst (a frame, with any noise before it) has fully reached the
+        host: the one in flight, else the next frame due (a real-time reader sleeps until then)."""
+        in_flight_s = self.arm_line.run_end_s()
+        if in_flight_s is not None:
+            return in_flight_s
+        return max(self.schedule.next_s, self.arm_line.free_at_s) + STATUS_SIZE * self.arm_line.byte_s
+
+    def host_bytes_in_flight(self, now_s: float) -> int:
+        """Host bytes written but not yet fully landed at ``now_s`` (pyserial's out_waiting)."""
+        return self.host_line.in_flight(max(now_s, self.now_s))
+
+    def host_line_free_s(self) -> float:
+        """When the last host byte written so far will have landed."""
+        return self.host_line.free_at_s
+
+    # --- the event loop ------------------------------------------------------------------------
+
+    def _next_internal_s(self) -> float:
+        times = [self.schedule.next_s]
+        if self._landings:
+            times.append(self._landings[0][0])
+        executor_s = self.executor.next_event_s()
+        if executor_s is not None:
+            times.append(executor_s)
+        return min(times)
+
+    def _run_until(self, now_s: float) -> None:
+        limit_s = max(now_s, self.now_s)
+        executor, landings, schedule = self.executor, self._landings, self.schedule
+        while True:
+            executor_s = executor.next_event_s()
+            landing_s = landings[0][0] if landings else None
+            status_s = schedule.next_s
+            if executor_s is not None and executor_s <= limit_s + TIME_EPSILON_S and (
+                landing_s is None or executor_s <= landing_s) and executor_s <= status_s:
+                executor.run_until(executor_s)
+            elif landing_s is not None and landing_s <= limit_s + TIME_EPSILON_S and landing_s <= status_s:
+                _, raw = landings.popleft()
+                self.executor.land(decode_received(self.connector.next_index(), landing_s, raw), landing_s)
+            elif status_s <= limit_s + TIME_EPSILON_S:
+                self._emit_status(status_s)
+            else:
+                break
+        executor.run_until(limit_s)
+        self.now_s = max(limit_s, executor.now_s)
+
+    def _emit_status(self, at_s: float) -> None:
+        kind = self.schedule.pop()
+        frame = build_status(kind, self.executor.snapshot(at_s)).encode()
+        self.arm_line.send(self.faults.apply(frame), at_s)
+        self.status_frames_built += 1
+
+    # --- the truth, for tests and the benchmark ------------------------------------------------
+
+    @property
+    def fifo(self) -> list[ReceivedFrame]:
+        """Frames in the connector now: those executing (holding slots) then those waiting."""
+        return list(self.connector.executing) + list(self.connector.queue)
+
+    @property
+    def fifo_occupancy(self) -> int:
+        return self.connector.occupancy
+
+    @property
+    def peak_fifo_occupancy(self) -> int:
+        return self.connector.peak_occupancy
+
+    @property
+    def frames_received(self) -> list[ReceivedFrame]:
+        """Every well-framed frame that landed, in arrival order (``.index``, ``.accepted``)."""
+        return self.connector.received
+
+    @property
+    def frames_dropped(self) -> int:
+        return self.connector.dropped
+
+    @property
+    def dropped_indexes(self) -> list[int]:
+        return self.connector.dropped_indexes
+
+    @property
+    def bad_frames(self) -> int:
+        """Frames discarded for a wrong tail byte (H7)."""
+        return self.framer.bad_frames
+
+    @property
+    def skipped_bytes(self) -> int:
+        """Bytes skipped while hunting for a head byte (H7)."""
+        return self.framer.skipped_bytes
+
+    @property
+    def execution_log(self) -> list[Execution]:
+        return self.executor.log
+
+    @property
+    def pose(self):
+        """The true pose now (``motion.ArmPose``: ``.cartesian`` in the worktable frame, ``.joints``)."""
+        return self.executor.pose_at(self.now_s)
+
+    def snapshot(self) -> LiveSnapshot:
+        """What a status frame would report now (X/Y/Z in the worktable frame, joints, …)."""
+        return self.executor.snapshot(self.now_s)
+
+    @property
+    def paused(self) -> bool:
+        return self.executor.paused
+
+    @property
+    def pwm_us(self) -> float:
+        return self.pose.pwm_us[0]
+
+    @property
+    def origin_mm(self) -> tuple[float, float, float]:
+        return self.executor.origin_mm
+
+    @property
+    def structure_mode(self) -> int:
+        return self.executor.structure_mode
+
+    @property
+    def program(self) -> SdProgram:
+        return self.executor.program
+
+    @property
+    def busy(self) -> bool:
+        """True while a segment (move, delay, SD program…) runs."""
+        return self.executor.busy
+
+    @property
+    def idle(self) -> bool:
+        """Nothing running, nothing waiting, nothing on the line towards the arm."""
+        return not self.executor.busy and not self.connector.queue and not self._landings

@@ -1,0 +1,253 @@
+"""``sim://`` — the simulated arm as a pyserial port (after pyserial's ``protocol_loop.py``).
+
+URL: ``sim://[?option=value&…]``, options (all optional):
+
+=========  ======================================================================  =========
+option     meaning                                                                 default
+=========  ======================================================================  =========
+speed      time scale: 4 = the arm runs 4× faster than the wall clock              1
+slowdown   speed factor: 1.3 = every motion takes 30 % longer than commanded       1
+baud       line rate in bit/s (else the port's ``baudrate``)                       9600
+control    ``queued`` (H5: control frames wait in the FIFO) or ``arrival``          queued
+fifo       connector buffer size in frames                                         200
+loss       share of status frames lost                                             0
+corrupt    share of status frames with one byte flipped                            0
+noise      share of status frames preceded by random noise bytes                   0
+seed       seed of the faults                                                      0
+profile    path of an arm profile (TOML)                                           built-in
+=========  ======================================================================  =========
+
+Strategy: a thin edge.  ``write`` hands the bytes to the model at the current model time and
+returns at once (they queue on the simulated wire; ``out_waiting`` counts those not yet sent);
+``read`` runs the model up to now and, while it lacks bytes, sleeps until the next status byte
+is due — on an ``Event``, so ``close``/``cancel_read`` wake it — never busy-waiting.  All model
+access goes through ``RealtimeArm``'s lock.  ``.model`` is the ``SimulatedArm`` for tests.
+Registered by importing ``armctl.sim`` (it appends itself to
+``serial.protocol_handler_packages``).
+"""
+
+from __future__ import annotations
+
+import numbers
+import threading
+import time
+import urllib.parse
+
+from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_bytes
+
+from .model import SimOptions, SimulatedArm
+from .realtime import RealtimeArm
+
+CONTROL_MODES = {"queued": False, "arrival": True}
+_USAGE = (
+    "expected sim://[?option=value&…] with options speed, slowdown, baud, control=queued|arrival, "
+    "fifo, loss, corrupt, noise, seed, profile"
+)
+
+
+def _positive_float(name: str, text: str) -> float:
+    value = float(text)
+    if not value > 0 or value != value or value == float("inf"):
+        raise ValueError(f"{name} must be a positive number, not {text!r}")
+    return value
+
+
+def _rate(name: str, text: str) -> float:
+    value = float(text)
+    if not 0.0 <= value <= 1.0:
+        raise ValueError(f"{name} must be between 0 and 1, not {text!r}")
+    return value
+
+
+def _positive_int(name: str, text: str) -> int:
+    value = int(text)
+    if value <= 0:
+        raise ValueError(f"{name} must be a positive whole number, not {text!r}")
+    return value
+
+
+def _control(name: str, text: str) -> bool:
+    if text not in CONTROL_MODES:
+        raise ValueError(f"{name} must be 'queued' or 'arrival', not {text!r}")
+    return CONTROL_MODES[text]
+
+
+# URL option → (SimOptions field or "time_scale", parser)
+_OPTIONS = {
+    "speed": ("time_scale", _positive_float),
+    "slowdown": ("speed_factor", _positive_float),
+    "baud": ("baud", _positive_int),
+    "control": ("control_on_arrival", _control),
+    "fifo": ("fifo_frames", _positive_int),
+    "loss": ("status_loss_rate", _rate),
+    "corrupt": ("status_corrupt_rate", _rate),
+    "noise": ("noise_rate", _rate),
+    "seed": ("seed", lambda name, text: int(text)),
+    "profile": ("profile", lambda name, text: text),
+}
+
+
+def parse_sim_url(url: str, baud: int | None = None) -> tuple[SimOptions, float]:
+    """``SimOptions`` and the time scale a ``sim://`` URL asks for; SerialException if bad."""
+    parts = urllib.parse.urlsplit(url)
+    if parts.scheme != "sim":
+        raise SerialException(f"{url!r} does not start with sim:// ({_USAGE})")
+    values: dict = {} if baud is None else {"baud": baud}
+    time_scale = 1.0
+    try:
+        for name, texts in urllib.parse.parse_qs(parts.query, keep_blank_values=True).items():
+            if name not in _OPTIONS:
+                raise ValueError(f"unknown option {name!r}")
+            if len(texts) > 1:
+                raise ValueError(f"option {name!r} is given {len(texts)} times")
+            target, parse = _OPTIONS[name]
+            value = parse(name, texts[0])
+            if target == "time_scale":
+                time_scale = value
+            else:
+                values[target] = value
+        return SimOptions(**values), time_scale
+    except ValueError as error:
+        raise SerialException(f"{error} in {url!r} ({_USAGE})") from None
+
+
+class Serial(SerialBase):
+    """A pyserial port whose other end is the simulated arm."""
+
+    def __init__(self, *args, **kwargs):
+        self.model: SimulatedArm | None = None
+        self._arm: RealtimeArm | None = None
+        self._received = bytearray()  # status bytes that reached the host, not yet read
+        self._wake = threading.Event()
+        super().__init__(*args, **kwargs)
+
+    # --- opening and closing -------------------------------------------------------------------
+
+    def open(self) -> None:
+        if self.is_open:
+            raise SerialException("Port is already open.")
+        if self._port is None:
+            raise SerialException("Port must be configured before it can be used.")
+        options, time_scale = self.from_url(self.portstr)
+        self._baudrate = options.baud
+        try:
+            self.model = SimulatedArm(options)
+        except Exception as error:  # a bad profile path or a profile that makes no sense
+            raise SerialException(f"cannot start the simulated arm: {error}") from None
+        self._arm = RealtimeArm(self.model, time_scale)
+        self._received.clear()
+        self._wake.clear()
+        self.is_open = True
+
+    def from_url(self, url: str) -> tuple[SimOptions, float]:
+        return parse_sim_url(url, baud=self._baudrate)
+
+    def close(self) -> None:
+        self.is_open = False
+        self._wake.set()
+
+    def _reconfigure_port(self) -> None:
+        if not isinstance(self._baudrate, numbers.Integral) or not 0 < self._baudrate < 2**32:
+            raise ValueError(f"invalid baudrate: {self._baudrate!r}")
+
+    def _update_rts_state(self) -> None:
+        pass
+
+    def _update_dtr_state(self) -> None:
+        pass
+
+    def _update_break_state(self) -> None:
+        pass
+
+    @property
+    def cts(self) -> bool:
+        return True
+
+    @property
+    def dsr(self) -> bool:
+        return True
+
+    @property
+    def ri(self) -> bool:
+        return False
+
+    @property
+    def cd(self) -> bool:
+        return True
+
+    # --- reading -------------------------------------------------------------------------------
+
+    def _check_open(self) -> RealtimeArm:
+        if not self.is_open or self._arm is None:
+            raise PortNotOpenError()
+        return self._arm
+
+    def _collect(self, arm: RealtimeArm) -> None:
+        """Move the status bytes that reached the host into the input buffer (lock held)."""
+        self._received += arm.poll()
+
+    @property
+    def in_waiting(self) -> int:
+        arm = self._check_open()
+        with arm.lock:
+            self._collect(arm)
+            return len(self._received)
+
+    def read(self, size: int = 1) -> bytes:
+        """Up to ``size`` status bytes; blocks per ``timeout`` like any pyserial port."""
+        arm = self._check_open()
+        deadline = None if self._timeout is None else time.monotonic() + self._timeout
+        self._wake.clear()
+        while self.is_open:
+            with arm.lock:
+                self._collect(arm)
+                if len(self._received) >= size:
+                    break
+            remaining = None if deadline is None else deadline - time.monotonic()
+            if remaining is not None and remaining <= 0:
+                break
+            pause = arm.wall_seconds_until_output()
+            if pause is None or (remaining is not None and pause > remaining):
+                pause = remaining
+            if self._wake.wait(pause):  # close() or cancel_read()
+                break
+        with arm.lock:
+            data = bytes(self._received[:size])
+            del self._received[:size]
+        return data
+
+    def cancel_read(self) -> None:
+        self._wake.set()
+
+    def reset_input_buffer(self) -> None:
+        arm = self._check_open()
+        with arm.lock:
+            self._collect(arm)
+            self._received.clear()
+
+    # --- writing -------------------------------------------------------------------------------
+
+    def write(self, data) -> int:
+        """Queue the bytes on the simulated line at the current model time; never blocks."""
+        data = to_bytes(data)
+        self._check_open().write(data)
+        return len(data)
+
+    @property
+    def out_waiting(self) -> int:
+        return self._check_open().out_waiting()
+
+    def flush(self) -> None:
+        """Wait until every byte written has gone over the simulated line."""
+        arm = self._check_open()
+        time.sleep(arm.wall_seconds_until_sent())
+
+    def reset_output_buffer(self) -> None:
+        """A no-op: bytes handed to the simulated line cannot be taken back (see README)."""
+        self._check_open()
+
+    def cancel_write(self) -> None:
+        pass
+
+    def send_break(self, duration: float = 0.25) -> None:
+        self._check_open()
