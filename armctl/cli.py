@@ -293,7 +293,7 @@ def sim(use_pty, tcp_port, sim_url):
 
     try:
         if use_pty:
-            serve_pty(options, ready, time_scale=time_scale)
+            serve_pty(options, ready, time_scale=time_scale, keep_serving=True)
         else:
             serve_tcp(tcp_port, options, ready, time_scale=time_scale)
     except KeyboardInterrupt:

@@ -4,8 +4,9 @@ Strategy: one loop per transport, both thin: wait (``poll``/``select``) until ho
 in or the next status byte is due, hand what came in to the ``RealtimeArm``, send what it
 produced.  The loop ends, closing everything it opened, when
 
-- the peer goes away — the pty's slave is closed again after a program had it open (POLLHUP),
-  or the TCP client disconnects;
+- the peer goes away — the pty's slave is closed again after a program had it open (POLLHUP;
+  unless ``keep_serving``, which waits for the next program instead), or the TCP client
+  disconnects;
 - ``stop`` (a ``threading.Event``) is set — tests and embedding callers use it;
 - the user presses Ctrl-C (KeyboardInterrupt is caught here, not re-raised).
 
@@ -51,10 +52,13 @@ def serve_pty(
     stop: threading.Event | None = None,
     time_scale: float = 1.0,
     model: SimulatedArm | None = None,
+    keep_serving: bool = False,
 ) -> str:
     """Run the arm on a new pseudo-terminal; ``on_ready(path)`` gets its slave path.
 
-    ``model``: an arm built by the caller (to inspect it afterwards), else one from ``options``."""
+    ``model``: an arm built by the caller (to inspect it afterwards), else one from ``options``.
+    ``keep_serving``: when a program closes the pty, wait for the next one instead of ending
+    (``armctl sim --pty``: `armctl status`, then `armctl run`, against the same arm)."""
     master_fd, slave_fd = os.openpty()
     try:
         tty.setraw(slave_fd, termios.TCSANOW)
@@ -67,14 +71,14 @@ def serve_pty(
     arm = RealtimeArm(model or SimulatedArm(options), time_scale)
     try:
         on_ready(path)
-        return _pump_pty(master_fd, arm, stop)
+        return _pump_pty(master_fd, arm, stop, keep_serving)
     except KeyboardInterrupt:
         return INTERRUPTED
     finally:
         os.close(master_fd)
 
 
-def _pump_pty(master_fd: int, arm: RealtimeArm, stop: threading.Event | None) -> str:
+def _pump_pty(master_fd: int, arm: RealtimeArm, stop: threading.Event | None, keep_serving: bool = False) -> str:
     poller = select.poll()
     poller.register(master_fd, select.POLLIN)
     peer_seen = False
@@ -82,8 +86,9 @@ def _pump_pty(master_fd: int, arm: RealtimeArm, stop: threading.Event | None) ->
         events = dict(poller.poll(_wait_s(arm) * 1000.0))
         hung_up = bool(events.get(master_fd, 0) & (select.POLLHUP | select.POLLERR))
         if hung_up:
-            if peer_seen:
+            if peer_seen and not keep_serving:
                 return PEER_CLOSED
+            peer_seen = False  # wait for the next program to open the pty; the arm keeps its state
             arm.poll()  # nobody listens yet: the arm runs, its output is discarded
             if stop is not None:
                 stop.wait(NO_PEER_WAIT_S)
