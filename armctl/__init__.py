@@ -4,4 +4,44 @@ Importing armctl is cheap on purpose: heavy modules (lark, rich, serial) are imp
 commands that need them, so ``armctl --help`` stays fast.
 """
 
+import sys
+
 __version__ = "0.1.0"
+
+
+def _add_sim_scheme(serial_module) -> None:
+    if "armctl.sim" not in serial_module.protocol_handler_packages:
+        serial_module.protocol_handler_packages.append("armctl.sim")
+
+
+class _AddSimSchemeWhenSerialLoads:
+    """Make ``serial.serial_for_url("sim://…")`` reach armctl's simulator (pyserial's documented
+    extension point: a package of ``protocol_<scheme>.py`` modules) without importing pyserial
+    here: ``import armctl`` stays cheap, and the scheme is added the moment pyserial loads."""
+
+    def find_spec(self, name, path=None, target=None):
+        if name != "serial":
+            return None
+        import importlib.util
+
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec("serial")
+        if spec is not None and spec.loader is not None:
+            load = spec.loader.exec_module
+
+            def exec_module(module):
+                load(module)
+                _add_sim_scheme(module)
+
+            spec.loader.exec_module = exec_module
+        return spec
+
+
+def _register_sim_scheme() -> None:
+    if "serial" in sys.modules:
+        _add_sim_scheme(sys.modules["serial"])
+    elif not any(isinstance(f, _AddSimSchemeWhenSerialLoads) for f in sys.meta_path):
+        sys.meta_path.insert(0, _AddSimSchemeWhenSerialLoads())
+
+
+_register_sim_scheme()

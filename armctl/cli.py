@@ -175,24 +175,10 @@ port_option = click.option(
 baud_option = click.option("--baud", type=click.IntRange(300, 4_000_000), default=None, help="Line rate [default: 9600 or `baud` in armctl.toml].")
 
 
-def _config() -> dict:
-    from .profile import find_config
-
-    return find_config()[1]
-
-
 def _connect(port: str | None, baud: int | None, **link_options):
-    """Resolve the port, say so when it is the simulator, open it with a reader thread."""
-    from .link import Link, resolve_port
-    from .protocol import DEFAULT_BAUD
+    from .link import connect
 
-    config = _config()
-    choice = resolve_port(port, config=config)
-    banner = choice.banner()
-    if banner:
-        click.echo(banner, err=True)
-    baud = baud or int(config.get("baud", DEFAULT_BAUD))
-    return Link.open(choice.url, baud, **link_options), baud
+    return connect(port, baud, announce=lambda text: click.echo(text, err=True), **link_options)
 
 
 @main.command()
@@ -298,6 +284,16 @@ def sim(use_pty, tcp_port, sim_url):
             serve_tcp(tcp_port, options, ready, time_scale=time_scale)
     except KeyboardInterrupt:
         pass
+
+
+def _register_packaged_commands() -> None:
+    """Commands that live with their package; their modules import only click at load."""
+    from .jog.command import jog
+
+    main.add_command(jog)
+
+
+_register_packaged_commands()
 
 
 @main.command(context_settings={"ignore_unknown_options": True, "allow_extra_args": True})

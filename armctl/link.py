@@ -1,0 +1,207 @@
+"""The port edge: choose a port, open it, read status frames in a thread, write frames.
+
+Strategy (after pyserial and python-can): every port is a pyserial URL — a device path,
+``socket://``, ``rfc2217://`` or armctl's own ``sim://`` — opened with ``serial_for_url``, so
+nothing above this module knows whether a real arm is attached.  A reader thread feeds bytes
+to the pure ``StatusReader`` and merges frames into an ``ArmState`` under a lock; callers take
+snapshots or wait on a condition.  OS failures become ``PortError`` with a sentence a user can
+act on (no such device, permission denied with the dialout hint, busy, vanished).
+"""
+
+from __future__ import annotations
+
+import copy
+import errno
+import os
+import threading
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+from .armstate import ArmState
+from .errors import PortError
+from .protocol import DEFAULT_BAUD, StatusFrame, StatusReader
+
+SIMULATOR_URL = "sim://"
+PORT_ENV = "ARMCTL_PORT"
+READ_CHUNK = 256
+READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
+
+
+@dataclass(frozen=True)
+class PortChoice:
+    url: str
+    origin: str  # "--port", "ARMCTL_PORT", "armctl.toml" or "default"
+
+    @property
+    def is_simulator(self) -> bool:
+        return self.url.startswith("sim://")
+
+    def banner(self) -> str | None:
+        """The first line a command prints when no real port was chosen."""
+        if self.origin == "default":
+            return "armctl: no port configured (--port, ARMCTL_PORT or armctl.toml): using the built-in simulator (sim://)"
+        if self.is_simulator:
+            return f"armctl: using the built-in simulator ({self.url})"
+        return None
+
+
+def resolve_port(option: str | None, environ=os.environ, config: dict | None = None) -> PortChoice:
+    """``--port``, else ``ARMCTL_PORT``, else ``port`` in armctl.toml, else the simulator."""
+    if option:
+        return PortChoice(option, "--port")
+    if environ.get(PORT_ENV):
+        return PortChoice(environ[PORT_ENV], PORT_ENV)
+    if config and config.get("port"):
+        return PortChoice(str(config["port"]), "armctl.toml")
+    return PortChoice(SIMULATOR_URL, "default")
+
+
+def connect(port: str | None, baud: int | None, announce: Callable[[str], None] = print, **link_options):
+    """What every port-using command does first: resolve the port (``--port``, ARMCTL_PORT,
+    armctl.toml, the simulator), announce the simulator, open it with a reader thread.
+    Returns the link and the baud rate used."""
+    from .profile import find_config
+
+    config = find_config()[1]
+    choice = resolve_port(port, config=config)
+    banner = choice.banner()
+    if banner:
+        announce(banner)
+    baud = baud or int(config.get("baud", DEFAULT_BAUD))
+    return Link.open(choice.url, baud, **link_options), baud
+
+
+def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_S, write_timeout: float | None = 2.0):
+    """Open any pyserial URL or device path, mapping failures to PortError."""
+    import serial
+
+    import armctl.sim  # noqa: F401 — registers the sim:// scheme (see armctl/__init__.py)
+
+    kwargs = {"baudrate": baud, "timeout": timeout, "write_timeout": write_timeout}
+    if "://" not in url:
+        kwargs["exclusive"] = True  # a second armctl on the same arm would interleave frames
+    try:
+        return serial.serial_for_url(url, **kwargs)
+    except (serial.SerialException, OSError, ValueError) as error:
+        raise PortError(describe_open_error(url, error)) from None
+
+
+def describe_open_error(url: str, error: Exception) -> str:
+    code = getattr(error, "errno", None)
+    text = str(error)
+    if code == errno.ENOENT or "No such file" in text:
+        return f"no such device: {url} (is the arm plugged in? `armctl ports` lists the ports found)"
+    if code == errno.EACCES or "Permission denied" in text:
+        return (
+            f"permission denied opening {url}: add yourself to the group that owns it "
+            f"(usually `sudo usermod -aG dialout $USER`, then log in again)"
+        )
+    if code in (errno.EBUSY, errno.EAGAIN) or "exclusively lock" in text:
+        return f"{url} is busy: another program (another armctl, a serial monitor) has it open"
+    if "ConnectionRefused" in text or code == errno.ECONNREFUSED:
+        return f"connection refused by {url}: is the bridge (e.g. `armctl sim --tcp`) running?"
+    return f"cannot open {url}: {text}"
+
+
+class Link:
+    """An open port with a reader thread that keeps ``state`` current.
+
+    ``on_status(frame, now)`` and ``on_bytes(data, now)`` are called from the reader thread
+    (for logs and for the streamer); ``error`` is set when the port went away.
+    """
+
+    def __init__(
+        self,
+        port,
+        url: str,
+        state: ArmState | None = None,
+        clock: Callable[[], float] = time.monotonic,
+        on_status: Callable[[StatusFrame, float], None] | None = None,
+    ) -> None:
+        self.port = port
+        self.url = url
+        self.clock = clock
+        self.reader = StatusReader()
+        self.state = state or ArmState()
+        self.on_status = on_status
+        self.bytes_received = 0
+        self.error: PortError | None = None
+        self._changed = threading.Condition()
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._read_loop, name="armctl-reader", daemon=True)
+
+    @classmethod
+    def open(cls, url: str, baud: int = DEFAULT_BAUD, **kwargs) -> "Link":
+        link = cls(open_port(url, baud), url, **kwargs)
+        link.start()
+        return link
+
+    def start(self) -> None:
+        self._thread.start()
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._thread.is_alive() and threading.current_thread() is not self._thread:
+            self._thread.join(timeout=1.0)
+        try:
+            self.port.close()
+        except Exception:  # closing a port that vanished may fail again; nothing to do
+            pass
+
+    def __enter__(self) -> "Link":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _read_loop(self) -> None:
+        while not self._stop.is_set():
+            try:
+                data = self.port.read(READ_CHUNK)
+            except Exception as error:  # pyserial raises SerialException, OSError or TypeError on unplug
+                if not self._stop.is_set():
+                    self._set_error(PortError(f"the port {self.url} went away: {error}"))
+                return
+            if not data:
+                continue
+            now = self.clock()
+            frames = self.reader.feed(data)
+            with self._changed:
+                self.bytes_received += len(data)
+                for frame in frames:
+                    self.state.update(frame, now)
+                    if self.on_status is not None:
+                        self.on_status(frame, now)
+                self._changed.notify_all()
+
+    def _set_error(self, error: PortError) -> None:
+        with self._changed:
+            self.error = error
+            self._changed.notify_all()
+
+    def write(self, frame: bytes) -> None:
+        if self.error is not None:
+            raise self.error
+        try:
+            self.port.write(frame)
+        except Exception as error:
+            raise PortError(f"writing to {self.url} failed: {error}") from None
+
+    def snapshot(self) -> tuple[ArmState, int, int, int]:
+        """A copy of the state with bytes received, bytes skipped and frames read so far."""
+        with self._changed:
+            return copy.deepcopy(self.state), self.bytes_received, self.reader.skipped_bytes, self.reader.frames
+
+    def wait_until(self, predicate: Callable[[ArmState], bool], timeout_s: float) -> bool:
+        """Block until ``predicate(state)`` holds, the port fails (raises) or time runs out."""
+        deadline = self.clock() + timeout_s
+        with self._changed:
+            while not predicate(self.state):
+                if self.error is not None:
+                    raise self.error
+                remaining = deadline - self.clock()
+                if remaining <= 0:
+                    return False
+                self._changed.wait(min(remaining, 0.05))
+            return True
