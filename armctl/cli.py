@@ -252,8 +252,9 @@ def estimate(script, lead_s, baud, profile_path, as_json):
     from .ui.run_job import check_script, estimate_job, print_estimate
 
     _check_readable(script)
-    check_script(_compile_source, script)
-    model = MotionModel(load_profile(profile_path))
+    profile = load_profile(profile_path)
+    check_script(script, profile)
+    model = MotionModel(profile)
     result = estimate_job(_compile_source, script, model, model.initial_pose(), lead_s, baud)
     if as_json:
         click.echo(json.dumps(result.to_json()))
@@ -289,8 +290,10 @@ def sim(use_pty, tcp_port, sim_url):
 def _register_packaged_commands() -> None:
     """Commands that live with their package; their modules import only click at load."""
     from .jog.command import jog
+    from .lint.command import lint
 
     main.add_command(jog)
+    main.add_command(lint)
 
 
 _register_packaged_commands()

@@ -43,14 +43,17 @@ class JobOptions:
     timeout_s: float
 
 
-def check_script(compile_source, script: str) -> None:
-    """The whole script is checked before anything is sent; on any error print them all, exit 1."""
-    check = compile_source(script)
-    check.finish()
-    if check.error_count:
-        for diagnostic in check.diagnostics:
-            click.echo(diagnostic.render(), err=True)
-        errors = check.error_count
+def check_script(script: str, profile) -> None:
+    """The same checks as ``armctl lint`` over the whole script before anything is sent: any
+    error prints every finding and exits 1; warnings are shown and the job goes on."""
+    from ..lint.engine import lint_lines
+    from ..script import read_lines
+
+    report = lint_lines(read_lines(script), script, profile)
+    for diagnostic in report.diagnostics:
+        click.echo(diagnostic.render(), err=True)
+    if report.errors:
+        errors = report.errors
         click.echo(f"{errors} error{'s' if errors != 1 else ''}: nothing was sent to the arm", err=True)
         sys.exit(EXIT_PROBLEMS)
 
@@ -125,8 +128,8 @@ def run_job(options: JobOptions, compile_source, connect) -> int:
     from ..profile import load_profile
     from ..runner import ABORT_SEQUENCES, JobRunner, RunView
 
-    check_script(compile_source, options.script)
     profile = load_profile(options.profile_path)
+    check_script(options.script, profile)
     model = MotionModel(profile)
     if options.dry_run:
         return dry_run(options, compile_source, model)

@@ -1,0 +1,126 @@
+"""Lint one script: compile it as a stream, run the rules, keep what the user asked to see.
+
+Strategy: one pass.  The line scanner (armctl/lint/scan.py) watches the lines on their way to
+the compiler; every statement the compiler yields is shown to the rules registered for its
+command class (armctl/lint/rules.py), then the arm tracker advances; END rules and the
+scanner's findings follow; the compiler's own diagnostics are taken as they are.  Each finding
+passes the selection (--select/--ignore) and the line's inline ``; armctl: ignore[…]``
+comment and is counted per code; lint keeps up to ``max_diagnostics`` of its own findings
+per file and the compiler as many of its own — so memory stays flat for a script of any
+length and any number of findings; ``FileReport.hidden`` says how many were not kept.
+
+A statement inside a repeat block is checked on every pass (a G91 loop may leave the
+workspace on its third pass only) but each (line, code) is reported for one pass only: the
+first that finds it.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Iterable, Optional
+
+from ..script import DEFAULT_MAX_DIAGNOSTICS, ERROR, WARNING, Diagnostic, SourceSpan, compile_lines
+from . import rules as _rules  # noqa: F401 - registers the rules
+from .registry import CHECKS, END, RULES, Selection, matches, severity_of
+from .scan import LineScanner, ignored_codes
+from .tracker import ArmTracker
+
+
+@dataclass
+class FileReport:
+    """What lint found in one script."""
+
+    file: str
+    diagnostics: list[Diagnostic] = field(default_factory=list)  # kept, sorted by position
+    counts: Counter = field(default_factory=Counter)  # code → findings (kept or not)
+    hidden: int = 0  # findings counted but not kept (over max_diagnostics)
+    uncounted_errors: int = 0  # compiler errors beyond its cap: not kept, code unknown
+    lines: int = 0
+
+    @property
+    def errors(self) -> int:
+        counted = sum(n for code, n in self.counts.items() if RULES[code].severity == ERROR)
+        return counted + self.uncounted_errors
+
+    @property
+    def warnings(self) -> int:
+        return sum(n for code, n in self.counts.items() if RULES[code].severity == WARNING)
+
+
+class _Collector:
+    """Filters, de-duplicates, counts and keeps findings for one report."""
+
+    def __init__(self, report: FileReport, selection: Selection, max_diagnostics: int) -> None:
+        self.report, self.selection, self.max = report, selection, max_diagnostics
+        self._passes: dict = {}  # (line, code) → the repeat pass that reported it first
+
+    def add(self, code: str, where, message: str, hint: Optional[str], loop: tuple = ()) -> None:
+        """``where``: a SourceSpan, or a rules.WordAt resolved to one only if the finding is kept."""
+        if code not in self.selection or _silenced(code, where.text):
+            return
+        if loop:  # report a loop line's code on one pass only (every finding of that pass)
+            first = self._passes.setdefault((where.line, code), loop)
+            if first != loop:
+                return
+            if any(loop):
+                message += f" (repeat pass {'/'.join(str(i + 1) for i in loop)})"
+        self.report.counts[code] += 1
+        if len(self.report.diagnostics) < self.max:
+            span = where if type(where) is SourceSpan else where.resolve()
+            self.report.diagnostics.append(Diagnostic(span, code, severity_of(code), message, hint))
+        else:
+            self.report.hidden += 1
+
+    def add_diagnostic(self, diagnostic: Diagnostic) -> None:
+        """A compiler diagnostic: always kept (the compiler keeps at most max_diagnostics itself),
+        so that lint's own findings never crowd out the errors that stop a script compiling."""
+        if diagnostic.code in self.selection and not _silenced(diagnostic.code, diagnostic.span.text):
+            self.report.counts[diagnostic.code] += 1
+            self.report.diagnostics.append(diagnostic)
+
+
+def _silenced(code: str, text: str) -> bool:
+    codes = ignored_codes(text)
+    return codes is not None and (not codes or matches(code, codes))
+
+
+def lint_lines(lines: Iterable[str], file: str, profile, selection: Optional[Selection] = None, *,
+               max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS) -> FileReport:
+    """Lint a script given as lines (an iterator is read once, lazily) against ``profile``;
+    ``selection`` defaults to every code."""
+    selection = Selection() if selection is None else selection
+    report = FileReport(file)
+    collector = _Collector(report, selection, max_diagnostics)
+    checks = {kind: [(code, check) for code, check in entries if code in selection]
+              for kind, entries in CHECKS.items()}
+    compilation = None
+    scanner = LineScanner(file, lambda: compilation.state.parameters, collector.add)
+    compilation = compile_lines(scanner.watch(lines), file, max_diagnostics=max_diagnostics)
+    arm = ArmTracker(profile)
+    for statement in compilation:
+        for code, check in checks.get(type(statement.command), ()):
+            for span, message, hint in check(statement, arm):
+                collector.add(code, span, message, hint, statement.loop)
+        arm.apply(statement)
+    for code, check in checks.get(END, ()):
+        for span, message, hint in check(arm):
+            collector.add(code, span, message, hint)
+    for code, span, message, hint in scanner.unused_parameters():
+        collector.add(code, span, message, hint)
+    if arm.statements == 0 and compilation.error_count == 0 and not scanner.not_text:
+        what = "the file is empty" if scanner.lines == 0 else "the script has no statements"
+        collector.add("L403", SourceSpan(file, 1, 1, 1, scanner.first_line), f"{what}: it sends nothing to the arm",
+                      "armctl lint checks motion scripts; is this the file you meant?")
+    for diagnostic in compilation.diagnostics:
+        collector.add_diagnostic(diagnostic)
+    reported = {d.span.line for d in compilation.diagnostics if d.code == "E011"}
+    for code, span, message, hint in scanner.not_text:
+        if span.line not in reported:
+            collector.add(code, span, message, hint)
+    # errors the compiler counted beyond its own cap: their codes are unknown, so they count as errors
+    report.uncounted_errors = compilation.error_count - sum(1 for d in compilation.diagnostics if d.is_error)
+    report.hidden += report.uncounted_errors
+    report.lines = scanner.lines
+    report.diagnostics.sort(key=lambda d: (d.span.line, d.span.column, d.code))
+    return report

@@ -1,0 +1,348 @@
+"""Lint's own rules: one small function per code, over compiled statements and the arm tracker.
+
+Strategy: the compiler (armctl/script) already rejects everything that cannot become a frame
+— syntax, unknown words, protocol ranges, unpaired arcs, missing modal values (speed, pose,
+PWM, G91 offsets from an unknown position), undefined parameters, bad repeat counts: those are
+its E0xx codes and lint reports them as they are.  The rules here judge what *does* compile
+against the arm's profile and common sense: geometry (L1xx), speeds and units (L2xx), PWM
+(L3xx), parameters, loops and empty scripts (L4xx, fed by armctl/lint/scan.py) and the state
+the script leaves the arm in (L5xx).
+
+A statement rule is ``check(statement, arm) -> iterable of (where, message, hint)``, where is
+a ``SourceSpan`` or a ``WordAt`` (a word's span, computed only if the finding is kept); it runs
+before ``arm`` (armctl/lint/tracker.py) advances past the statement, so ``arm`` describes the
+arm as the statement finds it.  An END rule is ``check(arm)``.  Rules read the profile through
+``arm.profile`` and never see each other; the engine adds the code, severity and location
+filters.  Thresholds that are judgement calls are named constants below.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from typing import Iterator, NamedTuple, Optional, Union
+
+from ..kinematics import reach_problem
+from ..motion import arc_through, circle_through
+from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove
+from ..script import ERROR, WARNING, SourceSpan
+from .registry import END, SOURCE, rule
+from .tracker import cartesian_target, pwm_channel_of
+
+ARC_POINT_TOLERANCE_MM = 0.05  # arc points closer than this to each other or to one line: degenerate
+ARC_RADIUS_TOLERANCE = (0.5, 0.01)  # R may differ from the circle by max(0.5 mm, 1 %) (as motion.py notes)
+ARC_SAMPLES = 24  # points checked along an arc against the workspace box and reach radius
+UNIT_SLIP_FACTOR = 5.0  # a G6 F above 5× the joint maximum reads as mm/min
+SLOW_CARTESIAN_MM_MIN = 60.0  # a Cartesian F below 1 mm/s reads as deg/s
+PWM_TOLERANCE_US = 0.5  # "equal" PWM values, for the gripper's end state
+
+CARTESIAN_MOVES = (LinearMove, AccelLinearMove, ArcStart, ArcEnd)
+Finding = tuple[Union[SourceSpan, "WordAt"], str, Optional[str]]  # where, message, hint
+
+
+class WordAt(NamedTuple):
+    """Where word ``letter`` is on the statement's line (else its head) — found only when a
+    finding is kept, because finding a word's columns means parsing the line again."""
+
+    statement: object
+    letter: str
+
+    @property
+    def line(self) -> int:
+        return self.statement.span.line
+
+    @property
+    def text(self) -> str:
+        return self.statement.span.text
+
+    def resolve(self) -> SourceSpan:
+        return self.statement.word_span(self.letter) or self.statement.span
+
+
+_at = WordAt
+
+
+def _mm(value: float) -> str:
+    return f"{value:.1f}".rstrip("0").rstrip(".") if abs(value - round(value)) > 1e-9 else f"{round(value)}"
+
+
+def _xyz(point) -> str:
+    return f"({_mm(point[0])}, {_mm(point[1])}, {_mm(point[2])})"
+
+
+# --- L1xx geometry --------------------------------------------------------------------------------
+
+
+@rule("L101", ERROR, "arc-degenerate",
+      "three arc points that coincide or lie on one line define no circle", on=[ArcEnd])
+def arc_degenerate(statement, arm) -> Iterator[Finding]:
+    start, points = _arc_points(statement, arm)
+    if start is None:
+        return
+    p0, p1, p2 = points
+    line = start.line
+    if math.dist(p0, p2) <= ARC_POINT_TOLERANCE_MM:
+        yield (statement.span, f"the arc ends where it starts {_xyz(p0)}: three points cannot define a full circle",
+               "split the circle into two arcs, each with its own G300/G301 pair")
+    elif math.dist(p0, p1) <= ARC_POINT_TOLERANCE_MM or math.dist(p1, p2) <= ARC_POINT_TOLERANCE_MM:
+        which = "start" if math.dist(p0, p1) <= ARC_POINT_TOLERANCE_MM else "end"
+        yield (statement.span, f"the G300 point on line {line} coincides with the arc's {which} point {_xyz(p1)}",
+               "the G300 point must lie on the arc between its start and its end")
+    elif circle_through(p0, p1, p2, ARC_POINT_TOLERANCE_MM) is None:
+        yield (statement.span, f"the arc's start {_xyz(p0)}, G300 point {_xyz(p1)} and end {_xyz(p2)} lie on one line",
+               "for a straight line use G1; for an arc move the G300 point off the line")
+
+
+@rule("L102", ERROR, "arc-radius",
+      "an R that disagrees with the circle through the arc's three points makes the path ambiguous",
+      on=[ArcEnd])
+def arc_radius(statement, arm) -> Iterator[Finding]:
+    start, points = _arc_points(statement, arm)
+    if start is None:
+        return
+    circle = circle_through(*points, ARC_POINT_TOLERANCE_MM)
+    if circle is None:
+        return  # L101
+    radius, written = circle[1], start.command.radius_mm
+    absolute, relative = ARC_RADIUS_TOLERANCE
+    if abs(written - radius) > max(absolute, relative * radius):
+        yield (_at(start, "R"), f"R{written:g} disagrees with the circle through the start, the G300 point and the G301"
+               f" point on line {statement.line} (radius {radius:.2f} mm)", f"write R{radius:.2f}")
+
+
+def _arc_points(statement, arm):
+    """(the G300 Statement, (start, via, end) points) of the arc this G301 ends, or (None, None)."""
+    start = arm.arc_start
+    if start is None or arm.arc_from is None:
+        return None, None
+    return start, (arm.arc_from[:3], cartesian_target(start.command)[:3], cartesian_target(statement.command)[:3])
+
+
+_AXIS = re.compile(r"robot ([XYZ]) = ")
+
+
+@rule("L103", ERROR, "outside-workspace",
+      "a target outside the profile's workspace box or reach, or with no joint solution inside the limits,"
+      " stops or crashes the arm",
+      on=CARTESIAN_MOVES + (JointMove,))
+def outside_workspace(statement, arm) -> Iterator[Finding]:
+    command = statement.command
+    if type(command) is JointMove:
+        yield from _joint_target_outside(statement, arm)
+        return
+    pose = cartesian_target(command)
+    problem = arm.reach_problem(pose, lambda: reach_problem(pose, arm.profile, arm.origin_mm, arm.ik_hint()))
+    if problem is not None:
+        axis = _AXIS.match(problem)
+        span = _at(statement, axis.group(1)) if axis else statement.span
+        what = "the G300 point" if type(command) is ArcStart else "target"
+        yield span, f"{what} {_xyz(pose)}: {problem}", _workspace_hint(arm, problem)
+    elif type(command) is ArcEnd:
+        yield from _arc_outside(statement, arm)
+
+
+def _joint_target_outside(statement, arm) -> Iterator[Finding]:
+    joints = statement.command.joints_deg
+    if any(not low <= j <= high for j, (low, high) in zip(joints, arm.profile.joint_limits_deg, strict=True)):
+        return  # L104 says it
+    robot = arm.profile.kinematics.forward(joints)[:3]
+    problem = _box_problem(robot, arm.profile.workspace)
+    if problem is not None:
+        yield statement.span, f"G6 puts the tool at robot {_xyz(robot)}: {problem}", _workspace_hint(arm, problem)
+
+
+def _arc_outside(statement, arm) -> Iterator[Finding]:
+    start, points = _arc_points(statement, arm)
+    if start is None:
+        return
+    arc = arc_through(*points, ARC_POINT_TOLERANCE_MM)
+    if arc is None:
+        return  # L101
+    for k in range(1, ARC_SAMPLES):
+        point = _arc_point(arc, points[0], arc.sweep_rad * k / ARC_SAMPLES)
+        problem = _box_problem(arm.robot_xyz(point), arm.profile.workspace)
+        if problem is not None:
+            yield (statement.span, f"the arc from line {start.line} passes {_xyz(point)}: {problem}",
+                   "the arc bulges beyond its three points; move the G300 point or split the arc")
+            return
+
+
+def _arc_point(arc, start, angle: float):
+    """The point ``angle`` radians along ``arc`` from ``start`` (rotation about the arc's normal)."""
+    c, n = arc.center, arc.normal
+    u = tuple(start[i] - c[i] for i in range(3))
+    v = (n[1] * u[2] - n[2] * u[1], n[2] * u[0] - n[0] * u[2], n[0] * u[1] - n[1] * u[0])
+    cos, sin = math.cos(angle), math.sin(angle)
+    return tuple(c[i] + u[i] * cos + v[i] * sin for i in range(3))
+
+
+def _box_problem(robot_xyz, box) -> Optional[str]:
+    """The workspace box and reach radius part of ``kinematics.reach_problem`` (no IK)."""
+    for name, value, (low, high) in zip("XYZ", robot_xyz, (box.x_mm, box.y_mm, box.z_mm), strict=True):
+        if not low <= value <= high:
+            return f"robot {name} = {value:.1f} mm is outside the workspace {low:g}…{high:g} mm"
+    distance = math.sqrt(sum(v * v for v in robot_xyz))
+    if distance > box.reach_mm:
+        return f"point is {distance:.1f} mm from the robot origin, beyond the reach radius {box.reach_mm:g} mm"
+    return None
+
+
+def _workspace_hint(arm, problem: str) -> str:
+    box, origin = arm.profile.workspace, arm.origin_mm
+    if problem.startswith("robot "):
+        if any(origin):
+            shifted = ", ".join(f"{name} {low - o:g}…{high - o:g}" for name, (low, high), o in
+                                zip("XYZ", (box.x_mm, box.y_mm, box.z_mm), origin, strict=True))
+            return f"with the G54 origin at robot {_xyz(origin)} the worktable limits are {shifted} mm"
+        return f"the profile's workspace is X {box.x_mm[0]:g}…{box.x_mm[1]:g}, Y {box.y_mm[0]:g}…{box.y_mm[1]:g}, " \
+               f"Z {box.z_mm[0]:g}…{box.z_mm[1]:g} mm"
+    if "reach radius" in problem:
+        return f"keep the tool point within {box.reach_mm:g} mm of the robot origin"
+    return "no joint solution inside the limits: bring the point nearer the arm or change the attitude (A180 B0 C0 = tool down)"
+
+
+@rule("L104", ERROR, "joint-limit",
+      "a joint angle outside the profile's limits drives the joint into its end stop", on=[JointMove])
+def joint_limit(statement, arm) -> Iterator[Finding]:
+    limits = arm.profile.joint_limits_deg
+    for k, (angle, (low, high)) in enumerate(zip(statement.command.joints_deg, limits, strict=True), 1):
+        if not low <= angle <= high:
+            yield (_at(statement, f"J{k}"), f"J{k}={angle:g} is outside its limits {low:g}…{high:g} deg",
+                   f"the profile allows J{k} from {low:g} to {high:g} deg")
+
+
+# --- L2xx speeds ----------------------------------------------------------------------------------
+
+
+def _is_unit_slip(statement, arm) -> bool:
+    return statement.words.get("F", 0.0) > UNIT_SLIP_FACTOR * arm.profile.speed.max_joint_deg_s
+
+
+@rule("L201", ERROR, "speed-above-max",
+      "a speed above the profile's maximum is more than the arm is rated for (and its ETA is wrong)",
+      on=CARTESIAN_MOVES + (JointMove,))
+def speed_above_max(statement, arm) -> Iterator[Finding]:
+    speed = arm.profile.speed
+    if type(statement.command) is JointMove:
+        value = statement.words.get("F")
+        if value is not None and value > speed.max_joint_deg_s and not _is_unit_slip(statement, arm):
+            yield (_at(statement, "F"), f"F{value:g} deg/s is above the profile's joint maximum {speed.max_joint_deg_s:g} deg/s",
+                   f"write F{speed.max_joint_deg_s:g} or less")
+        return
+    for letter in ("F", "Q"):
+        value = statement.words.get(letter)
+        if value is not None and value > speed.max_linear_mm_min:
+            limit = speed.max_linear_mm_min
+            yield (_at(statement, letter), f"{letter}{value:g} mm/min is above the profile's maximum {limit:g} mm/min",
+                   f"write {letter}{limit:g} or less")
+
+
+@rule("L202", ERROR, "joint-speed-in-mm-min",
+      "a G6 speed far above the joint maximum was almost always meant as mm/min; G6 F is deg/s",
+      on=[JointMove])
+def joint_speed_unit(statement, arm) -> Iterator[Finding]:
+    if _is_unit_slip(statement, arm):
+        value, limit = statement.words["F"], arm.profile.speed.max_joint_deg_s
+        yield (_at(statement, "F"), f"G6 F{value:g} means {value:g} deg/s, {value / limit:.0f}× the joint maximum"
+               f" {limit:g} deg/s: it reads like mm/min", f"G6 speeds are deg/s: write e.g. F{min(30.0, limit):g}")
+
+
+@rule("L203", WARNING, "cartesian-speed-in-deg-s",
+      "a Cartesian speed below 1 mm/s reads like deg/s; G1/G22x/G300/G301 F is mm/min",
+      on=CARTESIAN_MOVES)
+def cartesian_speed_unit(statement, arm) -> Iterator[Finding]:
+    value = statement.words.get("F")
+    if value is not None and 0 < value < SLOW_CARTESIAN_MM_MIN:
+        yield (_at(statement, "F"), f"F{value:g} means {value:g} mm/min ({value / 60:.2g} mm/s): it reads like deg/s",
+               f"Cartesian speeds are mm/min: {value:g} mm/s is F{value * 60:g}")
+
+
+@rule("L204", ERROR, "accel-above-max",
+      "an acceleration above the profile's maximum is more than the arm is rated for",
+      on=[AccelLinearMove])
+def accel_above_max(statement, arm) -> Iterator[Finding]:
+    value, limit = statement.words.get("K"), arm.profile.speed.max_accel_mm_s2
+    if value is not None and abs(value) > limit:
+        yield (_at(statement, "K"), f"K{value:g} mm/s² is above the profile's maximum acceleration {limit:g} mm/s²",
+               f"write K{math.copysign(limit, value):g} or a smaller magnitude")
+
+
+# --- L3xx PWM -------------------------------------------------------------------------------------
+
+
+@rule("L301", ERROR, "pwm-channel-unwired",
+      "a PWM value sent to a channel the profile does not wire moves nothing (the gripper is on PWM 1)",
+      on=[LinearMove, JointMove, ArcStart, ArcEnd])
+def pwm_channel_unwired(statement, arm) -> Iterator[Finding]:
+    channel = pwm_channel_of(statement.command)
+    wired = arm.profile.pwm.channels
+    if channel in wired:
+        return
+    key = ("L301", channel)
+    if "T" not in statement.words and key in arm.notes:
+        return  # reported once per channel unless a T word selects it again
+    arm.notes.add(key)
+    letter = "T" if "T" in statement.words else "S"
+    yield (_at(statement, letter), f"PWM channel {channel} is not wired in the profile (wired: {', '.join(map(str, wired))})",
+           "T1 selects the gripper's channel" if 1 in wired else "set pwm.channels in the profile")
+
+
+@rule("L302", ERROR, "pwm-outside-profile-range",
+      "a PWM pulse outside the profile's range drives the servo past its end stop",
+      on=[LinearMove, JointMove, ArcStart, ArcEnd])
+def pwm_outside_range(statement, arm) -> Iterator[Finding]:
+    value = statement.words.get("S")
+    low, high = arm.profile.pwm.range_us
+    if value is not None and not low <= value <= high:
+        pwm = arm.profile.pwm
+        yield (_at(statement, "S"), f"S{value:g} µs is outside the profile's PWM range {low:g}…{high:g} µs",
+               f"gripper open is S{pwm.gripper_open_us:g}, closed S{pwm.gripper_close_us:g}")
+
+
+# --- L4xx parameters, loops, empty scripts (found by armctl/lint/scan.py) -------------------------
+
+rule("L401", WARNING, "unused-parameter",
+     "a parameter assigned but never read is usually a typo in its name or a leftover", on=SOURCE)
+rule("L402", WARNING, "repeat-never-runs",
+     "a repeat count of 0 skips its block; a count must be a positive whole number to do anything", on=SOURCE)
+rule("L403", WARNING, "empty-script",
+     "a script without a single statement sends nothing to the arm", on=SOURCE)
+
+
+# --- L5xx how the script leaves the arm (only when the profile's [lint] table asks) ---------------
+
+
+@rule("L501", ERROR, "end-gripper",
+      "the profile's lint.end_gripper says how every job must leave the gripper (e.g. open, part released)",
+      on=END)
+def end_gripper(arm) -> Iterator[Finding]:
+    expected = arm.profile.lint.end_gripper
+    statement = arm.pwm_statement.get(1)
+    if expected is None or statement is None:
+        return
+    pwm = arm.profile.pwm
+    value = arm.pwm_us[1]
+    want = pwm.gripper_open_us if expected == "open" else pwm.gripper_close_us
+    if abs(value - want) <= PWM_TOLERANCE_US:
+        return
+    other = "closed" if expected == "open" else "open"
+    other_value = pwm.gripper_close_us if expected == "open" else pwm.gripper_open_us
+    state = other if abs(value - other_value) <= PWM_TOLERANCE_US else f"at S{value:g}, neither open nor closed"
+    key = "gripper_open_us" if expected == "open" else "gripper_close_us"
+    yield (_at(statement, "S"), f"the script ends with the gripper {state} (PWM 1 last set here);"
+           f" the profile expects it {expected}", f"end with a move carrying S{want:g} (pwm.{key})")
+
+
+@rule("L502", ERROR, "end-paused",
+      "the profile's lint.end_paused says whether a job may end paused (PAUSE toggles)", on=END)
+def end_paused(arm) -> Iterator[Finding]:
+    expected = arm.profile.lint.end_paused
+    if expected is None or arm.paused == expected:
+        return
+    if arm.paused:
+        toggles = f"{arm.pause_count} PAUSE toggle{'' if arm.pause_count == 1 else 's'}"
+        yield (arm.last_pause.span, f"the script ends paused: {toggles}, an odd number",
+               "add a PAUSE to resume before the end, or remove this one")
+    elif arm.last_statement is not None:
+        yield (arm.last_statement.span, "the script ends running, but the profile expects it to end paused",
+               "end with PAUSE")

@@ -1,0 +1,150 @@
+"""What lint learns from the source text itself, as the compiler reads it line by line.
+
+Strategy: ``LineScanner.watch(lines)`` sits between the file and the compiler and hands every
+line on unchanged, so the file is still read once and never held.  On the way it notes what
+statements cannot tell: which parameters are assigned and which are read (L401 unused), and
+the count of each repeat block (L402 a count of 0, which the language accepts).  A count is
+evaluated with the language itself (a one-line compilation of ``#<probe> = count``) using the
+parameters the compiler holds at that moment — exact for a block outside any other block,
+since the compiler has executed every earlier line when it asks for the next one; nested
+blocks are judged only when their count is a literal (their parameters change per pass).
+
+It also notes NUL and undecodable bytes and over-long lines — the compiler's fast path
+accepts comment lines without looking at their bytes, and plain lines whatever their length,
+but a file that is not UTF-8 text deserves E011 wherever the byte is (the engine drops the
+note when the compiler reported the line itself).
+
+Memory: one entry per distinct parameter name, whatever the length of the script.  Also here:
+``ignored_codes(text)``, the parser of the inline ``; armctl: ignore[CODE, …]`` comment.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Callable, Iterable, Iterator, Mapping, Optional
+
+from ..script import MAX_LINE_LENGTH, InitialState, SourceSpan, compile_lines
+
+_INLINE_COMMENT = re.compile(r"\([^)\n]*\)")
+_PARAMETER = re.compile(r"#<([A-Za-z_][A-Za-z0-9_]*)>")
+_ASSIGNMENT = re.compile(r"\s*(?:[Nn][0-9]+\s*)?#<([A-Za-z_][A-Za-z0-9_]*)>\s*=")
+_BLOCK = re.compile(r"\s*(?:[Nn][0-9]+\s*)?[Oo](?:<[A-Za-z0-9_]+>|[0-9]+)\s*(repeat|endrepeat)\b\s*(.*?)\s*$", re.I)
+_IGNORE = re.compile(r";.*?\barmctl:\s*ignore\b(?:\[([^\]]*)\])?", re.I)
+_PROBE = "armctl_lint_repeat_count"
+_MAX_NOT_TEXT = 100  # E011 findings kept from the scanner per file
+
+Finding = tuple[str, SourceSpan, str, Optional[str]]  # code, span, message, hint
+
+
+def ignored_codes(text: str) -> Optional[tuple[str, ...]]:
+    """The codes (or prefixes, upper case) an inline ``; armctl: ignore[…]`` silences on this
+    line; ``()`` for a bare ``; armctl: ignore`` (everything); None without the comment."""
+    if "armctl" not in text and "ARMCTL" not in text.upper():
+        return None
+    match = _IGNORE.search(text)
+    if match is None:
+        return None
+    if match.group(1) is None:
+        return ()
+    return tuple(code.strip().upper() for code in re.split(r"[,\s]+", match.group(1)) if code.strip())
+
+
+def code_text(text: str) -> str:
+    """The line with comments blanked out (same length up to the ``;``, so columns hold)."""
+    if "(" in text:
+        text = _INLINE_COMMENT.sub(lambda m: " " * len(m.group()), text)
+    return text.split(";", 1)[0]
+
+
+class LineScanner:
+    """Watches one script's lines on their way to the compiler (see the module docstring)."""
+
+    def __init__(self, file: str, parameters: Callable[[], Mapping[str, object]], report: Callable[..., None]) -> None:
+        self.file = file
+        self._parameters = parameters  # the compiler's live parameter values
+        self._report = report  # report(code, span, message, hint): L402 as soon as it is found
+        self._defined: dict[str, SourceSpan] = {}  # name (lower) → first assignment
+        self._used: set[str] = set()
+        self._depth = 0
+        self.first_line = ""
+        self.lines = 0
+        self.not_text: list[Finding] = []  # E011 candidates (comments the compiler skips), bounded
+
+    def watch(self, lines: Iterable[str]) -> Iterator[str]:
+        for raw in lines:
+            self.lines += 1
+            if self.lines == 1:
+                self.first_line = raw.rstrip("\r\n")
+            if not raw.isascii() or "\x00" in raw or len(raw) > MAX_LINE_LENGTH:
+                self._not_text(self.lines, raw.rstrip("\r\n"))
+            if "#" in raw or "o" in raw or "O" in raw:
+                self._look(self.lines, raw.rstrip("\r\n"))
+            yield raw
+
+    def _not_text(self, number: int, text: str) -> None:
+        """NUL bytes and undecodable bytes (lone surrogates) anywhere on the line, comments too."""
+        if len(self.not_text) >= _MAX_NOT_TEXT:
+            return
+        if len(text) > MAX_LINE_LENGTH:  # read_lines cut it: the compiler's fast path may not see it
+            span = SourceSpan(self.file, number, MAX_LINE_LENGTH + 1, len(text) + 1, text)
+            self.not_text.append(("E011", span, f"line is longer than {MAX_LINE_LENGTH} characters: not a statement",
+                                  "is this file a motion script?"))
+            return
+        nul = text.find("\x00")
+        bad = next((k for k, c in enumerate(text) if 0xDC80 <= ord(c) <= 0xDCFF), -1)
+        if nul >= 0 and (bad < 0 or nul < bad):
+            span = SourceSpan(self.file, number, nul + 1, nul + 2, text)
+            self.not_text.append(("E011", span, "NUL byte: this looks like a binary file, not a motion script",
+                                  "armctl reads motion scripts as UTF-8 text"))
+        elif bad >= 0:
+            span = SourceSpan(self.file, number, bad + 1, bad + 2, text)
+            self.not_text.append(("E011", span, f"byte 0x{ord(text[bad]) - 0xDC00:02x} is not UTF-8 text",
+                                  "save the script as UTF-8"))
+
+    def _look(self, number: int, text: str) -> None:
+        code = code_text(text)
+        if "#" in code:
+            self._parameters_in(number, text, code)
+        if "o" in code or "O" in code:
+            block = _BLOCK.match(code)
+            if block is not None:
+                self._block(number, text, block)
+
+    def _parameters_in(self, number: int, text: str, code: str) -> None:
+        assignment = _ASSIGNMENT.match(code)
+        for match in _PARAMETER.finditer(code):
+            name = match.group(1).lower()
+            if assignment is not None and match.start() == assignment.start(1) - 2:
+                if name not in self._defined:
+                    self._defined[name] = SourceSpan(self.file, number, match.start() + 1, match.end() + 1, text)
+            else:
+                self._used.add(name)
+
+    def _block(self, number: int, text: str, block: re.Match) -> None:
+        if block.group(1).lower() == "endrepeat":
+            self._depth = max(self._depth - 1, 0)
+            return
+        depth, self._depth = self._depth, self._depth + 1
+        expression = block.group(2)
+        if not expression or (depth and "#" in expression):
+            return
+        if evaluate(expression, self._parameters()) == 0:
+            span = SourceSpan(self.file, number, block.start(2) + 1, block.end(2) + 1, text)
+            self._report("L402", span, f"repeat count {expression} is 0: the block never runs",
+                         "remove the block, or give it a count of 1 or more")
+
+    def unused_parameters(self) -> Iterator[Finding]:
+        for name, span in self._defined.items():
+            if name not in self._used:
+                yield ("L401", span, f"#<{span.snippet[2:-1]}> is assigned but never read",
+                       "check the spelling where it is used, or remove the assignment")
+
+
+def evaluate(expression: str, parameters: Mapping[str, object]) -> Optional[float]:
+    """The value of a count expression with these parameters, in the language's own arithmetic;
+    None when it has no value (undefined parameter, syntax: the compiler reports those)."""
+    known = {name: value for name, value in parameters.items() if type(value) is float}
+    probe = compile_lines([f"#<{_PROBE}> = {expression}"], "<repeat count>", InitialState(parameters=known))
+    probe.finish()
+    value = probe.state.parameters.get(_PROBE)
+    return value if type(value) is float else None
