@@ -20,7 +20,10 @@ def _clock(seconds: float) -> str:
 
 
 def _line(statement) -> str:
-    return "—" if statement is None else f"{statement.line}  {statement.span.text.strip()[:48]}"
+    if statement is None:
+        return "—"
+    code = statement.span.text.split(";", 1)[0].strip()  # the statement, not its comment
+    return f"{statement.line}  {code[:48]}"
 
 
 def render_run(view: RunView, title: str) -> Panel:
@@ -37,7 +40,8 @@ def render_run(view: RunView, title: str) -> Panel:
     facts.add_row("elapsed / ETA", f"{_clock(view.elapsed_s)} / {_clock(view.eta_s)} left (estimate {_clock(view.estimated_job_s)})")
     facts.add_row(
         "queue (estimate)",
-        f"≤ {view.queued_frames_bound} frames (limit {view.capacity}) · {view.queued_s:.1f} s of motion (lead {view.lead_s:g} s)",
+        f"≤ {view.queued_frames_bound} frames (limit {view.capacity}) · {view.queued_s:.1f} s of motion ahead "
+        f"(next frame when ≤ {view.lead_s:g} s)",
     )
     position = "—" if view.position_mm is None else "  ".join(f"{v:.1f}" for v in view.position_mm)
     facts.add_row("position X Y Z", position)
