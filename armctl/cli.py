@@ -6,7 +6,8 @@ them, so ``armctl --help`` stays fast.  Every error a user can cause is an ``Arm
 an ``OSError`` and becomes one line on stderr with an exit code — never a traceback.
 
 Exit codes: 0 success, 1 the input had problems (script errors, lint findings, a job that did
-not finish), 2 usage errors and unreadable files, 130 interrupted by Ctrl-C.
+not finish), 2 usage errors and unreadable files, 130 interrupted by Ctrl-C, 141 the program
+reading our output went away (``| head``).
 """
 
 from __future__ import annotations
@@ -19,7 +20,7 @@ import click
 from . import __version__
 from .errors import ArmctlError
 
-EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
 
 
 class UsageFailure(ArmctlError):
@@ -38,8 +39,20 @@ class ArmctlGroup(click.Group):
             _fail(str(error), EXIT_PROBLEMS)
         except KeyboardInterrupt:
             _fail("interrupted", EXIT_INTERRUPTED)
+        except BrokenPipeError:
+            _reader_went_away()
         except OSError as error:
             _fail(_os_error_text(error), EXIT_USAGE)
+
+
+def _reader_went_away():
+    """``armctl compile job | head -1``: the reader has what it wanted; end quietly, as a
+    program killed by SIGPIPE would (exit 141), without a message about it."""
+    import os
+
+    devnull = os.open(os.devnull, os.O_WRONLY)
+    os.dup2(devnull, sys.stdout.fileno())  # Python's final flush of stdout must not fail again
+    sys.exit(EXIT_BROKEN_PIPE)
 
 
 def _fail(message: str, code: int):
@@ -107,11 +120,13 @@ def _compile_source(path: str, **options):
     from .script import compile_file, compile_lines
 
     if path == "-":
-        if not hasattr(_compile_source, "stdin_lines"):
+        # stdin can be read once; keep its lines for this invocation's second pass only.
+        meta = click.get_current_context().meta
+        if "armctl.stdin_lines" not in meta:
             from .script import iter_lines
 
-            _compile_source.stdin_lines = list(iter_lines(click.get_binary_stream("stdin")))
-        return compile_lines(_compile_source.stdin_lines, "<stdin>", **options)
+            meta["armctl.stdin_lines"] = list(iter_lines(click.get_binary_stream("stdin")))
+        return compile_lines(meta["armctl.stdin_lines"], "<stdin>", **options)
     return compile_file(path, **options)
 
 

@@ -99,7 +99,7 @@ def describe_open_error(url: str, error: Exception) -> str:
         )
     if code in (errno.EBUSY, errno.EAGAIN) or "exclusively lock" in text:
         return f"{url} is busy: another program (another armctl, a serial monitor) has it open"
-    if "ConnectionRefused" in text or code == errno.ECONNREFUSED:
+    if code == errno.ECONNREFUSED or "Connection refused" in text or "ConnectionRefused" in text:
         return f"connection refused by {url}: is the bridge (e.g. `armctl sim --tcp`) running?"
     return f"cannot open {url}: {text}"
 

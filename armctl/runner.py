@@ -38,6 +38,7 @@ class RunView:
     estimated_job_s: float
     lead_s: float
     capacity: int
+    total_lines: int = 0
     started_s: float = 0.0
     now_s: float = 0.0
     frames_sent: int = 0
@@ -101,6 +102,7 @@ class JobRunner:
         self.on_update = on_update or (lambda view: None)
         self.status_queue: queue.SimpleQueue = queue.SimpleQueue()
         self._rest: tuple | None = None  # (pose, since) of the last status position
+        self.stop_requested = False
 
     # --- time -------------------------------------------------------------------------------
 
@@ -159,7 +161,20 @@ class JobRunner:
             raise
         return view
 
+    def check_stop(self) -> None:
+        """Ctrl-C is deferred to here (see ``request_stop``): between writes, never inside one."""
+        if self.stop_requested:
+            raise KeyboardInterrupt
+
+    def request_stop(self) -> None:
+        """Called by the SIGINT handler: the loop stops at its next safe point; a second press
+        while stopping raises at once."""
+        if self.stop_requested:
+            raise KeyboardInterrupt
+        self.stop_requested = True
+
     def _step(self) -> None:
+        self.check_stop()
         self._drain()
         if self.link.error is not None:
             raise self.link.error
@@ -167,12 +182,13 @@ class JobRunner:
         when = self.streamer.next_write_time(now)
         if when is not None and when <= now:
             self._write(self.view.next_statement, now)
-            self.view.next_statement = next(self.statements, None)
+            self._refresh()  # only after every record of the write is complete
         else:
             self._refresh()
             self._sleep(POLL_S if when is None else min(when - now, POLL_S))
 
     def _write(self, statement, now: float) -> None:
+        """Write one frame and record it everywhere; nothing here calls out (no display)."""
         command = statement.command
         frame = command.encode()
         self.link.write(frame)
@@ -180,10 +196,10 @@ class JobRunner:
         view = self.view
         view.frames_sent += 1
         view.last_sent = statement
+        view.next_statement = next(self.statements, None)
         view.remaining_motion_s = max(0.0, view.remaining_motion_s - sent.segment.duration_s)
         if self.log is not None:
             self._log("tx", frame, now, line=statement.line)
-        self._refresh()
 
     def _refresh(self) -> None:
         view, streamer = self.view, self.streamer
@@ -216,6 +232,7 @@ class JobRunner:
         now = self.now()
         deadline = now + self.streamer.queued_seconds(now) * self.streamer.slowest_factor + SETTLE_SLACK_S
         while True:
+            self.check_stop()
             self._drain()
             if self.link.error is not None:
                 raise self.link.error
@@ -245,11 +262,14 @@ class JobRunner:
         view = self.view
         view.outcome = "interrupted"
         for command in sequence:
+            frame = command.encode()
             try:
-                self.link.write(command.encode())
+                self.link.write(frame)
             except PortError:
                 view.outcome = "port lost"
                 return
+            if self.log is not None:
+                self._log("tx", frame, self.now(), abort=True)
         deadline = self.now() + self.streamer.queued_seconds(self.now()) * self.streamer.slowest_factor + SETTLE_SLACK_S
         while self.now() < deadline:
             self._drain()

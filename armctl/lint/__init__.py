@@ -25,7 +25,20 @@ Usage::
         print(diagnostic.render())
 """
 
-from .engine import FileReport, lint_lines
-from .registry import LINT_RULES, RULES, Selection, UnknownCode, rule_name
+# Exports are loaded on first use (PEP 562): `armctl --help` imports armctl.lint.command,
+# and that must not pull in the engine, the compiler and lark.
+_EXPORTS = {
+    "FileReport": "engine", "lint_lines": "engine",
+    "LINT_RULES": "registry", "RULES": "registry", "Selection": "registry", "UnknownCode": "registry",
+    "rule_name": "registry",
+}
+
+
+def __getattr__(name):
+    if name not in _EXPORTS:
+        raise AttributeError(f"module 'armctl.lint' has no attribute {name!r}")
+    import importlib
+
+    return getattr(importlib.import_module(f".{_EXPORTS[name]}", __name__), name)
 
 __all__ = ["FileReport", "LINT_RULES", "RULES", "Selection", "UnknownCode", "lint_lines", "rule_name"]

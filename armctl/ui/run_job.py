@@ -8,9 +8,11 @@ itself is the pure Streamer's; the clock and the port are the runner's.
 
 from __future__ import annotations
 
+import signal
 import sys
+import threading
 import time
-from contextlib import nullcontext
+from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
 
 import click
@@ -50,10 +52,24 @@ def check_script(script: str, profile) -> None:
     from ..script import read_lines
 
     report = lint_lines(read_lines(script), script, profile)
-    for diagnostic in report.diagnostics:
+    _refuse_on_errors(report.diagnostics, report.errors)
+    return report
+
+
+def check_from_line(compile_source, script: str, from_line: int) -> None:
+    """A resume line the compiler cannot start at (inside an arc, inside a repeat block, past
+    the end) is an error like any other: nothing is sent."""
+    if from_line <= 1:
+        return
+    check = compile_source(script, from_line=from_line)
+    check.finish()
+    _refuse_on_errors([d for d in check.diagnostics if d.severity == "error"], check.error_count)
+
+
+def _refuse_on_errors(diagnostics, errors: int) -> None:
+    for diagnostic in diagnostics:
         click.echo(diagnostic.render(), err=True)
-    if report.errors:
-        errors = report.errors
+    if errors:
         click.echo(f"{errors} error{'s' if errors != 1 else ''}: nothing was sent to the arm", err=True)
         sys.exit(EXIT_PROBLEMS)
 
@@ -129,7 +145,8 @@ def run_job(options: JobOptions, compile_source, connect) -> int:
     from ..runner import ABORT_SEQUENCES, JobRunner, RunView
 
     profile = load_profile(options.profile_path)
-    check_script(options.script, profile)
+    report = check_script(options.script, profile)
+    check_from_line(compile_source, options.script, options.from_line)
     model = MotionModel(profile)
     if options.dry_run:
         return dry_run(options, compile_source, model)
@@ -143,7 +160,7 @@ def run_job(options: JobOptions, compile_source, connect) -> int:
             click.echo("nothing to send: the script has no frames" + (f" from line {options.from_line}" if options.from_line > 1 else ""))
             return EXIT_OK
         streamer = Streamer(model, start, lead_s=options.lead_s, baud=baud)
-        view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, lead_s=options.lead_s,
+        view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=report.lines, lead_s=options.lead_s,
                        capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
         statements = compile_source(options.script, initial=initial, from_line=options.from_line)
         runner = JobRunner(link, streamer, statements, view, time_scale=time_scale_of(link.url), log=log)
@@ -160,24 +177,36 @@ def _stream(runner, options: JobOptions, view) -> str:
     title = f"armctl run {options.script}"
     display = _Display(title, options.live and sys.stdout.isatty())
     runner.on_update = display.update
-    try:
-        with display:
+    with _deferred_ctrl_c(runner), display:
+        try:
+            runner.run()
+        except KeyboardInterrupt:
+            click.echo("\narmctl: interrupted: no more frames are sent; sending the abort sequence "
+                       f"({options.abort}) and waiting for the arm to come to rest …", err=True)
             try:
-                runner.run()
+                runner.abort(ABORT_SEQUENCES[options.abort])
             except KeyboardInterrupt:
-                click.echo("\narmctl: interrupted: no more frames are sent; sending the abort sequence "
-                           f"({options.abort}) and waiting for the arm to come to rest …", err=True)
-                try:
-                    runner.abort(ABORT_SEQUENCES[options.abort])
-                except KeyboardInterrupt:
-                    pass
-                return "interrupted"
-            except PortError as error:
-                view.messages.append(str(error))
-                return "port lost"
-    finally:
-        pass
+                pass
+            return "interrupted"
+        except PortError as error:
+            view.messages.append(str(error))
+            return "port lost"
     return view.outcome
+
+
+@contextmanager
+def _deferred_ctrl_c(runner):
+    """While streaming, Ctrl-C asks the runner to stop at its next safe point (between writes),
+    so the records of a frame written are never half made; a second Ctrl-C acts at once."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.getsignal(signal.SIGINT)
+    signal.signal(signal.SIGINT, lambda signum, frame: runner.request_stop())
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 class _Display:

@@ -33,6 +33,10 @@ def render_run(view: RunView, title: str) -> Panel:
     frames.add_column(justify="right")
     done = view.frames_sent / view.total_frames if view.total_frames else 1.0
     frames.add_row("frames", ProgressBar(total=1.0, completed=done, width=40), f"{view.frames_sent}/{view.total_frames}")
+    if view.total_lines:
+        line = view.last_sent.line if view.last_sent is not None else 0
+        frames.add_row("lines", ProgressBar(total=1.0, completed=min(line / view.total_lines, 1.0), width=40),
+                       f"{line}/{view.total_lines}")
 
     facts = Table.grid(padding=(0, 2))
     facts.add_column(style="bold")

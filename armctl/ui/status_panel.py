@@ -76,7 +76,8 @@ def status_line(state: ArmState) -> str:
     """One plain line for a terminal that is not one (a pipe, a log file)."""
     joints = " ".join(_num(v, 2) for v in state.joints_deg)
     paused = "—" if state.paused is None else ("paused" if state.paused else "running")
+    pwm = "—" if state.pwm_us is None else state.pwm_us
     return (
         f"xyz={_num(state.x_mm)},{_num(state.y_mm)},{_num(state.z_mm)} joints={joints} "
-        f"pwm={state.pwm_us} {paused} run_position={state.run_position}"
+        f"pwm={pwm} {paused} run_position={_num(state.run_position)}"
     )

@@ -1,0 +1,175 @@
+"""Packaging: the grammar loads from the editable install and from a wheel; ``armctl --help``
+stays light; ``python -m armctl`` works.
+
+The wheel is built from a copy of the checkout (so no ``build/`` or ``*.egg-info`` lands in the
+shared work tree), installed with ``pip install --no-deps --target``, and used from a directory
+outside the repository with ``PYTHONPATH`` pointing at it and the editable install's import
+finder removed — so the grammar can only come from inside the wheel.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import subprocess
+import sys
+import tomllib
+import zipfile
+from pathlib import Path
+
+import pytest
+
+from test_cli_compile import motion
+
+ROOT = Path(__file__).resolve().parents[1]
+PYTHON = sys.executable  # the virtualenv's interpreter (armctl installed editable, lark & co. present)
+SMALL_SCRIPT = "#<z> = 150\nG1 X250 Y0 Z#<z> A180 B0 C0 S1000 F3000 ; via Lark (a parameter)\nG4 P250\n"
+SMALL_FRAMES = [
+    motion("1", 1, f1=250, f2=0, f3=150, f4=180, f7=1000, f11=3000).hex(),
+    motion("6", 0, f1=250).hex(),
+]
+
+# Compiles stdin and says where armctl and its grammar came from.  argv[1] == "wheel": drop the
+# editable install's finder first, so only sys.path (PYTHONPATH) can provide armctl.
+PROBE = """
+import importlib.util, json, sys
+if sys.argv[1] == "wheel":
+    sys.meta_path[:] = [f for f in sys.meta_path if "__editable__" not in getattr(f, "__module__", "")]
+import armctl
+spec = importlib.util.find_spec("armctl.grammars")  # before the parser is built (no fallback yet)
+from armctl.script import compile_text
+from armctl.script.grammar import parser
+job = compile_text(sys.stdin.read(), "<probe>")
+frames = [statement.command.encode().hex() for statement in job]
+import armctl.grammars
+print(json.dumps({
+    "armctl": armctl.__file__,
+    "grammars_spec": None if spec is None else spec.origin,
+    "grammars": armctl.grammars.__file__,
+    "errors": job.error_count,
+    "frames": frames,
+    "lark_parser": type(parser()).__name__,
+    "checkout_on_path": [p for p in sys.path if p.rstrip("/") in ("%(root)s", "%(root)s/armctl", "%(root)s/grammars")],
+}))
+"""
+
+
+def probe(mode: str, cwd: Path, env: dict | None = None) -> dict:
+    done = subprocess.run(
+        [PYTHON, "-c", PROBE % {"root": str(ROOT)}, mode], input=SMALL_SCRIPT, capture_output=True, text=True,
+        cwd=cwd, env={**os.environ, **(env or {})}, timeout=60,
+    )
+    assert done.returncode == 0, done.stderr
+    return json.loads(done.stdout)
+
+
+# --- the editable install (the one this virtualenv has) ----------------------------------------
+
+
+def test_the_grammar_loads_from_the_editable_install(tmp_path):
+    found = probe("editable", cwd=tmp_path)
+    assert found["armctl"] == str(ROOT / "armctl" / "__init__.py")
+    assert found["grammars_spec"] == str(ROOT / "grammars" / "__init__.py")  # mapped by the install, not patched in
+    assert found["grammars"] == str(ROOT / "grammars" / "__init__.py")
+    assert (found["errors"], found["frames"]) == (0, SMALL_FRAMES)
+
+
+# --- a wheel --------------------------------------------------------------------------------------
+
+_NOT_SOURCE = shutil.ignore_patterns(".git", ".venv", "build", "dist", "*.egg-info", "__pycache__", ".hypothesis",
+                                     ".pytest_cache", "tests")
+
+
+def pip(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    return subprocess.run([PYTHON, "-m", "pip", *args], capture_output=True, text=True, cwd=cwd, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def wheel(tmp_path_factory):
+    """(the wheel file, the --target directory it is installed in, how it was built)."""
+    base = tmp_path_factory.mktemp("wheel")
+    source, dist, target = base / "source", base / "dist", base / "installed"
+    shutil.copytree(ROOT, source, ignore=_NOT_SOURCE)
+    built = pip("wheel", "--no-deps", "--no-build-isolation", "-q", "-w", str(dist), str(source), cwd=base)
+    how = "without build isolation"
+    if built.returncode != 0 and "bdist_wheel" in built.stdout + built.stderr:
+        # This virtualenv's setuptools cannot build wheels (see the xfail below): let pip fetch
+        # a build backend into an isolated environment instead, to still test the wheel itself.
+        built = pip("wheel", "--no-deps", "-q", "-w", str(dist), str(source), cwd=base)
+        how = "with build isolation"
+    assert built.returncode == 0, built.stdout + built.stderr
+    (wheel_file,) = dist.glob("armctl-*.whl")
+    installed = pip("install", "--no-deps", "-q", "--target", str(target), str(wheel_file), cwd=base)
+    assert installed.returncode == 0, installed.stdout + installed.stderr
+    return wheel_file, target, how
+
+
+def test_the_wheel_ships_the_grammar_as_package_data(wheel):
+    wheel_file, _, _ = wheel
+    names = zipfile.ZipFile(wheel_file).namelist()
+    assert "armctl/grammars/armctl.lark" in names
+    assert "armctl/grammars/__init__.py" in names
+    assert not any(name.startswith("grammars/") for name in names)  # only inside the package
+    assert not any(name.startswith("tests/") for name in names)
+
+
+def test_the_grammar_loads_from_the_wheel_outside_the_repository(wheel, tmp_path):
+    _, target, _ = wheel
+    found = probe("wheel", cwd=tmp_path, env={"PYTHONPATH": str(target)})
+    assert found["checkout_on_path"] == []
+    assert found["armctl"] == str(target / "armctl" / "__init__.py")
+    assert found["grammars_spec"] == str(target / "armctl" / "grammars" / "__init__.py")
+    assert found["grammars"] == str(target / "armctl" / "grammars" / "__init__.py")
+    assert (found["errors"], found["frames"]) == (0, SMALL_FRAMES)
+
+
+def test_the_wheels_command_line_compiles_outside_the_repository(wheel, tmp_path):
+    _, target, _ = wheel
+    script = tmp_path / "job.txt"
+    script.write_text(SMALL_SCRIPT)
+    code = ("import sys; sys.meta_path[:] = [f for f in sys.meta_path if '__editable__' not in "
+            "getattr(f, '__module__', '')]; from armctl.cli import main; main()")
+    done = subprocess.run([PYTHON, "-c", code, "compile", "job.txt"], capture_output=True, text=True, cwd=tmp_path,
+                          env={**os.environ, "PYTHONPATH": str(target)}, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.split() == SMALL_FRAMES
+
+
+def test_the_test_extra_provides_what_a_wheel_build_without_isolation_needs():
+    extra = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]["optional-dependencies"]["test"]
+    names = {requirement.split("[")[0].split(">")[0].split("=")[0].split("<")[0].strip().lower() for requirement in extra}
+    assert "wheel" in names or any(r.replace(" ", "").lower().startswith("setuptools>=7") for r in extra)
+
+
+# --- the command line stays light and answers as a module -----------------------------------------
+
+HEAVY = ("lark", "rich", "serial")
+
+
+def test_help_does_not_import_lark_rich_or_serial(tmp_path):
+    code = (
+        "import sys\n"
+        "from armctl.cli import main\n"
+        "main(['--help'], standalone_mode=False)\n"
+        f"heavy = sorted(m for m in sys.modules if m.split('.')[0] in {HEAVY!r})\n"
+        "print('HEAVY', heavy)\n"
+    )
+    done = subprocess.run([PYTHON, "-c", code], capture_output=True, text=True, cwd=tmp_path, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert "Usage: " in done.stdout and "compile" in done.stdout and "run" in done.stdout
+    heavy_line = done.stdout.splitlines()[-1]
+    assert heavy_line == "HEAVY []"
+
+
+def test_python_dash_m_armctl_version(tmp_path):
+    done = subprocess.run([PYTHON, "-m", "armctl", "--version"], capture_output=True, text=True, cwd=tmp_path, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == "armctl, version 0.1.0\n"
+
+
+def test_python_dash_m_armctl_help_lists_the_commands(tmp_path):
+    done = subprocess.run([PYTHON, "-m", "armctl", "--help"], capture_output=True, text=True, cwd=tmp_path, timeout=60)
+    assert done.returncode == 0
+    for command in ("compile", "decode", "estimate", "ports", "run", "sim", "status"):
+        assert f"  {command} " in done.stdout, command
