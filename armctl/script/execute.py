@@ -1,0 +1,396 @@
+"""How each statement runs against the modal state: moves, arcs, keywords, parameters.
+
+Strategy: ``StatementExecution`` is the half of ``Compilation`` (armctl/script/compiler.py)
+that gives statements their meaning; the other half reads lines, pairs blocks and keeps the
+diagnostics.  Moves take one of three paths, each starting from the same untouched state:
+
+  1. ``_plain_move`` — the hot path: a line the regex fast path scanned, in absolute mode,
+     with every value known (``resolve_plain``); no node is built.
+  2. ``_move`` — a node without word columns (a fast-path line in a repeat body, or G91):
+     the general ``resolve``; the first sign of trouble re-parses the line with Lark.
+  3. ``_move_with_diagnostics`` — a Lark node with columns: report everything wrong with the
+     line, commit what it did set, poison what it failed to set.
+
+A G300 is held back (``_arc``) until its G301 arrives; anything else in between is reported
+and the half arc dropped, so no half arc is ever yielded.
+
+Contract with the host class: it provides ``state``, ``file``, ``from_line``, ``_out`` (a
+list of statements to yield), ``_arc`` and the reporters ``_report``, ``_report_at`` and
+``_report_resume``.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import MISSING
+from typing import Optional
+
+from ..errors import FieldError
+from ..protocol import GoToPose, MCode, PauseToggle, ResetArm, ResetConnector, RunProgram, StructureMode
+from . import messages
+from .expressions import POISONED, ExpressionError, Unavailable, evaluate, format_value
+from .grammar import LETTERS, parse_line
+from .modal import CARTESIAN, JOINTS, PWM_KEYS, UNKNOWN
+from .nodes import Assignment, CodeLine, KeywordLine
+from .source import SourceSpan
+from .statement import NO_WORDS, Statement
+from .statements import (
+    CODES, DISTANCE_MODES, PLACEHOLDER, PLACEHOLDERS, PWM_OF_ACTIVE_CHANNEL, MoveSpec, Resolution, blame, resolve,
+    resolve_plain,
+)
+
+FLOAT32_MAX = 3.4028234663852886e38
+NOT_PLAIN = object()  # _plain_move: take the general path
+
+_KEYWORDS = {  # names → (command, what the number is or None, families it leaves unknown)
+    ("RESET",): (ResetArm, None, (CARTESIAN, JOINTS)),
+    ("RESET", "CONNECTOR"): (ResetConnector, None, ()),
+    ("PAUSE",): (PauseToggle, None, ()),
+    ("POSE",): (GoToPose, "a fixed pose 0…3", (CARTESIAN, JOINTS)),
+    ("PROGRAM",): (RunProgram, "an SD-card program 0…15", (CARTESIAN, JOINTS)),
+    ("MODE",): (StructureMode, "structure mode 0 or 1", ()),
+}
+
+
+class StatementExecution:
+    """Runs one parsed line (see the module docstring for what the host class provides)."""
+
+    def _execute(self, number: int, text: str, node, loop: tuple) -> None:
+        """Run any parsed line but a block line; what it yields goes to ``_out``."""
+        kind = type(node)
+        if kind is CodeLine:
+            if node.letter == "G":
+                spec = CODES.get(node.number)
+                if spec is not None:
+                    statement = self._move(number, text, node, spec, loop)
+                    if statement is not None:
+                        self._out.append(statement)
+                elif node.number in DISTANCE_MODES:
+                    self._distance_mode(number, text, node)
+                else:
+                    self._interrupt_arc(number, node.code)
+                    self._report("E002", number, text, node.column, node.end_column,
+                                 f"unknown statement {text[node.column - 1:node.end_column - 1].upper()}",
+                                 messages.unknown_g_code(node.number))
+            else:
+                self._m_code(number, text, node, loop)
+        elif kind is KeywordLine:
+            self._keyword(number, text, node, loop)
+        elif kind is Assignment:
+            self._assign(number, text, node)
+
+    # --- moves (G1 G220 G222 G230 G6 G300 G301 G4 G54) -------------------------------------
+
+    def _plain_move(self, number: int, text: str, scanned) -> Optional[Statement]:
+        """The hot path: a scanned G line in absolute mode with every value known.
+
+        Returns the statement to yield (or None: held back or before ``from_line``), or
+        ``NOT_PLAIN`` without having changed anything — then the line takes the general path."""
+        letter, digits, column, end_column, words = scanned
+        if (letter != "G" and letter != "g") or len(digits) > 9:
+            return NOT_PLAIN
+        spec = CODES.get(int(digits))
+        state = self.state
+        if spec is None or state.relative:
+            return NOT_PLAIN
+        names = iter(words)
+        written = {LETTERS[name]: float(value) for name, value in zip(names, names)}
+        if 2 * len(written) != len(words) or not written.keys() <= spec.letter_set:
+            return NOT_PLAIN
+        values = state.values
+        plain = resolve_plain(spec, written, values)
+        if plain is None:
+            return NOT_PLAIN
+        try:
+            command = spec.build(*plain[0])
+        except FieldError:
+            return NOT_PLAIN
+        return self._moved(spec, command, plain[1], number, text, column, end_column, written, ())
+
+    def _moved(self, spec: MoveSpec, command, updates: dict, number: int, text: str, column: int, end_column: int,
+               written: dict, loop: tuple) -> Optional[Statement]:
+        """A move that built: commit its state and hand its statement on (or hold an arc)."""
+        state = self.state
+        values = state.values
+        values.update(updates)
+        forgets = spec.forgets
+        if forgets:
+            values.update(UNKNOWN[forgets])
+            state.unknown_because[forgets] = (spec.code, number)
+        statement = Statement(command, self.file, number, column, end_column, text, spec.code, written,
+                              state.relative, loop)
+        if self._arc is None and not spec.is_arc:
+            return statement if number >= self.from_line else None
+        return self._sequence(spec.code, number, text, (column, end_column), statement)
+
+    def _move(self, number: int, text: str, node: CodeLine, spec: MoveSpec, loop: tuple) -> Optional[Statement]:
+        """Execute a move (or G4/G54); return its statement if it is to be yielded alone.
+
+        The first half is the hot path: a fast-path line whose words all belong to the
+        statement and whose command builds.  Anything else takes ``_move_with_diagnostics``,
+        which starts again from the same, untouched state.  Arcs and failures return None
+        (a completed arc pair goes to ``self._out``)."""
+        if node.spans is None:
+            words = node.words
+            written = dict(words)
+            if len(written) == len(words) and written.keys() <= spec.letter_set:
+                state = self.state
+                resolution = resolve(spec, written, state)
+                if resolution.ok:
+                    try:
+                        command = spec.build(*resolution.arguments)
+                    except FieldError:
+                        command = None
+                    if command is not None:
+                        return self._moved(spec, command, resolution.updates, number, text, node.column,
+                                           node.end_column, written, loop)
+            node = parse_line(text)
+        return self._move_with_diagnostics(number, text, node, spec, loop)
+
+    def _move_with_diagnostics(self, number: int, text: str, node: CodeLine, spec: MoveSpec, loop: tuple):
+        """``_move`` for a line with spans (Lark-parsed): report everything that is wrong."""
+        state, code = self.state, spec.code
+        written, failed = self._collect_words(number, text, node, spec)
+        resolution = resolve(spec, written, state)
+        poison = [] if resolution.ok else self._unresolved(number, text, node, spec, resolution, written)
+        command, bad_keys = self._build(number, text, node, spec, written, resolution.arguments)
+        values = state.values
+        values.update(resolution.updates)
+        for key in poison + bad_keys:
+            values[key] = POISONED
+        if spec.forgets:
+            state.forget(spec.forgets, (code, number))
+        statement = None
+        if command is not None and resolution.ok and not failed:
+            statement = Statement(command, self.file, number, node.column, node.end_column, text, code, written,
+                                  state.relative, loop)
+        return self._sequence(code, number, text, (node.column, node.end_column), statement)
+
+    def _build(self, number, text, node: CodeLine, spec: MoveSpec, written: dict, arguments: list):
+        """Build the command, reporting every value out of the protocol's range (E005).
+
+        Fields nothing could fill get a placeholder every field accepts, and so does each
+        field once reported, so that one pass checks every word of the line.  Returns the
+        command (None if anything was substituted) and the modal keys to poison."""
+        arguments = list(arguments)
+        substituted = set()
+        for index, value in enumerate(arguments):
+            if value is MISSING:
+                arguments[index] = PLACEHOLDERS.get(spec.field_names[index], PLACEHOLDER)
+                substituted.add(index)
+        spans = dict(zip((letter for letter, _ in node.words), node.spans))
+        bad_keys = []
+        for _ in arguments:
+            try:
+                command = spec.build(*arguments)
+            except FieldError as error:
+                slot, message = blame(spec, error)
+                index = spec.index_of[slot.field] if slot else None
+                if index is None or index in substituted:  # pragma: no cover - a placeholder is valid
+                    self._report("E005", number, text, node.column, node.end_column, message)
+                    return None, bad_keys
+                value = arguments[index]
+                if isinstance(value, float) and not (math.isfinite(value) and abs(value) <= FLOAT32_MAX):
+                    message = f"{slot.letter} is too large for a frame: a 32-bit float holds at most ±3.4e38"
+                if slot.letter in written and slot.letter in spans:
+                    self._report("E005", number, text, *spans[slot.letter], message)
+                else:
+                    name = slot.letter or slot.key
+                    self._report("E005", number, text, node.column, node.end_column, message,
+                                 f"{name} is modal: the value from an earlier line applies; write {name} here")
+                key = slot.key
+                if key == PWM_OF_ACTIVE_CHANNEL:
+                    key = PWM_KEYS.get(arguments[spec.index_of["pwm_channel"]])
+                if key:
+                    bad_keys.append(key)
+                arguments[index] = PLACEHOLDERS.get(slot.field, PLACEHOLDER)
+                substituted.add(index)
+                continue
+            return (None if substituted else command), bad_keys
+        return None, bad_keys  # pragma: no cover - each round substitutes one more field
+
+    def _sequence(self, code: str, number: int, text: str, head: tuple[int, int], statement: Optional[Statement]):
+        """Arc pairing for a move that just ran (``statement`` None if it failed): hold a G300
+        back, pair a G301 with it, and report a G300 something else follows."""
+        if code == "G300":
+            if self._arc is not None:
+                self._interrupt_arc(number, code)
+            self._arc = statement if statement is not None else SourceSpan(self.file, number, *head, text)
+            return None
+        if code == "G301":
+            arc, self._arc = self._arc, None
+            if arc is None:
+                self._report("E006", number, text, *head, "G301 has no G300 before it", messages.ARC_HINT)
+            elif statement is not None:
+                self._complete_arc(arc, statement)
+            return None
+        if self._arc is not None:
+            self._interrupt_arc(number, code)
+        if statement is not None and number >= self.from_line:
+            return statement
+        return None
+
+    def _collect_words(self, number, text, node: CodeLine, spec: MoveSpec) -> tuple[dict, bool]:
+        """The words' values (letter → number), reporting unknown, duplicate and bad values."""
+        written, seen, failed = {}, set(), False
+        for (letter, value), (column, end) in zip(node.words, node.spans):
+            if letter in seen:
+                failed = True
+                written.pop(letter, None)
+                self._poison_word(spec, letter)
+                self._report("E003", number, text, column, end, f"{letter} appears twice in {spec.code}",
+                             "a word may appear once per line")
+            elif letter not in spec.letter_set:
+                failed = True
+                self._report("E002", number, text, column, end, *messages.unknown_word(letter, text[column - 1:end - 1], spec))
+            else:
+                try:
+                    written[letter] = evaluate(value, self.state.parameters)
+                except ExpressionError as error:
+                    failed = True
+                    self._poison_word(spec, letter)
+                    self._report(error.code, number, text, error.column, error.end_column, error.message, error.hint)
+                except Unavailable:
+                    failed = True
+                    self._poison_word(spec, letter)
+            seen.add(letter)
+        return written, failed
+
+    def _poison_word(self, spec: MoveSpec, letter: str) -> None:
+        key = self._key(spec.key_of.get(letter))
+        if key is not None:
+            self.state.values[key] = POISONED
+
+    def _key(self, key: Optional[str]) -> Optional[str]:
+        if key == PWM_OF_ACTIVE_CHANNEL:
+            channel = self.state.values["T"]
+            return PWM_KEYS.get(channel) if type(channel) is float else None
+        return key
+
+    def _unresolved(self, number, text, node: CodeLine, spec: MoveSpec, resolution: Resolution, written: dict) -> list:
+        """Report what a move lacks; return the modal keys to poison."""
+        code, head = spec.code, (node.column, node.end_column)
+        spans = dict(zip((letter for letter, _ in node.words), node.spans))
+        poison = []
+        if resolution.bad_channel:
+            column, end = spans["T"]
+            self._report("E005", number, text, column, end, f"{text[column - 1:end - 1]} is not a PWM channel (1…4)",
+                         "T selects the PWM channel of G1; channel 1 drives the tool")
+            poison.append("T")
+        if resolution.missing:
+            letters = [letter for letter, _ in resolution.missing]
+            self._report("E004", number, text, *head, messages.missing(code, letters),
+                         messages.missing_hint(code, letters, self.state, written.get("T")))
+            poison += [key for _, key in resolution.missing]
+        if resolution.required:
+            self._report("E004", number, text, *head, *messages.required(code, resolution.required))
+        for letter, key in resolution.relative_unknown:
+            self._report("E004", number, text, *spans[letter],
+                         f"{letter} is relative (G91), but no earlier move set {letter}",
+                         f"set {letter} with an absolute move (G90) first")
+            poison.append(key)
+        return poison
+
+    # --- the other statements ----------------------------------------------------------------
+
+    def _distance_mode(self, number: int, text: str, node: CodeLine) -> None:
+        self._interrupt_arc(number, node.code)
+        if node.words:
+            node = node if node.spans is not None else parse_line(text)
+            for (letter, _), (column, end) in zip(node.words, node.spans):
+                self._report("E002", number, text, column, end, f"unknown word '{letter}' in {node.code}",
+                             f"{node.code} takes no words; put the move on the next line")
+            return
+        self.state.relative = DISTANCE_MODES[node.number]
+
+    def _m_code(self, number: int, text: str, node: CodeLine, loop: tuple) -> None:
+        self._interrupt_arc(number, "an M code")
+        head = text[node.column - 1:node.end_column - 1].upper()
+        if node.words:
+            node = node if node.spans is not None else parse_line(text)
+            for (letter, _), (column, end) in zip(node.words, node.spans):
+                self._report("E002", number, text, column, end, f"unknown word '{letter}' in {head}",
+                             "an M code is sent as its number alone")
+            return
+        try:
+            command = MCode(node.number)
+        except FieldError:
+            self._report("E005", number, text, node.column, node.end_column,
+                         f"{head} is outside the M-code range (a 32-bit signed integer)")
+            return
+        if number >= self.from_line:
+            self._out.append(Statement(command, self.file, number, node.column, node.end_column, text,
+                                       f"M{node.number}", NO_WORDS, self.state.relative, loop))
+
+    def _keyword(self, number: int, text: str, node: KeywordLine, loop: tuple) -> None:
+        keyword = node.keyword
+        self._interrupt_arc(number, keyword)
+        head = (node.column, node.end_column)
+        entry = _KEYWORDS.get(node.names)
+        if entry is None:
+            self._report("E002", number, text, *head, f"unknown statement '{text[node.column - 1:node.end_column - 1]}'",
+                         messages.STATEMENTS_HINT)
+            return
+        build, takes, forgets = entry
+        argument = None
+        if takes is None and node.argument is not None:
+            self._report("E002", number, text, *node.argument_span, f"{keyword} takes no number")
+            return
+        for family in forgets:  # whatever happens next, the user meant the arm to move
+            self.state.forget(family, (keyword, number))
+        if takes is not None:
+            if node.argument is None:
+                self._report("E004", number, text, *head, f"{keyword} needs a number", f"write {keyword} n: {takes}")
+                return
+            try:
+                argument = evaluate(node.argument, self.state.parameters)
+            except ExpressionError as error:
+                self._report(error.code, number, text, error.column, error.end_column, error.message, error.hint)
+                return
+            except Unavailable:
+                return
+        try:
+            command = build(argument) if takes is not None else build()
+        except FieldError as error:
+            reason = str(error).split(" ", 1)[1] if " " in str(error) else str(error)
+            self._report("E005", number, text, *node.argument_span, f"{keyword} {reason}", f"{keyword} takes {takes}")
+            return
+        if number >= self.from_line:
+            self._out.append(Statement(command, self.file, number, *head, text, keyword, NO_WORDS,
+                                       self.state.relative, loop))
+
+    def _assign(self, number: int, text: str, node: Assignment) -> None:
+        self._interrupt_arc(number, f"#<{node.name}> =")
+        parameters = self.state.parameters
+        try:
+            value = evaluate(node.value, parameters)
+        except ExpressionError as error:
+            parameters[node.name] = POISONED
+            self._report(error.code, number, text, error.column, error.end_column, error.message, error.hint)
+            return
+        except Unavailable:
+            parameters[node.name] = POISONED
+            return
+        if not math.isfinite(value):
+            parameters[node.name] = POISONED
+            self._report("E009", number, text, *node.value_span, f"#<{node.name}> = {format_value(value)} is not a usable number")
+            return
+        parameters[node.name] = value
+
+    # --- arcs -------------------------------------------------------------------------------
+
+    def _interrupt_arc(self, number: int, what: str) -> None:
+        """Something other than G301 comes next: a held-back G300 is reported and dropped."""
+        arc, self._arc = self._arc, None
+        if arc is not None:
+            span = arc.span if isinstance(arc, Statement) else arc
+            self._report_at(span, "E006", "G300 must be followed directly by G301", f"line {number} has {what}")
+
+    def _complete_arc(self, arc, end: Statement) -> None:
+        if not isinstance(arc, Statement):  # no G300 (reported) or a failed one (reported)
+            return
+        if arc.line < self.from_line <= end.line:
+            self._report_resume(f"it is inside the arc G300 (line {arc.line}) … G301 (line {end.line})",
+                                f"resume at line {arc.line}, the G300")
+        elif arc.line >= self.from_line:
+            self._out += (arc, end)

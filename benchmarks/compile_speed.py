@@ -1,0 +1,183 @@
+"""How fast, and in how much memory, armctl compiles a long motion script.
+
+Generates (in a temporary directory) a script of N G1 lines with 6–8 words and comments, then
+runs each contender on that same file in its own subprocess — so each peak RSS is its own —
+and prints a table:
+
+  armctl        armctl.script.compile_file(): parse, modal state, protocol command objects
+  regex         a plain compiled-regex tokenizer (letter/number pairs per line): the floor
+  gcodeparser   the PyPI package's streaming parser, gcodeparser.parse_gcode_lines()
+                (GcodeParser, the class, is deprecated in 0.3 and builds the same objects
+                into one list; --with-class adds it, at the cost of its memory)
+
+Targets (DESIGN): armctl's peak RSS <= 100 MB and armctl >= 0.5 x gcodeparser's lines/s.
+
+    .venv/bin/python benchmarks/compile_speed.py               # 1,000,000 lines
+    .venv/bin/python benchmarks/compile_speed.py --lines 100000 --repeat 3 --check
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import random
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+MAX_RSS_MB = 100.0
+MIN_RATIO = 0.5
+
+
+# --- the script --------------------------------------------------------------------------------
+
+
+def write_script(path: Path, lines: int, seed: int) -> None:
+    """G1 lines with 6–8 words (X Y Z A B C, sometimes F and S) and ; or ( ) comments."""
+    rng = random.Random(seed)
+    with open(path, "w", encoding="utf-8") as out:
+        out.write("G1 X0 Y0 Z100 A0 B0 C0 F3000 S1500 ; start from a known pose\n")
+        for index in range(1, lines):
+            words = [
+                f"X{rng.uniform(-300, 300):.3f}", f"Y{rng.uniform(-300, 300):.3f}", f"Z{rng.uniform(0, 300):.2f}",
+                f"A{rng.uniform(-90, 90):.1f}", f"B{rng.uniform(-90, 90):.1f}", f"C{rng.uniform(-180, 180):.1f}",
+            ]
+            extra = index % 3
+            if extra >= 1:
+                words.append(f"F{rng.choice((1200, 3000, 6000))}")
+            if extra == 2:
+                words.append(f"S{rng.randint(500, 2500)}")
+            if index % 4 == 0:
+                words.insert(3, "(attitude)")
+            out.write("G1 " + " ".join(words) + f" ; point {index}\n")
+
+
+# --- the contenders (each runs in a child process) ----------------------------------------------
+
+
+def run_armctl(path: str) -> int:
+    sys.path.insert(0, str(ROOT))
+    from armctl.script import compile_file
+
+    job = compile_file(path)
+    count = sum(1 for _ in job)
+    if job.error_count:
+        raise SystemExit(f"armctl found {job.error_count} errors: {job.diagnostics[0]}")
+    return count
+
+
+def run_regex(path: str) -> int:
+    import re
+
+    word = re.compile(r"([A-Za-z])([-+]?[0-9]*\.?[0-9]+)")
+    comment = re.compile(r"\([^)]*\)|;.*")
+    count = 0
+    with open(path, encoding="utf-8") as lines:
+        for line in lines:
+            words = [(letter.upper(), float(number)) for letter, number in word.findall(comment.sub("", line))]
+            count += bool(words)
+    return count
+
+
+def run_gcodeparser(path: str) -> int:
+    from gcodeparser import parse_gcode_lines
+
+    with open(path, encoding="utf-8") as lines:
+        return sum(1 for _ in parse_gcode_lines(lines))
+
+
+def run_gcodeparser_class(path: str) -> int:
+    import warnings
+
+    from gcodeparser import GcodeParser
+
+    warnings.simplefilter("ignore", DeprecationWarning)
+    with open(path, encoding="utf-8") as source:
+        return len(GcodeParser(source.read()).lines)
+
+
+CONTENDERS = {
+    "armctl": run_armctl,
+    "regex": run_regex,
+    "gcodeparser": run_gcodeparser,
+    "gcodeparser-class": run_gcodeparser_class,
+}
+
+
+def peak_rss_mb() -> float:
+    """This process's peak resident set size (VmHWM), in MB."""
+    try:
+        for line in Path("/proc/self/status").read_text().splitlines():
+            if line.startswith("VmHWM:"):
+                return int(line.split()[1]) / 1024
+    except OSError:
+        pass
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024  # Linux: kB
+
+
+def child(name: str, path: str) -> None:
+    start_rss = peak_rss_mb()
+    start = time.perf_counter()
+    count = CONTENDERS[name](path)
+    seconds = time.perf_counter() - start
+    print(json.dumps({"name": name, "count": count, "seconds": seconds, "peak_rss_mb": peak_rss_mb(),
+                      "start_rss_mb": start_rss}))
+
+
+def measure(name: str, path: Path) -> dict:
+    result = subprocess.run(
+        [sys.executable, __file__, "--child", name, str(path)], capture_output=True, text=True, check=False,
+    )
+    if result.returncode != 0:
+        raise SystemExit(f"{name} failed:\n{result.stderr}")
+    return json.loads(result.stdout.splitlines()[-1])
+
+
+# --- the table ---------------------------------------------------------------------------------
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--lines", type=int, default=1_000_000, help="script length (default 1,000,000)")
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--repeat", type=int, default=1, help="run each contender N times, keep the fastest")
+    parser.add_argument("--with-class", action="store_true", help="also measure gcodeparser.GcodeParser (whole file)")
+    parser.add_argument("--check", action="store_true", help="exit 1 if armctl misses a target")
+    parser.add_argument("--child", nargs=2, metavar=("NAME", "PATH"), help=argparse.SUPPRESS)
+    options = parser.parse_args(argv)
+    if options.child:
+        child(*options.child)
+        return 0
+
+    names = ["armctl", "regex", "gcodeparser"] + (["gcodeparser-class"] if options.with_class else [])
+    with tempfile.TemporaryDirectory(prefix="armctl-bench-") as folder:
+        path = Path(folder) / "job.txt"
+        write_script(path, options.lines, options.seed)
+        size_mb = path.stat().st_size / 1e6
+        print(f"script: {options.lines:,} lines, {size_mb:.1f} MB ({sys.implementation.name} {sys.version.split()[0]})")
+        results = {}
+        for _ in range(max(options.repeat, 1)):  # interleaved, so load on the machine hits all alike
+            for name in names:
+                run = measure(name, path)
+                if name not in results or run["seconds"] < results[name]["seconds"]:
+                    results[name] = run
+
+    print(f"{'contender':<18} {'lines/s':>12} {'seconds':>9} {'peak RSS MB':>12} {'at start MB':>12}")
+    for name, r in results.items():
+        rate = options.lines / r["seconds"]
+        print(f"{name:<18} {rate:>12,.0f} {r['seconds']:>9.2f} {r['peak_rss_mb']:>12.1f} {r['start_rss_mb']:>12.1f}")
+    armctl, reference = results["armctl"], results["gcodeparser"]
+    ratio = reference["seconds"] / armctl["seconds"]
+    rss = armctl["peak_rss_mb"]
+    speed_ok, memory_ok = ratio >= MIN_RATIO, rss <= MAX_RSS_MB
+    print(f"armctl / gcodeparser lines/s: {ratio:.2f} (target >= {MIN_RATIO}) {'ok' if speed_ok else 'MISSED'}")
+    print(f"armctl peak RSS: {rss:.1f} MB (target <= {MAX_RSS_MB:.0f} MB) {'ok' if memory_ok else 'MISSED'}")
+    return 1 if options.check and not (speed_ok and memory_ok) else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

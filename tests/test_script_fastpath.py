@@ -1,0 +1,119 @@
+"""The regex fast path and the lean resolver must agree with the full path they shortcut.
+
+Differential tests on generated input: for every line, ``parse_fast`` either declines (None)
+or returns exactly the node Lark builds — so the two agree on which lines they reject, since
+the fast path rejects nothing itself; ``resolve_plain`` either declines or returns exactly
+what ``resolve`` does; and a whole compilation gives the same statements and diagnostics with
+and without the fast path.
+"""
+
+from __future__ import annotations
+
+from hypothesis import HealthCheck, example, given, settings
+from hypothesis import strategies as st
+
+from armctl.script import InitialState, compile_lines
+from armctl.script.fastpath import parse_fast
+from armctl.script.grammar import parse_line
+from armctl.script.modal import POISONED, ModalState
+from armctl.script.nodes import EMPTY
+from armctl.script.statements import CODES, resolve, resolve_plain
+from armctl.script.syntax_errors import LineSyntaxError
+
+# --- generated lines ---------------------------------------------------------------------------
+
+numbers = st.one_of(
+    st.from_regex(r"\A[+-]?([0-9]{1,6}(\.[0-9]{0,4})?|\.[0-9]{1,4})\Z"),
+    st.sampled_from(["0", "-0", "+.5", "5.", "007", "1e5", "1.2.3", "", "-", ".", "9" * 60]),
+)
+letters = st.sampled_from(list("XYZABCUVSTFKQHRPJNGMEOxyzsf") + ["J1=", "j6=", "J7=", "J0="])
+words = st.builds(lambda letter, number: letter + number, letters, numbers)
+codes = st.sampled_from(["G1", "g1", "G01", "G6", "G220", "G230", "G300", "G301", "G4", "G54", "G90", "G91", "G2", "M3",
+                         "m117", "M", "G", "N10 G1", "n5G1", "G" + "1" * 12, "N10"])
+gaps = st.sampled_from(["", " ", "  ", "\t", " (c) ", "(a;b)", " ( ", " ) ", " ;x", "é", "\x00", "$", " = "])
+others = st.sampled_from(["X#<a>", "X[1+2]", "J1=#<a>", "RESET", "pose 2", "#<a> = 1", "O<a> repeat [2]", "[", "]",
+                          "#", "(", ";", "\r", "\udcff", "X-#<a>", "X[", "POSE"])
+
+
+@st.composite
+def lines(draw):
+    parts = [draw(st.sampled_from(["", " ", "\t"])), draw(codes)]
+    for _ in range(draw(st.integers(0, 14))):
+        parts.append(draw(gaps) if draw(st.integers(0, 4)) == 0 else " ")
+        parts.append(draw(words) if draw(st.integers(0, 6)) else draw(others))
+    if draw(st.booleans()):
+        parts.append(draw(st.sampled_from([" ; comment", ";", " (tail)", "   ", " ; (", " ; é"])))
+    return "".join(parts)
+
+
+any_line = st.one_of(lines(), st.text(max_size=60), st.text(alphabet="GXYZJ1=0.5- ;()#<>[]\t", max_size=40))
+
+
+def lark(line: str):
+    try:
+        return parse_line(line)
+    except LineSyntaxError:
+        return "rejected"
+
+
+@settings(max_examples=700, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(any_line)
+@example("G1 X10 Y-2.5 Z.5 A+3 B5. C0 F3000 S1500 ; c")
+@example("N10G1X1Y2(c)Z3;x")
+@example("G6 J1=5 j6=-.5")
+@example("G6 J1=#<a>")
+@example("G1 J7=1")
+@example("G1 X1.2.3")
+@example("G1 X5 (unclosed")
+@example("  (c) ; nothing")
+@example("G1 " + "X1 " * 13)
+def test_fast_path_answers_only_what_lark_answers_the_same_way(line):
+    fast = parse_fast(line)
+    if fast is not None:
+        assert lark(line) == fast
+
+
+@settings(max_examples=150, deadline=None)
+@given(st.lists(st.sampled_from([
+    "G1 X10 Y20 Z30 A0 B0 C0", "G1 X1", "g1 x-2.5 F100", "G1 T2 S2000", "G1 T3 X1", "G1 S9999", "G1 F0", "G1 X1 X2",
+    "G6 J1=10 J2=0 J3=0 J4=0 J5=0 J6=0", "G6 J1=5 H7", "G220 X1 K100", "G230 X1 Q5", "G300 X1 R5", "G301 X2",
+    "G4 P100", "G4 P-1", "G54 X0 Y0 Z0", "G90", "G91", "M3", "RESET", "POSE 1", "#<a> = [#<a> + 1]", "G1 X#<a>",
+    "G1 Q5", "G1 X1 ; c", "G1 (c) Y2", "N5 G1 Z3", "G1 X", "", "O<r> repeat [2]", "O<r> endrepeat", "G1 U5 V-5",
+]), max_size=25))
+def test_compiling_with_and_without_the_fast_path_is_the_same(script):
+    initial = InitialState(pose=(0, 0, 0, 0, 0, 0), pwm_us={1: 1500}, speed_mm_min=100, accel_mm_s2=10,
+                           parameters={"a": 1})
+    fast = compile_lines(script, "t.txt", initial)
+    slow = compile_lines(script, "t.txt", initial, fast=False)
+    assert list(fast) == list(slow)
+    assert fast.diagnostics == slow.diagnostics
+
+
+# --- the lean resolver -------------------------------------------------------------------------
+
+state_values = st.one_of(st.none(), st.just(POISONED), st.floats(-1000, 1000), st.sampled_from([1.0, 2.0, 3.0, 4.0]))
+written_values = st.one_of(st.floats(-1000, 1000), st.sampled_from([1.0, 2.0, 4.0, 5.0, 2.5, 0.0]))
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.sampled_from(sorted(CODES)), st.data())
+def test_resolve_plain_agrees_with_resolve(number, data):
+    spec = CODES[number]
+    state = ModalState()
+    for key in state.values:
+        state.values[key] = data.draw(state_values, label=key) if key != "T" else data.draw(
+            st.sampled_from([1.0, 2.0, 3.0, 4.0, POISONED]), label="T")
+    letters = data.draw(st.lists(st.sampled_from(spec.letters), unique=True), label="letters")
+    written = {letter: data.draw(written_values, label=letter) for letter in letters}
+    full = resolve(spec, written, state)
+    plain = resolve_plain(spec, written, state.values)
+    assert (plain is not None) == full.ok
+    if plain is not None:
+        assert plain == (full.arguments, full.updates)
+
+
+def test_fast_path_examples():
+    assert parse_fast("G1 X1 (c) Y2 ; z").words == (("X", 1.0), ("Y", 2.0))
+    assert parse_fast("; nothing") is EMPTY
+    assert parse_fast("G1 X#<a>") is None  # expressions go to Lark
+    assert parse_fast("RESET") is None
