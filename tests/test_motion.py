@@ -408,6 +408,9 @@ def test_accelerated_moves_progress_monotonically_and_end_at_end(target, mode, a
         speed0 = 0.0
     segment = MODEL.plan(accel(mode, *target, a, speed1, speed0), START)
     assert 0 <= segment.duration_s < math.inf
+    if segment.duration_s == 0:  # the target is the start: nothing to do, done at once
+        assert segment.length == 0 and segment.fraction_at(0) == 1.0
+        return
     fractions = [segment.fraction_at(segment.duration_s * k / 20) for k in range(20)]
     fractions.append(segment.fraction_at(segment.duration_s))
     assert all(b >= a - 1e-12 for a, b in zip(fractions, fractions[1:]))
