@@ -28,6 +28,7 @@ ABORT_SEQUENCES = {
 REST_CHECK_S = 0.6  # the arm counts as at rest when it reported the same pose this long
 SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to come to rest
 POLL_S = 0.05
+_REST_KINDS = (0, 1, 2, 4)  # position, joints 1-3, joints 4-6, pause and PWM
 
 
 @dataclass
@@ -101,7 +102,10 @@ class JobRunner:
         self.log = log
         self.on_update = on_update or (lambda view: None)
         self.status_queue: queue.SimpleQueue = queue.SimpleQueue()
-        self._rest: tuple | None = None  # (pose, since) of the last status position
+        # (position and joints as last reported, since when): the arm is at rest when none of
+        # them changed for REST_CHECK_S — a wrist turning in place changes only joints.
+        self._rest: tuple | None = None
+        self._reported: dict = {}
         self.stop_requested = False
 
     # --- time -------------------------------------------------------------------------------
@@ -137,11 +141,14 @@ class JobRunner:
         self.view.status_frames += 1
         if self.log is not None:
             self._log("rx", frame.encode(), at_s, kind=frame.KIND)
-        if frame.KIND == 0:
-            pose = (frame.x_mm, frame.y_mm, frame.z_mm)
-            self.view.position_mm = pose
-            if self._rest is None or self._rest[0] != pose:
-                self._rest = (pose, at_s)
+        if frame.KIND in _REST_KINDS:
+            values = tuple(frame.fields().values())
+            if frame.KIND == 0:
+                self.view.position_mm = values
+            self._reported[frame.KIND] = values
+            reported = tuple(self._reported.get(kind) for kind in _REST_KINDS)
+            if self._rest is None or self._rest[0] != reported:
+                self._rest = (reported, at_s)
 
     # --- the job ----------------------------------------------------------------------------
 
@@ -179,7 +186,7 @@ class JobRunner:
         if self.link.error is not None:
             raise self.link.error
         now = self.now()
-        when = self.streamer.next_write_time(now)
+        when = self.streamer.next_write_time(now, self.view.next_statement.command)
         if when is not None and when <= now:
             self._write(self.view.next_statement, now)
             self._refresh()  # only after every record of the write is complete
@@ -239,7 +246,10 @@ class JobRunner:
             now = self.now()
             if self.streamer.all_consumed or self.arm_at_rest(now):
                 self._mark_all_done()
-                view.arm_done_s = self._rest[1] if self._rest is not None else now
+                # Delays and other frames leave no trace: the arm is done at the later of its
+                # last visible change and the estimate's end of the job.
+                last_change = self._rest[1] if self._rest is not None else now
+                view.arm_done_s = max(last_change, min(self.streamer.estimated_finish_s() or now, now))
                 view.outcome = "finished"
                 break
             if now > deadline:
@@ -288,7 +298,8 @@ class JobRunner:
         if not pending or self._rest is None:
             return False
         target = pending[-1].segment.end.xyz
-        return max(abs(a - b) for a, b in zip(self._rest[0], target)) <= 0.5
+        position = self._reported.get(0)
+        return position is not None and max(abs(a - b) for a, b in zip(position, target)) <= 0.5
 
     def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
         record = {"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra}

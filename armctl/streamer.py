@@ -5,31 +5,54 @@ The connector holds at most 200 frames and silently drops the rest, and the arm 
 where it is.  So for every frame written the streamer keeps its planned ``Segment`` (the shared
 motion-time model), the moment its last byte left the wire, and two views of the arm:
 
-* a **lower bound of frames consumed**, advanced only on evidence: a reported position (or
-  joint half) lies on the path of segment k, and on no earlier segment still pending, so every
-  frame before k has finished and left the FIFO.  An observation moves the bound only when
-  the one before it agrees (one corrupted status frame can never move it), and a second,
-  *time* bound confirms frames that leave no trace in the position (delays, M codes, control
-  frames, PWM-only moves): a frame has certainly finished once even an arm ``slowest_factor``
-  times slower than the model would have finished it — counting only time the arm was seen
-  running, so a pause (or silence about the pause state) stops that clock;
-* an **estimate** of when each frame ends, from the model, re-anchored on every observation to
-  the segment the arm is most plausibly on.
+* a **lower bound of frames consumed**, advanced only on evidence:
+  - *position*: a reported position (or joint half, for joint and still segments) lies on the
+    path of segment k, and on no earlier segment still pending, so every frame before k has
+    finished and left the FIFO.  The earliest candidate counts (a point on several pending
+    paths — repeated targets — proves only the first).  An observation moves the bound only
+    when the one before it in the same stream agrees (the smaller of the two counts), so one
+    corrupted status frame can never move it.  A joint move's X/Y/Z trace is matched against
+    chords of its forward kinematics with a tolerance widened by how far the chords cut
+    corners; joint halves prove nothing while a Cartesian segment is pending before them.
+    An arc's G300 is held by the arm until its G301 has landed and finishes with it: evidence
+    of the arc never confirms its G300 alone.
+  - *time*: frames that leave no trace in the position (delays, M codes, control frames,
+    PWM-only and attitude-only moves) are confirmed once even an arm ``slowest_factor`` times
+    slower than the model would have finished them, counting only time the arm was seen
+    running (kind-4 status), so a pause, or silence about the pause state, stops that clock
+    and a resume pushes every pending deadline back by the whole pause.  The deadlines form a
+    chain from frame to frame; agreeing evidence that frame k has begun restarts the chain at
+    k (else it would drift ahead by the slowest factor for as long as the arm is kept busy).
+  Lost or corrupted status frames can only hold the bound back, i.e. make it more careful.
+* an **estimate** of when each frame ends, from the model, re-anchored on every observation:
+  each candidate segment says the arm is now within a window of that segment's time (a short
+  one on a path that moves, the whole segment on one that does not move what was observed);
+  the window nearest the estimate wins and the estimate moves by the least that puts ``now``
+  in it.  So a still frame never pushes the estimate while the estimate agrees with it, and
+  an arm standing still (paused, or slower than the model) holds the estimate back.
 
-A frame may be written only while (a) frames written − lower bound < capacity − margin and
-(b) estimated motion queued ahead of the arm ≤ ``lead_s``, and only once the previous frame has
-left the wire (writes are paced to the line, so no OS buffer hides seconds of frames).  Lost or
-corrupted status frames can only hold the bound back, i.e. make the streamer more careful.
+A frame may be written only once the previous frame has left the wire (writes are paced to
+the line, so no OS buffer hides seconds of frames) and while both hold:
+(a) frames written − lower bound < capacity − margin (never overflow the FIFO, whatever the
+    estimate says);
+(b) the estimated motion waiting behind the frame in progress — including the new frame, when
+    ``next_write_time`` is told which it is — is at most ``lead_s``, so an abort (a pause frame
+    queued behind everything, H5) leaves the arm at most the lead plus the move in progress.
+    A frame is also allowed once no more than ``FEED_AHEAD_S`` (or the lead) is queued in all,
+    so the arm is never starved of a move longer than the lead by itself.
 """
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass
 
 from .motion import ArmPose, MotionModel, Planner, Segment, distance_to_path
 from .protocol import (
     CONNECTOR_BUFFER_FRAMES,
+    ArcEnd,
+    ArcStart,
     DEFAULT_BAUD,
     STATUS_PERIOD_S,
     STATUS_ROTATION,
@@ -56,6 +79,14 @@ FRAME_SLACK_S = 0.02
 # 0.1 mm and 0.01 deg; the rest covers the moment between sampling and reading).
 POSITION_TOLERANCE_MM = 0.5
 JOINT_TOLERANCE_DEG = 0.2
+# A joint segment's X/Y/Z trace is matched against 16 chords of its forward kinematics; the chords
+# cut corners, so its tolerance adds this many times the largest chord-midpoint deviation.
+JOINT_TRACE_SLACK = 2.0
+JOINT_TRACE_FRACTION = 1 / 16  # how far along a joint segment one chord of its trace reaches
+# With the next command known, its own duration counts against the lead; but a frame is always
+# allowed once no more than this (or the lead, if shorter) is queued, so the arm never waits for
+# a move longer than the lead.
+FEED_AHEAD_S = 0.5
 ROTATION_S = len(STATUS_ROTATION) * STATUS_PERIOD_S
 
 
@@ -70,6 +101,9 @@ class SentFrame:
     wire_end_s: float  # its last byte left the host
     est_end_s: float = 0.0  # the estimate: when the arm finishes it
     certain_end_s: float = 0.0  # the time bound: it has surely finished by then (arm-running time)
+    chain_end_s: float = 0.0  # the time bound as a chain of frames (a G300's certain end is its G301's)
+    group_index: int = -1  # the first frame of its group: an arc's G301 finishes with its G300
+    xyz_tolerance_mm: float = POSITION_TOLERANCE_MM  # how near its path an X/Y/Z must be to match
 
 
 @dataclass(frozen=True)
@@ -114,6 +148,8 @@ class Streamer:
         self._paused = False
         self._pause_began_s = now
         self.status_frames = 0
+        self._peeked: tuple[Command, Segment] | None = None
+        self._certain_tail_s = 0.0  # the time bound of the last frame written (even a G300's)
 
     # --- writing ----------------------------------------------------------------------------
 
@@ -128,32 +164,87 @@ class Streamer:
             return 0.0
         return max(0.0, self.pending[-1].est_end_s - now)
 
-    def next_write_time(self, now: float) -> float | None:
+    def waiting_seconds(self, now: float) -> float:
+        """Estimated motion in frames the arm has not begun yet: ``queued_seconds`` without the
+        rest of the frame in progress.  This is what the lead bounds."""
+        if not self.pending:
+            return 0.0
+        tail_s = self.pending[-1].est_end_s
+        current_end_s = next((sent.est_end_s for sent in self.pending if sent.est_end_s > now), tail_s)
+        return max(0.0, tail_s - max(now, current_end_s))
+
+    def next_write_time(self, now: float, command: Command | None = None) -> float | None:
         """The earliest time ≥ now the next frame may be written if no news arrives; None while
-        only new evidence can allow it (the FIFO bound is reached)."""
+        only new evidence can allow it (the FIFO bound is reached).
+
+        The lead bounds the motion waiting behind the frame in progress (``waiting_seconds``):
+        after an abort the arm finishes the move it is on plus at most the lead.  With
+        ``command`` (the frame about to be written) its own duration counts too, so the bound
+        holds after the write; without it, it is checked before the write (the queue may then
+        exceed it by the frame just written).  Either way a frame is always allowed once no
+        more than ``FEED_AHEAD_S`` (or the lead, if shorter) is queued in all, so the arm never
+        waits for a move that is longer than the lead by itself."""
         if self.frames_in_flight_bound + 1 > self.limit_frames:
             return None
-        lead_ok_at = self.pending[-1].est_end_s - self.lead_s if self.pending else now
+        if not self.pending:
+            return max(now, self.wire_free_s)
+        duration_s = 0.0 if command is None else self._plan(command).duration_s
+        tail_s = self.pending[-1].est_end_s
+        lead_ok_at = tail_s - min(self.lead_s, FEED_AHEAD_S)  # the arm must not run dry
+        if duration_s <= self.lead_s:
+            # The waiting motion once frame j is in progress is tail − end of j: find the first
+            # frame after which the new one fits within the lead; it may go once that one began.
+            threshold_s = tail_s + duration_s - self.lead_s
+            began_s = None
+            for sent in self.pending:
+                if sent.est_end_s >= threshold_s:
+                    break
+                began_s = sent.est_end_s
+            lead_ok_at = min(lead_ok_at, now if began_s is None else began_s)
         return max(now, self.wire_free_s, lead_ok_at)
 
-    def may_write(self, now: float) -> bool:
-        when = self.next_write_time(now)
+    def may_write(self, now: float, command: Command | None = None) -> bool:
+        when = self.next_write_time(now, command)
         return when is not None and when <= now
+
+    def _plan(self, command: Command) -> Segment:
+        """The segment ``command`` would make if written next (kept for ``wrote``)."""
+        if self._peeked is None or self._peeked[0] is not command:
+            planner = self.planner
+            self._peeked = (command, planner.model.plan(command, planner.pose, planner.pending_arc))
+        return self._peeked[1]
 
     def wrote(self, command: Command, now: float, tag: object = None) -> SentFrame:
         """Record that the next frame's first byte went on the wire at ``now``."""
-        segment = self.planner.feed(command)
+        segment = self._plan(command)
+        self._peeked = None
+        planner = self.planner
+        planner.pending_arc = command if isinstance(command, ArcStart) else None
+        planner.pose = segment.end
         start_s = max(now, self.wire_free_s)
         wire_end = start_s + self.frame_s
         self.wire_free_s = wire_end
         previous = self.pending[-1] if self.pending else None
         est_start = max(wire_end, previous.est_end_s if previous else wire_end)
-        certain_start = max(wire_end + ARRIVAL_SLACK_S, previous.certain_end_s if previous else 0.0)
+        certain_start = max(wire_end + ARRIVAL_SLACK_S, self._certain_tail_s)
+        self._certain_tail_s = certain_start + segment.duration_s * self.slowest_factor + FRAME_SLACK_S
         frame = SentFrame(
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
-            est_end_s=est_start + segment.duration_s,
-            certain_end_s=certain_start + segment.duration_s * self.slowest_factor + FRAME_SLACK_S,
+            est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
+            chain_end_s=self._certain_tail_s, group_index=self.sent,
         )
+        if isinstance(command, ArcStart):
+            # The arm holds a G300 at the head until its G301 has landed and runs both as one
+            # segment: the G300 finishes only with the arc, whenever its G301 is written.
+            frame.certain_end_s = float("inf")
+        elif previous is not None and isinstance(previous.command, ArcStart) and previous.index == self.sent - 1:
+            if isinstance(command, ArcEnd):
+                frame.group_index = previous.index
+                previous.certain_end_s = frame.certain_end_s
+            else:
+                previous.certain_end_s = previous.chain_end_s  # the arm skips a G300 left alone
+        if segment.kind == "joint":
+            frame.xyz_tolerance_mm = POSITION_TOLERANCE_MM + JOINT_TRACE_SLACK * _trace_deviation_mm(segment)
         self.pending.append(frame)
         self.sent += 1
         return frame
@@ -183,6 +274,8 @@ class Streamer:
                 shift = now - self._pause_began_s
                 for sent in self.pending:
                     sent.certain_end_s += shift
+                    sent.chain_end_s += shift
+                self._certain_tail_s += shift
             self._running_seen_s = now
         self._paused = paused
 
@@ -193,6 +286,40 @@ class Streamer:
         while self.pending and self.pending[0].certain_end_s <= certain_now:
             self._consume_one()
 
+    def _consume_before(self, index: int) -> None:
+        """Every frame before ``index`` is known finished — except the rest of its group (a G300
+        finishes with its G301, so evidence of the arc proves nothing about the G300)."""
+        if self.pending:
+            k = index - self.pending[0].index
+            if 0 < k < len(self.pending):
+                index = self.pending[k].group_index
+        while self.pending and self.pending[0].index < index:
+            self._consume_one()
+
+    def _restart_time_bound(self, index: int, now: float) -> None:
+        """Frame ``index`` has begun by ``now`` (agreed evidence): restart the time bound's chain
+        there, since a chain that began at the first frame of a long job drifts ahead by the
+        slowest-arm factor for as long as the arm is kept busy."""
+        if not self.pending:
+            return
+        chain = None
+        for k in range(index - self.pending[0].index, len(self.pending)):
+            if k < 0:
+                return  # that frame is already known finished: nothing about the next ones
+            sent = self.pending[k]
+            start = now if chain is None else max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
+            chain = start + sent.segment.duration_s * self.slowest_factor + FRAME_SLACK_S
+            if chain >= sent.chain_end_s:
+                return  # no tighter than before, and neither are the frames after it
+            sent.chain_end_s = chain
+            if not isinstance(sent.command, ArcStart):
+                sent.certain_end_s = chain
+                if sent.group_index != sent.index and k > 0:
+                    self.pending[k - 1].certain_end_s = chain  # its G300 finishes with it
+            elif k + 1 < len(self.pending) and self.pending[k + 1].group_index != sent.index:
+                sent.certain_end_s = chain  # a G300 not followed by its G301: skipped
+        self._certain_tail_s = chain
+
     def _consume_one(self) -> None:
         self._last_done_tag = self.pending.popleft().tag
         self.consumed_lower_bound += 1
@@ -200,9 +327,14 @@ class Streamer:
     def _observe(self, xyz, now: float) -> None:
         candidates = []
         for sent in self.pending:
-            distance, fraction = distance_to_path(sent.segment, xyz)
-            if distance <= POSITION_TOLERANCE_MM:
-                candidates.append((sent.index, fraction))
+            segment = sent.segment
+            distance, fraction = distance_to_path(segment, xyz)
+            if distance <= sent.xyz_tolerance_mm:
+                if segment.kind == "joint":
+                    slack = JOINT_TRACE_FRACTION  # matched on chords of its trace
+                else:
+                    slack = sent.xyz_tolerance_mm / segment.length if segment.length > 0 else 1.0
+                candidates.append((sent.index, fraction - slack, fraction + slack))
         self._use("position", candidates, now)
 
     def _observe_joint_half(self, offset: int, values, now: float) -> None:
@@ -214,12 +346,12 @@ class Streamer:
                 if candidates:
                     break
                 return  # the arm may be on this Cartesian segment: no evidence from joints
-            fraction = _joint_half_fraction(sent.segment, offset, values)
-            if fraction is not None:
-                candidates.append((sent.index, fraction))
+            match = _joint_half_fraction(sent.segment, offset, values)
+            if match is not None:
+                candidates.append((sent.index, *match))
         self._use(f"joints{offset}", candidates, now)
 
-    def _use(self, stream: str, candidates: list[tuple[int, float]], now: float) -> None:
+    def _use(self, stream: str, candidates: list[tuple[int, float, float]], now: float) -> None:
         """Move the lower bound and the estimate on one observation's candidate segments.
 
         The earliest candidate is where the arm is at least; the bound moves there only when
@@ -232,30 +364,45 @@ class Streamer:
             return
         if previous is not None:
             agreed = min(previous, earliest)
-            while self.pending and self.pending[0].index < agreed:
-                self._consume_one()
+            self._consume_before(agreed)
+            self._restart_time_bound(agreed, now)
         self._reanchor(candidates, now)
 
-    def _reanchor(self, candidates: list[tuple[int, float]], now: float) -> None:
+    def _reanchor(self, candidates: list[tuple[int, float, float]], now: float) -> None:
         """Re-time the pending frames from the candidate the estimate finds most plausible.
 
-        Only a segment that moves says anything about time: the arm standing on a point shared
-        by a still frame tells nothing about whether that frame has run.  Seen at the very end
-        of a segment, the arm finished it at or before ``now`` (the estimate may only move
-        earlier); seen part-way, it finishes the rest from ``now``.
+        Each candidate says: the arm is now between fractions ``lo`` and ``hi`` of that frame's
+        path, i.e. between two moments of its segment — a short window on a segment that moves,
+        the whole segment for one that does not move what was observed (a delay, an M code, a
+        PWM-only or attitude-only frame seen by position).  The candidate whose window the
+        estimate is nearest to wins, and the estimate is moved by the least that puts ``now``
+        inside that window (not at all if it already is); every later frame follows.  So a
+        still frame never pushes the estimate while the estimate agrees with it, and an arm
+        standing still (paused, or slower than the model) holds the estimate back.
         """
-        first = self.pending[0].index if self.pending else 0
-        moving = [c for c in candidates if c[0] >= first and self.pending[c[0] - first].segment.length > 0]
-        if not moving:
+        if not self.pending:
             return
-        index, fraction = min(moving, key=lambda c: _distance_in_time(self.pending[c[0] - first], c[1], now))
-        k = index - first
+        first = self.pending[0].index
+        best = None
+        for index, lo, hi in candidates:
+            if index < first:
+                continue
+            sent = self.pending[index - first]
+            window = _time_window(sent.segment, lo, hi)
+            start = sent.est_end_s - sent.segment.duration_s
+            off = max(start + window[0] - now, now - (start + window[1]), 0.0)
+            if best is None or off < best[0]:
+                best = (off, index - first, window, start)
+            if off == 0.0:
+                break
+        if best is None or best[0] == 0.0:
+            return
+        _, k, (t_lo, t_hi), start = best
         sent = self.pending[k]
-        segment = sent.segment
-        if fraction >= 1.0:
-            sent.est_end_s = min(sent.est_end_s, now)
-        else:
-            sent.est_end_s = now + (segment.duration_s - segment.time_at_fraction(fraction))
+        start = now - t_lo if now < start + t_lo else now - t_hi
+        sent.est_end_s = start + sent.segment.duration_s
+        if sent.group_index != sent.index and k > 0:
+            self.pending[k - 1].est_end_s = start  # its G300: the arc's start
         for j in range(k + 1, len(self.pending)):
             nxt = self.pending[j]
             nxt.est_end_s = max(nxt.wire_end_s, self.pending[j - 1].est_end_s) + nxt.segment.duration_s
@@ -275,16 +422,20 @@ class Streamer:
         return self._last_done_tag
 
 
-def _distance_in_time(sent: SentFrame, fraction: float, now: float) -> float:
-    """How far the estimate is from saying the arm is at ``fraction`` of ``sent`` right now."""
-    segment = sent.segment
-    expected_at = sent.est_end_s - segment.duration_s + segment.time_at_fraction(fraction)
-    return abs(expected_at - now)
+def _time_window(segment: Segment, lo: float, hi: float) -> tuple[float, float]:
+    """Seconds after the segment began between which the arm is at fractions ``lo``…``hi``
+    of its path (a path of zero length: the whole segment)."""
+    if segment.length <= 0:
+        return 0.0, segment.duration_s
+    t_lo = 0.0 if lo <= 0.0 else segment.time_at_fraction(min(lo, 1.0))
+    t_hi = segment.duration_s if hi >= 1.0 else segment.time_at_fraction(max(hi, 0.0))
+    return t_lo, t_hi
 
 
-def _joint_half_fraction(segment: Segment, offset: int, values) -> float | None:
-    """The fraction along a joint or still segment at which joints offset…offset+2 equal
-    ``values`` within tolerance; None if never (or if the segment is Cartesian)."""
+def _joint_half_fraction(segment: Segment, offset: int, values) -> tuple[float, float] | None:
+    """The fractions ``(lo, hi)`` along a joint or still segment between which joints
+    offset…offset+2 equal ``values`` within tolerance; None if never (or if the segment is
+    Cartesian).  A segment that does not move these joints matches along all its length."""
     if segment.kind not in ("joint", "still"):
         return None
     q0 = segment.start.joints[offset : offset + 3]
@@ -292,10 +443,21 @@ def _joint_half_fraction(segment: Segment, offset: int, values) -> float | None:
     dq = [b - a for a, b in zip(q0, q1)]
     span = sum(d * d for d in dq)
     if span <= 1e-12:
-        u = 0.0
+        u, slack = 0.0, 1.0
     else:
         u = sum((v - a) * d for v, a, d in zip(values, q0, dq)) / span
         u = min(max(u, 0.0), 1.0)
+        slack = JOINT_TOLERANCE_DEG / math.sqrt(span)
     if max(abs(v - (a + d * u)) for v, a, d in zip(values, q0, dq)) > JOINT_TOLERANCE_DEG:
         return None
-    return u
+    return (u - slack, u + slack) if slack < 1.0 else (0.0, 1.0)
+
+
+def _trace_deviation_mm(segment: Segment, chords: int = 16) -> float:
+    """Largest distance between a joint segment's true X/Y/Z trace, sampled at the midpoints of
+    ``chords`` equal steps in joint space, and the chords ``distance_to_path`` matches against."""
+    worst = 0.0
+    for k in range(chords):
+        pose = segment.sample(segment.time_at_fraction((k + 0.5) / chords))
+        worst = max(worst, distance_to_path(segment, pose.xyz)[0])
+    return worst

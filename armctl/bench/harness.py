@@ -29,6 +29,7 @@ class RunResult:
     peak_queued_s: float  # the most motion ever queued ahead of the arm when a frame landed
     moving_after_abort_s: float | None = None
     timed_out: bool = False
+    aborted_at_s: float | None = None  # when the abort sequence was written
 
 
 @dataclass(frozen=True)
@@ -50,8 +51,16 @@ def run_job(
     events: Sequence[Event] = (),
     time_limit_s: float = 36_000.0,
     on_write: Callable[[int, float], None] | None = None,
+    on_status: Callable[[float], None] | None = None,
+    line: list[str] | None = None,
 ) -> RunResult:
-    """Stream ``commands`` with ``strategy`` until the arm is done (or aborted and still)."""
+    """Stream ``commands`` with ``strategy`` until the arm is done (or aborted and still).
+
+    ``on_write(index, now)`` follows every job frame written, ``on_status(now)`` every batch of
+    status frames the strategy has read; ``line``, if given, gets "job", "event" or "abort" for
+    each frame written, in the order they go on the wire (= the arm's arrival indexes).
+    """
+    line = [] if line is None else line
     reader = StatusReader()
     pending_events = sorted(events, key=lambda e: e.at_s)
     now = 0.0
@@ -60,15 +69,20 @@ def run_job(
     total = len(commands)
     stop_after = total if abort_after_frames is None else min(abort_after_frames, total)
     while True:
-        for frame in reader.feed(arm.advance(now)):
+        frames = reader.feed(arm.advance(now))
+        for frame in frames:
             strategy.receive_status(frame, now)
+        if frames and on_status is not None:
+            on_status(now)
         while pending_events and pending_events[0].at_s <= now + EPSILON_S:
             arm.write(pending_events.pop(0).command.encode(), now)
+            line.append("event")
         when = None
         if written < stop_after:
-            when = strategy.next_write_time(now)
+            when = strategy.next_write_time(now, commands[written])
             if when is not None and when <= now + EPSILON_S:
                 arm.write(commands[written].encode(), now)
+                line.append("job")
                 strategy.wrote(commands[written], now, written)
                 if on_write is not None:
                     on_write(written, now)
@@ -78,6 +92,7 @@ def run_job(
             aborted_at = now
             for command in abort_sequence:
                 arm.write(command.encode(), now)
+                line.append("abort")
             break
         elif arm.idle and not pending_events:
             break
@@ -91,7 +106,18 @@ def run_job(
             break
         now = max(upcoming, now + EPSILON_S)
     moving_after = _motion_after(arm, aborted_at, time_limit_s) if aborted_at is not None else None
-    return _result(arm, total, written, now, moving_after)
+    result = _result(arm, total, written, now, moving_after)
+    result.aborted_at_s = aborted_at
+    return result
+
+
+def job_frames_finished(arm: SimulatedArm, line: Sequence[str], now: float) -> int:
+    """The truth a streamer's lower bound is checked against: job frames the arm has finished
+    by ``now`` (``line`` as filled in by ``run_job``)."""
+    return sum(
+        1 for e in arm.execution_log
+        if e.end_s is not None and e.end_s <= now + EPSILON_S and e.index < len(line) and line[e.index] == "job"
+    )
 
 
 def _motion_after(arm: SimulatedArm, aborted_at: float, time_limit_s: float) -> float:

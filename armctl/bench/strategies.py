@@ -1,6 +1,6 @@
 """How a host could pace frames to the arm: armctl's streamer and the baselines it is judged by.
 
-Strategy: every pacing strategy answers the same three calls — ``next_write_time(now)``,
+Strategy: every pacing strategy answers the same three calls — ``next_write_time(now, command)``,
 ``wrote(command, now, tag)``, ``receive_status(frame, now)`` — so one virtual-time driver runs
 them all against the same simulated arm.  The baselines show why they are not used:
 
@@ -19,6 +19,10 @@ from __future__ import annotations
 from ..motion import ArmPose, MotionModel, Planner
 from ..protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, FRAME_SIZE, PositionStatus, frame_seconds
 from ..streamer import Streamer
+
+# Times this close are the same instant (the virtual-time driver writes at ``when`` if it is
+# within this of ``now``); the omniscient check must not be skipped on a rounding difference.
+TIME_TOLERANCE_S = 1e-9
 
 
 class _LinePaced:
@@ -42,7 +46,7 @@ class _LinePaced:
 class NaiveStrategy(_LinePaced):
     name = "naive"
 
-    def next_write_time(self, now: float) -> float:
+    def next_write_time(self, now: float, command=None) -> float:
         return max(now, self.wire_free_s)
 
 
@@ -58,7 +62,7 @@ class FixedDelayStrategy(_LinePaced):
         super().wrote(command, now, tag)
         self.last_write_s = now
 
-    def next_write_time(self, now: float) -> float:
+    def next_write_time(self, now: float, command=None) -> float:
         earliest = self.wire_free_s if self.last_write_s is None else self.last_write_s + self.delay_s
         return max(now, earliest)
 
@@ -89,7 +93,7 @@ class StopAndGoStrategy(_LinePaced):
         close = max(abs(a - b) for a, b in zip((frame.x_mm, frame.y_mm, frame.z_mm), target)) <= self.TOLERANCE_MM
         self.reached = close and now >= end_s
 
-    def next_write_time(self, now: float) -> float | None:
+    def next_write_time(self, now: float, command=None) -> float | None:
         return max(now, self.wire_free_s) if self.reached else None
 
 
@@ -104,10 +108,11 @@ class OmniscientStrategy(_LinePaced):
         self.arm = arm
         self.capacity = capacity
 
-    def next_write_time(self, now: float) -> float | None:
+    def next_write_time(self, now: float, command=None) -> float | None:
         start = max(now, self.wire_free_s)
-        if start > now:
+        if start > now + TIME_TOLERANCE_S:
             return start
+        now = start  # the same instant, give or take rounding: the driver will write now
         # Frames still on the wire will take slots too; a slot must be free for this one.
         in_flight = -(-self.arm.host_bytes_in_flight(now) // FRAME_SIZE)
         if self.arm.fifo_occupancy + in_flight < self.capacity:
@@ -123,8 +128,8 @@ class StreamerStrategy:
     def __init__(self, model: MotionModel, start: ArmPose, lead_s: float, baud: int = DEFAULT_BAUD) -> None:
         self.streamer = Streamer(model, start, lead_s=lead_s, baud=baud)
 
-    def next_write_time(self, now: float) -> float | None:
-        return self.streamer.next_write_time(now)
+    def next_write_time(self, now: float, command=None) -> float | None:
+        return self.streamer.next_write_time(now, command)
 
     def wrote(self, command, now: float, tag=None) -> None:
         self.streamer.wrote(command, now, tag)

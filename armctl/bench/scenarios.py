@@ -1,0 +1,221 @@
+"""The benchmark's scenarios: deterministic jobs of protocol commands and the arm they run on.
+
+Strategy: every job is generated directly as protocol commands (no script parsing, so building
+one costs milliseconds) from a seeded ``random.Random``; the same name and size always give the
+same frames.  Every target is a Cartesian point inside the default profile's workspace with the
+tool straight down (B0 = 180, B1 = 0, W = 0) unless the scenario turns it on purpose, or a joint
+pose computed from such a point by the profile's own inverse kinematics.
+
+Scenarios (``build_scenarios``):
+
+- ``long``: long linear moves, 0.6–1.6 s each — arm-bound; more frames than the FIFO holds, so a
+  host writing at line rate overflows it.
+- ``tiny``: 1 mm moves at 6000 mm/min = 10 ms each — line-bound (a frame takes 50 ms on the wire).
+- ``mixed``: pick-and-place cycles: joint moves, linear and accelerated moves, arcs (G300 + G301),
+  delays, M codes, PWM-only changes (gripper), attitude-only turns, repeated targets (zig-zags
+  between two points) and short moves.
+- ``slow`` / ``fast``: the mixed job on an arm 30 % slower (speed_factor 1.3) / faster (0.7) than
+  the model the host plans with.
+- ``lossy``: the mixed job with 2.5 % of status frames lost and 2.5 % corrupted (one byte flipped).
+- ``arrival``: the mixed job with control frames acting on arrival (the H5 alternative).
+- ``pause``: the mixed job paused from outside the host (a pause frame on the line) at 40 % of its
+  planned time and resumed 4 s later.  It runs with control frames acting on arrival: under H5 a
+  resume frame waits in the FIFO behind every frame written after the pause, and the arm takes
+  nothing but a resume while paused — so an outside pause that the host did not send can never be
+  resumed once a host has written anything after it (the host can only learn of the pause from
+  a status frame, up to 270 ms later).
+"""
+
+from __future__ import annotations
+
+import random
+from dataclasses import dataclass, field
+
+from ..motion import MotionModel, Planner, circle_through
+from ..profile import load_profile
+from ..protocol import (
+    AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, MCode, PauseToggle,
+)
+from ..kinematics import CartesianPose
+from ..sim.model import SimOptions
+from .harness import Event
+
+TOOL_DOWN = (180.0, 0.0, 0.0)  # B0, B1, W: the tool points straight down
+PWM_OPEN_US, PWM_CLOSED_US = 1000.0, 2000.0
+# Targets stay in this box (robot frame, mm), well inside the default profile's reach.
+BOX_X = (180.0, 320.0)
+BOX_Y = (-150.0, 150.0)
+BOX_Z = (80.0, 200.0)
+TRAVEL_Z = 240.0  # height of the moves between pick and place
+
+ARM_BOUND_RATIO = 1.01  # job time ÷ omniscient job time, arm-bound and line-bound scenarios
+OTHER_RATIO = 1.03  # the rest
+
+
+@dataclass(frozen=True)
+class Scenario:
+    name: str
+    title: str
+    commands: tuple[Command, ...]
+    options: SimOptions = SimOptions()
+    ratio_bound: float = OTHER_RATIO
+    events: tuple[Event, ...] = ()  # done to the arm from outside the host, at fixed times
+    note: str = ""
+    meta: dict = field(default_factory=dict, compare=False)
+
+    @property
+    def frames(self) -> int:
+        return len(self.commands)
+
+
+# --- job generators ---------------------------------------------------------------------------
+
+
+def _point(rng: random.Random) -> tuple[float, float, float]:
+    return (round(rng.uniform(*BOX_X), 1), round(rng.uniform(*BOX_Y), 1), round(rng.uniform(*BOX_Z), 1))
+
+
+def _line(xyz, speed_mm_min: float, pwm_us: float = PWM_OPEN_US, attitude=TOOL_DOWN) -> LinearMove:
+    return LinearMove(*xyz, *attitude, pwm_us, speed_mm_min)
+
+
+def long_moves(frames: int, seed: int = 1) -> list[Command]:
+    """Linear moves between random points 60–160 mm apart at 6000 mm/min (0.6–1.6 s each)."""
+    rng = random.Random(f"long/{seed}")
+    commands: list[Command] = []
+    here = (210.0, 0.0, 200.0)
+    while len(commands) < frames:
+        target = _point(rng)
+        distance = sum((a - b) ** 2 for a, b in zip(target, here)) ** 0.5
+        if not 60.0 <= distance <= 160.0:
+            continue
+        commands.append(_line(target, 6000.0))
+        here = target
+    return commands
+
+
+def tiny_moves(frames: int) -> list[Command]:
+    """1 mm moves at 6000 mm/min (10 ms each) along a slow square spiral: line-bound."""
+    commands: list[Command] = []
+    x, y, z = 250.0, 0.0, 150.0
+    steps = ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))
+    leg, direction, done_in_leg = 1, 0, 0
+    for _ in range(frames):
+        dx, dy = steps[direction]
+        x, y = x + dx, y + dy
+        commands.append(_line((x, y, z), 6000.0))
+        done_in_leg += 1
+        if done_in_leg == leg:
+            done_in_leg, direction = 0, (direction + 1) % 4
+            if direction % 2 == 0:
+                leg += 1
+    return commands
+
+
+def _arc_via(a, b, bulge: float = 0.25):
+    """A point between ``a`` and ``b`` (same height) pushed sideways by ``bulge`` × the chord,
+    on the side of the box's centre: the arc through it is the short way round."""
+    mx, my = (a[0] + b[0]) / 2, (a[1] + b[1]) / 2
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    nx, ny = -dy, dx  # perpendicular, as long as the chord
+    cx, cy = sum(BOX_X) / 2 - mx, sum(BOX_Y) / 2 - my
+    if nx * cx + ny * cy < 0:
+        nx, ny = -nx, -ny
+    return (round(mx + bulge * nx, 1), round(my + bulge * ny, 1), a[2])
+
+
+def _joints_for(kinematics, xyz, hint) -> tuple[float, ...]:
+    return tuple(round(j, 2) for j in kinematics.inverse(CartesianPose(*xyz, *TOOL_DOWN), hint))
+
+
+def mixed_job(cycles: int, seed: int = 1) -> list[Command]:
+    """Pick-and-place cycles mixing every kind of motion frame (25 frames per cycle)."""
+    rng = random.Random(f"mixed/{seed}")
+    kinematics = load_profile().kinematics
+    hint = (0.0, 0.0, 0.0, 0.0, 90.0, 0.0)
+    commands: list[Command] = []
+    for cycle in range(cycles):
+        pick, place = _point(rng), _point(rng)
+        while sum((a - b) ** 2 for a, b in zip(pick[:2], place[:2])) < 60.0**2:
+            place = _point(rng)
+        above_pick = (pick[0], pick[1], TRAVEL_Z)
+        above_place = (place[0], place[1], TRAVEL_Z)
+        # Joint move above the pick point (joints from the profile's IK), smoothing 2.
+        hint = _joints_for(kinematics, above_pick, hint)
+        commands.append(JointMove(*hint, PWM_OPEN_US, rng.choice((45.0, 60.0, 90.0)), smoothing=2))
+        # Down, close the gripper (PWM only), wait for it, M code, up.
+        commands.append(_line(pick, 3000.0))
+        commands.append(_line(pick, 3000.0, PWM_CLOSED_US))
+        commands.append(Delay(rng.choice((100.0, 200.0, 300.0))))
+        commands.append(MCode(100 + cycle % 5))
+        commands.append(_line(above_pick, 4000.0, PWM_CLOSED_US))
+        # An arc over to the place point (G300 then G301), bulging towards the box's centre.
+        via = _arc_via(above_pick, above_place)
+        radius = circle_through(above_pick, via, above_place)[1]
+        commands.append(ArcStart(*via, *TOOL_DOWN, PWM_CLOSED_US, round(radius, 1), 5000.0))
+        commands.append(ArcEnd(*above_place, *TOOL_DOWN, PWM_CLOSED_US, 5000.0))
+        # Attitude-only turns of the tool about the vertical, then back.
+        turn = rng.choice((30.0, 45.0, 90.0))
+        commands.append(_line(above_place, 4000.0, PWM_CLOSED_US, (180.0, 0.0, turn)))
+        commands.append(_line(above_place, 4000.0, PWM_CLOSED_US))
+        # Accelerated move down (G222: trapezoid), open (PWM only), delay, M code.
+        commands.append(AccelLinearMove(1, *place, *TOOL_DOWN, 2000.0, 4000.0))
+        commands.append(_line(place, 3000.0, PWM_OPEN_US))
+        commands.append(Delay(150.0))
+        commands.append(MCode(200))
+        commands.append(_line(above_place, 4000.0))
+        # Repeated targets: a zig-zag between two points 20 mm apart, three times over.
+        a = above_place
+        b = (a[0] + 20.0 if a[0] < 300.0 else a[0] - 20.0, a[1], a[2])
+        for _ in range(3):
+            commands.append(_line(b, 6000.0))
+            commands.append(_line(a, 6000.0))
+        # Short moves (4 mm at 6000 mm/min = 40 ms): faster than the line can feed them.
+        x, y, z = a
+        for k in range(4):
+            commands.append(_line((x, y + 4.0 * (k + 1) * (1 if y < 0 else -1), z), 6000.0))
+    return commands
+
+
+def planned_seconds(commands, model: MotionModel | None = None) -> float:
+    """The job's motion time by the model (arm from the default start pose)."""
+    model = model or MotionModel(load_profile())
+    return sum(segment.duration_s for segment in Planner(model).feed_all(commands))
+
+
+# --- the scenario list ---------------------------------------------------------------------------
+
+SIZES = {
+    # size: (long-move frames, tiny-move frames, mixed-job cycles of 25 frames)
+    "full": (420, 1000, 16),
+    "quick": (230, 240, 6),  # CI: still more long moves than the FIFO holds
+    "test": (40, 100, 2),  # the test suite: every kind of frame, seconds of wall time in all
+}
+PAUSE_AT_SHARE = 0.4
+PAUSE_FOR_S = 4.0
+
+
+def build_scenarios(size: str = "full", seed: int = 1) -> list[Scenario]:
+    """Every scenario, with jobs of ``size`` ("full", "quick" or "test", see ``SIZES``)."""
+    long_frames, tiny_frames, cycles = SIZES[size]
+    long_job = tuple(long_moves(long_frames, seed))
+    tiny_job = tuple(tiny_moves(tiny_frames))
+    mixed = tuple(mixed_job(cycles, seed))
+    pause_at = round(PAUSE_AT_SHARE * planned_seconds(mixed), 2)
+    pause_events = (Event(pause_at, PauseToggle()), Event(pause_at + PAUSE_FOR_S, PauseToggle()))
+    return [
+        Scenario("long", "long moves (arm-bound)", long_job, SimOptions(seed=seed), ARM_BOUND_RATIO),
+        Scenario("tiny", "tiny 10 ms moves (line-bound)", tiny_job, SimOptions(seed=seed), ARM_BOUND_RATIO),
+        Scenario("mixed", "mixed job", mixed, SimOptions(seed=seed)),
+        Scenario("slow", "mixed, arm 30 % slower", mixed, SimOptions(speed_factor=1.3, seed=seed)),
+        Scenario("fast", "mixed, arm 30 % faster", mixed, SimOptions(speed_factor=0.7, seed=seed)),
+        Scenario("lossy", "mixed, 5 % status lost/corrupt", mixed,
+                 SimOptions(status_loss_rate=0.025, status_corrupt_rate=0.025, seed=seed)),
+        Scenario("arrival", "mixed, control acts on arrival", mixed, SimOptions(control_on_arrival=True, seed=seed)),
+        Scenario("pause", "mixed, paused 4 s mid-job", mixed, SimOptions(control_on_arrival=True, seed=seed),
+                 events=pause_events,
+                 note=f"paused at {pause_at:g} s for {PAUSE_FOR_S:g} s; control frames act on arrival"),
+    ]
+
+
+SCENARIO_NAMES = ("long", "tiny", "mixed", "slow", "fast", "lossy", "arrival", "pause")

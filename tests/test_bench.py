@@ -1,0 +1,212 @@
+"""The benchmark in virtual time: armctl meets its targets in every scenario (small jobs), the
+baselines show why they are not used, and the table / CLI behave."""
+
+import json
+from functools import lru_cache
+
+import pytest
+
+from armctl.bench import table
+from armctl.bench.harness import run_job
+from armctl.bench.scenarios import (
+    ARM_BOUND_RATIO, BOX_X, BOX_Y, OTHER_RATIO, SCENARIO_NAMES, TRAVEL_Z, build_scenarios, long_moves, mixed_job,
+    planned_seconds, tiny_moves,
+)
+from armctl.bench.strategies import NaiveStrategy, StopAndGoStrategy
+from armctl.kinematics import CartesianPose, Unreachable
+from armctl.motion import MotionModel, Planner
+from armctl.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode
+from armctl.sim.model import SimOptions, SimulatedArm
+
+
+@lru_cache(maxsize=None)
+def scenarios():
+    return {s.name: s for s in build_scenarios("test")}
+
+
+@lru_cache(maxsize=None)
+def armctl_cells():
+    """armctl and the omniscient reference in every scenario (each with its abort run)."""
+    cells = table.run_bench(list(scenarios().values()), strategies=["armctl"], jobs=1)
+    return {(c.scenario, c.strategy): c for c in cells}
+
+
+# --- armctl meets its targets ------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("name", SCENARIO_NAMES)
+def test_armctl_meets_every_target(name):
+    cell = armctl_cells()[(name, "armctl")]
+    assert cell.dropped == 0 and cell.abort_dropped == 0
+    assert cell.ratio <= scenarios()[name].ratio_bound
+    assert cell.moving_after_abort_s <= cell.abort_limit_s
+    assert cell.failures == []
+    assert armctl_cells()[(name, "omniscient")].dropped == 0  # the reference is valid
+
+
+def test_ratio_bounds_are_those_of_the_issue():
+    bounds = {name: s.ratio_bound for name, s in scenarios().items()}
+    assert bounds["long"] == bounds["tiny"] == ARM_BOUND_RATIO == 1.01
+    assert {bounds[n] for n in SCENARIO_NAMES if n not in ("long", "tiny")} == {OTHER_RATIO} == {1.03}
+
+
+def test_armctl_keeps_the_queue_short():
+    for name in SCENARIO_NAMES:
+        cell = armctl_cells()[(name, "armctl")]
+        omniscient = armctl_cells()[(name, "omniscient")]
+        assert cell.peak_occupancy <= 40
+        assert cell.peak_occupancy <= omniscient.peak_occupancy
+
+
+def test_an_abort_stops_the_arm_within_the_lead_and_the_move_in_progress():
+    h5 = armctl_cells()[("mixed", "armctl")]
+    assert 0 < h5.moving_after_abort_s <= h5.abort_limit_s
+    # With control frames acting on arrival the pause frame stops the arm as it lands.
+    on_arrival = armctl_cells()[("arrival", "armctl")]
+    assert on_arrival.moving_after_abort_s <= 0.2
+
+
+def test_the_omniscient_arm_keeps_moving_long_after_an_abort_under_h5():
+    cell = table.run_cell(scenarios()["mixed"], "omniscient")
+    assert cell.moving_after_abort_s > 5.0
+
+
+# --- the baselines show their failure -----------------------------------------------------------
+
+
+def test_naive_drops_frames_on_long_moves():
+    arm = SimulatedArm(SimOptions())
+    job = long_moves(230)
+    # Every frame is written within 230 × 50 ms; the drops are known by then.
+    result = run_job(job, NaiveStrategy(), arm, time_limit_s=13.0)
+    assert result.written == 230
+    assert result.dropped > 0
+    assert result.peak_occupancy == 200
+
+
+def test_stop_and_go_is_slow_on_tiny_moves():
+    tiny = scenarios()["tiny"]
+    stop = table.run_cell(tiny, "stop-and-go", abort=False)
+    omniscient = table.run_cell(tiny, "omniscient", abort=False)
+    assert stop.dropped == 0
+    assert stop.job_s >= 1.3 * omniscient.job_s
+
+
+def test_stop_and_go_is_slow_on_the_mixed_job_too():
+    mixed = scenarios()["mixed"]
+    stop = table.run_cell(mixed, "stop-and-go", abort=False)
+    assert stop.job_s >= 1.1 * armctl_cells()[("mixed", "omniscient")].job_s
+
+
+def test_a_fixed_delay_is_too_slow_for_tiny_moves():
+    tiny = scenarios()["tiny"]
+    fixed = table.run_cell(tiny, "fixed delay", abort=False)
+    assert fixed.job_s >= 1.9 * armctl_cells()[("tiny", "omniscient")].job_s
+
+
+# --- the scenarios -------------------------------------------------------------------------------
+
+
+def test_scenarios_are_deterministic():
+    assert build_scenarios("test") == build_scenarios("test")
+    assert build_scenarios("quick")[2].commands == build_scenarios("quick")[2].commands
+
+
+def test_full_scenarios_overflow_a_naive_host():
+    long_frames = build_scenarios("full")[0].frames
+    assert long_frames >= 400
+    assert build_scenarios("quick")[0].frames > 200
+
+
+def test_moves_are_arm_bound_and_tiny_moves_line_bound():
+    model = MotionModel(SimulatedArm().profile)
+    long_segments = Planner(model).feed_all(long_moves(50))
+    assert min(s.duration_s for s in long_segments) > 0.5
+    tiny_segments = Planner(model).feed_all(tiny_moves(50))[1:]  # after the move to the start
+    assert {round(s.duration_s, 4) for s in tiny_segments} == {0.01}
+
+
+def test_the_mixed_job_has_every_kind_of_frame():
+    job = mixed_job(2)
+    kinds = {type(c) for c in job}
+    assert {LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Delay, MCode} <= kinds
+    segments = Planner(MotionModel(SimulatedArm().profile)).feed_all(job)
+    lines = [s for s in segments if isinstance(s.command, LinearMove)]
+    assert any(s.length == 0 and s.start.pwm_us != s.end.pwm_us for s in lines)  # PWM only
+    assert any(s.length == 0 and s.start.cartesian[5] != s.end.cartesian[5] for s in lines)  # attitude only
+    targets = [s.end.xyz for s in lines]
+    assert len(targets) > len(set(targets))  # repeated targets
+    assert all(s.note is None for s in segments)  # no clamped speed, every arc a true circle
+
+
+def test_every_target_and_path_stays_in_the_workspace():
+    arm = SimulatedArm()
+    kinematics = arm.profile.kinematics
+    for job in (long_moves(420), tiny_moves(1000), mixed_job(16)):
+        for segment in Planner(MotionModel(arm.profile)).feed_all(job):
+            if segment.kind not in ("line", "arc"):
+                continue
+            for k in range(6):
+                pose = segment.sample(segment.duration_s * k / 5)
+                try:
+                    kinematics.inverse(CartesianPose(*pose.robot_cartesian), pose.known_joints)
+                except Unreachable:  # pragma: no cover - the failure message is the point
+                    pytest.fail(f"{segment} leaves the workspace at {pose.xyz}")
+    assert BOX_X[1] <= 320 and abs(BOX_Y[0]) <= 150 and TRAVEL_Z <= 240
+
+
+def test_the_pause_scenario_pauses_mid_job_with_control_frames_on_arrival():
+    pause = scenarios()["pause"]
+    assert pause.options.control_on_arrival
+    start, end = pause.events
+    assert 0 < start.at_s < planned_seconds(pause.commands) and end.at_s - start.at_s == 4.0
+    # The paused run takes about 4 s longer than the same job unpaused.
+    paused = armctl_cells()[("pause", "omniscient")].job_s
+    unpaused = armctl_cells()[("arrival", "omniscient")].job_s
+    assert paused - unpaused == pytest.approx(4.0, abs=0.1)
+
+
+# --- the table and the command line ---------------------------------------------------------------
+
+
+def test_the_table_lists_every_cell_with_its_columns():
+    cells = list(armctl_cells().values())
+    text = table.format_table(cells)
+    lines = text.splitlines()
+    assert lines[0].split()[:2] == ["scenario", "strategy"]
+    for header in ("dropped", "time ÷ omni", "peak occupancy", "peak queued s", "moving after abort s"):
+        assert header in lines[0]
+    assert sum(1 for line in lines if line.startswith("tiny ")) == 2
+    assert "met" in text
+
+
+def test_check_targets_reports_each_miss():
+    cell = table.Cell("long", "armctl", 10, 2, 10.0, 5, 1.0, 9.0, 3.0, ratio=1.2, ratio_bound=1.01)
+    failures = table.check_targets(cell)
+    assert len(failures) == 3
+    assert "dropped 2" in failures[0] and "1.200" in failures[1] and "9.00 s" in failures[2]
+
+
+def test_main_prints_the_table_and_exits_0(capsys):
+    assert table.main(["--size", "test", "--scenario", "tiny", "--jobs", "1"]) == 0
+    out = capsys.readouterr().out
+    assert "tiny" in out and "every target met" in out and "wall time" in out
+
+
+def test_main_json(capsys):
+    assert table.main(["--size", "test", "--scenario", "tiny", "--json", "--jobs", "1"]) == 0
+    data = json.loads(capsys.readouterr().out)
+    assert {c["strategy"] for c in data["cells"]} == set(table.STRATEGY_NAMES)
+    armctl = next(c for c in data["cells"] if c["strategy"] == "armctl")
+    assert armctl["dropped"] == 0 and armctl["failures"] == []
+
+
+def test_main_exits_1_when_armctl_misses_a_target(capsys):
+    # A lead far shorter than a frame time starves the arm between long moves.
+    assert table.main(["--size", "test", "--scenario", "long", "--lead", "0.01", "--jobs", "1"]) == 1
+    assert "MISSED" in capsys.readouterr().out
+
+
+def test_main_rejects_a_bad_lead(capsys):
+    with pytest.raises(SystemExit):
+        table.main(["--lead", "0"])
