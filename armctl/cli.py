@@ -318,6 +318,6 @@ _register_packaged_commands()
 @click.pass_context
 def bench(ctx):
     """The streaming benchmark: scenarios × strategies in virtual time (see docs/bench.md)."""
-    from .bench.__main__ import main as bench_main
+    from .bench.table import main as bench_main
 
     sys.exit(bench_main(ctx.args))
