@@ -197,7 +197,7 @@ def test_pty_ctrl_c_while_moving_sends_the_neutral_at_once_and_exits_130(spawn):
     frames = jog.frames()
     assert [c for _, c in frames] == [Joystick(1, (152,)), Joystick(1, (128,))]
     ctrl_c = _last_key(events, "ctrl-c", frames[-1][0])
-    assert frames[-1][0] - ctrl_c <= 0.005
+    assert frames[-1][0] - ctrl_c <= 0.05  # at once: the neutral is the first thing jog does with it
     print(f"\nneutral {(frames[-1][0] - ctrl_c) * 1000:.1f} ms after Ctrl-C was read")
     assert frames[-1][0] - _last_key(events, "w", frames[-1][0]) <= NEUTRAL_AFTER_REPEAT_S
 
@@ -233,7 +233,7 @@ def test_pty_terminal_gone_while_moving_sends_the_neutral_at_once(spawn):
     assert [c for _, c in frames] == [Joystick(4, (152,)), Joystick(4, (128,))]
     # The hang-up came about one repeat after the last key: well before the lease's end.
     after_repeat = frames[-1][0] - _last_key(events, "t", frames[-1][0])
-    assert after_repeat < 0.09
+    assert after_repeat <= NEUTRAL_AFTER_REPEAT_S  # and well before the lease's end (about 33 ms)
     print(f"\nterminal gone: neutral {after_repeat * 1000:.1f} ms after the last repeat (hang-up ~33 ms after it)")
     notes = [r["text"] for r in jog.records() if r["dir"] == "note"]
     assert notes and "the terminal went away" in notes[-1]

@@ -11,7 +11,7 @@ its own:
 - the same key again (an auto-repeat, or a second tap) renews the lease to
   ``last key + repeat_gap_s`` (the default 100 ms keeps the neutral within 150 ms of the last
   repeat at 30 repeats/s, with two repeats allowed to go missing);
-- both leases end ``wake_margin_s`` (2 ms) early, so the edge's wake-up latency does not make a
+- both leases end ``wake_margin_s`` (20 ms) early, so the edge's wake-up latency does not make a
   tap move longer than the delay;
 - when the lease expires, or on ``stop`` (space, a mode change, quit, Ctrl-C, an error, the
   terminal gone — the caller decides), the neutral value goes out at once.
@@ -45,7 +45,7 @@ class DeadmanTiming:
     repeat_gap_s: float = 0.1  # once repeats flow: neutral this long after the last one
     line_s: float = 0.05  # one 48-byte frame on the wire (wall seconds)
     refresh_s: float | None = None  # resend an unchanged non-neutral value this often (None: never)
-    wake_margin_s: float = 0.002  # leases end this much early: the edge's wake-up latency
+    wake_margin_s: float = 0.020  # leases end this much early: the edge's wake-up latency
 
 
 def neutral(axis: int) -> Joystick:
