@@ -77,7 +77,7 @@ def main():
 
 def _read_input(path: str) -> bytes:
     if path == "-":
-        return click.get_binary_stream("stdin").read()
+        return sys.stdin.buffer.read()
     try:
         with open(path, "rb") as handle:
             return handle.read()
@@ -125,7 +125,7 @@ def _compile_source(path: str, **options):
         if "armctl.stdin_lines" not in meta:
             from .script import iter_lines
 
-            meta["armctl.stdin_lines"] = list(iter_lines(click.get_binary_stream("stdin")))
+            meta["armctl.stdin_lines"] = list(iter_lines(sys.stdin.buffer))
         return compile_lines(meta["armctl.stdin_lines"], "<stdin>", **options)
     return compile_file(path, **options)
 
@@ -175,7 +175,7 @@ def _output_stream(path: str | None, binary: bool):
     import contextlib
 
     if path is None:
-        stream = click.get_binary_stream("stdout") if binary else click.get_text_stream("stdout")
+        stream = sys.stdout.buffer if binary else sys.stdout
         return contextlib.nullcontext(stream)
     return open(path, "wb" if binary else "w", encoding=None if binary else "utf-8")
 

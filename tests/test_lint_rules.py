@@ -189,7 +189,7 @@ def test_arc_end_speed_zero_is_not_a_unit_slip():
 
 def test_acceleration_above_the_profile_maximum(test_profile):
     assert codes(START + "G222 X260 K1500 F3000", test_profile) == []
-    assert codes(START + "G222 X260 K-2500 F3000", test_profile) == [(2, "L204")]
+    assert codes(START + "G220 X260 K-2500 F3000", test_profile) == [(2, "L204")]
 
 
 # --- L3xx PWM -------------------------------------------------------------------------------------

@@ -70,8 +70,8 @@ def test_joint_moves_and_arcs_use_channel_1s_pwm():
 
 
 def test_k_is_modal_and_h_defaults_to_0_and_is_modal():
-    result = ok("G220 X1 K-100\nG222 X2\nG6 J1=1 J2=2 J3=3 J4=4 J5=5 J6=6\nG6 J1=2 H4\nG6 J1=3", KNOWN)
-    assert [result[0].accel_mm_s2, result[1].accel_mm_s2] == [-100, -100]
+    result = ok("G220 X1 K100\nG222 X2\nG6 J1=1 J2=2 J3=3 J4=4 J5=5 J6=6\nG6 J1=2 H4\nG6 J1=3", KNOWN)
+    assert [result[0].accel_mm_s2, result[1].accel_mm_s2] == [100, 100]
     assert [c.smoothing for c in result[2:]] == [0, 4, 4]
 
 
@@ -209,3 +209,15 @@ def test_statements_record_relative_mode():
 
 def test_accelerated_move_keeps_q_only_on_g230():
     assert ok("G230 X1 Q5\nG222 X2", KNOWN)[1] == AccelLinearMove(1, 2, 0, 50, 0, 0, 0, 500, 3000)
+
+
+def test_g222_and_g230_refuse_a_k_that_is_not_positive_even_a_modal_one():
+    from armctl.script import compile_text
+
+    job = compile_text("G220 X1 K-100\nG222 X2\nG230 X3 K0 Q10\nG222 X4 K50", "k.txt", KNOWN)
+    commands = [s.command for s in job]
+    assert [c.accel_mm_s2 for c in commands] == [-100, 50]  # G220 takes a falling ramp
+    assert [(d.code, d.span.line) for d in job.diagnostics] == [("E005", 2), ("E005", 3)]
+    assert "K = -100 must be greater than 0 in G222" in job.diagnostics[0].message
+    assert "K is modal" in job.diagnostics[0].hint
+    assert job.diagnostics[1].span.column == job.diagnostics[1].span.text.index("K0") + 1

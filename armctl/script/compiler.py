@@ -225,7 +225,7 @@ class Compilation(StatementExecution):
 
     def _count(self, block: Block) -> Optional[int]:
         node, line = block.opening.node, block.opening
-        if node.count is None:  # reported when the block opened
+        if node.count is None or block.too_deep:  # reported when the block opened
             return None
         try:
             value = evaluate(node.count, self.state.parameters)

@@ -102,7 +102,7 @@ class StatementExecution:
         if plain is None:
             return NOT_PLAIN
         try:
-            command = spec.build(*plain[0])
+            command = spec.make(*plain[0])
         except FieldError:
             return NOT_PLAIN
         return self._moved(spec, command, plain[1], number, text, column, end_column, written, ())
@@ -138,7 +138,7 @@ class StatementExecution:
                 resolution = resolve(spec, written, state)
                 if resolution.ok:
                     try:
-                        command = spec.build(*resolution.arguments)
+                        command = spec.make(*resolution.arguments)
                     except FieldError:
                         command = None
                     if command is not None:
@@ -182,7 +182,7 @@ class StatementExecution:
         bad_keys = []
         for _ in arguments:
             try:
-                command = spec.build(*arguments)
+                command = spec.make(*arguments)
             except FieldError as error:
                 slot, message = blame(spec, error)
                 index = spec.index_of[slot.field] if slot else None
@@ -282,8 +282,10 @@ class StatementExecution:
             self._report("E004", number, text, *head, messages.missing(code, letters),
                          messages.missing_hint(code, letters, self.state, written.get("T")))
             poison += [key for _, key in resolution.missing]
-        if resolution.required:
-            self._report("E004", number, text, *head, *messages.required(code, resolution.required))
+        # A required word that is on the line but failed (E003, E007, E009) was reported already.
+        required = [slot for slot in resolution.required if slot.letter not in spans]
+        if required:
+            self._report("E004", number, text, *head, *messages.required(code, required))
         for letter, key in resolution.relative_unknown:
             self._report("E004", number, text, *spans[letter],
                          f"{letter} is relative (G91), but no earlier move set {letter}",

@@ -22,8 +22,9 @@ from dataclasses import MISSING, dataclass, field
 from dataclasses import fields as dataclass_fields
 from typing import Callable, NamedTuple, Optional
 
+from ..errors import FieldError
 from ..protocol import (
-    PWM_CHANNELS, AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, SetWorktableOrigin,
+    PWM_CHANNELS, AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, SetWorktableOrigin, f32_repr,
 )
 from .modal import (
     CARTESIAN, CARTESIAN_SPEED, JOINT_KEYS, JOINT_SPEED, JOINTS, POISONED, POSE_KEYS, PWM_KEYS, ModalState,
@@ -61,6 +62,8 @@ class MoveSpec:
     constants: dict = field(default_factory=dict)
     forgets: Optional[str] = None  # the family this statement leaves unknown
     hints: dict = field(default_factory=dict)  # letter → hint when that word is not taken here
+    # A rule the language adds over the frame's own ranges: raises FieldError like the build.
+    validate: Optional[Callable[[Command], None]] = None
     letters: tuple[str, ...] = field(init=False)  # the words it takes, in table order
     letter_set: frozenset = field(init=False)
     key_of: dict = field(init=False)  # letter → modal key
@@ -71,6 +74,13 @@ class MoveSpec:
     is_arc: bool = field(init=False)  # G300/G301: the compiler pairs them
     plain_plan: tuple = field(init=False)  # (index, letter, key) of the ordinary modal slots
     channel_slots: Optional[tuple] = field(init=False)  # (T index, S index) for G1, else None
+
+    def make(self, *arguments) -> Command:
+        """The command from positional constructor arguments; FieldError if a value is wrong."""
+        command = self.build(*arguments)
+        if self.validate is not None:
+            self.validate(command)
+        return command
 
     def __post_init__(self) -> None:
         letters = tuple(s.letter for s in self.slots if s.letter)
@@ -109,6 +119,18 @@ _CHANNEL_1_ONLY = "this frame has no PWM channel byte: its S drives channel 1"
 _ARC_EXTERNAL = "arcs keep the external axes where the last move put them"
 
 
+def _rising_ramp(code: str):
+    """G222 and G230 ramp up to speed1 (PROTOCOL.md: modes 1 and 2 take a > 0); the frame
+    could carry any K, the language refuses what the vendor says those modes do not take."""
+
+    def validate(command: AccelLinearMove) -> None:
+        if command.accel_mm_s2 <= 0:
+            raise FieldError(f"AccelLinearMove.accel_mm_s2 = {f32_repr(command.accel_mm_s2)} must be greater "
+                             f"than 0 in {code} (it ramps up to F; only G220 takes a negative K)")
+
+    return validate
+
+
 def _accelerated(code: str, mode: int) -> MoveSpec:
     slots = _POSE + _EXTERNAL + (Slot("accel_mm_s2", "K", "K"), Slot("speed1_mm_min", "F", _CARTESIAN_F))
     hints = {"S": _NO_PWM, "T": _NO_PWM}
@@ -116,7 +138,8 @@ def _accelerated(code: str, mode: int) -> MoveSpec:
         slots += (Slot("speed0_mm_min", "Q", None, meaning="speed0, mm/min, the speed the ramp starts from"),)
     else:
         hints["Q"] = "Q (speed0) belongs to G230 only"
-    return MoveSpec(code, AccelLinearMove, slots, {"mode": mode}, JOINTS, hints)
+    validate = None if mode == 0 else _rising_ramp(code)
+    return MoveSpec(code, AccelLinearMove, slots, {"mode": mode}, JOINTS, hints, validate)
 
 
 CODES: dict[int, MoveSpec] = {
