@@ -18,7 +18,7 @@ import sys
 import click
 
 from . import __version__
-from .errors import ArmctlError
+from .errors import ArmctlError, ConfigError, ProfileError
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
 
@@ -33,7 +33,7 @@ class ArmctlGroup(click.Group):
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
-        except UsageFailure as error:
+        except (UsageFailure, ProfileError, ConfigError) as error:
             _fail(str(error), EXIT_USAGE)
         except ArmctlError as error:
             _fail(str(error), EXIT_PROBLEMS)
@@ -267,6 +267,8 @@ def estimate(script, lead_s, baud, profile_path, as_json):
     from .ui.run_job import check_script, estimate_job, print_estimate
 
     _check_readable(script)
+    if script == "-":
+        raise UsageFailure("estimate needs a file (it reads the script more than once); save it first")
     profile = load_profile(profile_path)
     check_script(script, profile)
     model = MotionModel(profile)

@@ -32,5 +32,9 @@ class ProfileError(ArmctlError):
     """An arm profile that cannot be read or does not make sense."""
 
 
+class ConfigError(ArmctlError):
+    """A value in armctl.toml that cannot be used."""
+
+
 class PortError(ArmctlError):
     """A serial port that cannot be opened, or that went away."""

@@ -15,7 +15,11 @@ from dataclasses import dataclass, field
 
 from .motion import ArmPose, MotionModel, Planner
 from .protocol import DEFAULT_BAUD, frame_seconds
-from .streamer import DEFAULT_LEAD_S
+from .streamer import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S
+from .protocol import CONNECTOR_BUFFER_FRAMES
+
+# The streamer never lets more frames be in flight than this (see streamer.py).
+FRAME_LIMIT = CONNECTOR_BUFFER_FRAMES - CAPACITY_MARGIN_FRAMES
 
 
 @dataclass
@@ -63,6 +67,11 @@ class JobEstimator:
         segment = self.planner.feed(command)
         result = self.result
         write = max(self._wire_free, self._arm_free - self.lead_s)
+        ends = self._ends
+        while ends and ends[0] <= write:
+            ends.popleft()
+        if len(ends) >= FRAME_LIMIT:  # the FIFO bound: wait until the oldest queued frame ends
+            write = max(write, ends[len(ends) - FRAME_LIMIT])
         land = write + self.frame_s
         self._wire_free = land
         if result.frames and land > self._arm_free:
@@ -78,7 +87,6 @@ class JobEstimator:
             result.joint_path_deg += segment.length
         if segment.note and len(result.notes) < self.MAX_NOTES:
             result.notes.append(segment.note)
-        ends = self._ends
         while ends and ends[0] <= land:
             ends.popleft()
         ends.append(self._arm_free)

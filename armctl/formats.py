@@ -13,15 +13,10 @@ import re
 import string
 from typing import Iterable, Iterator
 
-from .protocol import Chunk, Command, StatusFrame, describe, f32_repr, scan_frames
+from .protocol import Chunk, Command, StatusFrame, describe, f32_repr
 
 _HEX_DIGITS = frozenset(string.hexdigits.encode())
 _WHITESPACE = frozenset(string.whitespace.encode())
-
-
-def frame_hex(frame: bytes) -> str:
-    """96 lowercase hex digits, the ``compile --format hex`` line."""
-    return frame.hex()
 
 
 def json_value(value):
@@ -82,12 +77,6 @@ def _log_bytes(data: bytes) -> Iterator[bytes]:
             yield bytes.fromhex(record["hex"])
         except (ValueError, KeyError, TypeError):
             continue  # a log line without a frame (a note, a summary) carries no bytes
-
-
-def decode_lines(data: bytes) -> Iterator[str]:
-    """One readable line per frame found in ``data``, and one per run of bytes in no frame."""
-    for chunk in scan_frames(data):
-        yield describe_chunk(chunk)
 
 
 def describe_chunk(chunk: Chunk) -> str:

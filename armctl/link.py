@@ -19,10 +19,11 @@ from dataclasses import dataclass
 from typing import Callable
 
 from .armstate import ArmState
-from .errors import PortError
+from .errors import ConfigError, PortError
 from .protocol import DEFAULT_BAUD, StatusFrame, StatusReader
 
 SIMULATOR_URL = "sim://"
+BAUD_RANGE = (300, 4_000_000)
 PORT_ENV = "ARMCTL_PORT"
 READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
@@ -57,19 +58,48 @@ def resolve_port(option: str | None, environ=os.environ, config: dict | None = N
     return PortChoice(SIMULATOR_URL, "default")
 
 
-def connect(port: str | None, baud: int | None, announce: Callable[[str], None] = print, **link_options):
+def connect(port: str | None, baud: int | None, announce: Callable[[str], None] = print, profile=None,
+            **link_options):
     """What every port-using command does first: resolve the port (``--port``, ARMCTL_PORT,
-    armctl.toml, the simulator), announce the simulator, open it with a reader thread.
-    Returns the link and the baud rate used."""
-    from .profile import find_config
+    armctl.toml, the simulator), announce the simulator, open it with a reader thread whose
+    state judges jumps against the arm's top speeds (H9). Returns the link and the baud rate."""
+    from .profile import find_config, load_profile
 
-    config = find_config()[1]
+    config_path, config = find_config()
     choice = resolve_port(port, config=config)
     banner = choice.banner()
     if banner:
         announce(banner)
-    baud = baud or int(config.get("baud", DEFAULT_BAUD))
+    baud = baud or config_baud(config, config_path)
+    profile = profile or load_profile()
+    link_options.setdefault("state", plausible_state(profile))
+    link_options.setdefault("clock", scaled_clock(choice.url))
     return Link.open(choice.url, baud, **link_options), baud
+
+
+def config_baud(config: dict, path) -> int:
+    value = config.get("baud", DEFAULT_BAUD)
+    if isinstance(value, bool) or not isinstance(value, int) or not BAUD_RANGE[0] <= value <= BAUD_RANGE[1]:
+        raise ConfigError(f"{path}: baud = {value!r} must be a whole number of bit/s from {BAUD_RANGE[0]} to {BAUD_RANGE[1]}")
+    return value
+
+
+def plausible_state(profile) -> ArmState:
+    """An ArmState that holds back a value moving faster than twice the profile's top speeds
+    (a corrupted byte; the profile's numbers are illustrative, hence the factor)."""
+    speed = profile.speed
+    return ArmState(max_speed_mm_s=2 * speed.max_linear_mm_min / 60, max_joint_speed_deg_s=2 * speed.max_joint_deg_s)
+
+
+def scaled_clock(url: str) -> Callable[[], float]:
+    """The clock status frames are timed by: wall time, times ``speed`` for ``sim://?speed=N``
+    (the simulated arm then moves N× faster per wall second)."""
+    if not url.startswith("sim://"):
+        return time.monotonic
+    from .sim.protocol_sim import parse_sim_url
+
+    scale = parse_sim_url(url)[1]
+    return lambda: time.monotonic() * scale
 
 
 def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_S, write_timeout: float | None = 2.0):
@@ -107,8 +137,8 @@ def describe_open_error(url: str, error: Exception) -> str:
 class Link:
     """An open port with a reader thread that keeps ``state`` current.
 
-    ``on_status(frame, now)`` and ``on_bytes(data, now)`` are called from the reader thread
-    (for logs and for the streamer); ``error`` is set when the port went away.
+    ``on_status(frame, now)`` is called from the reader thread (for logs and for the
+    streamer); ``error`` is set when the port went away.
     """
 
     def __init__(

@@ -13,11 +13,12 @@ from __future__ import annotations
 import json
 import queue
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from typing import Callable, Iterator
 
 from .errors import ArmctlError, PortError
-from .protocol import ArcEnd, Command, PauseToggle, ResetConnector, StatusFrame
+from .protocol import ArcEnd, ArcStart, Command, PauseToggle, ResetConnector, StatusFrame
 from .streamer import Streamer
 
 ABORT_SEQUENCES = {
@@ -28,6 +29,8 @@ ABORT_SEQUENCES = {
 REST_CHECK_S = 0.6  # the arm counts as at rest when it reported the same pose this long
 SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to come to rest
 POLL_S = 0.05
+TARGET_MM = 0.5  # how close the reported position must be to the last target (0.1 mm resolution)
+TARGET_DEG = 0.2
 _REST_KINDS = (0, 1, 2, 4)  # position, joints 1-3, joints 4-6, pause and PWM
 
 
@@ -51,7 +54,6 @@ class RunView:
     remaining_motion_s: float = 0.0
     position_mm: tuple | None = None
     status_frames: int = 0
-    finished: bool = False
     arm_done_s: float | None = None  # when the arm came to rest at the end (model time)
     outcome: str = "running"  # running, finished, interrupted, port lost, no confirmation
     messages: list = field(default_factory=list)
@@ -106,6 +108,8 @@ class JobRunner:
         # them changed for REST_CHECK_S — a wrist turning in place changes only joints.
         self._rest: tuple | None = None
         self._reported: dict = {}
+        self._pause_reports: deque = deque(maxlen=2)  # the last two pause states reported
+        self._recent: deque = deque(maxlen=64)  # the last frames written (SentFrame)
         self.stop_requested = False
 
     # --- time -------------------------------------------------------------------------------
@@ -124,7 +128,7 @@ class JobRunner:
 
     # --- status -----------------------------------------------------------------------------
 
-    def on_status(self, frame: StatusFrame, read_s: float) -> None:
+    def on_status(self, frame: StatusFrame, _read_s: float) -> None:
         """Called by the link's reader thread: queue the frame with its model time."""
         self.status_queue.put((frame, self.now()))
 
@@ -141,6 +145,8 @@ class JobRunner:
         self.view.status_frames += 1
         if self.log is not None:
             self._log("rx", frame.encode(), at_s, kind=frame.KIND)
+        if frame.KIND == 4:
+            self._pause_reports.append(frame.paused)
         if frame.KIND in _REST_KINDS:
             values = tuple(frame.fields().values())
             if frame.KIND == 0:
@@ -200,6 +206,7 @@ class JobRunner:
         frame = command.encode()
         self.link.write(frame)
         sent = self.streamer.wrote(command, now, tag=statement)
+        self._recent.append(sent)
         view = self.view
         view.frames_sent += 1
         view.last_sent = statement
@@ -228,13 +235,46 @@ class JobRunner:
     # --- the end ----------------------------------------------------------------------------
 
     def arm_at_rest(self, now: float) -> bool:
-        """The arm reported the same position for REST_CHECK_S and the estimate says done."""
+        """The arm reported the same position, joints and PWM for REST_CHECK_S and the estimate
+        says the job is over."""
         finish = self.streamer.estimated_finish_s()
         if finish is not None and now < finish:
             return False
         return self._rest is not None and now - self._rest[1] >= REST_CHECK_S
 
+    @property
+    def arm_paused(self) -> bool | None:
+        """The pause state when the last two pause reports agree (one corrupted byte must not
+        make armctl toggle the arm); None while they disagree or are missing."""
+        reports = self._pause_reports
+        if len(reports) == 2 and reports[0] == reports[1]:
+            return reports[0]
+        return None
+
+    def _at_last_target(self) -> bool:
+        """The arm reports the end of the last frame written (joints for a joint move)."""
+        if not self._recent:
+            return True
+        segment = self._recent[-1].segment
+        if segment.kind == "joint":
+            joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
+            return len(joints) == 6 and max(abs(a - b) for a, b in zip(joints, segment.end.joints)) <= TARGET_DEG
+        position = self._reported.get(0)
+        return position is not None and max(abs(a - b) for a, b in zip(position, segment.end.xyz)) <= TARGET_MM
+
+    def _done_at(self, now: float) -> float:
+        """When the arm finished: its last visible change, plus the model's time for trailing
+        frames that leave no trace (delays, M codes, control frames)."""
+        done = self._rest[1] if self._rest is not None else now
+        for sent in reversed(self._recent):
+            if sent.segment.kind != "still":
+                break
+            done += sent.segment.duration_s
+        return min(done, now)
+
     def _wait_for_finish(self) -> None:
+        """Finished means: at rest, at the last target, not paused, and the estimate agrees.
+        Anything else ends without claiming the job ran (frames cleared or dropped, a pause)."""
         view = self.view
         now = self.now()
         deadline = now + self.streamer.queued_seconds(now) * self.streamer.slowest_factor + SETTLE_SLACK_S
@@ -244,39 +284,54 @@ class JobRunner:
             if self.link.error is not None:
                 raise self.link.error
             now = self.now()
-            if self.streamer.all_consumed or self.arm_at_rest(now):
+            if self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False:
                 self._mark_all_done()
-                # Delays and other frames leave no trace: the arm is done at the later of its
-                # last visible change and the estimate's end of the job.
-                last_change = self._rest[1] if self._rest is not None else now
-                view.arm_done_s = max(last_change, min(self.streamer.estimated_finish_s() or now, now))
+                view.arm_done_s = self._done_at(now)
                 view.outcome = "finished"
                 break
             if now > deadline:
                 view.outcome = "no confirmation"
-                view.messages.append("the arm did not confirm the end of the job in time (status frames missing?)")
+                view.messages.append(self._why_not_finished())
                 break
             self._refresh()
             self._sleep(POLL_S)
-        view.finished = view.outcome == "finished"
         self._refresh()
 
+    def _why_not_finished(self) -> str:
+        if self.arm_paused:
+            return "the arm reports it is paused: the rest of the job waits in its buffer"
+        position = self._reported.get(0)
+        if self._rest is not None and position is not None and self._recent and not self._at_last_target():
+            target = ", ".join(f"{v:.1f}" for v in self._recent[-1].segment.end.xyz)
+            here = ", ".join(f"{v:.1f}" for v in position)
+            return (f"the arm stopped at ({here}) but the job's last target is ({target}): "
+                    "frames were lost or cleared (a RESET CONNECTOR, a full buffer?)")
+        return "the arm did not confirm the end of the job in time (status frames missing?)"
+
     def _mark_all_done(self) -> None:
-        """At rest after the estimate: every frame written has run."""
-        while self.streamer.pending:
+        """The arm is at rest at the last target: every frame written has run — except a
+        trailing G300, which the arm holds until its G301 comes."""
+        pending = self.streamer.pending
+        while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             self.streamer._consume_one()
 
     def abort(self, sequence: tuple) -> None:
         """Ctrl-C: stop feeding (nothing more is written after this call), send the abort
-        sequence, and wait for the arm to come to rest so the view can say what ran."""
+        sequence, and wait for the arm to come to rest so the view can say what ran.
+        A pause toggle is not sent to an arm that reports it is paused: it would resume it."""
         view = self.view
         view.outcome = "interrupted"
+        self._drain()
+        if self.arm_paused and any(isinstance(c, PauseToggle) for c in sequence):
+            view.messages.append("the arm was already paused: no pause toggle sent (it would have resumed it)")
+            sequence = tuple(c for c in sequence if not isinstance(c, PauseToggle))
         for command in sequence:
             frame = command.encode()
             try:
                 self.link.write(frame)
-            except PortError:
+            except PortError as error:
                 view.outcome = "port lost"
+                view.messages.append(f"the abort sequence was NOT sent: {error}")
                 return
             if self.log is not None:
                 self._log("tx", frame, self.now(), abort=True)
@@ -284,22 +339,19 @@ class JobRunner:
         while self.now() < deadline:
             self._drain()
             if self.link.error is not None:
+                view.outcome = "port lost"
+                view.messages.append(str(self.link.error))
                 break
-            if self.arm_at_rest(self.now()) and self._rest is not None:
-                if self.streamer.all_consumed or self._at_last_target():
+            now = self.now()
+            still = self._rest is not None and now - self._rest[1] >= REST_CHECK_S
+            # At rest: paused (the estimate cannot know for how long) or with the job's time over.
+            if still and (self.arm_paused or self.arm_at_rest(now)):
+                if self._at_last_target():
                     self._mark_all_done()
                 break
             self._refresh()
             self._sleep(POLL_S)
         self._refresh()
-
-    def _at_last_target(self) -> bool:
-        pending = self.streamer.pending
-        if not pending or self._rest is None:
-            return False
-        target = pending[-1].segment.end.xyz
-        position = self._reported.get(0)
-        return position is not None and max(abs(a - b) for a, b in zip(position, target)) <= 0.5
 
     def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
         record = {"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra}

@@ -256,10 +256,11 @@ def test_status_through_socket_url_to_the_tcp_bridge():
 
 
 class FakeLink:
-    """What watch_status reads from a Link: url, port.baudrate, error, snapshot()."""
+    """What watch_status reads from a Link: url, port.baudrate, error, clock, snapshot()."""
 
     def __init__(self, states, fail_after=None):
         self.url = "fake://arm"
+        self.clock = time.monotonic
         self.port = types.SimpleNamespace(baudrate=9600)
         self.error = None
         self.states = list(states)

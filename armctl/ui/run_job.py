@@ -8,6 +8,8 @@ itself is the pure Streamer's; the clock and the port are the runner's.
 
 from __future__ import annotations
 
+import json
+import re
 import signal
 import sys
 import threading
@@ -87,7 +89,7 @@ def print_estimate(result, header: str) -> None:
     click.echo(header)
     click.echo(f"  frames            {result.frames}")
     click.echo(f"  job time          {result.job_s:.1f} s (motion {result.motion_s:.1f} s)")
-    click.echo(f"  line-bound share  {result.line_bound_share:.1%} (the arm waiting for the 9600-baud line)")
+    click.echo(f"  line-bound share  {result.line_bound_share:.1%} (the arm waiting for the serial line)")
     click.echo(f"  arm-bound share   {1 - result.line_bound_share:.1%}")
     click.echo(f"  path              {result.path_mm:.1f} mm Cartesian, {result.joint_path_deg:.1f} deg of joint moves")
     click.echo(f"  peak queue        {result.peak_queue_frames} frames, {result.peak_queue_s:.1f} s of motion")
@@ -100,25 +102,52 @@ def dry_run(options: JobOptions, compile_source, model) -> int:
     for statement in compile_source(options.script, from_line=options.from_line):
         frame = statement.command.encode()
         click.echo(f"{statement.line:>6}  {frame.hex()}  {describe(statement.command)}")
-    result = estimate_job(compile_source, options.script, model, start, options.lead_s, options.baud or 9600, options.from_line)
+    result = estimate_job(compile_source, options.script, model, start, options.lead_s, options.baud or _config_baud(), options.from_line)
     print_estimate(result, "dry run: no port opened; estimate from the profile's fixed pose 0:")
     return EXIT_OK
 
 
-def read_arm(link, timeout_s: float):
-    """Wait for all nine status kinds; resume a paused arm (a job was asked for)."""
+def _config_baud() -> int:
+    from ..link import config_baud
+    from ..profile import find_config
+
+    path, config = find_config()
+    return config_baud(config, path)
+
+
+def read_arm(link, timeout_s: float, log=None):
+    """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
+    kind has been replaced or held back, H9); resume an arm that twice reports it is paused."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
         _, received, _, frames = link.snapshot()
         heard = "nothing" if received == 0 else f"{received} bytes, {frames} status frames"
         raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
-    state = link.snapshot()[0]
-    if state.paused:
+    _wait_rotations(link, 2, timeout_s)
+    if _paused_twice(link, timeout_s):
         click.echo("armctl: the arm reports it is paused: sending one pause toggle to resume it", err=True)
-        link.write(PauseToggle().encode())
+        frame = PauseToggle().encode()
+        link.write(frame)
+        if log is not None:
+            log.write(json.dumps({"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}) + "\n")
         if not link.wait_until(lambda s: s.paused is False, max(timeout_s, 1.0)):
             raise JobFailed("the arm stayed paused after a pause toggle; nothing else was sent")
-        state = link.snapshot()[0]
-    return state
+        _wait_rotations(link, 1, timeout_s)
+    return link.snapshot()[0]
+
+
+def _wait_rotations(link, rotations: int, timeout_s: float) -> None:
+    frames = link.snapshot()[3]
+    link.wait_until(lambda s: s.frames >= frames + 9 * rotations, timeout_s)
+
+
+def _paused_twice(link, timeout_s: float) -> bool:
+    """Paused in two consecutive pause reports: one flipped byte must not make armctl toggle."""
+    state = link.snapshot()[0]
+    if not state.paused:
+        return False
+    seen = state.last_seen.get(4)
+    link.wait_until(lambda s: s.last_seen.get(4) != seen, timeout_s)
+    return bool(link.snapshot()[0].paused)
 
 
 def start_from_state(model, state):
@@ -142,7 +171,7 @@ def time_scale_of(url: str) -> float:
 def run_job(options: JobOptions, compile_source, connect) -> int:
     from ..motion import MotionModel
     from ..profile import load_profile
-    from ..runner import ABORT_SEQUENCES, JobRunner, RunView
+    from ..runner import JobRunner, RunView
 
     profile = load_profile(options.profile_path)
     report = check_script(options.script, profile)
@@ -151,9 +180,9 @@ def run_job(options: JobOptions, compile_source, connect) -> int:
     if options.dry_run:
         return dry_run(options, compile_source, model)
 
-    link, baud = connect(options.port, options.baud)
+    link, baud = connect(options.port, options.baud, profile=profile)
     with link, (open(options.log_path, "w", encoding="utf-8") if options.log_path else nullcontext()) as log:
-        state = read_arm(link, options.timeout_s)
+        state = read_arm(link, options.timeout_s, log)
         start, initial = start_from_state(model, state)
         estimate = estimate_job(compile_source, options.script, model, start, options.lead_s, baud, options.from_line, initial)
         if estimate.frames == 0:
@@ -187,7 +216,7 @@ def _stream(runner, options: JobOptions, view) -> str:
                 runner.abort(ABORT_SEQUENCES[options.abort])
             except KeyboardInterrupt:
                 pass
-            return "interrupted"
+            return view.outcome  # "interrupted", or "port lost" if the abort could not be sent
         except PortError as error:
             view.messages.append(str(error))
             return "port lost"
@@ -245,6 +274,29 @@ class _Display:
             self._last = now
 
 
+_BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
+
+
+def outermost_block_start(script: str, line: int) -> int | None:
+    """The opening line of the outermost repeat block around ``line``, if any."""
+    from ..script import read_lines
+
+    depth, start = 0, None
+    for number, text in enumerate(read_lines(script), 1):
+        match = _BLOCK_LINE.match(text)
+        if match is None:
+            continue
+        if match.group(1).lower() == "repeat":
+            if depth == 0:
+                start = number
+            depth += 1
+        elif depth:
+            depth -= 1
+            if depth == 0 and start is not None and start <= line <= number:
+                return start
+    return None
+
+
 def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions) -> int:
     sent = view.last_sent.line if view.last_sent is not None else None
     done = view.last_done.line if view.last_done is not None else None
@@ -264,7 +316,12 @@ def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions) -
     resume = view.resume_line()
     if resume is not None:
         loop = getattr(view.first_not_done, "loop", ())
-        where = f" (inside a repeat block, iteration {loop[-1] + 1}: --from-line restarts that block's first iteration)" if loop else ""
+        where = ""
+        if loop:
+            # --from-line cannot start inside a repeat block: resume at its outermost start.
+            resume = outermost_block_start(options.script, resume) or resume
+            where = (f" (line {view.resume_line()} is inside a repeat block, in pass {loop[-1] + 1}: the block "
+                     "runs again from its first pass, so the passes already done are repeated)")
         click.echo(f"resume with: armctl run {options.script} --from-line {resume}{where}")
     if outcome == "interrupted":
         click.echo(f"stopped: interrupted; abort sequence: {options.abort}", err=True)

@@ -90,7 +90,7 @@ def _watch_lines(link, period_s, render) -> None:
     while True:
         if link.error is not None:
             raise link.error
-        now = time.monotonic()
+        now = link.clock()
         state, health = _health(link, link.port.baudrate, rate, now)
         click.echo(render(state, health))
         time.sleep(period_s)
@@ -101,13 +101,13 @@ def _watch_live(link, baud) -> None:
     from rich.live import Live
 
     rate = _Rate()
-    now = time.monotonic()
+    now = link.clock()
     state, health = _health(link, baud, rate, now)
     with Live(render_status(state, health, now), console=Console(), refresh_per_second=12, transient=False) as live:
         while True:
             if link.error is not None:
                 raise link.error
             time.sleep(WATCH_REFRESH_S)
-            now = time.monotonic()
+            now = link.clock()
             state, health = _health(link, baud, rate, now)
             live.update(render_status(state, health, now))

@@ -1,0 +1,127 @@
+"""How a run ends, told truthfully: "done" only when the arm is at rest at the job's last target
+and not paused; a pause toggle never sent to an arm that is already paused; a resume line the
+compiler accepts (never inside an arc or a repeat block); a failed abort reported as one.
+
+These run the real `armctl run` against `sim://` fast-forwarded, or the runner's pieces alone.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from armctl.cli import main
+from armctl.estimate import FRAME_LIMIT, JobEstimator
+from armctl.link import config_baud, plausible_state
+from armctl.motion import MotionModel
+from armctl.profile import load_profile
+from armctl.protocol import Delay
+from armctl.ui.run_job import outermost_block_start
+
+START = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F6000\n"
+
+
+def run(tmp_path: Path, script: str, *args: str):
+    path = tmp_path / "job.txt"
+    path.write_text(script)
+    return CliRunner().invoke(main, ["run", str(path), "--no-live", *args], env={"ARMCTL_PORT": ""})
+
+
+def test_a_job_whose_last_frames_were_cleared_is_not_reported_done(tmp_path):
+    # RESET CONNECTOR (H5: acted on when it reaches the head) clears the frames queued behind it;
+    # with a long lead they are already there. The arm stops short of the job's last target.
+    script = START + "G1 Y120\nRESET CONNECTOR\nG1 Y-120\nG1 Z100\nG1 Z150\n"
+    result = run(tmp_path, script, "--port", "sim://?speed=20", "--lead", "60")
+    assert result.exit_code == 1, result.output
+    assert "done: the arm finished the job" not in result.stdout
+    assert "but the job's last target is (250.0, -120.0, 150.0)" in result.stderr
+
+
+def test_a_job_whose_frames_were_dropped_is_not_reported_done(tmp_path):
+    # A 3-frame FIFO and a lead that lets the host outrun it: frames are dropped on the way.
+    script = START + "".join(f"G1 Y{y}\n" for y in (60, -60, 60, -60, 0)) + "G1 Z100\n"
+    result = run(tmp_path, script, "--port", "sim://?speed=20&fifo=3", "--lead", "60")
+    assert result.exit_code == 1, result.output
+    assert "done: the arm finished the job" not in result.stdout
+
+
+def test_a_finished_job_is_reported_done_with_the_arm_time(tmp_path):
+    result = run(tmp_path, START + "G1 Y50\nG4 P300\n", "--port", "sim://?speed=20")
+    assert result.exit_code == 0, result.output
+    assert "done: the arm finished the job" in result.stdout
+    assert "arm time:" in result.stdout
+
+
+def test_resume_inside_a_repeat_block_names_the_outermost_block_start(tmp_path):
+    script = tmp_path / "loops.txt"
+    script.write_text(
+        "G4 P1\n"  # 1
+        "O<rows> repeat [2]\n"  # 2
+        "  O<cols> repeat [3]\n"  # 3
+        "    G4 P1\n"  # 4
+        "  O<cols> endrepeat\n"  # 5
+        "O<rows> endrepeat\n"  # 6
+        "G4 P1\n"  # 7
+        "o100 REPEAT [1]\n"  # 8: numbered label, any case
+        "G4 P1\n"  # 9
+        "o100 endrepeat\n"  # 10
+    )
+    assert outermost_block_start(str(script), 4) == 2
+    assert outermost_block_start(str(script), 5) == 2
+    assert outermost_block_start(str(script), 1) is None
+    assert outermost_block_start(str(script), 7) is None
+    assert outermost_block_start(str(script), 9) == 8
+    from armctl.script import compile_file
+
+    assert compile_file(script, from_line=2).finish() == []  # the line it names is one run accepts
+
+
+def test_the_estimate_never_queues_more_frames_than_the_streamer_would():
+    profile = load_profile()
+    model = MotionModel(profile)
+    estimator = JobEstimator(model, model.initial_pose(), lead_s=600)
+    for _ in range(600):
+        estimator.add(Delay(500))
+    assert estimator.result.peak_queue_frames <= FRAME_LIMIT
+
+
+def test_the_state_links_use_judges_jumps_against_the_profile():
+    state = plausible_state(load_profile())
+    assert state.max_speed_mm_s > 0 and state.max_joint_speed_deg_s > 0
+
+
+@pytest.mark.parametrize("value", ["fast", 1.5, True, [9600], 10**9, 100])
+def test_a_bad_baud_in_armctl_toml_is_a_clear_error(value):
+    from armctl.errors import ConfigError
+
+    with pytest.raises(ConfigError, match=r"armctl.toml: baud = .* must be a whole number of bit/s from 300"):
+        config_baud({"baud": value}, "armctl.toml")
+    assert config_baud({}, "armctl.toml") == 9600
+
+
+def test_ctrl_c_sends_no_pause_toggle_to_an_arm_that_is_already_paused(tmp_path, monkeypatch):
+    # The script pauses the arm itself (control frames act on arrival), then Ctrl-C comes:
+    # a pause toggle now would resume the arm, so the abort must not send one.
+    from armctl.ui import run_job
+
+    real_update = run_job._Display.update
+    pressed = []
+
+    def update(self, view):
+        real_update(self, view)
+        if view.frames_sent == 3 and not pressed and view.now_s - view.started_s > 1.0:
+            pressed.append(True)
+            raise KeyboardInterrupt
+
+    monkeypatch.setattr(run_job._Display, "update", update)
+    log = tmp_path / "log.jsonl"
+    script = START + "PAUSE\nG1 Y100\n"
+    result = run(tmp_path, script, "--port", "sim://?speed=10&control=arrival", "--log", str(log))
+    assert result.exit_code == 130, result.output
+    sent = [json.loads(line) for line in log.read_text().splitlines() if '"tx"' in line]
+    pause_frames = [r for r in sent if r["hex"].startswith("fc1e0302")]
+    assert len(pause_frames) == 1  # the script's own PAUSE, no abort toggle after it
+    assert "already paused: no pause toggle sent" in result.stderr
