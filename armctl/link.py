@@ -104,9 +104,7 @@ def scaled_clock(url: str) -> Callable[[], float]:
 
 def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_S, write_timeout: float | None = 2.0):
     """Open any pyserial URL or device path, mapping failures to PortError."""
-    import serial
-
-    import armctl.sim  # noqa: F401 — registers the sim:// scheme (see armctl/__init__.py)
+    import serial  # armctl/__init__.py adds the sim:// scheme as pyserial loads
 
     kwargs = {"baudrate": baud, "timeout": timeout, "write_timeout": write_timeout}
     if "://" not in url:

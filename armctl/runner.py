@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Iterator
 
 from .errors import ArmctlError, PortError
-from .protocol import ArcEnd, ArcStart, Command, PauseToggle, ResetConnector, StatusFrame
+from .protocol import ArcEnd, Command, PauseToggle, ResetConnector, StatusFrame
 from .streamer import Streamer
 
 ABORT_SEQUENCES = {
@@ -285,7 +285,7 @@ class JobRunner:
                 raise self.link.error
             now = self.now()
             if self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False:
-                self._mark_all_done()
+                self.streamer.confirm_all_done()
                 view.arm_done_s = self._done_at(now)
                 view.outcome = "finished"
                 break
@@ -307,13 +307,6 @@ class JobRunner:
             return (f"the arm stopped at ({here}) but the job's last target is ({target}): "
                     "frames were lost or cleared (a RESET CONNECTOR, a full buffer?)")
         return "the arm did not confirm the end of the job in time (status frames missing?)"
-
-    def _mark_all_done(self) -> None:
-        """The arm is at rest at the last target: every frame written has run — except a
-        trailing G300, which the arm holds until its G301 comes."""
-        pending = self.streamer.pending
-        while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
-            self.streamer._consume_one()
 
     def abort(self, sequence: tuple) -> None:
         """Ctrl-C: stop feeding (nothing more is written after this call), send the abort
@@ -347,7 +340,7 @@ class JobRunner:
             # At rest: paused (the estimate cannot know for how long) or with the job's time over.
             if still and (self.arm_paused or self.arm_at_rest(now)):
                 if self._at_last_target():
-                    self._mark_all_done()
+                    self.streamer.confirm_all_done()
                 break
             self._refresh()
             self._sleep(POLL_S)

@@ -417,6 +417,13 @@ class Streamer:
         """Every frame written is known to have finished."""
         return not self.pending
 
+    def confirm_all_done(self) -> None:
+        """The caller saw the arm at rest at the last frame's target: every frame written has
+        run — except a trailing G300, which the arm holds until its G301 comes."""
+        pending = self.pending
+        while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
+            self._consume_one()
+
     def last_known_done(self):
         """The tag of the last frame known finished, or None."""
         return self._last_done_tag
