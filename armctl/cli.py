@@ -212,6 +212,9 @@ def status(port, baud, once, watch, as_json, timeout):
     link, baud = _connect(port, baud)
     with link:
         if watch:
+            from .link import require_wall_clock
+
+            require_wall_clock(link, "status --watch")
             watch_status(link, baud, as_json)
         else:
             print_once(link, baud, timeout, as_json)
@@ -286,11 +289,13 @@ def estimate(script, lead_s, baud, profile_path, as_json):
 def sim(use_pty, tcp_port, sim_url):
     """Run the built-in simulated arm for other programs to talk to."""
     from .sim.bridge import serve_pty, serve_tcp
-    from .sim.protocol_sim import parse_sim_url
+    from .sim.protocol_sim import is_virtual_clock, parse_sim_url
 
     if bool(use_pty) == bool(tcp_port):
         raise UsageFailure("choose one of --pty or --tcp PORT")
     options, time_scale = parse_sim_url(sim_url)
+    if is_virtual_clock(sim_url):
+        raise UsageFailure("a served simulator runs in real time: drop clock=virtual from --url")
 
     def ready(where: str) -> None:
         click.echo(f"simulated arm on {where} (Ctrl-C to stop)")

@@ -6,6 +6,10 @@ nothing above this module knows whether a real arm is attached.  A reader thread
 to the pure ``StatusReader`` and merges frames into an ``ArmState`` under a lock; callers take
 snapshots or wait on a condition.  OS failures become ``PortError`` with a sentence a user can
 act on (no such device, permission denied with the dialout hint, busy, vanished).
+
+A ``sim://?clock=virtual`` port has no reader thread: its clock moves only when a caller waits
+(``wait_until``, ``idle``), which reads each status burst at the model time it lands.  Callers
+that wait through the link work unchanged on either kind of port.
 """
 
 from __future__ import annotations
@@ -27,6 +31,7 @@ BAUD_RANGE = (300, 4_000_000)
 PORT_ENV = "ARMCTL_PORT"
 READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
+VIRTUAL_MIN_STEP_S = 1e-6
 
 
 @dataclass(frozen=True)
@@ -75,6 +80,14 @@ def connect(port: str | None, baud: int | None, announce: Callable[[str], None] 
     link_options.setdefault("state", plausible_state(profile))
     link_options.setdefault("clock", scaled_clock(choice.url))
     return Link.open(choice.url, baud, **link_options), baud
+
+
+def require_wall_clock(link: "Link", command: str) -> None:
+    """Commands that follow the arm as it moves (a live view, jogging) need time to pass by
+    itself; a ``clock=virtual`` simulator only moves when waited on."""
+    if link.is_virtual:
+        raise ConfigError(f"{command} runs in real time, but {link.url} has a virtual clock: "
+                          "use sim:// without clock=virtual")
 
 
 def config_baud(config: dict, path) -> int:
@@ -149,7 +162,9 @@ class Link:
     ) -> None:
         self.port = port
         self.url = url
-        self.clock = clock
+        # A simulated port on a virtual clock: time is the model's and waiting moves it.
+        self.virtual_clock = getattr(port, "virtual_clock", None)
+        self.clock = self.virtual_clock or clock
         self.reader = StatusReader()
         self.state = state or ArmState()
         self.on_status = on_status
@@ -166,7 +181,12 @@ class Link:
         return link
 
     def start(self) -> None:
-        self._thread.start()
+        if self.virtual_clock is None:
+            self._thread.start()
+
+    @property
+    def is_virtual(self) -> bool:
+        return self.virtual_clock is not None
 
     def close(self) -> None:
         self._stop.set()
@@ -191,17 +211,39 @@ class Link:
                 if not self._stop.is_set():
                     self._set_error(PortError(f"the port {self.url} went away: {error}"))
                 return
-            if not data:
-                continue
-            now = self.clock()
-            frames = self.reader.feed(data)
+            if data:
+                self._take(data)
+
+    def _take(self, data: bytes) -> int:
+        """Feed bytes read to the status reader and the state; the number of frames found."""
+        now = self.clock()
+        frames = self.reader.feed(data)
+        with self._changed:
+            self.bytes_received += len(data)
+            for frame in frames:
+                self.state.update(frame, now)
+                if self.on_status is not None:
+                    self.on_status(frame, now)
+            self._changed.notify_all()
+        return len(frames)
+
+    def idle(self, seconds: float) -> None:
+        """Wait up to ``seconds`` of the link's clock; returns early once a status frame has
+        been read.  (On a real port the reader thread reads meanwhile; this only sleeps.)"""
+        if self.virtual_clock is None:
             with self._changed:
-                self.bytes_received += len(data)
-                for frame in frames:
-                    self.state.update(frame, now)
-                    if self.on_status is not None:
-                        self.on_status(frame, now)
-                self._changed.notify_all()
+                self._changed.wait(max(seconds, 0.0))
+            return
+        # At least a microsecond: a wait computed as a difference of nearly equal floats
+        # could otherwise leave the clock where it is, and the caller asking again forever.
+        end_s = self.clock() + max(seconds, VIRTUAL_MIN_STEP_S)
+        while True:
+            until_output = self.port.next_output_s()
+            step_to = end_s if until_output is None else min(end_s, self.clock() + until_output)
+            self.virtual_clock.advance_to(step_to)
+            data = self.port.read(self.port.in_waiting)
+            if (data and self._take(data)) or self.clock() >= end_s:
+                return
 
     def _set_error(self, error: PortError) -> None:
         with self._changed:
@@ -224,6 +266,12 @@ class Link:
     def wait_until(self, predicate: Callable[[ArmState], bool], timeout_s: float) -> bool:
         """Block until ``predicate(state)`` holds, the port fails (raises) or time runs out."""
         deadline = self.clock() + timeout_s
+        if self.virtual_clock is not None:
+            while not predicate(self.state):
+                if self.clock() >= deadline:
+                    return False
+                self.idle(deadline - self.clock())
+            return True
         with self._changed:
             while not predicate(self.state):
                 if self.error is not None:

@@ -98,6 +98,9 @@ class JobRunner:
         self.streamer = streamer
         self.statements = iter(statements)
         self.view = view
+        self.virtual = getattr(link, "is_virtual", False)
+        if self.virtual:  # sim://?clock=virtual: the link's clock is model time already
+            clock, time_scale = link.clock, 1.0
         self.time_scale = time_scale
         self._wall = clock
         self._wall_origin = clock()
@@ -120,6 +123,9 @@ class JobRunner:
 
     def _sleep(self, model_s: float) -> None:
         """Wait up to ``model_s`` for a status frame (returns early when one arrives)."""
+        if self.virtual:  # the link moves the clock; frames come through on_status meanwhile
+            self.link.idle(model_s)
+            return
         try:
             item = self.status_queue.get(timeout=max(model_s, 0.0) / self.time_scale)
         except queue.Empty:

@@ -12,7 +12,7 @@ from armctl.bench.scenarios import (
     ARM_BOUND_RATIO, BOX_X, BOX_Y, OTHER_RATIO, SCENARIO_NAMES, TRAVEL_Z, build_scenarios, long_moves, mixed_job,
     planned_seconds, tiny_moves,
 )
-from armctl.bench.strategies import NaiveStrategy, StopAndGoStrategy
+from armctl.bench.strategies import NaiveStrategy
 from armctl.kinematics import CartesianPose, Unreachable
 from armctl.motion import MotionModel, Planner
 from armctl.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode

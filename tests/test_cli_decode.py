@@ -174,7 +174,7 @@ def test_a_missing_file_is_a_usage_error(tmp_path):
 def test_the_run_log_is_decoded_too(tmp_path):
     log = tmp_path / "job.log"
     job = SCRIPTS / "short_job.txt"
-    ran = CliRunner().invoke(main, ["run", str(job), "--port", "sim://?speed=40", "--no-live", "--log", str(log)])
+    ran = CliRunner().invoke(main, ["run", str(job), "--port", "sim://?clock=virtual", "--no-live", "--log", str(log)])
     assert ran.exit_code == 0, ran.output
     records = [json.loads(line) for line in log.read_text().splitlines()]
     sent = [r for r in records if r["dir"] == "tx"]

@@ -1,7 +1,8 @@
 """``armctl run`` and ``armctl estimate`` as a user sees them, end to end.
 
-Jobs stream through ``CliRunner`` to the simulator at ``sim://?speed=40`` (forty times faster
-than the wall clock, so half a minute of arm time takes under a second), to the simulator's
+Jobs stream through ``CliRunner`` to the simulator at ``sim://?clock=virtual`` (model time moves
+only while armctl waits on the port, so half a minute of arm time takes a fraction of a second
+and every figure is the same on any machine, however loaded), to the simulator's
 TCP and pty bridges running in a thread (stopped mid-job for a lost port), and — in real time,
 with a job of under a second of arm time — to ``armctl sim --pty`` started as a separate process.
 Ctrl-C is a real SIGINT to a subprocess.
@@ -35,7 +36,7 @@ SCRIPTS = Path(__file__).resolve().parent / "data" / "scripts_cli"
 SHORT = SCRIPTS / "short_job.txt"
 TIMED = SCRIPTS / "timed_job.txt"
 RESUME = SCRIPTS / "resume_job.txt"  # lint-clean; an arc on lines 5-6, a repeat block on lines 7-9
-FAST_SIM = "sim://?speed=40"
+FAST_SIM = "sim://?clock=virtual"
 ARMCTL = [sys.executable, "-m", "armctl"]
 
 
@@ -296,7 +297,7 @@ def test_ctrl_c_during_the_progress_update_never_says_to_resend_a_line_known_exe
             raise KeyboardInterrupt
 
     monkeypatch.setattr(run_job._Display, "update", update)
-    result = run(SHORT, "--port", "sim://?speed=10", "--no-live")  # its first move is short: the abort sees it end
+    result = run(SHORT, "--port", FAST_SIM, "--no-live")
     assert result.exit_code == 130, result.output
     match = SUMMARY_STOPPED.search(result.stdout)
     assert match, result.stdout

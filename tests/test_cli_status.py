@@ -1,8 +1,8 @@
 """``armctl status`` and ``armctl ports`` as a user sees them.
 
 Every command runs through ``CliRunner`` in an empty working directory (no armctl.toml) with
-``ARMCTL_PORT`` cleared, against the simulator (``sim://?speed=N``: N times faster than the wall
-clock), pyserial's ``loop://`` (which sends nothing), small TCP peers that send junk, and the
+``ARMCTL_PORT`` cleared, against the simulator (``sim://?clock=virtual``: model time moves only while
+status waits), pyserial's ``loop://`` (which sends nothing), small TCP peers that send junk, and the
 simulator's own pty and TCP bridges running in a thread.  ``--watch`` is tested on its line
 loop with a fake link and a virtual clock, and once end to end in a subprocess with Ctrl-C.
 """
@@ -34,7 +34,8 @@ from armctl.sim.bridge import serve_pty, serve_tcp
 from armctl.sim.model import SimOptions
 
 KEYS = ["x", "y", "z", "joints", "worktable", "paused", "pwm", "w0", "w1", "file_length", "file_status", "run_position"]
-FAST_SIM = "sim://?speed=20"
+FAST_SIM = "sim://?clock=virtual"  # model time moves only while status waits: no machine is too slow
+WATCH_SIM = "sim://?speed=20"  # --watch needs a clock that moves by itself
 DEFAULT_BANNER = "armctl: no port configured (--port, ARMCTL_PORT or armctl.toml): using the built-in simulator (sim://)"
 
 
@@ -100,23 +101,23 @@ def write_toml(tmp_path, text: str) -> None:
 
 def test_port_option_beats_the_environment(tmp_path):
     write_toml(tmp_path, 'port = "loop://"\n')
-    result = status("--once", "--json", "--port", "sim://?speed=25", env={"ARMCTL_PORT": "loop://"})
+    result = status("--once", "--json", "--port", "sim://?clock=virtual&seed=25", env={"ARMCTL_PORT": "loop://"})
     assert result.exit_code == 0, result.output
-    assert result.stderr.splitlines()[0] == "armctl: using the built-in simulator (sim://?speed=25)"
+    assert result.stderr.splitlines()[0] == "armctl: using the built-in simulator (sim://?clock=virtual&seed=25)"
 
 
 def test_environment_beats_armctl_toml(tmp_path):
     write_toml(tmp_path, 'port = "loop://"\n')
-    result = status("--once", "--json", env={"ARMCTL_PORT": "sim://?speed=21"})
+    result = status("--once", "--json", env={"ARMCTL_PORT": "sim://?clock=virtual&seed=21"})
     assert result.exit_code == 0, result.output
-    assert result.stderr.splitlines()[0] == "armctl: using the built-in simulator (sim://?speed=21)"
+    assert result.stderr.splitlines()[0] == "armctl: using the built-in simulator (sim://?clock=virtual&seed=21)"
 
 
 def test_armctl_toml_port_is_used_when_nothing_else_names_one(tmp_path):
-    write_toml(tmp_path, 'port = "sim://?speed=22"\n')
+    write_toml(tmp_path, 'port = "sim://?clock=virtual&seed=22"\n')
     result = status("--once", "--json")
     assert result.exit_code == 0, result.output
-    assert result.stderr.splitlines()[0] == "armctl: using the built-in simulator (sim://?speed=22)"
+    assert result.stderr.splitlines()[0] == "armctl: using the built-in simulator (sim://?clock=virtual&seed=22)"
 
 
 def test_armctl_toml_in_a_parent_directory_names_a_real_port(tmp_path, monkeypatch):
@@ -339,7 +340,7 @@ def test_a_port_lost_while_watching_is_an_error_not_a_clean_exit(monkeypatch):
 
 def test_json_watch_end_to_end_then_ctrl_c_exits_0(tmp_path):
     process = subprocess.Popen(
-        [sys.executable, "-m", "armctl", "status", "--json", "--watch", "--port", FAST_SIM],
+        [sys.executable, "-m", "armctl", "status", "--json", "--watch", "--port", WATCH_SIM],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
         env={**os.environ, "ARMCTL_PORT": ""},
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),

@@ -163,6 +163,49 @@ def _last_key(events, name: str, before: float) -> float:
     return max(t for t, kind, value in events if kind == "key" and value == name and t <= before)
 
 
+LEASE_AFTER_PRESS_S = 0.5 - 0.020  # jog's tap lease (initial delay less its wake margin)
+LEASE_AFTER_REPEAT_S = 0.1 - 0.020  # once repeats flow (repeat gap less the wake margin)
+
+
+def motions(events, keys: dict[str, int], stopped_by: str | None = None) -> list[int]:
+    """Check the dead-man contract on jog's own clock and return the axis of each motion.
+
+    A busy machine can delay the test's typing (a "held" key whose repeats pause longer than
+    the lease): jog must then stop and start again — that is the dead-man switch working — so
+    the contract is checked against the keys jog actually read, not against the keys we meant:
+    - frames alternate: one non-neutral value, then the neutral of the same axis;
+    - once repeats flowed, the neutral comes within 150 ms of the last one; a motion of one key
+      and no repeat (a tap) lasts no longer than the tap limit;
+    - a neutral goes out only once the lease of the last key has run out (no stop while keys
+      flow), except the last one when ``stopped_by`` names the key (or event) that stopped it.
+    """
+    frames = [(t, c) for t, kind, c in events if kind == "tx"]
+    assert len(frames) % 2 == 0 and frames, frames
+    axes = []
+    for index in range(0, len(frames), 2):
+        (t_on, on), (t_off, off) = frames[index], frames[index + 1]
+        assert isinstance(on, Joystick) and isinstance(off, Joystick) and on.axis == off.axis, (on, off)
+        assert any(v != 128 for v in on.values) and all(v == 128 for v in off.values), (on, off)
+        name = next(k for k, axis in keys.items() if axis == on.axis)
+        pressed = [t for t, kind, value in events if kind == "key" and value == name and t <= t_off]
+        during = [t for t in pressed if t >= _last_key(events, name, t_on)]  # this motion's keys
+        if len(during) > 1:  # repeats flowed
+            assert t_off - during[-1] <= NEUTRAL_AFTER_REPEAT_S, (t_off - during[-1], name)
+        else:  # a tap
+            assert t_off - t_on <= TAP_LIMIT_S, (t_off - t_on, name)
+        last_frame = index + 2 == len(frames)
+        if not (last_frame and stopped_by):
+            lease = LEASE_AFTER_PRESS_S if len(during) == 1 else LEASE_AFTER_REPEAT_S
+            assert t_off - during[-1] >= lease - 0.005, (t_off - during[-1], lease, name)
+        axes.append(on.axis)
+    return axes
+
+
+def _collapse(axes: list[int]) -> list[int]:
+    """One entry per run of motions of the same axis (a delayed typist splits one hold)."""
+    return [axis for k, axis in enumerate(axes) if k == 0 or axes[k - 1] != axis]
+
+
 def test_pty_hold_stops_within_150ms_of_the_last_repeat_and_a_tap_within_the_delay(spawn):
     jog = spawn().ready()
     jog.hold(b"q", 0.6)  # joint 1 +
@@ -173,17 +216,15 @@ def test_pty_hold_stops_within_150ms_of_the_last_repeat_and_a_tap_within_the_del
     assert jog.exit_code() == 0
     assert jog.terminal_restored()
 
-    frames = jog.frames()
-    assert [c for _, c in frames] == [
-        Joystick(0, (152,)), Joystick(0, (128,)), Joystick(2, (152,)), Joystick(2, (128,)),
-    ]
     events = jog.events()
-    (t_on, _), (t_off, _) = frames[0], frames[1]
+    axes = motions(events, {"q": 0, "e": 2})
+    assert _collapse(axes) == [0, 2] and axes[-1] == 2 and axes.count(2) == 1
+    frames = jog.frames()
+    t_off = frames[-3][0]  # the neutral that ended the hold of q
     after_repeat = t_off - _last_key(events, "q", t_off)
-    assert after_repeat <= NEUTRAL_AFTER_REPEAT_S, after_repeat
-    tap_s = frames[3][0] - frames[2][0]
-    assert tap_s <= TAP_LIMIT_S, tap_s
-    print(f"\nneutral {after_repeat * 1000:.1f} ms after the last repeat; a tap moved {tap_s * 1000:.1f} ms")
+    tap_s = frames[-1][0] - frames[-2][0]
+    print(f"\nneutral {after_repeat * 1000:.1f} ms after the last repeat; a tap moved {tap_s * 1000:.1f} ms"
+          f"{'' if len(axes) == 2 else f' (the held key was read as {len(axes) - 1} holds)'}")
     assert "quit" in jog.text()
 
 
@@ -195,11 +236,11 @@ def test_pty_ctrl_c_while_moving_sends_the_neutral_at_once_and_exits_130(spawn):
     assert jog.terminal_restored()
     events = jog.events()
     frames = jog.frames()
-    assert [c for _, c in frames] == [Joystick(1, (152,)), Joystick(1, (128,))]
+    assert _collapse(motions(events, {"w": 1}, stopped_by="ctrl-c")) == [1]
+    assert frames[-1][1] == Joystick(1, (128,))
     ctrl_c = _last_key(events, "ctrl-c", frames[-1][0])
     assert frames[-1][0] - ctrl_c <= 0.05  # at once: the neutral is the first thing jog does with it
     print(f"\nneutral {(frames[-1][0] - ctrl_c) * 1000:.1f} ms after Ctrl-C was read")
-    assert frames[-1][0] - _last_key(events, "w", frames[-1][0]) <= NEUTRAL_AFTER_REPEAT_S
 
 
 def test_pty_escape_quits_and_stops_a_linear_jog(spawn):
@@ -209,8 +250,8 @@ def test_pty_escape_quits_and_stops_a_linear_jog(spawn):
     assert jog.exit_code() == 0
     assert jog.terminal_restored()
     frames = jog.frames()
-    assert [c for _, c in frames] == [Joystick(100, (152, 128, 128)), Joystick(100, (128, 128, 128))]
-    assert frames[-1][0] - _last_key(jog.events(), "up", frames[-1][0]) <= NEUTRAL_AFTER_REPEAT_S
+    assert _collapse(motions(jog.events(), {"up": 100}, stopped_by="esc")) == [100]
+    assert frames[0][1] == Joystick(100, (152, 128, 128)) and frames[-1][1] == Joystick(100, (128, 128, 128))
 
 
 def test_pty_sigterm_while_moving_stops_the_arm_and_restores_the_terminal(spawn):
@@ -219,7 +260,8 @@ def test_pty_sigterm_while_moving_stops_the_arm_and_restores_the_terminal(spawn)
     jog.proc.send_signal(signal.SIGTERM)
     assert jog.exit_code() == 1
     assert jog.terminal_restored()
-    assert [c for _, c in jog.frames()] == [Joystick(3, (152,)), Joystick(3, (128,))]
+    assert _collapse(motions(jog.events(), {"r": 3}, stopped_by="SIGTERM")) == [3]
+    assert jog.frames()[-1][1] == Joystick(3, (128,))
     assert "SIGTERM" in jog.text()
 
 
@@ -230,10 +272,10 @@ def test_pty_terminal_gone_while_moving_sends_the_neutral_at_once(spawn):
     assert jog.exit_code() == 1
     events = jog.events()
     frames = jog.frames()
-    assert [c for _, c in frames] == [Joystick(4, (152,)), Joystick(4, (128,))]
+    assert _collapse(motions(events, {"t": 4}, stopped_by="hang-up")) == [4]
+    assert frames[-1][1] == Joystick(4, (128,))
     # The hang-up came about one repeat after the last key: well before the lease's end.
     after_repeat = frames[-1][0] - _last_key(events, "t", frames[-1][0])
-    assert after_repeat <= NEUTRAL_AFTER_REPEAT_S  # and well before the lease's end (about 33 ms)
     print(f"\nterminal gone: neutral {after_repeat * 1000:.1f} ms after the last repeat (hang-up ~33 ms after it)")
     notes = [r["text"] for r in jog.records() if r["dir"] == "note"]
     assert notes and "the terminal went away" in notes[-1]
@@ -277,7 +319,7 @@ def test_pty_step_mode_moves_by_the_increment_and_taught_poses_lint_clean_and_re
     assert result.exit_code == 0, result.output
 
     armctl = str(Path(sys.executable).with_name("armctl"))
-    replay = subprocess.run([armctl, "run", str(record), "--port", "sim://?speed=10", "--no-live"],
+    replay = subprocess.run([armctl, "run", str(record), "--port", "sim://?clock=virtual", "--no-live"],
                             capture_output=True, text=True, cwd=tmp_path, timeout=20)
     assert replay.returncode == 0, replay.stdout + replay.stderr
     assert "done: the arm finished the job" in replay.stdout
@@ -297,3 +339,12 @@ def test_stdin_not_a_terminal_is_a_usage_error(tmp_path):
     assert result.returncode == 2
     assert "stdin is not a terminal" in result.stderr
     assert "Traceback" not in result.stderr
+
+
+def test_pty_a_virtual_clock_simulator_is_refused_with_a_sentence(spawn):
+    jog = spawn(port="sim://?clock=virtual")
+    assert jog.exit_code() == 2
+    jog.wait_for("jog runs in real time")
+    assert not jog.log_path.exists() or jog.frames() == []
+    assert jog.terminal_restored()
+    assert "Traceback" not in jog.text()

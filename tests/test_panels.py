@@ -6,7 +6,6 @@ rendered segments, since a console without colours prints none.
 
 from __future__ import annotations
 
-import pytest
 from rich.console import Console
 
 from armctl.armstate import STALE_AFTER_S, ArmState

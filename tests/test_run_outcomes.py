@@ -2,7 +2,7 @@
 and not paused; a pause toggle never sent to an arm that is already paused; a resume line the
 compiler accepts (never inside an arc or a repeat block); a failed abort reported as one.
 
-These run the real `armctl run` against `sim://` fast-forwarded, or the runner's pieces alone.
+These run the real `armctl run` against `sim://?clock=virtual`, or the runner's pieces alone.
 """
 
 from __future__ import annotations
@@ -34,7 +34,7 @@ def test_a_job_whose_last_frames_were_cleared_is_not_reported_done(tmp_path):
     # RESET CONNECTOR (H5: acted on when it reaches the head) clears the frames queued behind it;
     # with a long lead they are already there. The arm stops short of the job's last target.
     script = START + "G1 Y120\nRESET CONNECTOR\nG1 Y-120\nG1 Z100\nG1 Z150\n"
-    result = run(tmp_path, script, "--port", "sim://?speed=20", "--lead", "60")
+    result = run(tmp_path, script, "--port", "sim://?clock=virtual", "--lead", "60")
     assert result.exit_code == 1, result.output
     assert "done: the arm finished the job" not in result.stdout
     assert "but the job's last target is (250.0, -120.0, 150.0)" in result.stderr
@@ -43,13 +43,13 @@ def test_a_job_whose_last_frames_were_cleared_is_not_reported_done(tmp_path):
 def test_a_job_whose_frames_were_dropped_is_not_reported_done(tmp_path):
     # A 3-frame FIFO and a lead that lets the host outrun it: frames are dropped on the way.
     script = START + "".join(f"G1 Y{y}\n" for y in (60, -60, 60, -60, 0)) + "G1 Z100\n"
-    result = run(tmp_path, script, "--port", "sim://?speed=20&fifo=3", "--lead", "60")
+    result = run(tmp_path, script, "--port", "sim://?clock=virtual&fifo=3", "--lead", "60")
     assert result.exit_code == 1, result.output
     assert "done: the arm finished the job" not in result.stdout
 
 
 def test_a_finished_job_is_reported_done_with_the_arm_time(tmp_path):
-    result = run(tmp_path, START + "G1 Y50\nG4 P300\n", "--port", "sim://?speed=20")
+    result = run(tmp_path, START + "G1 Y50\nG4 P300\n", "--port", "sim://?clock=virtual")
     assert result.exit_code == 0, result.output
     assert "done: the arm finished the job" in result.stdout
     assert "arm time:" in result.stdout
@@ -119,7 +119,7 @@ def test_ctrl_c_sends_no_pause_toggle_to_an_arm_that_is_already_paused(tmp_path,
     monkeypatch.setattr(run_job._Display, "update", update)
     log = tmp_path / "log.jsonl"
     script = START + "PAUSE\nG1 Y100\n"
-    result = run(tmp_path, script, "--port", "sim://?speed=10&control=arrival", "--log", str(log))
+    result = run(tmp_path, script, "--port", "sim://?clock=virtual&control=arrival", "--log", str(log))
     assert result.exit_code == 130, result.output
     sent = [json.loads(line) for line in log.read_text().splitlines() if '"tx"' in line]
     pause_frames = [r for r in sent if r["hex"].startswith("fc1e0302")]

@@ -10,7 +10,7 @@ import pytest
 from armctl.motion import MotionModel, distance_to_path
 from armctl.profile import load_profile
 from armctl.protocol import (
-    ArcEnd, ArcStart, Delay, JointMove, JointsHighStatus, JointsLowStatus, LinearMove, MCode, PauseStatus,
+    ArcEnd, ArcStart, Delay, JointMove, JointsLowStatus, LinearMove, MCode, PauseStatus,
     PositionStatus,
 )
 from armctl.streamer import (

@@ -49,13 +49,15 @@ def jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, 
     150 ms of the last repeat (a single tap moves at most --repeat-delay). The key map is on
     screen; see docs/jog.md.
     """
-    from ..errors import ArmctlError
+    from ..errors import ArmctlError, ConfigError
 
     if not sys.stdin.isatty():
         _fail("jog reads single key presses, and stdin is not a terminal: run it in a terminal "
               "(not through a pipe, a file or a script)", EXIT_USAGE)
     try:
         sys.exit(_jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, timeout_s))
+    except ConfigError as error:  # armctl.toml, or a port jog cannot use: like any usage error
+        _fail(str(error), EXIT_USAGE)
     except ArmctlError as error:
         _fail(str(error), EXIT_FAILED)
     except KeyboardInterrupt:
@@ -104,7 +106,7 @@ def _open_files(record_path, log_path):
 
 
 def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, timeout_s) -> int:
-    from ..link import connect
+    from ..link import connect, require_wall_clock
     from ..protocol import frame_seconds
     from ..ui.run_job import time_scale_of
     from .edge import JogLoop, wait_for_pose
@@ -116,6 +118,7 @@ def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms,
     try:
         link, baud = connect(port, baud, announce=lambda text: click.echo(text, err=True), on_status=log.rx if log else None)
         with link:
+            require_wall_clock(link, "jog")
             problem = wait_for_pose(link, timeout_s)
             if problem is not None:
                 click.echo(f"armctl: {problem}", err=True)

@@ -6,6 +6,9 @@ URL: ``sim://[?option=value&…]``, options (all optional):
 option     meaning                                                                 default
 =========  ======================================================================  =========
 speed      time scale: 4 = the arm runs 4× faster than the wall clock              1
+clock      ``wall``, or ``virtual``: model time moves only while armctl waits on   wall
+           the port (``run``, ``status`` without ``--watch``), so a job takes
+           milliseconds and runs identically on any machine
 slowdown   speed factor: 1.3 = every motion takes 30 % longer than commanded       1
 baud       line rate in bit/s (else the port's ``baudrate``)                       9600
 control    ``queued`` (H5: control frames wait in the FIFO) or ``arrival``          queued
@@ -17,7 +20,9 @@ seed       seed of the faults                                                   
 profile    path of an arm profile (TOML)                                           built-in
 =========  ======================================================================  =========
 
-Strategy: a thin edge.  ``write`` hands the bytes to the model at the current model time and
+Strategy: a thin edge.  With ``clock=virtual`` nothing blocks: ``read`` returns what has
+arrived by the current model time, and ``Link`` moves ``virtual_clock`` forward instead of
+sleeping (``next_output_s`` says how far the next status burst is).  Otherwise:  ``write`` hands the bytes to the model at the current model time and
 returns at once (they queue on the simulated wire; ``out_waiting`` counts those not yet sent);
 ``read`` runs the model up to now and, while it lacks bytes, sleeps until the next status byte
 is due — on an ``Event``, so ``close``/``cancel_read`` wake it — never busy-waiting.  All model
@@ -36,12 +41,12 @@ import urllib.parse
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_bytes
 
 from .model import SimOptions, SimulatedArm
-from .realtime import RealtimeArm
+from .realtime import RealtimeArm, VirtualClock
 
 CONTROL_MODES = {"queued": False, "arrival": True}
 _USAGE = (
-    "expected sim://[?option=value&…] with options speed, slowdown, baud, control=queued|arrival, "
-    "fifo, loss, corrupt, noise, seed, profile"
+    "expected sim://[?option=value&…] with options speed, clock=wall|virtual, slowdown, baud, "
+    "control=queued|arrival, fifo, loss, corrupt, noise, seed, profile"
 )
 
 
@@ -72,9 +77,16 @@ def _control(name: str, text: str) -> bool:
     return CONTROL_MODES[text]
 
 
-# URL option → (SimOptions field or "time_scale", parser)
+def _clock(name: str, text: str) -> bool:
+    if text not in ("wall", "virtual"):
+        raise ValueError(f"{name} must be 'wall' or 'virtual', not {text!r}")
+    return text == "virtual"
+
+
+# URL option → (SimOptions field, "time_scale" or "virtual", parser)
 _OPTIONS = {
     "speed": ("time_scale", _positive_float),
+    "clock": ("virtual", _clock),
     "slowdown": ("speed_factor", _positive_float),
     "baud": ("baud", _positive_int),
     "control": ("control_on_arrival", _control),
@@ -89,11 +101,21 @@ _OPTIONS = {
 
 def parse_sim_url(url: str, baud: int | None = None) -> tuple[SimOptions, float]:
     """``SimOptions`` and the time scale a ``sim://`` URL asks for; SerialException if bad."""
+    options, time_scale, _ = _parse(url, baud)
+    return options, time_scale
+
+
+def is_virtual_clock(url: str) -> bool:
+    """Whether a ``sim://`` URL asks for ``clock=virtual``; SerialException if the URL is bad."""
+    return _parse(url)[2]
+
+
+def _parse(url: str, baud: int | None = None) -> tuple[SimOptions, float, bool]:
     parts = urllib.parse.urlsplit(url)
     if parts.scheme != "sim":
         raise SerialException(f"{url!r} does not start with sim:// ({_USAGE})")
     values: dict = {} if baud is None else {"baud": baud}
-    time_scale = 1.0
+    time_scale, virtual = 1.0, False
     try:
         for name, texts in urllib.parse.parse_qs(parts.query, keep_blank_values=True).items():
             if name not in _OPTIONS:
@@ -104,9 +126,13 @@ def parse_sim_url(url: str, baud: int | None = None) -> tuple[SimOptions, float]
             value = parse(name, texts[0])
             if target == "time_scale":
                 time_scale = value
+            elif target == "virtual":
+                virtual = value
             else:
                 values[target] = value
-        return SimOptions(**values), time_scale
+        if virtual and time_scale != 1.0:
+            raise ValueError("speed has no meaning with clock=virtual (the clock waits for nobody)")
+        return SimOptions(**values), time_scale, virtual
     except ValueError as error:
         raise SerialException(f"{error} in {url!r} ({_USAGE})") from None
 
@@ -117,6 +143,7 @@ class Serial(SerialBase):
     def __init__(self, *args, **kwargs):
         self.model: SimulatedArm | None = None
         self._arm: RealtimeArm | None = None
+        self.virtual_clock: VirtualClock | None = None  # set for clock=virtual
         self._received = bytearray()  # status bytes that reached the host, not yet read
         self._wake = threading.Event()
         super().__init__(*args, **kwargs)
@@ -128,13 +155,14 @@ class Serial(SerialBase):
             raise SerialException("Port is already open.")
         if self._port is None:
             raise SerialException("Port must be configured before it can be used.")
-        options, time_scale = self.from_url(self.portstr)
+        options, time_scale, virtual = _parse(self.portstr, baud=self._baudrate)
         self._baudrate = options.baud
         try:
             self.model = SimulatedArm(options)
         except Exception as error:  # a bad profile path or a profile that makes no sense
             raise SerialException(f"cannot start the simulated arm: {error}") from None
-        self._arm = RealtimeArm(self.model, time_scale)
+        self.virtual_clock = VirtualClock() if virtual else None
+        self._arm = RealtimeArm(self.model, time_scale, clock=self.virtual_clock or time.monotonic)
         self._received.clear()
         self._wake.clear()
         self.is_open = True
@@ -198,7 +226,10 @@ class Serial(SerialBase):
         arm = self._check_open()
         deadline = None if self._timeout is None else time.monotonic() + self._timeout
         self._wake.clear()
-        while self.is_open:
+        if self.virtual_clock is not None:  # a virtual clock waits for nobody: what is there now
+            with arm.lock:
+                self._collect(arm)
+        while self.is_open and self.virtual_clock is None:
             with arm.lock:
                 self._collect(arm)
                 if len(self._received) >= size:
@@ -215,6 +246,10 @@ class Serial(SerialBase):
             data = bytes(self._received[:size])
             del self._received[:size]
         return data
+
+    def next_output_s(self) -> float | None:
+        """Model seconds until the next status burst has reached the host (None: never)."""
+        return self._check_open().wall_seconds_until_output() if self.virtual_clock else None
 
     def cancel_read(self) -> None:
         self._wake.set()
@@ -240,6 +275,9 @@ class Serial(SerialBase):
     def flush(self) -> None:
         """Wait until every byte written has gone over the simulated line."""
         arm = self._check_open()
+        if self.virtual_clock is not None:
+            self.virtual_clock.advance_to(self.model.host_line_free_s())
+            return
         time.sleep(arm.wall_seconds_until_sent())
 
     def reset_output_buffer(self) -> None:

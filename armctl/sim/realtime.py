@@ -1,4 +1,5 @@
-"""The simulated arm on a wall clock: the one place where the simulator meets real time.
+"""The simulated arm on a clock: the one place where the simulator meets real time — or,
+for ``sim://?clock=virtual``, a clock that moves only when the program using the port waits.
 
 Strategy: the model is pure and takes ``now_s`` as an argument; this wrapper supplies it as
 ``(clock() − start) × time_scale`` (``time_scale`` 4 = the arm lives four times faster than
@@ -6,6 +7,10 @@ the wall clock) and serialises every call with one lock, so a reader thread and 
 can share it.  It never sleeps itself: it says how long the caller may sleep before the next
 status byte is due (``wall_seconds_until_output``), and the edges (``protocol_sim``,
 ``bridge``) do the waiting with whatever primitive suits them.
+
+``VirtualClock`` replaces the wall clock when the waiting itself is simulated: ``Link`` moves
+it forward instead of sleeping, so a job runs in milliseconds and the same run gives the same
+bytes at the same model times on any machine, however loaded (the end-to-end tests need that).
 """
 
 from __future__ import annotations
@@ -15,6 +20,20 @@ import time
 from typing import Callable
 
 from .model import SimulatedArm
+
+
+class VirtualClock:
+    """Model seconds that pass only when ``advance_to`` is called; never goes back."""
+
+    def __init__(self, start_s: float = 0.0) -> None:
+        self.now_s = float(start_s)
+
+    def __call__(self) -> float:
+        return self.now_s
+
+    def advance_to(self, t_s: float) -> None:
+        if t_s > self.now_s:
+            self.now_s = float(t_s)
 
 
 class RealtimeArm:

@@ -1,0 +1,123 @@
+"""``sim://?clock=virtual``: the simulator on a clock that moves only while armctl waits.
+
+What must hold: the port never blocks; ``Link`` reads each status frame at the model time it
+lands (so a log shows the same times as the model); a whole ``armctl run`` gives the same bytes
+at the same times every time, on any machine; commands that need time to pass by itself refuse
+a virtual clock with a sentence and exit 2.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pytest
+import serial
+from click.testing import CliRunner
+
+import armctl  # noqa: F401  (registers sim://)
+from armctl.cli import main
+from armctl.link import Link
+from armctl.protocol import STATUS_SIZE, Delay, StatusReader
+from armctl.sim.protocol_sim import is_virtual_clock, parse_sim_url
+from armctl.sim.realtime import VirtualClock
+
+TIMED = Path(__file__).resolve().parent / "data" / "scripts_cli" / "timed_job.txt"
+
+VIRTUAL = "sim://?clock=virtual"
+
+
+@pytest.fixture(autouse=True)
+def _empty_cwd(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("ARMCTL_PORT", "")
+
+
+def test_the_clock_only_moves_forward_when_told():
+    clock = VirtualClock()
+    assert clock() == 0.0
+    clock.advance_to(1.5)
+    clock.advance_to(1.0)  # never back
+    assert clock() == 1.5
+
+
+def test_url_option_parses_and_refuses_a_speed_with_it():
+    assert is_virtual_clock(VIRTUAL) and not is_virtual_clock("sim://?speed=4")
+    assert parse_sim_url("sim://?clock=wall")[1] == 1.0
+    with pytest.raises(serial.SerialException, match="speed has no meaning with clock=virtual"):
+        serial.serial_for_url("sim://?clock=virtual&speed=4")
+    with pytest.raises(serial.SerialException, match="clock must be 'wall' or 'virtual'"):
+        serial.serial_for_url("sim://?clock=fast")
+
+
+def test_a_virtual_port_never_blocks_and_time_stands_still_until_advanced():
+    with serial.serial_for_url(VIRTUAL, timeout=None) as port:  # timeout=None would block forever on a wall clock
+        assert port.read(100) == b""
+        assert port.next_output_s() == pytest.approx(STATUS_SIZE * 10 / 9600)
+        port.virtual_clock.advance_to(1.0)
+        received = port.read(10_000)
+        frames = StatusReader().feed(received)
+        assert len(frames) == 34  # one every 30 ms from t = 0 (t = 0.99 s lands at 0.999 s)
+        assert port.read(10) == b""
+
+
+def test_flush_moves_the_clock_to_when_the_last_byte_has_landed():
+    with serial.serial_for_url(VIRTUAL) as port:
+        port.write(Delay(10).encode() * 3)
+        port.flush()
+        assert port.virtual_clock() == pytest.approx(3 * 48 * 10 / 9600)
+        assert port.out_waiting == 0
+
+
+def test_link_reads_each_status_frame_at_the_model_time_it_lands():
+    times = []
+    link = Link.open(VIRTUAL, on_status=lambda frame, at_s: times.append(at_s))
+    with link:
+        assert link.is_virtual and not link._thread.is_alive()
+        link.idle(0.5)
+        assert times == [pytest.approx(STATUS_SIZE * 10 / 9600)]  # idle returns once a frame has been read
+        assert link.wait_until(lambda state: state.frames >= 10, timeout_s=5.0)
+        burst_s = STATUS_SIZE * 10 / 9600
+        assert times == pytest.approx([k * 0.030 + burst_s for k in range(10)])
+        start_s = link.clock()
+        assert start_s == times[-1]
+        assert not link.wait_until(lambda state: False, timeout_s=0.25)  # times out in model time
+        assert link.clock() == pytest.approx(start_s + 0.25)
+
+
+def test_a_tiny_wait_still_moves_the_clock():
+    # A caller that waits for ``when - now`` where both are nearly equal must not spin forever.
+    with Link.open(VIRTUAL) as link:
+        before = link.clock()
+        link.idle(1e-18)
+        assert link.clock() > before
+
+
+def _run_log(tmp_path, name: str) -> list[dict]:
+    log = tmp_path / name
+    result = CliRunner().invoke(main, ["run", str(TIMED), "--port", VIRTUAL, "--no-live", "--log", str(log)])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    return [json.loads(line) for line in log.read_text().splitlines()]
+
+
+def test_a_whole_run_is_the_same_bytes_at_the_same_times_every_time(tmp_path):
+    first, second = _run_log(tmp_path, "a.log"), _run_log(tmp_path, "b.log")
+    assert first == second
+    sent = [r for r in first if r["dir"] == "tx"]
+    assert len(sent) == 14
+    assert all(b["t"] - a["t"] >= 0.05 - 1e-9 for a, b in zip(sent, sent[1:]))  # never faster than the line
+
+
+@pytest.mark.parametrize(
+    "args, says",
+    [
+        (["status", "--watch", "--port", VIRTUAL], "status --watch runs in real time"),
+        (["sim", "--pty", "--url", VIRTUAL], "a served simulator runs in real time"),
+    ],
+)
+def test_commands_that_need_a_moving_clock_refuse_a_virtual_one(args, says):
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 2
+    assert says in result.stderr
+    assert "Traceback" not in result.output
