@@ -229,10 +229,13 @@ class Link:
 
     def idle(self, seconds: float) -> None:
         """Wait up to ``seconds`` of the link's clock; returns early once a status frame has
-        been read.  (On a real port the reader thread reads meanwhile; this only sleeps.)"""
+        been read.  (On a real port the reader thread reads meanwhile; this only waits.)"""
         if self.virtual_clock is None:
+            deadline = self.clock() + seconds  # the clock may be scaled: re-read it, never convert
             with self._changed:
-                self._changed.wait(max(seconds, 0.0))
+                frames = self.reader.frames
+                while self.reader.frames == frames and self.clock() < deadline and self.error is None:
+                    self._changed.wait(READ_TIMEOUT_S)
             return
         # At least a microsecond: a wait computed as a difference of nearly equal floats
         # could otherwise leave the clock where it is, and the caller asking again forever.

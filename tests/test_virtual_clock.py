@@ -121,3 +121,29 @@ def test_commands_that_need_a_moving_clock_refuse_a_virtual_one(args, says):
     assert result.exit_code == 2
     assert says in result.stderr
     assert "Traceback" not in result.output
+
+
+def test_idle_on_a_wall_clock_port_returns_after_a_status_frame_or_the_time():
+    with Link.open("sim://?speed=10") as link:
+        link.wait_until(lambda state: state.frames >= 1, timeout_s=5.0)
+        frames = link.snapshot()[3]
+        link.idle(10.0)  # 10 s of model time = 1 s of wall time; a frame comes every 30 ms
+        assert link.snapshot()[3] > frames
+    with Link.open("loop://") as silent:
+        before = silent.clock()
+        silent.idle(0.05)
+        assert silent.clock() - before >= 0.05
+
+
+@pytest.mark.parametrize("faults", ["loss=0.3", "corrupt=0.2", "noise=0.5"])
+def test_a_virtual_run_with_faulty_status_still_finishes(faults):
+    result = CliRunner().invoke(main, ["run", str(TIMED), "--port", f"{VIRTUAL}&{faults}&seed=3", "--no-live"])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+
+
+def test_a_virtual_arm_that_says_nothing_times_out_in_model_time():
+    result = CliRunner().invoke(main, ["run", str(TIMED), "--port", f"{VIRTUAL}&loss=1", "--no-live"])
+    assert result.exit_code == 1
+    assert "no complete status from sim://?clock=virtual&loss=1 within 3 s (received nothing)" in result.stderr
+    assert "Traceback" not in result.output
