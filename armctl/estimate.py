@@ -14,9 +14,8 @@ from collections import deque
 from dataclasses import dataclass, field
 
 from .motion import ArmPose, MotionModel, Planner
-from .protocol import DEFAULT_BAUD, frame_seconds
+from .protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, RunProgram, frame_seconds
 from .streamer import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S
-from .protocol import CONNECTOR_BUFFER_FRAMES
 
 # The streamer never lets more frames be in flight than this (see streamer.py).
 FRAME_LIMIT = CONNECTOR_BUFFER_FRAMES - CAPACITY_MARGIN_FRAMES
@@ -46,6 +45,9 @@ class Estimate:
             "path_mm": round(self.path_mm, 1), "joint_path_deg": round(self.joint_path_deg, 1),
             "peak_queue_frames": self.peak_queue_frames, "peak_queue_s": round(self.peak_queue_s, 3),
         }
+
+
+SD_PROGRAM_NOTE = "PROGRAM n: the SD program's own run time is unknown to armctl and not included"
 
 
 class JobEstimator:
@@ -87,6 +89,8 @@ class JobEstimator:
             result.joint_path_deg += segment.length
         if segment.note and len(result.notes) < self.MAX_NOTES:
             result.notes.append(segment.note)
+        if isinstance(command, RunProgram) and SD_PROGRAM_NOTE not in result.notes:
+            result.notes.append(SD_PROGRAM_NOTE)
         while ends and ends[0] <= land:
             ends.popleft()
         ends.append(self._arm_free)

@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from typing import Callable, Iterator
 
 from .errors import ArmctlError, PortError
-from .protocol import ArcEnd, Command, PauseToggle, ResetConnector, StatusFrame
+from .protocol import ArcEnd, Command, PauseToggle, ResetConnector, RunPositionStatus, StatusFrame
 from .streamer import Streamer
 
 ABORT_SEQUENCES = {
@@ -110,6 +110,10 @@ class JobRunner:
         # (position and joints as last reported, since when): the arm is at rest when none of
         # them changed for REST_CHECK_S — a wrist turning in place changes only joints.
         self._rest: tuple | None = None
+        self._motion: tuple | None = None  # the same for position and joints alone (no PWM)
+        self._moving: tuple | None = None  # … and when they last changed by more than jitter
+        self._run_position: float | None = None  # the SD program's run position last reported
+        self._active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
         self._reported: dict = {}
         self._pause_reports: deque = deque(maxlen=2)  # the last two pause states reported
         self._recent: deque = deque(maxlen=64)  # the last frames written (SentFrame)
@@ -161,6 +165,16 @@ class JobRunner:
             reported = tuple(self._reported.get(kind) for kind in _REST_KINDS)
             if self._rest is None or self._rest[0] != reported:
                 self._rest = (reported, at_s)
+            motion = reported[:3]
+            if self._motion is None or self._motion[0] != motion:
+                self._motion = (motion, at_s)
+            if self._moving is None or _moved_clearly(self._moving[0], motion):
+                self._moving = (motion, at_s)
+                self._active_s = at_s
+        elif frame.KIND == RunPositionStatus.KIND:
+            if self._run_position is not None and frame.value != self._run_position:
+                self._active_s = at_s  # an SD program advancing, even with the arm standing still
+            self._run_position = frame.value
 
     # --- the job ----------------------------------------------------------------------------
 
@@ -269,14 +283,18 @@ class JobRunner:
         return position is not None and max(abs(a - b) for a, b in zip(position, segment.end.xyz)) <= TARGET_MM
 
     def _done_at(self, now: float) -> float:
-        """When the arm finished: its last visible change, plus the model's time for trailing
-        frames that leave no trace (delays, M codes, control frames)."""
-        done = self._rest[1] if self._rest is not None else now
+        """When the arm finished: the end of its last motion seen, plus the model's time for
+        the frames after that motion, which move nothing (delays, M codes, control frames,
+        PWM-only moves, a move to where the arm already is); never before the last change
+        seen at all (a PWM report), never after now."""
+        if self._rest is None or self._motion is None:
+            return now
+        done = self._motion[1]
         for sent in reversed(self._recent):
-            if sent.segment.kind != "still":
+            if _moves_arm(sent.segment):
                 break
             done += sent.segment.duration_s
-        return min(done, now)
+        return min(max(done, self._rest[1]), now)
 
     def _wait_for_finish(self) -> None:
         """Finished means: at rest, at the last target, not paused, and the estimate agrees.
@@ -284,6 +302,7 @@ class JobRunner:
         view = self.view
         now = self.now()
         deadline = now + self.streamer.queued_seconds(now) * self.streamer.slowest_factor + SETTLE_SLACK_S
+        overran = False
         while True:
             self.check_stop()
             self._drain()
@@ -294,11 +313,19 @@ class JobRunner:
                 self.streamer.confirm_all_done()
                 view.arm_done_s = self._done_at(now)
                 view.outcome = "finished"
+                if overran:
+                    view.messages.append("the arm kept working past the estimate (moving, or running an SD program "
+                                         "whose time armctl cannot know); armctl waited until it stopped")
                 break
             if now > deadline:
-                view.outcome = "no confirmation"
-                view.messages.append(self._why_not_finished())
-                break
+                if self._active_s is not None and now - self._active_s < REST_CHECK_S:
+                    overran = True  # visibly working: the job is still running, whatever the estimate says
+                elif overran and now - self._active_s < REST_CHECK_S + SETTLE_SLACK_S:
+                    pass  # it just stopped: time to confirm it is where the job ends
+                else:
+                    view.outcome = "no confirmation"
+                    view.messages.append(self._why_not_finished())
+                    break
             self._refresh()
             self._sleep(POLL_S)
         self._refresh()
@@ -355,3 +382,25 @@ class JobRunner:
     def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
         record = {"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra}
         self.log.write(json.dumps(record) + "\n")
+
+
+def _moves_arm(segment) -> bool:
+    """Whether a frame's motion changes the reported position or joints."""
+    if segment.kind == "still":
+        return False
+    if segment.length > 0:
+        return True
+    return max(abs(a - b) for a, b in zip(segment.start.joints, segment.end.joints)) > 1e-6  # attitude only
+
+
+def _moved_clearly(before: tuple, after: tuple) -> bool:
+    """Position (kind 0) or joints (kinds 1, 2) changed by more than a reading's jitter."""
+    for kind, (old, new) in enumerate(zip(before, after)):
+        if old is None or new is None:
+            if old is not new:
+                return True
+            continue
+        limit = TARGET_MM if kind == 0 else TARGET_DEG
+        if max(abs(a - b) for a, b in zip(old, new)) > limit:
+            return True
+    return False

@@ -8,6 +8,7 @@ These run the real `armctl run` against `sim://?clock=virtual`, or the runner's 
 from __future__ import annotations
 
 import json
+import re
 from pathlib import Path
 
 import pytest
@@ -125,3 +126,53 @@ def test_ctrl_c_sends_no_pause_toggle_to_an_arm_that_is_already_paused(tmp_path,
     pause_frames = [r for r in sent if r["hex"].startswith("fc1e0302")]
     assert len(pause_frames) == 1  # the script's own PAUSE, no abort toggle after it
     assert "already paused: no pause toggle sent" in result.stderr
+
+
+# --- every example job, end to end in virtual time: done, and the arm time agrees with estimate ---
+
+EXAMPLES = sorted((Path(__file__).resolve().parent.parent / "scripts").glob("*.txt"))
+ARM_TIME = r"^arm time: ([\d.]+) s from the first frame to the arm at rest; estimated ([\d.]+) s"
+
+
+@pytest.mark.parametrize("script", [p for p in EXAMPLES if p.name != "sd_program.txt"], ids=lambda p: p.name)
+def test_every_example_finishes_within_5_percent_of_its_estimate(script):
+
+    result = CliRunner().invoke(main, ["run", str(script), "--no-live", "--port", "sim://?clock=virtual"],
+                                env={"ARMCTL_PORT": ""})
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    measured, estimated = map(float, re.search(ARM_TIME, result.stdout, re.M).groups())
+    assert abs(measured / estimated - 1) <= 0.05, (measured, estimated)
+
+
+def test_trailing_frames_that_move_nothing_count_in_the_arm_time(tmp_path):
+    # PWM-only moves, a delay and a move to where the arm already is: 3 s after the last motion.
+    script = START + "G1 Y50\nG1 S2000\nG1 S1000\nG4 P2000\nG1 Y50\n"
+    result = run(tmp_path, script, "--port", "sim://?clock=virtual")
+    assert result.exit_code == 0, result.output
+
+    measured, estimated = map(float, re.search(ARM_TIME, result.stdout, re.M).groups())
+    assert estimated > 2.0 and abs(measured / estimated - 1) <= 0.05, (measured, estimated)
+
+
+def test_an_sd_program_longer_than_the_estimate_is_waited_for_and_reported(tmp_path):
+    # The estimate cannot know how long PROGRAM 1 runs (the simulator: 4 s without moving the
+    # arm, its run position advancing); run waits while the arm works, then confirms the end.
+    sd = Path(__file__).resolve().parent.parent / "scripts" / "sd_program.txt"
+    result = CliRunner().invoke(main, ["run", str(sd), "--no-live", "--port", "sim://?clock=virtual"],
+                                env={"ARMCTL_PORT": ""})
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert "armctl waited until it stopped" in result.stderr
+    estimate = CliRunner().invoke(main, ["estimate", str(sd)])
+    assert "the SD program's own run time is unknown to armctl and not included" in estimate.stdout
+
+
+def test_jitter_in_the_readings_is_not_taken_for_motion():
+    from armctl.runner import _moved_clearly
+
+    here = ((200.0, 0.0, 150.0), (0.0, 10.0, 20.0), (0.0, 90.0, 0.0))
+    assert not _moved_clearly(here, ((200.3, -0.2, 150.1), (0.1, 10.0, 19.9), (0.0, 90.1, 0.0)))
+    assert _moved_clearly(here, ((201.0, 0.0, 150.0), here[1], here[2]))
+    assert _moved_clearly(here, (here[0], here[1], (0.0, 90.0, 0.5)))
+    assert _moved_clearly((None, here[1], here[2]), here)
