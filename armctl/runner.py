@@ -260,6 +260,8 @@ class JobRunner:
         finish = self.streamer.estimated_finish_s()
         if finish is not None and now < finish:
             return False
+        if self._active_s is not None and now - self._active_s < REST_CHECK_S:
+            return False  # an SD program still advancing, even with the arm standing still
         return self._rest is not None and now - self._rest[1] >= REST_CHECK_S
 
     @property
@@ -294,7 +296,7 @@ class JobRunner:
             if _moves_arm(sent.segment):
                 break
             done += sent.segment.duration_s
-        return min(max(done, self._rest[1]), now)
+        return min(max(done, self._rest[1], self._active_s or 0.0), now)
 
     def _wait_for_finish(self) -> None:
         """Finished means: at rest, at the last target, not paused, and the estimate agrees.

@@ -176,3 +176,12 @@ def test_jitter_in_the_readings_is_not_taken_for_motion():
     assert _moved_clearly(here, ((201.0, 0.0, 150.0), here[1], here[2]))
     assert _moved_clearly(here, (here[0], here[1], (0.0, 90.0, 0.5)))
     assert _moved_clearly((None, here[1], here[2]), here)
+
+
+def test_a_job_ending_in_an_sd_program_is_done_only_when_the_program_stops_advancing(tmp_path):
+    # The simulated PROGRAM 1 holds a standing arm for 4 s: "at rest at the last target" alone
+    # would call the job done while the program still runs.
+    result = run(tmp_path, "POSE 1\nPROGRAM 1\n", "--port", "sim://?clock=virtual")
+    assert result.exit_code == 0, result.output
+    measured = float(re.search(ARM_TIME, result.stdout, re.M).group(1))
+    assert 4.0 <= measured <= 5.5, result.stdout
