@@ -29,6 +29,7 @@ ABORT_SEQUENCES = {
 REST_CHECK_S = 0.6  # the arm counts as at rest when it reported the same pose this long
 SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to come to rest
 POLL_S = 0.05
+OVERRUN_MIN_S = 60.0  # the least time waited past the estimate for an arm still working
 TARGET_MM = 0.5  # how close the reported position must be to the last target (0.1 mm resolution)
 TARGET_DEG = 0.2
 _REST_KINDS = (0, 1, 2, 4)  # position, joints 1-3, joints 4-6, pause and PWM
@@ -320,6 +321,10 @@ class JobRunner:
                                          "whose time armctl cannot know); armctl waited until it stopped")
                 break
             if now > deadline:
+                if now > deadline + self._overrun_limit_s():
+                    view.outcome = "no confirmation"
+                    view.messages.append(self._why_not_finished())
+                    break
                 if self._active_s is not None and now - self._active_s < REST_CHECK_S:
                     overran = True  # visibly working: the job is still running, whatever the estimate says
                 elif overran and now - self._active_s < REST_CHECK_S + SETTLE_SLACK_S:
@@ -331,6 +336,12 @@ class JobRunner:
             self._refresh()
             self._sleep(POLL_S)
         self._refresh()
+
+    def _overrun_limit_s(self) -> float:
+        """How long past the deadline a visibly working arm is waited for: readings that
+        jitter or are corrupted look like work, so the wait must end (an SD program longer
+        than this ends "no confirmation")."""
+        return max(OVERRUN_MIN_S, self.view.estimated_job_s)
 
     def _why_not_finished(self) -> str:
         if self.arm_paused:

@@ -147,3 +147,20 @@ def test_a_virtual_arm_that_says_nothing_times_out_in_model_time():
     assert result.exit_code == 1
     assert "no complete status from sim://?clock=virtual&loss=1 within 3 s (received nothing)" in result.stderr
     assert "Traceback" not in result.output
+
+
+def test_the_virtual_clock_keeps_moving_at_large_model_times(tmp_path):
+    # At 4 Mbaud float rounding once left a status burst "due now" but not yet handed over
+    # after 1024 s of model time, and the clock stalled for ever.
+    job = tmp_path / "long.txt"
+    job.write_text("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\n" + "G4 P60000\n" * 20 + "G1 X250 Y50 Z150\n")
+    result = CliRunner().invoke(main, ["run", str(job), "--port", f"{VIRTUAL}&baud=4000000", "--no-live"])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+
+
+def test_status_that_always_looks_like_motion_does_not_keep_run_waiting_for_ever():
+    # Every status frame corrupted: the readings jump about, which looks like an arm at work.
+    result = CliRunner().invoke(main, ["run", str(TIMED), "--port", f"{VIRTUAL}&corrupt=1", "--no-live"])
+    assert result.exit_code == 1, result.output
+    assert "stopped: no confirmation" in result.stderr
