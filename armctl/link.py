@@ -242,9 +242,7 @@ class Link:
         end_s = self.clock() + max(seconds, VIRTUAL_MIN_STEP_S)
         while True:
             until_output = self.port.next_output_s()
-            # At least a microsecond per step: at large model times float rounding can leave a
-            # burst "due now" that the wire does not yet hand over, and the clock would stall.
-            step_to = end_s if until_output is None else min(end_s, self.clock() + max(until_output, VIRTUAL_MIN_STEP_S))
+            step_to = end_s if until_output is None else min(end_s, self.clock() + until_output)
             self.virtual_clock.advance_to(step_to)
             data = self.port.read(self.port.in_waiting)
             if (data and self._take(data)) or self.clock() >= end_s:

@@ -112,7 +112,7 @@ class JobRunner:
         # them changed for REST_CHECK_S — a wrist turning in place changes only joints.
         self._rest: tuple | None = None
         self._motion: tuple | None = None  # the same for position and joints alone (no PWM)
-        self._moving: tuple | None = None  # … and when they last changed by more than jitter
+        self._moved_from: tuple | None = None  # the readings when they last changed by more than jitter
         self._run_position: float | None = None  # the SD program's run position last reported
         self._active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
         self._reported: dict = {}
@@ -169,8 +169,8 @@ class JobRunner:
             motion = reported[:3]
             if self._motion is None or self._motion[0] != motion:
                 self._motion = (motion, at_s)
-            if self._moving is None or _moved_clearly(self._moving[0], motion):
-                self._moving = (motion, at_s)
+            if self._moved_from is None or _moved_clearly(self._moved_from, motion):
+                self._moved_from = motion
                 self._active_s = at_s
         elif frame.KIND == RunPositionStatus.KIND:
             if self._run_position is not None and frame.value != self._run_position:
@@ -290,7 +290,7 @@ class JobRunner:
         the frames after that motion, which move nothing (delays, M codes, control frames,
         PWM-only moves, a move to where the arm already is); never before the last change
         seen at all (a PWM report), never after now."""
-        if self._rest is None or self._motion is None:
+        if self._motion is None:  # set with _rest: nothing reported yet
             return now
         done = self._motion[1]
         for sent in reversed(self._recent):
@@ -321,15 +321,11 @@ class JobRunner:
                                          "whose time armctl cannot know); armctl waited until it stopped")
                 break
             if now > deadline:
-                if now > deadline + self._overrun_limit_s():
-                    view.outcome = "no confirmation"
-                    view.messages.append(self._why_not_finished())
-                    break
-                if self._active_s is not None and now - self._active_s < REST_CHECK_S:
-                    overran = True  # visibly working: the job is still running, whatever the estimate says
-                elif overran and now - self._active_s < REST_CHECK_S + SETTLE_SLACK_S:
-                    pass  # it just stopped: time to confirm it is where the job ends
-                else:
+                # Visibly working: the job is still running, whatever the estimate says; once it
+                # stops, there is time to confirm it is where the job ends.
+                overran = overran or (self._active_s is not None and now - self._active_s < REST_CHECK_S)
+                settling = overran and now - self._active_s < REST_CHECK_S + SETTLE_SLACK_S
+                if not settling or now > deadline + self._overrun_limit_s():
                     view.outcome = "no confirmation"
                     view.messages.append(self._why_not_finished())
                     break

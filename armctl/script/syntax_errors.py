@@ -159,12 +159,7 @@ def _where_value(text: str, column: int, rest: str) -> LineSyntaxError:
     if rest[:1] == "#":
         lexeme = _lexeme(rest)
         return LineSyntaxError("expected a parameter name: #<name> (letters, digits and _)", column, column + len(lexeme))
-    if not rest:
-        return LineSyntaxError(f"expected {VALUE} after {_quote(previous)}", column, column, hint)
-    lexeme = _lexeme(rest)
-    return LineSyntaxError(
-        f"expected {VALUE} after {_quote(previous)}, found {_quote(lexeme)}", column, column + len(lexeme), hint,
-    )
+    return _expected(f"{VALUE} after {_quote(previous)}", column, rest, hint)
 
 
 def _in_brackets(text: str, column: int, rest: str) -> LineSyntaxError:
@@ -182,21 +177,21 @@ def _in_brackets(text: str, column: int, rest: str) -> LineSyntaxError:
 def _where_equals(text: str, column: int, rest: str) -> LineSyntaxError:
     name = _previous(text, column)
     hint = f"{name} = 5 assigns a parameter; a parameter alone is not a statement"
-    if not rest:
-        return LineSyntaxError(f"expected '=' after {name}", column, column, hint)
-    lexeme = _lexeme(rest)
-    return LineSyntaxError(f"expected '=' after {name}, found {_quote(lexeme)}", column, column + len(lexeme), hint)
+    return _expected(f"'=' after {name}", column, rest, hint)
 
 
 def _after_label(text: str, column: int, rest: str) -> LineSyntaxError:
     label = _previous(text, column)
     hint = f"blocks are {label} repeat [n] … {label} endrepeat"
+    return _expected(f"repeat or endrepeat after {label}", column, rest, hint)
+
+
+def _expected(what: str, column: int, rest: str, hint: str | None) -> LineSyntaxError:
+    """"expected WHAT" at the end of the line, else "expected WHAT, found X" spanning X."""
     if not rest:
-        return LineSyntaxError(f"expected repeat or endrepeat after {label}", column, column, hint)
+        return LineSyntaxError(f"expected {what}", column, column, hint)
     lexeme = _lexeme(rest)
-    return LineSyntaxError(
-        f"expected repeat or endrepeat after {label}, found {_quote(lexeme)}", column, column + len(lexeme), hint,
-    )
+    return LineSyntaxError(f"expected {what}, found {_quote(lexeme)}", column, column + len(lexeme), hint)
 
 
 def _after_statement(text: str, column: int, rest: str) -> LineSyntaxError:

@@ -57,7 +57,7 @@ class Wire:
         while self._runs:
             run = self._runs[0]
             start_s, data, taken = run
-            arrived = min(len(data), int(math.floor((now_s - start_s) / self.byte_s + TIME_EPSILON_S)))
+            arrived = min(len(data), int(math.floor((now_s - start_s + TIME_EPSILON_S) / self.byte_s)))
             if arrived > taken:
                 out += data[taken:arrived]
                 run[2] = arrived
@@ -84,4 +84,4 @@ class Wire:
         """Bytes handed over but not fully arrived by ``now_s``."""
         if now_s >= self.free_at_s - TIME_EPSILON_S:
             return 0
-        return min(self.bytes_sent, math.ceil((self.free_at_s - now_s) / self.byte_s - TIME_EPSILON_S))
+        return min(self.bytes_sent, math.ceil((self.free_at_s - now_s - TIME_EPSILON_S) / self.byte_s))
