@@ -25,8 +25,8 @@ from typing import Iterator, NamedTuple, Optional, Union
 from ..kinematics import reach_problem
 from ..motion import arc_through, circle_through
 from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove
-from ..script import ERROR, WARNING, SourceSpan
-from .registry import END, SOURCE, rule
+from ..script import SourceSpan
+from .registry import END, check
 from .tracker import cartesian_target, pwm_channel_of
 
 ARC_POINT_TOLERANCE_MM = 0.05  # arc points closer than this to each other or to one line: degenerate
@@ -73,8 +73,7 @@ def _xyz(point) -> str:
 # --- L1xx geometry --------------------------------------------------------------------------------
 
 
-@rule("L101", ERROR, "arc-degenerate",
-      "three arc points that coincide or lie on one line define no circle", on=[ArcEnd])
+@check("L101", on=[ArcEnd])
 def arc_degenerate(statement, arm) -> Iterator[Finding]:
     start, points = _arc_points(statement, arm)
     if start is None:
@@ -93,9 +92,7 @@ def arc_degenerate(statement, arm) -> Iterator[Finding]:
                "for a straight line use G1; for an arc move the G300 point off the line")
 
 
-@rule("L102", ERROR, "arc-radius",
-      "an R that disagrees with the circle through the arc's three points makes the path ambiguous",
-      on=[ArcEnd])
+@check("L102", on=[ArcEnd])
 def arc_radius(statement, arm) -> Iterator[Finding]:
     start, points = _arc_points(statement, arm)
     if start is None:
@@ -121,10 +118,7 @@ def _arc_points(statement, arm):
 _AXIS = re.compile(r"robot ([XYZ]) = ")
 
 
-@rule("L103", ERROR, "outside-workspace",
-      "a target outside the profile's workspace box or reach, or with no joint solution inside the limits,"
-      " stops or crashes the arm",
-      on=CARTESIAN_MOVES + (JointMove,))
+@check("L103", on=CARTESIAN_MOVES + (JointMove,))
 def outside_workspace(statement, arm) -> Iterator[Finding]:
     command = statement.command
     if type(command) is JointMove:
@@ -201,8 +195,7 @@ def _workspace_hint(arm, problem: str) -> str:
     return "no joint solution inside the limits: bring the point nearer the arm or change the attitude (A180 B0 C0 = tool down)"
 
 
-@rule("L104", ERROR, "joint-limit",
-      "a joint angle outside the profile's limits drives the joint into its end stop", on=[JointMove])
+@check("L104", on=[JointMove])
 def joint_limit(statement, arm) -> Iterator[Finding]:
     limits = arm.profile.joint_limits_deg
     for k, (angle, (low, high)) in enumerate(zip(statement.command.joints_deg, limits, strict=True), 1):
@@ -218,9 +211,7 @@ def _is_unit_slip(statement, arm) -> bool:
     return statement.words.get("F", 0.0) > UNIT_SLIP_FACTOR * arm.profile.speed.max_joint_deg_s
 
 
-@rule("L201", ERROR, "speed-above-max",
-      "a speed above the profile's maximum is more than the arm is rated for (and its ETA is wrong)",
-      on=CARTESIAN_MOVES + (JointMove,))
+@check("L201", on=CARTESIAN_MOVES + (JointMove,))
 def speed_above_max(statement, arm) -> Iterator[Finding]:
     speed = arm.profile.speed
     if type(statement.command) is JointMove:
@@ -237,9 +228,7 @@ def speed_above_max(statement, arm) -> Iterator[Finding]:
                    f"write {letter}{limit:g} or less")
 
 
-@rule("L202", ERROR, "joint-speed-in-mm-min",
-      "a G6 speed far above the joint maximum was almost always meant as mm/min; G6 F is deg/s",
-      on=[JointMove])
+@check("L202", on=[JointMove])
 def joint_speed_unit(statement, arm) -> Iterator[Finding]:
     if _is_unit_slip(statement, arm):
         value, limit = statement.words["F"], arm.profile.speed.max_joint_deg_s
@@ -247,9 +236,7 @@ def joint_speed_unit(statement, arm) -> Iterator[Finding]:
                f" {limit:g} deg/s: it reads like mm/min", f"G6 speeds are deg/s: write e.g. F{min(30.0, limit):g}")
 
 
-@rule("L203", WARNING, "cartesian-speed-in-deg-s",
-      "a Cartesian speed below 1 mm/s reads like deg/s; G1/G22x/G300/G301 F is mm/min",
-      on=CARTESIAN_MOVES)
+@check("L203", on=CARTESIAN_MOVES)
 def cartesian_speed_unit(statement, arm) -> Iterator[Finding]:
     value = statement.words.get("F")
     if value is not None and 0 < value < SLOW_CARTESIAN_MM_MIN:
@@ -257,9 +244,7 @@ def cartesian_speed_unit(statement, arm) -> Iterator[Finding]:
                f"Cartesian speeds are mm/min: {value:g} mm/s is F{value * 60:g}")
 
 
-@rule("L204", ERROR, "accel-above-max",
-      "an acceleration above the profile's maximum is more than the arm is rated for",
-      on=[AccelLinearMove])
+@check("L204", on=[AccelLinearMove])
 def accel_above_max(statement, arm) -> Iterator[Finding]:
     value, limit = statement.words.get("K"), arm.profile.speed.max_accel_mm_s2
     if value is not None and abs(value) > limit:
@@ -270,9 +255,7 @@ def accel_above_max(statement, arm) -> Iterator[Finding]:
 # --- L3xx PWM -------------------------------------------------------------------------------------
 
 
-@rule("L301", ERROR, "pwm-channel-unwired",
-      "a PWM value sent to a channel the profile does not wire moves nothing (the gripper is on PWM 1)",
-      on=[LinearMove, JointMove, ArcStart, ArcEnd])
+@check("L301", on=[LinearMove, JointMove, ArcStart, ArcEnd])
 def pwm_channel_unwired(statement, arm) -> Iterator[Finding]:
     channel = pwm_channel_of(statement.command)
     wired = arm.profile.pwm.channels
@@ -287,9 +270,7 @@ def pwm_channel_unwired(statement, arm) -> Iterator[Finding]:
            "T1 selects the gripper's channel" if 1 in wired else "set pwm.channels in the profile")
 
 
-@rule("L302", ERROR, "pwm-outside-profile-range",
-      "a PWM pulse outside the profile's range drives the servo past its end stop",
-      on=[LinearMove, JointMove, ArcStart, ArcEnd])
+@check("L302", on=[LinearMove, JointMove, ArcStart, ArcEnd])
 def pwm_outside_range(statement, arm) -> Iterator[Finding]:
     value = statement.words.get("S")
     low, high = arm.profile.pwm.range_us
@@ -299,22 +280,13 @@ def pwm_outside_range(statement, arm) -> Iterator[Finding]:
                f"gripper open is S{pwm.gripper_open_us:g}, closed S{pwm.gripper_close_us:g}")
 
 
-# --- L4xx parameters, loops, empty scripts (found by armctl/lint/scan.py) -------------------------
-
-rule("L401", WARNING, "unused-parameter",
-     "a parameter assigned but never read is usually a typo in its name or a leftover", on=SOURCE)
-rule("L402", WARNING, "repeat-never-runs",
-     "a repeat count of 0 skips its block; a count must be a positive whole number to do anything", on=SOURCE)
-rule("L403", WARNING, "empty-script",
-     "a script without a single statement sends nothing to the arm", on=SOURCE)
+# --- L4xx parameters, loops, empty scripts: found by armctl/lint/scan.py and the engine ---------
 
 
 # --- L5xx how the script leaves the arm (only when the profile's [lint] table asks) ---------------
 
 
-@rule("L501", ERROR, "end-gripper",
-      "the profile's lint.end_gripper says how every job must leave the gripper (e.g. open, part released)",
-      on=END)
+@check("L501", on=END)
 def end_gripper(arm) -> Iterator[Finding]:
     expected = arm.profile.lint.end_gripper
     statement = arm.pwm_statement.get(1)
@@ -333,8 +305,7 @@ def end_gripper(arm) -> Iterator[Finding]:
            f" the profile expects it {expected}", f"end with a move carrying S{want:g} (pwm.{key})")
 
 
-@rule("L502", ERROR, "end-paused",
-      "the profile's lint.end_paused says whether a job may end paused (PAUSE toggles)", on=END)
+@check("L502", on=END)
 def end_paused(arm) -> Iterator[Finding]:
     expected = arm.profile.lint.end_paused
     if expected is None or arm.paused == expected:
