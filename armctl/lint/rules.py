@@ -8,8 +8,13 @@ against the arm's profile and common sense: geometry (L1xx), speeds and units (L
 (L3xx), parameters, loops and empty scripts (L4xx, fed by armctl/lint/scan.py) and the state
 the script leaves the arm in (L5xx).
 
-A statement rule is ``check(statement, arm) -> iterable of (where, message, hint)``, where is
-a ``SourceSpan`` or a ``WordAt`` (a word's span, computed only if the finding is kept); it runs
+A statement rule is ``check(statement, arm) -> iterable of (where, message, hint[, rests_on])``,
+where is a ``SourceSpan`` or a ``WordAt`` (a word's span, computed only if the finding is kept)
+and ``rests_on`` names the profile numbers the finding depends on ("section.key" or a whole
+"section"): the engine reports a finding on an error code as a warning when any of them is an
+illustrative number of the packaged default (armctl/profile.py's provenance) — a finding is
+only as true as the numbers it rests on.  A finding without ``rests_on`` rests on geometry or
+on the protocol alone.  It runs
 before ``arm`` (armctl/lint/tracker.py) advances past the statement, so ``arm`` describes the
 arm as the statement finds it.  An END rule is ``check(arm)``.  Rules read the profile through
 ``arm.profile`` and never see each other; the engine adds the code, severity and location
@@ -20,9 +25,9 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Iterator, NamedTuple, Optional, Union
+from typing import Iterator, NamedTuple, Optional
 
-from ..kinematics import reach_problem
+from ..kinematics import Unreachable, box_problem, inverse
 from ..motion import arc_through, circle_through
 from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove
 from ..script import SourceSpan
@@ -37,7 +42,8 @@ SLOW_CARTESIAN_MM_MIN = 60.0  # a Cartesian F below 1 mm/s reads as deg/s
 PWM_TOLERANCE_US = 0.5  # "equal" PWM values, for the gripper's end state
 
 CARTESIAN_MOVES = (LinearMove, AccelLinearMove, ArcStart, ArcEnd)
-Finding = tuple[Union[SourceSpan, "WordAt"], str, Optional[str]]  # where, message, hint
+TOOL_DOWN_DEG = (180.0, 0.0, 0.0)  # the attitude tried to tell "attitude" from "distance" (A180 B0 C0)
+Finding = tuple  # (where: SourceSpan | WordAt, message, hint[, rests_on: tuple of profile keys])
 
 
 class WordAt(NamedTuple):
@@ -116,6 +122,8 @@ def _arc_points(statement, arm):
 
 
 _AXIS = re.compile(r"robot ([XYZ]) = ")
+_WORKSPACE = ("workspace",)  # the box and the reach radius
+_KINEMATICS = ("links", "joints")  # inverse kinematics: link lengths and joint limits
 
 
 @check("L103", on=CARTESIAN_MOVES + (JointMove,))
@@ -125,14 +133,42 @@ def outside_workspace(statement, arm) -> Iterator[Finding]:
         yield from _joint_target_outside(statement, arm)
         return
     pose = cartesian_target(command)
-    problem = arm.reach_problem(pose, lambda: reach_problem(pose, arm.profile, arm.origin_mm, arm.ik_hint()))
+    if type(command) is not ArcStart and pose == arm.pose:
+        return  # the arm is already there (a gripper- or speed-only line): one mistake, one finding
+    problem = arm.reach_problem(pose, lambda: _reach_problem(pose, arm))
     if problem is not None:
-        axis = _AXIS.match(problem)
+        message, hint, rests_on = problem
+        axis = _AXIS.match(message)
         span = _at(statement, axis.group(1)) if axis else statement.span
         what = "the G300 point" if type(command) is ArcStart else "target"
-        yield span, f"{what} {_xyz(pose)}: {problem}", _workspace_hint(arm, problem)
+        yield span, f"{what} {_xyz(pose)}: {message}", hint, rests_on
     elif type(command) is ArcEnd:
         yield from _arc_outside(statement, arm)
+
+
+def _reach_problem(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
+    """(message, hint, rests_on) for a worktable pose the arm cannot take, or None: first the
+    workspace box and reach radius, then a joint solution inside the limits — and if there is
+    none, whether the attitude or the distance is at fault (the same point tool down)."""
+    robot = arm.robot_xyz(pose)
+    problem = box_problem(robot, arm.profile.workspace)
+    if problem is not None:
+        return problem, _workspace_hint(arm, problem), _WORKSPACE
+    profile = arm.profile
+    near = arm.ik_hint() if arm.ik_hint() is not None else profile.poses[0]
+    try:
+        inverse((*robot, *pose[3:6]), profile.links, near, profile.joint_limits_deg)
+        return None
+    except Unreachable as error:
+        problem = str(error)
+    try:
+        inverse((*robot, *TOOL_DOWN_DEG), profile.links, near, profile.joint_limits_deg)
+    except Unreachable:
+        return (problem, "the point itself is out of the arm's reach (even tool down, A180 B0 C0):"
+                " bring it nearer the arm", _KINEMATICS)
+    attitude = " ".join(f"{letter}{_mm(value)}" for letter, value in zip("ABC", pose[3:6]))
+    return (problem, f"the point is within reach, but not with the attitude {attitude}: the wrist cannot turn"
+            " that far; change the attitude (A180 B0 C0 = tool down reaches it)", _KINEMATICS)
 
 
 def _joint_target_outside(statement, arm) -> Iterator[Finding]:
@@ -140,9 +176,10 @@ def _joint_target_outside(statement, arm) -> Iterator[Finding]:
     if any(not low <= j <= high for j, (low, high) in zip(joints, arm.profile.joint_limits_deg, strict=True)):
         return  # L104 says it
     robot = arm.profile.kinematics.forward(joints)[:3]
-    problem = _box_problem(robot, arm.profile.workspace)
+    problem = box_problem(robot, arm.profile.workspace)
     if problem is not None:
-        yield statement.span, f"G6 puts the tool at robot {_xyz(robot)}: {problem}", _workspace_hint(arm, problem)
+        yield (statement.span, f"G6 puts the tool at robot {_xyz(robot)}: {problem}", _workspace_hint(arm, problem),
+               (*_WORKSPACE, "links"))
 
 
 def _arc_outside(statement, arm) -> Iterator[Finding]:
@@ -154,10 +191,10 @@ def _arc_outside(statement, arm) -> Iterator[Finding]:
         return  # L101
     for k in range(1, ARC_SAMPLES):
         point = _arc_point(arc, points[0], arc.sweep_rad * k / ARC_SAMPLES)
-        problem = _box_problem(arm.robot_xyz(point), arm.profile.workspace)
+        problem = box_problem(arm.robot_xyz(point), arm.profile.workspace)
         if problem is not None:
             yield (statement.span, f"the arc from line {start.line} passes {_xyz(point)}: {problem}",
-                   "the arc bulges beyond its three points; move the G300 point or split the arc")
+                   "the arc bulges beyond its three points; move the G300 point or split the arc", _WORKSPACE)
             return
 
 
@@ -170,17 +207,6 @@ def _arc_point(arc, start, angle: float):
     return tuple(c[i] + u[i] * cos + v[i] * sin for i in range(3))
 
 
-def _box_problem(robot_xyz, box) -> Optional[str]:
-    """The workspace box and reach radius part of ``kinematics.reach_problem`` (no IK)."""
-    for name, value, (low, high) in zip("XYZ", robot_xyz, (box.x_mm, box.y_mm, box.z_mm), strict=True):
-        if not low <= value <= high:
-            return f"robot {name} = {value:.1f} mm is outside the workspace {low:g}…{high:g} mm"
-    distance = math.sqrt(sum(v * v for v in robot_xyz))
-    if distance > box.reach_mm:
-        return f"point is {distance:.1f} mm from the robot origin, beyond the reach radius {box.reach_mm:g} mm"
-    return None
-
-
 def _workspace_hint(arm, problem: str) -> str:
     box, origin = arm.profile.workspace, arm.origin_mm
     if problem.startswith("robot "):
@@ -190,9 +216,7 @@ def _workspace_hint(arm, problem: str) -> str:
             return f"with the G54 origin at robot {_xyz(origin)} the worktable limits are {shifted} mm"
         return f"the profile's workspace is X {box.x_mm[0]:g}…{box.x_mm[1]:g}, Y {box.y_mm[0]:g}…{box.y_mm[1]:g}, " \
                f"Z {box.z_mm[0]:g}…{box.z_mm[1]:g} mm"
-    if "reach radius" in problem:
-        return f"keep the tool point within {box.reach_mm:g} mm of the robot origin"
-    return "no joint solution inside the limits: bring the point nearer the arm or change the attitude (A180 B0 C0 = tool down)"
+    return f"keep the tool point within {box.reach_mm:g} mm of the robot origin"
 
 
 @check("L104", on=[JointMove])
@@ -201,7 +225,7 @@ def joint_limit(statement, arm) -> Iterator[Finding]:
     for k, (angle, (low, high)) in enumerate(zip(statement.command.joints_deg, limits, strict=True), 1):
         if not low <= angle <= high:
             yield (_at(statement, f"J{k}"), f"J{k}={angle:g} is outside its limits {low:g}…{high:g} deg",
-                   f"the profile allows J{k} from {low:g} to {high:g} deg")
+                   f"the profile allows J{k} from {low:g} to {high:g} deg", (f"joints.j{k}_deg",))
 
 
 # --- L2xx speeds ----------------------------------------------------------------------------------
@@ -218,14 +242,14 @@ def speed_above_max(statement, arm) -> Iterator[Finding]:
         value = statement.words.get("F")
         if value is not None and value > speed.max_joint_deg_s and not _is_unit_slip(statement, arm):
             yield (_at(statement, "F"), f"F{value:g} deg/s is above the profile's joint maximum {speed.max_joint_deg_s:g} deg/s",
-                   f"write F{speed.max_joint_deg_s:g} or less")
+                   f"write F{speed.max_joint_deg_s:g} or less", ("speed.max_joint_deg_s",))
         return
     for letter in ("F", "Q"):
         value = statement.words.get(letter)
         if value is not None and value > speed.max_linear_mm_min:
             limit = speed.max_linear_mm_min
             yield (_at(statement, letter), f"{letter}{value:g} mm/min is above the profile's maximum {limit:g} mm/min",
-                   f"write {letter}{limit:g} or less")
+                   f"write {letter}{limit:g} or less", ("speed.max_linear_mm_min",))
 
 
 @check("L202", on=[JointMove])
@@ -233,7 +257,8 @@ def joint_speed_unit(statement, arm) -> Iterator[Finding]:
     if _is_unit_slip(statement, arm):
         value, limit = statement.words["F"], arm.profile.speed.max_joint_deg_s
         yield (_at(statement, "F"), f"G6 F{value:g} means {value:g} deg/s, {value / limit:.0f}× the joint maximum"
-               f" {limit:g} deg/s: it reads like mm/min", f"G6 speeds are deg/s: write e.g. F{min(30.0, limit):g}")
+               f" {limit:g} deg/s: it reads like mm/min", f"G6 speeds are deg/s: write e.g. F{min(30.0, limit):g}",
+               ("speed.max_joint_deg_s",))
 
 
 @check("L203", on=CARTESIAN_MOVES)
@@ -249,7 +274,7 @@ def accel_above_max(statement, arm) -> Iterator[Finding]:
     value, limit = statement.words.get("K"), arm.profile.speed.max_accel_mm_s2
     if value is not None and abs(value) > limit:
         yield (_at(statement, "K"), f"K{value:g} mm/s² is above the profile's maximum acceleration {limit:g} mm/s²",
-               f"write K{math.copysign(limit, value):g} or a smaller magnitude")
+               f"write K{math.copysign(limit, value):g} or a smaller magnitude", ("speed.max_accel_mm_s2",))
 
 
 # --- L3xx PWM -------------------------------------------------------------------------------------
@@ -267,7 +292,7 @@ def pwm_channel_unwired(statement, arm) -> Iterator[Finding]:
     arm.notes.add(key)
     letter = "T" if "T" in statement.words else "S"
     yield (_at(statement, letter), f"PWM channel {channel} is not wired in the profile (wired: {', '.join(map(str, wired))})",
-           "T1 selects the gripper's channel" if 1 in wired else "set pwm.channels in the profile")
+           "T1 selects the gripper's channel" if 1 in wired else "set pwm.channels in the profile", ("pwm.channels",))
 
 
 @check("L302", on=[LinearMove, JointMove, ArcStart, ArcEnd])
@@ -277,7 +302,7 @@ def pwm_outside_range(statement, arm) -> Iterator[Finding]:
     if value is not None and not low <= value <= high:
         pwm = arm.profile.pwm
         yield (_at(statement, "S"), f"S{value:g} µs is outside the profile's PWM range {low:g}…{high:g} µs",
-               f"gripper open is S{pwm.gripper_open_us:g}, closed S{pwm.gripper_close_us:g}")
+               f"gripper open is S{pwm.gripper_open_us:g}, closed S{pwm.gripper_close_us:g}", ("pwm.range_us",))
 
 
 # --- L4xx parameters, loops, empty scripts: found by armctl/lint/scan.py and the engine ---------
@@ -302,7 +327,8 @@ def end_gripper(arm) -> Iterator[Finding]:
     state = other if abs(value - other_value) <= PWM_TOLERANCE_US else f"at S{value:g}, neither open nor closed"
     key = "gripper_open_us" if expected == "open" else "gripper_close_us"
     yield (_at(statement, "S"), f"the script ends with the gripper {state} (PWM 1 last set here);"
-           f" the profile expects it {expected}", f"end with a move carrying S{want:g} (pwm.{key})")
+           f" the profile expects it {expected}", f"end with a move carrying S{want:g} (pwm.{key})",
+           (f"pwm.{key}", "pwm.gripper_open_us" if expected == "closed" else "pwm.gripper_close_us"))
 
 
 @check("L502", on=END)
