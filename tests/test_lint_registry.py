@@ -95,17 +95,26 @@ def test_every_code_in_the_config_ignore_list_is_accepted_in_a_fresh_process(tmp
     assert "All checks passed" in result.stdout
 
 
-def test_readme_and_help_examples_work_in_a_fresh_process(tmp_path):
-    (tmp_path / "job.txt").write_text(CLEAN + "G1 F30\nG1 X500\n")  # L203 on line 2, L103 on line 3 (warnings)
+JOB = CLEAN + "G1 F30\nG1 X500\n"  # L203 on line 2, L103 on line 3 (warnings on the built-in profile)
+
+
+def test_the_readme_config_ignore_works_in_a_fresh_process(tmp_path):
+    (tmp_path / "job.txt").write_text(JOB)
     (tmp_path / "armctl.toml").write_text('[lint]\nignore = ["L203"]\n')  # the README's example
-    ignored = armctl("lint", "--strict", "job.txt", cwd=tmp_path)
-    assert ignored.returncode == 1 and "L103" in ignored.stdout and "L203" not in ignored.stdout
-    (tmp_path / "armctl.toml").unlink()
-    for select, shown, hidden in (("E,L1", "L103", "L203"), ("L2", "L203", "L103")):  # lint --help, README
-        result = armctl("lint", "--select", select, "job.txt", cwd=tmp_path)
-        assert shown in result.stdout and hidden not in result.stdout, result.stderr
-    hook = armctl("lint", "--ignore", "L103", "job.txt", cwd=tmp_path)  # a pre-commit hook's args
-    assert hook.returncode == 0 and "L203" in hook.stdout and "L103" not in hook.stdout
+    result = armctl("lint", "--strict", "job.txt", cwd=tmp_path)
+    assert result.returncode == 1 and "L103" in result.stdout and "L203" not in result.stdout
+
+
+@pytest.mark.parametrize("option, codes, shown, hidden", [
+    ("--select", "E,L1", "L103", "L203"),  # the example in lint --help
+    ("--select", "L2", "L203", "L103"),  # the README's
+    ("--ignore", "L103", "L203", "L103"),  # a pre-commit hook's args: [--ignore, L103]
+])
+def test_help_readme_and_hook_examples_work_in_a_fresh_process(tmp_path, option, codes, shown, hidden):
+    (tmp_path / "job.txt").write_text(JOB)
+    result = armctl("lint", option, codes, "job.txt", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert shown in result.stdout and hidden not in result.stdout
 
 
 def test_an_unknown_code_is_still_a_usage_error_in_a_fresh_process(tmp_path):
