@@ -164,8 +164,8 @@ def _reach_problem(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
     try:
         inverse((*robot, *TOOL_DOWN_DEG), profile.links, near, profile.joint_limits_deg)
     except Unreachable:
-        return (problem, "the point itself is out of the arm's reach (even tool down, A180 B0 C0):"
-                " bring it nearer the arm", _KINEMATICS)
+        return (problem, "neither this attitude nor tool down (A180 B0 C0) has a joint solution: the point is out"
+                " of the arm's reach; bring it nearer the arm", _KINEMATICS)
     attitude = " ".join(f"{letter}{_mm(value)}" for letter, value in zip("ABC", pose[3:6]))
     return (problem, f"the point is within reach, but not with the attitude {attitude}: the wrist cannot turn"
             " that far; change the attitude (A180 B0 C0 = tool down reaches it)", _KINEMATICS)
