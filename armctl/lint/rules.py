@@ -14,9 +14,8 @@ and ``rests_on`` names the profile numbers the finding depends on ("section.key"
 "section"): the engine reports a finding on an error code as a warning when any of them is an
 illustrative number of the packaged default (armctl/profile.py's provenance) — a finding is
 only as true as the numbers it rests on.  A finding without ``rests_on`` rests on geometry or
-on the protocol alone.  It runs
-before ``arm`` (armctl/lint/tracker.py) advances past the statement, so ``arm`` describes the
-arm as the statement finds it.  An END rule is ``check(arm)``.  Rules read the profile through
+on the protocol alone.  It runs before ``arm`` (armctl/lint/tracker.py) advances past the
+statement, so ``arm`` describes the arm as the statement finds it.  An END rule is ``check(arm)``.  Rules read the profile through
 ``arm.profile`` and never see each other; the engine adds the code, severity and location
 filters.  Thresholds that are judgement calls are named constants below.
 """
