@@ -290,6 +290,17 @@ class Kinematics:
 # --- reachability (lint) ----------------------------------------------------------------------
 
 
+def box_problem(robot_xyz: Sequence[float], box) -> str | None:
+    """Why a robot-frame point is outside the profile's workspace box or reach radius, or None."""
+    for name, value, (low, high) in zip("XYZ", robot_xyz, (box.x_mm, box.y_mm, box.z_mm)):
+        if not low <= value <= high:
+            return f"robot {name} = {value:.1f} mm is outside the workspace {low:g}…{high:g} mm"
+    distance = math.sqrt(sum(v * v for v in robot_xyz))
+    if distance > box.reach_mm:
+        return f"point is {distance:.1f} mm from the robot origin, beyond the reach radius {box.reach_mm:g} mm"
+    return None
+
+
 def reach_problem(pose: Sequence[float], profile, origin_mm: Sequence[float] = (0.0, 0.0, 0.0), near=None) -> str | None:
     """Why the arm cannot take a worktable ``pose`` (robot = worktable + origin), or None.
 
@@ -297,13 +308,9 @@ def reach_problem(pose: Sequence[float], profile, origin_mm: Sequence[float] = (
     robot origin), then an IK solution inside the joint limits.
     """
     x, y, z = (pose[k] + origin_mm[k] for k in range(3))
-    box = profile.workspace
-    for name, value, (low, high) in (("X", x, box.x_mm), ("Y", y, box.y_mm), ("Z", z, box.z_mm)):
-        if not low <= value <= high:
-            return f"robot {name} = {value:.1f} mm is outside the workspace {low:g}…{high:g} mm"
-    distance = math.sqrt(x * x + y * y + z * z)
-    if distance > box.reach_mm:
-        return f"point is {distance:.1f} mm from the robot origin, beyond the reach radius {box.reach_mm:g} mm"
+    problem = box_problem((x, y, z), profile.workspace)
+    if problem is not None:
+        return problem
     try:
         inverse((x, y, z, *pose[3:6]), profile.links, near if near is not None else profile.poses[0],
                 profile.joint_limits_deg)

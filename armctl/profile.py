@@ -10,6 +10,12 @@ the joint limits, gripper values inside the PWM range).  Pure apart from reading
 Where a profile comes from (``load_profile``): an explicit file (``--profile FILE``); else the
 first ``armctl.toml`` found walking up from the working directory — its ``[profile]`` table, or
 ``profile = "path.toml"`` resolved relative to that armctl.toml; else the packaged default.
+
+Provenance: every key knows where its number came from (``Profile.source_of``): the packaged
+default's numbers are ``ILLUSTRATIVE`` guesses about a generic arm, except the few that are the
+protocol's own ranges (``PROTOCOL_KEYS``); a key the user's profile file or armctl.toml gives
+is named by that file; a measured value (a probe, later) is ``PROBE``.  Lint turns a finding
+that rests on an illustrative number into a warning that says so (armctl/lint/engine.py).
 """
 
 from __future__ import annotations
@@ -30,6 +36,13 @@ CONFIG_NAME = "armctl.toml"
 DEFAULT_RESOURCE = ("armctl.data", "default_profile.toml")
 GRIPPER_STATES = ("open", "closed")
 FIXED_POSES = ("0", "1", "2", "3")
+
+# Where a profile's number came from (Profile.source_of); a user's file is named by its path.
+ILLUSTRATIVE = "illustrative"  # the packaged default's guess: nobody measured it
+PROTOCOL = "protocol"  # a range the protocol itself fixes (PROTOCOL.md), true for every arm
+PROBE = "probe"  # measured on the arm
+# Keys of the packaged default that are the protocol's own ranges, not guesses about an arm.
+PROTOCOL_KEYS = frozenset({"pwm.range_us", "pwm.channels", "speed.max_accel_mm_s2"})
 
 
 @dataclass(frozen=True)
@@ -89,6 +102,26 @@ class Profile:
     timing: Timing
     lint: LintOptions
     source: str = field(default="", compare=False)  # where it was read from, for messages
+    # "section.key" → ILLUSTRATIVE, PROTOCOL, PROBE or the file that gave it; see source_of
+    sources: dict[str, str] = field(default_factory=dict, compare=False, repr=False)
+
+    def source_of(self, key: str) -> str:
+        """Where the number at ``key`` ("section.key") came from; a key without a recorded
+        source (a profile built in code) counts as given by its builder."""
+        return self.sources.get(key, "given")
+
+    def illustrative(self, keys) -> list[str]:
+        """Those of ``keys`` — "section.key", or a whole "section" — whose numbers (any of the
+        section's) are the packaged default's illustrative guesses."""
+        found = []
+        for key in keys:
+            if "." in key:
+                unmeasured = self.source_of(key) == ILLUSTRATIVE
+            else:
+                unmeasured = any(k.startswith(key + ".") and v == ILLUSTRATIVE for k, v in self.sources.items())
+            if unmeasured:
+                found.append(key)
+        return found
 
     @functools.cached_property
     def kinematics(self) -> Kinematics:
@@ -241,7 +274,20 @@ def _merge(base: dict, layer: dict) -> dict:
     return merged
 
 
-def _build(data: dict, source: str, prefix: str) -> Profile:
+def _sources(given: dict, source: str) -> dict[str, str]:
+    """Every schema key's source: ``source`` for the keys ``given`` (checked user data), the
+    packaged default's (PROTOCOL or ILLUSTRATIVE) for the rest."""
+    sources = {}
+    for section, rule in _SCHEMA.items():
+        for key in ([f"{section}.{k}" for k in rule] if isinstance(rule, dict) else [section]):
+            sources[key] = PROTOCOL if key in PROTOCOL_KEYS else ILLUSTRATIVE
+    for section, content in given.items():
+        for key in ([f"{section}.{k}" for k in content] if isinstance(content, dict) else [section]):
+            sources[key] = source
+    return sources
+
+
+def _build(data: dict, source: str, prefix: str, sources: dict[str, str]) -> Profile:
     for section in _SCHEMA:
         if isinstance(_SCHEMA[section], dict) and section not in _OPTIONAL_SECTIONS:
             missing = [k for k in _SCHEMA[section] if k not in data.get(section, {})]
@@ -259,6 +305,7 @@ def _build(data: dict, source: str, prefix: str) -> Profile:
         timing=Timing(**data["timing"]),
         lint=LintOptions(**data.get("lint", {})),
         source=source,
+        sources=sources,
     )
     _cross_check(profile, source, prefix)
     return profile
@@ -294,14 +341,15 @@ def parse_profile(data: dict, source: str = "<profile>", prefix: str = "") -> Pr
 
     ``prefix`` is prepended to key names in messages (``"profile."`` for an armctl.toml table).
     """
-    return _build(_merge(_default_data(), _check(data, source, prefix)), source, prefix)
+    given = _check(data, source, prefix)
+    return _build(_merge(_default_data(), given), source, prefix, _sources(given, source))
 
 
 @functools.lru_cache(maxsize=1)
 def default_profile() -> Profile:
     """The packaged default profile (every number illustrative)."""
     package, name = DEFAULT_RESOURCE
-    return _build(_default_data(), f"<packaged {name}>", "")
+    return _build(_default_data(), f"<packaged {name}>", "", _sources({}, ""))
 
 
 # --- files ------------------------------------------------------------------------------------

@@ -166,7 +166,13 @@ def test_a_script_with_a_compile_error_sends_nothing(tmp_path, recorded_writes):
 
 def test_a_script_with_a_lint_error_sends_nothing(tmp_path, recorded_writes):
     writes, opened = recorded_writes
-    result = run(SCRIPTS / "lint_error_job.txt", "--port", FAST_SIM, "--no-live")
+    # the user's own profile (the packaged numbers, given as the user's): its workspace is an error,
+    # the built-in profile's illustrative one only a warning (tests/test_lint_provenance.py)
+    from importlib import resources
+
+    measured = tmp_path / "measured.toml"
+    measured.write_bytes(resources.files("armctl.data").joinpath("default_profile.toml").read_bytes())
+    result = run(SCRIPTS / "lint_error_job.txt", "--port", FAST_SIM, "--no-live", "--profile", measured)
     assert writes == [] and opened == []
     assert result.exit_code == 1
     assert f"{SCRIPTS / 'lint_error_job.txt'}:4:4: L103 " in result.stderr

@@ -22,7 +22,9 @@ ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT / "tests" / "data" / "lint"
 CLEAN = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 Z100\n"
 WARNING = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F30\n"  # L203 only
-ERROR = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X500\n"  # L103 on line 2
+# L101 on line 3: an error whatever the profile (L103 on the built-in profile's illustrative
+# workspace is a warning, tests/test_lint_provenance.py)
+ERROR = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG300 X260 Y10 Z150 R10\nG301 X250 Y0 Z150\n"
 
 HEADLINE = re.compile(r"^(?P<file>.+?):(?P<line>\d+):(?P<col>\d+): (?P<code>[EL]\d{3}) .+$")
 GITHUB = re.compile(
@@ -94,8 +96,8 @@ def test_text_format_is_ruff_like(tmp_path):
     assert result.exit_code == 1
     lines = result.stdout.splitlines()
     match = HEADLINE.match(lines[0])
-    assert match and match.group("code", "line", "col") == ("L103", "2", "4")
-    assert lines[2] == "2 | G1 X500" and lines[3] == "  |    ^^^^"
+    assert match and match.group("code", "line", "col") == ("L101", "3", "1")
+    assert lines[2] == "3 | G301 X250 Y0 Z150" and lines[3] == "  | ^^^^"
     assert any(line.startswith("  = hint: ") for line in lines)
     assert lines[-1] == "Found 1 error in 1 of 1 file."
 
@@ -108,7 +110,7 @@ def test_json_format_is_one_array_with_the_promised_fields(tmp_path):
     assert result.exit_code == 1
     records = json.loads(result.stdout)
     assert [(Path(r["file"]).name, r["line"], r["code"], r["severity"]) for r in records] == [
-        ("a.txt", 2, "L103", "error"), ("b.txt", 1, "L203", "warning")]
+        ("a.txt", 3, "L101", "error"), ("b.txt", 1, "L203", "warning")]
     for record in records:
         assert {"file", "line", "column", "end_line", "end_column", "code", "severity", "message"} <= record.keys()
         assert record["end_line"] == record["line"] and record["end_column"] > record["column"]
@@ -128,7 +130,7 @@ def test_github_format_is_workflow_commands_and_a_summary(tmp_path):
     commands = [GITHUB.match(line) for line in lines[:-1]]
     assert all(commands), lines
     assert [(m.group("kind"), m.group("code"), m.group("line")) for m in commands] == [
-        ("error", "L103", "2"), ("warning", "L203", "1")]
+        ("error", "L101", "3"), ("warning", "L203", "1")]
     assert "%0Ahint: " in commands[0].group("message")  # the hint, on its own line in the annotation
     assert lines[-1] == "Found 1 error and 1 warning in 2 of 2 files."
 
@@ -150,7 +152,7 @@ def test_statistics_count_per_code(tmp_path):
     write(tmp_path / "a.txt", WARNING + "G1 X260 F40\nG1 X500 F3000\n")
     result = run(tmp_path / "a.txt", "--statistics")
     assert "2  L203  [warning]  cartesian-speed-in-deg-s" in result.stdout
-    assert "1  L103  [error]  outside-workspace" in result.stdout
+    assert "1  L103  [warning]  outside-workspace" in result.stdout  # on the illustrative workspace
 
 
 def test_list_rules_prints_every_code_with_severity_and_rationale():
@@ -253,7 +255,7 @@ def test_a_file_named_twice_is_linted_once(tmp_path):
 def test_stdin(tmp_path):
     result = run("-", "--format", "json", "--stdin-filename", "piped.txt", input=ERROR)
     assert result.exit_code == 1
-    assert [(r["file"], r["line"], r["code"]) for r in json.loads(result.stdout)] == [("piped.txt", 2, "L103")]
+    assert [(r["file"], r["line"], r["code"]) for r in json.loads(result.stdout)] == [("piped.txt", 3, "L101")]
     assert run("-", input=CLEAN).exit_code == 0
 
 
@@ -262,7 +264,7 @@ def test_missing_file_is_exit_2_but_the_rest_is_still_linted(tmp_path):
     result = run(tmp_path / "nope.txt", path)
     assert result.exit_code == 2
     assert "nope.txt: no such file or directory" in result.stderr
-    assert "L103" in result.stdout
+    assert "L101" in result.stdout
     assert result.stdout.splitlines()[-1] == "Found 1 error in 1 of 1 file. 1 path could not be read (see above)."
 
 

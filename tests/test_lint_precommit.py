@@ -44,7 +44,9 @@ def test_try_repo_runs_the_hook(tmp_path):
     repo = tmp_path / "user-repo"
     (repo / "jobs").mkdir(parents=True)
     shutil.copy(ROOT / "scripts" / "pick_and_place.txt", repo / "jobs")
-    (repo / "jobs" / "bad.gcode").write_text("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X500\n")
+    # an error on any profile (L101; X500 would be a warning on the built-in profile's illustrative workspace)
+    (repo / "jobs" / "bad.gcode").write_text("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG300 X260 Y10 Z150 R10\n"
+                                             "G301 X250 Y0 Z150\n")
     env = dict(os.environ, PRE_COMMIT_HOME=str(tmp_path / "cache"))
     git = ["git", "-c", "user.email=test@example.com", "-c", "user.name=test"]
     subprocess.run([*git, "init", "-q"], cwd=repo, check=True)
@@ -56,7 +58,7 @@ def test_try_repo_runs_the_hook(tmp_path):
 
     failed = try_repo()
     assert failed.returncode == 1, failed.stdout + failed.stderr
-    assert "jobs/bad.gcode:2:4: L103" in failed.stdout
+    assert "jobs/bad.gcode:3:1: L101" in failed.stdout
     subprocess.run([*git, "rm", "-q", "-f", "jobs/bad.gcode"], cwd=repo, check=True)
     passed = try_repo()
     assert passed.returncode == 0, passed.stdout + passed.stderr

@@ -6,7 +6,7 @@ judge the compiled statements against the arm profile while a tracker follows wh
 will be.  Pure except for ``paths`` (the file system) and ``command`` (click).
 
 Modules, one job each:
-  registry.py    the code table (RULES: language + lint), @rule, --select/--ignore Selection
+  registry.py    the code table (RULES: language + lint, declared statically), @check, --select/--ignore Selection
   rules.py       lint's rule functions (geometry, speeds, PWM, end state)
   tracker.py     where the arm will be between statements (G54 origin, FK after G6/POSE, PWM, pause)
   scan.py        what the source text says (parameters read/assigned, repeat counts, inline ignores)

@@ -82,7 +82,7 @@ def _run(paths, fmt, selection, strict, statistics, profile, stdin_filename, con
             continue
         summary.add(report)
         _write(formatter.file(report))
-    table = "".join(line + "\n" for line in statistics_lines(summary.counts)) if statistics else ""
+    table = "".join(line + "\n" for line in statistics_lines(summary.severities)) if statistics else ""
     if fmt == "json":  # stdout stays one JSON document
         _write(formatter.close(summary))
         click.echo(table + summary_line(summary), err=True)

@@ -9,6 +9,11 @@ comment and is counted per code; lint keeps up to ``max_diagnostics`` of its own
 per file and the compiler as many of its own — so memory stays flat for a script of any
 length and any number of findings; ``FileReport.hidden`` says how many were not kept.
 
+A finding's severity is its code's, except that an error resting on a number the packaged
+profile only illustrates (a rule's ``rests_on``, armctl/profile.py's provenance) is a warning
+that names those numbers: a finding is only as true as the numbers it rests on, and a warning
+never blocks ``run``.  So ``FileReport`` counts errors and warnings per finding, not per code.
+
 A statement inside a repeat block is checked on every pass (a G91 loop may leave the
 workspace on its third pass only) but each (line, code) is reported for one pass only: the
 first that finds it.
@@ -22,7 +27,7 @@ from typing import Iterable, Optional
 
 from ..script import DEFAULT_MAX_DIAGNOSTICS, ERROR, WARNING, Diagnostic, SourceSpan, compile_lines
 from . import rules as _rules  # noqa: F401 - registers the rules
-from .registry import CHECKS, END, RULES, Selection, matches, severity_of
+from .registry import CHECKS, END, Selection, matches, severity_of
 from .scan import LineScanner, ignored_codes
 from .tracker import ArmTracker
 
@@ -34,29 +39,31 @@ class FileReport:
     file: str
     diagnostics: list[Diagnostic] = field(default_factory=list)  # kept, sorted by position
     counts: Counter = field(default_factory=Counter)  # code → findings (kept or not)
+    severities: Counter = field(default_factory=Counter)  # (code, severity) → findings (kept or not)
     hidden: int = 0  # findings counted but not kept (over max_diagnostics)
     uncounted_errors: int = 0  # compiler errors beyond its cap: not kept, code unknown
     lines: int = 0
 
     @property
     def errors(self) -> int:
-        counted = sum(n for code, n in self.counts.items() if RULES[code].severity == ERROR)
+        counted = sum(n for (_, severity), n in self.severities.items() if severity == ERROR)
         return counted + self.uncounted_errors
 
     @property
     def warnings(self) -> int:
-        return sum(n for code, n in self.counts.items() if RULES[code].severity == WARNING)
+        return sum(n for (_, severity), n in self.severities.items() if severity == WARNING)
 
 
 class _Collector:
     """Filters, de-duplicates, counts and keeps findings for one report."""
 
-    def __init__(self, report: FileReport, selection: Selection, max_diagnostics: int) -> None:
-        self.report, self.selection, self.max = report, selection, max_diagnostics
+    def __init__(self, report: FileReport, selection: Selection, max_diagnostics: int, profile=None) -> None:
+        self.report, self.selection, self.max, self.profile = report, selection, max_diagnostics, profile
         self._passes: dict = {}  # (line, code) → the repeat pass that reported it first
 
-    def add(self, code: str, where, message: str, hint: Optional[str], loop: tuple = ()) -> None:
-        """``where``: a SourceSpan, or a rules.WordAt resolved to one only if the finding is kept."""
+    def add(self, code: str, where, message: str, hint: Optional[str], loop: tuple = (), rests_on: tuple = ()) -> None:
+        """``where``: a SourceSpan, or a rules.WordAt resolved to one only if the finding is kept;
+        ``rests_on``: the profile keys the finding depends on (see the module docstring)."""
         if code not in self.selection or _silenced(code, where.text):
             return
         if loop:  # report a loop line's code on one pass only (every finding of that pass)
@@ -65,10 +72,18 @@ class _Collector:
                 return
             if any(loop):
                 message += f" (repeat pass {'/'.join(str(i + 1) for i in loop)})"
+        severity = severity_of(code)
+        if severity == ERROR and rests_on and self.profile is not None:
+            unmeasured = self.profile.illustrative(rests_on)
+            if unmeasured:
+                severity = WARNING
+                message += (f" ({', '.join(unmeasured)}: illustrative numbers from the built-in profile;"
+                            " give your arm's profile with --profile)")
         self.report.counts[code] += 1
+        self.report.severities[code, severity] += 1
         if len(self.report.diagnostics) < self.max:
             span = where if type(where) is SourceSpan else where.resolve()
-            self.report.diagnostics.append(Diagnostic(span, code, severity_of(code), message, hint))
+            self.report.diagnostics.append(Diagnostic(span, code, severity, message, hint))
         else:
             self.report.hidden += 1
 
@@ -77,6 +92,7 @@ class _Collector:
         so that lint's own findings never crowd out the errors that stop a script compiling."""
         if diagnostic.code in self.selection and not _silenced(diagnostic.code, diagnostic.span.text):
             self.report.counts[diagnostic.code] += 1
+            self.report.severities[diagnostic.code, diagnostic.severity] += 1
             self.report.diagnostics.append(diagnostic)
 
 
@@ -91,7 +107,7 @@ def lint_lines(lines: Iterable[str], file: str, profile, selection: Optional[Sel
     ``selection`` defaults to every code."""
     selection = Selection() if selection is None else selection
     report = FileReport(file)
-    collector = _Collector(report, selection, max_diagnostics)
+    collector = _Collector(report, selection, max_diagnostics, profile)
     checks = {kind: [(code, check) for code, check in entries if code in selection]
               for kind, entries in CHECKS.items()}
     compilation = None
@@ -100,12 +116,12 @@ def lint_lines(lines: Iterable[str], file: str, profile, selection: Optional[Sel
     arm = ArmTracker(profile)
     for statement in compilation:
         for code, check in checks.get(type(statement.command), ()):
-            for span, message, hint in check(statement, arm):
-                collector.add(code, span, message, hint, statement.loop)
+            for span, message, hint, *rests_on in check(statement, arm):
+                collector.add(code, span, message, hint, statement.loop, *rests_on)
         arm.apply(statement)
     for code, check in checks.get(END, ()):
-        for span, message, hint in check(arm):
-            collector.add(code, span, message, hint)
+        for span, message, hint, *rests_on in check(arm):
+            collector.add(code, span, message, hint, (), *rests_on)
     for code, span, message, hint in scanner.unused_parameters():
         collector.add(code, span, message, hint)
     if arm.statements == 0 and compilation.error_count == 0 and not scanner.not_text:

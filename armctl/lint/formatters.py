@@ -21,7 +21,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 
 from ..script import Diagnostic
-from .registry import RULES, rule_name
+from .registry import rule_name
 
 
 @dataclass
@@ -35,6 +35,7 @@ class Summary:
     hidden: int = 0
     unreadable: int = 0  # paths that could not be read (missing, unreadable, no scripts)
     counts: Counter = field(default_factory=Counter)
+    severities: Counter = field(default_factory=Counter)  # (code, severity) → findings
 
     def add(self, report) -> None:
         self.files += 1
@@ -43,6 +44,7 @@ class Summary:
         self.warnings += report.warnings
         self.hidden += report.hidden
         self.counts.update(report.counts)
+        self.severities.update(report.severities)
 
 
 def _plural(count: int, word: str) -> str:
@@ -65,11 +67,12 @@ def summary_line(summary: Summary) -> str:
     return line
 
 
-def statistics_lines(counts: Counter) -> list[str]:
-    """ruff-like: count, code, severity, rule name — most frequent first."""
-    rows = sorted(counts.items(), key=lambda item: (-item[1], item[0]))
+def statistics_lines(severities: Counter) -> list[str]:
+    """ruff-like: count, code, severity, rule name — most frequent first.  ``severities`` counts
+    (code, severity): a code's findings on illustrative profile numbers are warnings, a row apart."""
+    rows = sorted(severities.items(), key=lambda item: (-item[1], item[0]))
     width = max((len(f"{n:,}") for _, n in rows), default=1)
-    return [f"{n:>{width},}  {code}  [{RULES[code].severity}]  {rule_name(code)}" for code, n in rows]
+    return [f"{n:>{width},}  {code}  [{severity}]  {rule_name(code)}" for (code, severity), n in rows]
 
 
 class TextFormatter:

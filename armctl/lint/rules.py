@@ -8,10 +8,14 @@ against the arm's profile and common sense: geometry (L1xx), speeds and units (L
 (L3xx), parameters, loops and empty scripts (L4xx, fed by armctl/lint/scan.py) and the state
 the script leaves the arm in (L5xx).
 
-A statement rule is ``check(statement, arm) -> iterable of (where, message, hint)``, where is
-a ``SourceSpan`` or a ``WordAt`` (a word's span, computed only if the finding is kept); it runs
-before ``arm`` (armctl/lint/tracker.py) advances past the statement, so ``arm`` describes the
-arm as the statement finds it.  An END rule is ``check(arm)``.  Rules read the profile through
+A statement rule is ``check(statement, arm) -> iterable of (where, message, hint[, rests_on])``,
+where is a ``SourceSpan`` or a ``WordAt`` (a word's span, computed only if the finding is kept)
+and ``rests_on`` names the profile numbers the finding depends on ("section.key" or a whole
+"section"): the engine reports a finding on an error code as a warning when any of them is an
+illustrative number of the packaged default (armctl/profile.py's provenance) — a finding is
+only as true as the numbers it rests on.  A finding without ``rests_on`` rests on geometry or
+on the protocol alone.  It runs before ``arm`` (armctl/lint/tracker.py) advances past the
+statement, so ``arm`` describes the arm as the statement finds it.  An END rule is ``check(arm)``.  Rules read the profile through
 ``arm.profile`` and never see each other; the engine adds the code, severity and location
 filters.  Thresholds that are judgement calls are named constants below.
 """
@@ -20,13 +24,13 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Iterator, NamedTuple, Optional, Union
+from typing import Iterator, NamedTuple, Optional
 
-from ..kinematics import reach_problem
+from ..kinematics import Unreachable, box_problem, inverse
 from ..motion import arc_through, circle_through
 from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove
-from ..script import ERROR, WARNING, SourceSpan
-from .registry import END, SOURCE, rule
+from ..script import SourceSpan
+from .registry import END, check
 from .tracker import cartesian_target, pwm_channel_of
 
 ARC_POINT_TOLERANCE_MM = 0.05  # arc points closer than this to each other or to one line: degenerate
@@ -37,7 +41,8 @@ SLOW_CARTESIAN_MM_MIN = 60.0  # a Cartesian F below 1 mm/s reads as deg/s
 PWM_TOLERANCE_US = 0.5  # "equal" PWM values, for the gripper's end state
 
 CARTESIAN_MOVES = (LinearMove, AccelLinearMove, ArcStart, ArcEnd)
-Finding = tuple[Union[SourceSpan, "WordAt"], str, Optional[str]]  # where, message, hint
+TOOL_DOWN_DEG = (180.0, 0.0, 0.0)  # the attitude tried to tell "attitude" from "distance" (A180 B0 C0)
+Finding = tuple  # (where: SourceSpan | WordAt, message, hint[, rests_on: tuple of profile keys])
 
 
 class WordAt(NamedTuple):
@@ -73,8 +78,7 @@ def _xyz(point) -> str:
 # --- L1xx geometry --------------------------------------------------------------------------------
 
 
-@rule("L101", ERROR, "arc-degenerate",
-      "three arc points that coincide or lie on one line define no circle", on=[ArcEnd])
+@check("L101", on=[ArcEnd])
 def arc_degenerate(statement, arm) -> Iterator[Finding]:
     start, points = _arc_points(statement, arm)
     if start is None:
@@ -93,9 +97,7 @@ def arc_degenerate(statement, arm) -> Iterator[Finding]:
                "for a straight line use G1; for an arc move the G300 point off the line")
 
 
-@rule("L102", ERROR, "arc-radius",
-      "an R that disagrees with the circle through the arc's three points makes the path ambiguous",
-      on=[ArcEnd])
+@check("L102", on=[ArcEnd])
 def arc_radius(statement, arm) -> Iterator[Finding]:
     start, points = _arc_points(statement, arm)
     if start is None:
@@ -119,26 +121,53 @@ def _arc_points(statement, arm):
 
 
 _AXIS = re.compile(r"robot ([XYZ]) = ")
+_WORKSPACE = ("workspace",)  # the box and the reach radius
+_KINEMATICS = ("links", "joints")  # inverse kinematics: link lengths and joint limits
 
 
-@rule("L103", ERROR, "outside-workspace",
-      "a target outside the profile's workspace box or reach, or with no joint solution inside the limits,"
-      " stops or crashes the arm",
-      on=CARTESIAN_MOVES + (JointMove,))
+@check("L103", on=CARTESIAN_MOVES + (JointMove,))
 def outside_workspace(statement, arm) -> Iterator[Finding]:
     command = statement.command
     if type(command) is JointMove:
         yield from _joint_target_outside(statement, arm)
         return
     pose = cartesian_target(command)
-    problem = arm.reach_problem(pose, lambda: reach_problem(pose, arm.profile, arm.origin_mm, arm.ik_hint()))
+    if type(command) is not ArcStart and pose == arm.pose:
+        return  # the arm is already there (a gripper- or speed-only line): one mistake, one finding
+    problem = arm.reach_problem(pose, lambda: _reach_problem(pose, arm))
     if problem is not None:
-        axis = _AXIS.match(problem)
+        message, hint, rests_on = problem
+        axis = _AXIS.match(message)
         span = _at(statement, axis.group(1)) if axis else statement.span
         what = "the G300 point" if type(command) is ArcStart else "target"
-        yield span, f"{what} {_xyz(pose)}: {problem}", _workspace_hint(arm, problem)
+        yield span, f"{what} {_xyz(pose)}: {message}", hint, rests_on
     elif type(command) is ArcEnd:
         yield from _arc_outside(statement, arm)
+
+
+def _reach_problem(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
+    """(message, hint, rests_on) for a worktable pose the arm cannot take, or None: first the
+    workspace box and reach radius, then a joint solution inside the limits — and if there is
+    none, whether the attitude or the distance is at fault (the same point tool down)."""
+    robot = arm.robot_xyz(pose)
+    problem = box_problem(robot, arm.profile.workspace)
+    if problem is not None:
+        return problem, _workspace_hint(arm, problem), _WORKSPACE
+    profile = arm.profile
+    near = arm.ik_hint() if arm.ik_hint() is not None else profile.poses[0]
+    try:
+        inverse((*robot, *pose[3:6]), profile.links, near, profile.joint_limits_deg)
+        return None
+    except Unreachable as error:
+        problem = str(error)
+    try:
+        inverse((*robot, *TOOL_DOWN_DEG), profile.links, near, profile.joint_limits_deg)
+    except Unreachable:
+        return (problem, "neither this attitude nor tool down (A180 B0 C0) has a joint solution: the point is out"
+                " of the arm's reach; bring it nearer the arm", _KINEMATICS)
+    attitude = " ".join(f"{letter}{_mm(value)}" for letter, value in zip("ABC", pose[3:6]))
+    return (problem, f"the point is within reach, but not with the attitude {attitude}: the wrist cannot turn"
+            " that far; change the attitude (A180 B0 C0 = tool down reaches it)", _KINEMATICS)
 
 
 def _joint_target_outside(statement, arm) -> Iterator[Finding]:
@@ -146,9 +175,10 @@ def _joint_target_outside(statement, arm) -> Iterator[Finding]:
     if any(not low <= j <= high for j, (low, high) in zip(joints, arm.profile.joint_limits_deg, strict=True)):
         return  # L104 says it
     robot = arm.profile.kinematics.forward(joints)[:3]
-    problem = _box_problem(robot, arm.profile.workspace)
+    problem = box_problem(robot, arm.profile.workspace)
     if problem is not None:
-        yield statement.span, f"G6 puts the tool at robot {_xyz(robot)}: {problem}", _workspace_hint(arm, problem)
+        yield (statement.span, f"G6 puts the tool at robot {_xyz(robot)}: {problem}", _workspace_hint(arm, problem),
+               (*_WORKSPACE, "links"))
 
 
 def _arc_outside(statement, arm) -> Iterator[Finding]:
@@ -160,10 +190,10 @@ def _arc_outside(statement, arm) -> Iterator[Finding]:
         return  # L101
     for k in range(1, ARC_SAMPLES):
         point = _arc_point(arc, points[0], arc.sweep_rad * k / ARC_SAMPLES)
-        problem = _box_problem(arm.robot_xyz(point), arm.profile.workspace)
+        problem = box_problem(arm.robot_xyz(point), arm.profile.workspace)
         if problem is not None:
             yield (statement.span, f"the arc from line {start.line} passes {_xyz(point)}: {problem}",
-                   "the arc bulges beyond its three points; move the G300 point or split the arc")
+                   "the arc bulges beyond its three points; move the G300 point or split the arc", _WORKSPACE)
             return
 
 
@@ -176,17 +206,6 @@ def _arc_point(arc, start, angle: float):
     return tuple(c[i] + u[i] * cos + v[i] * sin for i in range(3))
 
 
-def _box_problem(robot_xyz, box) -> Optional[str]:
-    """The workspace box and reach radius part of ``kinematics.reach_problem`` (no IK)."""
-    for name, value, (low, high) in zip("XYZ", robot_xyz, (box.x_mm, box.y_mm, box.z_mm), strict=True):
-        if not low <= value <= high:
-            return f"robot {name} = {value:.1f} mm is outside the workspace {low:g}…{high:g} mm"
-    distance = math.sqrt(sum(v * v for v in robot_xyz))
-    if distance > box.reach_mm:
-        return f"point is {distance:.1f} mm from the robot origin, beyond the reach radius {box.reach_mm:g} mm"
-    return None
-
-
 def _workspace_hint(arm, problem: str) -> str:
     box, origin = arm.profile.workspace, arm.origin_mm
     if problem.startswith("robot "):
@@ -196,19 +215,16 @@ def _workspace_hint(arm, problem: str) -> str:
             return f"with the G54 origin at robot {_xyz(origin)} the worktable limits are {shifted} mm"
         return f"the profile's workspace is X {box.x_mm[0]:g}…{box.x_mm[1]:g}, Y {box.y_mm[0]:g}…{box.y_mm[1]:g}, " \
                f"Z {box.z_mm[0]:g}…{box.z_mm[1]:g} mm"
-    if "reach radius" in problem:
-        return f"keep the tool point within {box.reach_mm:g} mm of the robot origin"
-    return "no joint solution inside the limits: bring the point nearer the arm or change the attitude (A180 B0 C0 = tool down)"
+    return f"keep the tool point within {box.reach_mm:g} mm of the robot origin"
 
 
-@rule("L104", ERROR, "joint-limit",
-      "a joint angle outside the profile's limits drives the joint into its end stop", on=[JointMove])
+@check("L104", on=[JointMove])
 def joint_limit(statement, arm) -> Iterator[Finding]:
     limits = arm.profile.joint_limits_deg
     for k, (angle, (low, high)) in enumerate(zip(statement.command.joints_deg, limits, strict=True), 1):
         if not low <= angle <= high:
             yield (_at(statement, f"J{k}"), f"J{k}={angle:g} is outside its limits {low:g}…{high:g} deg",
-                   f"the profile allows J{k} from {low:g} to {high:g} deg")
+                   f"the profile allows J{k} from {low:g} to {high:g} deg", (f"joints.j{k}_deg",))
 
 
 # --- L2xx speeds ----------------------------------------------------------------------------------
@@ -218,38 +234,33 @@ def _is_unit_slip(statement, arm) -> bool:
     return statement.words.get("F", 0.0) > UNIT_SLIP_FACTOR * arm.profile.speed.max_joint_deg_s
 
 
-@rule("L201", ERROR, "speed-above-max",
-      "a speed above the profile's maximum is more than the arm is rated for (and its ETA is wrong)",
-      on=CARTESIAN_MOVES + (JointMove,))
+@check("L201", on=CARTESIAN_MOVES + (JointMove,))
 def speed_above_max(statement, arm) -> Iterator[Finding]:
     speed = arm.profile.speed
     if type(statement.command) is JointMove:
         value = statement.words.get("F")
         if value is not None and value > speed.max_joint_deg_s and not _is_unit_slip(statement, arm):
             yield (_at(statement, "F"), f"F{value:g} deg/s is above the profile's joint maximum {speed.max_joint_deg_s:g} deg/s",
-                   f"write F{speed.max_joint_deg_s:g} or less")
+                   f"write F{speed.max_joint_deg_s:g} or less", ("speed.max_joint_deg_s",))
         return
     for letter in ("F", "Q"):
         value = statement.words.get(letter)
         if value is not None and value > speed.max_linear_mm_min:
             limit = speed.max_linear_mm_min
             yield (_at(statement, letter), f"{letter}{value:g} mm/min is above the profile's maximum {limit:g} mm/min",
-                   f"write {letter}{limit:g} or less")
+                   f"write {letter}{limit:g} or less", ("speed.max_linear_mm_min",))
 
 
-@rule("L202", ERROR, "joint-speed-in-mm-min",
-      "a G6 speed far above the joint maximum was almost always meant as mm/min; G6 F is deg/s",
-      on=[JointMove])
+@check("L202", on=[JointMove])
 def joint_speed_unit(statement, arm) -> Iterator[Finding]:
     if _is_unit_slip(statement, arm):
         value, limit = statement.words["F"], arm.profile.speed.max_joint_deg_s
         yield (_at(statement, "F"), f"G6 F{value:g} means {value:g} deg/s, {value / limit:.0f}× the joint maximum"
-               f" {limit:g} deg/s: it reads like mm/min", f"G6 speeds are deg/s: write e.g. F{min(30.0, limit):g}")
+               f" {limit:g} deg/s: it reads like mm/min", f"G6 speeds are deg/s: write e.g. F{min(30.0, limit):g}",
+               ("speed.max_joint_deg_s",))
 
 
-@rule("L203", WARNING, "cartesian-speed-in-deg-s",
-      "a Cartesian speed below 1 mm/s reads like deg/s; G1/G22x/G300/G301 F is mm/min",
-      on=CARTESIAN_MOVES)
+@check("L203", on=CARTESIAN_MOVES)
 def cartesian_speed_unit(statement, arm) -> Iterator[Finding]:
     value = statement.words.get("F")
     if value is not None and 0 < value < SLOW_CARTESIAN_MM_MIN:
@@ -257,22 +268,18 @@ def cartesian_speed_unit(statement, arm) -> Iterator[Finding]:
                f"Cartesian speeds are mm/min: {value:g} mm/s is F{value * 60:g}")
 
 
-@rule("L204", ERROR, "accel-above-max",
-      "an acceleration above the profile's maximum is more than the arm is rated for",
-      on=[AccelLinearMove])
+@check("L204", on=[AccelLinearMove])
 def accel_above_max(statement, arm) -> Iterator[Finding]:
     value, limit = statement.words.get("K"), arm.profile.speed.max_accel_mm_s2
     if value is not None and abs(value) > limit:
         yield (_at(statement, "K"), f"K{value:g} mm/s² is above the profile's maximum acceleration {limit:g} mm/s²",
-               f"write K{math.copysign(limit, value):g} or a smaller magnitude")
+               f"write K{math.copysign(limit, value):g} or a smaller magnitude", ("speed.max_accel_mm_s2",))
 
 
 # --- L3xx PWM -------------------------------------------------------------------------------------
 
 
-@rule("L301", ERROR, "pwm-channel-unwired",
-      "a PWM value sent to a channel the profile does not wire moves nothing (the gripper is on PWM 1)",
-      on=[LinearMove, JointMove, ArcStart, ArcEnd])
+@check("L301", on=[LinearMove, JointMove, ArcStart, ArcEnd])
 def pwm_channel_unwired(statement, arm) -> Iterator[Finding]:
     channel = pwm_channel_of(statement.command)
     wired = arm.profile.pwm.channels
@@ -284,37 +291,26 @@ def pwm_channel_unwired(statement, arm) -> Iterator[Finding]:
     arm.notes.add(key)
     letter = "T" if "T" in statement.words else "S"
     yield (_at(statement, letter), f"PWM channel {channel} is not wired in the profile (wired: {', '.join(map(str, wired))})",
-           "T1 selects the gripper's channel" if 1 in wired else "set pwm.channels in the profile")
+           "T1 selects the gripper's channel" if 1 in wired else "set pwm.channels in the profile", ("pwm.channels",))
 
 
-@rule("L302", ERROR, "pwm-outside-profile-range",
-      "a PWM pulse outside the profile's range drives the servo past its end stop",
-      on=[LinearMove, JointMove, ArcStart, ArcEnd])
+@check("L302", on=[LinearMove, JointMove, ArcStart, ArcEnd])
 def pwm_outside_range(statement, arm) -> Iterator[Finding]:
     value = statement.words.get("S")
     low, high = arm.profile.pwm.range_us
     if value is not None and not low <= value <= high:
         pwm = arm.profile.pwm
         yield (_at(statement, "S"), f"S{value:g} µs is outside the profile's PWM range {low:g}…{high:g} µs",
-               f"gripper open is S{pwm.gripper_open_us:g}, closed S{pwm.gripper_close_us:g}")
+               f"gripper open is S{pwm.gripper_open_us:g}, closed S{pwm.gripper_close_us:g}", ("pwm.range_us",))
 
 
-# --- L4xx parameters, loops, empty scripts (found by armctl/lint/scan.py) -------------------------
-
-rule("L401", WARNING, "unused-parameter",
-     "a parameter assigned but never read is usually a typo in its name or a leftover", on=SOURCE)
-rule("L402", WARNING, "repeat-never-runs",
-     "a repeat count of 0 skips its block; a count must be a positive whole number to do anything", on=SOURCE)
-rule("L403", WARNING, "empty-script",
-     "a script without a single statement sends nothing to the arm", on=SOURCE)
+# --- L4xx parameters, loops, empty scripts: found by armctl/lint/scan.py and the engine ---------
 
 
 # --- L5xx how the script leaves the arm (only when the profile's [lint] table asks) ---------------
 
 
-@rule("L501", ERROR, "end-gripper",
-      "the profile's lint.end_gripper says how every job must leave the gripper (e.g. open, part released)",
-      on=END)
+@check("L501", on=END)
 def end_gripper(arm) -> Iterator[Finding]:
     expected = arm.profile.lint.end_gripper
     statement = arm.pwm_statement.get(1)
@@ -330,11 +326,11 @@ def end_gripper(arm) -> Iterator[Finding]:
     state = other if abs(value - other_value) <= PWM_TOLERANCE_US else f"at S{value:g}, neither open nor closed"
     key = "gripper_open_us" if expected == "open" else "gripper_close_us"
     yield (_at(statement, "S"), f"the script ends with the gripper {state} (PWM 1 last set here);"
-           f" the profile expects it {expected}", f"end with a move carrying S{want:g} (pwm.{key})")
+           f" the profile expects it {expected}", f"end with a move carrying S{want:g} (pwm.{key})",
+           (f"pwm.{key}", "pwm.gripper_open_us" if expected == "closed" else "pwm.gripper_close_us"))
 
 
-@rule("L502", ERROR, "end-paused",
-      "the profile's lint.end_paused says whether a job may end paused (PAUSE toggles)", on=END)
+@check("L502", on=END)
 def end_paused(arm) -> Iterator[Finding]:
     expected = arm.profile.lint.end_paused
     if expected is None or arm.paused == expected:

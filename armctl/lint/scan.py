@@ -25,11 +25,12 @@ from typing import Callable, Iterable, Iterator, Mapping, Optional
 
 from ..script import MAX_LINE_LENGTH, InitialState, SourceSpan, compile_lines
 
-_INLINE_COMMENT = re.compile(r"\([^)\n]*\)")
 _PARAMETER = re.compile(r"#<([A-Za-z_][A-Za-z0-9_]*)>")
 _ASSIGNMENT = re.compile(r"\s*(?:[Nn][0-9]+\s*)?#<([A-Za-z_][A-Za-z0-9_]*)>\s*=")
 _BLOCK = re.compile(r"\s*(?:[Nn][0-9]+\s*)?[Oo](?:<[A-Za-z0-9_]+>|[0-9]+)\s*(repeat|endrepeat)\b\s*(.*?)\s*$", re.I)
-_IGNORE = re.compile(r";.*?\barmctl:\s*ignore\b(?:\[([^\]]*)\])?", re.I)
+# Searched from just after the line's first ";" only: every later ";" finds the same first match,
+# and trying the pattern at each of them (``;.*?armctl…``) was quadratic in the number of ";".
+_IGNORE = re.compile(r"\barmctl:\s*ignore\b(?:\[([^\]]*)\])?", re.I)
 _PROBE = "armctl_lint_repeat_count"
 _MAX_NOT_TEXT = 100  # E011 findings kept from the scanner per file
 
@@ -39,9 +40,10 @@ Finding = tuple[str, SourceSpan, str, Optional[str]]  # code, span, message, hin
 def ignored_codes(text: str) -> Optional[tuple[str, ...]]:
     """The codes (or prefixes, upper case) an inline ``; armctl: ignore[…]`` silences on this
     line; ``()`` for a bare ``; armctl: ignore`` (everything); None without the comment."""
-    if "armctl" not in text and "ARMCTL" not in text.upper():
+    comment = text.find(";")
+    if comment < 0 or "armctl" not in text.lower():
         return None
-    match = _IGNORE.search(text)
+    match = _IGNORE.search(text, comment + 1)
     if match is None:
         return None
     if match.group(1) is None:
@@ -50,10 +52,20 @@ def ignored_codes(text: str) -> Optional[tuple[str, ...]]:
 
 
 def code_text(text: str) -> str:
-    """The line with comments blanked out (same length up to the ``;``, so columns hold)."""
-    if "(" in text:
-        text = _INLINE_COMMENT.sub(lambda m: " " * len(m.group()), text)
-    return text.split(";", 1)[0]
+    """The line with comments blanked out (same length up to the ``;``, so columns hold): a
+    ``(…)`` comment runs to the first ``)``; an unclosed ``(`` stays (the compiler reports it).
+    One left-to-right scan: linear in the line's length, whatever it holds."""
+    if "(" not in text:
+        return text.split(";", 1)[0]
+    parts, position = [], 0
+    while (start := text.find("(", position)) >= 0:
+        end = text.find(")", start)
+        if end < 0:
+            break
+        parts += [text[position:start], " " * (end + 1 - start)]
+        position = end + 1
+    parts.append(text[position:])
+    return "".join(parts).split(";", 1)[0]
 
 
 class LineScanner:

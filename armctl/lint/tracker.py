@@ -55,7 +55,7 @@ class ArmTracker:
         self.statements = 0
         self.last_statement = None
         self.notes: set = set()  # what a rule already said once per script, e.g. ("L301", channel)
-        self._reach: dict = {}  # (pose, origin, hint) → reach problem or None
+        self._reach: dict = {}  # (pose, origin, joints) → reach problem or None
 
     # --- what rules ask -----------------------------------------------------------------------
 
@@ -68,8 +68,9 @@ class ArmTracker:
         """Joints to solve IK near: the last known joints, else None (the profile's home pose)."""
         return self.joints
 
-    def reach_problem(self, pose, compute) -> Optional[str]:
-        """``compute()`` for ``pose`` here, cached: loops and palettes revisit the same targets."""
+    def reach_problem(self, pose, compute):
+        """``compute()`` (rules.py: None, or the problem with its hint) for ``pose`` here, cached:
+        loops and palettes revisit the same targets."""
         key = (pose, self.origin_mm, self.joints)
         if key not in self._reach:
             if len(self._reach) >= _REACH_CACHE_SIZE:
