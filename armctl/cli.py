@@ -30,6 +30,10 @@ class UsageFailure(ArmctlError):
 class ArmctlGroup(click.Group):
     """Turns the errors a user can cause into a message and an exit code."""
 
+    def main(self, *args, **kwargs):
+        _tolerant_output()
+        return super().main(*args, **kwargs)
+
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
@@ -43,6 +47,20 @@ class ArmctlGroup(click.Group):
             _reader_went_away()
         except OSError as error:
             _fail(_os_error_text(error), EXIT_USAGE)
+
+
+def _tolerant_output() -> None:
+    """Every command may print anything (…, →, °, a user's file name) to any terminal: on an
+    output whose encoding lacks a character (PYTHONIOENCODING=latin-1, an ASCII locale) it is
+    written as an escape (``\\u2026``) instead of raising UnicodeEncodeError.  Done once here,
+    at the entry point, so click, rich and plain prints all inherit it."""
+    for stream in (sys.stdout, sys.stderr):
+        reconfigure = getattr(stream, "reconfigure", None)
+        if reconfigure is not None:
+            try:
+                reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):  # a closed or exotic stream: leave it as it is
+                pass
 
 
 def _reader_went_away():
