@@ -306,7 +306,7 @@ def estimate(script, lead_s, baud, profile_path, as_json):
 @click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?slowdown=1.3&loss=0.05.")
 def sim(use_pty, tcp_port, sim_url):
     """Run the built-in simulated arm for other programs to talk to."""
-    from .sim.bridge import serve_pty, serve_tcp
+    from .sim.bridge import INTERRUPTED, serve_pty, serve_tcp
     from .sim.protocol_sim import is_virtual_clock, parse_sim_url
 
     if bool(use_pty) == bool(tcp_port):
@@ -318,13 +318,12 @@ def sim(use_pty, tcp_port, sim_url):
     def ready(where: str) -> None:
         click.echo(f"simulated arm on {where} (Ctrl-C to stop)")
 
-    try:
-        if use_pty:
-            serve_pty(options, ready, time_scale=time_scale, keep_serving=True)
-        else:
-            serve_tcp(tcp_port, options, ready, time_scale=time_scale)
-    except KeyboardInterrupt:
-        pass
+    if use_pty:
+        ended = serve_pty(options, ready, time_scale=time_scale, keep_serving=True)
+    else:
+        ended = serve_tcp(tcp_port, options, ready, time_scale=time_scale)
+    if ended == INTERRUPTED:  # the bridge closed what it opened; Ctrl-C exits 130 like every command
+        raise KeyboardInterrupt
 
 
 def _register_packaged_commands() -> None:
