@@ -54,8 +54,8 @@ def _tolerant_output() -> None:
     output whose encoding lacks a character (PYTHONIOENCODING=latin-1, an ASCII locale) it is
     written as an escape (``\\u2026``) instead of raising UnicodeEncodeError.  Done once here,
     at the entry point, so click, rich and plain prints all inherit it."""
-    for stream in (sys.stdout, sys.stderr):
-        reconfigure = getattr(stream, "reconfigure", None)
+    for name in ("stdout", "stderr"):
+        reconfigure = getattr(getattr(sys, name, None), "reconfigure", None)
         if reconfigure is not None:
             try:
                 reconfigure(errors="backslashreplace")
