@@ -30,6 +30,10 @@ class UsageFailure(ArmctlError):
 class ArmctlGroup(click.Group):
     """Turns the errors a user can cause into a message and an exit code."""
 
+    def main(self, *args, **kwargs):
+        _tolerant_output()
+        return super().main(*args, **kwargs)
+
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
@@ -43,6 +47,20 @@ class ArmctlGroup(click.Group):
             _reader_went_away()
         except OSError as error:
             _fail(_os_error_text(error), EXIT_USAGE)
+
+
+def _tolerant_output() -> None:
+    """Every command may print anything (…, →, °, a user's file name) to any terminal: on an
+    output whose encoding lacks a character (PYTHONIOENCODING=latin-1, an ASCII locale) it is
+    written as an escape (``\\u2026``) instead of raising UnicodeEncodeError.  Done once here,
+    at the entry point, so click, rich and plain prints all inherit it."""
+    for name in ("stdout", "stderr"):
+        reconfigure = getattr(getattr(sys, name, None), "reconfigure", None)
+        if reconfigure is not None:
+            try:
+                reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):  # a closed or exotic stream: leave it as it is
+                pass
 
 
 def _reader_went_away():
@@ -288,7 +306,7 @@ def estimate(script, lead_s, baud, profile_path, as_json):
 @click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?slowdown=1.3&loss=0.05.")
 def sim(use_pty, tcp_port, sim_url):
     """Run the built-in simulated arm for other programs to talk to."""
-    from .sim.bridge import serve_pty, serve_tcp
+    from .sim.bridge import INTERRUPTED, serve_pty, serve_tcp
     from .sim.protocol_sim import is_virtual_clock, parse_sim_url
 
     if bool(use_pty) == bool(tcp_port):
@@ -300,13 +318,12 @@ def sim(use_pty, tcp_port, sim_url):
     def ready(where: str) -> None:
         click.echo(f"simulated arm on {where} (Ctrl-C to stop)")
 
-    try:
-        if use_pty:
-            serve_pty(options, ready, time_scale=time_scale, keep_serving=True)
-        else:
-            serve_tcp(tcp_port, options, ready, time_scale=time_scale)
-    except KeyboardInterrupt:
-        pass
+    if use_pty:
+        ended = serve_pty(options, ready, time_scale=time_scale, keep_serving=True)
+    else:
+        ended = serve_tcp(tcp_port, options, ready, time_scale=time_scale)
+    if ended == INTERRUPTED:  # the bridge closed what it opened; Ctrl-C exits 130 like every command
+        raise KeyboardInterrupt
 
 
 def _register_packaged_commands() -> None:

@@ -62,7 +62,8 @@ def looks_like_log(data: bytes) -> bool:
 def bytes_from_input(data: bytes) -> bytes:
     """The byte stream ``decode`` should scan, whatever form the user gave it in."""
     if looks_like_hex(data):
-        return bytes.fromhex(data.decode("ascii"))
+        # whitespace anywhere, even inside a byte ("1 23 4"), only separates digits
+        return bytes.fromhex("".join(data.decode("ascii").split()))
     if looks_like_log(data):
         return b"".join(_log_bytes(data))
     return data
@@ -75,8 +76,10 @@ def _log_bytes(data: bytes) -> Iterator[bytes]:
         try:
             record = json.loads(line)
             yield bytes.fromhex(record["hex"])
-        except (ValueError, KeyError, TypeError):
-            continue  # a log line without a frame (a note, a summary) carries no bytes
+        except (ValueError, KeyError, TypeError, RecursionError):
+            # a log line without a frame (a note, a summary) carries no bytes; nor does one
+            # that is no JSON object, or one nested too deeply for the parser
+            continue
 
 
 def describe_chunk(chunk: Chunk) -> str:

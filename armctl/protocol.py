@@ -76,8 +76,6 @@ JOYSTICK_STILL_RANGE = (108, 148)  # inclusive: values here mean "stand still"
 PAUSE_TOGGLE_ARGUMENT = 2
 STRUCTURE_MODE_ARGUMENT = {0: 0, 1: 9}  # mode → a[3]
 
-_F32_MAX = 3.4028234663852886e38
-
 
 # --- field normalisation ----------------------------------------------------------------------
 
@@ -88,9 +86,10 @@ def _f32(cls_name: str, name: str, value) -> float:
     value = float(value)
     if not math.isfinite(value):
         raise FieldError(f"{cls_name}.{name} must be finite, not {value!r}")
-    if abs(value) > _F32_MAX:
+    single = as_f32(value)
+    if single is None:  # beyond what rounds to ±float32 max (≈3.4028235e38)
         raise FieldError(f"{cls_name}.{name} = {value!r} does not fit a 32-bit float")
-    return FLOAT_CODEC.unpack(FLOAT_CODEC.pack(value))[0]
+    return single
 
 
 def _int(cls_name: str, name: str, value, low: int, high: int) -> int:
@@ -109,13 +108,30 @@ def _check_range(cls_name: str, name: str, value: float, low: float, high: float
         raise FieldError(f"{cls_name}.{name} = {f32_repr(value)} is outside {f32_repr(low)}…{f32_repr(high)}")
 
 
+def as_f32(value: float) -> float | None:
+    """``value`` rounded to single precision (H1), or None when it rounds beyond ±float32 max.
+
+    The one place that asks "what would the wire hold?": ``struct`` refuses a double that
+    rounds past the largest float32 with OverflowError, which must never reach a user."""
+    try:
+        return FLOAT_CODEC.unpack(FLOAT_CODEC.pack(value))[0]
+    except OverflowError:
+        return None
+
+
 def f32_repr(value: float) -> str:
-    """The shortest decimal that reads back as the same single-precision float."""
+    """The shortest decimal that reads back as the same single-precision float.
+
+    Total over every float: ±inf and NaN (which a frame being decoded may carry) are spelt
+    ``inf``, ``-inf`` and ``nan``; a double that is no float32 gets its own ``repr``."""
+    value = float(value)
+    if not math.isfinite(value):
+        return repr(value)
     if value == int(value) and abs(value) < 1e15:
         return str(int(value))
     for digits in range(1, 10):
         text = f"{value:.{digits}g}"
-        if FLOAT_CODEC.unpack(FLOAT_CODEC.pack(float(text)))[0] == value:
+        if as_f32(float(text)) == value:
             return text
     return repr(value)
 
@@ -815,7 +831,7 @@ class _FloatStatus(StatusFrame):
     def _from_data(cls, data: bytes) -> "StatusFrame":
         value = FLOAT_CODEC.unpack_from(data, 0)[0]
         if not math.isfinite(value):
-            raise FieldError(f"{cls.NAME} carries a non-finite float")
+            raise FieldError(f"{cls.NAME} carries {f32_repr(value)}, not a finite number")
         return cls(value)
 
 
@@ -981,9 +997,12 @@ def _chunk_at(data: bytes, position: int) -> Chunk | None:
             except FrameError:
                 pass
     if is_status_frame(data, position):
+        frame = data[position : position + STATUS_SIZE]
         try:
-            return Chunk(position, data[position : position + STATUS_SIZE], decode_status(data[position : position + STATUS_SIZE]))
-        except (FrameError, FieldError):
+            return Chunk(position, frame, decode_status(frame))
+        except FieldError as error:  # well framed, impossible value (an inf or NaN float)
+            return Chunk(position, frame, None, str(error))
+        except FrameError:
             return None
     return None
 

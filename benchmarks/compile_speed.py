@@ -12,6 +12,7 @@ and prints a table:
 
 Targets (DESIGN): armctl's peak RSS <= 100 MB and armctl >= 0.5 x gcodeparser's lines/s.
 
+    .venv/bin/pip install -e '.[bench]'                        # gcodeparser, the reference
     .venv/bin/python benchmarks/compile_speed.py               # 1,000,000 lines
     .venv/bin/python benchmarks/compile_speed.py --lines 100000 --repeat 3 --check
 """
@@ -19,6 +20,7 @@ Targets (DESIGN): armctl's peak RSS <= 100 MB and armctl >= 0.5 x gcodeparser's 
 from __future__ import annotations
 
 import argparse
+import importlib.util
 import json
 import random
 import resource
@@ -153,6 +155,11 @@ def main(argv: list[str] | None = None) -> int:
         child(*options.child)
         return 0
 
+    if importlib.util.find_spec("gcodeparser") is None:
+        # the reference contender: without it there is no target to compare against
+        print("compile_speed: the package gcodeparser is not installed; install the bench extra "
+              "first: pip install -e '.[bench]'", file=sys.stderr)
+        return 2
     names = ["armctl", "regex", "gcodeparser"] + (["gcodeparser-class"] if options.with_class else [])
     with tempfile.TemporaryDirectory(prefix="armctl-bench-") as folder:
         path = Path(folder) / "job.txt"

@@ -375,7 +375,7 @@ def test_a_small_job_through_armctl_sim_pty_in_another_process():
         assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
         assert result.stderr == ""  # a real device path: no simulator banner
         simulator.send_signal(signal.SIGINT)
-        assert simulator.wait(timeout=5) == 0
+        assert simulator.wait(timeout=5) == 130  # README: 130 Ctrl-C
     finally:
         simulator.kill()
         simulator.communicate()

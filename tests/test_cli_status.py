@@ -308,7 +308,8 @@ def test_json_watch_prints_one_json_line_per_period_until_ctrl_c(monkeypatch, ca
     clock = VirtualTime(stop_after=3)
     monkeypatch.setattr(status_watch, "time", clock)
     states = [a_state(200.0), a_state(201.5), a_state(203.0, paused=1)]
-    status_watch.watch_status(FakeLink(states), 9600, as_json=True)  # returns: Ctrl-C is a clean exit
+    with pytest.raises(KeyboardInterrupt):  # Ctrl-C leaves to the CLI, which exits 130
+        status_watch.watch_status(FakeLink(states), 9600, as_json=True)
     lines = capsys.readouterr().out.splitlines()
     assert [json.loads(line) for line in lines] == [s.to_json() for s in states]
     assert clock.sleeps == [status_watch.JSON_LINE_S] * 3
@@ -320,7 +321,8 @@ def test_plain_watch_off_a_terminal_prints_plain_lines_never_cursor_codes(monkey
 
     clock = VirtualTime(stop_after=2)
     monkeypatch.setattr(status_watch, "time", clock)
-    status_watch.watch_status(FakeLink([a_state(200.0), a_state(210.0)]), 9600, as_json=False)  # stdout: not a tty
+    with pytest.raises(KeyboardInterrupt):
+        status_watch.watch_status(FakeLink([a_state(200.0), a_state(210.0)]), 9600, as_json=False)  # stdout: not a tty
     text = capsys.readouterr().out
     lines = text.splitlines()
     assert len(lines) == 2
@@ -338,7 +340,7 @@ def test_a_port_lost_while_watching_is_an_error_not_a_clean_exit(monkeypatch):
         status_watch.watch_status(FakeLink([a_state(200.0)], fail_after=2), 9600, as_json=True)
 
 
-def test_json_watch_end_to_end_then_ctrl_c_exits_0(tmp_path):
+def test_json_watch_end_to_end_then_ctrl_c_exits_130(tmp_path):
     process = subprocess.Popen(
         [sys.executable, "-m", "armctl", "status", "--json", "--watch", "--port", WATCH_SIM],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
@@ -351,7 +353,8 @@ def test_json_watch_end_to_end_then_ctrl_c_exits_0(tmp_path):
         rest, err = process.communicate(timeout=10)
     finally:
         process.kill()
-    assert process.returncode == 0, err
+    assert process.returncode == 130, err  # README: 130 Ctrl-C
+    assert err.splitlines()[-1] == "armctl: interrupted"
     objects = [json.loads(line) for line in lines + rest.splitlines()]
     assert all(list(o) == KEYS for o in objects)
     assert objects[-1]["joints"] == [0.0, 0.0, 0.0, 0.0, 90.0, 0.0]

@@ -165,8 +165,28 @@ def test_run_panel_as_text():
 def test_run_panel_shows_the_statement_without_its_comment_and_cuts_long_ones():
     long = list(compile_text("G1 X250.125 Y-120.125 Z150.125 A180.125 B0.125 C0.125 S1000 F3000 U1.125 V1.125 ; c\n"))
     text = "\n".join(rendered(render_run(a_view(last_sent=long[0]), "t"), width=120))
-    assert "│ last line sent    1  G1 X250.125 Y-120.125 Z150.125 A180.125 B0.125 C  " in text  # 48 characters
+    assert "│ last line sent    1  G1 X250.125 Y-120.125 Z150.125 A180.125 B0.125 …  " in text  # 48 characters
     assert "; c" not in text and "U1.125" not in text
+
+
+def test_run_panel_shows_a_line_of_exactly_48_characters_whole():
+    line = "G1 X250.12 Y-120.125 Z150.125 A180.125 B0.125 C0"
+    assert len(line) == 48
+    statement = list(compile_text("G1 X0 Y0 Z100 A0 B0 C0 S1000 F3000\n" + line + "\n"))[1]
+    text = "\n".join(rendered(render_run(a_view(last_sent=statement), "t"), width=120))
+    assert f"│ last line sent    2  {line}  " in text and "…" not in text
+
+
+def test_run_panel_shows_expressions_and_brackets_as_written():
+    statements = list(compile_text(
+        "#<x0> = 200\nG1 X[#<x0>] Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X[#<x0> + [2 * 5]]\n",
+        "job.txt",
+    ))
+    view = a_view(last_sent=statements[1], last_done=statements[0])
+    text = "\n".join(rendered(render_run(view, "armctl run [red]job[/red].txt"), width=120))
+    assert "last line sent    3  G1 X[#<x0> + [2 * 5]]" in text
+    assert "last line done    2  G1 X[#<x0>] Y0 Z150 A180 B0 C0 S1000 F3000" in text
+    assert "armctl run [red]job[/red].txt" in text
 
 
 def test_run_panel_at_the_start():

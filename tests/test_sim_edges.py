@@ -8,6 +8,7 @@ from __future__ import annotations
 import _thread
 import os
 import queue
+import signal
 import threading
 import time
 
@@ -181,6 +182,17 @@ def test_a_bridge_stops_when_asked(serve, args):
     assert not thread.is_alive() and result == [STOPPED]
 
 
+@pytest.fixture
+def python_sigint():
+    """_thread.interrupt_main raises KeyboardInterrupt only while Python's own SIGINT handler
+    is installed; a runner started with SIGINT ignored (nohup, background, some CI) would
+    otherwise leave the bridge serving for ever."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
+
+
+@pytest.mark.usefixtures("python_sigint")
 def test_serve_pty_exits_cleanly_on_ctrl_c():
     timer = threading.Timer(0.1, _thread.interrupt_main)
     paths = []
@@ -193,6 +205,7 @@ def test_serve_pty_exits_cleanly_on_ctrl_c():
     assert paths and not os.path.exists(paths[0])  # the pty went away with its master
 
 
+@pytest.mark.usefixtures("python_sigint")
 def test_serve_tcp_exits_cleanly_on_ctrl_c_while_waiting_for_a_client():
     timer = threading.Timer(0.1, _thread.interrupt_main)
     assert serve_tcp(0, SimOptions(), lambda url: timer.start()) == INTERRUPTED

@@ -210,8 +210,8 @@ def _stream(runner, options: JobOptions, view) -> str:
         try:
             runner.run()
         except KeyboardInterrupt:
-            click.echo("\narmctl: interrupted: no more frames are sent; sending the abort sequence "
-                       f"({options.abort}) and waiting for the arm to come to rest …", err=True)
+            display.note("\narmctl: interrupted: no more frames are sent; sending the abort sequence "
+                         f"({options.abort}) and waiting for the arm to come to rest …")
             try:
                 runner.abort(ABORT_SEQUENCES[options.abort])
             except KeyboardInterrupt:
@@ -239,10 +239,17 @@ def _deferred_ctrl_c(runner):
 
 
 class _Display:
-    """A rich Live panel on a terminal, plain progress lines elsewhere; throttled."""
+    """A rich Live panel on a terminal, plain progress lines elsewhere; throttled.
 
-    def __init__(self, title: str, live: bool) -> None:
+    While the panel is live it owns the screen: rich redraws it by moving the cursor up over
+    the lines it drew last, so a line written past it (a raw write to stderr) makes the next
+    redraw land too low and leaves a stray partial panel above the real one.  Every message
+    printed during the job therefore goes through ``note``, which prints it above the panel.
+    """
+
+    def __init__(self, title: str, live: bool, console=None) -> None:
         self.title, self.live = title, live
+        self._console = console  # tests pass a recording console; None: rich's own (stdout)
         self._live = None
         self._last = 0.0
 
@@ -251,13 +258,25 @@ class _Display:
             from rich.live import Live
             from rich.text import Text
 
-            self._live = Live(Text("starting …"), refresh_per_second=10, transient=False)
+            self._live = Live(Text("starting …"), console=self._console, refresh_per_second=10, transient=False)
             self._live.__enter__()
         return self
 
     def __exit__(self, *exc):
         if self._live is not None:
-            self._live.__exit__(*exc)
+            live, self._live = self._live, None
+            live.__exit__(*exc)
+
+    def note(self, text: str) -> None:
+        """A message for stderr that the live panel must not be broken by."""
+        if self._live is not None and sys.stderr.isatty():
+            from rich.text import Text
+
+            # rich erases the panel, prints the text, redraws the panel below it; the leading
+            # newline that moves past an echoed ^C on a plain terminal is not needed here
+            self._live.console.print(Text(text.lstrip("\n")), soft_wrap=True)
+        else:
+            click.echo(text, err=True)
 
     def update(self, view) -> None:
         now = time.monotonic()
@@ -265,7 +284,7 @@ class _Display:
             if now - self._last >= LIVE_REFRESH_S or view.outcome != "running":
                 from .run_panel import render_run
 
-                self._live.update(render_run(view, self.title))
+                self._live.update(render_run(view, self.title), refresh=True)  # throttled above: draw now
                 self._last = now
         elif now - self._last >= PLAIN_PROGRESS_S:
             from .run_panel import progress_line

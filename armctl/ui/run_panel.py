@@ -1,7 +1,9 @@
 """The live view of ``armctl run``: a pure function of a ``RunView``.
 
 Strategy: like ``status_panel``, rendering takes a snapshot and returns a rich renderable (or a
-plain line for pipes), so tests compare text from a recording console.
+plain line for pipes), so tests compare text from a recording console.  Text that comes from
+the user (script lines, the file name in the title) goes in as ``Text``, never as a markup
+string: ``G1 X[#<x0>]`` is an expression, not a rich style tag.
 """
 
 from __future__ import annotations
@@ -10,6 +12,7 @@ from rich.console import Group
 from rich.panel import Panel
 from rich.progress_bar import ProgressBar
 from rich.table import Table
+from rich.text import Text
 
 from ..runner import RunView
 
@@ -19,11 +22,16 @@ def _clock(seconds: float) -> str:
     return f"{seconds // 60}:{seconds % 60:02d}"
 
 
-def _line(statement) -> str:
+LINE_TEXT_CHARS = 48  # a script line is cut to this (ellipsis included), so the panel keeps its width
+
+
+def _line(statement) -> Text:
     if statement is None:
-        return "—"
+        return Text("—")
     code = statement.span.text.split(";", 1)[0].strip()  # the statement, not its comment
-    return f"{statement.line}  {code[:48]}"
+    if len(code) > LINE_TEXT_CHARS:
+        code = code[: LINE_TEXT_CHARS - 1] + "…"
+    return Text(f"{statement.line}  {code}")
 
 
 def render_run(view: RunView, title: str) -> Panel:
@@ -51,7 +59,7 @@ def render_run(view: RunView, title: str) -> Panel:
     facts.add_row("position X Y Z", position)
     facts.add_row("last line sent", _line(view.last_sent))
     facts.add_row("last line done", _line(view.last_done))
-    return Panel(Group(frames, facts), title=title, expand=False)
+    return Panel(Group(frames, facts), title=Text(title), expand=False)
 
 
 def progress_line(view: RunView) -> str:

@@ -9,8 +9,11 @@ elsewhere — never cursor codes into a pipe).
 from __future__ import annotations
 
 import json
+import signal
 import sys
+import threading
 import time
+from contextlib import contextmanager
 
 import click
 
@@ -67,16 +70,15 @@ class _Rate:
 
 
 def watch_status(link, baud: int, as_json: bool) -> None:
-    """Until Ctrl-C (exit 0): a live panel on a terminal, lines elsewhere."""
-    try:
-        if as_json:
-            _watch_lines(link, JSON_LINE_S, lambda s, h: json.dumps(s.to_json()))
-        elif sys.stdout.isatty():
-            _watch_live(link, baud)
-        else:
-            _watch_lines(link, PLAIN_LINE_S, lambda s, h: status_line(s))
-    except KeyboardInterrupt:
-        pass
+    """Until Ctrl-C: a live panel on a terminal, lines elsewhere.  Ctrl-C leaves as
+    KeyboardInterrupt, after the live view has restored the terminal (cursor shown, last
+    panel kept), so the CLI exits 130 like every other command."""
+    if as_json:
+        _watch_lines(link, JSON_LINE_S, lambda s, h: json.dumps(s.to_json()))
+    elif sys.stdout.isatty():
+        _watch_live(link, baud)
+    else:
+        _watch_lines(link, PLAIN_LINE_S, lambda s, h: status_line(s))
 
 
 def _health(link, baud, rate, now):
@@ -103,11 +105,30 @@ def _watch_live(link, baud) -> None:
     rate = _Rate()
     now = link.clock()
     state, health = _health(link, baud, rate, now)
-    with Live(render_status(state, health, now), console=Console(), refresh_per_second=12, transient=False) as live:
-        while True:
-            if link.error is not None:
-                raise link.error
-            time.sleep(WATCH_REFRESH_S)
-            now = link.clock()
-            state, health = _health(link, baud, rate, now)
-            live.update(render_status(state, health, now))
+    with _ctrl_c_between_frames() as interrupted:
+        with Live(render_status(state, health, now), console=Console(), refresh_per_second=12, transient=False) as live:
+            while not interrupted.is_set():
+                if link.error is not None:
+                    raise link.error
+                time.sleep(WATCH_REFRESH_S)
+                now = link.clock()
+                state, health = _health(link, baud, rate, now)
+                live.update(render_status(state, health, now))
+    raise KeyboardInterrupt  # after Live has drawn its last frame and shown the cursor again
+
+
+@contextmanager
+def _ctrl_c_between_frames():
+    """Ctrl-C sets an event instead of raising wherever the main thread happens to be: a
+    KeyboardInterrupt inside rich's write of a frame cuts an escape sequence in half and leaves
+    its console buffering for ever, so the cursor is never shown again."""
+    interrupted = threading.Event()
+    previous = signal.getsignal(signal.SIGINT)
+    if threading.current_thread() is not threading.main_thread() or previous is signal.SIG_IGN:
+        yield interrupted
+        return
+    signal.signal(signal.SIGINT, lambda signum, frame: interrupted.set())
+    try:
+        yield interrupted
+    finally:
+        signal.signal(signal.SIGINT, previous)
