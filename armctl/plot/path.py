@@ -50,6 +50,7 @@ APPROXIMATE_NOTE = "kinematics not verified against your arm"
 ARC_STEP_DEG = 5.0
 JOINT_STEP_DEG = 2.0
 JOINT_MIN_STEPS = 8
+_SLACK = 0.01  # of a step: a 90.00005° arc (frames carry 32-bit floats) still makes 18 chords, not 19
 MAX_TEXT_CHARS = 80  # of a source line in a label
 VIEW_MARGIN_SHARE, VIEW_MARGIN_MIN_MM = 0.08, 10.0  # around the job in view_limits
 DEFAULT_MAX_SEGMENTS = 20_000  # kept for drawing; later ones are counted in JobPath.omitted
@@ -171,9 +172,9 @@ def point_count(segment: Segment, arc_start: ArcStart | None = None) -> int:
         return 1
     if segment.kind == "arc":
         arc = arc_through(segment.start.xyz, (arc_start.x_mm, arc_start.y_mm, arc_start.z_mm), segment.end.xyz)
-        return 1 + max(2, math.ceil(math.degrees(arc.sweep_rad) / ARC_STEP_DEG - 1e-9))
+        return 1 + max(2, math.ceil(math.degrees(arc.sweep_rad) / ARC_STEP_DEG - _SLACK))
     if segment.kind == "joint":
-        return 1 + max(JOINT_MIN_STEPS, math.ceil(segment.length / JOINT_STEP_DEG - 1e-9))
+        return 1 + max(JOINT_MIN_STEPS, math.ceil(segment.length / JOINT_STEP_DEG - _SLACK))
     return 2
 
 
