@@ -20,6 +20,7 @@ from .style import (
 )
 
 _AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
+DIV_ID = "armctl-plot"  # a fixed id: the same job gives the same file
 _END_MARKER_PX = 4  # a dot at each segment's ends (and at a segment that is one point)
 
 
@@ -68,7 +69,7 @@ def figure(path: JobPath, view: str = "3d") -> go.Figure:
 
 
 def write_html(path: JobPath, output: str, view: str = "3d") -> None:
-    figure(path, view).write_html(output, include_plotlyjs=True, full_html=True,
+    figure(path, view).write_html(output, include_plotlyjs=True, full_html=True, div_id=DIV_ID,
                                   config={"displaylogo": False, "responsive": True})
 
 
