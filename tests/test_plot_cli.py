@@ -107,7 +107,7 @@ def test_without_the_extra_in_a_fresh_process(tmp_path):
     blocker = tmp_path / "blocked"
     blocker.mkdir()
     for name in ("plotly", "matplotlib"):
-        write(blocker / f"{name}.py", f"raise ImportError('No module named {name}')\n")
+        write(blocker / f"{name}.py", f"raise ModuleNotFoundError('No module named {name}', name='{name}')\n")
     env = {**__import__("os").environ, "PYTHONPATH": str(blocker)}
     done = armctl("plot", SQUARE, "-o", tmp_path / "job.html", env=env)
     assert done.returncode == 2, done.stderr

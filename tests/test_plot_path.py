@@ -14,7 +14,7 @@ from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from armctl.lint.engine import lint_lines
@@ -143,6 +143,7 @@ def test_arc_points_lie_on_the_circle_through_the_three_points(start, via, end):
 
 @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.tuples(*[st.integers(-300, 300)] * 3), min_size=3, max_size=3, unique=True))
+@example([(-3, -38, 0), (7, 83, -5), (-1, -27, -1)])  # a wide arc: the sag bound needs the true step angle
 def test_any_arc_is_sampled_on_its_circle(points):
     start, via, end = points
     u, v = sub(via, start), sub(end, start)
@@ -168,7 +169,7 @@ def _check_arc(segment, start, via, end):
     assert max(chords) - min(chords) <= 1e-6 * max(1.0, radius)  # evenly spaced along the arc
     # the arc goes through the G300 point, not round the other side: the via point is within one
     # chord's sag of the polyline
-    step = chords[0] / radius  # radians between samples
+    step = 2 * math.asin(min(1.0, chords[0] / (2 * radius)))  # radians between samples
     sag = radius * (1 - math.cos(step / 2))
     nearest = min(_distance_to_chord(via, a, b) for a, b in zip(points, points[1:]))
     assert nearest <= sag + 1e-6
