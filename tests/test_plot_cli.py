@@ -115,6 +115,15 @@ def test_without_the_extra_in_a_fresh_process(tmp_path):
     assert not (tmp_path / "job.html").exists()
 
 
+def test_the_extra_and_the_package_are_declared():
+    import tomllib
+
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text(encoding="utf-8"))
+    extra = project["project"]["optional-dependencies"]["plot"]
+    assert {requirement.split(">")[0] for requirement in extra} == {"plotly", "matplotlib"}
+    assert "armctl.plot" in project["tool"]["setuptools"]["packages"]  # the wheel ships the command
+
+
 # --- usage errors and bad scripts (no extra needed: they stop before drawing) ----------------------------
 
 

@@ -224,8 +224,11 @@ def test_from_line_draws_the_rest_from_the_fixed_pose_0():
 
 
 def test_segments_past_the_cap_are_counted_not_kept():
-    path = path_of(f"{FIRST}\n" + "".join(f"G1 X{250 + k}\n" for k in range(1, 10)), max_segments=4)
-    assert len(path.segments) == 4 and path.omitted == 6
+    text = f"{FIRST}\n" + "".join(f"G1 X{250 + k}\n" for k in range(1, 10)) + "G300 X280 Y30 R30 F900\nG301 X310 Y0\n"
+    late = SimpleNamespace(span=SimpleNamespace(line=12))  # the G301, past the cap
+    path = path_of(text, [late], max_segments=4)
+    assert len(path.segments) == 4 and path.omitted == 6 + 1  # an arc is one segment
+    assert path.findings[0].segment is None and path.findings[0].point == path.segments[-1].points[-1]
 
 
 def test_every_kind_has_a_colour():

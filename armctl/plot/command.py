@@ -143,9 +143,9 @@ def _render(path, output: str, fmt: str, view) -> None:
 
 
 def _summary(path, output: str) -> None:
-    kinds = ", ".join(f"{kind} {len(path.of_kind(kind))}" for kind in path.kinds) or "nothing moves"
-    click.echo(f"wrote {output}: {len(path.segments)} segments ({kinds}), {len(path.findings)} findings,"
-               " from the profile's fixed pose 0")
+    from .style import summary
+
+    click.echo(f"wrote {output}: {summary(path)}, from the profile's fixed pose 0")
     if path.approximate:
         click.echo("joint moves are drawn through the profile's kinematics: approximate, not verified against your arm")
     if path.omitted:

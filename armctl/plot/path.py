@@ -132,7 +132,7 @@ class JobPath:
     workspace: Box
     segments: list[PathSegment] = field(default_factory=list)
     findings: list[Finding] = field(default_factory=list)
-    omitted: int = 0  # segments past max_segments, planned but not kept
+    omitted: int = 0  # segments past max_segments: counted, not drawn (their findings sit at the path's end)
     from_line: int = 1
 
     @property
@@ -202,14 +202,13 @@ def build_path(statements: Iterable, model: MotionModel, file: str = "<script>",
     opening = None  # the G300 statement waiting for its G301
     for statement in statements:
         command = statement.command
+        if len(path.segments) >= max_segments:  # counted, not planned: nothing more is drawn
+            path.omitted += type(command) is not ArcStart
+            continue
         arc_start = planner.pending_arc
         segment = planner.feed(command)
         if type(command) is ArcStart:
             opening = statement
-            continue
-        if len(path.segments) >= max_segments:
-            path.omitted += 1
-            opening = None
             continue
         kind = kind_of(command)
         first_line, text = statement.line, _clean(statement.text)

@@ -40,11 +40,20 @@ def workspace_name(box) -> str:
 
 
 def findings_name(severity: str, count: int) -> str:
-    return f"lint {severity}{'s' if count != 1 else ''} ({count})"
+    return f"lint {severity}{'' if count == 1 else 's'} ({count})"
+
+
+def counted(count: int, noun: str) -> str:
+    return f"{count} {noun}{'' if count == 1 else 's'}"
+
+
+def summary(path) -> str:
+    """``14 segments (linear 11, arc 2, joint 1), 0 findings``."""
+    kinds = ", ".join(f"{kind} {len(path.of_kind(kind))}" for kind in path.kinds) or "nothing moves"
+    return f"{counted(len(path.segments), 'segment')} ({kinds}), {counted(len(path.findings), 'finding')}"
 
 
 def title(path) -> str:
-    counts = ", ".join(f"{kind} {len(path.of_kind(kind))}" for kind in path.kinds) or "no segments"
     where = f" from line {path.from_line}" if path.from_line > 1 else ""
-    return f"{path.file}{where}: {len(path.segments)} segments ({counts}), {len(path.findings)} findings"
+    return f"{path.file}{where}: {summary(path)}"
 
