@@ -260,6 +260,12 @@ def test_findings_before_the_first_and_after_the_last_segment():
         (None, path.start), (0, path.segments[0].points[-1]), (1, (300, 0, 150)), (None, (300, 0, 150))]
 
 
+def test_a_finding_inside_a_repeat_block_without_a_segment_is_placed_after_its_last_pass():
+    path = path_of(f"{FIRST}\nO100 repeat [2]\nG91\nG1 X10\nG90\nO100 endrepeat\nG1 Y10\n")
+    placed = place_findings(path.segments, path.start, [SimpleNamespace(span=SimpleNamespace(line=5))])
+    assert placed[0].segment is None and close(placed[0].point, (270, 0, 150))
+
+
 def test_a_finding_on_a_g300_line_belongs_to_its_arc():
     path = path_of(f"{FIRST}\nG300 X280 Y30 R30 F900\nG301 X310 Y0\n")
     placed = place_findings(path.segments, path.start, [SimpleNamespace(span=SimpleNamespace(line=2))])

@@ -103,20 +103,19 @@ def _profile(profile_path):
 def _check(script: str, profile, from_line: int, force: bool) -> list:
     """Lint's findings (and a bad --from-line) on stderr; exit 1 on errors unless ``force``."""
     from ..lint.engine import lint_lines
+    from ..lint.formatters import TextFormatter
     from ..script import compile_file, read_lines
 
     report = lint_lines(read_lines(script), script, profile)
-    diagnostics = list(report.diagnostics)
     errors = report.errors
     if from_line > 1:  # a resume line the compiler cannot start at is an error like any other
         resume = [d for d in compile_file(script, from_line=from_line).finish() if d.code == "E010"]
-        diagnostics += resume
+        report.diagnostics.extend(resume)
         errors += len(resume)
-    for diagnostic in diagnostics:
-        click.echo(diagnostic.render(), err=True)
+    click.echo(TextFormatter().file(report), err=True, nl=False)  # exactly as `armctl lint` writes them
     if errors and not force:
         _fail(f"{errors} error{'s' if errors != 1 else ''}: nothing was drawn (--force draws it anyway)", EXIT_PROBLEMS)
-    return diagnostics
+    return report.diagnostics
 
 
 def _build(script: str, profile, from_line: int, diagnostics):

@@ -17,6 +17,7 @@ renderers (html.py, static.py) only draw what this module returns.
 
 from __future__ import annotations
 
+import bisect
 import math
 from dataclasses import dataclass, field
 from typing import Iterable, NamedTuple, Optional, Sequence
@@ -230,9 +231,11 @@ def place_findings(segments: Sequence[PathSegment], start: Point, diagnostics: I
     one written further down (the start pose if none is before it, the path's end if none is
     further down)."""
     first_of_line: dict[int, int] = {}
+    furthest: list[int] = []  # furthest[i]: the largest first_line of segments 0…i (repeat blocks go back)
     for segment in segments:
         first_of_line.setdefault(segment.first_line, segment.index)
         first_of_line.setdefault(segment.line, segment.index)
+        furthest.append(max(segment.first_line, furthest[-1] if furthest else 0))
     findings = []
     for diagnostic in diagnostics:
         line = diagnostic.span.line
@@ -240,7 +243,7 @@ def place_findings(segments: Sequence[PathSegment], start: Point, diagnostics: I
         if index is not None:
             findings.append(Finding(diagnostic, segments[index].points[-1], index))
             continue
-        later = next((s.index for s in segments if s.first_line > line), len(segments))
+        later = bisect.bisect_right(furthest, line)  # the first segment written below the line
         point = segments[later - 1].points[-1] if later > 0 else start
         findings.append(Finding(diagnostic, point, None))
     return findings
