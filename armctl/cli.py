@@ -330,9 +330,11 @@ def _register_packaged_commands() -> None:
     """Commands that live with their package; their modules import only click at load."""
     from .jog.command import jog
     from .lint.command import lint
+    from .plot.command import plot
 
     main.add_command(jog)
     main.add_command(lint)
+    main.add_command(plot)
 
 
 _register_packaged_commands()
