@@ -27,7 +27,7 @@ from .errors import ConfigError, PortError
 from .protocol import DEFAULT_BAUD, StatusFrame, StatusReader
 
 SIMULATOR_URL = "sim://"
-BAUD_RANGE = (300, 4_000_000)
+from .limits import BAUD_RANGE  # one range for --baud, `baud` in armctl.toml and sim://?baud=
 PORT_ENV = "ARMCTL_PORT"
 READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
