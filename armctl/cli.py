@@ -295,7 +295,10 @@ def sim(use_pty, tcp_port, sim_url):
 
     if bool(use_pty) == bool(tcp_port):
         raise UsageFailure("choose one of --pty or --tcp PORT")
-    options, time_scale = parse_sim_url(sim_url)
+    try:
+        options, time_scale = parse_sim_url(sim_url)
+    except ConfigError as error:
+        raise ConfigError(f"--url: {error}") from None
     if is_virtual_clock(sim_url):
         raise UsageFailure("a served simulator runs in real time: drop clock=virtual from --url")
 

@@ -23,8 +23,9 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Callable
 
-from .errors import ProfileError
+from .errors import ConfigError, ProfileError
 from .kinematics import JOINT_COUNT, Kinematics, Links
+from .limits import BAUD_RANGE
 
 CONFIG_NAME = "armctl.toml"
 DEFAULT_RESOURCE = ("armctl.data", "default_profile.toml")
@@ -329,14 +330,73 @@ def read_toml(path: Path) -> dict:
 
 def find_config(start: Path | None = None) -> tuple[Path | None, dict]:
     """The first armctl.toml in ``start`` (default: the working directory) or a parent, and
-    its whole content; ``(None, {})`` when there is none."""
+    its whole content with every top-level key checked; ``(None, {})`` when there is none."""
     directory = Path.cwd() if start is None else Path(start)
     directory = directory.resolve()
     for candidate in (directory, *directory.parents):
         path = candidate / CONFIG_NAME
         if path.is_file():
-            return path, read_toml(path)
+            data = read_toml(path)
+            for key, value in data.items():
+                check_config_value(path, key, value)
+            return path, data
     return None, {}
+
+
+# --- armctl.toml's top level --------------------------------------------------------------------
+# Each key's shape is checked here, once, for every command (a misspelt `prot = …` must not
+# quietly select the simulator); the tables' contents are checked by their owners: [profile]
+# above, [lint] by armctl/lint/command.py, [jog] by armctl/jog/settings.py and keymap.py.
+
+
+def _config_port(value) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise _Bad('must be a device path or URL such as "/dev/ttyUSB0" or "sim://" '
+                   "(leave port out to use the built-in simulator)")
+    return value
+
+
+def _config_baud(value) -> int:
+    low, high = BAUD_RANGE
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise _Bad(f"must be a whole number of bit/s from {low} to {high}")
+    return value
+
+
+def _config_profile(value):
+    if not isinstance(value, dict) and not (isinstance(value, str) and value.strip()):
+        raise _Bad("must be a table ([profile]) or a path string")
+    return value
+
+
+def _config_table(value) -> dict:
+    if not isinstance(value, dict):
+        raise _Bad("must be a table")
+    return value
+
+
+CONFIG_SCHEMA: dict[str, Callable] = {
+    "port": _config_port, "baud": _config_baud, "profile": _config_profile, "lint": _config_table, "jog": _config_table,
+}
+
+
+def check_config_value(path, key: str, value):
+    """``value`` of armctl.toml's top-level ``key``, checked; ConfigError naming the file and key."""
+    rule = CONFIG_SCHEMA.get(key)
+    if rule is None:
+        close = difflib.get_close_matches(key, list(CONFIG_SCHEMA), n=1)
+        hint = f" (did you mean {close[0]!r}?)" if close else f" (known: {', '.join(CONFIG_SCHEMA)})"
+        raise ConfigError(f"{path}: unknown key {key!r}{hint}")
+    try:
+        return rule(value)
+    except _Bad as bad:
+        shown = f"[{key}]" if isinstance(value, dict) else f"{key} = {_short_repr(value)}"
+        raise ConfigError(f"{path}: {shown} {bad}") from None
+
+
+def _short_repr(value, limit: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 def load_profile(path: Path | str | None = None, start: Path | None = None) -> Profile:
@@ -346,12 +406,8 @@ def load_profile(path: Path | str | None = None, start: Path | None = None) -> P
     config_path, config = find_config(start)
     if config_path is None or "profile" not in config:
         return default_profile()
-    entry = config["profile"]
+    entry = config["profile"]  # find_config checked it: a table or a path string
     if isinstance(entry, dict):
         return parse_profile(entry, str(config_path), prefix="profile.")
-    if isinstance(entry, str):
-        target = config_path.parent / entry
-        return parse_profile(read_toml(target), str(target))
-    raise ProfileError(
-        f"{config_path}: profile must be a table ([profile]) or a path string, not {entry!r}"
-    )
+    target = config_path.parent / entry
+    return parse_profile(read_toml(target), str(target))

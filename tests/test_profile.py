@@ -5,7 +5,7 @@ from importlib import resources
 
 import pytest
 
-from armctl.errors import ProfileError
+from armctl.errors import ConfigError, ProfileError
 from armctl.profile import (
     Profile, default_profile, find_config, load_profile, parse_profile, read_toml,
 )
@@ -179,7 +179,7 @@ def test_errors_in_the_profile_table_name_armctl_toml_and_the_full_key(tmp_path)
 
 def test_profile_entry_of_the_wrong_type(tmp_path):
     write(tmp_path / "armctl.toml", "profile = 3\n")
-    with pytest.raises(ProfileError, match=r"armctl\.toml: profile must be a table \(\[profile\]\) or a path"):
+    with pytest.raises(ConfigError, match=r"armctl\.toml: profile = 3 must be a table \(\[profile\]\) or a path"):
         load_profile(start=tmp_path)
 
 

@@ -47,7 +47,7 @@ def lint(ctx: click.Context, paths, fmt, select, ignore, strict, statistics, pro
     `; armctl: ignore[CODE]` is not reported for CODE. Exit status: 0 clean (warnings allowed
     unless --strict), 1 problems found, 2 usage error or unreadable input.
     """
-    from ..errors import ProfileError
+    from ..errors import ConfigError, ProfileError
     from .registry import UnknownCode
 
     if list_rules:
@@ -61,7 +61,7 @@ def lint(ctx: click.Context, paths, fmt, select, ignore, strict, statistics, pro
         from ..profile import load_profile
 
         profile = load_profile(profile_path)
-    except (ProfileError, UnknownCode, ValueError) as error:
+    except (ConfigError, ProfileError, UnknownCode, ValueError) as error:
         _fail(ctx, str(error))
     ctx.exit(_run(paths, fmt, selection, strict, statistics, profile, stdin_filename, config))
 
