@@ -26,6 +26,7 @@ from typing import Any, Callable
 from .errors import ConfigError, ProfileError
 from .kinematics import JOINT_COUNT, Kinematics, Links
 from .limits import BAUD_RANGE
+from .protocol import PWM_RANGE_US
 
 CONFIG_NAME = "armctl.toml"
 DEFAULT_RESOURCE = ("armctl.data", "default_profile.toml")
@@ -105,38 +106,44 @@ class _Bad(Exception):
 
 def _number(value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise _Bad(f"must be a number, not {value!r}")
+        raise _Bad(f"must be a number, not {_short_repr(value)}")
     return float(value)
 
 
-def _positive(value) -> float:
-    if (number := _number(value)) <= 0:
-        raise _Bad(f"must be greater than 0, not {value!r}")
-    return number
+def _in(low: float, high: float) -> Callable:
+    """A finite number from ``low`` to ``high``: a physically sensible range for a desktop arm,
+    and one the motion model computes with without dividing by zero or overflowing."""
 
+    def check(value) -> float:
+        number = _number(value)
+        if not low <= number <= high:
+            raise _Bad(f"must be from {low:g} to {high:g}, not {_short_repr(value)}")
+        return number
 
-def _not_negative(value) -> float:
-    if (number := _number(value)) < 0:
-        raise _Bad(f"must not be negative, not {value!r}")
-    return number
+    return check
 
 
 def _numbers(count: int, each: Callable = _number) -> Callable:
     def check(value) -> tuple:
         if not isinstance(value, list) or len(value) != count:
-            raise _Bad(f"must be a list of {count} numbers, not {value!r}")
+            raise _Bad(f"must be a list of {count} numbers, not {_short_repr(value)}")
         return tuple(each(v) for v in value)
 
     return check
 
 
-def _pair(value) -> tuple[float, float]:
-    if not isinstance(value, list) or len(value) != 2:
-        raise _Bad(f"must be a [min, max] pair of numbers, not {value!r}")
-    low, high = _number(value[0]), _number(value[1])
-    if low > high:
-        raise _Bad(f"has min {low:g} > max {high:g}")
-    return low, high
+def _pair(low: float, high: float) -> Callable:
+    each = _in(low, high)
+
+    def check(value) -> tuple[float, float]:
+        if not isinstance(value, list) or len(value) != 2:
+            raise _Bad(f"must be a [min, max] pair of numbers, not {_short_repr(value)}")
+        first, second = each(value[0]), each(value[1])
+        if first > second:
+            raise _Bad(f"has min {first:g} > max {second:g}")
+        return first, second
+
+    return check
 
 
 def _channels(value) -> tuple[int, ...]:
@@ -170,26 +177,36 @@ def _boolean(value) -> bool:
     return value
 
 
+# Ranges: a desktop arm reaches at most a few metres, turns a joint at most two full turns
+# either way, moves at most 100 m/min; a timing constant is at most a minute.  Lengths and
+# speeds that the motion model divides by have a lower bound well above underflow.
+_MM = _in(-10_000.0, 10_000.0)
+_DEG = _in(-720.0, 720.0)
+_PWM_US = _in(*PWM_RANGE_US)
+_SECONDS = _in(0.0, 60.0)
+_LINK_MM = _in(1.0, 10_000.0)
+
 _SCHEMA: dict[str, Any] = {
     "name": _text,
-    "workspace": {"x_mm": _pair, "y_mm": _pair, "z_mm": _pair, "reach_mm": _positive},
-    "joints": {f"j{k}_deg": _pair for k in range(1, JOINT_COUNT + 1)},
+    "workspace": {"x_mm": _pair(-10_000.0, 10_000.0), "y_mm": _pair(-10_000.0, 10_000.0),
+                  "z_mm": _pair(-10_000.0, 10_000.0), "reach_mm": _LINK_MM},
+    "joints": {f"j{k}_deg": _pair(-720.0, 720.0) for k in range(1, JOINT_COUNT + 1)},
     "speed": {
-        "max_linear_mm_min": _positive, "max_joint_deg_s": _positive, "max_accel_mm_s2": _positive,
-        "attitude_deg_s": _positive,
+        "max_linear_mm_min": _in(1.0, 100_000.0), "max_joint_deg_s": _in(0.1, 3600.0),
+        "max_accel_mm_s2": _in(1.0, 100_000.0), "attitude_deg_s": _in(0.1, 3600.0),
     },
     "pwm": {
-        "range_us": _pair, "channels": _channels, "gripper_open_us": _number, "gripper_close_us": _number,
-        "initial_us": _number,
+        "range_us": _pair(*PWM_RANGE_US), "channels": _channels, "gripper_open_us": _PWM_US,
+        "gripper_close_us": _PWM_US, "initial_us": _PWM_US,
     },
-    "poses": {pose: _numbers(JOINT_COUNT) for pose in FIXED_POSES},
+    "poses": {pose: _numbers(JOINT_COUNT, _DEG) for pose in FIXED_POSES},
     "links": {
-        "base_height_mm": _not_negative, "shoulder_offset_mm": _number, "upper_arm_mm": _positive,
-        "elbow_offset_mm": _number, "forearm_mm": _positive, "tool_mm": _not_negative,
+        "base_height_mm": _in(0.0, 10_000.0), "shoulder_offset_mm": _MM, "upper_arm_mm": _LINK_MM,
+        "elbow_offset_mm": _MM, "forearm_mm": _LINK_MM, "tool_mm": _in(0.0, 10_000.0),
     },
     "timing": {
-        "joint_ramp_s": _numbers(6, _not_negative), "command_overhead_s": _not_negative,
-        "pwm_change_s": _not_negative, "pose_smoothing": _smoothing,
+        "joint_ramp_s": _numbers(6, _SECONDS), "command_overhead_s": _SECONDS,
+        "pwm_change_s": _SECONDS, "pose_smoothing": _smoothing,
     },
     "lint": {"end_gripper": _gripper_state, "end_paused": _boolean},
 }
@@ -266,9 +283,7 @@ def _build(data: dict, source: str, prefix: str) -> Profile:
 
 
 def _cross_check(profile: Profile, source: str, prefix: str) -> None:
-    low, high = profile.pwm.range_us
-    if low < 500 or high > 2500:
-        raise ProfileError(f"{source}: {prefix}pwm.range_us {low:g}…{high:g} leaves the protocol's 500…2500 µs")
+    low, high = profile.pwm.range_us  # inside the protocol's range: the schema checked it
     for key in ("gripper_open_us", "gripper_close_us", "initial_us"):
         value = getattr(profile.pwm, key)
         if not low <= value <= high:
