@@ -213,10 +213,15 @@ _SCHEMA: dict[str, Any] = {
 _OPTIONAL_SECTIONS = {"lint"}
 
 
-def _unknown(source: str, key: str, known) -> ProfileError:
+def unknown_key_hint(key: str, known) -> str:
+    """`` (did you mean 'port'?)`` for a misspelt key, else the list of known keys: the one
+    wording of every unknown key in armctl.toml and a profile."""
     close = difflib.get_close_matches(key.rsplit(".", 1)[-1], list(known), n=1)
-    hint = f" (did you mean {close[0]!r}?)" if close else f" (known: {', '.join(known)})"
-    return ProfileError(f"{source}: unknown key {key!r}{hint}")
+    return f" (did you mean {close[0]!r}?)" if close else f" (known: {', '.join(known)})"
+
+
+def _unknown(source: str, key: str, known) -> ProfileError:
+    return ProfileError(f"{source}: unknown key {key!r}{unknown_key_hint(key, known)}")
 
 
 def _check(data: dict, source: str, prefix: str = "") -> dict:
@@ -399,9 +404,7 @@ def check_config_value(path, key: str, value):
     """``value`` of armctl.toml's top-level ``key``, checked; ConfigError naming the file and key."""
     rule = CONFIG_SCHEMA.get(key)
     if rule is None:
-        close = difflib.get_close_matches(key, list(CONFIG_SCHEMA), n=1)
-        hint = f" (did you mean {close[0]!r}?)" if close else f" (known: {', '.join(CONFIG_SCHEMA)})"
-        raise ConfigError(f"{path}: unknown key {key!r}{hint}")
+        raise ConfigError(f"{path}: unknown key {key!r}{unknown_key_hint(key, CONFIG_SCHEMA)}")
     try:
         return rule(value)
     except _Bad as bad:

@@ -272,6 +272,17 @@ def test_armctl_toml_mistakes_are_located_config_errors_never_the_simulator(tmp_
         assert lint.exit_code == 2 and message in lint.output, lint.output
 
 
+def test_misspelt_keys_in_the_lint_and_jog_tables_get_a_did_you_mean(tmp_path, script):
+    from armctl.jog.keymap import JogConfigError
+    from armctl.jog.settings import settings_from_config
+
+    (tmp_path / "armctl.toml").write_text('[lint]\nignre = ["L203"]\n')
+    result = _invoke(["lint", script])
+    assert result.exit_code == 2 and "unknown key 'lint.ignre' (did you mean 'ignore'?)" in result.output, result.output
+    with pytest.raises(JogConfigError, match=r"jog\.step_nm is not a jog setting \(did you mean 'step_mm'\?\)"):
+        settings_from_config({"step_nm": [1, 2, 3]}, "armctl.toml")
+
+
 @pytest.mark.parametrize("args, env, message", [
     (["status", "--once", "--port", ""], {}, "--port is empty"),
     (["run", "{script}", "--no-live", "--port", " "], {}, "--port is empty"),

@@ -21,6 +21,7 @@ from dataclasses import dataclass, fields, replace
 from typing import Mapping
 
 from ..limits import REPEAT_DELAY_RANGE_MS
+from ..profile import unknown_key_hint
 from ..protocol import JOYSTICK_NEUTRAL, JOYSTICK_STILL_RANGE
 from .keymap import JogConfigError
 
@@ -85,7 +86,7 @@ def settings_from_config(table: Mapping | None, source: str = "armctl.toml") -> 
         if key == "keys":
             continue
         if key not in known:
-            raise _bad(source, key, f"is not a jog setting (known: {', '.join(sorted(known))}, keys)")
+            raise _bad(source, key, f"is not a jog setting{unknown_key_hint(key, [*sorted(known), 'keys'])}")
         if key in _MS_RANGES:
             low, high = _MS_RANGES[key]
             number = _number(value)

@@ -114,7 +114,7 @@ def _lint_target(target, profile, selection, stdin_filename):
 
 def _config() -> dict:
     """The ``[lint]`` table of the nearest armctl.toml, checked: lists of strings only."""
-    from ..profile import find_config
+    from ..profile import find_config, unknown_key_hint
 
     path, content = find_config()
     table = content.get("lint", {})
@@ -122,7 +122,7 @@ def _config() -> dict:
         raise ValueError(f"{path}: lint must be a table ([lint])")
     for key, value in table.items():
         if key not in CONFIG_KEYS:
-            raise ValueError(f"{path}: unknown key lint.{key} (known: {', '.join(CONFIG_KEYS)})")
+            raise ValueError(f"{path}: unknown key 'lint.{key}'{unknown_key_hint(key, CONFIG_KEYS)}")
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
             raise ValueError(f"{path}: lint.{key} must be a list of strings")
     return table

@@ -20,6 +20,11 @@ seed       seed of the faults                                                   
 profile    path of an arm profile (TOML)                                           built-in
 =========  ======================================================================  =========
 
+Each number has a finite range (armctl/limits.py, also in the README); an unknown option, a
+bad or out-of-range value is a ``SimOptionError`` naming the option: a ``ConfigError`` for
+armctl (exit 2 on every command) and a ``SerialException`` for any other pyserial program.
+``_parse`` is the one parse of the URL; everything else calls it.
+
 Strategy: a thin edge.  With ``clock=virtual`` nothing blocks: ``read`` returns what has
 arrived by the current model time, and ``Link`` moves ``virtual_clock`` forward instead of
 sleeping (``next_output_s`` says how far the next status burst is).  Otherwise:  ``write`` hands the bytes to the model at the current model time and
