@@ -297,7 +297,11 @@ def sim(use_pty, tcp_port, sim_url):
         raise UsageFailure("choose one of --pty or --tcp PORT")
     try:
         options, time_scale = parse_sim_url(sim_url)
-    except ConfigError as error:
+        if isinstance(options.profile, str):  # read now, not when the first client connects
+            from .profile import load_profile
+
+            load_profile(options.profile)
+    except (ConfigError, ProfileError) as error:
         raise ConfigError(f"--url: {error}") from None
     if is_virtual_clock(sim_url):
         raise UsageFailure("a served simulator runs in real time: drop clock=virtual from --url")
