@@ -149,31 +149,31 @@ def _pair(low: float, high: float) -> Callable:
 def _channels(value) -> tuple[int, ...]:
     if (not isinstance(value, list) or not value or len(set(value)) != len(value)
             or any(isinstance(v, bool) or v not in (1, 2, 3, 4) for v in value)):
-        raise _Bad(f"must be a non-empty list of distinct PWM channels 1…4, not {value!r}")
+        raise _Bad(f"must be a non-empty list of distinct PWM channels 1…4, not {_short_repr(value)}")
     return tuple(int(v) for v in value)
 
 
 def _smoothing(value) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 6:
-        raise _Bad(f"must be a whole number 0…6, not {value!r}")
+        raise _Bad(f"must be a whole number 0…6, not {_short_repr(value)}")
     return value
 
 
 def _text(value) -> str:
     if not isinstance(value, str):
-        raise _Bad(f"must be a string, not {value!r}")
+        raise _Bad(f"must be a string, not {_short_repr(value)}")
     return value
 
 
 def _gripper_state(value) -> str:
     if value not in GRIPPER_STATES:
-        raise _Bad(f"must be \"open\" or \"closed\", not {value!r}")
+        raise _Bad(f"must be \"open\" or \"closed\", not {_short_repr(value)}")
     return value
 
 
 def _boolean(value) -> bool:
     if not isinstance(value, bool):
-        raise _Bad(f"must be true or false, not {value!r}")
+        raise _Bad(f"must be true or false, not {_short_repr(value)}")
     return value
 
 
@@ -183,7 +183,17 @@ def _boolean(value) -> bool:
 _MM = _in(-10_000.0, 10_000.0)
 _DEG = _in(-720.0, 720.0)
 _PWM_US = _in(*PWM_RANGE_US)
-_SECONDS = _in(0.0, 60.0)
+MIN_TIME_S = 1e-6  # a timing constant is 0 or at least this: a shorter one makes speeds overflow
+
+
+def _seconds(value) -> float:
+    number = _in(0.0, 60.0)(value)
+    if 0.0 < number < MIN_TIME_S:
+        raise _Bad(f"must be 0 or from {MIN_TIME_S:g} to 60, not {_short_repr(value)}")
+    return number
+
+
+_SECONDS = _seconds
 _LINK_MM = _in(1.0, 10_000.0)
 
 _SCHEMA: dict[str, Any] = {
@@ -235,7 +245,7 @@ def _check(data: dict, source: str, prefix: str = "") -> dict:
             checked[section] = _apply(rule, content, source, prefix + section)
             continue
         if not isinstance(content, dict):
-            raise ProfileError(f"{source}: {prefix}{section} must be a table ([{section}]), not {content!r}")
+            raise ProfileError(f"{source}: {prefix}{section} must be a table ([{section}]), not {_short_repr(content)}")
         checked[section] = {}
         for key, value in content.items():
             if key not in rule:

@@ -356,6 +356,7 @@ def test_a_profile_value_is_accepted_or_refused_naming_the_file_and_key(section,
     ("[links]\nforearm_mm = 1e-300\n", "links.forearm_mm must be from 1 to 10000"),
     ("[timing]\njoint_ramp_s = [0.1, 0.1, 0.1, 0.1, 0.1, 3.4028235e38]\n", "timing.joint_ramp_s must be from 0 to 60"),
     ("[workspace]\nx_mm = [-inf, 100]\n", "workspace.x_mm must be a number, not -inf"),
+    ("[timing]\npwm_change_s = 2.2e-309\n", "timing.pwm_change_s must be 0 or from 1e-06 to 60"),  # speeds overflowed
 ])
 def test_reproducers_from_issue_10_are_located_profile_errors(text, message, script, tmp_path):
     path = tmp_path / "arm.toml"
@@ -387,8 +388,8 @@ SPEED_AND_TIMING_EDGES = {
     ("speed", "max_joint_deg_s"): (0.1, 3600.0),
     ("speed", "max_accel_mm_s2"): (1.0, 100_000.0),
     ("speed", "attitude_deg_s"): (0.1, 3600.0),
-    ("timing", "command_overhead_s"): (0.0, 60.0),
-    ("timing", "pwm_change_s"): (0.0, 60.0),
+    ("timing", "command_overhead_s"): (1e-6, 60.0),  # or 0: see _edge_or_inside
+    ("timing", "pwm_change_s"): (1e-6, 60.0),
     ("links", "base_height_mm"): (0.0, 10_000.0),
     ("links", "shoulder_offset_mm"): (-10_000.0, 10_000.0),
     ("links", "upper_arm_mm"): (1.0, 10_000.0),
@@ -399,7 +400,9 @@ SPEED_AND_TIMING_EDGES = {
 
 
 def _edge_or_inside(low: float, high: float):
-    return st.one_of(st.sampled_from([low, high, None]), st.floats(min_value=low, max_value=high))
+    """The default (None), an edge, or any float inside; a timing constant may also be 0."""
+    edges = [low, high, None, *([0.0] if low == 1e-6 else [])]
+    return st.one_of(st.sampled_from(edges), st.floats(min_value=low, max_value=high))
 
 
 def test_the_edges_listed_here_are_the_schema_s():
@@ -413,7 +416,7 @@ def test_the_edges_listed_here_are_the_schema_s():
 
 @settings(max_examples=150, deadline=None)
 @given(choice=st.fixed_dictionaries({k: _edge_or_inside(*v) for k, v in SPEED_AND_TIMING_EDGES.items()}),
-       ramp=st.one_of(st.sampled_from([0.0, 60.0, 1e-9, None]), st.floats(min_value=0.0, max_value=60.0)))
+       ramp=_edge_or_inside(1e-6, 60.0))
 def test_the_motion_model_gives_finite_times_for_any_accepted_profile(choice, ramp):
     from armctl.estimate import JobEstimator
     from armctl.motion import MotionModel
