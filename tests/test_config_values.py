@@ -438,3 +438,28 @@ def test_the_motion_model_gives_finite_times_for_any_accepted_profile(choice, ra
     assert compilation.error_count == 0
     result = estimator.result
     assert math.isfinite(result.job_s) and result.job_s > 0
+
+
+@pytest.mark.parametrize("port, message", [
+    ("sim://?loss=2", "--port: loss must be a number 0…1"),
+    ("", "--port is empty"),
+])
+def test_jog_on_a_terminal_refuses_a_bad_port_with_exit_2(port, message, tmp_path):
+    """jog checks stdin is a terminal first; on a real pty the port is the next thing checked."""
+    master, slave = os.openpty()
+    try:
+        env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+        done = subprocess.run([*ARMCTL, "jog", "--port", port], stdin=slave, stdout=slave, stderr=slave,
+                              cwd=tmp_path, env=env, timeout=60)
+        os.set_blocking(master, False)
+        screen = b""
+        try:
+            while chunk := os.read(master, 65536):
+                screen += chunk
+        except (BlockingIOError, OSError):
+            pass
+    finally:
+        os.close(slave)
+        os.close(master)
+    text = screen.decode("utf-8", "replace")
+    assert done.returncode == 2 and message in text, text
