@@ -28,7 +28,6 @@ from .profile import CONFIG_NAME, check_config_value
 from .protocol import DEFAULT_BAUD, StatusFrame, StatusReader
 
 SIMULATOR_URL = "sim://"
-from .limits import BAUD_RANGE  # one range for --baud, `baud` in armctl.toml and sim://?baud=
 PORT_ENV = "ARMCTL_PORT"
 READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
