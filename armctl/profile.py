@@ -2,7 +2,8 @@
 
 Strategy: one schema table (section → key → checker) drives everything.  A TOML document is
 read with ``tomllib``, every key of it is checked against the schema (so an unknown key, a
-wrong type or a min > max pair is reported with the file and the dotted key), the checked
+wrong type, NaN/inf, a value outside its physically sensible range or a min > max pair is
+reported with the file and the dotted key), the checked
 values are laid over the packaged default (``armctl/data/default_profile.toml``) section by
 section, and the result is built into frozen dataclasses and cross-checked (fixed poses inside
 the joint limits, gripper values inside the PWM range).  Pure apart from reading files.
@@ -177,7 +178,7 @@ def _boolean(value) -> bool:
     return value
 
 
-# Ranges: a desktop arm reaches at most a few metres, turns a joint at most two full turns
+# Ranges: a desktop arm reaches well under 10 m, turns a joint at most two full turns
 # either way, moves at most 100 m/min; a timing constant is at most a minute.  Lengths and
 # speeds that the motion model divides by have a lower bound well above underflow.
 _MM = _in(-10_000.0, 10_000.0)
@@ -193,13 +194,12 @@ def _seconds(value) -> float:
     return number
 
 
-_SECONDS = _seconds
 _LINK_MM = _in(1.0, 10_000.0)
+_MM_PAIR = _pair(-10_000.0, 10_000.0)
 
 _SCHEMA: dict[str, Any] = {
     "name": _text,
-    "workspace": {"x_mm": _pair(-10_000.0, 10_000.0), "y_mm": _pair(-10_000.0, 10_000.0),
-                  "z_mm": _pair(-10_000.0, 10_000.0), "reach_mm": _LINK_MM},
+    "workspace": {"x_mm": _MM_PAIR, "y_mm": _MM_PAIR, "z_mm": _MM_PAIR, "reach_mm": _LINK_MM},
     "joints": {f"j{k}_deg": _pair(-720.0, 720.0) for k in range(1, JOINT_COUNT + 1)},
     "speed": {
         "max_linear_mm_min": _in(1.0, 100_000.0), "max_joint_deg_s": _in(0.1, 3600.0),
@@ -215,8 +215,8 @@ _SCHEMA: dict[str, Any] = {
         "elbow_offset_mm": _MM, "forearm_mm": _LINK_MM, "tool_mm": _in(0.0, 10_000.0),
     },
     "timing": {
-        "joint_ramp_s": _numbers(6, _SECONDS), "command_overhead_s": _SECONDS,
-        "pwm_change_s": _SECONDS, "pose_smoothing": _smoothing,
+        "joint_ramp_s": _numbers(6, _seconds), "command_overhead_s": _seconds,
+        "pwm_change_s": _seconds, "pose_smoothing": _smoothing,
     },
     "lint": {"end_gripper": _gripper_state, "end_paused": _boolean},
 }
