@@ -347,6 +347,12 @@ def test_a_profile_value_is_accepted_or_refused_naming_the_file_and_key(section,
     assert result.exit_code in (0, 1, 2), result.output
     if result.exit_code == 2:
         assert str(path) in result.output, result.output
+    try:
+        never_a_number = not math.isfinite(float(value))
+    except ValueError:
+        never_a_number = True  # text, a boolean, a list
+    if never_a_number or abs(float(value)) >= 1e308:  # no key's range comes near 1e308
+        assert result.exit_code == 2 and f"{path}: {section}.{key}" in result.output, result.output
 
 
 @pytest.mark.parametrize("text, message", [
