@@ -18,7 +18,9 @@ import sys
 import click
 
 from . import __version__
+from .cli_types import number
 from .errors import ArmctlError, ConfigError, ProfileError
+from .limits import BAUD_RANGE, LEAD_RANGE_S, LINE_RANGE, START_TIMEOUT_RANGE_S, STATUS_TIMEOUT_RANGE_S, TCP_PORT_RANGE
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
 
@@ -205,7 +207,7 @@ port_option = click.option(
     help="Device path or pyserial URL (socket://, rfc2217://, sim://?slowdown=1.3). "
     "Default: ARMCTL_PORT, else `port` in armctl.toml, else the built-in simulator.",
 )
-baud_option = click.option("--baud", type=click.IntRange(300, 4_000_000), default=None, help="Line rate [default: 9600 or `baud` in armctl.toml].")
+baud_option = click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=None, help="Line rate [default: 9600 or `baud` in armctl.toml].")
 
 
 def _connect(port: str | None, baud: int | None, **link_options):
@@ -220,7 +222,7 @@ def _connect(port: str | None, baud: int | None, **link_options):
 @click.option("--once", is_flag=True, help="Wait until all 9 status kinds were seen, print them, exit.")
 @click.option("--watch", is_flag=True, help="A live view, refreshed 12 times a second, until Ctrl-C.")
 @click.option("--json", "as_json", is_flag=True, help="JSON (one object; with --watch, JSON lines).")
-@click.option("--timeout", type=click.FloatRange(0.05, 600), default=2.0, show_default=True, help="Seconds to wait for the arm's status.")
+@click.option("--timeout", type=number(*STATUS_TIMEOUT_RANGE_S), default=2.0, show_default=True, help="Seconds to wait for the arm's status.")
 def status(port, baud, once, watch, as_json, timeout):
     """Show the arm's decoded status frames (position, joints, PWM, pause, SD program)."""
     from .ui.status_watch import print_once, watch_status
@@ -254,16 +256,16 @@ def ports():
 @click.argument("script", metavar="SCRIPT")
 @port_option
 @baud_option
-@click.option("--lead", "lead_s", type=click.FloatRange(0.1, 60), default=2.0, show_default=True,
+@click.option("--lead", "lead_s", type=number(*LEAD_RANGE_S), default=2.0, show_default=True,
               help="Seconds of motion kept queued ahead of the arm (how long it keeps moving after Ctrl-C).")
-@click.option("--from-line", "from_line", type=click.IntRange(1), default=1, help="Start at this line, with the modal state the lines before it set.")
+@click.option("--from-line", "from_line", type=number(*LINE_RANGE, whole=True), default=1, help="Start at this line, with the modal state the lines before it set.")
 @click.option("--dry-run", is_flag=True, help="Check, print the frames and the estimate; open no port.")
 @click.option("--log", "log_path", type=click.Path(dir_okay=False, writable=True), help="JSON lines of every frame written and read (armctl decode reads it).")
 @click.option("--no-live", is_flag=True, help="Plain progress lines instead of the live panel.")
 @click.option("--abort", type=click.Choice(["pause", "reset-connector", "none"]), default="pause", show_default=True,
               help="What Ctrl-C sends after it stops feeding (see README: Stopping a job).")
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
-@click.option("--timeout", "timeout_s", type=click.FloatRange(0.1, 600), default=3.0, show_default=True, help="Seconds to wait for the arm's status before starting.")
+@click.option("--timeout", "timeout_s", type=number(*START_TIMEOUT_RANGE_S), default=3.0, show_default=True, help="Seconds to wait for the arm's status before starting.")
 def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort, profile_path, timeout_s):
     """Check a motion script, then stream it to the arm without overflowing its buffer."""
     from .ui.run_job import JobOptions, run_job
@@ -277,8 +279,8 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
 
 @main.command()
 @click.argument("script", metavar="SCRIPT")
-@click.option("--lead", "lead_s", type=click.FloatRange(0.1, 60), default=2.0, show_default=True, help="The lead run would use.")
-@click.option("--baud", type=click.IntRange(300, 4_000_000), default=9600, show_default=True)
+@click.option("--lead", "lead_s", type=number(*LEAD_RANGE_S), default=2.0, show_default=True, help="The lead run would use.")
+@click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=9600, show_default=True)
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object.")
 def estimate(script, lead_s, baud, profile_path, as_json):
@@ -302,7 +304,7 @@ def estimate(script, lead_s, baud, profile_path, as_json):
 
 @main.command()
 @click.option("--pty", "use_pty", is_flag=True, help="Serve the simulated arm on a new pseudo-terminal and print its path.")
-@click.option("--tcp", "tcp_port", type=click.IntRange(1, 65535), help="Serve one client on 127.0.0.1:PORT (socket://127.0.0.1:PORT).")
+@click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True), help="Serve one client on 127.0.0.1:PORT (socket://127.0.0.1:PORT).")
 @click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?slowdown=1.3&loss=0.05.")
 def sim(use_pty, tcp_port, sim_url):
     """Run the built-in simulated arm for other programs to talk to."""
@@ -311,7 +313,14 @@ def sim(use_pty, tcp_port, sim_url):
 
     if bool(use_pty) == bool(tcp_port):
         raise UsageFailure("choose one of --pty or --tcp PORT")
-    options, time_scale = parse_sim_url(sim_url)
+    try:
+        options, time_scale = parse_sim_url(sim_url)
+        if isinstance(options.profile, str):  # read now, not when the first client connects
+            from .profile import load_profile
+
+            load_profile(options.profile)
+    except (ConfigError, ProfileError) as error:
+        raise ConfigError(f"--url: {error}") from None
     if is_virtual_clock(sim_url):
         raise UsageFailure("a served simulator runs in real time: drop clock=virtual from --url")
 

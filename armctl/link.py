@@ -24,10 +24,10 @@ from typing import Callable
 
 from .armstate import ArmState
 from .errors import ConfigError, PortError
+from .profile import CONFIG_NAME, check_config_value
 from .protocol import DEFAULT_BAUD, StatusFrame, StatusReader
 
 SIMULATOR_URL = "sim://"
-BAUD_RANGE = (300, 4_000_000)
 PORT_ENV = "ARMCTL_PORT"
 READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
@@ -52,14 +52,24 @@ class PortChoice:
         return None
 
 
-def resolve_port(option: str | None, environ=os.environ, config: dict | None = None) -> PortChoice:
-    """``--port``, else ``ARMCTL_PORT``, else ``port`` in armctl.toml, else the simulator."""
-    if option:
+def resolve_port(option: str | None, environ=os.environ, config: dict | None = None, config_path=CONFIG_NAME) -> PortChoice:
+    """``--port``, else ``ARMCTL_PORT``, else ``port`` in armctl.toml, else the simulator.
+
+    The simulator is the default only when no port is given anywhere: a port given empty (or,
+    in armctl.toml, of the wrong type) is a ConfigError, never a quiet fallback to the simulator.
+    """
+    if option is not None:
+        if not option.strip():
+            raise ConfigError("--port is empty: give a device or URL (`armctl ports` lists the devices found), "
+                              "or leave --port out")
         return PortChoice(option, "--port")
-    if environ.get(PORT_ENV):
+    if PORT_ENV in environ:
+        if not environ[PORT_ENV].strip():
+            raise ConfigError(f"{PORT_ENV} is set but empty: give a device or URL, or unset it "
+                              f"(`unset {PORT_ENV}`)")
         return PortChoice(environ[PORT_ENV], PORT_ENV)
-    if config and config.get("port"):
-        return PortChoice(str(config["port"]), "armctl.toml")
+    if config and "port" in config:
+        return PortChoice(check_config_value(config_path, "port", config["port"]), "armctl.toml")
     return PortChoice(SIMULATOR_URL, "default")
 
 
@@ -71,7 +81,9 @@ def connect(port: str | None, baud: int | None, announce: Callable[[str], None] 
     from .profile import find_config, load_profile
 
     config_path, config = find_config()
-    choice = resolve_port(port, config=config)
+    choice = resolve_port(port, config=config, config_path=config_path)
+    if choice.is_simulator:
+        check_sim_url(choice, config_path)
     banner = choice.banner()
     if banner:
         announce(banner)
@@ -80,6 +92,18 @@ def connect(port: str | None, baud: int | None, announce: Callable[[str], None] 
     link_options.setdefault("state", plausible_state(profile))
     link_options.setdefault("clock", scaled_clock(choice.url))
     return Link.open(choice.url, baud, **link_options), baud
+
+
+def check_sim_url(choice: PortChoice, config_path=None) -> None:
+    """A bad ``sim://`` option is a usage error (exit 2) naming where the URL came from, raised
+    before anything opens: the one parse is armctl/sim/protocol_sim.py's."""
+    from .sim.protocol_sim import parse_sim_url
+
+    try:
+        parse_sim_url(choice.url)
+    except ConfigError as error:
+        where = f"{config_path}: port" if choice.origin == "armctl.toml" and config_path else choice.origin
+        raise ConfigError(f"{where}: {error}") from None
 
 
 def require_wall_clock(link: "Link", command: str) -> None:
@@ -91,10 +115,7 @@ def require_wall_clock(link: "Link", command: str) -> None:
 
 
 def config_baud(config: dict, path) -> int:
-    value = config.get("baud", DEFAULT_BAUD)
-    if isinstance(value, bool) or not isinstance(value, int) or not BAUD_RANGE[0] <= value <= BAUD_RANGE[1]:
-        raise ConfigError(f"{path}: baud = {value!r} must be a whole number of bit/s from {BAUD_RANGE[0]} to {BAUD_RANGE[1]}")
-    return value
+    return check_config_value(path, "baud", config.get("baud", DEFAULT_BAUD))
 
 
 def plausible_state(profile) -> ArmState:
@@ -124,6 +145,8 @@ def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_
         kwargs["exclusive"] = True  # a second armctl on the same arm would interleave frames
     try:
         return serial.serial_for_url(url, **kwargs)
+    except ConfigError:  # a bad sim:// option: the user's configuration, not the port
+        raise
     except (serial.SerialException, OSError, ValueError) as error:
         raise PortError(describe_open_error(url, error)) from None
 

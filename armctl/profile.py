@@ -2,7 +2,8 @@
 
 Strategy: one schema table (section → key → checker) drives everything.  A TOML document is
 read with ``tomllib``, every key of it is checked against the schema (so an unknown key, a
-wrong type or a min > max pair is reported with the file and the dotted key), the checked
+wrong type, NaN/inf, a value outside its physically sensible range or a min > max pair is
+reported with the file and the dotted key), the checked
 values are laid over the packaged default (``armctl/data/default_profile.toml``) section by
 section, and the result is built into frozen dataclasses and cross-checked (fixed poses inside
 the joint limits, gripper values inside the PWM range).  Pure apart from reading files.
@@ -29,8 +30,10 @@ from importlib import resources
 from pathlib import Path
 from typing import Any, Callable
 
-from .errors import ProfileError
+from .errors import ConfigError, ProfileError
 from .kinematics import JOINT_COUNT, Kinematics, Links
+from .limits import BAUD_RANGE
+from .protocol import PWM_RANGE_US
 
 CONFIG_NAME = "armctl.toml"
 DEFAULT_RESOURCE = ("armctl.data", "default_profile.toml")
@@ -137,101 +140,131 @@ class _Bad(Exception):
 
 def _number(value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise _Bad(f"must be a number, not {value!r}")
+        raise _Bad(f"must be a number, not {_short_repr(value)}")
     return float(value)
 
 
-def _positive(value) -> float:
-    if (number := _number(value)) <= 0:
-        raise _Bad(f"must be greater than 0, not {value!r}")
-    return number
+def _in(low: float, high: float) -> Callable:
+    """A finite number from ``low`` to ``high``: a physically sensible range for a desktop arm,
+    and one the motion model computes with without dividing by zero or overflowing."""
 
+    def check(value) -> float:
+        number = _number(value)
+        if not low <= number <= high:
+            raise _Bad(f"must be from {low:g} to {high:g}, not {_short_repr(value)}")
+        return number
 
-def _not_negative(value) -> float:
-    if (number := _number(value)) < 0:
-        raise _Bad(f"must not be negative, not {value!r}")
-    return number
+    return check
 
 
 def _numbers(count: int, each: Callable = _number) -> Callable:
     def check(value) -> tuple:
         if not isinstance(value, list) or len(value) != count:
-            raise _Bad(f"must be a list of {count} numbers, not {value!r}")
+            raise _Bad(f"must be a list of {count} numbers, not {_short_repr(value)}")
         return tuple(each(v) for v in value)
 
     return check
 
 
-def _pair(value) -> tuple[float, float]:
-    if not isinstance(value, list) or len(value) != 2:
-        raise _Bad(f"must be a [min, max] pair of numbers, not {value!r}")
-    low, high = _number(value[0]), _number(value[1])
-    if low > high:
-        raise _Bad(f"has min {low:g} > max {high:g}")
-    return low, high
+def _pair(low: float, high: float) -> Callable:
+    each = _in(low, high)
+
+    def check(value) -> tuple[float, float]:
+        if not isinstance(value, list) or len(value) != 2:
+            raise _Bad(f"must be a [min, max] pair of numbers, not {_short_repr(value)}")
+        first, second = each(value[0]), each(value[1])
+        if first > second:
+            raise _Bad(f"has min {first:g} > max {second:g}")
+        return first, second
+
+    return check
 
 
 def _channels(value) -> tuple[int, ...]:
     if (not isinstance(value, list) or not value or len(set(value)) != len(value)
             or any(isinstance(v, bool) or v not in (1, 2, 3, 4) for v in value)):
-        raise _Bad(f"must be a non-empty list of distinct PWM channels 1…4, not {value!r}")
+        raise _Bad(f"must be a non-empty list of distinct PWM channels 1…4, not {_short_repr(value)}")
     return tuple(int(v) for v in value)
 
 
 def _smoothing(value) -> int:
     if isinstance(value, bool) or not isinstance(value, int) or not 0 <= value <= 6:
-        raise _Bad(f"must be a whole number 0…6, not {value!r}")
+        raise _Bad(f"must be a whole number 0…6, not {_short_repr(value)}")
     return value
 
 
 def _text(value) -> str:
     if not isinstance(value, str):
-        raise _Bad(f"must be a string, not {value!r}")
+        raise _Bad(f"must be a string, not {_short_repr(value)}")
     return value
 
 
 def _gripper_state(value) -> str:
     if value not in GRIPPER_STATES:
-        raise _Bad(f"must be \"open\" or \"closed\", not {value!r}")
+        raise _Bad(f"must be \"open\" or \"closed\", not {_short_repr(value)}")
     return value
 
 
 def _boolean(value) -> bool:
     if not isinstance(value, bool):
-        raise _Bad(f"must be true or false, not {value!r}")
+        raise _Bad(f"must be true or false, not {_short_repr(value)}")
     return value
 
 
+# Ranges: a desktop arm reaches well under 10 m, turns a joint at most two full turns
+# either way, moves at most 100 m/min; a timing constant is at most a minute.  Lengths and
+# speeds that the motion model divides by have a lower bound well above underflow.
+_MM = _in(-10_000.0, 10_000.0)
+_DEG = _in(-720.0, 720.0)
+_PWM_US = _in(*PWM_RANGE_US)
+MIN_TIME_S = 1e-6  # a timing constant is 0 or at least this: a shorter one makes speeds overflow
+
+
+def _seconds(value) -> float:
+    number = _in(0.0, 60.0)(value)
+    if 0.0 < number < MIN_TIME_S:
+        raise _Bad(f"must be 0 or from {MIN_TIME_S:g} to 60, not {_short_repr(value)}")
+    return number
+
+
+_LINK_MM = _in(1.0, 10_000.0)
+_MM_PAIR = _pair(-10_000.0, 10_000.0)
+
 _SCHEMA: dict[str, Any] = {
     "name": _text,
-    "workspace": {"x_mm": _pair, "y_mm": _pair, "z_mm": _pair, "reach_mm": _positive},
-    "joints": {f"j{k}_deg": _pair for k in range(1, JOINT_COUNT + 1)},
+    "workspace": {"x_mm": _MM_PAIR, "y_mm": _MM_PAIR, "z_mm": _MM_PAIR, "reach_mm": _LINK_MM},
+    "joints": {f"j{k}_deg": _pair(-720.0, 720.0) for k in range(1, JOINT_COUNT + 1)},
     "speed": {
-        "max_linear_mm_min": _positive, "max_joint_deg_s": _positive, "max_accel_mm_s2": _positive,
-        "attitude_deg_s": _positive,
+        "max_linear_mm_min": _in(1.0, 100_000.0), "max_joint_deg_s": _in(0.1, 3600.0),
+        "max_accel_mm_s2": _in(1.0, 100_000.0), "attitude_deg_s": _in(0.1, 3600.0),
     },
     "pwm": {
-        "range_us": _pair, "channels": _channels, "gripper_open_us": _number, "gripper_close_us": _number,
-        "initial_us": _number,
+        "range_us": _pair(*PWM_RANGE_US), "channels": _channels, "gripper_open_us": _PWM_US,
+        "gripper_close_us": _PWM_US, "initial_us": _PWM_US,
     },
-    "poses": {pose: _numbers(JOINT_COUNT) for pose in FIXED_POSES},
+    "poses": {pose: _numbers(JOINT_COUNT, _DEG) for pose in FIXED_POSES},
     "links": {
-        "base_height_mm": _not_negative, "shoulder_offset_mm": _number, "upper_arm_mm": _positive,
-        "elbow_offset_mm": _number, "forearm_mm": _positive, "tool_mm": _not_negative,
+        "base_height_mm": _in(0.0, 10_000.0), "shoulder_offset_mm": _MM, "upper_arm_mm": _LINK_MM,
+        "elbow_offset_mm": _MM, "forearm_mm": _LINK_MM, "tool_mm": _in(0.0, 10_000.0),
     },
     "timing": {
-        "joint_ramp_s": _numbers(6, _not_negative), "command_overhead_s": _not_negative,
-        "pwm_change_s": _not_negative, "pose_smoothing": _smoothing,
+        "joint_ramp_s": _numbers(6, _seconds), "command_overhead_s": _seconds,
+        "pwm_change_s": _seconds, "pose_smoothing": _smoothing,
     },
     "lint": {"end_gripper": _gripper_state, "end_paused": _boolean},
 }
 _OPTIONAL_SECTIONS = {"lint"}
 
 
-def _unknown(source: str, key: str, known) -> ProfileError:
+def unknown_key_hint(key: str, known) -> str:
+    """`` (did you mean 'port'?)`` for a misspelt key, else the list of known keys: the one
+    wording of every unknown key in armctl.toml and a profile."""
     close = difflib.get_close_matches(key.rsplit(".", 1)[-1], list(known), n=1)
-    hint = f" (did you mean {close[0]!r}?)" if close else f" (known: {', '.join(known)})"
-    return ProfileError(f"{source}: unknown key {key!r}{hint}")
+    return f" (did you mean {close[0]!r}?)" if close else f" (known: {', '.join(known)})"
+
+
+def _unknown(source: str, key: str, known) -> ProfileError:
+    return ProfileError(f"{source}: unknown key {key!r}{unknown_key_hint(key, known)}")
 
 
 def _check(data: dict, source: str, prefix: str = "") -> dict:
@@ -245,7 +278,7 @@ def _check(data: dict, source: str, prefix: str = "") -> dict:
             checked[section] = _apply(rule, content, source, prefix + section)
             continue
         if not isinstance(content, dict):
-            raise ProfileError(f"{source}: {prefix}{section} must be a table ([{section}]), not {content!r}")
+            raise ProfileError(f"{source}: {prefix}{section} must be a table ([{section}]), not {_short_repr(content)}")
         checked[section] = {}
         for key, value in content.items():
             if key not in rule:
@@ -312,9 +345,7 @@ def _build(data: dict, source: str, prefix: str, sources: dict[str, str]) -> Pro
 
 
 def _cross_check(profile: Profile, source: str, prefix: str) -> None:
-    low, high = profile.pwm.range_us
-    if low < 500 or high > 2500:
-        raise ProfileError(f"{source}: {prefix}pwm.range_us {low:g}…{high:g} leaves the protocol's 500…2500 µs")
+    low, high = profile.pwm.range_us  # inside the protocol's range: the schema checked it
     for key in ("gripper_open_us", "gripper_close_us", "initial_us"):
         value = getattr(profile.pwm, key)
         if not low <= value <= high:
@@ -377,14 +408,71 @@ def read_toml(path: Path) -> dict:
 
 def find_config(start: Path | None = None) -> tuple[Path | None, dict]:
     """The first armctl.toml in ``start`` (default: the working directory) or a parent, and
-    its whole content; ``(None, {})`` when there is none."""
+    its whole content with every top-level key checked; ``(None, {})`` when there is none."""
     directory = Path.cwd() if start is None else Path(start)
     directory = directory.resolve()
     for candidate in (directory, *directory.parents):
         path = candidate / CONFIG_NAME
         if path.is_file():
-            return path, read_toml(path)
+            data = read_toml(path)
+            for key, value in data.items():
+                check_config_value(path, key, value)
+            return path, data
     return None, {}
+
+
+# --- armctl.toml's top level --------------------------------------------------------------------
+# Each key's shape is checked here, once, for every command (a misspelt `prot = …` must not
+# quietly select the simulator); the tables' contents are checked by their owners: [profile]
+# above, [lint] by armctl/lint/command.py, [jog] by armctl/jog/settings.py and keymap.py.
+
+
+def _config_port(value) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise _Bad('must be a device path or URL such as "/dev/ttyUSB0" or "sim://" '
+                   "(leave port out to use the built-in simulator)")
+    return value
+
+
+def _config_baud(value) -> int:
+    low, high = BAUD_RANGE
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise _Bad(f"must be a whole number of bit/s from {low} to {high}")
+    return value
+
+
+def _config_profile(value):
+    if not isinstance(value, dict) and not (isinstance(value, str) and value.strip()):
+        raise _Bad("must be a table ([profile]) or a path string")
+    return value
+
+
+def _config_table(value) -> dict:
+    if not isinstance(value, dict):
+        raise _Bad("must be a table")
+    return value
+
+
+CONFIG_SCHEMA: dict[str, Callable] = {
+    "port": _config_port, "baud": _config_baud, "profile": _config_profile, "lint": _config_table, "jog": _config_table,
+}
+
+
+def check_config_value(path, key: str, value):
+    """``value`` of armctl.toml's top-level ``key``, checked; ConfigError naming the file and key."""
+    rule = CONFIG_SCHEMA.get(key)
+    if rule is None:
+        raise ConfigError(f"{path}: unknown key {key!r}{unknown_key_hint(key, CONFIG_SCHEMA)}")
+    try:
+        return rule(value)
+    except _Bad as bad:
+        shown = f"[{key}]" if isinstance(value, dict) else f"{key} = {_short_repr(value)}"
+        raise ConfigError(f"{path}: {shown} {bad}") from None
+
+
+def _short_repr(value, limit: int = 60) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 def load_profile(path: Path | str | None = None, start: Path | None = None) -> Profile:
@@ -394,12 +482,8 @@ def load_profile(path: Path | str | None = None, start: Path | None = None) -> P
     config_path, config = find_config(start)
     if config_path is None or "profile" not in config:
         return default_profile()
-    entry = config["profile"]
+    entry = config["profile"]  # find_config checked it: a table or a path string
     if isinstance(entry, dict):
         return parse_profile(entry, str(config_path), prefix="profile.")
-    if isinstance(entry, str):
-        target = config_path.parent / entry
-        return parse_profile(read_toml(target), str(target))
-    raise ProfileError(
-        f"{config_path}: profile must be a table ([profile]) or a path string, not {entry!r}"
-    )
+    target = config_path.parent / entry
+    return parse_profile(read_toml(target), str(target))

@@ -43,7 +43,7 @@ ARMCTL = [sys.executable, "-m", "armctl"]
 @pytest.fixture(autouse=True)
 def _empty_cwd(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setenv("ARMCTL_PORT", "")
+    monkeypatch.delenv("ARMCTL_PORT", raising=False)
 
 
 def run(*args):
@@ -245,7 +245,7 @@ def test_from_line_starts_there_with_the_modal_state_before_it(tmp_path):
 def start_job(script: Path, *options: str) -> subprocess.Popen:
     return subprocess.Popen(
         [*ARMCTL, "run", str(script), "--no-live", *options],
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env={**os.environ, "ARMCTL_PORT": ""},
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env={k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"},
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # background jobs may ignore SIGINT
     )
 

@@ -42,7 +42,7 @@ DEFAULT_BANNER = "armctl: no port configured (--port, ARMCTL_PORT or armctl.toml
 @pytest.fixture(autouse=True)
 def _empty_cwd(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setenv("ARMCTL_PORT", "")
+    monkeypatch.delenv("ARMCTL_PORT", raising=False)
     assert find_config(tmp_path)[0] is None, "an armctl.toml above the temporary directory would change the port"
 
 
@@ -344,7 +344,7 @@ def test_json_watch_end_to_end_then_ctrl_c_exits_130(tmp_path):
     process = subprocess.Popen(
         [sys.executable, "-m", "armctl", "status", "--json", "--watch", "--port", WATCH_SIM],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, cwd=tmp_path,
-        env={**os.environ, "ARMCTL_PORT": ""},
+        env={k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"},
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:

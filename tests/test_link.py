@@ -18,7 +18,7 @@ import pytest
 import serial
 
 from armctl.armstate import ArmState
-from armctl.errors import PortError
+from armctl.errors import ConfigError, PortError
 from armctl.link import SIMULATOR_URL, Link, PortChoice, describe_open_error, open_port, resolve_port
 from armctl.protocol import PositionStatus
 
@@ -30,16 +30,32 @@ from armctl.protocol import PositionStatus
     [
         ("/dev/ttyUSB0", {"ARMCTL_PORT": "socket://h:1"}, {"port": "/dev/ttyACM0"}, "/dev/ttyUSB0", "--port"),
         (None, {"ARMCTL_PORT": "socket://h:1"}, {"port": "/dev/ttyACM0"}, "socket://h:1", "ARMCTL_PORT"),
-        (None, {"ARMCTL_PORT": ""}, {"port": "/dev/ttyACM0"}, "/dev/ttyACM0", "armctl.toml"),  # empty = unset
         (None, {}, {"port": "/dev/ttyACM0"}, "/dev/ttyACM0", "armctl.toml"),
         (None, {}, {"baud": 9600}, SIMULATOR_URL, "default"),
         (None, {}, None, SIMULATOR_URL, "default"),
-        ("", {"ARMCTL_PORT": "sim://?speed=2"}, {}, "sim://?speed=2", "ARMCTL_PORT"),  # --port '' = not given
     ],
-    ids=["option", "environment", "empty-environment", "toml", "toml-without-port", "nothing", "empty-option"],
+    ids=["option", "environment", "toml", "toml-without-port", "nothing"],
 )
 def test_resolve_port_precedence(option, environ, config, url, origin):
     assert resolve_port(option, environ=environ, config=config) == PortChoice(url, origin)
+
+
+@pytest.mark.parametrize(
+    "option, environ, config, message",
+    [
+        ("", {"ARMCTL_PORT": "sim://?speed=2"}, {}, r"^--port is empty"),
+        (" ", {}, {}, r"^--port is empty"),
+        (None, {"ARMCTL_PORT": ""}, {"port": "/dev/ttyACM0"}, r"^ARMCTL_PORT is set but empty"),
+        (None, {}, {"port": ""}, r"^armctl\.toml: port = '' must be a device path or URL"),
+        (None, {}, {"port": []}, r"^armctl\.toml: port = \[\] must be a device path or URL"),
+        (None, {}, {"port": 5}, r"^armctl\.toml: port = 5 must be a device path or URL"),
+    ],
+    ids=["empty-option", "blank-option", "empty-environment", "empty-toml", "list-toml", "number-toml"],
+)
+def test_a_port_given_empty_or_of_the_wrong_type_is_a_config_error_not_the_simulator(option, environ, config, message):
+
+    with pytest.raises(ConfigError, match=message):
+        resolve_port(option, environ=environ, config=config)
 
 
 def test_the_default_says_it_is_the_simulator_and_a_real_port_says_nothing():
@@ -120,7 +136,7 @@ def test_open_port_turns_real_failures_into_port_errors():
         open_port("/dev/armctl-no-such-device")
     with pytest.raises(PortError, match=r"^cannot open bogus://x: "):
         open_port("bogus://x")
-    with pytest.raises(PortError, match=r"^cannot open sim://\?speed=-1: speed must be a positive number"):
+    with pytest.raises(ConfigError, match=r"^speed must be a number 0.01…1000, not '-1' in 'sim://\?speed=-1'"):
         open_port("sim://?speed=-1")
 
 

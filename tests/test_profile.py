@@ -5,7 +5,7 @@ from importlib import resources
 
 import pytest
 
-from armctl.errors import ProfileError
+from armctl.errors import ConfigError, ProfileError
 from armctl.profile import (
     Profile, default_profile, find_config, load_profile, parse_profile, read_toml,
 )
@@ -145,7 +145,7 @@ def test_not_utf8(tmp_path):
     [
         ("[speed]\nmax_joint_deg_s = \"fast\"\n", r"speed\.max_joint_deg_s must be a number, not 'fast'"),
         ("[speed]\nmax_joint_deg_s = true\n", r"speed\.max_joint_deg_s must be a number, not True"),
-        ("[speed]\nmax_joint_deg_s = -5\n", r"speed\.max_joint_deg_s must be greater than 0, not -5"),
+        ("[speed]\nmax_joint_deg_s = -5\n", r"speed\.max_joint_deg_s must be from 0\.1 to 3600, not -5"),
         ("[joints]\nj3_deg = [50, -50]\n", r"joints\.j3_deg has min 50 > max -50"),
         ("[workspace]\nz_mm = [10]\n", r"workspace\.z_mm must be a \[min, max\] pair"),
         ("[speed]\nmax_jont_deg_s = 5\n", r"unknown key 'speed\.max_jont_deg_s' \(did you mean 'max_joint_deg_s'\?\)"),
@@ -155,11 +155,12 @@ def test_not_utf8(tmp_path):
         ("[poses]\n0 = [0, 0, 0]\n", r"poses\.0 must be a list of 6 numbers"),
         ("[poses]\n0 = [0, 0, 0, 0, 170, 0]\n", r"poses\.0 has J5 = 170, outside joints\.j5_deg"),
         ("[pwm]\nchannels = [1, 5]\n", r"pwm\.channels must be a non-empty list of distinct PWM channels"),
-        ("[pwm]\ngripper_close_us = 3000\n", r"pwm\.gripper_close_us = 3000 is outside pwm\.range_us"),
-        ("[pwm]\nrange_us = [400, 2500]\n", r"pwm\.range_us 400…2500 leaves the protocol's 500…2500"),
+        ("[pwm]\ngripper_close_us = 3000\n", r"pwm\.gripper_close_us must be from 500 to 2500, not 3000"),
+        ("[pwm]\nrange_us = [1000, 1800]\n", r"pwm\.gripper_close_us = 2000 is outside pwm\.range_us"),
+        ("[pwm]\nrange_us = [400, 2500]\n", r"pwm\.range_us must be from 500 to 2500, not 400"),
         ("[timing]\npose_smoothing = 7\n", r"timing\.pose_smoothing must be a whole number 0…6"),
         ("[timing]\njoint_ramp_s = [0.1, 0.2]\n", r"timing\.joint_ramp_s must be a list of 6 numbers"),
-        ("[timing]\npwm_change_s = -1\n", r"timing\.pwm_change_s must not be negative"),
+        ("[timing]\npwm_change_s = -1\n", r"timing\.pwm_change_s must be from 0 to 60, not -1"),
         ("[lint]\nend_gripper = \"ajar\"\n", r"lint\.end_gripper must be \"open\" or \"closed\""),
         ("[lint]\nend_paused = 0\n", r"lint\.end_paused must be true or false"),
         ("name = 3\n", r"name must be a string"),
@@ -173,13 +174,13 @@ def test_each_error_names_the_file_and_key(tmp_path, text, message):
 
 def test_errors_in_the_profile_table_name_armctl_toml_and_the_full_key(tmp_path):
     write(tmp_path / "armctl.toml", "[profile.speed]\nmax_joint_deg_s = 0\n")
-    with pytest.raises(ProfileError, match=r"armctl\.toml: profile\.speed\.max_joint_deg_s must be greater than 0"):
+    with pytest.raises(ProfileError, match=r"armctl\.toml: profile\.speed\.max_joint_deg_s must be from 0\.1 to 3600, not 0"):
         load_profile(start=tmp_path)
 
 
 def test_profile_entry_of_the_wrong_type(tmp_path):
     write(tmp_path / "armctl.toml", "profile = 3\n")
-    with pytest.raises(ProfileError, match=r"armctl\.toml: profile must be a table \(\[profile\]\) or a path"):
+    with pytest.raises(ConfigError, match=r"armctl\.toml: profile = 3 must be a table \(\[profile\]\) or a path"):
         load_profile(start=tmp_path)
 
 

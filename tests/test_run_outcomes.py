@@ -28,7 +28,7 @@ START = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F6000\n"
 def run(tmp_path: Path, script: str, *args: str):
     path = tmp_path / "job.txt"
     path.write_text(script)
-    return CliRunner().invoke(main, ["run", str(path), "--no-live", *args], env={"ARMCTL_PORT": ""})
+    return CliRunner().invoke(main, ["run", str(path), "--no-live", *args], env={"ARMCTL_PORT": None})
 
 
 def test_a_job_whose_last_frames_were_cleared_is_not_reported_done(tmp_path):
@@ -138,7 +138,7 @@ ARM_TIME = r"^arm time: ([\d.]+) s from the first frame to the arm at rest; esti
 def test_every_example_finishes_within_5_percent_of_its_estimate(script):
 
     result = CliRunner().invoke(main, ["run", str(script), "--no-live", "--port", "sim://?clock=virtual"],
-                                env={"ARMCTL_PORT": ""})
+                                env={"ARMCTL_PORT": None})
     assert result.exit_code == 0, result.output
     assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
     measured, estimated = map(float, re.search(ARM_TIME, result.stdout, re.M).groups())
@@ -160,7 +160,7 @@ def test_an_sd_program_longer_than_the_estimate_is_waited_for_and_reported(tmp_p
     # arm, its run position advancing); run waits while the arm works, then confirms the end.
     sd = Path(__file__).resolve().parent.parent / "scripts" / "sd_program.txt"
     result = CliRunner().invoke(main, ["run", str(sd), "--no-live", "--port", "sim://?clock=virtual"],
-                                env={"ARMCTL_PORT": ""})
+                                env={"ARMCTL_PORT": None})
     assert result.exit_code == 0, result.output
     assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
     assert "armctl waited until it stopped" in result.stderr

@@ -92,11 +92,11 @@ def test_a_profile_path_in_the_url(tmp_path):
 @pytest.mark.parametrize(
     "url, message",
     [
-        ("sim://?sped=4", "unknown option 'sped'"),
-        ("sim://?speed=0", "speed must be a positive number"),
-        ("sim://?loss=2", "loss must be between 0 and 1"),
+        ("sim://?sped=4", "unknown option 'sped' \\(did you mean 'speed'\\?\\)"),
+        ("sim://?speed=0", "speed must be a number 0.01…1000, not '0'"),
+        ("sim://?loss=2", "loss must be a number 0…1, not '2'"),
         ("sim://?control=later", "control must be 'queued' or 'arrival'"),
-        ("sim://?seed=x", "invalid literal"),
+        ("sim://?seed=x", "seed must be a whole number 0…"),
         ("sim://?seed=1&seed=2", "given 2 times"),
         ("sim://?profile=/no/such/profile.toml", "file not found"),
     ],

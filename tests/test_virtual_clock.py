@@ -30,7 +30,7 @@ VIRTUAL = "sim://?clock=virtual"
 @pytest.fixture(autouse=True)
 def _empty_cwd(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
-    monkeypatch.setenv("ARMCTL_PORT", "")
+    monkeypatch.delenv("ARMCTL_PORT", raising=False)
 
 
 def test_the_clock_only_moves_forward_when_told():

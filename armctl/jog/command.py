@@ -15,6 +15,9 @@ import sys
 
 import click
 
+from ..cli_types import number
+from ..limits import BAUD_RANGE, REPEAT_DELAY_RANGE_MS, START_TIMEOUT_RANGE_S
+
 EXIT_USAGE = 2
 EXIT_FAILED = 1
 
@@ -28,7 +31,7 @@ def _fail(message: str, code: int):
 @click.option("--port", "port", metavar="URL",
               help="Device path or pyserial URL (socket://, rfc2217://, sim://). "
               "Default: ARMCTL_PORT, else `port` in armctl.toml, else the built-in simulator.")
-@click.option("--baud", type=click.IntRange(300, 4_000_000), default=None,
+@click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=None,
               help="Line rate [default: 9600 or `baud` in armctl.toml].")
 @click.option("--mode", type=click.Choice(["joint", "linear"]), default="joint", show_default=True,
               help="Start jogging joints (q/a … y/h) or the tool along X/Y/Z (arrows, PgUp/PgDn).")
@@ -37,10 +40,10 @@ def _fail(message: str, code: int):
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
 @click.option("--log", "log_path", type=click.Path(dir_okay=False), metavar="FILE",
               help="JSON lines of every frame written and read, and every key (armctl decode reads it).")
-@click.option("--repeat-delay", "repeat_delay_ms", type=click.FloatRange(50, 5000), default=None, metavar="MS",
+@click.option("--repeat-delay", "repeat_delay_ms", type=number(*REPEAT_DELAY_RANGE_MS), default=None, metavar="MS",
               help="A single key press moves at most this long; set it to your keyboard's auto-repeat delay "
               "[default: 500 or `initial_delay_ms` in armctl.toml's [jog]].")
-@click.option("--timeout", "timeout_s", type=click.FloatRange(0.1, 600), default=3.0, show_default=True,
+@click.option("--timeout", "timeout_s", type=number(*START_TIMEOUT_RANGE_S), default=3.0, show_default=True,
               help="Seconds to wait for the arm's status before refusing to jog.")
 def jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, timeout_s):
     """Move the arm from the keyboard and record poses into a script.

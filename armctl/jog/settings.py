@@ -20,6 +20,8 @@ import math
 from dataclasses import dataclass, fields, replace
 from typing import Mapping
 
+from ..limits import REPEAT_DELAY_RANGE_MS
+from ..profile import unknown_key_hint
 from ..protocol import JOYSTICK_NEUTRAL, JOYSTICK_STILL_RANGE
 from .keymap import JogConfigError
 
@@ -44,9 +46,17 @@ class JogSettings:
         return len(self.joystick_offsets)
 
 
-_LEVEL_LISTS = ("joystick_offsets", "step_mm", "step_deg", "linear_speed_mm_min", "joint_speed_deg_s")
+# level list → the range of each entry (joystick_offsets: see _offset_ok); a desktop arm's
+# step is at most a few cm or a quarter turn, its speeds those of armctl's own F checks
+_LEVEL_LISTS = {
+    "joystick_offsets": (1.0, 255.0),  # then _offset_ok says exactly which are allowed
+    "step_mm": (0.001, 100.0),
+    "step_deg": (0.001, 90.0),
+    "linear_speed_mm_min": (0.1, 60_000.0),
+    "joint_speed_deg_s": (0.01, 1000.0),
+}
 _MS_RANGES = {
-    "initial_delay_ms": (50.0, 5000.0),
+    "initial_delay_ms": REPEAT_DELAY_RANGE_MS,
     "repeat_gap_ms": (20.0, REPEAT_GAP_LIMIT_MS),
     "refresh_ms": (0.0, 10000.0),
     "escape_ms": (5.0, 1000.0),
@@ -76,7 +86,7 @@ def settings_from_config(table: Mapping | None, source: str = "armctl.toml") -> 
         if key == "keys":
             continue
         if key not in known:
-            raise _bad(source, key, f"is not a jog setting (known: {', '.join(sorted(known))}, keys)")
+            raise _bad(source, key, f"is not a jog setting{unknown_key_hint(key, [*sorted(known), 'keys'])}")
         if key in _MS_RANGES:
             low, high = _MS_RANGES[key]
             number = _number(value)
@@ -84,14 +94,15 @@ def settings_from_config(table: Mapping | None, source: str = "armctl.toml") -> 
                 raise _bad(source, key, f"must be a number of milliseconds {low:g}…{high:g}, not {value!r}")
             values[key] = number
         elif key in _LEVEL_LISTS:
-            if not isinstance(value, list) or not value or any(_number(v) is None or _number(v) <= 0 for v in value):
-                raise _bad(source, key, f"must be a non-empty list of positive numbers, not {value!r}")
+            low, high = _LEVEL_LISTS[key]
+            if not isinstance(value, list) or not value or any(_number(v) is None or not low <= _number(v) <= high for v in value):
+                raise _bad(source, key, f"must be a non-empty list of positive numbers {low:g}…{high:g}, not {value!r}")
             if key == "joystick_offsets" and not all(_offset_ok(float(v)) for v in value):
                 raise _bad(source, key, f"entries must be whole numbers 21…127 (outside the still band), not {value!r}")
             values[key] = tuple(int(v) for v in value) if key == "joystick_offsets" else tuple(float(v) for v in value)
         elif key == "level":
-            if isinstance(value, bool) or not isinstance(value, int) or value < 1:
-                raise _bad(source, key, f"must be a whole number ≥ 1, not {value!r}")
+            if isinstance(value, bool) or not isinstance(value, int) or not 1 <= value <= 1000:
+                raise _bad(source, key, f"must be a whole number ≥ 1 (a speed level), not {value!r}")
             values[key] = value
     settings = replace(JogSettings(), **values)
     counts = {name: len(getattr(settings, name)) for name in _LEVEL_LISTS}

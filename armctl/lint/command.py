@@ -47,7 +47,7 @@ def lint(ctx: click.Context, paths, fmt, select, ignore, strict, statistics, pro
     `; armctl: ignore[CODE]` is not reported for CODE. Exit status: 0 clean (warnings allowed
     unless --strict), 1 problems found, 2 usage error or unreadable input.
     """
-    from ..errors import ProfileError
+    from ..errors import ConfigError, ProfileError
     from .registry import UnknownCode
 
     if list_rules:
@@ -61,7 +61,7 @@ def lint(ctx: click.Context, paths, fmt, select, ignore, strict, statistics, pro
         from ..profile import load_profile
 
         profile = load_profile(profile_path)
-    except (ProfileError, UnknownCode, ValueError) as error:
+    except (ConfigError, ProfileError, UnknownCode, ValueError) as error:
         _fail(ctx, str(error))
     ctx.exit(_run(paths, fmt, selection, strict, statistics, profile, stdin_filename, config))
 
@@ -114,7 +114,7 @@ def _lint_target(target, profile, selection, stdin_filename):
 
 def _config() -> dict:
     """The ``[lint]`` table of the nearest armctl.toml, checked: lists of strings only."""
-    from ..profile import find_config
+    from ..profile import find_config, unknown_key_hint
 
     path, content = find_config()
     table = content.get("lint", {})
@@ -122,7 +122,7 @@ def _config() -> dict:
         raise ValueError(f"{path}: lint must be a table ([lint])")
     for key, value in table.items():
         if key not in CONFIG_KEYS:
-            raise ValueError(f"{path}: unknown key lint.{key} (known: {', '.join(CONFIG_KEYS)})")
+            raise ValueError(f"{path}: unknown key 'lint.{key}'{unknown_key_hint(key, CONFIG_KEYS)}")
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
             raise ValueError(f"{path}: lint.{key} must be a list of strings")
     return table

@@ -20,6 +20,11 @@ seed       seed of the faults                                                   
 profile    path of an arm profile (TOML)                                           built-in
 =========  ======================================================================  =========
 
+Each number has a finite range (armctl/limits.py, also in the README); an unknown option, a
+bad or out-of-range value is a ``SimOptionError`` naming the option: a ``ConfigError`` for
+armctl (exit 2 on every command) and a ``SerialException`` for any other pyserial program.
+``_parse`` is the one parse of the URL; everything else calls it.
+
 Strategy: a thin edge.  With ``clock=virtual`` nothing blocks: ``read`` returns what has
 arrived by the current model time, and ``Link`` moves ``virtual_clock`` forward instead of
 sleeping (``next_output_s`` says how far the next status burst is).  Otherwise:  ``write`` hands the bytes to the model at the current model time and
@@ -33,13 +38,19 @@ Registered by importing ``armctl.sim`` (it appends itself to
 
 from __future__ import annotations
 
+import difflib
+import math
 import numbers
 import threading
 import time
 import urllib.parse
+from typing import Callable
 
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_bytes
 
+from ..errors import ConfigError
+from ..limits import (BAUD_RANGE, SIM_FIFO_RANGE_FRAMES, SIM_RATE_RANGE, SIM_SEED_RANGE, SIM_SLOWDOWN_RANGE,
+                      SIM_TIME_SCALE_RANGE)
 from .model import SimOptions, SimulatedArm
 from .realtime import RealtimeArm, VirtualClock
 
@@ -50,76 +61,102 @@ _USAGE = (
 )
 
 
-def _positive_float(name: str, text: str) -> float:
-    value = float(text)
-    if not value > 0 or value != value or value == float("inf"):
-        raise ValueError(f"{name} must be a positive number, not {text!r}")
-    return value
+class SimOptionError(ConfigError, SerialException):
+    """A bad ``sim://`` URL: a usage error for armctl (exit 2), a ``SerialException`` for any
+    program that opens the URL through pyserial."""
 
 
-def _rate(name: str, text: str) -> float:
-    value = float(text)
-    if not 0.0 <= value <= 1.0:
-        raise ValueError(f"{name} must be between 0 and 1, not {text!r}")
-    return value
+def _shown(text: str, limit: int = 60) -> str:
+    """``text`` quoted for a message, cut short: a URL may be any length."""
+    return repr(text) if len(text) <= limit else repr(text[: limit - 1]) + "…"
 
 
-def _positive_int(name: str, text: str) -> int:
-    value = int(text)
-    if value <= 0:
-        raise ValueError(f"{name} must be a positive whole number, not {text!r}")
-    return value
+def _float_in(low: float, high: float) -> Callable[[str, str], float]:
+    def parse(name: str, text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = math.nan
+        # NaN fails every comparison, so "not inside" also refuses it (and ±inf)
+        if not low <= value <= high:
+            raise ValueError(f"{name} must be a number {low:g}…{high:g}, not {_shown(text)}")
+        return value
+
+    return parse
+
+
+def _int_in(low: int, high: int) -> Callable[[str, str], int]:
+    def parse(name: str, text: str) -> int:
+        digits = text.strip()
+        # bounded length first: int() of a 100,000-digit text costs time and may refuse itself
+        value = int(digits) if len(digits) <= 25 and digits.lstrip("+-").isdigit() else None
+        if value is None or not low <= value <= high:
+            raise ValueError(f"{name} must be a whole number {low}…{high}, not {_shown(text)}")
+        return value
+
+    return parse
 
 
 def _control(name: str, text: str) -> bool:
     if text not in CONTROL_MODES:
-        raise ValueError(f"{name} must be 'queued' or 'arrival', not {text!r}")
+        raise ValueError(f"{name} must be 'queued' or 'arrival', not {_shown(text)}")
     return CONTROL_MODES[text]
 
 
 def _clock(name: str, text: str) -> bool:
     if text not in ("wall", "virtual"):
-        raise ValueError(f"{name} must be 'wall' or 'virtual', not {text!r}")
+        raise ValueError(f"{name} must be 'wall' or 'virtual', not {_shown(text)}")
     return text == "virtual"
 
 
-# URL option → (SimOptions field, "time_scale" or "virtual", parser)
-_OPTIONS = {
-    "speed": ("time_scale", _positive_float),
+def _path(name: str, text: str) -> str:
+    if not text:
+        raise ValueError(f"{name} must be the path of a profile TOML, not ''")
+    return text
+
+
+# URL option → (SimOptions field, "time_scale" or "virtual", parser); ranges from armctl/limits.py
+_OPTIONS: dict[str, tuple[str, Callable[[str, str], object]]] = {
+    "speed": ("time_scale", _float_in(*SIM_TIME_SCALE_RANGE)),
     "clock": ("virtual", _clock),
-    "slowdown": ("speed_factor", _positive_float),
-    "baud": ("baud", _positive_int),
+    "slowdown": ("speed_factor", _float_in(*SIM_SLOWDOWN_RANGE)),
+    "baud": ("baud", _int_in(*BAUD_RANGE)),
     "control": ("control_on_arrival", _control),
-    "fifo": ("fifo_frames", _positive_int),
-    "loss": ("status_loss_rate", _rate),
-    "corrupt": ("status_corrupt_rate", _rate),
-    "noise": ("noise_rate", _rate),
-    "seed": ("seed", lambda name, text: int(text)),
-    "profile": ("profile", lambda name, text: text),
+    "fifo": ("fifo_frames", _int_in(*SIM_FIFO_RANGE_FRAMES)),
+    "loss": ("status_loss_rate", _float_in(*SIM_RATE_RANGE)),
+    "corrupt": ("status_corrupt_rate", _float_in(*SIM_RATE_RANGE)),
+    "noise": ("noise_rate", _float_in(*SIM_RATE_RANGE)),
+    "seed": ("seed", _int_in(*SIM_SEED_RANGE)),
+    "profile": ("profile", _path),
 }
+OPTION_NAMES = tuple(_OPTIONS)
 
 
 def parse_sim_url(url: str, baud: int | None = None) -> tuple[SimOptions, float]:
-    """``SimOptions`` and the time scale a ``sim://`` URL asks for; SerialException if bad."""
+    """``SimOptions`` and the time scale a ``sim://`` URL asks for; SimOptionError if bad."""
     options, time_scale, _ = _parse(url, baud)
     return options, time_scale
 
 
 def is_virtual_clock(url: str) -> bool:
-    """Whether a ``sim://`` URL asks for ``clock=virtual``; SerialException if the URL is bad."""
+    """Whether a ``sim://`` URL asks for ``clock=virtual``; SimOptionError if the URL is bad."""
     return _parse(url)[2]
 
 
 def _parse(url: str, baud: int | None = None) -> tuple[SimOptions, float, bool]:
     parts = urllib.parse.urlsplit(url)
     if parts.scheme != "sim":
-        raise SerialException(f"{url!r} does not start with sim:// ({_USAGE})")
+        raise SimOptionError(f"{_shown(url)} does not start with sim:// ({_USAGE})")
+    if parts.netloc or parts.path.strip("/") or parts.fragment:
+        raise SimOptionError(f"{_shown(url)}: sim:// takes its options after '?', nothing else ({_USAGE})")
     values: dict = {} if baud is None else {"baud": baud}
     time_scale, virtual = 1.0, False
     try:
         for name, texts in urllib.parse.parse_qs(parts.query, keep_blank_values=True).items():
             if name not in _OPTIONS:
-                raise ValueError(f"unknown option {name!r}")
+                close = difflib.get_close_matches(name, OPTION_NAMES, n=1)
+                hint = f" (did you mean {close[0]!r}?)" if close else ""
+                raise ValueError(f"unknown option {_shown(name)}{hint}")
             if len(texts) > 1:
                 raise ValueError(f"option {name!r} is given {len(texts)} times")
             target, parse = _OPTIONS[name]
@@ -134,7 +171,7 @@ def _parse(url: str, baud: int | None = None) -> tuple[SimOptions, float, bool]:
             raise ValueError("speed has no meaning with clock=virtual (the clock waits for nobody)")
         return SimOptions(**values), time_scale, virtual
     except ValueError as error:
-        raise SerialException(f"{error} in {url!r} ({_USAGE})") from None
+        raise SimOptionError(f"{error} in {_shown(url)} ({_USAGE})") from None
 
 
 class Serial(SerialBase):
@@ -160,7 +197,7 @@ class Serial(SerialBase):
         try:
             self.model = SimulatedArm(options)
         except Exception as error:  # a bad profile path or a profile that makes no sense
-            raise SerialException(f"cannot start the simulated arm: {error}") from None
+            raise SimOptionError(f"sim:// option profile: {error}") from None
         self.virtual_clock = VirtualClock() if virtual else None
         self._arm = RealtimeArm(self.model, time_scale, clock=self.virtual_clock or time.monotonic)
         self._received.clear()

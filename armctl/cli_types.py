@@ -1,0 +1,46 @@
+"""The one click parameter type for every number an ``armctl`` option takes.
+
+Strategy: click's ``FloatRange`` compares with its bounds, and every comparison with NaN is
+false, so ``--lead nan`` passes the range check and ``--timeout nan`` waits for ever; an open
+upper bound lets ``--from-line 10**30`` through.  ``number(low, high)`` is the only way an
+option declares a number: both bounds are required, NaN and ±inf are refused by name, and the
+failure is click's usage error (exit 2, naming the option).  The tests find every numeric
+option through click's own command objects and require it to be ``Bounded``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import click
+
+
+class Bounded:
+    """Marks a click number type whose value is finite and inside ``[min, max]``."""
+
+    min: float
+    max: float
+
+    def _finite(self, value, param, ctx):
+        if isinstance(value, float) and not math.isfinite(value):
+            self.fail(f"{value!r} is not a finite number (give {self.min:g}…{self.max:g})", param, ctx)
+        return value
+
+
+class BoundedFloat(Bounded, click.FloatRange):
+    def convert(self, value, param, ctx):
+        # inf is already out of range; NaN passes click's comparisons and is caught here
+        return self._finite(super().convert(value, param, ctx), param, ctx)
+
+
+class BoundedInt(Bounded, click.IntRange):
+    pass
+
+
+def number(low: float, high: float, *, whole: bool = False) -> click.ParamType:
+    """A finite number from ``low`` to ``high`` (inclusive); ``whole``: an integer."""
+    if not (math.isfinite(low) and math.isfinite(high) and low <= high):
+        raise ValueError(f"bad bounds {low!r}…{high!r}")
+    if whole:
+        return BoundedInt(int(low), int(high))
+    return BoundedFloat(float(low), float(high))

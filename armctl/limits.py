@@ -1,0 +1,23 @@
+"""The ranges a number a user gives may take: one table for options, ``sim://`` and armctl.toml.
+
+Strategy: every range a command-line option, a ``sim://`` option or an armctl.toml value is
+checked against lives here once, as ``(low, high)`` with the unit in the name, so ``--baud``,
+``baud =`` in armctl.toml and ``sim://?baud=`` cannot drift apart.  Pure constants; no imports.
+"""
+
+from __future__ import annotations
+
+BAUD_RANGE = (300, 4_000_000)  # bit/s: what pyserial and USB-serial adapters offer
+LEAD_RANGE_S = (0.1, 60.0)  # motion queued ahead of the arm
+STATUS_TIMEOUT_RANGE_S = (0.05, 600.0)  # waiting for the arm's first status
+START_TIMEOUT_RANGE_S = (0.1, 600.0)  # waiting for the arm before a job or jog starts
+LINE_RANGE = (1, 2**31 - 1)  # a line number in a script
+TCP_PORT_RANGE = (1, 65535)
+REPEAT_DELAY_RANGE_MS = (50.0, 5000.0)  # jog: a single key press moves at most this long
+
+# sim:// options
+SIM_TIME_SCALE_RANGE = (0.01, 1000.0)  # speed=: the simulated arm runs this many times faster
+SIM_SLOWDOWN_RANGE = (0.1, 10.0)  # slowdown=: motion takes this many times the model's time
+SIM_FIFO_RANGE_FRAMES = (1, 100_000)  # fifo=: the connector's buffer (the real one holds 200)
+SIM_SEED_RANGE = (0, 2**64 - 1)
+SIM_RATE_RANGE = (0.0, 1.0)  # loss=, corrupt=, noise=: a share of status frames
