@@ -149,14 +149,25 @@ def test_a_bad_profile_exits_2(tmp_path, monkeypatch):
     assert not Path("job.html").exists()
 
 
+def users_profile(tmp_path) -> Path:
+    """The packaged numbers given as the user's own profile: their workspace findings are errors
+    (on the built-in, illustrative profile they are warnings: tests/test_lint_provenance.py)."""
+    from importlib import resources
+
+    path = tmp_path / "my_arm.toml"
+    path.write_bytes(resources.files("armctl.data").joinpath("default_profile.toml").read_bytes())
+    return path
+
+
 def test_a_script_with_errors_is_not_drawn_and_reported_as_lint_reports_it(tmp_path):
     pytest.importorskip("plotly")
     script = write(tmp_path / "job.txt", BAD)
-    result = plot(script, "-o", "job.html")
+    profile = users_profile(tmp_path)
+    result = plot(script, "-o", "job.html", "--profile", profile)
     assert result.exit_code == 1
     assert "2 errors: nothing was drawn" in result.output
     assert not Path("job.html").exists()
-    lint = CliRunner().invoke(main, ["lint", str(script)])
+    lint = CliRunner().invoke(main, ["lint", str(script), "--profile", str(profile)])
     findings = lint.stdout.rsplit("Found ", 1)[0]  # lint's text without its summary line
     assert findings.count(f"{script}:") == 3  # L401, L103, E002
     assert result.stderr.startswith(findings)
@@ -208,7 +219,7 @@ def test_html_of_the_example_job(tmp_path):
 def test_html_with_force_draws_the_findings(tmp_path):
     pytest.importorskip("plotly")
     script = write(tmp_path / "job.txt", BAD)
-    result = plot(script, "-o", "job.html", "--force")
+    result = plot(script, "-o", "job.html", "--force", "--profile", users_profile(tmp_path))
     assert result.exit_code == 1  # drawn, but the script still has errors
     traces, _ = figure_of(Path("job.html").read_text(encoding="utf-8"))
     found = {t["meta"]["severity"]: t for t in traces_of(traces, "findings")}
@@ -269,7 +280,7 @@ def test_svg_holds_three_views_and_a_legend(tmp_path):
 def test_svg_one_view_and_findings(tmp_path):
     pytest.importorskip("matplotlib")
     script = write(tmp_path / "job.txt", BAD)
-    result = plot(script, "-o", "job.svg", "--view", "xz", "--force")
+    result = plot(script, "-o", "job.svg", "--view", "xz", "--force", "--profile", users_profile(tmp_path))
     assert result.exit_code == 1
     ids = _ids(Path("job.svg"))
     assert "view-xz" in ids and not {"view-xy", "view-yz"} & ids

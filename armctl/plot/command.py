@@ -21,6 +21,9 @@ import sys
 
 import click
 
+from ..cli_types import number
+from ..limits import LINE_RANGE
+
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE = 0, 1, 2
 FORMATS = {".html": "html", ".htm": "html", ".svg": "svg", ".png": "png"}
 LIBRARY_OF = {"html": "plotly", "svg": "matplotlib", "png": "matplotlib"}
@@ -40,7 +43,7 @@ def _fail(message: str, code: int = EXIT_USAGE):
 @click.option("--view", type=click.Choice(["3d", "xy", "xz", "yz"]), default=None,
               help="One view only: 3d, or the orthographic top (xy), front (xz) or side (yz) view.  "
                    "[default: 3d for HTML, xy+xz+yz for SVG/PNG]")
-@click.option("--from-line", type=click.IntRange(min=1), default=1, show_default=True, metavar="N",
+@click.option("--from-line", type=number(*LINE_RANGE, whole=True), default=1, show_default=True, metavar="N",
               help="Draw the job as `run --from-line N` would send it (from the fixed pose 0).")
 @click.option("--profile", "profile_path", metavar="FILE",
               help="Arm profile (TOML). Default: armctl.toml's [profile] (or its path), else the packaged default.")
