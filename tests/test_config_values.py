@@ -46,6 +46,7 @@ BASE_ARGS = {
     "decode": ["{script}"],
     "lint": ["{script}"],
     "ports": [],
+    "plot": ["{script}", "-o", "{script}.svg", "--view", "xy"],
 }
 
 SPECIAL_NUMBERS = [
