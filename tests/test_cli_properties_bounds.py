@@ -120,13 +120,14 @@ def test_dev_zero_on_stdin(tmp_path, command):
 
 @pytest.mark.parametrize("command", [("lint",), ("compile",), ("estimate",)], ids=" ".join)
 def test_an_endless_stream_of_valid_lines_on_stdin(tmp_path, command):
-    """A script that never ends (a generator piped in) is a bounded read too."""
+    """A script that never ends (a generator piped in) is a bounded read too.  Its lines carry
+    3 KB comments, so that any bound in bytes is reached within seconds (about 30 MB/s today)."""
     args = [*command, "-"]
     process = start(args, tmp_path, stdin=subprocess.PIPE)
     stop = threading.Event()
 
     def feed():
-        chunk = b"G4 P1\n" * 10_000
+        chunk = (b"G4 P1 ; " + b"c" * 3000 + b"\n") * 100
         try:
             while not stop.is_set():
                 process.stdin.write(chunk)
