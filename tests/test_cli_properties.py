@@ -29,6 +29,7 @@ import math
 import os
 import pkgutil
 import re
+import resource
 import struct
 import subprocess
 import sys
@@ -44,6 +45,7 @@ from armctl.cli import main
 
 EXIT_CODES = {0, 1, 2}  # 130 (Ctrl-C) and 141 (broken pipe) only where a test causes them
 SUBPROCESS_TIMEOUT_S = 10.0
+MEMORY_LIMIT_BYTES = 1 << 30  # far above what armctl needs for any input here (tens of MB)
 PROPERTY_SETTINGS = settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow,
                                                                                       HealthCheck.function_scoped_fixture])
 
@@ -97,11 +99,11 @@ def fill(text: str, slot: re.Match, value: str) -> str:
     return text[: slot.start("value")] + value + text[slot.end("value"):]
 
 
-def test_every_statement_template_is_valid_and_has_slots(tmp_path):
+def test_every_statement_template_is_valid_and_has_slots(workdir):
     """The generators below start from valid scripts, so every failure is the number's."""
     for statement in STATEMENTS:
         assert slots(statement), statement
-        result = invoke(["compile", "--format", "hex", write(tmp_path, PRELUDE + statement + "\n")])
+        result = invoke(["compile", "--format", "hex", write(workdir, PRELUDE + statement + "\n")])
         assert result.exit_code == 0, (statement, result.output, result.stderr)
 
 
@@ -137,18 +139,23 @@ def fresh_env(**extra: str) -> dict:
     return env
 
 
+def limit_memory() -> None:
+    """In the child before exec: a runaway read ends in MemoryError, not in the machine swapping."""
+    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT_BYTES, MEMORY_LIMIT_BYTES))
+
+
 def run_fresh(args, cwd: Path, input: bytes | None = None, timeout_s: float = SUBPROCESS_TIMEOUT_S,
-              stdin=None) -> subprocess.CompletedProcess:
+              stdin=subprocess.DEVNULL) -> subprocess.CompletedProcess:
     """The installed command in a new interpreter; a hang fails the test, never the suite."""
     command = [sys.executable, "-m", "armctl", *map(str, args)]
     try:
         return subprocess.run(command, input=input, stdin=stdin if input is None else None, capture_output=True,
-                              cwd=cwd, env=fresh_env(), timeout=timeout_s)
+                              cwd=cwd, env=fresh_env(), timeout=timeout_s, preexec_fn=limit_memory)
     except subprocess.TimeoutExpired:
         pytest.fail(f"armctl {' '.join(map(str, args))}: no answer within {timeout_s} s (a hang)")
 
 
-def check_fresh(args, cwd: Path, input: bytes | None = None, allowed=EXIT_CODES, stdin=None):
+def check_fresh(args, cwd: Path, input: bytes | None = None, allowed=EXIT_CODES, stdin=subprocess.DEVNULL):
     done = run_fresh(args, cwd, input=input, stdin=stdin)
     stdout, stderr = (done.stdout.decode("utf-8", "replace"), done.stderr.decode("utf-8", "replace"))
     check_outcome(args, done.returncode, stdout, stderr, allowed)

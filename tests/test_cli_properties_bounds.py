@@ -14,7 +14,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import resource
 import subprocess
 import sys
 import threading
@@ -22,20 +21,15 @@ from pathlib import Path
 
 import pytest
 
-from test_cli_properties import SUBPROCESS_TIMEOUT_S, check_outcome, fresh_env
+from test_cli_properties import SUBPROCESS_TIMEOUT_S, check_outcome, fresh_env, limit_memory
 
-MEMORY_LIMIT_BYTES = 1 << 30  # far above what armctl needs for any of these (tens of MB)
 LOCATED = re.compile(r"job\.txt:\d+:\d+")
 SCRIPT_COMMANDS = (("lint",), ("compile", "--format", "hex"), ("estimate",), ("run", "--dry-run"))
 
 
-def _limit_memory() -> None:
-    resource.setrlimit(resource.RLIMIT_AS, (MEMORY_LIMIT_BYTES, MEMORY_LIMIT_BYTES))
-
-
 def start(args, cwd: Path, stdin=subprocess.DEVNULL) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "armctl", *map(str, args)], stdin=stdin, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, cwd=cwd, env=fresh_env(), preexec_fn=_limit_memory)
+                            stderr=subprocess.PIPE, cwd=cwd, env=fresh_env(), preexec_fn=limit_memory)
 
 
 def finish(process: subprocess.Popen, args, timeout_s: float = SUBPROCESS_TIMEOUT_S) -> tuple[int, str, str]:
