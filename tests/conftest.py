@@ -4,12 +4,22 @@ Golden frame vectors (tests/data/golden_*.txt, written by hand from PROTOCOL.md;
 is described at the top of each file).  A test that takes ``command_vector`` or
 ``status_vector`` runs once per record; ``all_command_vectors`` / ``all_status_vectors`` give
 the whole list.  The files are read lazily, so a broken data file fails only these tests.
+
+No test can hang: pyproject.toml gives every test a timeout (pytest-timeout, ``thread``
+method, which needs no signal).  Tests that run on the wall clock (bridges, signals to a
+subprocess, a ``sim://`` without ``clock=virtual``) carry the ``realtime`` marker:
+``pytest -m "not realtime"`` deselects them, and ``ARMCTL_SKIP_REALTIME=1`` skips them.
+A test that presses Ctrl-C in its own process takes the ``ctrl_c`` fixture, which works however
+the runner was started (nohup, ``&``, CI with SIGINT ignored).
 """
 
 from __future__ import annotations
 
 import functools
+import os
 import re
+import signal
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -104,3 +114,44 @@ def all_command_vectors() -> tuple[GoldenVector, ...]:
 @pytest.fixture(scope="session")
 def all_status_vectors() -> tuple[GoldenVector, ...]:
     return golden_status()
+
+
+# --- the real-time tests and Ctrl-C ------------------------------------------------------------
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if not os.environ.get("ARMCTL_SKIP_REALTIME"):
+        return
+    skip = pytest.mark.skip(reason="ARMCTL_SKIP_REALTIME is set")
+    for item in items:
+        if item.get_closest_marker("realtime"):
+            item.add_marker(skip)
+
+
+@pytest.fixture
+def ctrl_c():
+    """``ctrl_c(after_s)`` sends this process a real SIGINT ``after_s`` seconds later.
+
+    A runner started in the background, under nohup or by some CI inherits SIGINT *ignored*;
+    then neither a signal nor ``_thread.interrupt_main`` raises KeyboardInterrupt and a test
+    waiting for one waits for ever.  So the test runs with Python's own handler (KeyboardInterrupt
+    in the main thread), and the previous handler is restored afterwards.  A timer that has not
+    fired when the test ends is cancelled, so no stray Ctrl-C reaches a later test."""
+    if threading.current_thread() is not threading.main_thread():
+        pytest.fail("the ctrl_c fixture needs the main thread (signal handlers live there)")
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    timers: list[threading.Timer] = []
+
+    def press(after_s: float) -> None:
+        timer = threading.Timer(after_s, os.kill, (os.getpid(), signal.SIGINT))
+        timer.daemon = True
+        timers.append(timer)
+        timer.start()
+
+    try:
+        yield press
+    finally:
+        for timer in timers:
+            timer.cancel()
+            timer.join()
+        signal.signal(signal.SIGINT, previous)

@@ -267,6 +267,7 @@ def interrupted(tmp_path_factory):
     return process.returncode, first + rest, err, log
 
 
+@pytest.mark.realtime
 def test_ctrl_c_exits_130_and_says_where_to_resume(interrupted):
     code, out, err, log = interrupted
     assert code == 130, err
@@ -283,6 +284,7 @@ def test_ctrl_c_exits_130_and_says_where_to_resume(interrupted):
     assert "frames: " in out and " of 14 sent" in out
 
 
+@pytest.mark.realtime
 def test_the_resume_line_ctrl_c_printed_is_one_the_compiler_accepts(interrupted):
     from armctl.script import compile_file
 
@@ -311,6 +313,7 @@ def test_ctrl_c_during_the_progress_update_never_says_to_resend_a_line_known_exe
     assert int(match["resume"]) == 3
 
 
+@pytest.mark.realtime
 def test_the_log_holds_the_abort_frame_ctrl_c_sent(interrupted):
     sent = [r for r in read_log(interrupted[3]) if r["dir"] == "tx"]
     assert sent[-1]["hex"].startswith("fc1e0302")  # control 30/3, a[3] = 2: the pause toggle
@@ -360,6 +363,7 @@ def test_a_port_lost_mid_job_exits_1_with_the_summary(serve, args):
 # --- against `armctl sim --pty` in another process, in real time --------------------------------
 
 
+@pytest.mark.realtime
 def test_a_small_job_through_armctl_sim_pty_in_another_process():
     simulator = subprocess.Popen(
         [*ARMCTL, "sim", "--pty"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,

@@ -133,6 +133,7 @@ def test_armctl_toml_in_a_parent_directory_names_a_real_port(tmp_path, monkeypat
 # --- ports that say nothing useful -------------------------------------------------------------
 
 
+@pytest.mark.realtime
 def test_a_silent_port_fails_within_the_timeout_naming_port_baud_and_nothing_received():
     started = time.monotonic()
     result = status("--once", "--json", "--port", "loop://", "--timeout", "0.3")
@@ -235,6 +236,7 @@ def bridge_thread(serve, *args, **kwargs):
         assert not thread.is_alive()
 
 
+@pytest.mark.realtime
 def test_status_through_a_real_pseudo_terminal():
     with bridge_thread(serve_pty) as path:
         assert path.startswith("/dev/pts/")
@@ -245,6 +247,7 @@ def test_status_through_a_real_pseudo_terminal():
     assert list(state) == KEYS and state["joints"] == [0.0, 0.0, 0.0, 0.0, 90.0, 0.0]
 
 
+@pytest.mark.realtime
 def test_status_through_socket_url_to_the_tcp_bridge():
     with bridge_thread(serve_tcp, 0) as url:
         assert url.startswith("socket://127.0.0.1:")
@@ -340,6 +343,7 @@ def test_a_port_lost_while_watching_is_an_error_not_a_clean_exit(monkeypatch):
         status_watch.watch_status(FakeLink([a_state(200.0)], fail_after=2), 9600, as_json=True)
 
 
+@pytest.mark.realtime
 def test_json_watch_end_to_end_then_ctrl_c_exits_130(tmp_path):
     process = subprocess.Popen(
         [sys.executable, "-m", "armctl", "status", "--json", "--watch", "--port", WATCH_SIM],

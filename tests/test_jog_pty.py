@@ -27,7 +27,7 @@ import pytest
 
 from armctl.protocol import JointMove, Joystick, decode_command, decode_status
 
-pytestmark = pytest.mark.skipif(bool(os.environ.get("ARMCTL_SKIP_REALTIME")), reason="ARMCTL_SKIP_REALTIME is set")
+pytestmark = pytest.mark.realtime  # ARMCTL_SKIP_REALTIME=1 skips these (tests/conftest.py)
 
 REPEAT_S = 0.033
 KEYBOARD_DELAY_S = 0.4

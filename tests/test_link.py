@@ -212,6 +212,7 @@ def test_a_port_that_raises_on_write_is_a_port_error():
             link.write(b"\x01")
 
 
+@pytest.mark.realtime
 def test_wait_until_returns_false_on_timeout():
     with Link(QuietPort(), "fake://arm") as link:
         link.start()

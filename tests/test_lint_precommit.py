@@ -40,6 +40,7 @@ def _pre_commit() -> str | None:
 
 @pytest.mark.skipif(_pre_commit() is None, reason="pre-commit is not installed")
 @pytest.mark.skipif(os.environ.get("ARMCTL_TEST_PRECOMMIT") != "1", reason="set ARMCTL_TEST_PRECOMMIT=1 (slow, uses the network)")
+@pytest.mark.timeout(960)  # pre-commit's own install, bounded by the 900 s subprocess timeout
 def test_try_repo_runs_the_hook(tmp_path):
     repo = tmp_path / "user-repo"
     (repo / "jobs").mkdir(parents=True)

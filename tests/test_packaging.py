@@ -85,6 +85,11 @@ def pip(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run([PYTHON, "-m", "pip", *args], capture_output=True, text=True, cwd=cwd, timeout=300)
 
 
+# building and installing the wheel (three pip calls of up to 300 s each) happens in the first
+# test that uses it: that test's limit covers them, not the suite's 60 s default
+WHEEL_TIME_LIMIT = pytest.mark.timeout(960)
+
+
 @pytest.fixture(scope="module")
 def wheel(tmp_path_factory):
     """(the wheel file, the --target directory it is installed in, how it was built)."""
@@ -105,6 +110,7 @@ def wheel(tmp_path_factory):
     return wheel_file, target, how
 
 
+@WHEEL_TIME_LIMIT
 def test_the_wheel_ships_the_grammar_as_package_data(wheel):
     wheel_file, _, _ = wheel
     names = zipfile.ZipFile(wheel_file).namelist()
@@ -114,6 +120,7 @@ def test_the_wheel_ships_the_grammar_as_package_data(wheel):
     assert not any(name.startswith("tests/") for name in names)
 
 
+@WHEEL_TIME_LIMIT
 def test_the_grammar_loads_from_the_wheel_outside_the_repository(wheel, tmp_path):
     _, target, _ = wheel
     found = probe("wheel", cwd=tmp_path, env={"PYTHONPATH": str(target)})
@@ -124,6 +131,7 @@ def test_the_grammar_loads_from_the_wheel_outside_the_repository(wheel, tmp_path
     assert (found["errors"], found["frames"]) == (0, SMALL_FRAMES)
 
 
+@WHEEL_TIME_LIMIT
 def test_the_wheels_command_line_compiles_outside_the_repository(wheel, tmp_path):
     _, target, _ = wheel
     script = tmp_path / "job.txt"

@@ -1,14 +1,14 @@
 """The simulator's real-time edges: the ``sim://`` pyserial URL and the pty / TCP bridges.
 
-These are the only simulator tests that run on the wall clock; each stays well under a
-second by running the arm faster than real time (``speed=``/``time_scale``)."""
+These are the only simulator tests that run on the wall clock (marked ``realtime``); each stays
+well under a second by running the arm faster than real time (``speed=``/``time_scale``).  Ctrl-C
+is a real SIGINT through the ``ctrl_c`` fixture (tests/conftest.py), so it arrives even when the
+runner was started with SIGINT ignored."""
 
 from __future__ import annotations
 
-import _thread
 import os
 import queue
-import signal
 import threading
 import time
 
@@ -29,6 +29,7 @@ def test_importing_armctl_sim_registers_the_scheme():
 # --- sim:// ------------------------------------------------------------------------------------
 
 
+@pytest.mark.realtime
 def test_a_frame_written_to_sim_lands_and_status_comes_back():
     with serial.serial_for_url("sim://", timeout=1.0) as port:
         port.write(MCode(3).encode())
@@ -45,6 +46,7 @@ def test_a_frame_written_to_sim_lands_and_status_comes_back():
         assert port.model.execution_log[0].outcome == "done"
 
 
+@pytest.mark.realtime
 def test_sim_read_honours_the_timeout_without_busy_waiting():
     with serial.serial_for_url("sim://", timeout=0.05) as port:
         port.reset_input_buffer()
@@ -60,6 +62,7 @@ def test_sim_read_honours_the_timeout_without_busy_waiting():
         assert later <= ((time.monotonic() - since) / 0.030 + 2) * STATUS_SIZE
 
 
+@pytest.mark.realtime
 def test_sim_in_waiting_and_reset_input_buffer():
     with serial.serial_for_url("sim://", timeout=0.1) as port:
         time.sleep(0.1)
@@ -106,6 +109,7 @@ def test_bad_sim_urls_raise_serial_exception_with_a_clear_message(url, message):
         serial.serial_for_url(url)
 
 
+@pytest.mark.realtime
 def test_a_reader_thread_and_a_writer_thread_share_the_port():
     with serial.serial_for_url("sim://?speed=50", timeout=0.02) as port:
         received = bytearray()
@@ -128,6 +132,7 @@ def test_a_reader_thread_and_a_writer_thread_share_the_port():
         assert StatusReader().feed(bytes(received))
 
 
+@pytest.mark.realtime
 def test_close_wakes_a_blocked_reader():
     port = serial.serial_for_url("sim://", timeout=None)
     result = []
@@ -150,6 +155,7 @@ def _serve_in_thread(serve, *args, **kwargs):
     return ready.get(timeout=2.0), thread, result
 
 
+@pytest.mark.realtime
 @pytest.mark.parametrize("kind", ["pty", "tcp"])
 def test_a_bridge_serves_the_arm_until_the_peer_goes_away(kind):
     model = SimulatedArm()
@@ -173,6 +179,7 @@ def test_a_bridge_serves_the_arm_until_the_peer_goes_away(kind):
     assert [f.command for f in model.frames_received] == [MCode(5)]
 
 
+@pytest.mark.realtime
 @pytest.mark.parametrize("serve, args", [(serve_pty, ()), (serve_tcp, (0,))])
 def test_a_bridge_stops_when_asked(serve, args):
     stop = threading.Event()
@@ -182,30 +189,20 @@ def test_a_bridge_stops_when_asked(serve, args):
     assert not thread.is_alive() and result == [STOPPED]
 
 
-@pytest.fixture
-def python_sigint():
-    """_thread.interrupt_main raises KeyboardInterrupt only while Python's own SIGINT handler
-    is installed; a runner started with SIGINT ignored (nohup, background, some CI) would
-    otherwise leave the bridge serving for ever."""
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    yield
-    signal.signal(signal.SIGINT, previous)
-
-
-@pytest.mark.usefixtures("python_sigint")
-def test_serve_pty_exits_cleanly_on_ctrl_c():
-    timer = threading.Timer(0.1, _thread.interrupt_main)
+@pytest.mark.realtime
+@pytest.mark.timeout(10)
+def test_serve_pty_exits_cleanly_on_ctrl_c(ctrl_c):
     paths = []
 
     def on_ready(path):
         paths.append(path)
-        timer.start()
+        ctrl_c(0.1)
 
     assert serve_pty(SimOptions(), on_ready) == INTERRUPTED
     assert paths and not os.path.exists(paths[0])  # the pty went away with its master
 
 
-@pytest.mark.usefixtures("python_sigint")
-def test_serve_tcp_exits_cleanly_on_ctrl_c_while_waiting_for_a_client():
-    timer = threading.Timer(0.1, _thread.interrupt_main)
-    assert serve_tcp(0, SimOptions(), lambda url: timer.start()) == INTERRUPTED
+@pytest.mark.realtime
+@pytest.mark.timeout(10)
+def test_serve_tcp_exits_cleanly_on_ctrl_c_while_waiting_for_a_client(ctrl_c):
+    assert serve_tcp(0, SimOptions(), lambda url: ctrl_c(0.1)) == INTERRUPTED

@@ -123,6 +123,7 @@ def test_commands_that_need_a_moving_clock_refuse_a_virtual_one(args, says):
     assert "Traceback" not in result.output
 
 
+@pytest.mark.realtime
 def test_idle_on_a_wall_clock_port_returns_after_a_status_frame_or_the_time():
     with Link.open("sim://?speed=10") as link:
         link.wait_until(lambda state: state.frames >= 1, timeout_s=5.0)
