@@ -2,9 +2,14 @@
 baselines show why they are not used, and the table / CLI behave."""
 
 import json
+import subprocess
+import sys
 from functools import lru_cache
 
 import pytest
+from click.testing import CliRunner
+
+from armctl import cli
 
 from armctl.bench import table
 from armctl.bench.harness import run_job
@@ -17,6 +22,7 @@ from armctl.kinematics import CartesianPose, Unreachable
 from armctl.motion import MotionModel, Planner
 from armctl.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode
 from armctl.sim.model import SimOptions, SimulatedArm
+from armctl.streamer import DEFAULT_LEAD_S
 
 
 @lru_cache(maxsize=None)
@@ -187,26 +193,56 @@ def test_check_targets_reports_each_miss():
     assert "dropped 2" in failures[0] and "1.200" in failures[1] and "9.00 s" in failures[2]
 
 
-def test_main_prints_the_table_and_exits_0(capsys):
-    assert table.main(["--size", "test", "--scenario", "tiny", "--jobs", "1"]) == 0
-    out = capsys.readouterr().out
-    assert "tiny" in out and "every target met" in out and "wall time" in out
+def bench_cli(*args):
+    return CliRunner().invoke(cli.main, ["bench", *args])
 
 
-def test_main_json(capsys):
-    assert table.main(["--size", "test", "--scenario", "tiny", "--json", "--jobs", "1"]) == 0
-    data = json.loads(capsys.readouterr().out)
+def test_bench_prints_the_table_and_exits_0():
+    result = bench_cli("--size", "test", "--scenario", "tiny", "--jobs", "1")
+    assert result.exit_code == 0, result.output
+    assert "tiny" in result.output and "every target met" in result.output and "wall time" in result.output
+
+
+def test_bench_json():
+    result = bench_cli("--size", "test", "--scenario", "tiny", "--json", "--jobs", "1")
+    assert result.exit_code == 0
+    data = json.loads(result.output)
     assert {c["strategy"] for c in data["cells"]} == set(table.STRATEGY_NAMES)
     armctl = next(c for c in data["cells"] if c["strategy"] == "armctl")
     assert armctl["dropped"] == 0 and armctl["failures"] == []
 
 
-def test_main_exits_1_when_armctl_misses_a_target(capsys):
+def test_bench_exits_1_when_armctl_misses_a_target():
     # A lead far shorter than a frame time starves the arm between long moves.
-    assert table.main(["--size", "test", "--scenario", "long", "--lead", "0.01", "--jobs", "1"]) == 1
-    assert "MISSED" in capsys.readouterr().out
+    result = bench_cli("--size", "test", "--scenario", "long", "--lead", "0.01", "--jobs", "1")
+    assert result.exit_code == 1
+    assert "MISSED" in result.output
 
 
-def test_main_rejects_a_bad_lead(capsys):
-    with pytest.raises(SystemExit):
-        table.main(["--lead", "0"])
+@pytest.mark.parametrize("args", [("--lead", "0"), ("--lead", "x"), ("--scenario", "nope"), ("--jobs", "0")])
+def test_bench_rejects_bad_options_with_exit_2(args):
+    result = bench_cli(*args)
+    assert result.exit_code == 2
+    assert "Traceback" not in result.output
+
+
+def test_bench_default_lead_is_the_streamers():
+    lead = next(p for p in cli.bench.params if p.name == "lead_s")
+    assert lead.default == DEFAULT_LEAD_S
+
+
+@pytest.mark.parametrize("command", [["armctl"], ["-m", "armctl.bench"]])
+def test_bench_help_lists_every_option_in_a_fresh_process(command):
+    argv = [sys.executable, "-m", "armctl", "bench"] if command == ["armctl"] else [sys.executable, *command]
+    done = subprocess.run([*argv, "--help"], capture_output=True, text=True, timeout=30)
+    assert done.returncode == 0, done.stderr
+    for option in ("--quick", "--scenario", "--lead", "--json", "--jobs"):
+        assert option in done.stdout
+    assert all(name in done.stdout for name in SCENARIO_NAMES)
+
+
+def test_bench_runs_in_a_fresh_process():
+    done = subprocess.run([sys.executable, "-m", "armctl", "bench", "--size", "test", "--scenario", "tiny",
+                           "--jobs", "1"], capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0, done.stderr
+    assert "every target met" in done.stdout

@@ -38,6 +38,7 @@ from ..protocol import (
 )
 from ..kinematics import CartesianPose
 from ..sim.model import SimOptions
+from . import SCENARIO_NAMES  # noqa: F401  (re-exported: the names of build_scenarios' list)
 from .harness import Event
 
 TOOL_DOWN = (180.0, 0.0, 0.0)  # B0, B1, W: the tool points straight down
@@ -217,5 +218,3 @@ def build_scenarios(size: str = "full", seed: int = 1) -> list[Scenario]:
                  note=f"paused at {pause_at:g} s for {PAUSE_FOR_S:g} s; control frames act on arrival"),
     ]
 
-
-SCENARIO_NAMES = ("long", "tiny", "mixed", "slow", "fast", "lossy", "arrival", "pause")

@@ -19,13 +19,13 @@ armctl's own rows are checked against the targets of DESIGN.md / issue 5:
 The abort run leaves out a scenario's outside events (the pause scenario's pause and resume):
 they are pause toggles too, and would toggle against the abort's pause.
 
-``main`` is ``python -m armctl.bench`` (and ``armctl bench``); it exits 1 when armctl misses a
-target anywhere.
+``main`` runs and prints the table for ``armctl bench`` (whose options live in armctl/cli.py;
+``python -m armctl.bench`` is the same click command); it returns 1 when armctl misses a target
+anywhere.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -223,32 +223,22 @@ def summary(cells: list[Cell], scenarios: list[Scenario], lead_s: float, wall_s:
     return "\n".join(lines)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m armctl.bench",
-        description="Scenario × strategy table of streaming to the simulated arm, in virtual time.")
-    parser.add_argument("--quick", action="store_const", const="quick", dest="size", default="full",
-                        help="smaller jobs (for CI)")
-    parser.add_argument("--size", choices=tuple(SIZES), help=argparse.SUPPRESS)
-    parser.add_argument("--scenario", action="append", choices=SCENARIO_NAMES, metavar="NAME",
-                        help=f"run only this scenario (repeatable): {', '.join(SCENARIO_NAMES)}")
-    parser.add_argument("--lead", type=float, default=DEFAULT_LEAD_S, metavar="S",
-                        help=f"armctl's lead in seconds (default {DEFAULT_LEAD_S:g})")
-    parser.add_argument("--json", action="store_true", help="print the cells as JSON")
-    parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel processes (default: CPUs)")
-    args = parser.parse_args(argv)
-    if not args.lead > 0:
-        parser.error("--lead must be greater than 0")
-    scenarios = [s for s in build_scenarios(args.size) if not args.scenario or s.name in args.scenario]
+def main(size: str = "full", scenario_names=(), lead_s: float = DEFAULT_LEAD_S, as_json: bool = False,
+         jobs: int | None = None) -> int:
+    """Run the table and print it (or its cells as JSON); 1 when armctl misses a target anywhere.
+    The command line is ``armctl bench`` (armctl/cli.py); ``python -m armctl.bench`` runs it too."""
+    if not lead_s > 0:
+        raise ValueError("the lead must be greater than 0")
+    scenarios = [s for s in build_scenarios(size) if not scenario_names or s.name in scenario_names]
     started = time.perf_counter()
-    cells = run_bench(scenarios, lead_s=args.lead, jobs=args.jobs)
+    cells = run_bench(scenarios, lead_s=lead_s, jobs=jobs)
     wall_s = time.perf_counter() - started
-    if args.json:
-        json.dump({"lead_s": args.lead, "size": args.size, "wall_s": round(wall_s, 2),
+    if as_json:
+        json.dump({"lead_s": lead_s, "size": size, "wall_s": round(wall_s, 2),
                    "cells": [asdict(c) for c in cells]}, sys.stdout, indent=1, ensure_ascii=False)
         print()
     else:
         print(format_table(cells))
         print()
-        print(summary(cells, scenarios, args.lead, wall_s))
+        print(summary(cells, scenarios, lead_s, wall_s))
     return 1 if any(c.failures for c in cells) else 0
