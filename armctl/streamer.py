@@ -45,6 +45,7 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from collections import deque
 from dataclasses import dataclass
 
@@ -88,6 +89,9 @@ JOINT_TRACE_FRACTION = 1 / 16  # how far along a joint segment one chord of its 
 # a move longer than the lead.
 FEED_AHEAD_S = 0.5
 ROTATION_S = len(STATUS_ROTATION) * STATUS_PERIOD_S
+# An observation is matched against this many of the oldest pending frames and as many around the
+# estimate's frame, so its cost does not grow with the queue (see ``Streamer._scan``).
+SCAN_WINDOW_FRAMES = 16
 
 
 @dataclass
@@ -150,6 +154,7 @@ class Streamer:
         self.status_frames = 0
         self._peeked: tuple[Command, Segment] | None = None
         self._certain_tail_s = 0.0  # the time bound of the last frame written (even a G300's)
+        self._cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
 
     # --- writing ----------------------------------------------------------------------------
 
@@ -246,6 +251,8 @@ class Streamer:
         if segment.kind == "joint":
             frame.xyz_tolerance_mm = POSITION_TOLERANCE_MM + JOINT_TRACE_SLACK * _trace_deviation_mm(segment)
         self.pending.append(frame)
+        if segment.kind in ("line", "arc"):
+            self._cartesian.append(frame.index)
         self.sent += 1
         return frame
 
@@ -325,39 +332,90 @@ class Streamer:
         self.consumed_lower_bound += 1
 
     def _observe(self, xyz, now: float) -> None:
-        candidates = []
-        for sent in self.pending:
+        def match(sent: SentFrame):
             segment = sent.segment
             distance, fraction = distance_to_path(segment, xyz)
-            if distance <= sent.xyz_tolerance_mm:
-                if segment.kind == "joint":
-                    slack = JOINT_TRACE_FRACTION  # matched on chords of its trace
-                else:
-                    slack = sent.xyz_tolerance_mm / segment.length if segment.length > 0 else 1.0
-                candidates.append((sent.index, fraction - slack, fraction + slack))
-        self._use("position", candidates, now)
+            if distance > sent.xyz_tolerance_mm:
+                return None
+            if segment.kind == "joint":
+                slack = JOINT_TRACE_FRACTION  # matched on chords of its trace
+            else:
+                slack = sent.xyz_tolerance_mm / segment.length if segment.length > 0 else 1.0
+            return fraction - slack, fraction + slack
+
+        earliest, candidates = self._scan(match, len(self.pending), now)
+        self._use("position", earliest, candidates, now)
 
     def _observe_joint_half(self, offset: int, values, now: float) -> None:
         """Joint halves say nothing about a Cartesian segment (that would need IK), so a match
         on a joint segment counts only up to the first pending Cartesian segment."""
-        candidates = []
-        for sent in self.pending:
-            if sent.segment.kind in ("line", "arc"):
-                if candidates:
-                    break
-                return  # the arm may be on this Cartesian segment: no evidence from joints
-            match = _joint_half_fraction(sent.segment, offset, values)
-            if match is not None:
-                candidates.append((sent.index, *match))
-        self._use(f"joints{offset}", candidates, now)
+        cartesian = self._cartesian
+        while cartesian and self.pending and cartesian[0] < self.pending[0].index:
+            cartesian.popleft()  # consumed
+        end = cartesian[0] - self.pending[0].index if cartesian else len(self.pending)
+        if end == 0:
+            return  # the arm may be on this Cartesian segment: no evidence from joints
+        earliest, candidates = self._scan(lambda sent: _joint_half_fraction(sent.segment, offset, values), end, now)
+        if earliest is None and end < len(self.pending):
+            return  # the arm may be on the Cartesian segment after these: no evidence
+        self._use(f"joints{offset}", earliest, candidates, now)
 
-    def _use(self, stream: str, candidates: list[tuple[int, float, float]], now: float) -> None:
+    def _scan(self, match, end: int, now: float):
+        """Match one observation against the pending frames before ``end``: (earliest, candidates).
+
+        Flat cost: the search covers the oldest ``SCAN_WINDOW_FRAMES`` pending frames (where the
+        lower bound's evidence is) and as many around the frame the estimate has in progress
+        (where the re-anchoring evidence is); the rest only when neither window matches.  The
+        earliest candidate stays sound: with no match among the oldest frames and a match
+        further on, the arm is at least at the first frame not searched, so that is the
+        earliest index reported (evidence no stronger than what was searched)."""
+        pending = self.pending
+        candidates: list[tuple[int, float, float]] = []
+        head = min(end, SCAN_WINDOW_FRAMES)
+        for k in range(head):
+            sent = pending[k]
+            found = match(sent)
+            if found is not None:
+                candidates.append((sent.index, *found))
+                if _estimate_off_s(sent, *found, now) == 0.0:
+                    # The usual case: the earliest candidate is where the estimate has the arm,
+                    # so no later candidate can change the bound or the estimate.
+                    return sent.index, candidates
+                break
+        else:
+            k = head
+
+        def search(lo: int, hi: int) -> None:
+            for j in range(lo, hi):
+                sent = pending[j]
+                found = match(sent)
+                if found is not None:
+                    candidates.append((sent.index, *found))
+
+        search(k + 1, head)
+        if head == end:
+            return (candidates[0][0] if candidates else None), candidates
+        in_head = bool(candidates)
+        centre = bisect_right(pending, now, key=_est_end)  # the frame the estimate has in progress
+        lo = max(head, centre - SCAN_WINDOW_FRAMES // 2)
+        hi = min(end, max(lo, centre + SCAN_WINDOW_FRAMES // 2))
+        search(lo, hi)
+        if in_head or (candidates and lo == head):
+            return candidates[0][0], candidates
+        if candidates:
+            # Nothing among the oldest frames: the arm is at least at the first frame not searched.
+            return pending[head].index, candidates
+        search(head, lo)  # neither window matched (the estimate is far off, or this is noise)
+        search(hi, end)
+        return (candidates[0][0] if candidates else None), candidates
+
+    def _use(self, stream: str, earliest: int | None, candidates: list[tuple[int, float, float]],
+             now: float) -> None:
         """Move the lower bound and the estimate on one observation's candidate segments.
 
-        The earliest candidate is where the arm is at least; the bound moves there only when
-        the previous observation of the same stream agrees, so one corrupted frame cannot.
+        ``earliest`` is where the arm is at least; the bound moves there only when the previous
+        observation of the same stream agrees, so one corrupted frame cannot.
         """
-        earliest = candidates[0][0] if candidates else None
         previous = self._last_candidate.get(stream)
         self._last_candidate[stream] = earliest
         if earliest is None:
@@ -387,25 +445,28 @@ class Streamer:
         for index, lo, hi in candidates:
             if index < first:
                 continue
-            sent = self.pending[index - first]
-            window = _time_window(sent.segment, lo, hi)
-            start = sent.est_end_s - sent.segment.duration_s
-            off = max(start + window[0] - now, now - (start + window[1]), 0.0)
+            off = _estimate_off_s(self.pending[index - first], lo, hi, now)
             if best is None or off < best[0]:
-                best = (off, index - first, window, start)
+                best = (off, index - first, lo, hi)
             if off == 0.0:
                 break
         if best is None or best[0] == 0.0:
             return
-        _, k, (t_lo, t_hi), start = best
+        _, k, lo, hi = best
         sent = self.pending[k]
+        t_lo, t_hi = _time_window(sent.segment, lo, hi)
+        start = sent.est_end_s - sent.segment.duration_s
         start = now - t_lo if now < start + t_lo else now - t_hi
         sent.est_end_s = start + sent.segment.duration_s
         if sent.group_index != sent.index and k > 0:
             self.pending[k - 1].est_end_s = start  # its G300: the arc's start
+        previous_end_s = sent.est_end_s
         for j in range(k + 1, len(self.pending)):
             nxt = self.pending[j]
-            nxt.est_end_s = max(nxt.wire_end_s, self.pending[j - 1].est_end_s) + nxt.segment.duration_s
+            end_s = max(nxt.wire_end_s, previous_end_s) + nxt.segment.duration_s
+            if end_s == nxt.est_end_s:
+                break  # and so are the frames after it
+            nxt.est_end_s = previous_end_s = end_s
 
     # --- the end of a job ---------------------------------------------------------------------
 
@@ -427,6 +488,18 @@ class Streamer:
     def last_known_done(self):
         """The tag of the last frame known finished, or None."""
         return self._last_done_tag
+
+
+def _est_end(sent: SentFrame) -> float:
+    return sent.est_end_s
+
+
+def _estimate_off_s(sent: SentFrame, lo: float, hi: float, now: float) -> float:
+    """How far (s) the estimate is from having the arm between fractions ``lo`` and ``hi`` of
+    ``sent``'s path at ``now`` (0 when it agrees)."""
+    t_lo, t_hi = _time_window(sent.segment, lo, hi)
+    start = sent.est_end_s - sent.segment.duration_s
+    return max(start + t_lo - now, now - (start + t_hi), 0.0)
 
 
 def _time_window(segment: Segment, lo: float, hi: float) -> tuple[float, float]:

@@ -6,6 +6,8 @@ corrupted frame, a pause or silence can never make it claim a frame the arm has 
 """
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from armctl.motion import MotionModel, distance_to_path
 from armctl.profile import load_profile
@@ -14,7 +16,8 @@ from armctl.protocol import (
     PositionStatus,
 )
 from armctl.streamer import (
-    ARRIVAL_SLACK_S, CAPACITY_MARGIN_FRAMES, FEED_AHEAD_S, FRAME_SLACK_S, SLOWEST_ARM_FACTOR, Streamer,
+    ARRIVAL_SLACK_S, CAPACITY_MARGIN_FRAMES, FEED_AHEAD_S, FRAME_SLACK_S, SCAN_WINDOW_FRAMES, SLOWEST_ARM_FACTOR,
+    Streamer,
 )
 
 MODEL = MotionModel(load_profile())
@@ -343,3 +346,49 @@ def test_an_arm_seen_at_the_end_before_the_estimate_pulls_it_earlier():
     end0 = s.pending[0].est_end_s
     s.receive_status(point_on(s, 1, 0.0), end0 - 0.3)  # a faster arm: already at B's start
     assert s.pending[0].est_end_s == pytest.approx(end0 - 0.3, abs=0.02)
+
+
+# --- the windowed search: flat cost, never a stronger claim than a full search --------------------
+
+
+def _full_scan_earliest(s: Streamer, xyz):
+    """The earliest pending frame whose path passes within its tolerance of ``xyz`` (all searched)."""
+    for sent in s.pending:
+        if distance_to_path(sent.segment, xyz)[0] <= sent.xyz_tolerance_mm:
+            return sent.index
+    return None
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    points=st.lists(st.sampled_from([A, B, C, (220.0, -50.0, 280.0), (260.0, 40.0, 260.0)]), min_size=2, max_size=70),
+    seen=st.tuples(st.integers(0, 69), st.floats(0.0, 1.0)),
+    now=st.floats(0.0, 80.0),
+)
+def test_the_windowed_search_never_claims_more_than_a_full_search(points, seen, now):
+    s = streamer(capacity=1000)
+    write_all(s, [line(*p) for p in points])
+    index, fraction = seen[0] % len(points), seen[1]
+    segment = s.pending[index].segment
+    xyz = segment.sample(segment.time_at_fraction(fraction)).xyz
+    earliest, candidates = s._scan(lambda sent: (0.0, 1.0) if distance_to_path(sent.segment, xyz)[0]
+                                   <= sent.xyz_tolerance_mm else None, len(s.pending), now)
+    truth = _full_scan_earliest(s, xyz)
+    assert truth is not None and earliest is not None
+    assert earliest <= truth  # never further than the arm can be proven to be
+    if truth < SCAN_WINDOW_FRAMES:
+        assert earliest == truth  # where the evidence usually is, exactly as strong
+    assert [c[0] for c in candidates] == sorted(c[0] for c in candidates)
+
+
+def test_a_match_only_beyond_the_oldest_frames_proves_only_the_first_frame_not_searched():
+    s = streamer(capacity=1000)
+    far = (200.0, -100.0, 200.0)
+    write_all(s, [line(250.0, 0.0, 300.0 - k % 2) for k in range(40)] + [line(*far)])
+    tail = s.pending[-1]
+    end = tail.segment.end.xyz
+    earliest, candidates = s._scan(
+        lambda sent: (0.9, 1.0) if distance_to_path(sent.segment, end)[0] <= 0.5 else None, len(s.pending),
+        tail.est_end_s)
+    assert candidates and candidates[-1][0] == tail.index
+    assert earliest == SCAN_WINDOW_FRAMES  # not the far frame: the frames between were not searched
