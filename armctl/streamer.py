@@ -349,10 +349,13 @@ class Streamer:
     def _observe_joint_half(self, offset: int, values, now: float) -> None:
         """Joint halves say nothing about a Cartesian segment (that would need IK), so a match
         on a joint segment counts only up to the first pending Cartesian segment."""
-        cartesian = self._cartesian
-        while cartesian and self.pending and cartesian[0] < self.pending[0].index:
+        if not self.pending:
+            self._use(f"joints{offset}", None, [], now)
+            return
+        cartesian, first = self._cartesian, self.pending[0].index
+        while cartesian and cartesian[0] < first:
             cartesian.popleft()  # consumed
-        end = cartesian[0] - self.pending[0].index if cartesian else len(self.pending)
+        end = cartesian[0] - first if cartesian else len(self.pending)
         if end == 0:
             return  # the arm may be on this Cartesian segment: no evidence from joints
         earliest, candidates = self._scan(lambda sent: _joint_half_fraction(sent.segment, offset, values), end, now)

@@ -392,3 +392,12 @@ def test_a_match_only_beyond_the_oldest_frames_proves_only_the_first_frame_not_s
         tail.est_end_s)
     assert candidates and candidates[-1][0] == tail.index
     assert earliest == SCAN_WINDOW_FRAMES  # not the far frame: the frames between were not searched
+
+
+def test_status_with_nothing_pending_is_harmless():
+    s = streamer()
+    s.wrote(line(*A), 0.0)
+    s.confirm_all_done()
+    for frame in (at(*A), JointsLowStatus(0.0, 0.0, 0.0), running()):
+        s.receive_status(frame, 5.0)
+    assert s.all_consumed and s.consumed_lower_bound == 1
