@@ -265,3 +265,31 @@ def test_bench_runs_in_a_fresh_process():
                            "--jobs", "1"], capture_output=True, text=True, timeout=60)
     assert done.returncode == 0, done.stderr
     assert "every target met" in done.stdout
+
+
+# --- a long virtual run keeps bounded records -----------------------------------------------------
+
+
+def test_the_simulator_keeps_bounded_history_and_exact_counts():
+    from armctl.bench.harness import job_frames_finished
+    from armctl.bench.strategies import NaiveStrategy
+    from armctl.sim.connector import HISTORY_FRAMES, RecentList
+
+    frames = 3 * HISTORY_FRAMES
+    commands = [MCode(k % 7) for k in range(frames)]  # no motion: line-bound, nothing dropped
+    arm = SimulatedArm(SimOptions(baud=115200))
+    result = run_job(commands, NaiveStrategy(115200), arm)
+    assert result.written == frames and result.dropped == 0
+    assert arm.executor.finished_count == frames  # counted over the whole run
+    assert arm.connector.received.total == frames
+    assert HISTORY_FRAMES <= len(arm.execution_log) < 2 * HISTORY_FRAMES  # a window, not the run
+    assert HISTORY_FRAMES <= len(arm.frames_received) < 2 * HISTORY_FRAMES
+    assert arm.execution_log[-1].index == frames - 1  # the most recent ones
+    assert result.job_s == arm.execution_log[-1].end_s
+    assert not arm.history_complete
+    with pytest.raises(ValueError):
+        job_frames_finished(arm, ["job"] * frames, result.job_s)
+    window = RecentList(limit=3)
+    for k in range(10):
+        window.append(k)
+    assert window == [6, 7, 8, 9] and window.total == 10 and not window.complete
