@@ -24,6 +24,11 @@ Scenarios (``build_scenarios``):
   nothing but a resume while paused — so an outside pause that the host did not send can never be
   resumed once a host has written anything after it (the host can only learn of the pause from
   a status frame, up to 270 ms later).
+- ``longfirst``: one 4.7 s move, then 40 ms moves (line-bound): reaches the physical floor only if
+  the host writes the short moves while the long one runs (the streamer's rule (c)).
+- ``backforth``: 10 ms moves back and forth between two points 1 mm apart, at 115200 baud (the moves
+  are then arm-bound): every position lies on every pending path.
+- ``periodic``: round a pentagon of 10 mm sides, 100 ms a side: targets repeat every 5 frames.
 """
 
 from __future__ import annotations
@@ -243,7 +248,7 @@ SIZES = {
     "test": (40, 100, 2),  # the test suite: every kind of frame, seconds of wall time in all
 }
 # Frames of the issue-13 shapes (longfirst, backforth, periodic) at each size.
-SHAPE_FRAMES = {"full": 1000, "quick": 400, "test": 200}
+SHAPE_FRAMES = {"full": 1000, "quick": 300, "test": 200}
 FAST_BAUD = 115200  # the back-and-forth job: a fast line makes 10 ms moves arm-bound
 PAUSE_AT_SHARE = 0.4
 PAUSE_FOR_S = 4.0
