@@ -15,7 +15,9 @@ motion-time model), the moment its last byte left the wire, and two views of the
     chords of its forward kinematics with a tolerance widened by how far the chords cut
     corners; joint halves prove nothing while a Cartesian segment is pending before them.
     An arc's G300 is held by the arm until its G301 has landed and finishes with it: evidence
-    of the arc never confirms its G300 alone.
+    of the arc never confirms its G300 alone.  For a flat cost per status frame the search
+    covers the oldest pending frames and a window around the estimate's frame (the rest only
+    when neither matches); a match beyond an unsearched gap proves only the gap's first frame.
   - *time*: frames that leave no trace in the position (delays, M codes, control frames,
     PWM-only and attitude-only moves) are confirmed once even an arm ``slowest_factor`` times
     slower than the model would have finished them, counting only time the arm was seen
