@@ -293,3 +293,27 @@ def test_the_simulator_keeps_bounded_history_and_exact_counts():
     for k in range(10):
         window.append(k)
     assert window == [6, 7, 8, 9] and window.total == 10 and not window.complete
+
+
+# --- rule (c): what an abort costs behind a long move ---------------------------------------------
+
+
+@pytest.mark.parametrize("abort_after", [40, 60, 80, 100, 140])
+def test_an_abort_behind_a_long_move_stops_within_the_lead_plus_that_move(abort_after):
+    from armctl.bench.strategies import StreamerStrategy
+    from armctl.protocol import frame_seconds
+
+    scenario = scenarios()["longfirst"]
+    arm = SimulatedArm(scenario.options)
+    strategy = StreamerStrategy(MotionModel(arm.profile), arm.pose, 2.0)
+    result = run_job(scenario.commands, strategy, arm, abort_after_frames=abort_after)
+    long_move_s = arm.execution_log[0].duration_s
+    assert long_move_s > 4.0
+    assert result.dropped == 0
+    assert result.moving_after_abort_s <= 2.0 + long_move_s + frame_seconds(scenario.options.baud)
+
+
+def test_the_abort_limit_counts_the_last_long_move_written():
+    cell = table.run_cell(scenarios()["longfirst"], "armctl")
+    long_move_s = planned_seconds(scenarios()["longfirst"].commands[:1])
+    assert cell.abort_limit_s == pytest.approx(2.0 + long_move_s + 0.05, abs=0.01)
