@@ -9,6 +9,8 @@ from __future__ import annotations
 
 BAUD_RANGE = (300, 4_000_000)  # bit/s: what pyserial and USB-serial adapters offer
 LEAD_RANGE_S = (0.1, 60.0)  # motion queued ahead of the arm
+BENCH_LEAD_RANGE_S = (0.001, 60.0)  # the benchmark may also show what a lead too short to feed the arm does
+BENCH_JOBS_RANGE = (1, 64)  # parallel benchmark processes
 STATUS_TIMEOUT_RANGE_S = (0.05, 600.0)  # waiting for the arm's first status
 START_TIMEOUT_RANGE_S = (0.1, 600.0)  # waiting for the arm before a job or jog starts
 LINE_RANGE = (1, 2**31 - 1)  # a line number in a script

@@ -15,7 +15,9 @@ motion-time model), the moment its last byte left the wire, and two views of the
     chords of its forward kinematics with a tolerance widened by how far the chords cut
     corners; joint halves prove nothing while a Cartesian segment is pending before them.
     An arc's G300 is held by the arm until its G301 has landed and finishes with it: evidence
-    of the arc never confirms its G300 alone.
+    of the arc never confirms its G300 alone.  For a flat cost per status frame the search
+    covers the oldest pending frames and a window around the estimate's frame (the rest only
+    when neither matches); a match beyond an unsearched gap proves only the gap's first frame.
   - *time*: frames that leave no trace in the position (delays, M codes, control frames,
     PWM-only and attitude-only moves) are confirmed once even an arm ``slowest_factor`` times
     slower than the model would have finished them, counting only time the arm was seen
@@ -39,12 +41,18 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
     ``next_write_time`` is told which it is — is at most ``lead_s``, so an abort (a pause frame
     queued behind everything, H5) leaves the arm at most the lead plus the move in progress.
     A frame is also allowed once no more than ``FEED_AHEAD_S`` (or the lead) is queued in all,
-    so the arm is never starved of a move longer than the lead by itself.
+    so the arm is never starved of a move longer than the lead by itself;
+(c) or, for a line-bound frame (no longer than a frame on the wire), while the motion queued
+    after it is at most the lead plus the last frame written longer than a frame time: behind a
+    long move, short frames are written while it runs instead of idling the line until it
+    nearly ends, and since line-bound frames cannot make the queue grow, an abort still leaves
+    at most the lead plus that long move.
 """
 
 from __future__ import annotations
 
 import math
+from bisect import bisect_right
 from collections import deque
 from dataclasses import dataclass
 
@@ -88,6 +96,9 @@ JOINT_TRACE_FRACTION = 1 / 16  # how far along a joint segment one chord of its 
 # a move longer than the lead.
 FEED_AHEAD_S = 0.5
 ROTATION_S = len(STATUS_ROTATION) * STATUS_PERIOD_S
+# An observation is matched against this many of the oldest pending frames and as many around the
+# estimate's frame, so its cost does not grow with the queue (see ``Streamer._scan``).
+SCAN_WINDOW_FRAMES = 16
 
 
 @dataclass
@@ -150,6 +161,8 @@ class Streamer:
         self.status_frames = 0
         self._peeked: tuple[Command, Segment] | None = None
         self._certain_tail_s = 0.0  # the time bound of the last frame written (even a G300's)
+        self._long_move_s = 0.0  # the last frame written that was longer than a frame time (c)
+        self._cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
 
     # --- writing ----------------------------------------------------------------------------
 
@@ -201,7 +214,25 @@ class Streamer:
                     break
                 began_s = sent.est_end_s
             lead_ok_at = min(lead_ok_at, now if began_s is None else began_s)
+        if command is not None and self._line_bound_credit_ok(now, duration_s):
+            lead_ok_at = now
         return max(now, self.wire_free_s, lead_ok_at)
+
+    def _line_bound_credit_ok(self, now: float, duration_s: float) -> bool:
+        """(c) A line-bound frame — the arm runs it in no more than its own time on the wire —
+        may be written past the lead while the motion queued after it stays within the lead
+        plus the last frame written that was longer than a frame time (the "long move").
+
+        Why: behind a long move, line-bound frames would otherwise wait until the long move is
+        nearly done, and then the line, not the arm, sets the pace: every frame time the line
+        idled during the long move is added to the job.  Written during the long move instead,
+        they save that wire time.  While only line-bound frames follow, the queue cannot grow
+        (each adds at most a frame time of motion per frame time of wire), so an abort leaves
+        the arm at most the lead plus that long move — the bound of (b) when the long move is
+        the one in progress, kept for as long as line-bound frames follow it."""
+        if duration_s > self.frame_s or self._long_move_s <= 0.0:
+            return False
+        return self.queued_seconds(now) + duration_s <= self.lead_s + self._long_move_s
 
     def may_write(self, now: float, command: Command | None = None) -> bool:
         when = self.next_write_time(now, command)
@@ -243,9 +274,13 @@ class Streamer:
                 previous.certain_end_s = frame.certain_end_s
             else:
                 previous.certain_end_s = previous.chain_end_s  # the arm skips a G300 left alone
+        if segment.duration_s > self.frame_s:
+            self._long_move_s = segment.duration_s  # (c): the credit line-bound frames after it get
         if segment.kind == "joint":
             frame.xyz_tolerance_mm = POSITION_TOLERANCE_MM + JOINT_TRACE_SLACK * _trace_deviation_mm(segment)
         self.pending.append(frame)
+        if segment.kind in ("line", "arc"):
+            self._cartesian.append(frame.index)
         self.sent += 1
         return frame
 
@@ -325,39 +360,93 @@ class Streamer:
         self.consumed_lower_bound += 1
 
     def _observe(self, xyz, now: float) -> None:
-        candidates = []
-        for sent in self.pending:
+        def match(sent: SentFrame):
             segment = sent.segment
             distance, fraction = distance_to_path(segment, xyz)
-            if distance <= sent.xyz_tolerance_mm:
-                if segment.kind == "joint":
-                    slack = JOINT_TRACE_FRACTION  # matched on chords of its trace
-                else:
-                    slack = sent.xyz_tolerance_mm / segment.length if segment.length > 0 else 1.0
-                candidates.append((sent.index, fraction - slack, fraction + slack))
-        self._use("position", candidates, now)
+            if distance > sent.xyz_tolerance_mm:
+                return None
+            if segment.kind == "joint":
+                slack = JOINT_TRACE_FRACTION  # matched on chords of its trace
+            else:
+                slack = sent.xyz_tolerance_mm / segment.length if segment.length > 0 else 1.0
+            return fraction - slack, fraction + slack
+
+        earliest, candidates = self._scan(match, len(self.pending), now)
+        self._use("position", earliest, candidates, now)
 
     def _observe_joint_half(self, offset: int, values, now: float) -> None:
         """Joint halves say nothing about a Cartesian segment (that would need IK), so a match
         on a joint segment counts only up to the first pending Cartesian segment."""
-        candidates = []
-        for sent in self.pending:
-            if sent.segment.kind in ("line", "arc"):
-                if candidates:
-                    break
-                return  # the arm may be on this Cartesian segment: no evidence from joints
-            match = _joint_half_fraction(sent.segment, offset, values)
-            if match is not None:
-                candidates.append((sent.index, *match))
-        self._use(f"joints{offset}", candidates, now)
+        if not self.pending:
+            self._use(f"joints{offset}", None, [], now)
+            return
+        cartesian, first = self._cartesian, self.pending[0].index
+        while cartesian and cartesian[0] < first:
+            cartesian.popleft()  # consumed
+        end = cartesian[0] - first if cartesian else len(self.pending)
+        if end == 0:
+            return  # the arm may be on this Cartesian segment: no evidence from joints
+        earliest, candidates = self._scan(lambda sent: _joint_half_fraction(sent.segment, offset, values), end, now)
+        if earliest is None and end < len(self.pending):
+            return  # the arm may be on the Cartesian segment after these: no evidence
+        self._use(f"joints{offset}", earliest, candidates, now)
 
-    def _use(self, stream: str, candidates: list[tuple[int, float, float]], now: float) -> None:
+    def _scan(self, match, end: int, now: float):
+        """Match one observation against the pending frames before ``end``: (earliest, candidates).
+
+        Flat cost: the search covers the oldest ``SCAN_WINDOW_FRAMES`` pending frames (where the
+        lower bound's evidence is) and as many around the frame the estimate has in progress
+        (where the re-anchoring evidence is); the rest only when neither window matches.  The
+        earliest candidate stays sound: with no match among the oldest frames and a match
+        further on, the arm is at least at the first frame not searched, so that is the
+        earliest index reported (evidence no stronger than what was searched)."""
+        pending = self.pending
+        candidates: list[tuple[int, float, float]] = []
+        head = min(end, SCAN_WINDOW_FRAMES)
+        for k in range(head):
+            sent = pending[k]
+            found = match(sent)
+            if found is not None:
+                candidates.append((sent.index, *found))
+                if _estimate_off_s(sent, *found, now) == 0.0:
+                    # The usual case: the earliest candidate is where the estimate has the arm,
+                    # so no later candidate can change the bound or the estimate.
+                    return sent.index, candidates
+                break
+        else:
+            k = head
+
+        def search(lo: int, hi: int) -> None:
+            for j in range(lo, hi):
+                sent = pending[j]
+                found = match(sent)
+                if found is not None:
+                    candidates.append((sent.index, *found))
+
+        search(k + 1, head)
+        if head == end:
+            return (candidates[0][0] if candidates else None), candidates
+        in_head = bool(candidates)
+        centre = bisect_right(pending, now, key=_est_end)  # the frame the estimate has in progress
+        lo = max(head, centre - SCAN_WINDOW_FRAMES // 2)
+        hi = min(end, max(lo, centre + SCAN_WINDOW_FRAMES // 2))
+        search(lo, hi)
+        if in_head or (candidates and lo == head):
+            return candidates[0][0], candidates
+        if candidates:
+            # Nothing among the oldest frames: the arm is at least at the first frame not searched.
+            return pending[head].index, candidates
+        search(head, lo)  # neither window matched (the estimate is far off, or this is noise)
+        search(hi, end)
+        return (candidates[0][0] if candidates else None), candidates
+
+    def _use(self, stream: str, earliest: int | None, candidates: list[tuple[int, float, float]],
+             now: float) -> None:
         """Move the lower bound and the estimate on one observation's candidate segments.
 
-        The earliest candidate is where the arm is at least; the bound moves there only when
-        the previous observation of the same stream agrees, so one corrupted frame cannot.
+        ``earliest`` is where the arm is at least; the bound moves there only when the previous
+        observation of the same stream agrees, so one corrupted frame cannot.
         """
-        earliest = candidates[0][0] if candidates else None
         previous = self._last_candidate.get(stream)
         self._last_candidate[stream] = earliest
         if earliest is None:
@@ -387,25 +476,28 @@ class Streamer:
         for index, lo, hi in candidates:
             if index < first:
                 continue
-            sent = self.pending[index - first]
-            window = _time_window(sent.segment, lo, hi)
-            start = sent.est_end_s - sent.segment.duration_s
-            off = max(start + window[0] - now, now - (start + window[1]), 0.0)
+            off = _estimate_off_s(self.pending[index - first], lo, hi, now)
             if best is None or off < best[0]:
-                best = (off, index - first, window, start)
+                best = (off, index - first, lo, hi)
             if off == 0.0:
                 break
         if best is None or best[0] == 0.0:
             return
-        _, k, (t_lo, t_hi), start = best
+        _, k, lo, hi = best
         sent = self.pending[k]
+        t_lo, t_hi = _time_window(sent.segment, lo, hi)
+        start = sent.est_end_s - sent.segment.duration_s
         start = now - t_lo if now < start + t_lo else now - t_hi
         sent.est_end_s = start + sent.segment.duration_s
         if sent.group_index != sent.index and k > 0:
             self.pending[k - 1].est_end_s = start  # its G300: the arc's start
+        previous_end_s = sent.est_end_s
         for j in range(k + 1, len(self.pending)):
             nxt = self.pending[j]
-            nxt.est_end_s = max(nxt.wire_end_s, self.pending[j - 1].est_end_s) + nxt.segment.duration_s
+            end_s = max(nxt.wire_end_s, previous_end_s) + nxt.segment.duration_s
+            if end_s == nxt.est_end_s:
+                break  # and so are the frames after it
+            nxt.est_end_s = previous_end_s = end_s
 
     # --- the end of a job ---------------------------------------------------------------------
 
@@ -427,6 +519,18 @@ class Streamer:
     def last_known_done(self):
         """The tag of the last frame known finished, or None."""
         return self._last_done_tag
+
+
+def _est_end(sent: SentFrame) -> float:
+    return sent.est_end_s
+
+
+def _estimate_off_s(sent: SentFrame, lo: float, hi: float, now: float) -> float:
+    """How far (s) the estimate is from having the arm between fractions ``lo`` and ``hi`` of
+    ``sent``'s path at ``now`` (0 when it agrees)."""
+    t_lo, t_hi = _time_window(sent.segment, lo, hi)
+    start = sent.est_end_s - sent.segment.duration_s
+    return max(start + t_lo - now, now - (start + t_hi), 0.0)
 
 
 def _time_window(segment: Segment, lo: float, hi: float) -> tuple[float, float]:

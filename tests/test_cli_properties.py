@@ -35,13 +35,13 @@ import subprocess
 import sys
 from pathlib import Path
 
-import click
 import pytest
 from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from armctl.cli import main
+from cli_catalogue import QUICK_INVOCATIONS, VIRTUAL_SIM, all_commands, numeric_options, quick_args
 
 EXIT_CODES = {0, 1, 2}  # 130 (Ctrl-C) and 141 (broken pipe) only where a test causes them
 SUBPROCESS_TIMEOUT_S = 10.0
@@ -409,44 +409,12 @@ def test_an_unknown_code_through_the_installed_command(tmp_path):
 
 
 TINY_SCRIPT = "G4 P10\n"
-VIRTUAL_SIM = "sim://?clock=virtual"
-# How to call each command so that an accepted value ends quickly: the option under test is added
-# to these arguments.  A new command fails test_every_command_has_a_quick_invocation until it
-# has one, and then inherits every property below.
-QUICK_INVOCATIONS = {
-    "decode": ["decode", "-"],
-    "compile": ["compile", "{script}"],
-    "status": ["status", "--once", "--port", VIRTUAL_SIM],
-    "ports": ["ports"],
-    "run": ["run", "{script}", "--port", VIRTUAL_SIM, "--no-live"],
-    "estimate": ["estimate", "{script}"],
-    "sim": ["sim"],
-    "jog": ["jog", "--port", VIRTUAL_SIM],
-    "lint": ["lint", "{script}"],
-    "bench": ["bench"],
-}
 MUST_REJECT = ("nan", "inf", "-inf")
 MAY_ACCEPT = ("-1", "1e39", "99999999999999999999999")
 
 
-def all_commands(group: click.Group = main, path: tuple[str, ...] = ()):
-    for name, command in sorted(group.commands.items()):
-        if isinstance(command, click.Group):
-            yield from all_commands(command, (*path, name))
-        else:
-            yield (*path, name), command
-
-
-def _is_numeric(param: click.Parameter) -> bool:
-    kind = param.type
-    return isinstance(kind, (click.types.IntParamType, click.types.FloatParamType)) or kind in (click.INT, click.FLOAT)
-
-
 NUMERIC_OPTIONS = [
-    (path, param.opts[-1] if param.opts[-1].startswith("--") else param.opts[0])
-    for path, command in all_commands()
-    for param in command.params
-    if isinstance(param, click.Option) and not param.is_flag and _is_numeric(param)
+    (path, param.opts[-1] if param.opts[-1].startswith("--") else param.opts[0]) for path, param in numeric_options()
 ]
 
 
@@ -457,8 +425,7 @@ def test_every_command_has_a_quick_invocation():
 
 
 def _with_option(path, option, value, script: Path) -> list[str]:
-    base = [part.format(script=script) for part in QUICK_INVOCATIONS[path[0]]]
-    return [*base, f"{option}={value}"]
+    return [*quick_args(path, script), f"{option}={value}"]
 
 
 @pytest.mark.parametrize("path, option", NUMERIC_OPTIONS, ids=[f"{' '.join(p)} {o}" for p, o in NUMERIC_OPTIONS])

@@ -28,26 +28,15 @@ from armctl.cli import main
 from armctl.cli_types import Bounded
 from armctl.profile import _SCHEMA, find_config
 
+from cli_catalogue import numeric_options, quick_args
+
 ARMCTL = [sys.executable, "-m", "armctl"]
 FAST_SIM = "sim://?clock=virtual"
-NOT_TESTED_HERE = {"bench"}  # its options are being rewritten on another branch
 SCRIPT_TEXT = "G6 J1=0 J2=0 J3=0 J4=0 J5=90 J6=0 S1500 F30\nPOSE 1\nG4 P100\nPOSE 0\n"
 
 # How to invoke each command so that a value its options accept ends quickly: a virtual clock,
 # a script, or a usage error that comes after option parsing (sim: --pty with --tcp; jog: stdin
 # is not a terminal).  A new command must be added here: the test below says so.
-BASE_ARGS = {
-    "run": ["{script}", "--no-live", "--port", FAST_SIM],
-    "estimate": ["{script}"],
-    "status": ["--once", "--port", FAST_SIM],
-    "sim": ["--pty"],
-    "jog": ["--port", FAST_SIM],
-    "compile": ["{script}"],
-    "decode": ["{script}"],
-    "lint": ["{script}"],
-    "ports": [],
-    "plot": ["{script}", "-o", "{script}.svg", "--view", "xy"],
-}
 
 SPECIAL_NUMBERS = [
     "nan", "-nan", "NaN", "inf", "-inf", "+inf", "Infinity", "1e308", "-1e308", "1e309", "-1e309",
@@ -63,21 +52,7 @@ VALUE_TEXTS = st.one_of(
 )
 
 
-def _commands():
-    return sorted((name, command) for name, command in main.commands.items() if name not in NOT_TESTED_HERE)
-
-
-def _numeric_options():
-    """(command name, option) for every option whose type is a number, read from click."""
-    found = []
-    for name, command in _commands():
-        for param in command.params:
-            if isinstance(param, click.Option) and isinstance(param.type, (click.types._NumberParamTypeBase, Bounded)):
-                found.append((name, param))
-    return found
-
-
-NUMERIC_OPTIONS = _numeric_options()
+NUMERIC_OPTIONS = [(path[0], param) for path, param in numeric_options()]
 
 
 def _accepts(param: click.Option, text: str) -> bool:
@@ -128,17 +103,12 @@ def test_every_numeric_option_is_bounded_on_both_sides(command, param):
     assert math.isfinite(param.type.min) and math.isfinite(param.type.max)
 
 
-def test_every_command_has_a_quick_invocation_for_these_tests():
-    missing = [name for name, _ in _commands() if name not in BASE_ARGS]
-    assert not missing, f"add a quick invocation of {missing} to BASE_ARGS"
-
-
 @pytest.mark.parametrize("command, param", NUMERIC_OPTIONS, ids=lambda p: getattr(p, "name", p))
 @settings(max_examples=25, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(text=VALUE_TEXTS)
 def test_a_numeric_option_accepts_its_range_and_refuses_everything_else_with_exit_2(command, param, text, script):
     option = param.opts[-1]
-    args = [command, *(a.format(script=script) for a in BASE_ARGS[command]), f"{option}={text}"]
+    args = [*quick_args((command,), script), f"{option}={text}"]
     result = _invoke(args)
     _no_traceback(result)
     refused = f"Invalid value for '{option}'" in result.output

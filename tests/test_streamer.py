@@ -6,6 +6,8 @@ corrupted frame, a pause or silence can never make it claim a frame the arm has 
 """
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from armctl.motion import MotionModel, distance_to_path
 from armctl.profile import load_profile
@@ -14,7 +16,8 @@ from armctl.protocol import (
     PositionStatus,
 )
 from armctl.streamer import (
-    ARRIVAL_SLACK_S, CAPACITY_MARGIN_FRAMES, FEED_AHEAD_S, FRAME_SLACK_S, SLOWEST_ARM_FACTOR, Streamer,
+    ARRIVAL_SLACK_S, CAPACITY_MARGIN_FRAMES, FEED_AHEAD_S, FRAME_SLACK_S, SCAN_WINDOW_FRAMES, SLOWEST_ARM_FACTOR,
+    Streamer,
 )
 
 MODEL = MotionModel(load_profile())
@@ -343,3 +346,109 @@ def test_an_arm_seen_at_the_end_before_the_estimate_pulls_it_earlier():
     end0 = s.pending[0].est_end_s
     s.receive_status(point_on(s, 1, 0.0), end0 - 0.3)  # a faster arm: already at B's start
     assert s.pending[0].est_end_s == pytest.approx(end0 - 0.3, abs=0.02)
+
+
+# --- the windowed search: flat cost, never a stronger claim than a full search --------------------
+
+
+def _full_scan_earliest(s: Streamer, xyz):
+    """The earliest pending frame whose path passes within its tolerance of ``xyz`` (all searched)."""
+    for sent in s.pending:
+        if distance_to_path(sent.segment, xyz)[0] <= sent.xyz_tolerance_mm:
+            return sent.index
+    return None
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    points=st.lists(st.sampled_from([A, B, C, (220.0, -50.0, 280.0), (260.0, 40.0, 260.0)]), min_size=2, max_size=70),
+    seen=st.tuples(st.integers(0, 69), st.floats(0.0, 1.0)),
+    now=st.floats(0.0, 80.0),
+)
+def test_the_windowed_search_never_claims_more_than_a_full_search(points, seen, now):
+    s = streamer(capacity=1000)
+    write_all(s, [line(*p) for p in points])
+    index, fraction = seen[0] % len(points), seen[1]
+    segment = s.pending[index].segment
+    xyz = segment.sample(segment.time_at_fraction(fraction)).xyz
+    earliest, candidates = s._scan(lambda sent: (0.0, 1.0) if distance_to_path(sent.segment, xyz)[0]
+                                   <= sent.xyz_tolerance_mm else None, len(s.pending), now)
+    truth = _full_scan_earliest(s, xyz)
+    assert truth is not None and earliest is not None
+    assert earliest <= truth  # never further than the arm can be proven to be
+    if truth < SCAN_WINDOW_FRAMES:
+        assert earliest == truth  # where the evidence usually is, exactly as strong
+    assert [c[0] for c in candidates] == sorted(c[0] for c in candidates)
+
+
+def test_a_match_only_beyond_the_oldest_frames_proves_only_the_first_frame_not_searched():
+    s = streamer(capacity=1000)
+    far = (200.0, -100.0, 200.0)
+    write_all(s, [line(250.0, 0.0, 300.0 - k % 2) for k in range(40)] + [line(*far)])
+    tail = s.pending[-1]
+    end = tail.segment.end.xyz
+    earliest, candidates = s._scan(
+        lambda sent: (0.9, 1.0) if distance_to_path(sent.segment, end)[0] <= 0.5 else None, len(s.pending),
+        tail.est_end_s)
+    assert candidates and candidates[-1][0] == tail.index
+    assert earliest == SCAN_WINDOW_FRAMES  # not the far frame: the frames between were not searched
+
+
+def test_status_with_nothing_pending_is_harmless():
+    s = streamer()
+    s.wrote(line(*A), 0.0)
+    s.confirm_all_done()
+    for frame in (at(*A), JointsLowStatus(0.0, 0.0, 0.0), running()):
+        s.receive_status(frame, 5.0)
+    assert s.all_consumed and s.consumed_lower_bound == 1
+
+
+# --- (c) line-bound frames behind a long move ---------------------------------------------------
+
+
+def _zigzag(n, step_mm=4.0):
+    """4 mm moves at 6000 mm/min: 40 ms each, shorter than a frame on the wire (50 ms)."""
+    return [line(250.0, step_mm * ((k % 2) + 1), 150.0) for k in range(n)]
+
+
+def test_line_bound_frames_behind_a_long_move_go_past_the_lead_up_to_the_lead_plus_that_move():
+    s = streamer(lead_s=1.0)
+    s.wrote(line(250.0, 0.0, 150.0, speed=1000.0), 0.0)  # 155 mm at 1000 mm/min: 9.3 s
+    long_s = s.pending[0].segment.duration_s
+    now = FRAME_S
+    for move in _zigzag(150):  # 6 s of motion: far past the 1 s lead, within lead + long move
+        when = s.next_write_time(now, move)
+        assert when == pytest.approx(max(now, s.wire_free_s))  # never waits for the lead
+        s.wrote(move, when)
+        now = s.wire_free_s
+        assert s.queued_seconds(now) <= 1.0 + long_s + 1e-9
+    assert s.waiting_seconds(now) > 1.0  # the lead alone would have held these back
+
+
+def test_the_line_bound_credit_is_the_last_long_move_s_and_never_more():
+    s = streamer(lead_s=1.0)
+    s.wrote(line(250.0, 0.0, 150.0, speed=3000.0), 0.0)  # 3.1 s
+    # Then 0.4 s moves written regardless of the streamer: the last long move is now 0.4 s.
+    now = write_all(s, [line(250.0, 8.0 * (k % 2), 150.0, speed=1200.0) for k in range(12)], FRAME_S)
+    assert s.queued_seconds(now) > 1.0 + 0.4 + 0.04
+    move = _zigzag(1)[0]
+    when = s.next_write_time(now, move)
+    assert when > now  # waits until the queue is back within the lead plus 0.4 s
+    assert s.queued_seconds(when) + 0.04 <= 1.0 + 0.4 + 1e-6
+
+
+def test_a_frame_longer_than_a_frame_time_gets_no_line_bound_credit():
+    s = streamer(lead_s=1.0)
+    s.wrote(line(250.0, 0.0, 150.0, speed=1000.0), 0.0)  # 9.3 s
+    now = write_all(s, _zigzag(25), FRAME_S)  # 1 s of motion behind it: the lead is full
+    slow = line(250.0, 0.0, 150.0, speed=1200.0)  # 8 mm at 1200 mm/min: 0.4 s, not line-bound
+    assert s.next_write_time(now, slow) > now + 1.0
+
+
+def test_no_line_bound_credit_without_a_long_move():
+    s = streamer(lead_s=0.3)
+    now = write_all(s, [line(210.0, float(k % 2), 300.0) for k in range(40)])  # 10 ms moves from home
+    assert not s._line_bound_credit_ok(now, 0.01)
+    s.wrote(line(250.0, 0.0, 150.0), now)  # 1.55 s
+    assert s._line_bound_credit_ok(s.wire_free_s, 0.01)
+    assert not s._line_bound_credit_ok(s.wire_free_s, 0.06)  # longer than a frame on the wire

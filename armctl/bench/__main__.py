@@ -1,5 +1,5 @@
-"""``python -m armctl.bench``: the streaming benchmark table (see armctl/bench/table.py)."""
+"""``python -m armctl.bench``: the same command as ``armctl bench`` (options in armctl/cli.py)."""
 
-from .table import main
+from ..cli import bench
 
-raise SystemExit(main())
+bench(prog_name="python -m armctl.bench")

@@ -13,6 +13,7 @@ from dataclasses import dataclass
 from typing import Callable, Sequence
 
 from ..protocol import Command, PauseToggle, StatusReader
+from ..sim.connector import HISTORY_FRAMES
 from ..sim.model import SimulatedArm
 
 EPSILON_S = 1e-9
@@ -60,7 +61,7 @@ def run_job(
     status frames the strategy has read; ``line``, if given, gets "job", "event" or "abort" for
     each frame written, in the order they go on the wire (= the arm's arrival indexes).
     """
-    line = [] if line is None else line
+    line = _Discard() if line is None else line  # not kept unless asked for: memory stays flat
     reader = StatusReader()
     pending_events = sorted(events, key=lambda e: e.at_s)
     now = 0.0
@@ -111,9 +112,17 @@ def run_job(
     return result
 
 
+class _Discard:
+    def append(self, item) -> None:
+        pass
+
+
 def job_frames_finished(arm: SimulatedArm, line: Sequence[str], now: float) -> int:
     """The truth a streamer's lower bound is checked against: job frames the arm has finished
-    by ``now`` (``line`` as filled in by ``run_job``)."""
+    by ``now`` (``line`` as filled in by ``run_job``).  Needs the arm's whole history, so it is
+    for runs of up to ``HISTORY_FRAMES`` frames (the tests')."""
+    if not arm.history_complete:
+        raise ValueError(f"the run is longer than the simulator's history ({HISTORY_FRAMES} frames)")
     return sum(
         1 for e in arm.execution_log
         if e.end_s is not None and e.end_s <= now + EPSILON_S and e.index < len(line) and line[e.index] == "job"
@@ -141,17 +150,10 @@ def _motion_after(arm: SimulatedArm, aborted_at: float, time_limit_s: float) -> 
 
 
 def _result(arm: SimulatedArm, total: int, written: int, now: float, moving_after, timed_out=False) -> RunResult:
-    log = arm.execution_log
-    ends = [e.end_s for e in log if e.end_s is not None]
-    job_s = max(ends) if ends else now
-    landed = {f.index: f.arrival_s for f in arm.frames_received if f.accepted}
-    peak_queued = 0.0
-    for execution in log:
-        arrival = landed.get(execution.index)
-        if arrival is not None and execution.end_s is not None:
-            peak_queued = max(peak_queued, execution.end_s - arrival)
+    executor = arm.executor  # its run-long counters: the execution log is only a recent window
     return RunResult(
-        frames=total, written=written, dropped=arm.frames_dropped, job_s=job_s,
-        peak_occupancy=arm.peak_fifo_occupancy, peak_queued_s=peak_queued,
+        frames=total, written=written, dropped=arm.frames_dropped,
+        job_s=now if executor.last_end_s is None else executor.last_end_s,
+        peak_occupancy=arm.peak_fifo_occupancy, peak_queued_s=executor.peak_wait_s,
         moving_after_abort_s=moving_after, timed_out=timed_out,
     )

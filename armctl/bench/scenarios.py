@@ -24,20 +24,27 @@ Scenarios (``build_scenarios``):
   nothing but a resume while paused — so an outside pause that the host did not send can never be
   resumed once a host has written anything after it (the host can only learn of the pause from
   a status frame, up to 270 ms later).
+- ``longfirst``: one 4.7 s move, then 40 ms moves (line-bound): reaches the physical floor only if
+  the host writes the short moves while the long one runs (the streamer's rule (c)).
+- ``backforth``: 10 ms moves back and forth between two points 1 mm apart, at 115200 baud (the moves
+  are then arm-bound): every position lies on every pending path.
+- ``periodic``: round a pentagon of 10 mm sides, 100 ms a side: targets repeat every 5 frames.
 """
 
 from __future__ import annotations
 
+import math
 import random
 from dataclasses import dataclass, field
 
 from ..motion import MotionModel, Planner, circle_through
 from ..profile import load_profile
 from ..protocol import (
-    AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, MCode, PauseToggle,
+    AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, MCode, PauseToggle, frame_seconds,
 )
 from ..kinematics import CartesianPose
-from ..sim.model import SimOptions
+from ..sim.model import SimOptions, _load_profile
+from . import SCENARIO_NAMES  # noqa: F401  (re-exported: the names of build_scenarios' list)
 from .harness import Event
 
 TOOL_DOWN = (180.0, 0.0, 0.0)  # B0, B1, W: the tool points straight down
@@ -50,6 +57,9 @@ TRAVEL_Z = 240.0  # height of the moves between pick and place
 
 ARM_BOUND_RATIO = 1.01  # job time ÷ omniscient job time, arm-bound and line-bound scenarios
 OTHER_RATIO = 1.03  # the rest
+# Job time ÷ the physical bound (``physical_bound_s``: about max(frames × frame time, Σ motion) + one
+# frame time, PROTOCOL.md's last section), issue 13: a long move then line-bound moves.
+LONG_FIRST_PHYSICAL_RATIO = 1.01
 
 
 @dataclass(frozen=True)
@@ -58,8 +68,10 @@ class Scenario:
     title: str
     commands: tuple[Command, ...]
     options: SimOptions = SimOptions()
-    ratio_bound: float = OTHER_RATIO
+    ratio_bound: float | None = OTHER_RATIO  # armctl's job time ÷ omniscient's (None: no target)
     events: tuple[Event, ...] = ()  # done to the arm from outside the host, at fixed times
+    physical_bound: float | None = None  # armctl's job time ÷ the physical bound (None: no target)
+    outside_stop_s: float = 0.0  # time the arm is held still from outside (added to the physical bound)
     note: str = ""
     meta: dict = field(default_factory=dict, compare=False)
 
@@ -110,6 +122,50 @@ def tiny_moves(frames: int) -> list[Command]:
             if direction % 2 == 0:
                 leg += 1
     return commands
+
+
+def long_then_short(frames: int) -> list[Command]:
+    """One long move (home to the box, 4.7 s at 2000 mm/min), then 4 mm moves at 6000 mm/min
+    (40 ms each: line-bound, a frame takes 50 ms) zig-zagging 20 at a time: the line is the
+    bottleneck, but only if the host uses the FIFO while the long move runs."""
+    commands: list[Command] = [_line((250.0, 0.0, 150.0), 2000.0)]
+    y = 0.0
+    for k in range(frames - 1):
+        y += 4.0 if (k // 20) % 2 == 0 else -4.0
+        commands.append(_line((250.0, y, 150.0), 6000.0))
+    return commands
+
+
+def back_and_forth(frames: int, gap_mm: float = 1.0) -> list[Command]:
+    """A move to a point, then 1 mm moves back and forth between it and a point ``gap_mm`` away
+    (10 ms each at 6000 mm/min): every target repeats, every path is the same line."""
+    a, b = (250.0, 0.0, 150.0), (250.0 + gap_mm, 0.0, 150.0)
+    return [_line(a, 6000.0)] + [_line(b if k % 2 == 0 else a, 6000.0) for k in range(frames - 1)]
+
+
+def periodic(frames: int, period: int = 5, side_mm: float = 10.0) -> list[Command]:
+    """Round a regular pentagon of ``side_mm`` sides (100 ms each at 6000 mm/min) again and again:
+    targets repeat with a period of ``period`` frames."""
+    radius = side_mm / (2 * math.sin(math.pi / period))
+    corners = [(round(250.0 + radius * math.cos(2 * math.pi * k / period), 3),
+                round(radius * math.sin(2 * math.pi * k / period), 3), 150.0) for k in range(period)]
+    return [_line(corners[k % period], 6000.0) for k in range(frames)]
+
+
+def physical_bound_s(commands, options: SimOptions, outside_stop_s: float = 0.0) -> float:
+    """The physical floor of a job (PROTOCOL.md's last section, made exact): frame k cannot land
+    before (k + 1) frame times and the arm must then still run it and every frame after it, so no
+    host finishes before max over k of ((k + 1) × frame time + Σ motion from frame k on) — at
+    least max(N × frame time, Σ motion), plus up to one frame time.  Motion at the arm's true
+    speed (its ``speed_factor``), plus any time the arm is held still from outside."""
+    model = MotionModel(_load_profile(options.profile), options.speed_factor)
+    durations = [segment.duration_s for segment in Planner(model).feed_all(commands)]
+    frame_s = frame_seconds(options.baud)
+    floor_s, rest_s = 0.0, 0.0
+    for k in range(len(durations) - 1, -1, -1):
+        rest_s += durations[k]
+        floor_s = max(floor_s, (k + 1) * frame_s + rest_s)
+    return floor_s + outside_stop_s
 
 
 def _arc_via(a, b, bulge: float = 0.25):
@@ -191,6 +247,9 @@ SIZES = {
     "quick": (230, 240, 6),  # CI: still more long moves than the FIFO holds
     "test": (40, 100, 2),  # the test suite: every kind of frame, seconds of wall time in all
 }
+# Frames of the issue-13 shapes (longfirst, backforth, periodic) at each size.
+SHAPE_FRAMES = {"full": 1000, "quick": 300, "test": 200}
+FAST_BAUD = 115200  # the back-and-forth job: a fast line makes 10 ms moves arm-bound
 PAUSE_AT_SHARE = 0.4
 PAUSE_FOR_S = 4.0
 
@@ -198,6 +257,7 @@ PAUSE_FOR_S = 4.0
 def build_scenarios(size: str = "full", seed: int = 1) -> list[Scenario]:
     """Every scenario, with jobs of ``size`` ("full", "quick" or "test", see ``SIZES``)."""
     long_frames, tiny_frames, cycles = SIZES[size]
+    shape_frames = SHAPE_FRAMES[size]
     long_job = tuple(long_moves(long_frames, seed))
     tiny_job = tuple(tiny_moves(tiny_frames))
     mixed = tuple(mixed_job(cycles, seed))
@@ -214,8 +274,14 @@ def build_scenarios(size: str = "full", seed: int = 1) -> list[Scenario]:
         Scenario("arrival", "mixed, control acts on arrival", mixed, SimOptions(control_on_arrival=True, seed=seed)),
         Scenario("pause", "mixed, paused 4 s mid-job", mixed, SimOptions(control_on_arrival=True, seed=seed),
                  events=pause_events,
-                 note=f"paused at {pause_at:g} s for {PAUSE_FOR_S:g} s; control frames act on arrival"),
+                 note=f"paused at {pause_at:g} s for {PAUSE_FOR_S:g} s; control frames act on arrival",
+                 outside_stop_s=PAUSE_FOR_S),
+        Scenario("longfirst", "a long move, then line-bound 40 ms moves", tuple(long_then_short(shape_frames)),
+                 SimOptions(seed=seed), ARM_BOUND_RATIO, physical_bound=LONG_FIRST_PHYSICAL_RATIO),
+        Scenario("backforth", "10 ms moves back and forth, 115200 baud", tuple(back_and_forth(shape_frames)),
+                 SimOptions(baud=FAST_BAUD, seed=seed), None,
+                 note="no time target (issue 13 asks ≤ 1.02 × physical; see docs/bench.md)"),
+        Scenario("periodic", "a pentagon round and round (period 5)", tuple(periodic(shape_frames)),
+                 SimOptions(seed=seed), None, note="no time target (see docs/bench.md)"),
     ]
 
-
-SCENARIO_NAMES = ("long", "tiny", "mixed", "slow", "fast", "lossy", "arrival", "pause")

@@ -19,13 +19,13 @@ armctl's own rows are checked against the targets of DESIGN.md / issue 5:
 The abort run leaves out a scenario's outside events (the pause scenario's pause and resume):
 they are pause toggles too, and would toggle against the abort's pause.
 
-``main`` is ``python -m armctl.bench`` (and ``armctl bench``); it exits 1 when armctl misses a
-target anywhere.
+``main`` runs and prints the table for ``armctl bench`` (whose options live in armctl/cli.py;
+``python -m armctl.bench`` is the same click command); it returns 1 when armctl misses a target
+anywhere.
 """
 
 from __future__ import annotations
 
-import argparse
 import json
 import os
 import sys
@@ -38,7 +38,7 @@ from ..protocol import frame_seconds
 from ..sim.model import SimulatedArm
 from ..streamer import DEFAULT_LEAD_S
 from .harness import RunResult, run_job
-from .scenarios import SCENARIO_NAMES, SIZES, Scenario, build_scenarios
+from .scenarios import Scenario, build_scenarios, physical_bound_s
 from .strategies import (
     FixedDelayStrategy, NaiveStrategy, OmniscientStrategy, StopAndGoStrategy, StreamerStrategy,
 )
@@ -79,6 +79,9 @@ class Cell:
     timed_out: bool = False
     ratio: float | None = None  # job_s ÷ omniscient job_s, filled in by run_bench
     ratio_bound: float | None = None
+    physical_s: float | None = None  # the physical bound of the job (PROTOCOL.md's last section)
+    physical_ratio: float | None = None  # job_s ÷ physical_s
+    physical_bound: float | None = None  # armctl's target for physical_ratio (None: none)
     failures: list[str] = field(default_factory=list)
 
 
@@ -98,6 +101,18 @@ def _duration_of_arrival(arm: SimulatedArm, index: int) -> float:
     return 0.0
 
 
+def _last_long_move_s(arm: SimulatedArm, last_index: int, frame_s: float) -> float:
+    """True duration of the last frame up to arrival ``last_index`` that took the arm longer
+    than a frame takes on the wire (0 if none): the streamer's rule (c) lets line-bound frames
+    queue behind such a move up to the lead plus that move."""
+    longest = 0.0
+    for execution in arm.execution_log:
+        duration = execution.duration_s
+        if execution.index <= last_index and duration is not None and duration > frame_s:
+            longest = duration  # the log is in execution order: the last one wins
+    return longest
+
+
 def run_cell(scenario: Scenario, strategy: str, lead_s: float = DEFAULT_LEAD_S,
              fixed_delay_s: float = FIXED_DELAY_S, abort: bool = True) -> Cell:
     arm = SimulatedArm(scenario.options)
@@ -111,11 +126,15 @@ def run_cell(scenario: Scenario, strategy: str, lead_s: float = DEFAULT_LEAD_S,
                           abort_after_frames=scenario.frames // 2, line=line)
         moving, abort_dropped = aborted.moving_after_abort_s, aborted.dropped
         slowness = max(1.0, scenario.options.speed_factor)
+        frame_s = frame_seconds(scenario.options.baud)
         last_written = max(k for k, source in enumerate(line) if source == "job")
-        longest = max(_in_progress_s(arm, aborted.aborted_at_s), _duration_of_arrival(arm, last_written))
-        limit = lead_s * slowness + longest + frame_seconds(scenario.options.baud)
+        longest = max(_in_progress_s(arm, aborted.aborted_at_s), _duration_of_arrival(arm, last_written),
+                      _last_long_move_s(arm, last_written, frame_s * scenario.options.speed_factor))
+        limit = lead_s * slowness + longest + frame_s
+    physical_s = physical_bound_s(scenario.commands, scenario.options, scenario.outside_stop_s)
     return Cell(scenario.name, strategy, scenario.frames, full.dropped, full.job_s, full.peak_occupancy,
-                full.peak_queued_s, moving, limit, abort_dropped, full.timed_out)
+                full.peak_queued_s, moving, limit, abort_dropped, full.timed_out, physical_s=physical_s,
+                physical_ratio=full.job_s / physical_s, physical_bound=scenario.physical_bound)
 
 
 def _run_cell_args(args) -> Cell:
@@ -155,8 +174,10 @@ def check_targets(cell: Cell) -> list[str]:
         failures.append("timed out")
     if cell.dropped or cell.abort_dropped:
         failures.append(f"dropped {cell.dropped + cell.abort_dropped} frame(s)")
-    if cell.ratio is not None and cell.ratio > cell.ratio_bound + 1e-9:
+    if cell.ratio is not None and cell.ratio_bound is not None and cell.ratio > cell.ratio_bound + 1e-9:
         failures.append(f"job time {cell.ratio:.3f} × omniscient > {cell.ratio_bound:.2f}")
+    if cell.physical_bound is not None and cell.physical_ratio > cell.physical_bound + 1e-9:
+        failures.append(f"job time {cell.physical_ratio:.3f} × the physical bound > {cell.physical_bound:.2f}")
     if cell.moving_after_abort_s is not None and cell.moving_after_abort_s > cell.abort_limit_s + 1e-9:
         failures.append(f"moved {cell.moving_after_abort_s:.2f} s after the abort > {cell.abort_limit_s:.2f} s")
     return failures
@@ -164,8 +185,8 @@ def check_targets(cell: Cell) -> list[str]:
 
 # --- output -----------------------------------------------------------------------------------
 
-HEADERS = ("scenario", "strategy", "frames", "dropped", "time ÷ omni", "peak occupancy", "peak queued s",
-           "moving after abort s", "armctl targets")
+HEADERS = ("scenario", "strategy", "frames", "dropped", "time ÷ omni", "time ÷ physical", "peak occupancy",
+           "peak queued s", "moving after abort s", "armctl targets")
 
 
 def _row(cell: Cell) -> tuple[str, ...]:
@@ -174,19 +195,23 @@ def _row(cell: Cell) -> tuple[str, ...]:
         moving += f" (≤ {cell.abort_limit_s:.2f})"
     dropped = str(cell.dropped) + (f" (+{cell.abort_dropped})" if cell.abort_dropped else "")
     ratio = "—" if cell.ratio is None else f"{cell.ratio:.3f}"
+    physical = "—" if cell.physical_ratio is None else f"{cell.physical_ratio:.3f}"
     if cell.strategy == "armctl":
-        ratio += f" (≤ {cell.ratio_bound:.2f})"
+        if cell.ratio_bound is not None:
+            ratio += f" (≤ {cell.ratio_bound:.2f})"
+        if cell.physical_bound is not None:
+            physical += f" (≤ {cell.physical_bound:.2f})"
         verdict = "met" if not cell.failures else "MISSED: " + "; ".join(cell.failures)
     else:
         verdict = ""
-    return (cell.scenario, cell.strategy, str(cell.frames), dropped, ratio, str(cell.peak_occupancy),
+    return (cell.scenario, cell.strategy, str(cell.frames), dropped, ratio, physical, str(cell.peak_occupancy),
             f"{cell.peak_queued_s:.2f}", moving, verdict)
 
 
 def format_table(cells: list[Cell]) -> str:
     rows = [HEADERS] + [_row(c) for c in cells]
     widths = [max(len(r[k]) for r in rows) for k in range(len(HEADERS))]
-    numeric = {2, 3, 5, 6}
+    numeric = {2, 3, 6, 7}
     lines = []
     previous = None
     for n, row in enumerate(rows):
@@ -223,32 +248,22 @@ def summary(cells: list[Cell], scenarios: list[Scenario], lead_s: float, wall_s:
     return "\n".join(lines)
 
 
-def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(
-        prog="python -m armctl.bench",
-        description="Scenario × strategy table of streaming to the simulated arm, in virtual time.")
-    parser.add_argument("--quick", action="store_const", const="quick", dest="size", default="full",
-                        help="smaller jobs (for CI)")
-    parser.add_argument("--size", choices=tuple(SIZES), help=argparse.SUPPRESS)
-    parser.add_argument("--scenario", action="append", choices=SCENARIO_NAMES, metavar="NAME",
-                        help=f"run only this scenario (repeatable): {', '.join(SCENARIO_NAMES)}")
-    parser.add_argument("--lead", type=float, default=DEFAULT_LEAD_S, metavar="S",
-                        help=f"armctl's lead in seconds (default {DEFAULT_LEAD_S:g})")
-    parser.add_argument("--json", action="store_true", help="print the cells as JSON")
-    parser.add_argument("--jobs", type=int, default=None, metavar="N", help="parallel processes (default: CPUs)")
-    args = parser.parse_args(argv)
-    if not args.lead > 0:
-        parser.error("--lead must be greater than 0")
-    scenarios = [s for s in build_scenarios(args.size) if not args.scenario or s.name in args.scenario]
+def main(size: str = "full", scenario_names=(), lead_s: float = DEFAULT_LEAD_S, as_json: bool = False,
+         jobs: int | None = None) -> int:
+    """Run the table and print it (or its cells as JSON); 1 when armctl misses a target anywhere.
+    The command line is ``armctl bench`` (armctl/cli.py); ``python -m armctl.bench`` runs it too."""
+    if not lead_s > 0:
+        raise ValueError("the lead must be greater than 0")
+    scenarios = [s for s in build_scenarios(size) if not scenario_names or s.name in scenario_names]
     started = time.perf_counter()
-    cells = run_bench(scenarios, lead_s=args.lead, jobs=args.jobs)
+    cells = run_bench(scenarios, lead_s=lead_s, jobs=jobs)
     wall_s = time.perf_counter() - started
-    if args.json:
-        json.dump({"lead_s": args.lead, "size": args.size, "wall_s": round(wall_s, 2),
+    if as_json:
+        json.dump({"lead_s": lead_s, "size": size, "wall_s": round(wall_s, 2),
                    "cells": [asdict(c) for c in cells]}, sys.stdout, indent=1, ensure_ascii=False)
         print()
     else:
         print(format_table(cells))
         print()
-        print(summary(cells, scenarios, args.lead, wall_s))
+        print(summary(cells, scenarios, lead_s, wall_s))
     return 1 if any(c.failures for c in cells) else 0

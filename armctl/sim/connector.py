@@ -10,6 +10,9 @@ Decisions (PROTOCOL.md):
   discards them all if the last is not the matching tail (``bad_frames``).  Bytes that are not a
   head byte while the connector hunts for one are skipped (``skipped_bytes``).
 - **H6** — a frame that lands while the buffer is full is dropped whole; nothing tells the host.
+- The records for tests and the benchmark (``received``, ``dropped_indexes``, ``cleared_indexes``)
+  keep the most recent ``HISTORY_FRAMES`` entries or more (``RecentList``); their counts cover
+  the whole run.
 - ``FRAME_HOLDS_SLOT_UNTIL_DONE`` — armctl's reading of "buffer full": a frame keeps its slot
   until the arm has *finished* executing it (the pessimistic reading).  So 200 frames fit,
   counting the one being executed, and the 201st frame that lands while none has finished is
@@ -36,9 +39,38 @@ from ..protocol import (
 
 # H6, armctl's reading: a frame occupies its buffer slot until its execution has finished.
 FRAME_HOLDS_SLOT_UNTIL_DONE = True
+# The simulator's records (frames received, dropped, cleared; executions) keep only the most recent
+# this many entries, and counters for the rest, so a long virtual run takes flat memory.
+HISTORY_FRAMES = 1024
 
 _TAIL_FOR_HEAD = {MOTION_HEAD: MOTION_TAIL, CONTROL_HEAD: CONTROL_TAIL}
 _HEAD_PATTERN = re.compile(bytes([ord("["), MOTION_HEAD, CONTROL_HEAD, ord("]")]))
+
+
+class RecentList(list):
+    """A record that keeps only its most recent entries: at least ``limit`` of them, at most twice
+    that (the oldest are cut in blocks, so appending stays cheap); ``total`` counts every entry
+    ever appended and ``complete`` says whether all are still here.  A list, so tests compare it
+    with one."""
+
+    def __init__(self, limit: int = HISTORY_FRAMES) -> None:
+        super().__init__()
+        self.limit = limit
+        self.total = 0
+
+    def append(self, item) -> None:
+        super().append(item)
+        self.total += 1
+        if len(self) >= 2 * self.limit:
+            del self[: len(self) - self.limit]
+
+    def extend(self, items) -> None:
+        for item in items:
+            self.append(item)
+
+    @property
+    def complete(self) -> bool:
+        return self.total == len(self)
 
 
 class Framer:
@@ -105,9 +137,10 @@ class Connector:
     hold_until_done: bool = FRAME_HOLDS_SLOT_UNTIL_DONE
     queue: deque = field(default_factory=deque)  # ReceivedFrame waiting, oldest first
     executing: list = field(default_factory=list)  # taken by the arm, still holding a slot
-    received: list = field(default_factory=list)  # every well-framed frame, by arrival index
-    dropped_indexes: list = field(default_factory=list)
-    cleared_indexes: list = field(default_factory=list)  # flushed by a connector reset
+    # The most recent well-framed frames, by arrival index (``received.total`` counts them all).
+    received: RecentList = field(default_factory=lambda: RecentList())
+    dropped_indexes: RecentList = field(default_factory=lambda: RecentList())
+    cleared_indexes: RecentList = field(default_factory=lambda: RecentList())  # flushed by a connector reset
     peak_occupancy: int = 0
 
     @property
@@ -117,14 +150,17 @@ class Connector:
 
     @property
     def dropped(self) -> int:
-        return len(self.dropped_indexes)
+        return self.dropped_indexes.total
 
     def next_index(self) -> int:
-        return len(self.received)
+        return self.received.total
+
+    def _record(self, frame: ReceivedFrame) -> None:
+        self.received.append(frame)
 
     def land(self, frame: ReceivedFrame) -> bool:
         """A frame has fully arrived: buffer it, or drop it whole if the buffer is full (H6)."""
-        self.received.append(frame)
+        self._record(frame)
         if self.occupancy >= self.capacity_frames:
             frame.accepted = False
             self.dropped_indexes.append(frame.index)
@@ -135,7 +171,7 @@ class Connector:
 
     def record_unbuffered(self, frame: ReceivedFrame) -> None:
         """A frame acted on as it landed, never buffered (control frames, H5 alternative)."""
-        self.received.append(frame)
+        self._record(frame)
 
     def head(self) -> ReceivedFrame | None:
         return self.queue[0] if self.queue else None
@@ -163,5 +199,6 @@ class Connector:
         for frame in self.queue:
             (gone if before_index is None or frame.index < before_index else keep).append(frame)
         self.queue = keep
-        self.cleared_indexes.extend(f.index for f in gone)
+        for frame in gone:
+            self.cleared_indexes.append(frame.index)
         return gone

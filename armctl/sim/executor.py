@@ -54,7 +54,7 @@ from ..protocol import (
     SetWorktableOrigin,
     StructureMode,
 )
-from .connector import Connector, ReceivedFrame
+from .connector import Connector, ReceivedFrame, RecentList
 from .joystick import JoystickMotion
 from .program import Hold, SdProgram
 
@@ -104,7 +104,11 @@ class Executor:
         self.program = SdProgram()
         self.joystick = JoystickMotion(profile, speed_factor)
         self.joystick.stop(self.pose.joints, start_s)
-        self.log: list[Execution] = []
+        self.log: RecentList = RecentList()  # the most recent executions (Execution), in order
+        # For the whole run, however long (the log is a window): what the benchmark reads.
+        self.finished_count = 0  # executions that have ended (done, interrupted, skipped, ignored)
+        self.last_end_s: float | None = None  # when the last of them ended
+        self.peak_wait_s = 0.0  # the longest time from a frame landing to its execution's end
         self.now_s = start_s
         self._running: _Running | None = None
 
@@ -207,12 +211,19 @@ class Executor:
             self.program.stop(end_s)
         for frame, entry in zip(running.frames, running.entries):
             entry.end_s, entry.outcome = end_s, outcome
+            self._ended(frame, end_s)
             self.connector.finish(frame)
         self._start_pose()
 
     def _instant(self, frame: ReceivedFrame, now_s: float, outcome: str = DONE, note: str | None = None) -> None:
         self.log.append(Execution(frame.index, frame.command, now_s, now_s, outcome, note))
+        self._ended(frame, now_s)
         self.connector.finish(frame)
+
+    def _ended(self, frame: ReceivedFrame, end_s: float) -> None:
+        self.finished_count += 1
+        self.last_end_s = end_s if self.last_end_s is None else max(self.last_end_s, end_s)
+        self.peak_wait_s = max(self.peak_wait_s, end_s - frame.arrival_s)
 
     # --- control frames -----------------------------------------------------------------------
 

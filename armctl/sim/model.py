@@ -7,7 +7,9 @@ every event up to ``now_s`` — a frame landing, a segment ending, a status fram
 and returns the status bytes whose last bit has reached the host.  ``next_event_time()`` lets
 a virtual-time driver jump straight to the next moment anything changes.  Nothing here loops
 over bytes or ticks over time: a 1000-frame job costs about 1000 landings, 1000 executions and
-one status frame per 30 ms of arm time.
+one status frame per 30 ms of arm time.  Its records of what happened (frames received, executions)
+keep the most recent ``connector.HISTORY_FRAMES`` entries (or up to twice that) plus counters, so memory stays flat
+however long a virtual run is.
 
 At one instant, events run in this order: segment ends (freeing slots), then frames landing,
 then the status frame (so it reports the state after both).
@@ -185,7 +187,8 @@ class SimulatedArm:
 
     @property
     def frames_received(self) -> list[ReceivedFrame]:
-        """Every well-framed frame that landed, in arrival order (``.index``, ``.accepted``)."""
+        """The well-framed frames that landed, in arrival order (``.index``, ``.accepted``): all
+        of them in a run of up to ``HISTORY_FRAMES`` or more, else the most recent."""
         return self.connector.received
 
     @property
@@ -194,6 +197,7 @@ class SimulatedArm:
 
     @property
     def dropped_indexes(self) -> list[int]:
+        """Arrival indexes of the frames dropped (the most recent, if there were very many)."""
         return self.connector.dropped_indexes
 
     @property
@@ -208,7 +212,14 @@ class SimulatedArm:
 
     @property
     def execution_log(self) -> list[Execution]:
+        """What the arm took, in order: every execution in a run of up to ``HISTORY_FRAMES``
+        frames or more, else the most recent (``history_complete`` says which)."""
         return self.executor.log
+
+    @property
+    def history_complete(self) -> bool:
+        """True while ``execution_log`` and ``frames_received`` still hold the whole run."""
+        return self.executor.log.complete and self.connector.received.complete
 
     @property
     def pose(self):
