@@ -41,12 +41,13 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
     ``next_write_time`` is told which it is — is at most ``lead_s``, so an abort (a pause frame
     queued behind everything, H5) leaves the arm at most the lead plus the move in progress.
     A frame is also allowed once no more than ``FEED_AHEAD_S`` (or the lead) is queued in all,
-    so the arm is never starved of a move longer than the lead by itself;
-(c) or, for a line-bound frame (no longer than a frame on the wire), while the motion queued
-    after it is at most the lead plus the last frame written longer than a frame time: behind a
-    long move, short frames are written while it runs instead of idling the line until it
-    nearly ends, and since line-bound frames cannot make the queue grow, an abort still leaves
-    at most the lead plus that long move.
+    so the arm is never starved of a move longer than the lead by itself.
+
+The lead is the knob between a prompt stop and the line's pace: behind a move longer than the
+lead, short line-bound moves wait until the queue behind it is within the lead, so the line
+idles for most of that move (``armctl bench``'s ``longfirst`` row shows the cost; a longer
+``--lead`` removes it).  Writing them earlier would let an abort leave the arm moving for the
+lead plus that whole move after it has ended: the stop bound is not traded for speed.
 """
 
 from __future__ import annotations
@@ -161,7 +162,6 @@ class Streamer:
         self.status_frames = 0
         self._peeked: tuple[Command, Segment] | None = None
         self._certain_tail_s = 0.0  # the time bound of the last frame written (even a G300's)
-        self._long_move_s = 0.0  # the last frame written that was longer than a frame time (c)
         self._cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
 
     # --- writing ----------------------------------------------------------------------------
@@ -214,25 +214,7 @@ class Streamer:
                     break
                 began_s = sent.est_end_s
             lead_ok_at = min(lead_ok_at, now if began_s is None else began_s)
-        if command is not None and self._line_bound_credit_ok(now, duration_s):
-            lead_ok_at = now
         return max(now, self.wire_free_s, lead_ok_at)
-
-    def _line_bound_credit_ok(self, now: float, duration_s: float) -> bool:
-        """(c) A line-bound frame — the arm runs it in no more than its own time on the wire —
-        may be written past the lead while the motion queued after it stays within the lead
-        plus the last frame written that was longer than a frame time (the "long move").
-
-        Why: behind a long move, line-bound frames would otherwise wait until the long move is
-        nearly done, and then the line, not the arm, sets the pace: every frame time the line
-        idled during the long move is added to the job.  Written during the long move instead,
-        they save that wire time.  While only line-bound frames follow, the queue cannot grow
-        (each adds at most a frame time of motion per frame time of wire), so an abort leaves
-        the arm at most the lead plus that long move — the bound of (b) when the long move is
-        the one in progress, kept for as long as line-bound frames follow it."""
-        if duration_s > self.frame_s or self._long_move_s <= 0.0:
-            return False
-        return self.queued_seconds(now) + duration_s <= self.lead_s + self._long_move_s
 
     def may_write(self, now: float, command: Command | None = None) -> bool:
         when = self.next_write_time(now, command)
@@ -274,8 +256,6 @@ class Streamer:
                 previous.certain_end_s = frame.certain_end_s
             else:
                 previous.certain_end_s = previous.chain_end_s  # the arm skips a G300 left alone
-        if segment.duration_s > self.frame_s:
-            self._long_move_s = segment.duration_s  # (c): the credit line-bound frames after it get
         if segment.kind == "joint":
             frame.xyz_tolerance_mm = POSITION_TOLERANCE_MM + JOINT_TRACE_SLACK * _trace_deviation_mm(segment)
         self.pending.append(frame)

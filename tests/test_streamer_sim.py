@@ -226,12 +226,18 @@ def test_periodic_jobs_never_drop_and_never_overstate(cycle, frames, long_first,
     assert not ahead_of_truth(checks)
 
 
-def test_line_bound_moves_flow_during_a_long_move():
-    """Rule (c): 40 ms moves behind a 4.7 s move are written while it runs, so the line never
-    idles: the job ends at the physical floor (it idled 1.5 s here with the lead alone)."""
+def test_behind_a_long_move_the_lead_sets_the_price_of_the_stop_bound():
+    """40 ms moves behind a 4.7 s move: at the default lead they wait until the queue behind the
+    long move is within the lead, so the line idles during most of it (the job ends later than the
+    physical floor by about that much); a lead as long as the move lets the line run through and
+    reaches the floor.  Zero drops and a sound lower bound either way."""
     from armctl.bench.scenarios import long_then_short, physical_bound_s
 
     commands = long_then_short(300)
+    floor_s = physical_bound_s(commands, SimOptions())
     result, checks, _ = stream_checked(commands, SimOptions())
     assert result.dropped == 0 and not ahead_of_truth(checks)
-    assert result.job_s <= physical_bound_s(commands, SimOptions()) + 0.02
+    assert floor_s + 0.5 < result.job_s < floor_s + 4.7
+    result, checks, _ = stream_checked(commands, SimOptions(), lead_s=5.0)
+    assert result.dropped == 0 and not ahead_of_truth(checks)
+    assert result.job_s <= floor_s + 0.02

@@ -101,18 +101,6 @@ def _duration_of_arrival(arm: SimulatedArm, index: int) -> float:
     return 0.0
 
 
-def _last_long_move_s(arm: SimulatedArm, last_index: int, frame_s: float) -> float:
-    """True duration of the last frame up to arrival ``last_index`` that took the arm longer
-    than a frame takes on the wire (0 if none): the streamer's rule (c) lets line-bound frames
-    queue behind such a move up to the lead plus that move."""
-    longest = 0.0
-    for execution in arm.execution_log:
-        duration = execution.duration_s
-        if execution.index <= last_index and duration is not None and duration > frame_s:
-            longest = duration  # the log is in execution order: the last one wins
-    return longest
-
-
 def run_cell(scenario: Scenario, strategy: str, lead_s: float = DEFAULT_LEAD_S,
              fixed_delay_s: float = FIXED_DELAY_S, abort: bool = True) -> Cell:
     arm = SimulatedArm(scenario.options)
@@ -128,8 +116,7 @@ def run_cell(scenario: Scenario, strategy: str, lead_s: float = DEFAULT_LEAD_S,
         slowness = max(1.0, scenario.options.speed_factor)
         frame_s = frame_seconds(scenario.options.baud)
         last_written = max(k for k, source in enumerate(line) if source == "job")
-        longest = max(_in_progress_s(arm, aborted.aborted_at_s), _duration_of_arrival(arm, last_written),
-                      _last_long_move_s(arm, last_written, frame_s * scenario.options.speed_factor))
+        longest = max(_in_progress_s(arm, aborted.aborted_at_s), _duration_of_arrival(arm, last_written))
         limit = lead_s * slowness + longest + frame_s
     physical_s = physical_bound_s(scenario.commands, scenario.options, scenario.outside_stop_s)
     return Cell(scenario.name, strategy, scenario.frames, full.dropped, full.job_s, full.peak_occupancy,
