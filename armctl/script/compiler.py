@@ -108,12 +108,12 @@ class Compilation(StatementExecution):
         fast = self._fast
         out, open_blocks, from_line, plain_move = self._out, self._blocks.stack, self.from_line, self._plain_move
         number = 0
-        for number, text in enumerate(self._lines, 1):
-            text = text.rstrip("\r\n")
+        for number, raw in enumerate(self._lines, 1):
+            text = raw.rstrip("\r\n")
             if number == from_line:
                 self._resume_text = text
             if len(text) > MAX_LINE_LENGTH or not text.isascii() or "\x00" in text:
-                verdict = self._is_text(number, text)
+                verdict = self._is_text(number, text, getattr(raw, "length", len(text)))
                 if verdict is _ABORT:
                     break
                 if not verdict:
@@ -150,10 +150,11 @@ class Compilation(StatementExecution):
         self.diagnostics.sort(key=lambda d: (d.span.line, d.span.column))
         self.finished = True
 
-    def _is_text(self, number: int, text: str):
+    def _is_text(self, number: int, text: str, length: int):
         """False (and E011) for a line too long to be a statement or not valid UTF-8;
         ``_ABORT`` (and E011) for a NUL byte: the input is binary, reading stops.  Checked
-        before either parser, so the fast path and Lark see the same lines."""
+        before either parser, so the fast path and Lark see the same lines.  ``length`` is the
+        line's real length in characters (a cut line is shorter than the line was)."""
         if "\x00" in text:
             column = text.index("\x00") + 1
             self._report("E011", number, text, column, column + 1,
@@ -162,7 +163,7 @@ class Compilation(StatementExecution):
             return _ABORT
         if len(text) > MAX_LINE_LENGTH:
             self._report("E011", number, text, MAX_LINE_LENGTH + 1, len(text) + 1,
-                         f"line is {len(text)} characters long; a statement has at most {MAX_LINE_LENGTH}")
+                         f"line is {length} characters long; a statement has at most {MAX_LINE_LENGTH}")
             return False
         try:
             text.encode("utf-8")
