@@ -98,18 +98,24 @@ def _lint_target(target, profile, selection, stdin_filename):
     """The FileReport for one target, or None (reported on stderr) when it cannot be read."""
     import sys
 
-    from ..script import iter_lines
+    from ..inputs import InputTooLarge
+    from ..script import read_script
     from .engine import lint_lines
 
+    # read once, bounded (armctl/inputs.py), like run and compile: an endless input is exit 2
     try:
         if target.is_stdin:
             stream = getattr(sys.stdin, "buffer", sys.stdin)
-            return lint_lines(iter_lines(stream), stdin_filename or "<stdin>", profile, selection)
-        with open(target.path, "rb") as stream:
-            return lint_lines(iter_lines(stream), target.path, profile, selection)
+            script = read_script("-", stdin=stream)
+        else:
+            script = read_script(target.path)
     except OSError as error:
         click.echo(f"armctl lint: cannot read {_safe(target.path)}: {error.strerror or error}", err=True)
         return None
+    except InputTooLarge as error:
+        click.echo(f"armctl lint: {_safe(str(error))}", err=True)
+        return None
+    return lint_lines(script.lines(), stdin_filename or "<stdin>" if target.is_stdin else target.path, profile, selection)
 
 
 def _config() -> dict:
