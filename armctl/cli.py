@@ -191,6 +191,7 @@ class _PendingOutput:
         else:
             directory = os.path.dirname(os.path.abspath(path))
             handle, self._temp = tempfile.mkstemp(prefix=".armctl-", suffix=".tmp", dir=directory)
+            os.fchmod(handle, _new_file_mode(path))  # mkstemp's 0600 is not what open() would give
             self._file = os.fdopen(handle, "wb" if binary else "w", encoding=encoding)
         self.stream = self._file
         self.committed = False
@@ -218,6 +219,18 @@ class _PendingOutput:
                 os.unlink(self._temp)
             except OSError:
                 pass
+
+
+def _new_file_mode(path: str) -> int:
+    """The mode ``path`` has (it is replaced), else what open() would create under the umask."""
+    import os
+
+    try:
+        return os.stat(path).st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
 
 
 def _pending_output(path: str | None, binary: bool):

@@ -41,8 +41,9 @@ def read_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES
     first NUL byte (or at the limit's read if that line does not end)."""
     chunks: list[bytes] = []
     total = 0
+    size = _file_size(stream)  # a regular file: read it in one piece (one copy in memory, not two)
     while True:
-        chunk = stream.read(min(_CHUNK_BYTES, limit_bytes + 1 - total))
+        chunk = stream.read(min(max(_CHUNK_BYTES, size + 1), limit_bytes + 1 - total))
         if not chunk:
             break
         if stop_at_nul_line and b"\x00" in chunk:
@@ -56,6 +57,18 @@ def read_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES
             raise InputTooLarge(f"{name}: longer than {describe_limit(limit_bytes)}: armctl reads at most that much "
                                 "(is this the file you meant?)")
     return b"".join(chunks)
+
+
+def _file_size(stream) -> int:
+    """The size of a regular file behind ``stream``; 0 for a pipe, a device or no file."""
+    import os
+    import stat
+
+    try:
+        info = os.fstat(stream.fileno())
+    except (AttributeError, OSError, ValueError):  # io.BytesIO, a closed or unusual stream
+        return 0
+    return info.st_size if stat.S_ISREG(info.st_mode) else 0
 
 
 def read_file_bounded(path: str, name: str | None = None, limit_bytes: int = MAX_INPUT_BYTES, *,

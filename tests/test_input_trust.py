@@ -248,6 +248,11 @@ def test_compile_o_writes_only_after_a_clean_check_and_leaves_no_temporary_file(
     assert result.exit_code == 0, result.output
     assert out.read_text().split() == compiled_hex(JOB)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.txt", "frames.hex", "good.txt"]
+    fresh = tmp_path / "fresh.hex"
+    assert CliRunner().invoke(main, ["compile", str(good), "-o", str(fresh)]).exit_code == 0
+    umask = os.umask(0)
+    os.umask(umask)
+    assert fresh.stat().st_mode & 0o777 == 0o666 & ~umask  # as open() would create it, not mkstemp's 0600
 
 
 # --- 5. a --log that fails mid-job takes the Ctrl-C path ------------------------------------------------
