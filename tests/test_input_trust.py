@@ -322,3 +322,43 @@ def test_infinity_times_zero_is_not_a_number_not_too_large():
     huge = "1" + "0" * 400  # a literal beyond a double: infinity
     [diagnostic] = [d for d in compile_text(f"#<a> = [{huge} * 0]\n").finish() if d.code == "E009"]
     assert "is not a number (NaN)" in diagnostic.message and "too large" not in diagnostic.message
+
+
+# --- lint's cost follows the text: a pass that repeats the last one is not run again ----------------
+
+
+def test_lint_stops_a_loop_once_a_pass_repeats_the_one_before():
+    from armctl.script import compile_lines
+
+    loop = START + "O<a> repeat [600000]\nG1 Y10\nG1 Y-10 S1500\nO<a> endrepeat\n"
+    job = compile_lines(loop.splitlines(), skip_repeats=True)
+    # pass 2 differs from pass 1 (its first move carries S1500), pass 3 repeats pass 2: stop
+    assert sum(1 for _ in job) == 1 + 3 * 2 and job.diagnostics == []
+    assert job.lines_run < 20
+    relative = START + "G91\nO<a> repeat [50]\nG1 Y1\nO<a> endrepeat\n"  # each pass moves on: all run
+    assert sum(1 for _ in compile_lines(relative.splitlines(), skip_repeats=True)) == 1 + 50
+    paused = START + "O<a> repeat [5]\nPAUSE\nO<a> endrepeat\n"  # the pause state alternates: all run
+    assert sum(1 for _ in compile_lines(paused.splitlines(), skip_repeats=True)) == 1 + 5
+
+
+BODY_LINES = ["G1 Y10", "G1 Y-10 S1500", "G91", "G90", "G1 X5", "G1 X600", "PAUSE", "G4 P10", "#<i> = [#<i> + 1]",
+              "G1 Y#<i>", "G6 J1=10 J2=0 J3=0 J4=0 J5=0 J6=0 F20", "G1 F30", "G1 Z[200 / #<z>]", "#<z> = 0"]
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(body=st.lists(st.sampled_from(BODY_LINES), min_size=1, max_size=4),
+       inner=st.lists(st.sampled_from(BODY_LINES), max_size=2), count=st.integers(0, 6), inner_count=st.integers(0, 4))
+def test_skipping_repeated_passes_never_changes_what_lint_reports(body, inner, count, inner_count):
+    from armctl.lint import engine, lint_lines
+    from armctl.profile import default_profile
+
+    script = ("#<i> = 0\n#<z> = 1\n" + START + f"O<a> repeat [{count}]\n" + "\n".join(body) + "\n"
+              + (f"O<b> repeat [{inner_count}]\n" + "\n".join(inner) + "\nO<b> endrepeat\n" if inner else "")
+              + "O<a> endrepeat\nG1 Z140\n")
+    skipped = lint_lines(script.splitlines(), "job.txt", default_profile())
+    real = engine.compile_lines
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(engine, "compile_lines", lambda *a, **k: real(*a, **{**k, "skip_repeats": False}))
+        every_pass = lint_lines(script.splitlines(), "job.txt", default_profile())
+    assert skipped.diagnostics == every_pass.diagnostics
+    assert skipped.counts == every_pass.counts

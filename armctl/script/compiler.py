@@ -23,6 +23,12 @@ block runs, the lines it would run are counted from its text (count × one pass,
 evaluated now), so ``O1 repeat [1e9]`` or 64 nested ``repeat [2]`` is one located E012 at
 once, in time proportional to the text; a count only known as the block runs is still
 caught by the running total.  Either way compiling stops there: nothing past it is run.
+
+For checking only (``skip_repeats=True``, what lint asks for), a repeat block stops running
+once a pass yields the same commands as the pass before it and leaves the modal state as it
+found it: every later pass would yield exactly those commands again, so they have nothing new
+to say (a pass with a PAUSE toggle is never skipped: the pause state alternates).  Then a
+loop of absolute moves costs two passes, whatever its count; a G91 loop still runs each pass.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ import math
 from typing import Iterable, Iterator, Optional
 
 from ..errors import ScriptError
+from ..protocol import PauseToggle
 from . import messages
 from .blocks import Block, BlockCollector, Line, Problem
 from .execute import NOT_PLAIN, StatementExecution
@@ -68,6 +75,7 @@ class Compilation(StatementExecution):
     def __init__(
         self, lines: Iterable[str], file: str = "<script>", initial: InitialState | None = None, *,
         from_line: int = 1, max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS, fast: bool = True,
+        skip_repeats: bool = False,
     ) -> None:
         if from_line < 1:
             raise ValueError(f"from_line counts from 1, not {from_line}")
@@ -80,6 +88,7 @@ class Compilation(StatementExecution):
         self.finished = False
         self._lines = lines
         self._fast = fast
+        self._skip_repeats = skip_repeats
         self._max_diagnostics = max_diagnostics
         self._seen: set = set()
         self._blocks = BlockCollector()
@@ -245,21 +254,40 @@ class Compilation(StatementExecution):
         if count:
             self._check_expansion(block, count)
         repeating = self._repeating
+        previous = None  # (the commands of the last pass, the modal state it ended with)
         for index in range(count or 0):
             loop = path + (index,)
             self._repeating = repeating or index > 0
             self._count_line(block.opening)  # the pass itself (its endrepeat), even with an empty body
-            for item in block.items:
-                if type(item) is Block:
-                    yield from self._run_block(item, loop)
-                    continue
-                self._count_line(item)
-                self._execute(item.number, item.text, item.node, loop)
-                if out:
-                    yield from out
-                    out.clear()
+            commands = [] if self._skip_repeats else None
+            for statement in self._pass(block, loop):
+                if commands is not None:
+                    commands.append(statement.command)
+                yield statement
             self._interrupt_arc(block.end_line, f"{block.label} endrepeat")
+            if commands is not None:
+                current = (commands, self._fingerprint())
+                if current == previous and not any(type(c) is PauseToggle for c in commands):
+                    break  # every later pass would yield these same commands again (see the docstring)
+                previous = current
         self._repeating = repeating
+
+    def _pass(self, block: Block, loop: tuple) -> Iterator[Statement]:
+        out = self._out
+        for item in block.items:
+            if type(item) is Block:
+                yield from self._run_block(item, loop)
+                continue
+            self._count_line(item)
+            self._execute(item.number, item.text, item.node, loop)
+            if out:
+                yield from out
+                out.clear()
+
+    def _fingerprint(self) -> tuple:
+        """The modal state as plain, comparable data (what the next pass starts from)."""
+        state = self.state
+        return (tuple(state.values.items()), tuple(sorted(state.parameters.items())), state.relative)
 
     def _count_line(self, line: Line) -> None:
         self.lines_run += 1
@@ -359,10 +387,11 @@ class Compilation(StatementExecution):
 
 def compile_lines(
     lines: Iterable[str], file: str = "<script>", initial: InitialState | None = None, *,
-    from_line: int = 1, max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS, fast: bool = True,
+    from_line: int = 1, max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS, fast: bool = True, skip_repeats: bool = False,
 ) -> Compilation:
     """Compile ``lines`` (an open text file, a list of strings …) as a stream; see ``Compilation``."""
-    return Compilation(lines, file, initial, from_line=from_line, max_diagnostics=max_diagnostics, fast=fast)
+    return Compilation(lines, file, initial, from_line=from_line, max_diagnostics=max_diagnostics, fast=fast,
+                       skip_repeats=skip_repeats)
 
 
 def compile_text(text: str, file: str = "<script>", initial: InitialState | None = None, **options) -> Compilation:
