@@ -95,7 +95,8 @@ def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
     from ..script import Diagnostic
 
     estimator = JobEstimator(model, start, lead_s, baud)
-    for statement in script.compile(initial=initial, from_line=from_line):
+    compilation = script.compile(initial=initial, from_line=from_line)
+    for statement in compilation:
         estimator.add(statement.command)
         if estimator.result.motion_s > MAX_JOB_MOTION_S:
             hours = MAX_JOB_MOTION_S / 3600
@@ -104,6 +105,11 @@ def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
                                        "check the delays (G4 P is in milliseconds), speeds and external-axis values; "
                                        "split a longer job")
             _refuse_on_errors([diagnostic], 1)
+    # This pass is the stream's twin (same snapshot, same initial state, same from_line): if it
+    # compiled cleanly, so will the stream, frame for frame; the arm's reported state can make
+    # a line fail that passed the check (a G91 offset from the real pose), and then nothing goes.
+    if compilation.error_count:
+        _refuse_on_errors([d for d in compilation.diagnostics if d.is_error], compilation.error_count)
     return estimator.result
 
 
