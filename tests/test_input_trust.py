@@ -86,6 +86,28 @@ def test_a_script_changed_while_run_streams_sends_exactly_what_was_checked(tmp_p
     assert "frames: 15 of 15 sent" in result.stdout
 
 
+@settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@given(at_frame=st.integers(1, 14), new_text=st.sampled_from([EVIL, "", JOB[:70], "G1 X\x00\xff\n", JOB.replace("Y", "Z")]))
+def test_whatever_the_file_becomes_and_whenever_the_frames_sent_are_the_checked_ones(tmp_path, at_frame, new_text):
+    from armctl.ui import run_job
+
+    script, log = tmp_path / "job.txt", tmp_path / "job.log"
+    script.write_text(JOB)
+    real_update = run_job._Display.update
+
+    def update(self, view):
+        real_update(self, view)
+        if view.frames_sent == at_frame:
+            script.write_bytes(new_text.encode("utf-8", "surrogateescape"))
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(run_job._Display, "update", update)
+        result = CliRunner().invoke(main, ["run", str(script), "--no-live", "--port", "sim://?clock=virtual",
+                                           "--log", str(log)])
+    assert result.exit_code == 0, result.output
+    assert logged_motion(log) == compiled_hex(JOB)
+
+
 def test_run_and_estimate_read_stdin_once():
     ran = armctl("run", "-", "--dry-run", input=JOB.encode())
     assert ran.returncode == 0, ran.stderr
