@@ -314,7 +314,10 @@ def ports():
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
 @click.option("--timeout", "timeout_s", type=click.FloatRange(0.1, 600), default=3.0, show_default=True, help="Seconds to wait for the arm's status before starting.")
 def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort, profile_path, timeout_s):
-    """Check a motion script, then stream it to the arm without overflowing its buffer."""
+    """Check a motion script, then stream it to the arm without overflowing its buffer.
+
+    SCRIPT (a file, or - for standard input) is read once: what was checked is what is sent.
+    """
     from .ui.run_job import JobOptions, run_job
 
     snapshot = _read_script(script)
@@ -329,7 +332,10 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object.")
 def estimate(script, lead_s, baud, profile_path, as_json):
-    """How long a job takes on the arm: time, frames, path, line- vs arm-bound, peak queue."""
+    """How long a job takes on the arm: time, frames, path, line- vs arm-bound, peak queue.
+
+    SCRIPT may be - for standard input.
+    """
     from .motion import MotionModel
     from .profile import load_profile
     from .ui.run_job import check_script, estimate_job, print_estimate
