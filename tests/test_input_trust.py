@@ -328,6 +328,16 @@ def test_a_log_that_fails_mid_job_stops_the_job_like_ctrl_c(tmp_path, monkeypatc
     assert "stopped: failed" in result.stderr
 
 
+def test_a_full_disk_under_the_log_stops_the_job_with_exit_1():
+    # /dev/full: every write fails with ENOSPC, as on a full disk; the installed command
+    result = armctl("run", Path(__file__).parent / "data" / "scripts_cli" / "short_job.txt", "--no-live",
+                    "--port", "sim://?clock=virtual", "--log", "/dev/full")
+    assert result.returncode == 1, result.stderr
+    err = result.stderr.decode()
+    assert "the log /dev/full could not be written" in err and "sending the abort sequence" in err
+    assert "resume with: armctl run" in result.stdout.decode() and "Traceback" not in err
+
+
 # --- 6. messages ---------------------------------------------------------------------------------
 
 

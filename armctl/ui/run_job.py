@@ -202,6 +202,20 @@ def _open_log(path: str):
     return open(path, "w", encoding="utf-8", buffering=1)
 
 
+@contextmanager
+def _log_file(path: str):
+    """``_open_log``, closed at the end; a close that fails again after a failed write (the
+    line still buffered) is not a second error: the job already stopped on the first."""
+    log = _open_log(path)
+    try:
+        yield log
+    finally:
+        try:
+            log.close()
+        except OSError:
+            pass
+
+
 def run_job(options: JobOptions, script, connect) -> int:
     """Run the job in ``script`` (the ``ScriptSnapshot`` read once; ``options.script`` is only
     the name the summary shows)."""
@@ -219,7 +233,7 @@ def run_job(options: JobOptions, script, connect) -> int:
     estimate_job(script, model, model.initial_pose(), options.lead_s, options.baud or _config_baud(), options.from_line)
 
     link, baud = connect(options.port, options.baud, profile=profile)
-    with link, (_open_log(options.log_path) if options.log_path else nullcontext()) as log:
+    with link, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
         state = read_arm(link, options.timeout_s, log)
         start, initial = start_from_state(model, state)
         estimate = estimate_job(script, model, start, options.lead_s, baud, options.from_line, initial)
