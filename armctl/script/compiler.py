@@ -25,10 +25,11 @@ once, in time proportional to the text; a count only known as the block runs is 
 caught by the running total.  Either way compiling stops there: nothing past it is run.
 
 For checking only (``skip_repeats=True``, what lint asks for), a repeat block stops running
-once a pass yields the same commands as the pass before it and leaves the modal state as it
-found it: every later pass would yield exactly those commands again, so they have nothing new
-to say (a pass with a PAUSE toggle is never skipped: the pause state alternates).  Then a
-loop of absolute moves costs two passes, whatever its count; a G91 loop still runs each pass.
+once a pass yields the same commands as the pass before it and ends in the same modal state:
+the next pass starts where this one did, so it and every later one would yield exactly those
+commands again and have nothing new to say (a pass with a PAUSE toggle is never cut short: the
+pause state alternates).  A loop of absolute moves then costs two or three passes, whatever
+its count; a G91 loop, whose targets move on, still runs each pass.
 """
 
 from __future__ import annotations
