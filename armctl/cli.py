@@ -21,6 +21,7 @@ from . import __version__
 from .bench import SCENARIO_NAMES as BENCH_SCENARIOS  # the names only: imports nothing else
 from .cli_types import number
 from .errors import ArmctlError, ConfigError, ProfileError
+from .inputs import InputTooLarge
 from .limits import BAUD_RANGE, BENCH_JOBS_RANGE, BENCH_LEAD_RANGE_S, LEAD_RANGE_S, LINE_RANGE, START_TIMEOUT_RANGE_S, STATUS_TIMEOUT_RANGE_S, TCP_PORT_RANGE
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
@@ -40,7 +41,7 @@ class ArmctlGroup(click.Group):
     def invoke(self, ctx: click.Context):
         try:
             return super().invoke(ctx)
-        except (UsageFailure, ProfileError, ConfigError) as error:
+        except (UsageFailure, ProfileError, ConfigError, InputTooLarge) as error:
             _fail(str(error), EXIT_USAGE)
         except ArmctlError as error:
             _fail(str(error), EXIT_PROBLEMS)
@@ -97,13 +98,15 @@ def main():
 
 
 def _read_input(path: str) -> bytes:
+    """All of ``path`` (``-``: stdin), bounded (armctl/inputs.py): too long is exit 2."""
+    from .inputs import read_bounded, read_file_bounded
+
     if path == "-":
-        return sys.stdin.buffer.read()
+        return read_bounded(sys.stdin.buffer, "<stdin>")
     try:
-        with open(path, "rb") as handle:
-            return handle.read()
+        return read_file_bounded(path)
     except OSError as error:
-        raise UsageFailure(f"cannot read {path}: {error.strerror}") from None
+        raise UsageFailure(f"cannot read {path}: {error.strerror or error}") from None
 
 
 @main.command()
@@ -125,30 +128,16 @@ def decode(source: str):
     click.echo(summary_line(chunks), err=True)
 
 
-def _check_readable(path: str) -> None:
-    """Fail early (exit 2) on a script that cannot be opened, before any pass over it."""
-    if path == "-":
-        return
+def _read_script(path: str):
+    """The script at ``path`` (``-``: stdin) read once, bounded, as an immutable
+    ``ScriptSnapshot``: every pass of the command compiles this snapshot, never the file
+    again (what was checked is what is sent or written).  Unreadable or too long: exit 2."""
+    from .script import read_script
+
     try:
-        with open(path, "rb"):
-            pass
+        return read_script(path)
     except OSError as error:
-        raise UsageFailure(f"cannot read {path}: {error.strerror}") from None
-
-
-def _compile_source(path: str, **options):
-    """A fresh pass over the script at ``path`` (``-``: stdin, read once and kept)."""
-    from .script import compile_file, compile_lines
-
-    if path == "-":
-        # stdin can be read once; keep its lines for this invocation's second pass only.
-        meta = click.get_current_context().meta
-        if "armctl.stdin_lines" not in meta:
-            from .script import iter_lines
-
-            meta["armctl.stdin_lines"] = list(iter_lines(sys.stdin.buffer))
-        return compile_lines(meta["armctl.stdin_lines"], "<stdin>", **options)
-    return compile_file(path, **options)
+        raise UsageFailure(f"cannot read {path}: {error.strerror or error}") from None
 
 
 def _report_script_errors(compilation) -> None:
@@ -169,19 +158,22 @@ def compile_command(script: str, fmt: str, output: str | None):
     """Check a motion script, then print the exact frames the arm would receive.
 
     The whole script is checked first; with any error nothing is written and the exit code
-    is 1. SCRIPT may be - for standard input.
+    is 1. SCRIPT may be - for standard input. -o writes the file only after a clean check,
+    all at once (a temporary file renamed over it), and never over the script itself.
     """
     from .formats import frame_record
 
-    _check_readable(script)
-    check = _compile_source(script)
-    check.finish()
-    if check.error_count:
-        _report_script_errors(check)
     if fmt == "bin" and output is None and sys.stdout.isatty():
         raise UsageFailure("refusing to write binary frames to a terminal: use -o FILE or a pipe")
-    with _output_stream(output, binary=fmt == "bin") as out:
-        for statement in _compile_source(script):
+    if output is not None and script != "-" and _same_file(script, output):
+        raise UsageFailure(f"refusing to write the frames over the script itself ({output}): choose another -o")
+    source_script = _read_script(script)
+    # One pass: the frames go to a temporary file while the script compiles; it becomes the
+    # output (or is copied to stdout) only if the whole script compiled without errors.
+    with _pending_output(output, binary=fmt == "bin") as pending:
+        out = pending.stream
+        compilation = source_script.compile()
+        for statement in compilation:
             frame = statement.command.encode()
             if fmt == "hex":
                 out.write(frame.hex() + "\n")
@@ -190,15 +182,90 @@ def compile_command(script: str, fmt: str, output: str | None):
             else:
                 source = {"file": statement.span.file, "line": statement.line, "text": statement.span.text.rstrip("\r\n")}
                 out.write(json.dumps(frame_record(statement.command, frame, source)) + "\n")
+        if compilation.error_count:
+            _report_script_errors(compilation)  # exits 1; the pending output is discarded
+        pending.commit()
 
 
-def _output_stream(path: str | None, binary: bool):
+def _same_file(script: str, output: str) -> bool:
+    import os
+
+    try:
+        return os.path.samefile(script, output)
+    except OSError:  # the output does not exist yet (or cannot be looked at): not the script
+        return False
+
+
+class _PendingOutput:
+    """Frames written to a temporary file; ``commit`` makes them the output (``os.replace``
+    next to the target, so a reader never sees half a file) or copies them to stdout."""
+
+    def __init__(self, path: str | None, binary: bool) -> None:
+        import os
+        import tempfile
+
+        self.path, self.binary = path, binary
+        encoding = None if binary else "utf-8"
+        if path is None:
+            self._file = tempfile.TemporaryFile("w+b" if binary else "w+", encoding=encoding)
+            self._temp = None
+        else:
+            directory = os.path.dirname(os.path.abspath(path))
+            handle, self._temp = tempfile.mkstemp(prefix=".armctl-", suffix=".tmp", dir=directory)
+            os.fchmod(handle, _new_file_mode(path))  # mkstemp's 0600 is not what open() would give
+            self._file = os.fdopen(handle, "wb" if binary else "w", encoding=encoding)
+        self.stream = self._file
+        self.committed = False
+
+    def commit(self) -> None:
+        import os
+        import shutil
+
+        if self._temp is None:
+            self._file.seek(0)
+            target = sys.stdout.buffer if self.binary else sys.stdout
+            shutil.copyfileobj(self._file, target)
+            target.flush()
+        else:
+            self._file.close()
+            os.replace(self._temp, self.path)
+        self.committed = True
+
+    def discard(self) -> None:
+        import os
+
+        self._file.close()
+        if self._temp is not None and not self.committed:
+            try:
+                os.unlink(self._temp)
+            except OSError:
+                pass
+
+
+def _new_file_mode(path: str) -> int:
+    """The mode ``path`` has (it is replaced), else what open() would create under the umask."""
+    import os
+
+    try:
+        return os.stat(path).st_mode & 0o7777
+    except OSError:
+        umask = os.umask(0)
+        os.umask(umask)
+        return 0o666 & ~umask
+
+
+def _pending_output(path: str | None, binary: bool):
     import contextlib
 
-    if path is None:
-        stream = sys.stdout.buffer if binary else sys.stdout
-        return contextlib.nullcontext(stream)
-    return open(path, "wb" if binary else "w", encoding=None if binary else "utf-8")
+    @contextlib.contextmanager
+    def pending():
+        output = _PendingOutput(path, binary)
+        try:
+            yield output
+        finally:
+            output.discard()
+
+    return pending()
 
 
 # --- commands that talk to a port -------------------------------------------------------------
@@ -268,14 +335,15 @@ def ports():
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
 @click.option("--timeout", "timeout_s", type=number(*START_TIMEOUT_RANGE_S), default=3.0, show_default=True, help="Seconds to wait for the arm's status before starting.")
 def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort, profile_path, timeout_s):
-    """Check a motion script, then stream it to the arm without overflowing its buffer."""
+    """Check a motion script, then stream it to the arm without overflowing its buffer.
+
+    SCRIPT (a file, or - for standard input) is read once: what was checked is what is sent.
+    """
     from .ui.run_job import JobOptions, run_job
 
-    _check_readable(script)
-    if script == "-":
-        raise UsageFailure("run needs a file (it reads the script more than once); save it first")
+    snapshot = _read_script(script)
     options = JobOptions(script, port, baud, lead_s, from_line, dry_run, log_path, not no_live, abort, profile_path, timeout_s)
-    sys.exit(run_job(options, _compile_source, _connect))
+    sys.exit(run_job(options, snapshot, _connect))
 
 
 @main.command()
@@ -285,18 +353,19 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object.")
 def estimate(script, lead_s, baud, profile_path, as_json):
-    """How long a job takes on the arm: time, frames, path, line- vs arm-bound, peak queue."""
+    """How long a job takes on the arm: time, frames, path, line- vs arm-bound, peak queue.
+
+    SCRIPT may be - for standard input.
+    """
     from .motion import MotionModel
     from .profile import load_profile
     from .ui.run_job import check_script, estimate_job, print_estimate
 
-    _check_readable(script)
-    if script == "-":
-        raise UsageFailure("estimate needs a file (it reads the script more than once); save it first")
+    snapshot = _read_script(script)
     profile = load_profile(profile_path)
-    check_script(script, profile)
+    check_script(snapshot, profile)
     model = MotionModel(profile)
-    result = estimate_job(_compile_source, script, model, model.initial_pose(), lead_s, baud)
+    result = estimate_job(snapshot, model, model.initial_pose(), lead_s, baud)
     if as_json:
         click.echo(json.dumps(result.to_json()))
     else:

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 from .motion import ArmPose, MotionModel, Planner
 from .protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, RunProgram, frame_seconds
+from .script.source import MAX_JOB_MOTION_S  # noqa: F401 - the bound run and estimate apply (E012)
 from .streamer import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S
 
 # The streamer never lets more frames be in flight than this (see streamer.py).

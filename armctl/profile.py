@@ -397,12 +397,16 @@ def _parse(data: bytes, source: str) -> dict:
 
 def read_toml(path: Path) -> dict:
     """A TOML file as a dict; every failure is a ProfileError naming the file."""
+    from .inputs import MAX_TOML_BYTES, InputTooLarge, read_file_bounded
+
     try:
-        data = Path(path).read_bytes()
+        data = read_file_bounded(str(path), str(path), MAX_TOML_BYTES)  # /dev/zero is not a profile
     except FileNotFoundError:
         raise ProfileError(f"{path}: file not found") from None
     except OSError as error:
         raise ProfileError(f"{path}: cannot read: {error.strerror or error}") from None
+    except InputTooLarge as error:
+        raise ProfileError(str(error)) from None
     return _parse(data, str(path))
 
 

@@ -4,8 +4,10 @@ Strategy: the edge where time is real.  The link's reader thread only queues sta
 with the time they were read; this module's single thread drains that queue into the
 streamer, asks it when the next frame may go, writes it, and sleeps until the next decision
 is due.  Everything it knows is in ``RunView`` (for the live panel and the summary); every way
-a job can end — finished, Ctrl-C, a lost port — leaves a ``RunView`` that says the last line
-sent, the last line known executed and where to resume.
+a job can end — finished, Ctrl-C, a lost port, a failure such as a --log that cannot be
+written — leaves a ``RunView`` that says the last line sent, the last line known executed and
+where to resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks
+to stop at the next safe point, and the caller sends the abort sequence.
 """
 
 from __future__ import annotations
@@ -119,6 +121,7 @@ class JobRunner:
         self._pause_reports: deque = deque(maxlen=2)  # the last two pause states reported
         self._recent: deque = deque(maxlen=64)  # the last frames written (SentFrame)
         self.stop_requested = False
+        self.failure: str | None = None  # why the job stopped, when not by Ctrl-C (``fail``)
 
     # --- time -------------------------------------------------------------------------------
 
@@ -205,6 +208,12 @@ class JobRunner:
         while stopping raises at once."""
         if self.stop_requested:
             raise KeyboardInterrupt
+        self.stop_requested = True
+
+    def fail(self, why: str) -> None:
+        """A failure mid-job (not a lost port): stop at the next safe point, like Ctrl-C, and
+        let the summary say ``why``."""
+        self.failure = self.failure or why
         self.stop_requested = True
 
     def _step(self) -> None:
@@ -389,8 +398,17 @@ class JobRunner:
         self._refresh()
 
     def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
+        """One JSON line; a log that cannot be written (disk full, EIO) stops the job (``fail``):
+        the record of what was sent is part of the job."""
+        if self.log is None:
+            return
         record = {"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra}
-        self.log.write(json.dumps(record) + "\n")
+        try:
+            self.log.write(json.dumps(record) + "\n")
+        except (OSError, ValueError) as error:  # ValueError: the file was closed under us
+            name = getattr(self.log, "name", "the log")
+            self.log = None  # nothing more is written to it (the abort is not logged)
+            self.fail(f"the log {name} could not be written ({error})")
 
 
 def _moves_arm(segment) -> bool:

@@ -246,17 +246,7 @@ def test_dash_errors_name_stdin():
     assert done.stderr.decode().startswith("<stdin>:1:1: E004 G4 needs P")
 
 
-@pytest.fixture
-def _no_stdin_left_over():
-    """Other in-process tests must not see this test's stdin (nor this test theirs)."""
-    import armctl.cli
-
-    vars(armctl.cli._compile_source).pop("stdin_lines", None)
-    yield
-    vars(armctl.cli._compile_source).pop("stdin_lines", None)
-
-
-def test_dash_reads_stdin_afresh_on_every_invocation(_no_stdin_left_over):
+def test_dash_reads_stdin_afresh_on_every_invocation():
     first = compile_("-", input="G4 P10\n")
     second = compile_("-", input="G4 P20\n")
     assert first.stdout == motion("6", 0, f1=10).hex() + "\n"

@@ -186,10 +186,11 @@ def test_a_from_line_the_compiler_rejects_sends_nothing(line):
     assert f"E010 cannot resume at line {line}" in result.stderr
 
 
-def test_run_needs_a_file_not_stdin():
-    result = CliRunner().invoke(main, ["run", "-"], input="G4 P10\n")
-    assert result.exit_code == 2
-    assert "run needs a file" in result.stderr
+def test_run_reads_stdin_once_like_a_file():
+    # the script is read once into a snapshot, so stdin works as well as a file
+    result = CliRunner().invoke(main, ["run", "-", "--dry-run"], input="G4 P10\n")
+    assert result.exit_code == 0, result.output
+    assert "ee3600" in result.stdout and "frames            1" in result.stdout
 
 
 def test_a_port_that_says_nothing_stops_before_sending(recorded_writes):

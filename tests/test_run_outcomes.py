@@ -70,11 +70,11 @@ def test_resume_inside_a_repeat_block_names_the_outermost_block_start(tmp_path):
         "G4 P1\n"  # 9
         "o100 endrepeat\n"  # 10
     )
-    assert outermost_block_start(str(script), 4) == 2
-    assert outermost_block_start(str(script), 5) == 2
-    assert outermost_block_start(str(script), 1) is None
-    assert outermost_block_start(str(script), 7) is None
-    assert outermost_block_start(str(script), 9) == 8
+    assert outermost_block_start(script.read_text().splitlines(), 4) == 2
+    assert outermost_block_start(script.read_text().splitlines(), 5) == 2
+    assert outermost_block_start(script.read_text().splitlines(), 1) is None
+    assert outermost_block_start(script.read_text().splitlines(), 7) is None
+    assert outermost_block_start(script.read_text().splitlines(), 9) == 8
     from armctl.script import compile_file
 
     assert compile_file(script, from_line=2).finish() == []  # the line it names is one run accepts

@@ -95,20 +95,40 @@ def _run(paths, fmt, selection, strict, statistics, profile, stdin_filename, con
 
 
 def _lint_target(target, profile, selection, stdin_filename):
-    """The FileReport for one target, or None (reported on stderr) when it cannot be read."""
+    """The FileReport for one target, or None (reported on stderr) when it cannot be read.
+
+    Read once and bounded (armctl/inputs.py).  A regular file streams line by line, so lint's
+    memory stays flat however long the script (its size is checked first, and the stream is
+    bounded too, in case it grows); stdin, a pipe or a device is read whole into a snapshot,
+    which stops at the first NUL (``/dev/zero``) or at the limit (``yes |``) at once.
+    """
+    import os
+    import stat
     import sys
 
-    from ..script import iter_lines
+    from ..inputs import MAX_INPUT_BYTES, InputTooLarge, describe_limit, read_bounded
+    from ..script import ScriptSnapshot, iter_lines, read_script
     from .engine import lint_lines
 
+    name = stdin_filename or "<stdin>" if target.is_stdin else target.path
     try:
         if target.is_stdin:
             stream = getattr(sys.stdin, "buffer", sys.stdin)
-            return lint_lines(iter_lines(stream), stdin_filename or "<stdin>", profile, selection)
+            return lint_lines(read_script("-", stdin=stream).lines(), name, profile, selection)
         with open(target.path, "rb") as stream:
-            return lint_lines(iter_lines(stream), target.path, profile, selection)
+            info = os.fstat(stream.fileno())
+            if not stat.S_ISREG(info.st_mode):
+                snapshot = ScriptSnapshot(name, read_bounded(stream, target.path, stop_at_nul_line=True))
+                return lint_lines(snapshot.lines(), name, profile, selection)
+            if info.st_size > MAX_INPUT_BYTES:
+                raise InputTooLarge(f"{target.path}: longer than {describe_limit(MAX_INPUT_BYTES)}: "
+                                    "armctl reads at most that much (is this the file you meant?)")
+            return lint_lines(iter_lines(stream, MAX_INPUT_BYTES, target.path), name, profile, selection)
     except OSError as error:
         click.echo(f"armctl lint: cannot read {_safe(target.path)}: {error.strerror or error}", err=True)
+        return None
+    except InputTooLarge as error:
+        click.echo(f"armctl lint: {_safe(str(error))}", err=True)
         return None
 
 

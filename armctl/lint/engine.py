@@ -16,7 +16,8 @@ never blocks ``run``.  So ``FileReport`` counts errors and warnings per finding,
 
 A statement inside a repeat block is checked on every pass (a G91 loop may leave the
 workspace on its third pass only) but each (line, code) is reported for one pass only: the
-first that finds it.
+first that finds it.  Passes stop once one repeats the one before it exactly (same commands,
+same modal state after): the rest could only say the same again.
 """
 
 from __future__ import annotations
@@ -112,7 +113,9 @@ def lint_lines(lines: Iterable[str], file: str, profile, selection: Optional[Sel
               for kind, entries in CHECKS.items()}
     compilation = None
     scanner = LineScanner(file, lambda: compilation.state.parameters, collector.add)
-    compilation = compile_lines(scanner.watch(lines), file, max_diagnostics=max_diagnostics)
+    # skip_repeats: a repeat pass that repeats the last one exactly has nothing new to say, so
+    # lint's cost follows the text, not the repeat counts (see armctl/script/compiler.py)
+    compilation = compile_lines(scanner.watch(lines), file, max_diagnostics=max_diagnostics, skip_repeats=True)
     arm = ArmTracker(profile)
     for statement in compilation:
         for code, check in checks.get(type(statement.command), ()):

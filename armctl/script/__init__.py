@@ -18,7 +18,7 @@ Modules, one job each:
   execute.py         how each statement runs against the modal state (moves, arcs, keywords)
   statement.py       Statement: a command object and its source position
   messages.py        the wording of the compiler's diagnostics
-  files.py           reading a file safely (UTF-8, line length cap)
+  files.py           reading a script once, bounded, into an immutable snapshot (UTF-8, line cap)
 
 Usage::
 
@@ -34,13 +34,14 @@ Usage::
 """
 
 from .compiler import DEFAULT_MAX_DIAGNOSTICS, MAX_LINE_LENGTH, Compilation, check_lines, compile_lines, compile_text
-from .files import compile_file, iter_lines, read_lines
+from .files import CutLine, ScriptSnapshot, compile_file, iter_lines, read_lines, read_script
 from .modal import InitialState, ModalState
 from .source import ERROR, RULES, WARNING, Diagnostic, Rule, SourceSpan
 from .statement import Statement
 
 __all__ = [
     "Compilation", "Diagnostic", "InitialState", "ModalState", "Rule", "RULES", "SourceSpan", "Statement",
-    "check_lines", "compile_file", "compile_lines", "compile_text", "iter_lines", "read_lines",
+    "check_lines", "compile_file", "compile_lines", "compile_text", "iter_lines", "read_lines", "read_script",
+    "CutLine", "ScriptSnapshot",
     "DEFAULT_MAX_DIAGNOSTICS", "MAX_LINE_LENGTH", "ERROR", "WARNING",
 ]

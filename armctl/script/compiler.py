@@ -15,6 +15,21 @@ columns; the fast path never has to.  Repeat blocks are paired above the grammar
 (armctl/script/blocks.py): the body of the outermost open block is buffered as parsed lines
 and run when it closes.  A G300 is held back until its G301 arrives, so that a broken pair
 never yields half an arc.  With ``from_line``, earlier lines run for their modal state only.
+
+Expansion is bounded: one script may run at most ``MAX_LINES_RUN`` lines, each pass of a
+repeat block counted — its body lines and its endrepeat, once per pass, and its repeat line
+once (a line sends at most one frame; an empty body still costs its passes).  Before a repeat
+block runs, the lines it would run are counted from its text (count × one pass, nested counts
+evaluated now), so ``O1 repeat [1e9]`` or 64 nested ``repeat [2]`` is one located E012 at
+once, in time proportional to the text; a count only known as the block runs is still
+caught by the running total.  Either way compiling stops there: nothing past it is run.
+
+For checking only (``skip_repeats=True``, what lint asks for), a repeat block stops running
+once a pass yields the same commands as the pass before it and ends in the same modal state:
+the next pass starts where this one did, so it and every later one would yield exactly those
+commands again and have nothing new to say (a pass with a PAUSE toggle is never cut short: the
+pause state alternates).  A loop of absolute moves then costs two or three passes, whatever
+its count; a G91 loop, whose targets move on, still runs each pass.
 """
 
 from __future__ import annotations
@@ -23,6 +38,7 @@ import math
 from typing import Iterable, Iterator, Optional
 
 from ..errors import ScriptError
+from ..protocol import PauseToggle
 from . import messages
 from .blocks import Block, BlockCollector, Line, Problem
 from .execute import NOT_PLAIN, StatementExecution
@@ -31,13 +47,17 @@ from .fastpath import node_from_scan, scan
 from .grammar import parse_line
 from .modal import InitialState, ModalState
 from .nodes import EMPTY, BlockLine
-from .source import Diagnostic, SourceSpan
+from .source import MAX_LINES_RUN, Diagnostic, SourceSpan
 from .statement import Statement
 from .syntax_errors import LineSyntaxError
 
 MAX_LINE_LENGTH = 4096  # characters; longer lines are not statements (E011)
 DEFAULT_MAX_DIAGNOSTICS = 1000  # kept in memory; later ones are only counted
 _ABORT = object()  # _is_text: stop reading, the input is not text
+
+
+class _TooLarge(Exception):
+    """Raised (after E012 is reported) to stop compiling a script that expands too far."""
 
 
 class Compilation(StatementExecution):
@@ -56,6 +76,7 @@ class Compilation(StatementExecution):
     def __init__(
         self, lines: Iterable[str], file: str = "<script>", initial: InitialState | None = None, *,
         from_line: int = 1, max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS, fast: bool = True,
+        skip_repeats: bool = False,
     ) -> None:
         if from_line < 1:
             raise ValueError(f"from_line counts from 1, not {from_line}")
@@ -68,6 +89,7 @@ class Compilation(StatementExecution):
         self.finished = False
         self._lines = lines
         self._fast = fast
+        self._skip_repeats = skip_repeats
         self._max_diagnostics = max_diagnostics
         self._seen: set = set()
         self._blocks = BlockCollector()
@@ -76,6 +98,7 @@ class Compilation(StatementExecution):
         self._resume_text = ""
         self._started = False
         self._repeating = False  # running a repeat body again (not its first iteration)
+        self.lines_run = 0  # every pass of a repeat block counted; at most MAX_LINES_RUN
 
     # --- public ---------------------------------------------------------------------------
 
@@ -105,15 +128,23 @@ class Compilation(StatementExecution):
     # --- the line loop ----------------------------------------------------------------------
 
     def _run(self) -> Iterator[Statement]:
+        try:
+            yield from self._read()
+        except _TooLarge:
+            pass  # E012 is reported where it happened; nothing after it is run
+        self.diagnostics.sort(key=lambda d: (d.span.line, d.span.column))
+        self.finished = True
+
+    def _read(self) -> Iterator[Statement]:
         fast = self._fast
         out, open_blocks, from_line, plain_move = self._out, self._blocks.stack, self.from_line, self._plain_move
         number = 0
-        for number, text in enumerate(self._lines, 1):
-            text = text.rstrip("\r\n")
+        for number, raw in enumerate(self._lines, 1):
+            text = raw.rstrip("\r\n")
             if number == from_line:
                 self._resume_text = text
             if len(text) > MAX_LINE_LENGTH or not text.isascii() or "\x00" in text:
-                verdict = self._is_text(number, text)
+                verdict = self._is_text(number, text, getattr(raw, "length", len(text)))
                 if verdict is _ABORT:
                     break
                 if not verdict:
@@ -127,6 +158,9 @@ class Compilation(StatementExecution):
                 continue
             else:
                 if not open_blocks:  # the hot path: a plain G line, no node built
+                    self.lines_run += 1
+                    if self.lines_run > MAX_LINES_RUN:
+                        self._too_large(number, text)
                     statement = plain_move(number, text, scanned)
                     if statement is not NOT_PLAIN:
                         if statement is not None:
@@ -139,6 +173,9 @@ class Compilation(StatementExecution):
             if open_blocks or type(node) is BlockLine:
                 yield from self._block_line(Line(number, text, node))
                 continue
+            self.lines_run += 1
+            if self.lines_run > MAX_LINES_RUN:
+                self._too_large(number, text)
             self._execute(number, text, node, ())
             if out:
                 yield from out
@@ -147,13 +184,19 @@ class Compilation(StatementExecution):
             self.lines_read = number
             yield from self._end_of_file()
         self.lines_read = number
-        self.diagnostics.sort(key=lambda d: (d.span.line, d.span.column))
-        self.finished = True
 
-    def _is_text(self, number: int, text: str):
+    def _too_large(self, number: int, text: str, column: int = 1, end_column: int | None = None, message: str | None = None):
+        self._report("E012", number, text, column, len(text) + 1 if end_column is None else end_column,
+                     message or f"the script runs more than {MAX_LINES_RUN:,} lines by this line "
+                                "(every pass of a repeat block counted)",
+                     "a script this long is surely generated by mistake; split the job or lower the repeat counts")
+        raise _TooLarge
+
+    def _is_text(self, number: int, text: str, length: int):
         """False (and E011) for a line too long to be a statement or not valid UTF-8;
         ``_ABORT`` (and E011) for a NUL byte: the input is binary, reading stops.  Checked
-        before either parser, so the fast path and Lark see the same lines."""
+        before either parser, so the fast path and Lark see the same lines.  ``length`` is the
+        line's real length in characters (a cut line is shorter than the line was)."""
         if "\x00" in text:
             column = text.index("\x00") + 1
             self._report("E011", number, text, column, column + 1,
@@ -162,7 +205,7 @@ class Compilation(StatementExecution):
             return _ABORT
         if len(text) > MAX_LINE_LENGTH:
             self._report("E011", number, text, MAX_LINE_LENGTH + 1, len(text) + 1,
-                         f"line is {len(text)} characters long; a statement has at most {MAX_LINE_LENGTH}")
+                         f"line is {length} characters long; a statement has at most {MAX_LINE_LENGTH}")
             return False
         try:
             text.encode("utf-8")
@@ -207,21 +250,83 @@ class Compilation(StatementExecution):
             self._report_resume(f"it is inside {block.label} repeat (lines {block.line}–{block.end_line})",
                                 f"resume at line {block.line} or after line {block.end_line}")
         self._interrupt_arc(block.line, f"{block.label} repeat")
+        self._count_line(block.opening)  # the repeat line runs once
         count = self._count(block)
+        if count:
+            self._check_expansion(block, count)
         repeating = self._repeating
+        previous = None  # (the commands of the last pass, the modal state it ended with)
         for index in range(count or 0):
             loop = path + (index,)
             self._repeating = repeating or index > 0
-            for item in block.items:
-                if type(item) is Block:
-                    yield from self._run_block(item, loop)
-                    continue
-                self._execute(item.number, item.text, item.node, loop)
-                if out:
-                    yield from out
-                    out.clear()
+            self._count_line(block.opening)  # the pass itself (its endrepeat), even with an empty body
+            commands = [] if self._skip_repeats else None
+            for statement in self._pass(block, loop):
+                if commands is not None:
+                    commands.append(statement.command)
+                yield statement
             self._interrupt_arc(block.end_line, f"{block.label} endrepeat")
+            if commands is not None:
+                current = (commands, self._fingerprint())
+                if current == previous and not any(type(c) is PauseToggle for c in commands):
+                    break  # every later pass would yield these same commands again (see the docstring)
+                previous = current
         self._repeating = repeating
+
+    def _pass(self, block: Block, loop: tuple) -> Iterator[Statement]:
+        out = self._out
+        for item in block.items:
+            if type(item) is Block:
+                yield from self._run_block(item, loop)
+                continue
+            self._count_line(item)
+            self._execute(item.number, item.text, item.node, loop)
+            if out:
+                yield from out
+                out.clear()
+
+    def _fingerprint(self) -> tuple:
+        """The modal state as plain, comparable data (what the next pass starts from)."""
+        state = self.state
+        return (tuple(state.values.items()), tuple(sorted(state.parameters.items())), state.relative)
+
+    def _count_line(self, line: Line) -> None:
+        self.lines_run += 1
+        if self.lines_run > MAX_LINES_RUN:
+            self._too_large(line.number, line.text)
+
+    def _check_expansion(self, block: Block, count: int) -> None:
+        """E012 at the repeat line, before it runs, if ``count`` passes would run more lines
+        than the script has left (counted from the text: see ``_pass_lines``)."""
+        room = MAX_LINES_RUN - self.lines_run
+        per_pass = self._pass_lines(block, room)
+        if per_pass is not None and count * per_pass > room:
+            line = block.opening
+            self._too_large(line.number, line.text, *line.node.count_span,
+                            f"{block.label} repeat would run {count:,} passes × {per_pass:,} lines; one script runs at "
+                            f"most {MAX_LINES_RUN:,} lines (every pass of a repeat block counted)")
+
+    def _pass_lines(self, block: Block, room: int) -> Optional[int]:
+        """Lines one pass of ``block`` runs (as ``_run_block`` counts them: the pass, each body
+        line, each nested block's repeat line and passes, with nested counts as they evaluate
+        now); None when a nested count is not known yet (the running total still bounds it).
+        Stops counting past ``room``: the answer is then "too many"."""
+        total = 1
+        for item in block.items:
+            total += 1
+            if type(item) is Block and not item.too_deep and item.count is not None:
+                try:
+                    count = evaluate(item.count, self.state.parameters)
+                except (ExpressionError, Unavailable):
+                    return None
+                if math.isfinite(count) and count >= 1 and count == int(count):  # else it never runs
+                    inner = self._pass_lines(item, room)
+                    if inner is None:
+                        return None
+                    total += int(count) * inner
+            if total > room:
+                return total
+        return total
 
     def _count(self, block: Block) -> Optional[int]:
         node, line = block.opening.node, block.opening
@@ -283,10 +388,11 @@ class Compilation(StatementExecution):
 
 def compile_lines(
     lines: Iterable[str], file: str = "<script>", initial: InitialState | None = None, *,
-    from_line: int = 1, max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS, fast: bool = True,
+    from_line: int = 1, max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS, fast: bool = True, skip_repeats: bool = False,
 ) -> Compilation:
     """Compile ``lines`` (an open text file, a list of strings …) as a stream; see ``Compilation``."""
-    return Compilation(lines, file, initial, from_line=from_line, max_diagnostics=max_diagnostics, fast=fast)
+    return Compilation(lines, file, initial, from_line=from_line, max_diagnostics=max_diagnostics, fast=fast,
+                       skip_repeats=skip_repeats)
 
 
 def compile_text(text: str, file: str = "<script>", initial: InitialState | None = None, **options) -> Compilation:

@@ -104,6 +104,9 @@ class Binary:
         if self.operator == "/" and right == 0:
             raise ExpressionError("E009", f"division by zero in {self}", self.column, self.end_column)
         result = _OPERATIONS[self.operator](left, right)
+        if math.isnan(result):  # inf - inf, inf * 0, inf / inf: no size at all, so not "too large"
+            raise ExpressionError("E009", f"{self} is not a number (NaN): an infinite operand makes it undefined",
+                                  self.column, self.end_column)
         if not math.isfinite(result):
             raise ExpressionError("E009", f"{self} is too large to be a number", self.column, self.end_column)
         return result

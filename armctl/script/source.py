@@ -26,6 +26,13 @@ class Rule(NamedTuple):
     summary: str
 
 
+# What one script may expand to (E012).  Lines run, every pass of a repeat block counted
+# (a line sends at most one frame): twice the 1,000,000-line benchmark script, more than a day
+# of frames at the line's 20 frames/s.  Motion time, by the profile's model (armctl/estimate.py):
+# a job longer than a day is surely a mistake (G4 P is milliseconds; U/V are degrees).
+MAX_LINES_RUN = 2_000_000
+MAX_JOB_MOTION_S = 24 * 3600.0
+
 # code → (severity, one-line rationale).  Codes are stable: tools and CI configs refer to them.
 RULES: dict[str, Rule] = {
     "E001": Rule(ERROR, "syntax: the line does not read as a statement (a word without its number, a stray character, an unclosed comment or bracket)"),
@@ -39,6 +46,8 @@ RULES: dict[str, Rule] = {
     "E009": Rule(ERROR, "arithmetic: division by zero or a result too large for a number"),
     "E010": Rule(ERROR, "resume line: a --from-line must start at a statement outside repeat blocks and arcs, within the file"),
     "E011": Rule(ERROR, "not text: the line is not valid UTF-8, contains NUL bytes, or is too long to be a statement"),
+    "E012": Rule(ERROR, f"too large: the script would run more than {MAX_LINES_RUN:,} lines (every pass of a repeat "
+                        f"block counted) or more than {MAX_JOB_MOTION_S / 3600:g} hours of motion"),
 }
 
 

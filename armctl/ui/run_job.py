@@ -4,6 +4,18 @@ Strategy: the sequence a careful operator would follow, each step a function —
 whole script (nothing leaves before it passes), read the arm's state, estimate, stream with a
 live view, and always end with a summary that says what ran and how to resume.  The pacing
 itself is the pure Streamer's; the clock and the port are the runner's.
+
+What was checked is exactly what is sent: the script is read once, before anything else, into
+an immutable ``ScriptSnapshot`` (armctl/script/files.py), and every step — the lint check, the
+``--from-line`` check, the estimate, the stream and the resume line of the summary — compiles
+that same snapshot, never the file again.  Compiling is deterministic (the same lines and the
+same initial state give the same frames), so an edit to the file or its replacement while the
+job streams changes nothing that is sent; stdin (``run -``) works the same way.
+
+Any failure mid-job — Ctrl-C, a ``--log`` that cannot be written, an unexpected error — takes
+one path: stop feeding, send the abort sequence, wait for the arm, print the summary with the
+last line sent, the last line known executed and the resume line.  Only a lost port skips
+the abort (there is nothing to send it through).
 """
 
 from __future__ import annotations
@@ -47,23 +59,23 @@ class JobOptions:
     timeout_s: float
 
 
-def check_script(script: str, profile) -> None:
-    """The same checks as ``armctl lint`` over the whole script before anything is sent: any
-    error prints every finding and exits 1; warnings are shown and the job goes on."""
+def check_script(script, profile):
+    """The same checks as ``armctl lint`` over the whole script (a ``ScriptSnapshot``) before
+    anything is sent: any error prints every finding and exits 1; warnings are shown and the
+    job goes on."""
     from ..lint.engine import lint_lines
-    from ..script import read_lines
 
-    report = lint_lines(read_lines(script), script, profile)
+    report = lint_lines(script.lines(), script.name, profile)
     _refuse_on_errors(report.diagnostics, report.errors)
     return report
 
 
-def check_from_line(compile_source, script: str, from_line: int) -> None:
+def check_from_line(script, from_line: int) -> None:
     """A resume line the compiler cannot start at (inside an arc, inside a repeat block, past
     the end) is an error like any other: nothing is sent."""
     if from_line <= 1:
         return
-    check = compile_source(script, from_line=from_line)
+    check = script.compile(from_line=from_line)
     check.finish()
     _refuse_on_errors([d for d in check.diagnostics if d.severity == "error"], check.error_count)
 
@@ -76,12 +88,28 @@ def _refuse_on_errors(diagnostics, errors: int) -> None:
         sys.exit(EXIT_PROBLEMS)
 
 
-def estimate_job(compile_source, script, model, start, lead_s, baud, from_line=1, initial=None):
-    from ..estimate import JobEstimator
+def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
+    """The estimate of the job in ``script`` (a ``ScriptSnapshot``); a job whose motion time
+    passes ``MAX_JOB_MOTION_S`` is refused (E012 at the line where it does; exit 1)."""
+    from ..estimate import MAX_JOB_MOTION_S, JobEstimator
+    from ..script import Diagnostic
 
     estimator = JobEstimator(model, start, lead_s, baud)
-    for statement in compile_source(script, initial=initial, from_line=from_line):
+    compilation = script.compile(initial=initial, from_line=from_line)
+    for statement in compilation:
         estimator.add(statement.command)
+        if estimator.result.motion_s > MAX_JOB_MOTION_S:
+            hours = MAX_JOB_MOTION_S / 3600
+            diagnostic = Diagnostic.of("E012", statement.span, f"the job's motion time passes {hours:g} hours here "
+                                       f"(the profile's motion model): one job may hold at most {hours:g} hours",
+                                       "check the delays (G4 P is in milliseconds), speeds and external-axis values; "
+                                       "split a longer job")
+            _refuse_on_errors([diagnostic], 1)
+    # This pass is the stream's twin (same snapshot, same initial state, same from_line): if it
+    # compiled cleanly, so will the stream, frame for frame; the arm's reported state can make
+    # a line fail that passed the check (a G91 offset from the real pose), and then nothing goes.
+    if compilation.error_count:
+        _refuse_on_errors([d for d in compilation.diagnostics if d.is_error], compilation.error_count)
     return estimator.result
 
 
@@ -97,12 +125,13 @@ def print_estimate(result, header: str) -> None:
         click.echo(f"  note: {note}")
 
 
-def dry_run(options: JobOptions, compile_source, model) -> int:
+def dry_run(options: JobOptions, script, model) -> int:
     start = model.initial_pose()
-    for statement in compile_source(options.script, from_line=options.from_line):
+    # the estimate first: it refuses a job too long to run (E012) before a frame is printed
+    result = estimate_job(script, model, start, options.lead_s, options.baud or _config_baud(), options.from_line)
+    for statement in script.compile(from_line=options.from_line):
         frame = statement.command.encode()
         click.echo(f"{statement.line:>6}  {frame.hex()}  {describe(statement.command)}")
-    result = estimate_job(compile_source, options.script, model, start, options.lead_s, options.baud or _config_baud(), options.from_line)
     print_estimate(result, "dry run: no port opened; estimate from the profile's fixed pose 0:")
     return EXIT_OK
 
@@ -168,36 +197,59 @@ def time_scale_of(url: str) -> float:
     return parse_sim_url(url)[1]
 
 
-def run_job(options: JobOptions, compile_source, connect) -> int:
+def _open_log(path: str):
+    """The --log file, line-buffered: a write failure (disk full) shows at the line that failed."""
+    return open(path, "w", encoding="utf-8", buffering=1)
+
+
+@contextmanager
+def _log_file(path: str):
+    """``_open_log``, closed at the end; a close that fails again after a failed write (the
+    line still buffered) is not a second error: the job already stopped on the first."""
+    log = _open_log(path)
+    try:
+        yield log
+    finally:
+        try:
+            log.close()
+        except OSError:
+            pass
+
+
+def run_job(options: JobOptions, script, connect) -> int:
+    """Run the job in ``script`` (the ``ScriptSnapshot`` read once; ``options.script`` is only
+    the name the summary shows)."""
     from ..motion import MotionModel
     from ..profile import load_profile
     from ..runner import JobRunner, RunView
 
     profile = load_profile(options.profile_path)
-    report = check_script(options.script, profile)
-    check_from_line(compile_source, options.script, options.from_line)
+    report = check_script(script, profile)
+    check_from_line(script, options.from_line)
     model = MotionModel(profile)
     if options.dry_run:
-        return dry_run(options, compile_source, model)
+        return dry_run(options, script, model)
+    # before the port opens: a job too long to run (E012) is refused from the fixed pose 0
+    estimate_job(script, model, model.initial_pose(), options.lead_s, options.baud or _config_baud(), options.from_line)
 
     link, baud = connect(options.port, options.baud, profile=profile)
-    with link, (open(options.log_path, "w", encoding="utf-8") if options.log_path else nullcontext()) as log:
+    with link, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
         state = read_arm(link, options.timeout_s, log)
         start, initial = start_from_state(model, state)
-        estimate = estimate_job(compile_source, options.script, model, start, options.lead_s, baud, options.from_line, initial)
+        estimate = estimate_job(script, model, start, options.lead_s, baud, options.from_line, initial)
         if estimate.frames == 0:
             click.echo("nothing to send: the script has no frames" + (f" from line {options.from_line}" if options.from_line > 1 else ""))
             return EXIT_OK
         streamer = Streamer(model, start, lead_s=options.lead_s, baud=baud)
         view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=report.lines, lead_s=options.lead_s,
                        capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
-        statements = compile_source(options.script, initial=initial, from_line=options.from_line)
+        statements = script.compile(initial=initial, from_line=options.from_line)
         runner = JobRunner(link, streamer, statements, view, time_scale=time_scale_of(link.url), log=log)
         link.on_status = runner.on_status
         wall_start = time.monotonic()
         outcome = _stream(runner, options, view)
         wall_s = time.monotonic() - wall_start
-        return _summary(view, outcome, wall_s, estimate, options)
+        return _summary(view, outcome, wall_s, estimate, options, script)
 
 
 def _stream(runner, options: JobOptions, view) -> str:
@@ -209,18 +261,27 @@ def _stream(runner, options: JobOptions, view) -> str:
     with _deferred_ctrl_c(runner), display:
         try:
             runner.run()
+            return view.outcome
         except KeyboardInterrupt:
-            display.note("\narmctl: interrupted: no more frames are sent; sending the abort sequence "
-                         f"({options.abort}) and waiting for the arm to come to rest …")
-            try:
-                runner.abort(ABORT_SEQUENCES[options.abort])
-            except KeyboardInterrupt:
-                pass
-            return view.outcome  # "interrupted", or "port lost" if the abort could not be sent
+            pass  # Ctrl-C, or a failure the runner met (runner.failure) that asked it to stop
         except PortError as error:
             view.messages.append(str(error))
             return "port lost"
-    return view.outcome
+        except Exception as error:  # anything else mid-job: the same path as Ctrl-C
+            runner.failure = runner.failure or f"{type(error).__name__}: {error}"
+        why = runner.failure or "interrupted"
+        display.note(f"\narmctl: {why}: no more frames are sent; sending the abort sequence "
+                     f"({options.abort}) and waiting for the arm to come to rest …")
+        try:
+            runner.abort(ABORT_SEQUENCES[options.abort])
+        except KeyboardInterrupt:
+            pass
+        except Exception as error:  # the abort itself failed: say so, the summary still follows
+            view.messages.append(f"the abort did not complete: {type(error).__name__}: {error}")
+        if runner.failure and view.outcome != "port lost":
+            view.outcome = "failed"
+            view.messages.append(runner.failure)
+        return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
 
 
 @contextmanager
@@ -296,12 +357,11 @@ class _Display:
 _BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
 
 
-def outermost_block_start(script: str, line: int) -> int | None:
-    """The opening line of the outermost repeat block around ``line``, if any."""
-    from ..script import read_lines
-
+def outermost_block_start(lines, line: int) -> int | None:
+    """The opening line of the outermost repeat block around ``line``, if any (``lines``: the
+    script's lines, e.g. ``ScriptSnapshot.lines()`` — the same text that was sent)."""
     depth, start = 0, None
-    for number, text in enumerate(read_lines(script), 1):
+    for number, text in enumerate(lines, 1):
         match = _BLOCK_LINE.match(text)
         if match is None:
             continue
@@ -316,7 +376,7 @@ def outermost_block_start(script: str, line: int) -> int | None:
     return None
 
 
-def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions) -> int:
+def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, script) -> int:
     sent = view.last_sent.line if view.last_sent is not None else None
     done = view.last_done.line if view.last_done is not None else None
     click.echo(f"frames: {view.frames_sent} of {view.total_frames} sent")
@@ -338,7 +398,7 @@ def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions) -
         where = ""
         if loop:
             # --from-line cannot start inside a repeat block: resume at its outermost start.
-            resume = outermost_block_start(options.script, resume) or resume
+            resume = outermost_block_start(script.lines(), resume) or resume
             where = (f" (line {view.resume_line()} is inside a repeat block, in pass {loop[-1] + 1}: the block "
                      "runs again from its first pass, so the passes already done are repeated)")
         click.echo(f"resume with: armctl run {options.script} --from-line {resume}{where}")
