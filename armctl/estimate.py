@@ -15,7 +15,7 @@ from dataclasses import dataclass, field
 
 from .motion import ArmPose, MotionModel, Planner
 from .protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, RunProgram, frame_seconds
-from .script.source import MAX_JOB_MOTION_S  # noqa: F401 - the bound run and estimate apply (E012)
+from .script.source import MAX_JOB_MOTION_S, Diagnostic
 from .streamer import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S
 
 # The streamer never lets more frames be in flight than this (see streamer.py).
@@ -46,6 +46,19 @@ class Estimate:
             "path_mm": round(self.path_mm, 1), "joint_path_deg": round(self.joint_path_deg, 1),
             "peak_queue_frames": self.peak_queue_frames, "peak_queue_s": round(self.peak_queue_s, 3),
         }
+
+
+def motion_time_overrun(statement, motion_s: float) -> Diagnostic | None:
+    """E012 at ``statement`` when the job's motion time ``motion_s`` (by the profile's model, up
+    to and including that statement) passes ``MAX_JOB_MOTION_S``: the one place run, estimate and
+    lint judge a job too long (``G4 P3e38`` or ``U3e38`` would otherwise keep ``run`` going for ever)."""
+    if motion_s <= MAX_JOB_MOTION_S:
+        return None
+    hours = MAX_JOB_MOTION_S / 3600
+    return Diagnostic.of("E012", statement.span, f"the job's motion time passes {hours:g} hours here "
+                         f"(the profile's motion model): one job may hold at most {hours:g} hours",
+                         "check the delays (G4 P is in milliseconds), speeds and external-axis values; "
+                         "split a longer job")
 
 
 SD_PROGRAM_NOTE = "PROGRAM n: the SD program's own run time is unknown to armctl and not included"

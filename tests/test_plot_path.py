@@ -249,7 +249,7 @@ def test_findings_are_pinned_to_their_segment_or_to_where_the_arm_is():
     # a comment-like line and a line with errors move nothing: where the arm is when the job gets there
     assert by_code["L401"].segment is None and close(by_code["L401"].point, (250, 0, 150))
     assert by_code["E002"].segment is None and close(by_code["E002"].point, (500, 0, 150))
-    assert "line 3:4 L103 error" in by_code["L103"].describe()
+    assert "line 3:4 L103 warning" in by_code["L103"].describe()  # the built-in profile's workspace: illustrative
 
 
 def test_findings_before_the_first_and_after_the_last_segment():

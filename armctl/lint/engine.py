@@ -102,6 +102,64 @@ def _silenced(code: str, text: str) -> bool:
     return codes is not None and (not codes or matches(code, codes))
 
 
+class _MotionClock:
+    """The job's motion time as ``run`` and ``estimate`` judge it (E012, ``motion_time_overrun``),
+    from the profile's fixed pose 0.  A repeat pass that repeated itself stands for the passes
+    lint skips (``Compilation.skipped_passes``): it starts and ends where they would, so each of
+    them takes its time again.  A nested block's skipped passes inside a pass that is itself
+    skipped are counted once, so the sum may fall short of the job's, never exceed it: a job
+    lint finds too long surely is (``run`` and ``estimate`` judge the whole expansion).
+    Reported once."""
+
+    def __init__(self, profile, compilation) -> None:
+        from ..motion import MotionModel, Planner
+
+        model = MotionModel(profile)
+        self._planner = Planner(model, model.initial_pose())
+        self._compilation = compilation
+        self._skips_seen = 0
+        self._motion_s = 0.0
+        self._last = None
+        self._reported = False
+
+    def feed(self, statement):
+        """Count ``statement`` (and the passes skipped before it); E012 once the sum passes the bound."""
+        if self._reported:
+            return None
+        self._count_skipped()
+        self._motion_s += self._planner.feed(statement.command).duration_s
+        self._last = statement
+        return self._judge(statement)
+
+    def finish(self):
+        """After the last statement: passes skipped at the very end count too (E012 at that statement)."""
+        if self._reported or self._last is None:
+            return None
+        self._count_skipped()
+        return self._judge(self._last)
+
+    def _count_skipped(self) -> None:
+        skipped = self._compilation.skipped_passes
+        while self._skips_seen < len(skipped):
+            commands, passes = skipped[self._skips_seen]
+            self._skips_seen += 1
+            self._motion_s += passes * self._pass_s(commands)
+
+    def _judge(self, statement):
+        from ..estimate import motion_time_overrun
+
+        overrun = motion_time_overrun(statement, self._motion_s)
+        self._reported = overrun is not None
+        return overrun
+
+    def _pass_s(self, commands) -> float:
+        """One more run of a pass that ends where it starts: planned from here, the planner left as it was."""
+        from ..motion import Planner
+
+        planner = Planner(self._planner.model, self._planner.pose)
+        return sum(planner.feed(command).duration_s for command in commands)
+
+
 def lint_lines(lines: Iterable[str], file: str, profile, selection: Optional[Selection] = None, *,
                max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS) -> FileReport:
     """Lint a script given as lines (an iterator is read once, lazily) against ``profile``;
@@ -117,11 +175,18 @@ def lint_lines(lines: Iterable[str], file: str, profile, selection: Optional[Sel
     # lint's cost follows the text, not the repeat counts (see armctl/script/compiler.py)
     compilation = compile_lines(scanner.watch(lines), file, max_diagnostics=max_diagnostics, skip_repeats=True)
     arm = ArmTracker(profile)
+    clock = _MotionClock(profile, compilation)
     for statement in compilation:
         for code, check in checks.get(type(statement.command), ()):
             for span, message, hint, *rests_on in check(statement, arm):
                 collector.add(code, span, message, hint, statement.loop, *rests_on)
         arm.apply(statement)
+        overrun = clock.feed(statement)
+        if overrun is not None:
+            collector.add_diagnostic(overrun)
+    overrun = clock.finish()
+    if overrun is not None:
+        collector.add_diagnostic(overrun)
     for code, check in checks.get(END, ()):
         for span, message, hint, *rests_on in check(arm):
             collector.add(code, span, message, hint, (), *rests_on)

@@ -99,6 +99,10 @@ class Compilation(StatementExecution):
         self._started = False
         self._repeating = False  # running a repeat body again (not its first iteration)
         self.lines_run = 0  # every pass of a repeat block counted; at most MAX_LINES_RUN
+        # skip_repeats: (the commands of a pass that repeated itself, how many more passes it
+        # stands for), appended when the block stops early, before the next statement is yielded,
+        # so a checker can count what the skipped passes would have done (lint's motion time)
+        self.skipped_passes: list[tuple[list, int]] = []
 
     # --- public ---------------------------------------------------------------------------
 
@@ -269,7 +273,10 @@ class Compilation(StatementExecution):
             if commands is not None:
                 current = (commands, self._fingerprint())
                 if current == previous and not any(type(c) is PauseToggle for c in commands):
-                    break  # every later pass would yield these same commands again (see the docstring)
+                    # every later pass would yield these same commands again (see the docstring)
+                    if index + 1 < count:
+                        self.skipped_passes.append((commands, count - index - 1))
+                    break
                 previous = current
         self._repeating = repeating
 

@@ -91,20 +91,15 @@ def _refuse_on_errors(diagnostics, errors: int) -> None:
 def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
     """The estimate of the job in ``script`` (a ``ScriptSnapshot``); a job whose motion time
     passes ``MAX_JOB_MOTION_S`` is refused (E012 at the line where it does; exit 1)."""
-    from ..estimate import MAX_JOB_MOTION_S, JobEstimator
-    from ..script import Diagnostic
+    from ..estimate import JobEstimator, motion_time_overrun
 
     estimator = JobEstimator(model, start, lead_s, baud)
     compilation = script.compile(initial=initial, from_line=from_line)
     for statement in compilation:
         estimator.add(statement.command)
-        if estimator.result.motion_s > MAX_JOB_MOTION_S:
-            hours = MAX_JOB_MOTION_S / 3600
-            diagnostic = Diagnostic.of("E012", statement.span, f"the job's motion time passes {hours:g} hours here "
-                                       f"(the profile's motion model): one job may hold at most {hours:g} hours",
-                                       "check the delays (G4 P is in milliseconds), speeds and external-axis values; "
-                                       "split a longer job")
-            _refuse_on_errors([diagnostic], 1)
+        overrun = motion_time_overrun(statement, estimator.result.motion_s)
+        if overrun is not None:
+            _refuse_on_errors([overrun], 1)
     # This pass is the stream's twin (same snapshot, same initial state, same from_line): if it
     # compiled cleanly, so will the stream, frame for frame; the arm's reported state can make
     # a line fail that passed the check (a G91 offset from the real pose), and then nothing goes.
