@@ -40,8 +40,11 @@ SPEED = st.floats(min_value=1e-3, max_value=1e5, allow_nan=False)  # jog's level
 
 
 def lint_errors(text: str) -> list[str]:
+    """Every error but E012: a job longer than a day (lint's motion-time bound) is a true finding
+    about the speed level taught with (jog's slowest, 0.01 deg/s or 0.1 mm/min, over a long way),
+    not about the line the teacher wrote."""
     report = lint_lines(text.splitlines(), "taught.txt", default_profile())
-    return [str(d) for d in report.diagnostics if d.is_error]
+    return [str(d) for d in report.diagnostics if d.is_error and d.code != "E012"]
 
 
 @settings(max_examples=150, deadline=None)
