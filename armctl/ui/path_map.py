@@ -32,7 +32,7 @@ EMPTY, TODO, QUEUED, DONE, ARM = "empty", "todo", "queued", "done", "arm"
 ARM_GLYPH = "◉"
 
 MAP_WIDTH_CHARS, MAP_HEIGHT_ROWS = 40, 10  # the grid: 80 × 40 dots
-MAP_MAX_FRAMES = 20_000  # frames sampled for the map; a longer job's map shows its first ones
+MAP_MAX_FRAMES = 5_000  # frames sampled for the map (a longer job: its first ones); ~0.3 s of lines, ~1.6 s of arcs
 COORDINATE_LIMIT_MM = 1e9  # points beyond are clamped here (no arm reaches a kilometre)
 MIN_EXTENT_MM = 1.0  # a job that moves less than this in X and in Y has no top view
 
