@@ -32,7 +32,11 @@ EMPTY, TODO, QUEUED, DONE, ARM = "empty", "todo", "queued", "done", "arm"
 ARM_GLYPH = "◉"
 
 MAP_WIDTH_CHARS, MAP_HEIGHT_ROWS = 40, 10  # the grid: 80 × 40 dots
-MAP_MAX_FRAMES = 5_000  # frames sampled for the map (a longer job: its first ones); ~0.3 s of lines, ~1.6 s of arcs
+# Frames sampled for the map (a longer job's map shows its first ones): the sampling runs before
+# the first frame is sent, so it is bounded; measured on a loaded 2-core machine, 5000 frames
+# took 0.3 s as G1 lines and 1.6 s as wide arcs (plot samples an arc every 5 degrees).
+MAP_MAX_FRAMES = 5_000
+MAP_MARGIN_MM = 2.0  # around the job, so its outline does not run along the grid's edge
 COORDINATE_LIMIT_MM = 1e9  # points beyond are clamped here (no arm reaches a kilometre)
 MIN_EXTENT_MM = 1.0  # a job that moves less than this in X and in Y has no top view
 
@@ -63,7 +67,7 @@ class PathGrid:
     frames: int  # frames sampled (the map's ordinals are 0 … frames-1)
     cells: dict = field(default_factory=dict)  # (column, row) -> _Cell
     origin_mm: tuple[float, float] = (0.0, 0.0)  # worktable origin X/Y: reported + origin = robot frame
-    _cache: tuple = (None, None)
+    _cache: tuple = field(default=(None, None), repr=False, compare=False)  # the last rows drawn, by their key
 
     def cell_of(self, x_mm: float, y_mm: float) -> Optional[tuple[int, int]]:
         """The character a robot-frame X/Y falls in (clamped to the grid's edge), None if not finite."""
@@ -204,4 +208,4 @@ def job_grid(statements: Iterable, model, start, *, max_frames: int = MAP_MAX_FR
                  for segment in path.segments if segment.kind != STILL]  # a still frame moves nothing
     origin = tuple(start.origin_mm[:2])
     return rasterise(polylines, frames=sampled, width_chars=width_chars, height_rows=height_rows, origin_mm=origin,
-                     margin_mm=2.0)
+                     margin_mm=MAP_MARGIN_MM)
