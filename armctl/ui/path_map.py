@@ -18,7 +18,9 @@ the line).  The arm's reported position is one marker character on top.
 
 Pure: points and counters in, characters and state names out; the rich styling is
 run_panel.py's.  Points are in the robot frame, mm (``build_path``'s frame); the caller gives
-the worktable origin that turns the arm's reported (worktable) X/Y into that frame.
+the worktable origin that turns the arm's reported (worktable) X/Y into that frame — the
+origin the job starts with: after a G54 inside the job the marker is off by the shift (the
+view holds no later origin report).
 """
 
 from __future__ import annotations

@@ -369,13 +369,13 @@ class _Display:
             click.echo(progress_line(view))
             self._last = now
 
-
     def _map_room(self):
         """The grid if the terminal has room for the panel with it, else None."""
         if self.grid is None:
             return None
         width, height = self._live.console.size
         return self.grid if width >= MAP_MIN_WIDTH and height >= MAP_MIN_HEIGHT else None
+
 
 
 _BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
