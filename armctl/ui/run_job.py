@@ -377,7 +377,6 @@ class _Display:
         return self.grid if width >= MAP_MIN_WIDTH and height >= MAP_MIN_HEIGHT else None
 
 
-
 _BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
 
 
