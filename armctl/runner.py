@@ -72,6 +72,11 @@ class RunView:
 
     first_not_done: object = None  # the Statement to resume at: the first not known finished
 
+    @property
+    def frames_known_done(self) -> int:
+        """Frames the streamer knows finished (its lower bound): the ones written and not queued."""
+        return max(0, self.frames_sent - self.queued_frames_bound)
+
     def resume_line(self) -> int | None:
         """The line ``--from-line`` should name to continue after the last line known executed."""
         return None if self.first_not_done is None else self.first_not_done.line

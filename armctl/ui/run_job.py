@@ -38,6 +38,9 @@ from ..streamer import Streamer
 EXIT_OK, EXIT_PROBLEMS, EXIT_INTERRUPTED = 0, 1, 130
 LIVE_REFRESH_S = 0.1
 PLAIN_PROGRESS_S = 2.0
+# The least terminal the panel's map is drawn in: its ~24 rows with the map, a few lines of
+# notes above; the map's rows are 60 columns with their label.
+MAP_MIN_WIDTH, MAP_MIN_HEIGHT = 80, 30
 
 
 class JobFailed(ArmctlError):
@@ -240,18 +243,21 @@ def run_job(options: JobOptions, script, connect) -> int:
                        capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
         statements = script.compile(initial=initial, from_line=options.from_line)
         runner = JobRunner(link, streamer, statements, view, time_scale=time_scale_of(link.url), log=log)
+        # the live panel's map: the same snapshot compiled the same way, sampled once before the
+        # first frame (bounded: path_map.MAP_MAX_FRAMES); no panel, no map
+        grid = _job_grid(script, model, start, initial, options) if _live(options) else None
         link.on_status = runner.on_status
         wall_start = time.monotonic()
-        outcome = _stream(runner, options, view)
+        outcome = _stream(runner, options, view, grid)
         wall_s = time.monotonic() - wall_start
         return _summary(view, outcome, wall_s, estimate, options, script)
 
 
-def _stream(runner, options: JobOptions, view) -> str:
+def _stream(runner, options: JobOptions, view, grid=None) -> str:
     from ..runner import ABORT_SEQUENCES
 
     title = f"armctl run {options.script}"
-    display = _Display(title, options.live and sys.stdout.isatty())
+    display = _Display(title, _live(options), grid=grid)
     runner.on_update = display.update
     with _deferred_ctrl_c(runner), display:
         try:
@@ -279,6 +285,17 @@ def _stream(runner, options: JobOptions, view) -> str:
         return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
 
 
+def _live(options: JobOptions) -> bool:
+    """The rich panel, rather than plain progress lines: asked for, and stdout is a terminal."""
+    return options.live and sys.stdout.isatty()
+
+
+def _job_grid(script, model, start, initial, options: JobOptions):
+    from .path_map import job_grid
+
+    return job_grid(script.compile(initial=initial, from_line=options.from_line), model, start)
+
+
 @contextmanager
 def _deferred_ctrl_c(runner):
     """While streaming, Ctrl-C asks the runner to stop at its next safe point (between writes),
@@ -301,10 +318,14 @@ class _Display:
     the lines it drew last, so a line written past it (a raw write to stderr) makes the next
     redraw land too low and leaves a stray partial panel above the real one.  Every message
     printed during the job therefore goes through ``note``, which prints it above the panel.
+
+    The job's map (``grid``, a path_map.PathGrid, or None) is drawn while the terminal has room
+    for it (MAP_MIN_WIDTH × MAP_MIN_HEIGHT, checked at every redraw, so a resize counts); rich
+    would crop a panel taller than the screen.
     """
 
-    def __init__(self, title: str, live: bool, console=None) -> None:
-        self.title, self.live = title, live
+    def __init__(self, title: str, live: bool, console=None, grid=None) -> None:
+        self.title, self.live, self.grid = title, live, grid
         self._console = console  # tests pass a recording console; None: rich's own (stdout)
         self._live = None
         self._last = 0.0
@@ -340,13 +361,20 @@ class _Display:
             if now - self._last >= LIVE_REFRESH_S or view.outcome != "running":
                 from .run_panel import render_run
 
-                self._live.update(render_run(view, self.title), refresh=True)  # throttled above: draw now
+                self._live.update(render_run(view, self.title, self._map_room()), refresh=True)  # throttled: draw now
                 self._last = now
         elif now - self._last >= PLAIN_PROGRESS_S:
             from .run_panel import progress_line
 
             click.echo(progress_line(view))
             self._last = now
+
+    def _map_room(self):
+        """The grid if the terminal has room for the panel with it, else None."""
+        if self.grid is None:
+            return None
+        width, height = self._live.console.size
+        return self.grid if width >= MAP_MIN_WIDTH and height >= MAP_MIN_HEIGHT else None
 
 
 _BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)

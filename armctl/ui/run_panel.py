@@ -4,6 +4,9 @@ Strategy: like ``status_panel``, rendering takes a snapshot and returns a rich r
 plain line for pipes), so tests compare text from a recording console.  Text that comes from
 the user (script lines, the file name in the title) goes in as ``Text``, never as a markup
 string: ``G1 X[#<x0>]`` is an expression, not a rich style tag.
+
+The map (a top view of the job, path_map.py) is drawn when the caller passes the job's
+``PathGrid``: the characters and their states are path_map's, only their styles are here.
 """
 
 from __future__ import annotations
@@ -15,6 +18,9 @@ from rich.table import Table
 from rich.text import Text
 
 from ..runner import RunView
+from .path_map import ARM, ARM_GLYPH as ARM_MARK, DONE, QUEUED, TODO, PathGrid
+
+MAP_STYLES = {DONE: "green", QUEUED: "bold yellow", TODO: "dim", ARM: "bold red"}
 
 
 def _clock(seconds: float) -> str:
@@ -34,7 +40,28 @@ def _line(statement) -> Text:
     return Text(f"{statement.line}  {code}")
 
 
-def render_run(view: RunView, title: str) -> Panel:
+def render_map(grid: PathGrid, view: RunView) -> Text:
+    """The map's rows, styled by state, then what the shapes and colours mean."""
+    text = Text()
+    for line in grid.rows(view.frames_sent, view.frames_known_done, view.position_mm):
+        for char, state in line:
+            text.append(char, MAP_STYLES.get(state))
+        text.append("\n")
+    (x0, x1), (y0, y1) = grid.x_mm, grid.y_mm
+    text.append(f"X {x0:.0f}…{x1:.0f} → · Y {y0:.0f}…{y1:.0f} ↑ mm\n", "dim")
+    text.append("done", MAP_STYLES[DONE])
+    text.append(" · ")
+    text.append("queued", MAP_STYLES[QUEUED])
+    text.append(" (solid: written) · ")
+    text.append("not sent", MAP_STYLES[TODO])
+    text.append(" (dotted) · ")
+    text.append(f"{ARM_MARK} arm", MAP_STYLES[ARM])
+    if grid.frames < view.total_frames:
+        text.append(f"\nthe map shows the first {grid.frames} of {view.total_frames} frames", "dim")
+    return text
+
+
+def render_run(view: RunView, title: str, grid: PathGrid | None = None) -> Panel:
     frames = Table.grid(padding=(0, 1))
     frames.add_column(width=10)
     frames.add_column()
@@ -59,6 +86,8 @@ def render_run(view: RunView, title: str) -> Panel:
     facts.add_row("position X Y Z", position)
     facts.add_row("last line sent", _line(view.last_sent))
     facts.add_row("last line done", _line(view.last_done))
+    if grid is not None:
+        facts.add_row("path X/Y (top)", render_map(grid, view))
     return Panel(Group(frames, facts), title=Text(title), expand=False)
 
 
