@@ -71,13 +71,14 @@ def _setup(profile_path, repeat_delay_ms):
     from dataclasses import replace
 
     from ..errors import ProfileError
-    from ..profile import find_config, load_profile
+    from ..profile import load_config, load_profile
     from .keymap import JogConfigError, keymap_from_config
     from .settings import settings_from_config
 
     try:
-        config_path, config = find_config()
-        table = config.get("jog", {})
+        config = load_config()
+        config_path = config.path_of("jog")
+        table = config.values.get("jog", {})
         source = str(config_path) if config_path else "armctl.toml"
         if not isinstance(table, dict):
             raise JogConfigError(f"{source}: jog must be a table ([jog]), not {table!r}")

@@ -133,11 +133,12 @@ def _lint_target(target, profile, selection, stdin_filename):
 
 
 def _config() -> dict:
-    """The ``[lint]`` table of the nearest armctl.toml, checked: lists of strings only."""
-    from ..profile import find_config, unknown_key_hint
+    """The ``[lint]`` table of the nearest armctl.toml (else the user's), checked: lists of strings only."""
+    from ..profile import load_config, unknown_key_hint
 
-    path, content = find_config()
-    table = content.get("lint", {})
+    config = load_config()
+    path = config.path_of("lint")
+    table = config.values.get("lint", {})
     if not isinstance(table, dict):
         raise ValueError(f"{path}: lint must be a table ([lint])")
     for key, value in table.items():

@@ -133,10 +133,10 @@ def dry_run(options: JobOptions, script, model) -> int:
 
 def _config_baud() -> int:
     from ..link import config_baud
-    from ..profile import find_config
+    from ..profile import load_config
 
-    path, config = find_config()
-    return config_baud(config, path)
+    config = load_config()
+    return config_baud(config.values, config.path_of("baud"))
 
 
 def read_arm(link, timeout_s: float, log=None):
