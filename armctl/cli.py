@@ -309,15 +309,20 @@ def status(port, baud, once, watch, as_json, timeout):
 
 
 @main.command()
-def ports():
+@click.option("--json", "as_json", is_flag=True, help="One JSON array of {device, description, hwid} objects.")
+def ports(as_json):
     """List the serial ports found on this machine (device, description, hardware id)."""
     from serial.tools import list_ports
 
     found = sorted(list_ports.comports(), key=lambda p: p.device)
+    if as_json:
+        records = [{"device": p.device, "description": p.description, "hwid": p.hwid} for p in found]
+        click.echo(json.dumps(records, ensure_ascii=False))
     if not found:
-        click.echo("no serial ports found (the built-in simulator is always there: --port sim://)")
-    for info in found:
-        click.echo(f"{info.device}\t{info.description}\t{info.hwid}")
+        click.echo("no serial ports found (the built-in simulator is always there: --port sim://)", err=as_json)
+    if not as_json:
+        for info in found:
+            click.echo(f"{info.device}\t{info.description}\t{info.hwid}")
 
 
 @main.command()

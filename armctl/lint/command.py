@@ -29,6 +29,7 @@ def _codes(values: tuple[str, ...]) -> list[str]:
 @click.option("--format", "fmt", type=click.Choice(["text", "json", "github"]), default="text", show_default=True,
               help="text: ruff-like, with the source line and a caret; json: one array of objects; "
                    "github: workflow commands that annotate a pull request.")
+@click.option("--json", "as_json", is_flag=True, help="The same as --format json (armctl's one JSON spelling).")
 @click.option("--select", multiple=True, metavar="CODES",
               help="Report only these codes or prefixes (comma-separated, repeatable): --select E,L1.")
 @click.option("--ignore", multiple=True, metavar="CODES", help="Do not report these codes or prefixes: --ignore L203.")
@@ -39,7 +40,7 @@ def _codes(values: tuple[str, ...]) -> list[str]:
 @click.option("--stdin-filename", metavar="NAME", help="The name to report for - (standard input).")
 @click.option("--list-rules", is_flag=True, help="Print every code with its severity and rationale, then exit.")
 @click.pass_context
-def lint(ctx: click.Context, paths, fmt, select, ignore, strict, statistics, profile_path, stdin_filename, list_rules):
+def lint(ctx: click.Context, paths, fmt, as_json, select, ignore, strict, statistics, profile_path, stdin_filename, list_rules):
     """Check motion scripts against the language and the arm profile before anything moves.
 
     PATH is a script, a directory (searched recursively for *.txt *.arm *.gcode *.nc, or
@@ -50,6 +51,10 @@ def lint(ctx: click.Context, paths, fmt, select, ignore, strict, statistics, pro
     from ..errors import ConfigError, ProfileError
     from .registry import UnknownCode
 
+    if as_json:
+        if fmt not in ("text", "json") or (fmt == "text" and ctx.get_parameter_source("fmt") != click.core.ParameterSource.DEFAULT):
+            _fail(ctx, f"--json is --format json: it cannot be combined with --format {fmt}")
+        fmt = "json"
     if list_rules:
         click.echo(_rules_listing(fmt), nl=False)
         return
