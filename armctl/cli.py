@@ -89,12 +89,19 @@ def _os_error_text(error: OSError) -> str:
 
 @click.group(cls=ArmctlGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, "--version", prog_name="armctl")
-def main():
+@click.option("-v", "--verbose", is_flag=True, help="Log to stderr why `run` paces as it does (what each write waited for, what proved frames done).")
+@click.option("-q", "--quiet", is_flag=True, help="Print only errors, the summary and the data asked for: no banner, progress or warnings.")
+def main(verbose, quiet):
     """Drive a 6-axis desktop robot arm over its serial connector.
 
     Without --port (or ARMCTL_PORT, or `port` in armctl.toml) commands talk to the built-in
     simulator.
     """
+    from .output import configure
+
+    if verbose and quiet:
+        raise click.UsageError("choose -v or -q, not both")
+    configure(verbose, quiet)
 
 
 def _read_input(path: str) -> bytes:
@@ -280,8 +287,9 @@ baud_option = click.option("--baud", type=number(*BAUD_RANGE, whole=True), defau
 
 def _connect(port: str | None, baud: int | None, **link_options):
     from .link import connect
+    from .output import quiet
 
-    return connect(port, baud, announce=lambda text: click.echo(text, err=True), **link_options)
+    return connect(port, baud, announce=lambda text: None if quiet() else click.echo(text, err=True), **link_options)
 
 
 @main.command()

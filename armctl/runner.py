@@ -8,11 +8,16 @@ a job can end — finished, Ctrl-C, a lost port, a failure such as a --log that 
 written — leaves a ``RunView`` that says the last line sent, the last line known executed and
 where to resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks
 to stop at the next safe point, and the caller sends the abort sequence.
+
+With ``-v`` it tells the pacing story through ``logging`` (logger ``armctl.runner``): the
+streamer leaves why it decided as data (``write_reason``, ``bound_evidence``) and this edge logs
+a line only when that reason changes, so a long job reads as a few lines, not one per frame.
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import queue
 import time
 from collections import deque
@@ -21,7 +26,9 @@ from typing import Callable, Iterator
 
 from .errors import ArmctlError, PortError
 from .protocol import ArcEnd, Command, PauseToggle, ResetConnector, RunPositionStatus, StatusFrame
-from .streamer import Streamer
+from .streamer import Evidence, Streamer, WaitReason
+
+_logger = logging.getLogger(__name__)
 
 ABORT_SEQUENCES = {
     "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
@@ -122,6 +129,8 @@ class JobRunner:
         self._recent: deque = deque(maxlen=64)  # the last frames written (SentFrame)
         self.stop_requested = False
         self.failure: str | None = None  # why the job stopped, when not by Ctrl-C (``fail``)
+        self._told_wait: WaitReason | None = None  # the last wait reason logged
+        self._told_evidence: Evidence | None = None  # the last evidence logged
 
     # --- time -------------------------------------------------------------------------------
 
@@ -155,7 +164,10 @@ class JobRunner:
             self._take_status(*item)
 
     def _take_status(self, frame: StatusFrame, at_s: float) -> None:
+        before = self.streamer.consumed_lower_bound
         self.streamer.receive_status(frame, at_s)
+        if self.streamer.consumed_lower_bound > before:
+            self._explain_bound(at_s)
         self.view.status_frames += 1
         if self.log is not None:
             self._log("rx", frame.encode(), at_s, kind=frame.KIND)
@@ -223,6 +235,7 @@ class JobRunner:
             raise self.link.error
         now = self.now()
         when = self.streamer.next_write_time(now, self.view.next_statement.command)
+        self._explain_wait(now, when)
         if when is not None and when <= now:
             self._write(self.view.next_statement, now)
             self._refresh()  # only after every record of the write is complete
@@ -322,7 +335,7 @@ class JobRunner:
                 raise self.link.error
             now = self.now()
             if self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False:
-                self.streamer.confirm_all_done()
+                self._confirm_all_done(now)
                 view.arm_done_s = self._done_at(now)
                 view.outcome = "finished"
                 if overran:
@@ -391,11 +404,57 @@ class JobRunner:
             # At rest: paused (the estimate cannot know for how long) or with the job's time over.
             if still and (self.arm_paused or self.arm_at_rest(now)):
                 if self._at_last_target():
-                    self.streamer.confirm_all_done()
+                    self._confirm_all_done(now)
                 break
             self._refresh()
             self._sleep(POLL_S)
         self._refresh()
+
+    def _confirm_all_done(self, now: float) -> None:
+        before = self.streamer.consumed_lower_bound
+        self.streamer.confirm_all_done()
+        if self.streamer.consumed_lower_bound > before:
+            self._explain_bound(now)
+
+    # --- -v: the pacing story ---------------------------------------------------------------
+
+    def _explain_wait(self, now: float, when: float | None) -> None:
+        """Log why the next write waits, when the reason differs from the last one logged."""
+        reason = self.streamer.write_reason
+        if reason is WaitReason.READY or reason is self._told_wait or not _logger.isEnabledFor(logging.INFO):
+            return
+        self._told_wait = reason
+        streamer, line = self.streamer, self.view.next_statement.line
+        if reason is WaitReason.CAPACITY:
+            why = (f"the FIFO's capacity: {streamer.frames_in_flight_bound} frames written and not known consumed, "
+                   f"the bound is {streamer.limit_frames} (the connector's FIFO less a margin); only new evidence "
+                   "that frames finished lets it go")
+        elif reason is WaitReason.LEAD:
+            why = (f"the lead: {streamer.waiting_seconds(now):.2f} s of motion waits behind the move in progress "
+                   f"(lead {streamer.lead_s:g} s); it may go in {when - now:.2f} s")
+        else:
+            why = (f"the wire: the previous frame is still leaving at the line's rate "
+                   f"({streamer.frame_s * 1000:.0f} ms a frame); it may go in {(when - now) * 1000:.0f} ms")
+        _logger.info("t=%.2f s: line %s waits for %s", now - self.view.started_s, line, why)
+
+    def _explain_bound(self, now: float) -> None:
+        """Log what advanced the lower bound of frames consumed, when the kind of evidence changes."""
+        evidence = self.streamer.bound_evidence
+        if evidence is None or evidence is self._told_evidence or not _logger.isEnabledFor(logging.INFO):
+            return
+        self._told_evidence = evidence
+        streamer = self.streamer
+        done = streamer.last_known_done()
+        how = {
+            Evidence.POSITION: "two agreeing position reports lie on the path of a later frame",
+            Evidence.JOINTS: "two agreeing joint reports lie on the path of a later frame",
+            Evidence.TIME: f"even an arm {streamer.slowest_factor:g}x slower than the model has finished them "
+                           "(time the arm was seen running)",
+            Evidence.AT_REST: "the arm is at rest at the last target",
+        }[evidence]
+        _logger.info("t=%.2f s: evidence (%s): %s; frames known consumed: %d, through line %s",
+                     now - self.view.started_s, evidence, how, streamer.consumed_lower_bound,
+                     getattr(done, "line", "?"))
 
     def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
         """One JSON line; a log that cannot be written (disk full, EIO) stops the job (``fail``):

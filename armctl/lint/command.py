@@ -72,6 +72,9 @@ def lint(ctx: click.Context, paths, fmt, as_json, select, ignore, strict, statis
 
 
 def _run(paths, fmt, selection, strict, statistics, profile, stdin_filename, config) -> int:
+    from dataclasses import replace
+
+    from ..output import quiet
     from .formatters import FORMATTERS, Summary, statistics_lines, summary_line
     from .paths import DEFAULT_INCLUDE, expand
 
@@ -86,6 +89,8 @@ def _run(paths, fmt, selection, strict, statistics, profile, stdin_filename, con
             summary.unreadable += 1
             continue
         summary.add(report)
+        if fmt != "json" and quiet():  # -q: errors only (the summary still counts the warnings)
+            report = replace(report, diagnostics=[d for d in report.diagnostics if d.severity == "error"])
         _write(formatter.file(report))
     table = "".join(line + "\n" for line in statistics_lines(summary.severities)) if statistics else ""
     if fmt == "json":  # stdout stays one JSON document

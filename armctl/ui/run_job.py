@@ -65,8 +65,11 @@ def check_script(script, profile):
     job goes on."""
     from ..lint.engine import lint_lines
 
+    from ..output import quiet
+
     report = lint_lines(script.lines(), script.name, profile)
-    _refuse_on_errors(report.diagnostics, report.errors)
+    shown = [d for d in report.diagnostics if d.severity == "error"] if quiet() else report.diagnostics  # -q: no warnings
+    _refuse_on_errors(shown, report.errors)
     return report
 
 
@@ -251,8 +254,10 @@ def _stream(runner, options: JobOptions, view) -> str:
     from ..runner import ABORT_SEQUENCES
 
     title = f"armctl run {options.script}"
-    display = _Display(title, options.live and sys.stdout.isatty())
-    runner.on_update = display.update
+    from ..output import quiet
+
+    display = _Display(title, options.live and sys.stdout.isatty() and not quiet())
+    runner.on_update = (lambda view: None) if quiet() else display.update  # -q: the summary only
     with _deferred_ctrl_c(runner), display:
         try:
             runner.run()
