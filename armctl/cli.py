@@ -280,9 +280,10 @@ def _pending_output(path: str | None, binary: bool):
 port_option = click.option(
     "--port", "port", metavar="URL",
     help="Device path or pyserial URL (socket://, rfc2217://, sim://?slowdown=1.3). "
-    "Default: ARMCTL_PORT, else `port` in armctl.toml, else the built-in simulator.",
+    "Default: ARMCTL_PORT, else `port` in the project's armctl.toml, else in yours (`armctl config`), "
+    "else the built-in simulator.",
 )
-baud_option = click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=None, help="Line rate [default: 9600 or `baud` in armctl.toml].")
+baud_option = click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=None, help="Line rate [default: `baud` in the project's or your armctl.toml, else 9600].")
 
 
 def _connect(port: str | None, baud: int | None, **link_options):
