@@ -42,6 +42,10 @@ OVERRUN_MIN_S = 60.0  # the least time waited past the estimate for an arm still
 TARGET_MM = 0.5  # how close the reported position must be to the last target (0.1 mm resolution)
 TARGET_DEG = 0.2
 _REST_KINDS = (0, 1, 2, 4)  # position, joints 1-3, joints 4-6, pause and PWM
+# -v: the wire is told as the reason only once this many frames in a row waited for it alone
+# (about a second at 9600 baud): between frames held back by the lead or the FIFO, the line's
+# own pace between two writes is not news, and telling it would alternate with them frame by frame.
+WIRE_STORY_FRAMES = 20
 
 
 @dataclass
@@ -130,6 +134,8 @@ class JobRunner:
         self.stop_requested = False
         self.failure: str | None = None  # why the job stopped, when not by Ctrl-C (``fail``)
         self._told_wait: WaitReason | None = None  # the last wait reason logged
+        self._wire_frames = 0  # frames in a row that waited for the wire alone (WIRE_STORY_FRAMES)
+        self._wire_counted_at = -1  # frames_sent when a wire wait was last counted (once a frame)
         self._told_evidence: Evidence | None = None  # the last evidence logged
 
     # --- time -------------------------------------------------------------------------------
@@ -421,7 +427,14 @@ class JobRunner:
     def _explain_wait(self, now: float, when: float | None) -> None:
         """Log why the next write waits, when the reason differs from the last one logged."""
         reason = self.streamer.write_reason
-        if reason is WaitReason.READY or reason is self._told_wait or not _logger.isEnabledFor(logging.INFO):
+        if reason is WaitReason.READY or not _logger.isEnabledFor(logging.INFO):
+            return
+        if reason is not WaitReason.WIRE:
+            self._wire_frames = 0
+        elif self._wire_counted_at != self.view.frames_sent:
+            self._wire_frames += 1
+            self._wire_counted_at = self.view.frames_sent
+        if reason is self._told_wait or (reason is WaitReason.WIRE and self._wire_frames < WIRE_STORY_FRAMES):
             return
         self._told_wait = reason
         streamer, line = self.streamer, self.view.next_statement.line
@@ -431,10 +444,11 @@ class JobRunner:
                    "that frames finished lets it go")
         elif reason is WaitReason.LEAD:
             why = (f"the lead: {streamer.waiting_seconds(now):.2f} s of motion waits behind the move in progress "
-                   f"(lead {streamer.lead_s:g} s); it may go in {when - now:.2f} s")
+                   f"and this frame adds {streamer.next_frame_motion_s:.2f} s (lead {streamer.lead_s:g} s); "
+                   f"it may go in {when - now:.2f} s")
         else:
-            why = (f"the wire: the previous frame is still leaving at the line's rate "
-                   f"({streamer.frame_s * 1000:.0f} ms a frame); it may go in {(when - now) * 1000:.0f} ms")
+            why = (f"the wire: the last {WIRE_STORY_FRAMES} frames waited only for the frame before to leave at "
+                   f"the line's rate ({streamer.frame_s * 1000:.0f} ms a frame): the job is line-bound here")
         _logger.info("t=%.2f s: line %s waits for %s", now - self.view.started_s, line, why)
 
     def _explain_bound(self, now: float) -> None:

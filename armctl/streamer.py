@@ -188,6 +188,7 @@ class Streamer:
         self._certain_tail_s = 0.0  # the time bound of the last frame written (even a G300's)
         self._cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
         self.write_reason = WaitReason.READY  # why next_write_time answered as it did
+        self.next_frame_motion_s = 0.0  # the motion of the frame next_write_time was asked about
         self.bound_evidence: Evidence | None = None  # what last advanced consumed_lower_bound
 
     # --- writing ----------------------------------------------------------------------------
@@ -230,6 +231,7 @@ class Streamer:
             self.write_reason = WaitReason.WIRE if self.wire_free_s > now else WaitReason.READY
             return max(now, self.wire_free_s)
         duration_s = 0.0 if command is None else self._plan(command).duration_s
+        self.next_frame_motion_s = duration_s
         tail_s = self.pending[-1].est_end_s
         lead_ok_at = tail_s - min(self.lead_s, FEED_AHEAD_S)  # the arm must not run dry
         if duration_s <= self.lead_s:

@@ -109,6 +109,19 @@ def test_verbose_run_explains_the_pacing_in_a_fresh_process(tmp_path):
     assert_explains_pacing(done.stderr)
 
 
+def test_verbose_run_names_the_wire_and_the_fifo_capacity_on_a_job_of_short_moves(tmp_path):
+    """400 moves of 2 mm (0.1 s each, twice a frame's time on the wire): the line leads at first,
+    then the lead, and the FIFO fills while the evidence cannot tell the repeated targets apart."""
+    moves = "".join(f"G1 X{212 if k % 2 == 0 else 210} F1200\n" for k in range(400))
+    (tmp_path / "short.txt").write_text("G1 X210 Y0 Z300 A180 B0 C0 S1500 F1200\n" + moves, encoding="utf-8")
+    result = CliRunner().invoke(main, ["-v", "run", "short.txt", "--port", SIM, "--no-live"])
+    assert result.exit_code == 0, result.output
+    story = [text for text in result.stderr.splitlines() if text.startswith("armctl: t=")]
+    assert any("waits for the wire: the last 20 frames" in text for text in story), story
+    assert any("waits for the FIFO's capacity: 196 frames" in text for text in story), story
+    assert len(story) < 20, story
+
+
 def test_without_v_nothing_is_logged_even_after_a_v_run_in_the_same_process():
     CliRunner().invoke(main, ["-v", "run", JOB, "--port", SIM, "--no-live"])
     result = CliRunner().invoke(main, ["run", JOB, "--port", SIM, "--no-live"])
