@@ -120,7 +120,10 @@ def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms,
     settings, keymap, profile = _setup(profile_path, repeat_delay_ms)
     teach, log = _open_files(record_path, log_path)
     try:
-        link, baud = connect(port, baud, announce=lambda text: click.echo(text, err=True), on_status=log.rx if log else None)
+        from ..output import quiet
+
+        link, baud = connect(port, baud, announce=lambda text: None if quiet() else click.echo(text, err=True),
+                             on_status=log.rx if log else None)
         with link:
             require_wall_clock(link, "jog")
             problem = wait_for_pose(link, timeout_s)
