@@ -89,12 +89,19 @@ def _os_error_text(error: OSError) -> str:
 
 @click.group(cls=ArmctlGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, "--version", prog_name="armctl")
-def main():
+@click.option("-v", "--verbose", is_flag=True, help="Log to stderr why `run` paces as it does (what each write waited for, what proved frames done).")
+@click.option("-q", "--quiet", is_flag=True, help="Print only errors, the summary and the data asked for: no banner, progress or warnings.")
+def main(verbose, quiet):
     """Drive a 6-axis desktop robot arm over its serial connector.
 
     Without --port (or ARMCTL_PORT, or `port` in armctl.toml) commands talk to the built-in
     simulator.
     """
+    from .output import configure
+
+    if verbose and quiet:
+        raise click.UsageError("choose -v or -q, not both")
+    configure(verbose, quiet)
 
 
 def _read_input(path: str) -> bytes:
@@ -273,15 +280,17 @@ def _pending_output(path: str | None, binary: bool):
 port_option = click.option(
     "--port", "port", metavar="URL",
     help="Device path or pyserial URL (socket://, rfc2217://, sim://?slowdown=1.3). "
-    "Default: ARMCTL_PORT, else `port` in armctl.toml, else the built-in simulator.",
+    "Default: ARMCTL_PORT, else `port` in the project's armctl.toml, else in yours (`armctl config`), "
+    "else the built-in simulator.",
 )
-baud_option = click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=None, help="Line rate [default: 9600 or `baud` in armctl.toml].")
+baud_option = click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=None, help="Line rate [default: `baud` in the project's or your armctl.toml, else 9600].")
 
 
 def _connect(port: str | None, baud: int | None, **link_options):
     from .link import connect
+    from .output import quiet
 
-    return connect(port, baud, announce=lambda text: click.echo(text, err=True), **link_options)
+    return connect(port, baud, announce=lambda text: None if quiet() else click.echo(text, err=True), **link_options)
 
 
 @main.command()
@@ -309,15 +318,20 @@ def status(port, baud, once, watch, as_json, timeout):
 
 
 @main.command()
-def ports():
+@click.option("--json", "as_json", is_flag=True, help="One JSON array of {device, description, hwid} objects.")
+def ports(as_json):
     """List the serial ports found on this machine (device, description, hardware id)."""
     from serial.tools import list_ports
 
     found = sorted(list_ports.comports(), key=lambda p: p.device)
+    if as_json:
+        records = [{"device": p.device, "description": p.description, "hwid": p.hwid} for p in found]
+        click.echo(json.dumps(records, ensure_ascii=False))
     if not found:
-        click.echo("no serial ports found (the built-in simulator is always there: --port sim://)")
-    for info in found:
-        click.echo(f"{info.device}\t{info.description}\t{info.hwid}")
+        click.echo("no serial ports found (the built-in simulator is always there: --port sim://)", err=as_json)
+    if not as_json:
+        for info in found:
+            click.echo(f"{info.device}\t{info.description}\t{info.hwid}")
 
 
 @main.command()
@@ -407,10 +421,12 @@ def sim(use_pty, tcp_port, sim_url):
 
 def _register_packaged_commands() -> None:
     """Commands that live with their package; their modules import only click at load."""
+    from .config import config
     from .jog.command import jog
     from .lint.command import lint
     from .plot.command import plot
 
+    main.add_command(config)
     main.add_command(jog)
     main.add_command(lint)
     main.add_command(plot)

@@ -37,7 +37,11 @@ VIRTUAL_MIN_STEP_S = 1e-6
 @dataclass(frozen=True)
 class PortChoice:
     url: str
-    origin: str  # "--port", "ARMCTL_PORT", "armctl.toml" or "default"
+    origin: str  # "--port", "ARMCTL_PORT", the armctl.toml it came from (project or user) or "default"
+
+    @property
+    def from_file(self) -> bool:
+        return self.origin not in ("--port", PORT_ENV, "default")
 
     @property
     def is_simulator(self) -> bool:
@@ -53,7 +57,8 @@ class PortChoice:
 
 
 def resolve_port(option: str | None, environ=os.environ, config: dict | None = None, config_path=CONFIG_NAME) -> PortChoice:
-    """``--port``, else ``ARMCTL_PORT``, else ``port`` in armctl.toml, else the simulator.
+    """``--port``, else ``ARMCTL_PORT``, else ``port`` in armctl.toml (``config``: the project
+    file laid over the user file, ``config_path``: the one ``port`` came from), else the simulator.
 
     The simulator is the default only when no port is given anywhere: a port given empty (or,
     in armctl.toml, of the wrong type) is a ConfigError, never a quiet fallback to the simulator.
@@ -69,7 +74,7 @@ def resolve_port(option: str | None, environ=os.environ, config: dict | None = N
                               f"(`unset {PORT_ENV}`)")
         return PortChoice(environ[PORT_ENV], PORT_ENV)
     if config and "port" in config:
-        return PortChoice(check_config_value(config_path, "port", config["port"]), "armctl.toml")
+        return PortChoice(check_config_value(config_path, "port", config["port"]), str(config_path))
     return PortChoice(SIMULATOR_URL, "default")
 
 
@@ -78,23 +83,23 @@ def connect(port: str | None, baud: int | None, announce: Callable[[str], None] 
     """What every port-using command does first: resolve the port (``--port``, ARMCTL_PORT,
     armctl.toml, the simulator), announce the simulator, open it with a reader thread whose
     state judges jumps against the arm's top speeds (H9). Returns the link and the baud rate."""
-    from .profile import find_config, load_profile
+    from .profile import load_config, load_profile
 
-    config_path, config = find_config()
-    choice = resolve_port(port, config=config, config_path=config_path)
+    config = load_config()
+    choice = resolve_port(port, config=config.values, config_path=config.path_of("port"))
     if choice.is_simulator:
-        check_sim_url(choice, config_path)
+        check_sim_url(choice)
     banner = choice.banner()
     if banner:
         announce(banner)
-    baud = baud or config_baud(config, config_path)
+    baud = baud or config_baud(config.values, config.path_of("baud"))
     profile = profile or load_profile()
     link_options.setdefault("state", plausible_state(profile))
     link_options.setdefault("clock", scaled_clock(choice.url))
     return Link.open(choice.url, baud, **link_options), baud
 
 
-def check_sim_url(choice: PortChoice, config_path=None) -> None:
+def check_sim_url(choice: PortChoice) -> None:
     """A bad ``sim://`` option is a usage error (exit 2) naming where the URL came from, raised
     before anything opens: the one parse is armctl/sim/protocol_sim.py's."""
     from .sim.protocol_sim import parse_sim_url
@@ -102,7 +107,7 @@ def check_sim_url(choice: PortChoice, config_path=None) -> None:
     try:
         parse_sim_url(choice.url)
     except ConfigError as error:
-        where = f"{config_path}: port" if choice.origin == "armctl.toml" and config_path else choice.origin
+        where = f"{choice.origin}: port" if choice.from_file else choice.origin
         raise ConfigError(f"{where}: {error}") from None
 
 

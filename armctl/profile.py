@@ -9,8 +9,9 @@ section, and the result is built into frozen dataclasses and cross-checked (fixe
 the joint limits, gripper values inside the PWM range).  Pure apart from reading files.
 
 Where a profile comes from (``load_profile``): an explicit file (``--profile FILE``); else the
-first ``armctl.toml`` found walking up from the working directory — its ``[profile]`` table, or
-``profile = "path.toml"`` resolved relative to that armctl.toml; else the packaged default.
+first ``armctl.toml`` found walking up from the working directory, else the user's armctl.toml
+(``load_config``) — its ``[profile]`` table, or ``profile = "path.toml"`` resolved relative to
+that armctl.toml; else the packaged default.
 
 Provenance: every key knows where its number came from (``Profile.source_of``): the packaged
 default's numbers are ``ILLUSTRATIVE`` guesses about a generic arm, except the few that are the
@@ -410,6 +411,15 @@ def read_toml(path: Path) -> dict:
     return _parse(data, str(path))
 
 
+def read_config(path: Path) -> dict:
+    """An armctl.toml's whole content with every top-level key checked: the one reading of a
+    project file and of the user file."""
+    data = read_toml(path)
+    for key, value in data.items():
+        check_config_value(path, key, value)
+    return data
+
+
 def find_config(start: Path | None = None) -> tuple[Path | None, dict]:
     """The first armctl.toml in ``start`` (default: the working directory) or a parent, and
     its whole content with every top-level key checked; ``(None, {})`` when there is none."""
@@ -418,11 +428,45 @@ def find_config(start: Path | None = None) -> tuple[Path | None, dict]:
     for candidate in (directory, *directory.parents):
         path = candidate / CONFIG_NAME
         if path.is_file():
-            data = read_toml(path)
-            for key, value in data.items():
-                check_config_value(path, key, value)
-            return path, data
+            return path, read_config(path)
     return None, {}
+
+
+def user_config_path() -> Path:
+    """The user's armctl.toml: ``$XDG_CONFIG_HOME/armctl/armctl.toml`` (``~/.config/…`` when
+    unset) on Linux and the BSDs, platformdirs' equivalent on macOS and Windows."""
+    import platformdirs
+
+    return Path(platformdirs.user_config_dir("armctl", appauthor=False)) / CONFIG_NAME
+
+
+@dataclass(frozen=True)
+class Config:
+    """The effective top-level settings and the file each came from.
+
+    Layering (README: Configuration): the nearest project armctl.toml wins key by key over the
+    user file, at the top level — ``port``, ``baud``, ``profile``, ``[lint]`` and ``[jog]`` each
+    come whole from one file, because a table's keys are checked together (the jog lists must
+    have one length; a profile describes one arm) and an error names one file."""
+
+    values: dict
+    origins: dict[str, Path]
+    project_path: Path | None
+    user_path: Path
+
+    def path_of(self, key: str) -> Path | None:
+        """The file ``key`` came from (None: no file sets it)."""
+        return self.origins.get(key)
+
+
+def load_config(start: Path | None = None) -> Config:
+    """The project file (``find_config``) laid over the user file, both read by ``read_config``."""
+    project_path, project = find_config(start)
+    user_path = user_config_path()
+    user = read_config(user_path) if user_path.is_file() else {}
+    origins = {key: user_path for key in user}
+    origins.update({key: project_path for key in project})
+    return Config({**user, **project}, origins, project_path, user_path)
 
 
 # --- armctl.toml's top level --------------------------------------------------------------------
@@ -480,13 +524,15 @@ def _short_repr(value, limit: int = 60) -> str:
 
 
 def load_profile(path: Path | str | None = None, start: Path | None = None) -> Profile:
-    """The profile to use: ``path`` if given, else the one an armctl.toml names, else the default."""
+    """The profile to use: ``path`` if given, else the one the project or user armctl.toml
+    names (a path relative to that file), else the default."""
     if path is not None:
         return parse_profile(read_toml(Path(path)), str(path))
-    config_path, config = find_config(start)
-    if config_path is None or "profile" not in config:
+    config = load_config(start)
+    if "profile" not in config.values:
         return default_profile()
-    entry = config["profile"]  # find_config checked it: a table or a path string
+    entry = config.values["profile"]  # read_config checked it: a table or a path string
+    config_path = config.path_of("profile")
     if isinstance(entry, dict):
         return parse_profile(entry, str(config_path), prefix="profile.")
     target = config_path.parent / entry

@@ -8,11 +8,16 @@ a job can end — finished, Ctrl-C, a lost port, a failure such as a --log that 
 written — leaves a ``RunView`` that says the last line sent, the last line known executed and
 where to resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks
 to stop at the next safe point, and the caller sends the abort sequence.
+
+With ``-v`` it tells the pacing story through ``logging`` (logger ``armctl.runner``): the
+streamer leaves why it decided as data (``write_reason``, ``bound_evidence``) and this edge logs
+a line only when that reason changes, so a long job reads as a few lines, not one per frame.
 """
 
 from __future__ import annotations
 
 import json
+import logging
 import queue
 import time
 from collections import deque
@@ -21,7 +26,9 @@ from typing import Callable, Iterator
 
 from .errors import ArmctlError, PortError
 from .protocol import ArcEnd, Command, PauseToggle, ResetConnector, RunPositionStatus, StatusFrame
-from .streamer import Streamer
+from .streamer import Evidence, Streamer, WaitReason
+
+_logger = logging.getLogger(__name__)
 
 ABORT_SEQUENCES = {
     "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
@@ -35,6 +42,10 @@ OVERRUN_MIN_S = 60.0  # the least time waited past the estimate for an arm still
 TARGET_MM = 0.5  # how close the reported position must be to the last target (0.1 mm resolution)
 TARGET_DEG = 0.2
 _REST_KINDS = (0, 1, 2, 4)  # position, joints 1-3, joints 4-6, pause and PWM
+# -v: the wire is told as the reason only once this many frames in a row waited for it alone
+# (about a second at 9600 baud): between frames held back by the lead or the FIFO, the line's
+# own pace between two writes is not news, and telling it would alternate with them frame by frame.
+WIRE_STORY_FRAMES = 20
 
 
 @dataclass
@@ -127,6 +138,10 @@ class JobRunner:
         self._recent: deque = deque(maxlen=64)  # the last frames written (SentFrame)
         self.stop_requested = False
         self.failure: str | None = None  # why the job stopped, when not by Ctrl-C (``fail``)
+        self._told_wait: WaitReason | None = None  # the last wait reason logged
+        self._wire_frames = 0  # frames in a row that waited for the wire alone (WIRE_STORY_FRAMES)
+        self._wire_counted_at = -1  # frames_sent when a wire wait was last counted (once a frame)
+        self._told_evidence: Evidence | None = None  # the last evidence logged
 
     # --- time -------------------------------------------------------------------------------
 
@@ -160,7 +175,10 @@ class JobRunner:
             self._take_status(*item)
 
     def _take_status(self, frame: StatusFrame, at_s: float) -> None:
+        before = self.streamer.consumed_lower_bound
         self.streamer.receive_status(frame, at_s)
+        if self.streamer.consumed_lower_bound > before:
+            self._explain_bound(at_s)
         self.view.status_frames += 1
         if self.log is not None:
             self._log("rx", frame.encode(), at_s, kind=frame.KIND)
@@ -228,6 +246,7 @@ class JobRunner:
             raise self.link.error
         now = self.now()
         when = self.streamer.next_write_time(now, self.view.next_statement.command)
+        self._explain_wait(now, when)
         if when is not None and when <= now:
             self._write(self.view.next_statement, now)
             self._refresh()  # only after every record of the write is complete
@@ -327,7 +346,7 @@ class JobRunner:
                 raise self.link.error
             now = self.now()
             if self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False:
-                self.streamer.confirm_all_done()
+                self._confirm_all_done(now)
                 view.arm_done_s = self._done_at(now)
                 view.outcome = "finished"
                 if overran:
@@ -396,11 +415,65 @@ class JobRunner:
             # At rest: paused (the estimate cannot know for how long) or with the job's time over.
             if still and (self.arm_paused or self.arm_at_rest(now)):
                 if self._at_last_target():
-                    self.streamer.confirm_all_done()
+                    self._confirm_all_done(now)
                 break
             self._refresh()
             self._sleep(POLL_S)
         self._refresh()
+
+    def _confirm_all_done(self, now: float) -> None:
+        before = self.streamer.consumed_lower_bound
+        self.streamer.confirm_all_done()
+        if self.streamer.consumed_lower_bound > before:
+            self._explain_bound(now)
+
+    # --- -v: the pacing story ---------------------------------------------------------------
+
+    def _explain_wait(self, now: float, when: float | None) -> None:
+        """Log why the next write waits, when the reason differs from the last one logged."""
+        reason = self.streamer.write_reason
+        if reason is WaitReason.READY or not _logger.isEnabledFor(logging.INFO):
+            return
+        if reason is not WaitReason.WIRE:
+            self._wire_frames = 0
+        elif self._wire_counted_at != self.view.frames_sent:
+            self._wire_frames += 1
+            self._wire_counted_at = self.view.frames_sent
+        if reason is self._told_wait or (reason is WaitReason.WIRE and self._wire_frames < WIRE_STORY_FRAMES):
+            return
+        self._told_wait = reason
+        streamer, line = self.streamer, self.view.next_statement.line
+        if reason is WaitReason.CAPACITY:
+            why = (f"the FIFO's capacity: {streamer.frames_in_flight_bound} frames written and not known consumed, "
+                   f"the bound is {streamer.limit_frames} (the connector's FIFO less a margin); only new evidence "
+                   "that frames finished lets it go")
+        elif reason is WaitReason.LEAD:
+            why = (f"the lead: {streamer.waiting_seconds(now):.2f} s of motion waits behind the move in progress "
+                   f"and this frame adds {streamer.next_frame_motion_s:.2f} s (lead {streamer.lead_s:g} s); "
+                   f"it may go in {when - now:.2f} s")
+        else:
+            why = (f"the wire: the last {WIRE_STORY_FRAMES} frames waited only for the frame before to leave at "
+                   f"the line's rate ({streamer.frame_s * 1000:.0f} ms a frame): the job is line-bound here")
+        _logger.info("t=%.2f s: line %s waits for %s", now - self.view.started_s, line, why)
+
+    def _explain_bound(self, now: float) -> None:
+        """Log what advanced the lower bound of frames consumed, when the kind of evidence changes."""
+        evidence = self.streamer.bound_evidence
+        if evidence is None or evidence is self._told_evidence or not _logger.isEnabledFor(logging.INFO):
+            return
+        self._told_evidence = evidence
+        streamer = self.streamer
+        done = streamer.last_known_done()
+        how = {
+            Evidence.POSITION: "two agreeing position reports lie on the path of a later frame",
+            Evidence.JOINTS: "two agreeing joint reports lie on the path of a later frame",
+            Evidence.TIME: f"even an arm {streamer.slowest_factor:g}x slower than the model has finished them "
+                           "(time the arm was seen running)",
+            Evidence.AT_REST: "the arm is at rest at the last target",
+        }[evidence]
+        _logger.info("t=%.2f s: evidence (%s): %s; frames known consumed: %d, through line %s",
+                     now - self.view.started_s, evidence, how, streamer.consumed_lower_bound,
+                     getattr(done, "line", "?"))
 
     def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
         """One JSON line; a log that cannot be written (disk full, EIO) stops the job (``fail``):

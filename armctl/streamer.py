@@ -43,6 +43,11 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
     A frame is also allowed once no more than ``FEED_AHEAD_S`` (or the lead) is queued in all,
     so the arm is never starved of a move longer than the lead by itself.
 
+Why it decided is data too, for whoever drives it (armctl/runner.py logs it with ``-v``):
+``next_write_time`` leaves the binding constraint in ``write_reason`` (``WaitReason``: the FIFO's
+capacity, the lead, the wire, or none), and each advance of the lower bound leaves its evidence
+in ``bound_evidence`` (``Evidence``: position, joints, time, the arm at rest at the end).
+
 The lead is the knob between a prompt stop and the line's pace: behind a move longer than the
 lead, short line-bound moves wait until the queue behind it is within the lead, so the line
 idles for most of that move (``armctl bench``'s ``longfirst`` row shows the cost; a longer
@@ -56,6 +61,7 @@ import math
 from bisect import bisect_right
 from collections import deque
 from dataclasses import dataclass
+from enum import StrEnum
 
 from .motion import ArmPose, MotionModel, Planner, Segment, distance_to_path
 from .protocol import (
@@ -100,6 +106,24 @@ ROTATION_S = len(STATUS_ROTATION) * STATUS_PERIOD_S
 # An observation is matched against this many of the oldest pending frames and as many around the
 # estimate's frame, so its cost does not grow with the queue (see ``Streamer._scan``).
 SCAN_WINDOW_FRAMES = 16
+
+
+class WaitReason(StrEnum):
+    """What held the last write back (``Streamer.write_reason``)."""
+
+    READY = "ready"  # nothing: the frame may go now
+    CAPACITY = "capacity"  # rule (a): the FIFO bound is reached; only new evidence allows a write
+    LEAD = "lead"  # rule (b): the motion waiting behind the move in progress fills the lead
+    WIRE = "wire"  # the previous frame is still leaving the host at the line's rate
+
+
+class Evidence(StrEnum):
+    """What last advanced the lower bound of frames consumed (``Streamer.bound_evidence``)."""
+
+    POSITION = "position"  # two agreeing X/Y/Z reports on the path of a later frame
+    JOINTS = "joints"  # two agreeing joint-half reports on a later joint or still frame
+    TIME = "time"  # even an arm slowest_factor times slower than the model has finished them
+    AT_REST = "at rest"  # the caller saw the arm at rest at the last target (confirm_all_done)
 
 
 @dataclass
@@ -163,6 +187,9 @@ class Streamer:
         self._peeked: tuple[Command, Segment] | None = None
         self._certain_tail_s = 0.0  # the time bound of the last frame written (even a G300's)
         self._cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
+        self.write_reason = WaitReason.READY  # why next_write_time answered as it did
+        self.next_frame_motion_s = 0.0  # the motion of the frame next_write_time was asked about
+        self.bound_evidence: Evidence | None = None  # what last advanced consumed_lower_bound
 
     # --- writing ----------------------------------------------------------------------------
 
@@ -198,10 +225,13 @@ class Streamer:
         more than ``FEED_AHEAD_S`` (or the lead, if shorter) is queued in all, so the arm never
         waits for a move that is longer than the lead by itself."""
         if self.frames_in_flight_bound + 1 > self.limit_frames:
+            self.write_reason = WaitReason.CAPACITY
             return None
         if not self.pending:
+            self.write_reason = WaitReason.WIRE if self.wire_free_s > now else WaitReason.READY
             return max(now, self.wire_free_s)
         duration_s = 0.0 if command is None else self._plan(command).duration_s
+        self.next_frame_motion_s = duration_s
         tail_s = self.pending[-1].est_end_s
         lead_ok_at = tail_s - min(self.lead_s, FEED_AHEAD_S)  # the arm must not run dry
         if duration_s <= self.lead_s:
@@ -214,7 +244,12 @@ class Streamer:
                     break
                 began_s = sent.est_end_s
             lead_ok_at = min(lead_ok_at, now if began_s is None else began_s)
-        return max(now, self.wire_free_s, lead_ok_at)
+        when = max(now, self.wire_free_s, lead_ok_at)
+        if when <= now:
+            self.write_reason = WaitReason.READY
+        else:
+            self.write_reason = WaitReason.LEAD if lead_ok_at >= self.wire_free_s else WaitReason.WIRE
+        return when
 
     def may_write(self, now: float, command: Command | None = None) -> bool:
         when = self.next_write_time(now, command)
@@ -300,6 +335,7 @@ class Streamer:
         certain_now = self._running_seen_s
         while self.pending and self.pending[0].certain_end_s <= certain_now:
             self._consume_one()
+            self.bound_evidence = Evidence.TIME
 
     def _consume_before(self, index: int) -> None:
         """Every frame before ``index`` is known finished — except the rest of its group (a G300
@@ -433,7 +469,10 @@ class Streamer:
             return
         if previous is not None:
             agreed = min(previous, earliest)
+            before = self.consumed_lower_bound
             self._consume_before(agreed)
+            if self.consumed_lower_bound > before:
+                self.bound_evidence = Evidence.POSITION if stream == "position" else Evidence.JOINTS
             self._restart_time_bound(agreed, now)
         self._reanchor(candidates, now)
 
@@ -495,6 +534,7 @@ class Streamer:
         pending = self.pending
         while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             self._consume_one()
+            self.bound_evidence = Evidence.AT_REST
 
     def last_known_done(self):
         """The tag of the last frame known finished, or None."""

@@ -19,6 +19,7 @@ import functools
 import os
 import re
 import signal
+import tempfile
 import threading
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,6 +27,11 @@ from pathlib import Path
 import pytest
 
 import armctl.protocol as protocol
+
+# The user's own armctl.toml (~/.config/armctl/armctl.toml) must not change what the tests see:
+# every test, and every armctl it starts, looks in an empty config directory instead.  Tests of
+# the user file point XDG_CONFIG_HOME elsewhere with monkeypatch.
+os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="armctl-test-config-")
 
 DATA = Path(__file__).parent / "data"
 

@@ -71,13 +71,14 @@ def _setup(profile_path, repeat_delay_ms):
     from dataclasses import replace
 
     from ..errors import ProfileError
-    from ..profile import find_config, load_profile
+    from ..profile import load_config, load_profile
     from .keymap import JogConfigError, keymap_from_config
     from .settings import settings_from_config
 
     try:
-        config_path, config = find_config()
-        table = config.get("jog", {})
+        config = load_config()
+        config_path = config.path_of("jog")
+        table = config.values.get("jog", {})
         source = str(config_path) if config_path else "armctl.toml"
         if not isinstance(table, dict):
             raise JogConfigError(f"{source}: jog must be a table ([jog]), not {table!r}")
@@ -119,7 +120,10 @@ def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms,
     settings, keymap, profile = _setup(profile_path, repeat_delay_ms)
     teach, log = _open_files(record_path, log_path)
     try:
-        link, baud = connect(port, baud, announce=lambda text: click.echo(text, err=True), on_status=log.rx if log else None)
+        from ..output import quiet
+
+        link, baud = connect(port, baud, announce=lambda text: None if quiet() else click.echo(text, err=True),
+                             on_status=log.rx if log else None)
         with link:
             require_wall_clock(link, "jog")
             problem = wait_for_pose(link, timeout_s)

@@ -29,6 +29,7 @@ def _codes(values: tuple[str, ...]) -> list[str]:
 @click.option("--format", "fmt", type=click.Choice(["text", "json", "github"]), default="text", show_default=True,
               help="text: ruff-like, with the source line and a caret; json: one array of objects; "
                    "github: workflow commands that annotate a pull request.")
+@click.option("--json", "as_json", is_flag=True, help="The same as --format json (armctl's one JSON spelling).")
 @click.option("--select", multiple=True, metavar="CODES",
               help="Report only these codes or prefixes (comma-separated, repeatable): --select E,L1.")
 @click.option("--ignore", multiple=True, metavar="CODES", help="Do not report these codes or prefixes: --ignore L203.")
@@ -39,7 +40,7 @@ def _codes(values: tuple[str, ...]) -> list[str]:
 @click.option("--stdin-filename", metavar="NAME", help="The name to report for - (standard input).")
 @click.option("--list-rules", is_flag=True, help="Print every code with its severity and rationale, then exit.")
 @click.pass_context
-def lint(ctx: click.Context, paths, fmt, select, ignore, strict, statistics, profile_path, stdin_filename, list_rules):
+def lint(ctx: click.Context, paths, fmt, as_json, select, ignore, strict, statistics, profile_path, stdin_filename, list_rules):
     """Check motion scripts against the language and the arm profile before anything moves.
 
     PATH is a script, a directory (searched recursively for *.txt *.arm *.gcode *.nc, or
@@ -50,6 +51,10 @@ def lint(ctx: click.Context, paths, fmt, select, ignore, strict, statistics, pro
     from ..errors import ConfigError, ProfileError
     from .registry import UnknownCode
 
+    if as_json:
+        if fmt not in ("text", "json") or (fmt == "text" and ctx.get_parameter_source("fmt") != click.core.ParameterSource.DEFAULT):
+            _fail(ctx, f"--json is --format json: it cannot be combined with --format {fmt}")
+        fmt = "json"
     if list_rules:
         click.echo(_rules_listing(fmt), nl=False)
         return
@@ -67,6 +72,9 @@ def lint(ctx: click.Context, paths, fmt, select, ignore, strict, statistics, pro
 
 
 def _run(paths, fmt, selection, strict, statistics, profile, stdin_filename, config) -> int:
+    from dataclasses import replace
+
+    from ..output import quiet
     from .formatters import FORMATTERS, Summary, statistics_lines, summary_line
     from .paths import DEFAULT_INCLUDE, expand
 
@@ -81,6 +89,8 @@ def _run(paths, fmt, selection, strict, statistics, profile, stdin_filename, con
             summary.unreadable += 1
             continue
         summary.add(report)
+        if fmt != "json" and quiet():  # -q: errors only (the summary still counts the warnings)
+            report = replace(report, diagnostics=[d for d in report.diagnostics if d.severity == "error"])
         _write(formatter.file(report))
     table = "".join(line + "\n" for line in statistics_lines(summary.severities)) if statistics else ""
     if fmt == "json":  # stdout stays one JSON document
@@ -133,11 +143,12 @@ def _lint_target(target, profile, selection, stdin_filename):
 
 
 def _config() -> dict:
-    """The ``[lint]`` table of the nearest armctl.toml, checked: lists of strings only."""
-    from ..profile import find_config, unknown_key_hint
+    """The ``[lint]`` table of the nearest armctl.toml (else the user's), checked: lists of strings only."""
+    from ..profile import load_config, unknown_key_hint
 
-    path, content = find_config()
-    table = content.get("lint", {})
+    config = load_config()
+    path = config.path_of("lint")
+    table = config.values.get("lint", {})
     if not isinstance(table, dict):
         raise ValueError(f"{path}: lint must be a table ([lint])")
     for key, value in table.items():

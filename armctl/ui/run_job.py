@@ -68,8 +68,11 @@ def check_script(script, profile):
     job goes on."""
     from ..lint.engine import lint_lines
 
+    from ..output import quiet
+
     report = lint_lines(script.lines(), script.name, profile)
-    _refuse_on_errors(report.diagnostics, report.errors)
+    shown = [d for d in report.diagnostics if d.severity == "error"] if quiet() else report.diagnostics  # -q: no warnings
+    _refuse_on_errors(shown, report.errors)
     return report
 
 
@@ -136,10 +139,10 @@ def dry_run(options: JobOptions, script, model) -> int:
 
 def _config_baud() -> int:
     from ..link import config_baud
-    from ..profile import find_config
+    from ..profile import load_config
 
-    path, config = find_config()
-    return config_baud(config, path)
+    config = load_config()
+    return config_baud(config.values, config.path_of("baud"))
 
 
 def read_arm(link, timeout_s: float, log=None):
@@ -257,8 +260,10 @@ def _stream(runner, options: JobOptions, view, grid=None) -> str:
     from ..runner import ABORT_SEQUENCES
 
     title = f"armctl run {options.script}"
+    from ..output import quiet
+
     display = _Display(title, _live(options), grid=grid)
-    runner.on_update = display.update
+    runner.on_update = (lambda view: None) if quiet() else display.update  # -q: the summary only
     with _deferred_ctrl_c(runner), display:
         try:
             runner.run()
@@ -286,8 +291,10 @@ def _stream(runner, options: JobOptions, view, grid=None) -> str:
 
 
 def _live(options: JobOptions) -> bool:
-    """The rich panel, rather than plain progress lines: asked for, and stdout is a terminal."""
-    return options.live and sys.stdout.isatty()
+    """The rich panel, rather than plain progress lines: asked for, stdout is a terminal, not -q."""
+    from ..output import quiet
+
+    return options.live and sys.stdout.isatty() and not quiet()
 
 
 def _job_grid(script, model, start, initial, options: JobOptions):
