@@ -229,5 +229,5 @@ def test_python_dash_m_armctl_version(tmp_path):
 def test_python_dash_m_armctl_help_lists_the_commands(tmp_path):
     done = subprocess.run([PYTHON, "-m", "armctl", "--help"], capture_output=True, text=True, cwd=tmp_path, timeout=60)
     assert done.returncode == 0
-    for command in ("compile", "decode", "estimate", "ports", "run", "sim", "status"):
+    for command in ("compile", "completion", "decode", "estimate", "ports", "run", "sim", "status"):
         assert f"  {command} " in done.stdout, command

@@ -94,7 +94,9 @@ def test_the_tcp_bridge_loads_and_serves_without_termios(tmp_path):
 def test_the_other_commands_run_without_termios(tmp_path):
     script = tmp_path / "job.txt"
     script.write_text("G4 P250\n")
-    for args in (["estimate", "job.txt"], ["lint", "job.txt"], ["compile", "job.txt"], ["completion", "bash"],
+    (tmp_path / "frames.hex").write_text("ee360000007a4300000000000000000000000000000000000000000000000000000000000000000000000000000000ef\n")
+    for args in (["estimate", "job.txt"], ["lint", "job.txt"], ["compile", "job.txt"], ["decode", "frames.hex"],
+                 ["completion", "bash"], ["ports"], ["status", "--once", "--port", "sim://?clock=virtual"],
                  ["run", "job.txt", "--port", "sim://?clock=virtual", "--no-live"]):
         done = without_termios(CLI, *args, tmp_path=tmp_path)
         assert done.returncode == 0, (args, done.stderr)
