@@ -20,6 +20,7 @@ VIRTUAL_SIM = "sim://?clock=virtual"
 QUICK_INVOCATIONS = {
     "bench": ["--size", "test", "--scenario", "tiny", "--jobs", "1"],
     "compile": ["{script}"],
+    "completion": ["bash"],
     "decode": ["{script}"],
     "estimate": ["{script}"],
     "jog": ["--port", VIRTUAL_SIM],  # refuses a virtual clock (or a non-terminal) at once
