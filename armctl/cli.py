@@ -422,11 +422,13 @@ def sim(use_pty, tcp_port, sim_url):
 def _register_packaged_commands() -> None:
     """Commands that live with their package; their modules import only click at load."""
     from .config import config
+    from .completion import completion
     from .jog.command import jog
     from .lint.command import lint
     from .plot.command import plot
 
     main.add_command(config)
+    main.add_command(completion)
     main.add_command(jog)
     main.add_command(lint)
     main.add_command(plot)

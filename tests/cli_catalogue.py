@@ -21,6 +21,7 @@ QUICK_INVOCATIONS = {
     "bench": ["--size", "test", "--scenario", "tiny", "--jobs", "1"],
     "compile": ["{script}"],
     "config": [],
+    "completion": ["bash"],
     "decode": ["{script}"],
     "estimate": ["{script}"],
     "jog": ["--port", VIRTUAL_SIM],  # refuses a virtual clock (or a non-terminal) at once

@@ -85,6 +85,9 @@ def pip(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run([PYTHON, "-m", "pip", *args], capture_output=True, text=True, cwd=cwd, timeout=300)
 
 
+DISTRIBUTION = "armctl-serial"  # the name on the package index; `armctl` there is someone else's library
+WHEEL_PREFIX = DISTRIBUTION.replace("-", "_")  # a wheel's file name normalises the name (PEP 427)
+
 # building and installing the wheel (three pip calls of up to 300 s each) happens in the first
 # test that uses it: that test's limit covers them, not the suite's 60 s default
 WHEEL_TIME_LIMIT = pytest.mark.timeout(960)
@@ -104,7 +107,7 @@ def wheel(tmp_path_factory):
         built = pip("wheel", "--no-deps", "-q", "-w", str(dist), str(source), cwd=base)
         how = "with build isolation"
     assert built.returncode == 0, built.stdout + built.stderr
-    (wheel_file,) = dist.glob("armctl-*.whl")
+    (wheel_file,) = dist.glob(f"{WHEEL_PREFIX}-*.whl")
     installed = pip("install", "--no-deps", "-q", "--target", str(target), str(wheel_file), cwd=base)
     assert installed.returncode == 0, installed.stdout + installed.stderr
     return wheel_file, target, how
@@ -118,6 +121,53 @@ def test_the_wheel_ships_the_grammar_as_package_data(wheel):
     assert "armctl/grammars/__init__.py" in names
     assert not any(name.startswith("grammars/") for name in names)  # only inside the package
     assert not any(name.startswith("tests/") for name in names)
+
+
+def _metadata(wheel_file: Path) -> tuple[dict[str, list[str]], str]:
+    """The wheel's METADATA headers (name -> every value) and its entry_points.txt."""
+    from email.parser import HeaderParser
+
+    with zipfile.ZipFile(wheel_file) as archive:
+        (metadata_name,) = [n for n in archive.namelist() if n.endswith(".dist-info/METADATA")]
+        (entry_points_name,) = [n for n in archive.namelist() if n.endswith(".dist-info/entry_points.txt")]
+        message = HeaderParser().parsestr(archive.read(metadata_name).decode())
+        entry_points = archive.read(entry_points_name).decode()
+    headers: dict[str, list[str]] = {}
+    for key, value in message.items():
+        headers.setdefault(key, []).append(value)
+    return headers, entry_points
+
+
+@WHEEL_TIME_LIMIT
+def test_the_wheel_is_armctl_serial_with_the_armctl_command_and_package(wheel):
+    wheel_file, target, _ = wheel
+    headers, entry_points = _metadata(wheel_file)
+    assert headers["Name"] == [DISTRIBUTION]
+    assert headers["Version"] == ["0.1.0"]
+    assert "[console_scripts]\narmctl = armctl.cli:main" in entry_points  # the command keeps its name
+    assert headers.get("License-Expression") == ["MIT"]  # SPDX (PEP 639), not the deprecated table
+    assert headers["Requires-Python"] == [">=3.11"]
+    classifiers = headers["Classifier"]
+    for version in ("3.11", "3.12", "3.13"):
+        assert f"Programming Language :: Python :: {version}" in classifiers
+    assert "Typing :: Typed" in classifiers
+    assert not any(c.startswith("License ::") for c in classifiers)  # PEP 639: the expression says it
+    assert "robot arm" in headers["Keywords"][0].split(",")
+    names = zipfile.ZipFile(wheel_file).namelist()
+    assert "armctl/py.typed" in names  # PEP 561: type checkers use the package's annotations
+    assert (target / "armctl" / "py.typed").is_file()
+    assert not any(name.split("/")[0] not in ("armctl",) and not name.startswith(f"{WHEEL_PREFIX}-")
+                   for name in names)  # one import package, `armctl`, and the wheel's own .dist-info
+
+
+def test_the_pyproject_names_no_invented_urls():
+    """No [project.urls] until the project has a public home: a placeholder host would send
+    users (and the index page) somewhere that is not this project."""
+    project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+    assert project["name"] == DISTRIBUTION
+    assert project["scripts"] == {"armctl": "armctl.cli:main"}
+    for url in project.get("urls", {}).values():
+        assert "<" not in url and "example" not in url, url
 
 
 @WHEEL_TIME_LIMIT
@@ -179,5 +229,5 @@ def test_python_dash_m_armctl_version(tmp_path):
 def test_python_dash_m_armctl_help_lists_the_commands(tmp_path):
     done = subprocess.run([PYTHON, "-m", "armctl", "--help"], capture_output=True, text=True, cwd=tmp_path, timeout=60)
     assert done.returncode == 0
-    for command in ("compile", "decode", "estimate", "ports", "run", "sim", "status"):
+    for command in ("compile", "completion", "decode", "estimate", "ports", "run", "sim", "status"):
         assert f"  {command} " in done.stdout, command

@@ -53,7 +53,12 @@ def jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, 
     screen; see docs/jog.md.
     """
     from ..errors import ArmctlError, ConfigError
+    from ..posix_terminal import NeedsPosixTerminal, require_posix_terminal
 
+    try:  # first: on Windows this, not a redirected stdin, is why jog cannot run
+        require_posix_terminal("armctl jog", "run it under WSL, or on Linux or macOS")
+    except NeedsPosixTerminal as error:
+        _fail(str(error), EXIT_USAGE)
     if not sys.stdin.isatty():
         _fail("jog reads single key presses, and stdin is not a terminal: run it in a terminal "
               "(not through a pipe, a file or a script)", EXIT_USAGE)

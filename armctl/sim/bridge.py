@@ -21,11 +21,10 @@ import errno
 import os
 import select
 import socket
-import termios
 import threading
-import tty
 from typing import Callable
 
+from ..posix_terminal import require_posix_terminal
 from .model import SimOptions, SimulatedArm
 from .realtime import RealtimeArm
 
@@ -58,7 +57,12 @@ def serve_pty(
 
     ``model``: an arm built by the caller (to inspect it afterwards), else one from ``options``.
     ``keep_serving``: when a program closes the pty, wait for the next one instead of ending
-    (``armctl sim --pty``: `armctl status`, then `armctl run`, against the same arm)."""
+    (``armctl sim --pty``: `armctl status`, then `armctl run`, against the same arm).
+    ``NeedsPosixTerminal`` where there is no termios (Windows): nothing is opened."""
+    require_posix_terminal("armctl sim --pty", "serve the arm with `armctl sim --tcp PORT` instead")
+    import termios  # here, not at the top: serve_tcp needs neither and works on Windows
+    import tty
+
     master_fd, slave_fd = os.openpty()
     try:
         tty.setraw(slave_fd, termios.TCSANOW)
