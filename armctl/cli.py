@@ -118,20 +118,21 @@ def _read_input(path: str) -> bytes:
 
 @main.command()
 @click.argument("source", default="-", metavar="[FILE|-]")
-def decode(source: str):
+@click.option("--json", "as_json", is_flag=True, help="JSON lines: one object per frame or run of bytes (the summary stays on stderr).")
+def decode(source: str, as_json: bool):
     """Name every frame in hex text, raw bytes or an armctl log.
 
     Finds 48-byte command frames and 9-byte status frames in any mix, prints one readable
     line per frame (offset, family, command and fields with units) and marks bytes that
     belong to no frame.
     """
-    from .formats import bytes_from_input, describe_chunk, summary_line
+    from .formats import bytes_from_input, chunk_record, describe_chunk, summary_line
     from .protocol import scan_frames
 
     data = bytes_from_input(_read_input(source))
     chunks = list(scan_frames(data))
     for chunk in chunks:
-        click.echo(describe_chunk(chunk))
+        click.echo(json.dumps(chunk_record(chunk)) if as_json else describe_chunk(chunk))
     click.echo(summary_line(chunks), err=True)
 
 
@@ -160,8 +161,9 @@ def _report_script_errors(compilation) -> None:
 @click.argument("script", metavar="SCRIPT")
 @click.option("--format", "fmt", type=click.Choice(["hex", "json", "bin"]), default="hex", show_default=True,
               help="hex: one frame per line, 96 hex digits; json: one object per frame; bin: the raw bytes.")
+@click.option("--json", "as_json", is_flag=True, help="The same as --format json (armctl's one JSON spelling).")
 @click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Write here instead of stdout.")
-def compile_command(script: str, fmt: str, output: str | None):
+def compile_command(script: str, fmt: str, as_json: bool, output: str | None):
     """Check a motion script, then print the exact frames the arm would receive.
 
     The whole script is checked first; with any error nothing is written and the exit code
@@ -170,6 +172,11 @@ def compile_command(script: str, fmt: str, output: str | None):
     """
     from .formats import frame_record
 
+    if as_json:
+        given = click.get_current_context().get_parameter_source("fmt") != click.core.ParameterSource.DEFAULT
+        if given and fmt != "json":
+            raise click.UsageError(f"--json is --format json: it cannot be combined with --format {fmt}")
+        fmt = "json"
     if fmt == "bin" and output is None and sys.stdout.isatty():
         raise UsageFailure("refusing to write binary frames to a terminal: use -o FILE or a pipe")
     if output is not None and script != "-" and _same_file(script, output):

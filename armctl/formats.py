@@ -9,6 +9,7 @@ a ``hex`` field), or raw bytes.
 from __future__ import annotations
 
 import json
+import math
 import re
 import string
 from typing import Iterable, Iterator
@@ -20,9 +21,12 @@ _WHITESPACE = frozenset(string.whitespace.encode())
 
 
 def json_value(value):
-    """Field values for JSON: floats in their shortest single-precision spelling."""
+    """Field values for JSON: floats in their shortest single-precision spelling; inf and NaN
+    (a decoded frame may carry them) as the strings "inf", "-inf", "nan" — JSON has no such numbers."""
     if isinstance(value, float):
         text = f32_repr(value)
+        if not math.isfinite(value):
+            return text
         return float(text) if any(c in text for c in ".eE") else int(text)
     if isinstance(value, tuple):
         return [json_value(v) for v in value]
@@ -92,6 +96,26 @@ def describe_chunk(chunk: Chunk) -> str:
     if chunk.error is not None:
         return f"{where}  invalid  {chunk.error}: {chunk.data.hex(' ')}"
     return f"{where}  ??       {len(chunk.data)} byte(s) in no frame: {_short_hex(chunk.data)}"
+
+
+def chunk_record(chunk: Chunk) -> dict:
+    """``decode --json``: one object per chunk — its offset and bytes, its family (motion,
+    control, status, invalid, junk) and, for a frame, its name and decoded fields."""
+    record = {"offset": chunk.offset, "hex": chunk.data.hex()}
+    frame = chunk.frame
+    if isinstance(frame, Command):
+        record["family"] = "motion" if chunk.data[0] == 0xEE else "control"
+        record.update(command=type(frame).__name__, name=frame.NAME)
+    elif isinstance(frame, StatusFrame):
+        record.update(family="status", kind=frame.KIND, name=type(frame).__name__)
+    elif chunk.error is not None:
+        record.update(family="invalid", error=chunk.error)
+        return record
+    else:
+        record["family"] = "junk"
+        return record
+    record["fields"] = {name: json_value(v) for name, v in frame.fields().items()}
+    return record
 
 
 def _short_hex(data: bytes, limit: int = 24) -> str:

@@ -15,6 +15,8 @@ import subprocess
 import sys
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from click.testing import CliRunner
 
 from armctl.cli import main
@@ -84,3 +86,43 @@ def test_installed_command_keeps_stdout_json(tmp_path):
         assert check(json.loads(done.stdout)), (name, done.stdout)
         if message is not None:
             assert message in done.stderr, (name, done.stderr)
+
+
+# --- the commands that print a stream of records: JSON lines ------------------------------------
+
+def _strict_json_lines(text: str) -> list:
+    """Every line one JSON value, with no NaN/Infinity (which JSON does not have)."""
+    def refuse(constant):
+        raise ValueError(f"{constant} is not JSON")
+    return [json.loads(line, parse_constant=refuse) for line in text.splitlines()]
+
+
+def test_compile_json_is_format_json_and_refuses_another_format():
+    lines = _strict_json_lines(CliRunner().invoke(main, ["compile", "job.txt", "--json"]).stdout)
+    assert lines == _strict_json_lines(CliRunner().invoke(main, ["compile", "job.txt", "--format", "json"]).stdout)
+    assert [record["command"] for record in lines] == ["LinearMove"]
+    result = CliRunner().invoke(main, ["compile", "job.txt", "--json", "--format", "hex"])
+    assert result.exit_code == 2 and "--json is --format json" in result.output
+
+
+def test_decode_json_names_every_chunk_and_keeps_the_summary_on_stderr(tmp_path):
+    frames = CliRunner().invoke(main, ["compile", "job.txt"]).stdout
+    (tmp_path / "frames.hex").write_text(frames + "ce0000807f000064cf\n" + "01 02\n", encoding="utf-8")
+    result = CliRunner().invoke(main, ["decode", "frames.hex", "--json"])
+    assert result.exit_code == 0, result.output
+    records = _strict_json_lines(result.stdout)
+    assert [r["family"] for r in records] == ["motion", "invalid", "junk"]
+    assert records[0]["fields"]["x_mm"] == 500 and records[1]["error"].endswith("not a finite number")
+    assert "1 command frame(s)" in result.stderr
+
+
+@settings(max_examples=200, deadline=None)
+@given(data=st.binary(max_size=200))
+def test_decode_json_of_any_bytes_is_strict_json_lines(data):
+    from armctl.formats import bytes_from_input, chunk_record
+    from armctl.protocol import scan_frames
+
+    text = "\n".join(json.dumps(chunk_record(chunk)) for chunk in scan_frames(bytes_from_input(data)))
+    records = _strict_json_lines(text)
+    # the records' bytes spell the input back, in order
+    assert b"".join(bytes.fromhex(r["hex"]) for r in records) == bytes_from_input(data)
