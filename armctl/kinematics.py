@@ -37,7 +37,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple, Sequence
+from functools import lru_cache
+from typing import Iterator, NamedTuple, Sequence
 
 from .errors import ArmctlError
 
@@ -173,10 +174,20 @@ def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None 
     At a singularity the free angle is taken from ``near`` (J1 when the wrist centre is on the
     base axis, J4 when J5 = 0).  An empty list means the pose is out of reach.
     """
+    return list(_solutions(pose, links, near))
+
+
+@lru_cache(maxsize=256)
+def _flange_of(b0_deg: float, b1_deg: float, w_deg: float):
+    """The flange rotation for a tool attitude: scripts keep one attitude for many moves."""
+    return _flange_from_tool(_rpy_matrix(math.radians(b0_deg), math.radians(b1_deg), math.radians(w_deg)))
+
+
+def _solutions(pose, links, near) -> Iterator[tuple[float, ...]]:
+    """``solutions``, one at a time, in the same order (so a caller may stop at the first that fits)."""
     x, y, z, b0, b1, w = pose
     near = near or (0.0,) * JOINT_COUNT
-    tool = _rpy_matrix(math.radians(b0), math.radians(b1), math.radians(w))
-    flange = _flange_from_tool(tool)
+    flange = _flange_of(b0, b1, w)
     d6 = links.tool_mm
     wx, wy, wz = x - d6 * flange[0], y - d6 * flange[3], z - d6 * flange[6]
     a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
@@ -188,7 +199,6 @@ def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None 
     else:
         yaws = [math.atan2(wy, wx)]
         yaws.append(yaws[0] + math.pi)
-    found = []
     for j1 in yaws:
         u = wx * math.cos(j1) + wy * math.sin(j1) - links.shoulder_offset_mm
         v = wz - links.base_height_mm
@@ -203,8 +213,7 @@ def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None 
             arm = _arm(j1, t)
             wrist = _mul((arm[0], arm[3], arm[6], arm[1], arm[4], arm[7], arm[2], arm[5], arm[8]), flange)
             for j4, j5, j6 in _wrist_solutions(wrist, math.radians(near[3])):
-                found.append(tuple(wrap_deg(math.degrees(a)) for a in (j1, j2, t - j2, j4, j5, j6)))
-    return found
+                yield tuple(wrap_deg(math.degrees(a)) for a in (j1, j2, t - j2, j4, j5, j6))
 
 
 def _wrist_solutions(m, near_j4):
@@ -270,6 +279,24 @@ def inverse(
             f" outside its limits {low:g}…{high:g}°"
         )
     return best
+
+
+def has_solution(
+    pose: Sequence[float], links: Links, near: Sequence[float], limits: Sequence[tuple[float, float]],
+) -> bool:
+    """Whether ``inverse(pose, links, near, limits)`` returns rather than raising Unreachable.
+
+    The same solutions, fitted the same way, but it stops at the first that fits instead of
+    fitting all eight to choose the nearest: lint asks this of every target, and only a pose
+    that fails needs ``inverse`` again, for its message."""
+    near = tuple(near)
+    for solution in _solutions(pose, links, near):
+        for k, angle in enumerate(solution):
+            if _fit(angle, near[k], limits[k]) is None:
+                break
+        else:
+            return True
+    return False
 
 
 @dataclass(frozen=True)

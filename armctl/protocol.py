@@ -92,6 +92,9 @@ def _f32(cls_name: str, name: str, value) -> float:
     return single
 
 
+_PLAIN_NUMBERS = frozenset((int, float))  # exact types: bool is refused, as _f32 does
+
+
 def _int(cls_name: str, name: str, value, low: int, high: int) -> int:
     if isinstance(value, bool) or not isinstance(value, int):
         if isinstance(value, float) and value.is_integer():
@@ -162,9 +165,30 @@ class _MotionCommand(Command):
     # field name → float slot 1…11; fields not listed are integers handled by the subclass.
     SLOTS: ClassVar[dict[str, int]] = {}
 
+    def __init_subclass__(cls, **kwargs) -> None:
+        super().__init_subclass__(**kwargs)
+        cls._FLOAT_NAMES = tuple(cls.SLOTS)  # not annotated: no dataclass field
+        cls._FLOATS_CODEC = struct.Struct(f"<{len(cls.SLOTS)}f")  # H1, all float fields at once
+
     def __post_init__(self) -> None:
-        for name in self.SLOTS:
-            object.__setattr__(self, name, _f32(type(self).__name__, name, getattr(self, name)))
+        # Every float field rounded to single precision in one pack/unpack and stored in one
+        # update (a compiler builds one such object per line).  Anything unusual — a value
+        # that is no plain int/float, not finite, or too large for float32 — takes the
+        # field-by-field path, which raises the precise FieldError.
+        state, names = self.__dict__, self._FLOAT_NAMES
+        values = [state[name] for name in names]
+        rounded = None
+        if set(map(type, values)) <= _PLAIN_NUMBERS:
+            try:
+                rounded = self._FLOATS_CODEC.unpack(self._FLOATS_CODEC.pack(*values))
+            except OverflowError:
+                pass
+        # each rounded value is at most float32's max, so their sum is finite unless one is not
+        if rounded is not None and math.isfinite(sum(rounded)):
+            state.update(zip(names, rounded))
+        else:
+            for name in names:
+                object.__setattr__(self, name, _f32(type(self).__name__, name, getattr(self, name)))
         self._validate()
 
     def _validate(self) -> None:
