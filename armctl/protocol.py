@@ -181,7 +181,7 @@ class _MotionCommand(Command):
         if set(map(type, values)) <= _PLAIN_NUMBERS:
             try:
                 rounded = self._FLOATS_CODEC.unpack(self._FLOATS_CODEC.pack(*values))
-            except OverflowError:
+            except (OverflowError, struct.error):  # struct.error: an int too large for a double
                 pass
         # each rounded value is at most float32's max, so their sum is finite unless one is not
         if rounded is not None and math.isfinite(sum(rounded)):
