@@ -37,7 +37,8 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import NamedTuple, Sequence
+from functools import lru_cache
+from typing import Iterator, NamedTuple, Sequence
 
 from .errors import ArmctlError
 
@@ -173,10 +174,29 @@ def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None 
     At a singularity the free angle is taken from ``near`` (J1 when the wrist centre is on the
     base axis, J4 when J5 = 0).  An empty list means the pose is out of reach.
     """
-    x, y, z, b0, b1, w = pose
+    return list(_solutions(pose, links, near))
+
+
+@lru_cache(maxsize=256)
+def _flange_of(b0_deg: float, b1_deg: float, w_deg: float):
+    """The flange rotation for a tool attitude: scripts keep one attitude for many moves."""
+    return _flange_from_tool(_rpy_matrix(math.radians(b0_deg), math.radians(b1_deg), math.radians(w_deg)))
+
+
+def _solutions(pose, links, near) -> Iterator[tuple[float, ...]]:
+    """``solutions``, one at a time, in the same order (so a caller may stop at the first that fits)."""
     near = near or (0.0,) * JOINT_COUNT
-    tool = _rpy_matrix(math.radians(b0), math.radians(b1), math.radians(w))
-    flange = _flange_from_tool(tool)
+    near_j4 = math.radians(near[3])
+    for j1, j2, t, flange in _arm_solutions(pose, links, near):
+        for j4, j5, j6 in _wrist_of(j1, t, flange, near_j4):
+            yield tuple(wrap_deg(math.degrees(a)) for a in (j1, j2, t - j2, j4, j5, j6))
+
+
+def _arm_solutions(pose, links, near) -> Iterator[tuple[float, float, float, tuple]]:
+    """(J1, J2, J2 + J3 in radians, the flange rotation) for each way the first three joints
+    place the wrist centre of ``pose``: front/back, elbow up/down."""
+    x, y, z, b0, b1, w = pose
+    flange = _flange_of(b0, b1, w)
     d6 = links.tool_mm
     wx, wy, wz = x - d6 * flange[0], y - d6 * flange[3], z - d6 * flange[6]
     a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
@@ -188,7 +208,6 @@ def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None 
     else:
         yaws = [math.atan2(wy, wx)]
         yaws.append(yaws[0] + math.pi)
-    found = []
     for j1 in yaws:
         u = wx * math.cos(j1) + wy * math.sin(j1) - links.shoulder_offset_mm
         v = wz - links.base_height_mm
@@ -199,12 +218,14 @@ def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None 
         for delta in {math.acos(cos_d), -math.acos(cos_d)}:
             alpha = math.atan2(v, u) + math.atan2(reach * math.sin(delta), a2 + reach * math.cos(delta))
             j2 = math.pi / 2 - alpha
-            t = gamma - (alpha - delta)
-            arm = _arm(j1, t)
-            wrist = _mul((arm[0], arm[3], arm[6], arm[1], arm[4], arm[7], arm[2], arm[5], arm[8]), flange)
-            for j4, j5, j6 in _wrist_solutions(wrist, math.radians(near[3])):
-                found.append(tuple(wrap_deg(math.degrees(a)) for a in (j1, j2, t - j2, j4, j5, j6)))
-    return found
+            yield j1, j2, gamma - (alpha - delta), flange
+
+
+def _wrist_of(j1, t, flange, near_j4):
+    """The wrist's (J4, J5, J6) radians for an arm at J1 = ``j1``, J2 + J3 = ``t``."""
+    arm = _arm(j1, t)
+    wrist = _mul((arm[0], arm[3], arm[6], arm[1], arm[4], arm[7], arm[2], arm[5], arm[8]), flange)
+    return _wrist_solutions(wrist, near_j4)
 
 
 def _wrist_solutions(m, near_j4):
@@ -270,6 +291,33 @@ def inverse(
             f" outside its limits {low:g}…{high:g}°"
         )
     return best
+
+
+def has_solution(
+    pose: Sequence[float], links: Links, near: Sequence[float], limits: Sequence[tuple[float, float]],
+) -> bool:
+    """Whether ``inverse(pose, links, near, limits)`` returns rather than raising Unreachable.
+
+    The same solutions, fitted the same way, but it stops at the first that fits instead of
+    fitting all eight to choose the nearest, and tries no wrist on an arm placement whose
+    first three joints do not fit: lint asks this of every target, and only a pose that fails
+    needs ``inverse`` again, for its message (tests/test_kinematics.py holds the two equal)."""
+    near = tuple(near)
+    near_j4 = math.radians(near[3])
+    for j1, j2, t, flange in _arm_solutions(pose, links, near):
+        if _fits((j1, j2, t - j2), near, limits, 0):  # else neither wrist flip can help
+            for wrist in _wrist_of(j1, t, flange, near_j4):
+                if _fits(wrist, near, limits, 3):
+                    return True
+    return False
+
+
+def _fits(angles_rad, near, limits, first: int) -> bool:
+    """Whether joints ``first``, ``first`` + 1, … at ``angles_rad`` fit their limits as ``inverse`` fits them."""
+    for k, angle in enumerate(angles_rad, first):
+        if _fit(wrap_deg(math.degrees(angle)), near[k], limits[k]) is None:
+            return False
+    return True
 
 
 @dataclass(frozen=True)

@@ -7,7 +7,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from armctl.kinematics import (
-    CartesianPose, Kinematics, Links, Unreachable, forward, inverse, reach_problem, reachable, rotation_matrix,
+    CartesianPose, Kinematics, Links, Unreachable, forward, has_solution, inverse, reach_problem, reachable, rotation_matrix,
     solutions, wrap_deg,
 )
 from armctl.profile import parse_profile
@@ -166,3 +166,33 @@ def test_reachable_applies_the_worktable_origin():
 
 def test_cartesian_pose_fields_carry_units():
     assert CartesianPose(1, 2, 3, 4, 5, 6)._fields == ("x_mm", "y_mm", "z_mm", "b0_deg", "b1_deg", "w_deg")
+
+
+# --- has_solution: lint's fast reach test is inverse's answer (issue 13) ---------------------
+
+HOME = (0.0, 0.0, 0.0, 0.0, 90.0, 0.0)
+POSES = [HOME, (0.0, 30.0, 30.0, 0.0, 30.0, 0.0), (90.0, 0.0, 0.0, 0.0, 90.0, 0.0), (0.0, -45.0, 90.0, 0.0, 45.0, 0.0)]
+_ANGLE = st.one_of(st.sampled_from([0.0, 90.0, -90.0, 180.0, 45.0]), st.floats(-180, 180))
+
+
+@settings(max_examples=400, deadline=None)
+@given(
+    st.floats(-450, 450), st.floats(-450, 450), st.floats(-100, 600), _ANGLE, _ANGLE, _ANGLE,
+    st.one_of(st.none(), st.sampled_from(POSES), st.tuples(*(st.floats(-180, 180) for _ in range(6)))),
+)
+def test_has_solution_is_exactly_whether_inverse_returns(x, y, z, b0, b1, w, near):
+    near = HOME if near is None else near
+    pose = (x, y, z, b0, b1, w)
+    try:
+        inverse(pose, LINKS, near, LIMITS)
+        expected = True
+    except Unreachable:
+        expected = False
+    assert has_solution(pose, LINKS, near, LIMITS) is expected
+
+
+def test_has_solution_finds_both_answers():
+    limits, links, home = LIMITS, LINKS, HOME
+    assert has_solution((250, 0, 150, 180, 0, 0), links, home, limits)
+    assert not has_solution((600, 0, 150, 180, 0, 0), links, home, limits)  # out of reach
+    assert not has_solution(tuple(forward((0, 0, 0, 0, 90, 0), links)), links, home, [(-170, 170), (5, 100)] + list(limits[2:]))

@@ -112,8 +112,10 @@ class _MotionClock:
     Reported once."""
 
     def __init__(self, profile, compilation) -> None:
+        from ..estimate import motion_time_overrun
         from ..motion import MotionModel, Planner
 
+        self._overrun = motion_time_overrun  # imported once, not once a statement
         model = MotionModel(profile)
         self._planner = Planner(model, model.initial_pose())
         self._compilation = compilation
@@ -146,9 +148,7 @@ class _MotionClock:
             self._motion_s += passes * self._pass_s(commands)
 
     def _judge(self, statement):
-        from ..estimate import motion_time_overrun
-
-        overrun = motion_time_overrun(statement, self._motion_s)
+        overrun = self._overrun(statement, self._motion_s)
         self._reported = overrun is not None
         return overrun
 

@@ -26,7 +26,7 @@ import math
 import re
 from typing import Iterator, NamedTuple, Optional
 
-from ..kinematics import Unreachable, box_problem, inverse
+from ..kinematics import Unreachable, box_problem, has_solution, inverse
 from ..motion import arc_through, circle_through
 from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove
 from ..script import SourceSpan
@@ -155,9 +155,12 @@ def _reach_problem(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
         return problem, _workspace_hint(arm, problem), _WORKSPACE
     profile = arm.profile
     near = arm.ik_hint() if arm.ik_hint() is not None else profile.poses[0]
+    target = (*robot, *pose[3:6])
+    if has_solution(target, profile.links, near, profile.joint_limits_deg):
+        return None  # the common case, decided without choosing the best solution
     try:
-        inverse((*robot, *pose[3:6]), profile.links, near, profile.joint_limits_deg)
-        return None
+        inverse(target, profile.links, near, profile.joint_limits_deg)
+        return None  # pragma: no cover - has_solution says when inverse succeeds
     except Unreachable as error:
         problem = str(error)
     try:

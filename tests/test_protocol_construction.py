@@ -1,0 +1,59 @@
+"""A motion command's floats are rounded in one pack/unpack (issue 13: cheap construction); any
+unusual value takes the field-by-field path.  Both must give the same object or the same error:
+a float subclass forces the field-by-field path for the comparison."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from armctl.errors import FieldError
+from armctl.protocol import AccelLinearMove, JointMove, LinearMove
+
+
+class _Slow(float):
+    """Not an exact float: construction takes the field-by-field path."""
+
+
+def _outcome(cls, values: dict):
+    try:
+        command = cls(**values)
+    except FieldError as error:
+        return ("error", str(error))
+    return ("ok", [(name, getattr(command, name), math.copysign(1.0, getattr(command, name))) for name in cls.SLOTS])
+
+
+NUMBERS = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True), st.floats(-1e4, 1e4), st.integers(-(2**70), 2**70),
+    st.sampled_from([0.0, -0.0, 3.4028234663852886e38, 3.4028235677973366e38, 1e39, 1e-46, 1500, 3000.0]),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.sampled_from([LinearMove, AccelLinearMove, JointMove]), st.data())
+def test_the_one_pack_path_gives_what_the_field_by_field_path_gives(cls, data):
+    values = {name: data.draw(NUMBERS, label=name) for name in cls.SLOTS}
+    if cls is AccelLinearMove:
+        values["mode"] = 2
+    slow = {name: _Slow(value) if name in cls.SLOTS else value for name, value in values.items()}
+    fast_outcome, slow_outcome = _outcome(cls, values), _outcome(cls, slow)
+    if fast_outcome[0] == "ok":
+        assert slow_outcome[0] == "ok"
+        assert all(type(value) is float for _, value, _ in fast_outcome[1])
+        assert [(n, v if v == v else "nan", s) for n, v, s in fast_outcome[1]] == \
+               [(n, v if v == v else "nan", s) for n, v, s in slow_outcome[1]]
+    else:
+        assert fast_outcome == slow_outcome
+
+
+def test_bools_and_strings_are_refused_as_before():
+    good = dict(x_mm=1, y_mm=2, z_mm=3, b0_deg=180, b1_deg=0, w_deg=0, pwm_us=1500, speed_mm_min=3000)
+    with pytest.raises(FieldError, match="y_mm must be a number, not True"):
+        LinearMove(**{**good, "y_mm": True})
+    with pytest.raises(FieldError, match="z_mm must be a number, not '3'"):
+        LinearMove(**{**good, "z_mm": "3"})
+    with pytest.raises(OverflowError):  # as before: float() of an int beyond a double
+        LinearMove(**{**good, "x_mm": 10**400})
