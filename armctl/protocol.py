@@ -694,6 +694,26 @@ def _decode_motion(frame: bytes) -> AnyCommand:
 # --- arm → host status frames -----------------------------------------------------------------
 
 
+@dataclass(frozen=True)
+class StatusFrame:
+    """Base of the 9 status kinds: ``0xCE d0..d5 kind 0xCF``."""
+
+    KIND: ClassVar[int] = -1
+    NAME: ClassVar[str] = ""
+
+    def encode(self) -> bytes:
+        frame = bytearray(STATUS_SIZE)
+        frame[0], frame[7], frame[8] = STATUS_HEAD, self.KIND, STATUS_TAIL
+        frame[1:7] = self._data().ljust(6, b"\0")
+        return bytes(frame)
+
+    def _data(self) -> bytes:  # pragma: no cover - every subclass overrides
+        raise NotImplementedError
+
+    def fields(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
 def _word(cls_name: str, name: str, value, scale: int) -> float:
     """A value carried as a signed 16-bit word of ``value × scale``, normalised to that grid."""
     number = _f64(cls_name, name, value)
@@ -721,221 +741,166 @@ MM_SCALE = 10  # status lengths are 0.1 mm
 DEG_SCALE = 100  # status angles are 0.01 deg (H8: kinds 3 and 5 reuse kinds 0 and 1's scales)
 
 
-# The status classes are defined on first use, not at import: building a frozen dataclass
-# costs a few hundred microseconds, and ``lint``, ``compile`` and ``estimate`` never see a status
-# frame (issue 13, start-up).  ``from armctl.protocol import PositionStatus`` (or any use of the
-# names below) defines them all once, through the module's ``__getattr__`` (PEP 562); the
-# functions here that need them call ``_status_kinds()``.  They are first used when a module
-# that reads status frames is imported, under the import system's lock.
-_STATUS_NAMES = frozenset((
-    "StatusFrame", "PositionStatus", "JointsLowStatus", "JointsHighStatus", "WorktableStatus", "WristStatus",
-    "PauseStatus", "FileLengthStatus", "RunPositionStatus", "FileStatus", "STATUS_KINDS", "_ThreeWords", "_FloatStatus",
-))
+@dataclass(frozen=True)
+class _ThreeWords(StatusFrame):
+    SCALE: ClassVar[int] = 1
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            object.__setattr__(self, f.name, _word(type(self).__name__, f.name, getattr(self, f.name), self.SCALE))
+
+    def _data(self) -> bytes:
+        return _words(self.fields().values(), self.SCALE)
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "StatusFrame":
+        return cls(*_unwords(data, len(fields(cls)), cls.SCALE))
 
 
-def __getattr__(name: str):
-    if name in _STATUS_NAMES:
-        _status_kinds()
-        return globals()[name]
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+@dataclass(frozen=True)
+class PositionStatus(_ThreeWords):
+    """Kind 0 — tool position X, Y, Z in mm."""
+
+    KIND: ClassVar[int] = 0
+    NAME: ClassVar[str] = "position"
+    SCALE: ClassVar[int] = MM_SCALE
+    x_mm: float
+    y_mm: float
+    z_mm: float
 
 
-def _status_kinds() -> dict:
-    """STATUS_KINDS (kind byte → class), the status classes defined first if they are not yet."""
-    kinds = globals().get("STATUS_KINDS")
-    if kinds is None:
-        _define_status_frames()
-        kinds = globals()["STATUS_KINDS"]
-    return kinds
+@dataclass(frozen=True)
+class JointsLowStatus(_ThreeWords):
+    """Kind 1 — joints 1, 2, 3 (a0, a1, a2) in degrees."""
+
+    KIND: ClassVar[int] = 1
+    NAME: ClassVar[str] = "joints 1-3"
+    SCALE: ClassVar[int] = DEG_SCALE
+    j1_deg: float
+    j2_deg: float
+    j3_deg: float
 
 
-def _define_status_frames() -> None:
-    """Define the status frame classes as module globals (see the comment above)."""
-    global StatusFrame, _ThreeWords, PositionStatus, JointsLowStatus, JointsHighStatus, WorktableStatus
-    global WristStatus, PauseStatus, _FloatStatus, FileLengthStatus, RunPositionStatus, FileStatus, STATUS_KINDS
+@dataclass(frozen=True)
+class JointsHighStatus(_ThreeWords):
+    """Kind 2 — joints 4, 5, 6 (b0/w0, b1/w1, aw) in degrees."""
 
-    @dataclass(frozen=True)
-    class StatusFrame:
-        """Base of the 9 status kinds: ``0xCE d0..d5 kind 0xCF``."""
-
-        KIND: ClassVar[int] = -1
-        NAME: ClassVar[str] = ""
-
-        def encode(self) -> bytes:
-            frame = bytearray(STATUS_SIZE)
-            frame[0], frame[7], frame[8] = STATUS_HEAD, self.KIND, STATUS_TAIL
-            frame[1:7] = self._data().ljust(6, b"\0")
-            return bytes(frame)
-
-        def _data(self) -> bytes:  # pragma: no cover - every subclass overrides
-            raise NotImplementedError
-
-        def fields(self) -> dict:
-            return {f.name: getattr(self, f.name) for f in fields(self)}
+    KIND: ClassVar[int] = 2
+    NAME: ClassVar[str] = "joints 4-6"
+    SCALE: ClassVar[int] = DEG_SCALE
+    j4_deg: float
+    j5_deg: float
+    j6_deg: float
 
 
-    @dataclass(frozen=True)
-    class _ThreeWords(StatusFrame):
-        SCALE: ClassVar[int] = 1
+@dataclass(frozen=True)
+class WorktableStatus(_ThreeWords):
+    """Kind 3 — worktable origin X0, Y0, Z0 in mm."""
 
-        def __post_init__(self) -> None:
-            for f in fields(self):
-                object.__setattr__(self, f.name, _word(type(self).__name__, f.name, getattr(self, f.name), self.SCALE))
-
-        def _data(self) -> bytes:
-            return _words(self.fields().values(), self.SCALE)
-
-        @classmethod
-        def _from_data(cls, data: bytes) -> "StatusFrame":
-            return cls(*_unwords(data, len(fields(cls)), cls.SCALE))
+    KIND: ClassVar[int] = 3
+    NAME: ClassVar[str] = "worktable origin"
+    SCALE: ClassVar[int] = MM_SCALE
+    x_mm: float
+    y_mm: float
+    z_mm: float
 
 
-    @dataclass(frozen=True)
-    class PositionStatus(_ThreeWords):
-        """Kind 0 — tool position X, Y, Z in mm."""
+@dataclass(frozen=True)
+class WristStatus(_ThreeWords):
+    """Kind 5 — w0, w1 in degrees; d4..d5 unused."""
 
-        KIND: ClassVar[int] = 0
-        NAME: ClassVar[str] = "position"
-        SCALE: ClassVar[int] = MM_SCALE
-        x_mm: float
-        y_mm: float
-        z_mm: float
-
-
-    @dataclass(frozen=True)
-    class JointsLowStatus(_ThreeWords):
-        """Kind 1 — joints 1, 2, 3 (a0, a1, a2) in degrees."""
-
-        KIND: ClassVar[int] = 1
-        NAME: ClassVar[str] = "joints 1-3"
-        SCALE: ClassVar[int] = DEG_SCALE
-        j1_deg: float
-        j2_deg: float
-        j3_deg: float
+    KIND: ClassVar[int] = 5
+    NAME: ClassVar[str] = "wrist"
+    SCALE: ClassVar[int] = DEG_SCALE
+    w0_deg: float
+    w1_deg: float
 
 
-    @dataclass(frozen=True)
-    class JointsHighStatus(_ThreeWords):
-        """Kind 2 — joints 4, 5, 6 (b0/w0, b1/w1, aw) in degrees."""
+@dataclass(frozen=True)
+class PauseStatus(StatusFrame):
+    """Kind 4 — d1 = pause state (raw byte, non-zero = paused); d4..d5 = PWM in µs."""
 
-        KIND: ClassVar[int] = 2
-        NAME: ClassVar[str] = "joints 4-6"
-        SCALE: ClassVar[int] = DEG_SCALE
-        j4_deg: float
-        j5_deg: float
-        j6_deg: float
+    KIND: ClassVar[int] = 4
+    NAME: ClassVar[str] = "pause and PWM"
+    pause_state: int
+    pwm_us: int
 
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "pause_state", _int("PauseStatus", "pause_state", self.pause_state, 0, 255))
+        object.__setattr__(self, "pwm_us", _int("PauseStatus", "pwm_us", self.pwm_us, -32768, 32767))
 
-    @dataclass(frozen=True)
-    class WorktableStatus(_ThreeWords):
-        """Kind 3 — worktable origin X0, Y0, Z0 in mm."""
+    @property
+    def paused(self) -> bool:
+        return self.pause_state != 0
 
-        KIND: ClassVar[int] = 3
-        NAME: ClassVar[str] = "worktable origin"
-        SCALE: ClassVar[int] = MM_SCALE
-        x_mm: float
-        y_mm: float
-        z_mm: float
+    def _data(self) -> bytes:
+        return bytes([0, self.pause_state, 0, 0]) + STATUS_WORD_CODEC.pack(self.pwm_us)
 
-
-    @dataclass(frozen=True)
-    class WristStatus(_ThreeWords):
-        """Kind 5 — w0, w1 in degrees; d4..d5 unused."""
-
-        KIND: ClassVar[int] = 5
-        NAME: ClassVar[str] = "wrist"
-        SCALE: ClassVar[int] = DEG_SCALE
-        w0_deg: float
-        w1_deg: float
+    @classmethod
+    def _from_data(cls, data: bytes) -> "PauseStatus":
+        return cls(data[1], STATUS_WORD_CODEC.unpack_from(data, 4)[0])
 
 
-    @dataclass(frozen=True)
-    class PauseStatus(StatusFrame):
-        """Kind 4 — d1 = pause state (raw byte, non-zero = paused); d4..d5 = PWM in µs."""
+@dataclass(frozen=True)
+class _FloatStatus(StatusFrame):
+    value: float
 
-        KIND: ClassVar[int] = 4
-        NAME: ClassVar[str] = "pause and PWM"
-        pause_state: int
-        pwm_us: int
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "value", _f32(type(self).__name__, "value", self.value))
 
-        def __post_init__(self) -> None:
-            object.__setattr__(self, "pause_state", _int("PauseStatus", "pause_state", self.pause_state, 0, 255))
-            object.__setattr__(self, "pwm_us", _int("PauseStatus", "pwm_us", self.pwm_us, -32768, 32767))
+    def _data(self) -> bytes:
+        return FLOAT_CODEC.pack(self.value)
 
-        @property
-        def paused(self) -> bool:
-            return self.pause_state != 0
-
-        def _data(self) -> bytes:
-            return bytes([0, self.pause_state, 0, 0]) + STATUS_WORD_CODEC.pack(self.pwm_us)
-
-        @classmethod
-        def _from_data(cls, data: bytes) -> "PauseStatus":
-            return cls(data[1], STATUS_WORD_CODEC.unpack_from(data, 4)[0])
+    @classmethod
+    def _from_data(cls, data: bytes) -> "StatusFrame":
+        value = FLOAT_CODEC.unpack_from(data, 0)[0]
+        if not math.isfinite(value):
+            raise FieldError(f"{cls.NAME} carries {f32_repr(value)}, not a finite number")
+        return cls(value)
 
 
-    @dataclass(frozen=True)
-    class _FloatStatus(StatusFrame):
-        value: float
+@dataclass(frozen=True)
+class FileLengthStatus(_FloatStatus):
+    """Kind 100 — SD program file length (float, H8: little-endian)."""
 
-        def __post_init__(self) -> None:
-            object.__setattr__(self, "value", _f32(type(self).__name__, "value", self.value))
-
-        def _data(self) -> bytes:
-            return FLOAT_CODEC.pack(self.value)
-
-        @classmethod
-        def _from_data(cls, data: bytes) -> "StatusFrame":
-            value = FLOAT_CODEC.unpack_from(data, 0)[0]
-            if not math.isfinite(value):
-                raise FieldError(f"{cls.NAME} carries {f32_repr(value)}, not a finite number")
-            return cls(value)
+    KIND: ClassVar[int] = 100
+    NAME: ClassVar[str] = "SD file length"
 
 
-    @dataclass(frozen=True)
-    class FileLengthStatus(_FloatStatus):
-        """Kind 100 — SD program file length (float, H8: little-endian)."""
+@dataclass(frozen=True)
+class RunPositionStatus(_FloatStatus):
+    """Kind 103 — SD program run position (float, H8: little-endian)."""
 
-        KIND: ClassVar[int] = 100
-        NAME: ClassVar[str] = "SD file length"
-
-
-    @dataclass(frozen=True)
-    class RunPositionStatus(_FloatStatus):
-        """Kind 103 — SD program run position (float, H8: little-endian)."""
-
-        KIND: ClassVar[int] = 103
-        NAME: ClassVar[str] = "SD run position"
+    KIND: ClassVar[int] = 103
+    NAME: ClassVar[str] = "SD run position"
 
 
-    @dataclass(frozen=True)
-    class FileStatus(StatusFrame):
-        """Kind 102 — SD program file status, d0..d1 as a raw big-endian 16-bit number."""
+@dataclass(frozen=True)
+class FileStatus(StatusFrame):
+    """Kind 102 — SD program file status, d0..d1 as a raw big-endian 16-bit number."""
 
-        KIND: ClassVar[int] = 102
-        NAME: ClassVar[str] = "SD file status"
-        raw: int
+    KIND: ClassVar[int] = 102
+    NAME: ClassVar[str] = "SD file status"
+    raw: int
 
-        def __post_init__(self) -> None:
-            object.__setattr__(self, "raw", _int("FileStatus", "raw", self.raw, 0, 0xFFFF))
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "raw", _int("FileStatus", "raw", self.raw, 0, 0xFFFF))
 
-        def _data(self) -> bytes:
-            return self.raw.to_bytes(2, "big")
+    def _data(self) -> bytes:
+        return self.raw.to_bytes(2, "big")
 
-        @classmethod
-        def _from_data(cls, data: bytes) -> "FileStatus":
-            return cls(int.from_bytes(data[0:2], "big"))
-
-
-    STATUS_KINDS = {
-        k.KIND: k
-        for k in (
-            PositionStatus, JointsLowStatus, JointsHighStatus, WorktableStatus, PauseStatus, WristStatus,
-            FileLengthStatus, FileStatus, RunPositionStatus,
-        )
-    }
+    @classmethod
+    def _from_data(cls, data: bytes) -> "FileStatus":
+        return cls(int.from_bytes(data[0:2], "big"))
 
 
+STATUS_KINDS: dict[int, type[StatusFrame]] = {
+    k.KIND: k
+    for k in (
+        PositionStatus, JointsLowStatus, JointsHighStatus, WorktableStatus, PauseStatus, WristStatus,
+        FileLengthStatus, FileStatus, RunPositionStatus,
+    )
+}
 # The order in which the arm rotates through the kinds, one every STATUS_PERIOD_S.
 STATUS_ROTATION = (0, 1, 2, 3, 4, 5, 100, 102, 103)
 
@@ -946,7 +911,7 @@ def is_status_frame(data: bytes, offset: int = 0) -> bool:
         len(data) - offset >= STATUS_SIZE
         and data[offset] == STATUS_HEAD
         and data[offset + 8] == STATUS_TAIL
-        and data[offset + 7] in _status_kinds()
+        and data[offset + 7] in STATUS_KINDS
     )
 
 
@@ -957,7 +922,7 @@ def decode_status(frame: bytes) -> StatusFrame:
         raise FrameError(f"a status frame is {STATUS_SIZE} bytes, not {len(frame)}")
     if not is_status_frame(frame):
         raise FrameError(f"not a status frame: {frame.hex(' ')}")
-    return _status_kinds()[frame[7]]._from_data(frame[1:7])
+    return STATUS_KINDS[frame[7]]._from_data(frame[1:7])
 
 
 class StatusReader:
