@@ -148,6 +148,16 @@ def _read_script(path: str):
         raise UsageFailure(f"cannot read {path}: {error.strerror or error}") from None
 
 
+def _refuse_same_file(output: str, script: str, option: str) -> None:
+    """An output (``-o``, ``--log``) that is the script itself: exit 2, nothing written."""
+    from .outputs import SameFileError, refuse_same_file
+
+    try:
+        refuse_same_file(output, script, option)
+    except SameFileError as error:
+        raise UsageFailure(str(error)) from None
+
+
 def _report_script_errors(compilation) -> None:
     """Print every diagnostic of a failed check and exit 1; nothing else is written."""
     for diagnostic in compilation.diagnostics:
@@ -179,12 +189,14 @@ def compile_command(script: str, fmt: str, as_json: bool, output: str | None):
         fmt = "json"
     if fmt == "bin" and output is None and sys.stdout.isatty():
         raise UsageFailure("refusing to write binary frames to a terminal: use -o FILE or a pipe")
-    if output is not None and script != "-" and _same_file(script, output):
-        raise UsageFailure(f"refusing to write the frames over the script itself ({output}): choose another -o")
+    if output is not None:
+        _refuse_same_file(output, script, "-o")
     source_script = _read_script(script)
     # One pass: the frames go to a temporary file while the script compiles; it becomes the
     # output (or is copied to stdout) only if the whole script compiled without errors.
-    with _pending_output(output, binary=fmt == "bin") as pending:
+    from .outputs import PendingOutput
+
+    with PendingOutput(output, binary=fmt == "bin") as pending:
         out = pending.stream
         compilation = source_script.compile()
         for statement in compilation:
@@ -199,87 +211,6 @@ def compile_command(script: str, fmt: str, as_json: bool, output: str | None):
         if compilation.error_count:
             _report_script_errors(compilation)  # exits 1; the pending output is discarded
         pending.commit()
-
-
-def _same_file(script: str, output: str) -> bool:
-    import os
-
-    try:
-        return os.path.samefile(script, output)
-    except OSError:  # the output does not exist yet (or cannot be looked at): not the script
-        return False
-
-
-class _PendingOutput:
-    """Frames written to a temporary file; ``commit`` makes them the output (``os.replace``
-    next to the target, so a reader never sees half a file) or copies them to stdout."""
-
-    def __init__(self, path: str | None, binary: bool) -> None:
-        import os
-        import tempfile
-
-        self.path, self.binary = path, binary
-        encoding = None if binary else "utf-8"
-        if path is None:
-            self._file = tempfile.TemporaryFile("w+b" if binary else "w+", encoding=encoding)
-            self._temp = None
-        else:
-            directory = os.path.dirname(os.path.abspath(path))
-            handle, self._temp = tempfile.mkstemp(prefix=".armctl-", suffix=".tmp", dir=directory)
-            os.fchmod(handle, _new_file_mode(path))  # mkstemp's 0600 is not what open() would give
-            self._file = os.fdopen(handle, "wb" if binary else "w", encoding=encoding)
-        self.stream = self._file
-        self.committed = False
-
-    def commit(self) -> None:
-        import os
-        import shutil
-
-        if self._temp is None:
-            self._file.seek(0)
-            target = sys.stdout.buffer if self.binary else sys.stdout
-            shutil.copyfileobj(self._file, target)
-            target.flush()
-        else:
-            self._file.close()
-            os.replace(self._temp, self.path)
-        self.committed = True
-
-    def discard(self) -> None:
-        import os
-
-        self._file.close()
-        if self._temp is not None and not self.committed:
-            try:
-                os.unlink(self._temp)
-            except OSError:
-                pass
-
-
-def _new_file_mode(path: str) -> int:
-    """The mode ``path`` has (it is replaced), else what open() would create under the umask."""
-    import os
-
-    try:
-        return os.stat(path).st_mode & 0o7777
-    except OSError:
-        umask = os.umask(0)
-        os.umask(umask)
-        return 0o666 & ~umask
-
-
-def _pending_output(path: str | None, binary: bool):
-    import contextlib
-
-    @contextlib.contextmanager
-    def pending():
-        output = _PendingOutput(path, binary)
-        try:
-            yield output
-        finally:
-            output.discard()
-
-    return pending()
 
 
 # --- commands that talk to a port -------------------------------------------------------------
@@ -362,6 +293,8 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
     """
     from .ui.run_job import JobOptions, run_job
 
+    if log_path is not None:
+        _refuse_same_file(log_path, script, "--log")
     snapshot = _read_script(script)
     options = JobOptions(script, port, baud, lead_s, from_line, dry_run, log_path, not no_live, abort, profile_path, timeout_s)
     sys.exit(run_job(options, snapshot, _connect))

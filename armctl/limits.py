@@ -2,12 +2,20 @@
 
 Strategy: every range a command-line option, a ``sim://`` option or an armctl.toml value is
 checked against lives here once, as ``(low, high)`` with the unit in the name, so ``--baud``,
-``baud =`` in armctl.toml and ``sim://?baud=`` cannot drift apart.  Pure constants; no imports.
+``baud =`` in armctl.toml and ``sim://?baud=`` cannot drift apart.  Pure constants, some derived from the protocol's.
 """
 
 from __future__ import annotations
 
-BAUD_RANGE = (300, 4_000_000)  # bit/s: what pyserial and USB-serial adapters offer
+import math
+
+from .protocol import BITS_PER_BYTE, STATUS_PERIOD_S, STATUS_SIZE
+
+# bit/s.  The arm sends a 9-byte status frame every 30 ms (3000 bit/s at 8N1): on a slower line
+# its status falls ever further behind, and a job judged on stale positions could be called done
+# or lost wrongly.  The top is what pyserial and USB-serial adapters offer.
+MIN_BAUD = math.ceil(STATUS_SIZE * BITS_PER_BYTE / STATUS_PERIOD_S - 1e-9)
+BAUD_RANGE = (MIN_BAUD, 4_000_000)
 LEAD_RANGE_S = (0.1, 60.0)  # motion queued ahead of the arm
 BENCH_LEAD_RANGE_S = (0.001, 60.0)  # the benchmark may also show what a lead too short to feed the arm does
 BENCH_JOBS_RANGE = (1, 64)  # parallel benchmark processes

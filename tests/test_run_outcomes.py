@@ -98,7 +98,7 @@ def test_the_state_links_use_judges_jumps_against_the_profile():
 def test_a_bad_baud_in_armctl_toml_is_a_clear_error(value):
     from armctl.errors import ConfigError
 
-    with pytest.raises(ConfigError, match=r"armctl.toml: baud = .* must be a whole number of bit/s from 300"):
+    with pytest.raises(ConfigError, match=r"armctl.toml: baud = .* must be a whole number of bit/s from 3000"):
         config_baud({"baud": value}, "armctl.toml")
     assert config_baud({}, "armctl.toml") == 9600
 
