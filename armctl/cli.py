@@ -40,7 +40,10 @@ class ArmctlGroup(click.Group):
 
     def invoke(self, ctx: click.Context):
         try:
-            return super().invoke(ctx)
+            try:
+                return super().invoke(ctx)
+            finally:
+                _flush_stdout()
         except (UsageFailure, ProfileError, ConfigError, InputTooLarge) as error:
             _fail(str(error), EXIT_USAGE)
         except ArmctlError as error:
@@ -51,6 +54,22 @@ class ArmctlGroup(click.Group):
             _reader_went_away()
         except OSError as error:
             _fail(_os_error_text(error), EXIT_USAGE)
+
+
+def _flush_stdout() -> None:
+    """Whatever the command wrote must reach its reader: a full disk (``compile > /dev/full``)
+    is an error (exit 2), never a silent success with half the frames."""
+    flush = getattr(sys.stdout, "flush", None)  # None: stdout replaced by something odd (a test)
+    if flush is None:
+        return
+    try:
+        flush()
+    except BrokenPipeError:
+        raise
+    except OSError as error:
+        raise UsageFailure(f"cannot write the output: {error.strerror or error}") from None
+    except ValueError:  # stdout closed by the command itself
+        pass
 
 
 def _tolerant_output() -> None:

@@ -251,3 +251,28 @@ def _wait_for_pane(tmux, text: str) -> str:
             return pane
         time.sleep(0.1)
     raise AssertionError(f"{text!r} never appeared:\n{pane}")
+
+
+@pytest.mark.realtime
+@pytest.mark.parametrize("stop_signal", [signal.SIGTERM, signal.SIGHUP], ids=["SIGTERM", "SIGHUP"])
+def test_sigterm_or_sighup_mid_job_takes_the_ctrl_c_path(tmp_path, stop_signal):
+    """timeout, systemd, a CI cancelling (SIGTERM) or a closed terminal (SIGHUP): the job stops
+    as on Ctrl-C — abort sequence, summary, resume line (with the options that shaped the run) — exit 130."""
+    log = tmp_path / "job.log"
+    port = "sim://?speed=5"
+    process = _spawn(["run", "scripts/pick_and_place.txt", "--port", port, "--no-live", "--lead", "1.5",
+                      "--log", str(log)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        first = _readline(process.stdout)  # the first progress line: the job is streaming
+        assert first.startswith("[0:00] frames"), first
+        process.send_signal(stop_signal)
+        code = process.wait(timeout=WAIT_S)
+        out, err = process.stdout.read(), process.stderr.read()
+    finally:
+        process.kill()
+    assert code == 130, err
+    assert f"note: stopped by {stop_signal.name}" in err and "Traceback" not in err
+    assert any('"abort": true' in line for line in log.read_text().splitlines())
+    resume = next(line for line in out.splitlines() if line.startswith("resume with: "))
+    assert resume.startswith("resume with: armctl run scripts/pick_and_place.txt --from-line ")
+    assert f"--port '{port}'" in resume and "--lead 1.5" in resume

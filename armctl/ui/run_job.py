@@ -33,7 +33,7 @@ import click
 
 from ..errors import ArmctlError, PortError
 from ..protocol import PauseToggle, describe
-from ..streamer import Streamer
+from ..streamer import DEFAULT_LEAD_S, Streamer
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_INTERRUPTED = 0, 1, 130
 LIVE_REFRESH_S = 0.1
@@ -305,17 +305,28 @@ def _job_grid(script, model, start, initial, options: JobOptions):
 
 @contextmanager
 def _deferred_ctrl_c(runner):
-    """While streaming, Ctrl-C asks the runner to stop at its next safe point (between writes),
-    so the records of a frame written are never half made; a second Ctrl-C acts at once."""
+    """While streaming, Ctrl-C (or SIGTERM, SIGHUP) asks the runner to stop at its next safe point
+    (between writes), so the records of a frame written are never half made; a second one acts at once."""
     if threading.current_thread() is not threading.main_thread():
         yield
         return
-    previous = signal.getsignal(signal.SIGINT)
-    signal.signal(signal.SIGINT, lambda signum, frame: runner.request_stop())
+    # SIGTERM (timeout, systemd, a CI cancelling) and SIGHUP (the terminal closed) stop a job
+    # the same way: an arm left running with no summary and no resume line is the worst ending.
+    signals = [signal.SIGINT] + [getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
+
+    def stop(signum, _frame):
+        if signum != signal.SIGINT:
+            runner.view.messages.append(f"stopped by {signal.Signals(signum).name}")
+        runner.request_stop()
+
+    previous = {number: signal.getsignal(number) for number in signals}
+    for number in signals:
+        signal.signal(number, stop)
     try:
         yield
     finally:
-        signal.signal(signal.SIGINT, previous)
+        for number, handler in previous.items():
+            signal.signal(number, handler)
 
 
 class _Display:
@@ -406,6 +417,27 @@ def outermost_block_start(lines, line: int) -> int | None:
     return None
 
 
+def resume_command(options: JobOptions, line: int) -> str:
+    """The command that continues this job on the same arm: every option that shaped the run
+    (port, baud, lead, profile, abort), quoted for a POSIX shell.  Without them a resume could
+    reach another port, or check the script against the illustrative profile instead of yours.
+    A port, baud or profile that came from armctl.toml or ARMCTL_PORT is left to come from there."""
+    import shlex
+
+    words = ["armctl", "run", options.script, "--from-line", str(line)]
+    if options.port is not None:
+        words += ["--port", options.port]
+    if options.baud is not None:
+        words += ["--baud", str(options.baud)]
+    if options.lead_s != DEFAULT_LEAD_S:
+        words += ["--lead", f"{options.lead_s:g}"]
+    if options.profile_path is not None:
+        words += ["--profile", options.profile_path]
+    if options.abort != "pause":
+        words += ["--abort", options.abort]
+    return shlex.join(words)
+
+
 def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, script) -> int:
     sent = view.last_sent.line if view.last_sent is not None else None
     done = view.last_done.line if view.last_done is not None else None
@@ -431,7 +463,7 @@ def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, s
             resume = outermost_block_start(script.lines(), resume) or resume
             where = (f" (line {view.resume_line()} is inside a repeat block, in pass {loop[-1] + 1}: the block "
                      "runs again from its first pass, so the passes already done are repeated)")
-        click.echo(f"resume with: armctl run {options.script} --from-line {resume}{where}")
+        click.echo(f"resume with: {resume_command(options, resume)}{where}")
     if outcome == "interrupted":
         click.echo(f"stopped: interrupted; abort sequence: {options.abort}", err=True)
         return EXIT_INTERRUPTED
