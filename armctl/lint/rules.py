@@ -28,7 +28,7 @@ from typing import Iterator, NamedTuple, Optional
 
 from ..kinematics import Unreachable, box_problem, has_solution, inverse
 from ..motion import arc_through, circle_through
-from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove
+from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove, as_f32
 from ..script import SourceSpan
 from .registry import END, check
 from .tracker import cartesian_target, pwm_channel_of
@@ -233,21 +233,31 @@ def joint_limit(statement, arm) -> Iterator[Finding]:
 # --- L2xx speeds ----------------------------------------------------------------------------------
 
 
+def _sent(statement, letter: str) -> float | None:
+    """The word's value as the frame carries it (32-bit, H1), so a finding judges what is sent:
+    ``S2500.00001`` goes out as 2500 and is inside 500…2500.  None when the word is absent."""
+    value = statement.words.get(letter)
+    if value is None:
+        return None
+    sent = as_f32(value)
+    return value if sent is None else sent  # beyond float32: the compiler's E005 says so
+
+
 def _is_unit_slip(statement, arm) -> bool:
-    return statement.words.get("F", 0.0) > UNIT_SLIP_FACTOR * arm.profile.speed.max_joint_deg_s
+    return (_sent(statement, "F") or 0.0) > UNIT_SLIP_FACTOR * arm.profile.speed.max_joint_deg_s
 
 
 @check("L201", on=CARTESIAN_MOVES + (JointMove,))
 def speed_above_max(statement, arm) -> Iterator[Finding]:
     speed = arm.profile.speed
     if type(statement.command) is JointMove:
-        value = statement.words.get("F")
+        value = _sent(statement, "F")
         if value is not None and value > speed.max_joint_deg_s and not _is_unit_slip(statement, arm):
             yield (_at(statement, "F"), f"F{value:g} deg/s is above the profile's joint maximum {speed.max_joint_deg_s:g} deg/s",
                    f"write F{speed.max_joint_deg_s:g} or less", ("speed.max_joint_deg_s",))
         return
     for letter in ("F", "Q"):
-        value = statement.words.get(letter)
+        value = _sent(statement, letter)
         if value is not None and value > speed.max_linear_mm_min:
             limit = speed.max_linear_mm_min
             yield (_at(statement, letter), f"{letter}{value:g} mm/min is above the profile's maximum {limit:g} mm/min",
@@ -257,7 +267,7 @@ def speed_above_max(statement, arm) -> Iterator[Finding]:
 @check("L202", on=[JointMove])
 def joint_speed_unit(statement, arm) -> Iterator[Finding]:
     if _is_unit_slip(statement, arm):
-        value, limit = statement.words["F"], arm.profile.speed.max_joint_deg_s
+        value, limit = _sent(statement, "F"), arm.profile.speed.max_joint_deg_s
         yield (_at(statement, "F"), f"G6 F{value:g} means {value:g} deg/s, {value / limit:.0f}× the joint maximum"
                f" {limit:g} deg/s: it reads like mm/min", f"G6 speeds are deg/s: write e.g. F{min(30.0, limit):g}",
                ("speed.max_joint_deg_s",))
@@ -265,7 +275,7 @@ def joint_speed_unit(statement, arm) -> Iterator[Finding]:
 
 @check("L203", on=CARTESIAN_MOVES)
 def cartesian_speed_unit(statement, arm) -> Iterator[Finding]:
-    value = statement.words.get("F")
+    value = _sent(statement, "F")
     if value is not None and 0 < value < SLOW_CARTESIAN_MM_MIN:
         yield (_at(statement, "F"), f"F{value:g} means {value:g} mm/min ({value / 60:.2g} mm/s): it reads like deg/s",
                f"Cartesian speeds are mm/min: {value:g} mm/s is F{value * 60:g}")
@@ -273,7 +283,7 @@ def cartesian_speed_unit(statement, arm) -> Iterator[Finding]:
 
 @check("L204", on=[AccelLinearMove])
 def accel_above_max(statement, arm) -> Iterator[Finding]:
-    value, limit = statement.words.get("K"), arm.profile.speed.max_accel_mm_s2
+    value, limit = _sent(statement, "K"), arm.profile.speed.max_accel_mm_s2
     if value is not None and abs(value) > limit:
         yield (_at(statement, "K"), f"K{value:g} mm/s² is above the profile's maximum acceleration {limit:g} mm/s²",
                f"write K{math.copysign(limit, value):g} or a smaller magnitude", ("speed.max_accel_mm_s2",))
@@ -299,7 +309,7 @@ def pwm_channel_unwired(statement, arm) -> Iterator[Finding]:
 
 @check("L302", on=[LinearMove, JointMove, ArcStart, ArcEnd])
 def pwm_outside_range(statement, arm) -> Iterator[Finding]:
-    value = statement.words.get("S")
+    value = _sent(statement, "S")
     low, high = arm.profile.pwm.range_us
     if value is not None and not low <= value <= high:
         pwm = arm.profile.pwm
