@@ -275,8 +275,11 @@ def test_bare_inline_ignore_and_prefixes():
 
 def test_selection_by_code_and_prefix():
     script = START + "G1 X260 F30\nG1 X270 F9000\nG4"
-    assert codes(script, selection=Selection.of(["L2"])) == [(2, "L203"), (3, "L201")]
-    assert codes(script, selection=Selection.of([], ["L203", "E"])) == [(3, "L201")]
+    # a language error (E004: G4 without P) is reported whatever the selection: compile and run
+    # refuse the script anyway, so a lint that passed it would be untrue
+    assert codes(script, selection=Selection.of(["L2"])) == [(2, "L203"), (3, "L201"), (4, "E004")]
+    assert codes(script, selection=Selection.of([], ["L203", "E"])) == [(3, "L201"), (4, "E004")]
+    assert codes(START + "G1 X260 F30 ; armctl: ignore\nG4 ; armctl: ignore\n") == [(3, "E004")]
 
 
 def test_unknown_selection_code_is_refused():

@@ -90,8 +90,12 @@ class _Collector:
 
     def add_diagnostic(self, diagnostic: Diagnostic) -> None:
         """A compiler diagnostic: always kept (the compiler keeps at most max_diagnostics itself),
-        so that lint's own findings never crowd out the errors that stop a script compiling."""
-        if diagnostic.code in self.selection and not _silenced(diagnostic.code, diagnostic.span.text):
+        so that lint's own findings never crowd out the errors that stop a script compiling.
+        A language *error* (E…) is reported whatever the selection or an inline ignore says, as
+        ruff reports syntax errors: compile and run refuse the script anyway, so a lint that
+        passed it would be untrue."""
+        selected = diagnostic.code in self.selection and not _silenced(diagnostic.code, diagnostic.span.text)
+        if selected or diagnostic.is_error:
             self.report.counts[diagnostic.code] += 1
             self.report.severities[diagnostic.code, diagnostic.severity] += 1
             self.report.diagnostics.append(diagnostic)
