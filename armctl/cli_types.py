@@ -21,6 +21,15 @@ class Bounded:
     min: float
     max: float
 
+    def _ascii(self, value, param, ctx):
+        # int() and float() also read other scripts' digits ("١٠" is 10): nobody types those on purpose
+        if isinstance(value, str) and not value.isascii():
+            self.fail(f"{value!r} is not a number (give {self._range()})", param, ctx)
+        return value
+
+    def _range(self) -> str:
+        return f"{self.min:g}…{self.max:g}" if isinstance(self.min, float) else f"{self.min}…{self.max}"
+
     def _finite(self, value, param, ctx):
         if isinstance(value, float) and not math.isfinite(value):
             self.fail(f"{value!r} is not a finite number (give {self.min:g}…{self.max:g})", param, ctx)
@@ -30,11 +39,12 @@ class Bounded:
 class BoundedFloat(Bounded, click.FloatRange):
     def convert(self, value, param, ctx):
         # inf is already out of range; NaN passes click's comparisons and is caught here
-        return self._finite(super().convert(value, param, ctx), param, ctx)
+        return self._finite(super().convert(self._ascii(value, param, ctx), param, ctx), param, ctx)
 
 
 class BoundedInt(Bounded, click.IntRange):
-    pass
+    def convert(self, value, param, ctx):
+        return super().convert(self._ascii(value, param, ctx), param, ctx)
 
 
 def number(low: float, high: float, *, whole: bool = False) -> click.ParamType:

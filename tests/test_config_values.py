@@ -42,7 +42,7 @@ SPECIAL_NUMBERS = [
     "nan", "-nan", "NaN", "inf", "-inf", "+inf", "Infinity", "1e308", "-1e308", "1e309", "-1e309",
     "3.4028235e38", "3.4028234e38", "3.4028236e38", "-3.4028235e38", "340282346638528859811704183484516925440",
     "0", "-0", "-1", "1e-308", "5e-324", "0.0001", "99999999999999999999999", str(2**63), str(-(2**63)),
-    "abc", "", " ", "1,5", "0x10", "1e5",
+    "abc", "", " ", "1,5", "0x10", "1e5", "١", "٢.٥", "１０",
 ]
 VALUE_TEXTS = st.one_of(
     st.sampled_from(SPECIAL_NUMBERS),
@@ -58,6 +58,8 @@ NUMERIC_OPTIONS = [(path[0], param) for path, param in numeric_options()]
 def _accepts(param: click.Option, text: str) -> bool:
     """The oracle: a finite number inside the declared bounds (a whole one for integer options)."""
     kind = param.type
+    if not text.isascii():  # "١" is a number to int() and float(), not to armctl
+        return False
     try:
         value = int(text) if isinstance(kind, click.IntRange) else float(text)
     except ValueError:
@@ -148,6 +150,8 @@ def _sim_accepts(name: str, text: str) -> bool:
               "fifo": limits.SIM_FIFO_RANGE_FRAMES, "seed": limits.SIM_SEED_RANGE, "loss": limits.SIM_RATE_RANGE,
               "corrupt": limits.SIM_RATE_RANGE, "noise": limits.SIM_RATE_RANGE}
     low, high = ranges[name]
+    if not text.isascii():  # "١" is a number to int() and float(), not in a URL
+        return False
     try:
         value = int(text) if isinstance(low, int) else float(text)
     except ValueError:

@@ -74,7 +74,8 @@ def _shown(text: str, limit: int = 60) -> str:
 def _float_in(low: float, high: float) -> Callable[[str, str], float]:
     def parse(name: str, text: str) -> float:
         try:
-            value = float(text)
+            # ASCII only: float() also reads other scripts' digits ("١" is 1), which nobody means in a URL
+            value = float(text) if text.isascii() else math.nan
         except ValueError:
             value = math.nan
         # NaN fails every comparison, so "not inside" also refuses it (and ±inf)
@@ -89,7 +90,8 @@ def _int_in(low: int, high: int) -> Callable[[str, str], int]:
     def parse(name: str, text: str) -> int:
         digits = text.strip()
         # bounded length first: int() of a 100,000-digit text costs time and may refuse itself
-        value = int(digits) if len(digits) <= 25 and digits.lstrip("+-").isdigit() else None
+        plain = digits.isascii() and digits.lstrip("+-").isdigit()  # "١" is a digit to isdigit(), not in a URL
+        value = int(digits) if len(digits) <= 25 and plain else None
         if value is None or not low <= value <= high:
             raise ValueError(f"{name} must be a whole number {low}…{high}, not {_shown(text)}")
         return value
