@@ -245,9 +245,9 @@ baud_option = click.option("--baud", type=number(*BAUD_RANGE, whole=True), defau
 
 def _connect(port: str | None, baud: int | None, **link_options):
     from .link import connect
-    from .output import quiet
+    from .output import announce
 
-    return connect(port, baud, announce=lambda text: None if quiet() else click.echo(text, err=True), **link_options)
+    return connect(port, baud, announce=announce, **link_options)
 
 
 @main.command()

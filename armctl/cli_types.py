@@ -32,7 +32,7 @@ class Bounded:
 
     def _finite(self, value, param, ctx):
         if isinstance(value, float) and not math.isfinite(value):
-            self.fail(f"{value!r} is not a finite number (give {self.min:g}…{self.max:g})", param, ctx)
+            self.fail(f"{value!r} is not a finite number (give {self._range()})", param, ctx)
         return value
 
 

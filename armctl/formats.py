@@ -105,16 +105,14 @@ def chunk_record(chunk: Chunk) -> dict:
     frame = chunk.frame
     if isinstance(frame, Command):
         record["family"] = "motion" if chunk.data[0] == 0xEE else "control"
-        record.update(command=type(frame).__name__, name=frame.NAME)
+        record.update(frame_record(frame, chunk.data))
     elif isinstance(frame, StatusFrame):
         record.update(family="status", kind=frame.KIND, name=type(frame).__name__)
+        record["fields"] = {name: json_value(v) for name, v in frame.fields().items()}
     elif chunk.error is not None:
         record.update(family="invalid", error=chunk.error)
-        return record
     else:
         record["family"] = "junk"
-        return record
-    record["fields"] = {name: json_value(v) for name, v in frame.fields().items()}
     return record
 
 

@@ -26,6 +26,11 @@ _CHUNK_BYTES = 1024 * 1024
 class InputTooLarge(ArmctlError):
     """An input longer than armctl reads (or an endless one): exit 2, nothing done with it."""
 
+    @classmethod
+    def beyond(cls, name: str, limit_bytes: int) -> "InputTooLarge":
+        return cls(f"{name}: longer than {describe_limit(limit_bytes)}: armctl reads at most that much "
+                   "(is this the file you meant?)")
+
 
 def describe_limit(limit_bytes: int) -> str:
     """``134217728`` → ``128 MiB``; small limits in bytes."""
@@ -54,8 +59,7 @@ def read_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES
         chunks.append(chunk)
         total += len(chunk)
         if total > limit_bytes:
-            raise InputTooLarge(f"{name}: longer than {describe_limit(limit_bytes)}: armctl reads at most that much "
-                                "(is this the file you meant?)")
+            raise InputTooLarge.beyond(name, limit_bytes)
     return b"".join(chunks)
 
 

@@ -2,14 +2,14 @@
 
 Strategy: every range a command-line option, a ``sim://`` option or an armctl.toml value is
 checked against lives here once, as ``(low, high)`` with the unit in the name, so ``--baud``,
-``baud =`` in armctl.toml and ``sim://?baud=`` cannot drift apart.  Pure constants, some derived from the protocol's.
+``baud =`` in armctl.toml and ``sim://?baud=`` cannot drift apart.  Pure constants, some derived from the link's (armctl/line.py).
 """
 
 from __future__ import annotations
 
 import math
 
-from .protocol import BITS_PER_BYTE, STATUS_PERIOD_S, STATUS_SIZE
+from .line import BITS_PER_BYTE, STATUS_PERIOD_S, STATUS_SIZE
 
 # bit/s.  The arm sends a 9-byte status frame every 30 ms (3000 bit/s at 8N1): on a slower line
 # its status falls ever further behind, and a job judged on stale positions could be called done

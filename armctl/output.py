@@ -49,3 +49,9 @@ def quiet() -> bool:
     """``-q`` was given: print only errors, the summary and the data asked for."""
     ctx = click.get_current_context(silent=True)
     return bool(ctx is not None and ctx.find_root().params.get("quiet"))
+
+
+def announce(text: str) -> None:
+    """A notice on stderr (the simulator banner): not with ``-q``."""
+    if not quiet():
+        click.echo(text, err=True)

@@ -25,13 +25,11 @@ from .errors import FieldError, FrameError
 
 # --- the link -------------------------------------------------------------------------------
 
-FRAME_SIZE = 48  # every host→arm frame, motion or control
-STATUS_SIZE = 9  # every arm→host status frame
-CONNECTOR_BUFFER_BYTES = 9600
-CONNECTOR_BUFFER_FRAMES = CONNECTOR_BUFFER_BYTES // FRAME_SIZE  # 200
-DEFAULT_BAUD = 9600
-BITS_PER_BYTE = 10  # 8N1: start bit, 8 data bits, stop bit
-STATUS_PERIOD_S = 0.030  # one status frame every 30 ms
+# The link's numbers live in armctl/line.py (imported without the codec: the CLI's option ranges
+# derive from them at start-up); they are part of this module's interface too.
+from .line import (  # noqa: E402,F401
+    BITS_PER_BYTE, CONNECTOR_BUFFER_BYTES, CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, FRAME_SIZE, STATUS_PERIOD_S, STATUS_SIZE,
+)
 
 
 def byte_seconds(baud: int = DEFAULT_BAUD) -> float:

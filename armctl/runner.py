@@ -175,10 +175,8 @@ class JobRunner:
             self._take_status(*item)
 
     def _take_status(self, frame: StatusFrame, at_s: float) -> None:
-        before = self.streamer.consumed_lower_bound
         self.streamer.receive_status(frame, at_s)
-        if self.streamer.consumed_lower_bound > before:
-            self._explain_bound(at_s)
+        self._explain_bound(at_s)  # the streamer names new evidence only when the bound moved
         self.view.status_frames += 1
         if self.log is not None:
             self._log("rx", frame.encode(), at_s, kind=frame.KIND)
@@ -422,10 +420,8 @@ class JobRunner:
         self._refresh()
 
     def _confirm_all_done(self, now: float) -> None:
-        before = self.streamer.consumed_lower_bound
         self.streamer.confirm_all_done()
-        if self.streamer.consumed_lower_bound > before:
-            self._explain_bound(now)
+        self._explain_bound(now)
 
     # --- -v: the pacing story ---------------------------------------------------------------
 

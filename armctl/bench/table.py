@@ -80,7 +80,7 @@ class Cell:
     ratio: float | None = None  # job_s ÷ omniscient job_s, filled in by run_bench
     ratio_bound: float | None = None
     physical_s: float | None = None  # the physical bound of the job (PROTOCOL.md's last section)
-    physical_ratio: float | None = None  # job_s ÷ physical_s
+    physical_ratio: float | None = None  # job_s ÷ physical_s, filled in by run_bench (as physical_s)
     physical_bound: float | None = None  # armctl's target for physical_ratio (None: none)
     failures: list[str] = field(default_factory=list)
 
@@ -118,10 +118,8 @@ def run_cell(scenario: Scenario, strategy: str, lead_s: float = DEFAULT_LEAD_S,
         last_written = max(k for k, source in enumerate(line) if source == "job")
         longest = max(_in_progress_s(arm, aborted.aborted_at_s), _duration_of_arrival(arm, last_written))
         limit = lead_s * slowness + longest + frame_s
-    physical_s = physical_bound_s(scenario.commands, scenario.options, scenario.outside_stop_s)
     return Cell(scenario.name, strategy, scenario.frames, full.dropped, full.job_s, full.peak_occupancy,
-                full.peak_queued_s, moving, limit, abort_dropped, full.timed_out, physical_s=physical_s,
-                physical_ratio=full.job_s / physical_s, physical_bound=scenario.physical_bound)
+                full.peak_queued_s, moving, limit, abort_dropped, full.timed_out)
 
 
 def _run_cell_args(args) -> Cell:
@@ -146,9 +144,14 @@ def run_bench(scenarios: list[Scenario], strategies=STRATEGY_NAMES, lead_s: floa
         cells = [run_cell(*w) for w in work]
     by_scenario = {s.name: s for s in scenarios}
     reference = {c.scenario: c.job_s for c in cells if c.strategy == "omniscient"}
+    # the floor depends on the job alone: planned once per scenario, not once per strategy
+    floor_s = {s.name: physical_bound_s(s.commands, s.options, s.outside_stop_s) for s in scenarios}
     for cell in cells:
         cell.ratio = cell.job_s / reference[cell.scenario] if reference[cell.scenario] else None
         cell.ratio_bound = by_scenario[cell.scenario].ratio_bound
+        cell.physical_s = floor_s[cell.scenario]
+        cell.physical_ratio = cell.job_s / cell.physical_s
+        cell.physical_bound = by_scenario[cell.scenario].physical_bound
         if cell.strategy == "armctl":
             cell.failures = check_targets(cell)
     return cells

@@ -85,8 +85,6 @@ def _setup(profile_path, repeat_delay_ms):
         config_path = config.path_of("jog")
         table = config.values.get("jog", {})
         source = str(config_path) if config_path else "armctl.toml"
-        if not isinstance(table, dict):
-            raise JogConfigError(f"{source}: jog must be a table ([jog]), not {table!r}")
         settings = settings_from_config(table, source)
         keys = table.get("keys", {})
         if not isinstance(keys, dict):
@@ -125,10 +123,9 @@ def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms,
     settings, keymap, profile = _setup(profile_path, repeat_delay_ms)
     teach, log = _open_files(record_path, log_path)
     try:
-        from ..output import quiet
+        from ..output import announce
 
-        link, baud = connect(port, baud, announce=lambda text: None if quiet() else click.echo(text, err=True),
-                             on_status=log.rx if log else None)
+        link, baud = connect(port, baud, announce=announce, on_status=log.rx if log else None)
         with link:
             require_wall_clock(link, "jog")
             problem = wait_for_pose(link, timeout_s)

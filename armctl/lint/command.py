@@ -116,7 +116,7 @@ def _lint_target(target, profile, selection, stdin_filename):
     import stat
     import sys
 
-    from ..inputs import MAX_INPUT_BYTES, InputTooLarge, describe_limit, read_bounded
+    from ..inputs import MAX_INPUT_BYTES, InputTooLarge, read_bounded
     from ..script import ScriptSnapshot, iter_lines, read_script
     from .engine import lint_lines
 
@@ -131,8 +131,7 @@ def _lint_target(target, profile, selection, stdin_filename):
                 snapshot = ScriptSnapshot(name, read_bounded(stream, target.path, stop_at_nul_line=True))
                 return lint_lines(snapshot.lines(), name, profile, selection)
             if info.st_size > MAX_INPUT_BYTES:
-                raise InputTooLarge(f"{target.path}: longer than {describe_limit(MAX_INPUT_BYTES)}: "
-                                    "armctl reads at most that much (is this the file you meant?)")
+                raise InputTooLarge.beyond(target.path, MAX_INPUT_BYTES)
             return lint_lines(iter_lines(stream, MAX_INPUT_BYTES, target.path), name, profile, selection)
     except OSError as error:
         click.echo(f"armctl lint: cannot read {_safe(target.path)}: {error.strerror or error}", err=True)
@@ -149,8 +148,6 @@ def _config() -> dict:
     config = load_config()
     path = config.path_of("lint")
     table = config.values.get("lint", {})
-    if not isinstance(table, dict):
-        raise ValueError(f"{path}: lint must be a table ([lint])")
     for key, value in table.items():
         if key not in CONFIG_KEYS:
             raise ValueError(f"{path}: unknown key 'lint.{key}'{unknown_key_hint(key, CONFIG_KEYS)}")

@@ -86,7 +86,7 @@ def check(code: str, on: Iterable | str) -> Callable:
     declared = LINT_RULES.get(code)
     if declared is None or declared.fed_by != "check":
         raise ValueError(f"@check({code!r}): not a code declared for a check in LINT_RULES")
-    if any(code == known for entries in CHECKS.values() for known, _ in entries):
+    if code in checked_codes():
         raise ValueError(f"@check({code!r}): the code already has a check")
     targets = [on] if isinstance(on, str) else list(on)
     if not targets:

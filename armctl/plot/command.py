@@ -61,22 +61,27 @@ def plot(script, output, view, from_line, profile_path, force):
     fmt = FORMATS.get(os.path.splitext(output)[1].lower())
     if fmt is None:
         _fail(f"cannot tell what to write from the name {output!r}: end it with .html, .svg or .png")
-    _check_readable(script)
+    snapshot = _read(script)
     _require_extra(fmt)
     profile = _profile(profile_path)
-    diagnostics = _check(script, profile, from_line, force)
-    path = _build(script, profile, from_line, diagnostics)
+    diagnostics = _check(snapshot, profile, from_line, force)
+    path = _build(snapshot, profile, from_line, diagnostics)
     _render(path, output, fmt, view)
     _summary(path, output)
     sys.exit(EXIT_PROBLEMS if any(d.is_error for d in diagnostics) else EXIT_OK)
 
 
-def _check_readable(script: str) -> None:
+def _read(script: str):
+    """The script read once (``ScriptSnapshot``): the check and the drawing see the same bytes."""
+    from ..inputs import InputTooLarge
+    from ..script import read_script
+
     if script == "-":
         _fail("plot needs a file (it reads the script more than once); save it first")
     try:
-        with open(script, "rb"):
-            pass
+        return read_script(script)
+    except InputTooLarge as error:
+        _fail(str(error))
     except OSError as error:
         _fail(f"cannot read {script}: {error.strerror or error}")
 
@@ -103,16 +108,15 @@ def _profile(profile_path):
         _fail(f"cannot read {error.filename or profile_path}: {error.strerror or error}")
 
 
-def _check(script: str, profile, from_line: int, force: bool) -> list:
+def _check(snapshot, profile, from_line: int, force: bool) -> list:
     """Lint's findings (and a bad --from-line) on stderr; exit 1 on errors unless ``force``."""
     from ..lint.engine import lint_lines
     from ..lint.formatters import TextFormatter
-    from ..script import compile_file, read_lines
 
-    report = lint_lines(read_lines(script), script, profile)
+    report = lint_lines(snapshot.lines(), snapshot.name, profile)
     errors = report.errors
     if from_line > 1:  # a resume line the compiler cannot start at is an error like any other
-        resume = [d for d in compile_file(script, from_line=from_line).finish() if d.code == "E010"]
+        resume = [d for d in snapshot.compile(from_line=from_line).finish() if d.code == "E010"]
         report.diagnostics.extend(resume)
         errors += len(resume)
     click.echo(TextFormatter().file(report), err=True, nl=False)  # exactly as `armctl lint` writes them
@@ -121,13 +125,12 @@ def _check(script: str, profile, from_line: int, force: bool) -> list:
     return report.diagnostics
 
 
-def _build(script: str, profile, from_line: int, diagnostics):
+def _build(snapshot, profile, from_line: int, diagnostics):
     from ..motion import MotionModel
-    from ..script import compile_file
     from .path import build_path
 
-    statements = compile_file(script, from_line=from_line)
-    return build_path(statements, MotionModel(profile), script, diagnostics, from_line=from_line)
+    statements = snapshot.compile(from_line=from_line)
+    return build_path(statements, MotionModel(profile), snapshot.name, diagnostics, from_line=from_line)
 
 
 def _render(path, output: str, fmt: str, view) -> None:

@@ -105,7 +105,8 @@ def _draw_view(ax, path: JobPath, view: str) -> None:
 
 def _fit(ax, path: JobPath, axes: str) -> list[tuple[float, float]]:
     """Set the view's limits around the job (path.view_limits); returns them."""
-    limits = [path.view_limits()[_AXIS_INDEX[letter]] for letter in axes]
+    around = path.view_limits()  # once: it walks every sampled point
+    limits = [around[_AXIS_INDEX[letter]] for letter in axes]
     for setter, (low, high) in zip((ax.set_xlim, ax.set_ylim, getattr(ax, "set_zlim", None)), limits):
         setter(low, high)
     return limits

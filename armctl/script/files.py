@@ -25,7 +25,7 @@ import sys
 from dataclasses import dataclass
 from typing import BinaryIO, Iterator, Union
 
-from ..inputs import MAX_INPUT_BYTES, InputTooLarge, describe_limit, read_bounded, read_file_bounded
+from ..inputs import MAX_INPUT_BYTES, InputTooLarge, read_bounded, read_file_bounded
 from .compiler import MAX_LINE_LENGTH, Compilation, compile_lines
 from .modal import InitialState
 
@@ -68,7 +68,7 @@ def iter_lines(stream: BinaryIO, limit_bytes: int = MAX_INPUT_BYTES, name: str =
                 if not rest or rest.endswith(b"\n"):
                     break
         if total > limit_bytes:
-            raise InputTooLarge(f"{name}: longer than {describe_limit(limit_bytes)}: armctl reads at most that much")
+            raise InputTooLarge.beyond(name, limit_bytes)
         if first:
             first = False
             if raw.startswith(b"\xef\xbb\xbf"):

@@ -138,9 +138,9 @@ class Connector:
     queue: deque = field(default_factory=deque)  # ReceivedFrame waiting, oldest first
     executing: list = field(default_factory=list)  # taken by the arm, still holding a slot
     # The most recent well-framed frames, by arrival index (``received.total`` counts them all).
-    received: RecentList = field(default_factory=lambda: RecentList())
-    dropped_indexes: RecentList = field(default_factory=lambda: RecentList())
-    cleared_indexes: RecentList = field(default_factory=lambda: RecentList())  # flushed by a connector reset
+    received: RecentList = field(default_factory=RecentList)
+    dropped_indexes: RecentList = field(default_factory=RecentList)
+    cleared_indexes: RecentList = field(default_factory=RecentList)  # flushed by a connector reset
     peak_occupancy: int = 0
 
     @property
@@ -155,12 +155,9 @@ class Connector:
     def next_index(self) -> int:
         return self.received.total
 
-    def _record(self, frame: ReceivedFrame) -> None:
-        self.received.append(frame)
-
     def land(self, frame: ReceivedFrame) -> bool:
         """A frame has fully arrived: buffer it, or drop it whole if the buffer is full (H6)."""
-        self._record(frame)
+        self.received.append(frame)
         if self.occupancy >= self.capacity_frames:
             frame.accepted = False
             self.dropped_indexes.append(frame.index)
@@ -171,7 +168,7 @@ class Connector:
 
     def record_unbuffered(self, frame: ReceivedFrame) -> None:
         """A frame acted on as it landed, never buffered (control frames, H5 alternative)."""
-        self._record(frame)
+        self.received.append(frame)
 
     def head(self) -> ReceivedFrame | None:
         return self.queue[0] if self.queue else None
@@ -199,6 +196,5 @@ class Connector:
         for frame in self.queue:
             (gone if before_index is None or frame.index < before_index else keep).append(frame)
         self.queue = keep
-        for frame in gone:
-            self.cleared_indexes.append(frame.index)
+        self.cleared_indexes.extend(frame.index for frame in gone)
         return gone

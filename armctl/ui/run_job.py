@@ -230,8 +230,9 @@ def run_job(options: JobOptions, script, connect) -> int:
     model = MotionModel(profile)
     if options.dry_run:
         return dry_run(options, script, model)
-    # before the port opens: a job too long to run (E012) is refused from the fixed pose 0
-    estimate_job(script, model, model.initial_pose(), options.lead_s, options.baud or _config_baud(), options.from_line)
+    # A job too long to run (E012) was refused by check_script's lint, which judges the motion
+    # time as estimate_job does; the estimate from the arm's own pose below judges it again over
+    # the whole expansion, before anything is sent.  No third pass here.
 
     link, baud = connect(options.port, options.baud, profile=profile)
     with link, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
