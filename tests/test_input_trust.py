@@ -394,3 +394,13 @@ def test_skipping_repeated_passes_never_changes_what_lint_reports(body, inner, c
         every_pass = lint_lines(script.splitlines(), "job.txt", default_profile())
     assert skipped.diagnostics == every_pass.diagnostics
     assert skipped.counts == every_pass.counts
+
+
+@pytest.mark.parametrize("mode", ["G90", "G91"])
+def test_every_line_counts_once_toward_the_expansion_bound(mode):
+    """A plain line the fast path hands on to the general one (G91, here) is still one line run."""
+    from armctl.script import compile_text
+
+    job = compile_text(f"{mode}\n" + "G1 X1 Y1 Z1 A180 B0 C0 F100\n" * 3)
+    list(job)
+    assert job.lines_run == 4

@@ -154,6 +154,7 @@ class Compilation(StatementExecution):
                 if not verdict:
                     continue
             scanned = scan(text) if fast else None
+            counted = False  # lines_run already counts this line (the hot path below)
             if scanned is None:
                 node = self._parse(number, text)
                 if node is None or node is EMPTY:
@@ -162,6 +163,7 @@ class Compilation(StatementExecution):
                 continue
             else:
                 if not open_blocks:  # the hot path: a plain G line, no node built
+                    counted = True
                     self.lines_run += 1
                     if self.lines_run > MAX_LINES_RUN:
                         self._too_large(number, text)
@@ -177,9 +179,10 @@ class Compilation(StatementExecution):
             if open_blocks or type(node) is BlockLine:
                 yield from self._block_line(Line(number, text, node))
                 continue
-            self.lines_run += 1
-            if self.lines_run > MAX_LINES_RUN:
-                self._too_large(number, text)
+            if not counted:  # a plain line the hot path handed on (G91, an unknown value) is one line
+                self.lines_run += 1
+                if self.lines_run > MAX_LINES_RUN:
+                    self._too_large(number, text)
             self._execute(number, text, node, ())
             if out:
                 yield from out
