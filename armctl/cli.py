@@ -352,28 +352,28 @@ def estimate(script, lead_s, baud, profile_path, as_json):
 def sim(use_pty, tcp_port, sim_url):
     """Run the built-in simulated arm for other programs to talk to."""
     from .sim.bridge import INTERRUPTED, serve_pty, serve_tcp
-    from .sim.protocol_sim import is_virtual_clock, parse_sim_url
+    from .sim.protocol_sim import parse_sim_url
 
     if bool(use_pty) == bool(tcp_port):
         raise UsageFailure("choose one of --pty or --tcp PORT")
     try:
-        options, time_scale = parse_sim_url(sim_url)
+        options = parse_sim_url(sim_url)
         if isinstance(options.profile, str):  # read now, not when the first client connects
             from .profile import load_profile
 
             load_profile(options.profile)
     except (ConfigError, ProfileError) as error:
         raise ConfigError(f"--url: {error}") from None
-    if is_virtual_clock(sim_url):
+    if options.virtual_clock:
         raise UsageFailure("a served simulator runs in real time: drop clock=virtual from --url")
 
     def ready(where: str) -> None:
         click.echo(f"simulated arm on {where} (Ctrl-C to stop)")
 
     if use_pty:
-        ended = serve_pty(options, ready, time_scale=time_scale, keep_serving=True)
+        ended = serve_pty(options, ready, time_scale=options.time_scale, keep_serving=True)
     else:
-        ended = serve_tcp(tcp_port, options, ready, time_scale=time_scale)
+        ended = serve_tcp(tcp_port, options, ready, time_scale=options.time_scale)
     if ended == INTERRUPTED:  # the bridge closed what it opened; Ctrl-C exits 130 like every command
         raise KeyboardInterrupt
 

@@ -137,7 +137,7 @@ def scaled_clock(url: str) -> Callable[[], float]:
         return time.monotonic
     from .sim.protocol_sim import parse_sim_url
 
-    scale = parse_sim_url(url)[1]
+    scale = parse_sim_url(url).time_scale
     return lambda: time.monotonic() * scale
 
 

@@ -195,7 +195,7 @@ def time_scale_of(url: str) -> float:
         return 1.0
     from ..sim.protocol_sim import parse_sim_url
 
-    return parse_sim_url(url)[1]
+    return parse_sim_url(url).time_scale
 
 
 def _open_log(path: str):
