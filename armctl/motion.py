@@ -575,6 +575,19 @@ class MotionModel:
         return ArmPose(self.kinematics, joints=self.profile.poses[0] if joints is None else joints,
                        pwm_us=(pwm,) * PWM_CHANNEL_COUNT, origin_mm=origin_mm)
 
+    def reported_pose(self, xyz_mm: Sequence[float], joints: Sequence[float], pwm_us: float,
+                      origin_mm: Sequence[float] = (0.0, 0.0, 0.0)) -> ArmPose:
+        """The arm where it reports it is: X/Y/Z and joints as reported, neither derived from the
+        other (an unverified profile's kinematics must not decide where a job starts); X/Y/Z
+        turned from robot into worktable coordinates when the arm reports those (the profile's
+        ``[connector] status_xyz_frame``).  Only the attitude, which no status frame reports, comes
+        from the joints through the profile's forward kinematics."""
+        if self.profile.connector.reports_robot_xyz:
+            xyz_mm = [value - origin for value, origin in zip(xyz_mm, origin_mm)]
+        attitude = self.kinematics.forward(joints)[3:]
+        return ArmPose(self.kinematics, cartesian=(*xyz_mm, *attitude), joints=joints,
+                       pwm_us=(pwm_us,) * PWM_CHANNEL_COUNT, origin_mm=origin_mm)
+
     def plan(self, command: Command, start: ArmPose, arc_start: ArcStart | None = None) -> Segment:
         """The segment ``command`` makes from ``start``.  An ArcEnd needs its ArcStart."""
         if type(command) is ArcEnd:
