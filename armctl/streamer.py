@@ -542,10 +542,10 @@ class Streamer:
         if found is None or segment.length <= 0 and segment.kind != "joint":
             self._pace_from.pop(stream, None)
             return
-        t_lo, t_hi = _time_window(segment, *found)
-        if t_hi - t_lo > PACE_MIN_SPAN_S / 4:
-            return  # too vague a sighting (a short segment, or the ends of a path)
-        model_s = (t_lo + t_hi) / 2
+        lo, hi = found
+        if lo <= 0.0 or hi >= 1.0:
+            return  # a window cut at an end of the path: its middle is not where the arm was
+        model_s = segment.time_at_fraction((lo + hi) / 2)
         last = self._pace_from.get(stream)
         if last is None or last[0] != index or model_s < last[1]:
             self._pace_from[stream] = (index, model_s, now)
