@@ -371,9 +371,9 @@ def sim(use_pty, tcp_port, sim_url):
         click.echo(f"simulated arm on {where} (Ctrl-C to stop)")
 
     if use_pty:
-        ended = serve_pty(options, ready, time_scale=options.time_scale, keep_serving=True)
+        ended = serve_pty(options, ready, keep_serving=True)
     else:
-        ended = serve_tcp(tcp_port, options, ready, time_scale=options.time_scale)
+        ended = serve_tcp(tcp_port, options, ready)
     if ended == INTERRUPTED:  # the bridge closed what it opened; Ctrl-C exits 130 like every command
         raise KeyboardInterrupt
 
