@@ -357,6 +357,8 @@ class Streamer:
         self._advance_by_time()
 
     def _note_pause_state(self, paused: bool, now: float) -> None:
+        if paused:
+            self._pace_from.clear()  # a pace sample must not span a pause (arrival mode freezes a move)
         if paused and not self._paused and self._running_seen_s is not None:
             self._pause_began_s = self._running_seen_s  # it may have begun right after
         if not paused:
