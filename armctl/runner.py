@@ -443,6 +443,8 @@ class JobRunner:
             why = (f"the FIFO's capacity: {streamer.frames_in_flight_bound} frames written and not known consumed, "
                    f"the bound is {streamer.limit_frames} (the connector's FIFO less a margin); only new evidence "
                    "that frames finished lets it go")
+        elif reason is WaitReason.IN_ORDER:
+            why = "every frame before it to be known finished: the arm acts on this control frame as it lands"
         elif reason is WaitReason.LEAD:
             why = (f"the lead: {streamer.waiting_seconds(now):.2f} s of motion waits behind the move in progress "
                    f"and this frame adds {streamer.next_frame_motion_s:.2f} s (lead {streamer.lead_s:g} s); "

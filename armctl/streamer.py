@@ -34,7 +34,9 @@ motion-time model), the moment its last byte left the wire, and two views of the
     running (kind-4 status), so a pause, or silence about the pause state, stops that clock
     and a resume pushes every pending deadline back by the whole pause.  The deadlines form a
     chain from frame to frame; agreeing evidence that frame k has begun restarts the chain at
-    k (else it would drift ahead by the slowest factor for as long as the arm is kept busy).
+    k (else it would drift ahead by the slowest factor for as long as the arm is kept busy),
+    from the least fraction of k's path both agreeing observations put the arm at (so a frame
+    seen at its end is confirmed soon after, not a whole slow-arm duration later).
   Lost or corrupted status frames can only hold the bound back, i.e. make it more careful.
 * an **estimate** of when each frame ends, from the model, re-anchored on every observation:
   each candidate segment says the arm is now within a window of that segment's time (a short
@@ -57,6 +59,9 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
     ``FEED_AHEAD_S`` (or the lead) of the arm's seconds is queued in all, so the arm is never
     starved of a move longer than the lead by itself.  The pace shapes only this rule: the
     lower bound never reads it.
+(c) with ``control_frames = "arrival"`` a control frame (POSE, PROGRAM, G54, a pause toggle…)
+    acts the moment it lands, ahead of everything queued: one in a job is written only once the
+    lower bound says every frame before it has finished, so the arm runs the job in its order.
 
 Why it decided is data too, for whoever drives it (armctl/runner.py logs it with ``-v``):
 ``next_write_time`` leaves the binding constraint in ``write_reason`` (``WaitReason``: the FIFO's
@@ -80,6 +85,7 @@ from enum import StrEnum
 
 from .motion import ArmPose, MotionModel, Planner, Segment, distance_to_path
 from .protocol import (
+    CONTROL_COMMANDS,
     ArcEnd,
     ArcStart,
     DEFAULT_BAUD,
@@ -138,6 +144,7 @@ class WaitReason(StrEnum):
     CAPACITY = "capacity"  # rule (a): the FIFO bound is reached; only new evidence allows a write
     LEAD = "lead"  # rule (b): the motion waiting behind the move in progress fills the lead
     WIRE = "wire"  # the previous frame is still leaving the host at the line's rate
+    IN_ORDER = "in order"  # rule (c): a control frame acting on arrival waits until the queue is known done
 
 
 class Evidence(StrEnum):
@@ -196,6 +203,7 @@ class Streamer:
         self.planner = Planner(model, start)
         connector = model.profile.connector
         self.kinematics_verified = connector.kinematics_verified
+        self.control_on_arrival = connector.control_on_arrival
         self.reports_robot_xyz = connector.reports_robot_xyz
         self.lead_s = lead_s
         self.limit_frames = (connector.fifo_frames if capacity is None else capacity) - margin
@@ -206,6 +214,7 @@ class Streamer:
         self.consumed_lower_bound = 0
         self.wire_free_s = now
         self._last_candidate: dict[str, int | None] = {}
+        self._last_fraction: dict[str, float | None] = {}  # the least fraction on that candidate
         self._last_done_tag = None
         # Arm-running clock for the time bound: seconds the arm was certainly not paused.
         self._running_seen_s: float | None = None
@@ -261,6 +270,9 @@ class Streamer:
         if not self.pending:
             self.write_reason = WaitReason.WIRE if self.wire_free_s > now else WaitReason.READY
             return max(now, self.wire_free_s)
+        if self.control_on_arrival and isinstance(command, CONTROL_COMMANDS):
+            self.write_reason = WaitReason.IN_ORDER  # rule (c): only evidence lets it go
+            return None
         duration_s = 0.0 if command is None else self._plan(command).duration_s
         self.next_frame_motion_s = duration_s
         tail_s = self.pending[-1].est_end_s
@@ -391,10 +403,11 @@ class Streamer:
         while self.pending and self.pending[0].index < index:
             self._consume_one()
 
-    def _restart_time_bound(self, index: int, now: float) -> None:
-        """Frame ``index`` has begun by ``now`` (agreed evidence): restart the time bound's chain
-        there, since a chain that began at the first frame of a long job drifts ahead by the
-        slowest-arm factor for as long as the arm is kept busy."""
+    def _restart_time_bound(self, index: int, now: float, fraction: float = 0.0) -> None:
+        """Frame ``index`` has begun by ``now`` and its arm is at least ``fraction`` along its path
+        (agreed evidence): restart the time bound's chain there, since a chain that began at the
+        first frame of a long job drifts ahead by the slowest-arm factor for as long as the arm
+        is kept busy."""
         if not self.pending:
             return
         chain = None
@@ -402,8 +415,12 @@ class Streamer:
             if k < 0:
                 return  # that frame is already known finished: nothing about the next ones
             sent = self.pending[k]
-            start = now if chain is None else max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
-            chain = start + sent.segment.duration_s * self.slowest_factor + FRAME_SLACK_S
+            if chain is None:  # the rest of it, from the least fraction the evidence allows
+                left_s = sent.segment.duration_s - _time_window(sent.segment, fraction, 1.0)[0]
+                chain = now + left_s * self.slowest_factor + FRAME_SLACK_S
+            else:
+                start = max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
+                chain = start + sent.segment.duration_s * self.slowest_factor + FRAME_SLACK_S
             if chain >= sent.chain_end_s:
                 return  # no tighter than before, and neither are the frames after it
             sent.chain_end_s = chain
@@ -519,7 +536,10 @@ class Streamer:
         observation of the same stream agrees, so one corrupted frame cannot.
         """
         previous = self._last_candidate.get(stream)
+        previous_fraction = self._last_fraction.get(stream)
         self._last_candidate[stream] = earliest
+        fraction = next((lo for index, lo, _ in candidates if index == earliest), None)
+        self._last_fraction[stream] = fraction
         if earliest is None:
             return
         if previous is not None:
@@ -528,7 +548,8 @@ class Streamer:
             self._consume_before(agreed)
             if self.consumed_lower_bound > before:
                 self.bound_evidence = Evidence.POSITION if stream == "position" else Evidence.JOINTS
-            self._restart_time_bound(agreed, now)
+            both = (previous == earliest and fraction is not None and previous_fraction is not None)
+            self._restart_time_bound(agreed, now, max(0.0, min(previous_fraction, fraction)) if both else 0.0)
             if agreed == earliest:
                 self._measure_pace(stream, earliest, candidates, now)
         self._reanchor(candidates, now)

@@ -282,6 +282,21 @@ def test_the_streamer_measures_the_arms_pace_and_counts_the_lead_in_its_seconds(
     assert s.lead_model_s == pytest.approx(1.0, rel=0.05)
 
 
+def test_on_an_arm_that_acts_on_control_frames_as_they_land_they_wait_until_the_queue_is_known_done():
+    from armctl.protocol import GoToPose
+    from armctl.streamer import WaitReason
+
+    move = LinearMove(250.0, 20.0, 150.0, 180.0, 0.0, 0.0, 1500.0, 6000.0)
+    for control, held in (("queued", False), ("arrival", True)):
+        model = MotionModel(parse_profile({"connector": {"control_frames": control}}))
+        s = Streamer(model, model.initial_pose(), lead_s=60.0)
+        assert s.next_write_time(0.0, GoToPose(0)) == 0.0  # nothing queued: it may go at once
+        s.wrote(move, 0.0)
+        when = s.next_write_time(1.0, GoToPose(0))
+        assert (when is None and s.write_reason is WaitReason.IN_ORDER) == held
+        assert s.next_write_time(1.0, move) is not None  # motion frames are not held
+
+
 # --- Ctrl-C on a slow arm --------------------------------------------------------------------------
 
 
@@ -349,7 +364,7 @@ def test_random_jobs_on_any_arm_the_profile_describes_never_drop_and_never_overs
     """The profile says what the arm is (kinematics unverified: the arm's links may differ); the
     lower bound of frames consumed never passes what the arm has really finished, checked at every
     status frame against the simulator's truth, and nothing is dropped."""
-    commands = build_job(ops, with_pose_frames=control == "queued")
+    commands = build_job(ops, with_pose_frames=True)  # on arrival too: the streamer keeps them in order
     if origin is not None:
         commands.insert(0, SetWorktableOrigin(*origin))
     if not commands:
