@@ -125,9 +125,11 @@ def config_baud(config: dict, path) -> int:
 
 def plausible_state(profile) -> ArmState:
     """An ArmState that holds back a value moving faster than twice the profile's top speeds
-    (a corrupted byte; the profile's numbers are illustrative, hence the factor)."""
-    speed = profile.speed
-    return ArmState(max_speed_mm_s=2 * speed.max_linear_mm_min / 60, max_joint_speed_deg_s=2 * speed.max_joint_deg_s)
+    (a corrupted byte; the profile's numbers are illustrative, hence the factor), the arm's
+    ``[connector] speed_factor`` included (0.5: it moves twice as fast as the model)."""
+    speed, factor = profile.speed, 2 / min(1.0, profile.connector.speed_factor)
+    return ArmState(max_speed_mm_s=factor * speed.max_linear_mm_min / 60,
+                    max_joint_speed_deg_s=factor * speed.max_joint_deg_s)
 
 
 def scaled_clock(url: str) -> Callable[[], float]:
@@ -137,7 +139,7 @@ def scaled_clock(url: str) -> Callable[[], float]:
         return time.monotonic
     from .sim.protocol_sim import parse_sim_url
 
-    scale = parse_sim_url(url)[1]
+    scale = parse_sim_url(url).time_scale
     return lambda: time.monotonic() * scale
 
 

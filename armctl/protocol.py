@@ -56,9 +56,8 @@ STATUS_WORD_CODEC = struct.Struct(">h")
 # PROTOCOL.md: a[2] = 0 or 1 both select PWM channel 1 in a linear move; armctl sends 1,
 # the value the vendor's own table shows.
 LINEAR_SUBCOMMAND_FOR_CHANNEL_1 = 1
-# H5 — control frames wait in the same FIFO as motion frames.  The simulator's option and
-# the streamer's assumptions both default to this constant.
-CONTROL_FRAMES_QUEUED = True
+# H5 (control frames wait in the same FIFO as motion frames) and H6 (the FIFO's size) are not
+# constants: they are the arm profile's [connector] settings, the document's reading by default.
 
 # Protocol ranges (PROTOCOL.md); a command outside them cannot be constructed.
 PWM_RANGE_US = (500.0, 2500.0)

@@ -185,7 +185,7 @@ class JobRunner:
         if frame.KIND in _REST_KINDS:
             values = tuple(frame.fields().values())
             if frame.KIND == 0:
-                self.view.position_mm = values
+                self.view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
             self._reported[frame.KIND] = values
             reported = tuple(self._reported.get(kind) for kind in _REST_KINDS)
             if self._rest is None or self._rest[0] != reported:
@@ -310,7 +310,7 @@ class JobRunner:
         if not self._recent:
             return True
         segment = self._recent[-1].segment
-        if segment.kind == "joint":
+        if segment.kind == "joint" or segment.end.xyz_derived:  # what the arm reports, not the profile's FK
             joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
             return len(joints) == 6 and max(abs(a - b) for a, b in zip(joints, segment.end.joints)) <= TARGET_DEG
         position = self._reported.get(0)
@@ -443,6 +443,8 @@ class JobRunner:
             why = (f"the FIFO's capacity: {streamer.frames_in_flight_bound} frames written and not known consumed, "
                    f"the bound is {streamer.limit_frames} (the connector's FIFO less a margin); only new evidence "
                    "that frames finished lets it go")
+        elif reason is WaitReason.IN_ORDER:
+            why = "every frame before it to be known finished: the arm acts on this control frame as it lands"
         elif reason is WaitReason.LEAD:
             why = (f"the lead: {streamer.waiting_seconds(now):.2f} s of motion waits behind the move in progress "
                    f"and this frame adds {streamer.next_frame_motion_s:.2f} s (lead {streamer.lead_s:g} s); "

@@ -185,7 +185,7 @@ def test_random_short_jobs_never_drop_and_never_overstate(ops, speed_factor, dam
     if not commands:
         return
     options = SimOptions(speed_factor=speed_factor, status_loss_rate=damage, status_corrupt_rate=damage,
-                         control_on_arrival=on_arrival, seed=seed)
+                         control_frames="arrival" if on_arrival else "queued", seed=seed)
     result, checks, streamer = stream_checked(commands, options, lead_s=lead_s)
     assert not result.timed_out
     assert result.dropped == 0

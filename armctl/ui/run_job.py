@@ -185,7 +185,7 @@ def start_from_state(model, state):
     from ..script import InitialState
 
     joints = tuple(state.joints_deg)
-    pose = model.initial_pose(joints=joints, pwm_us=float(state.pwm_us), origin_mm=tuple(state.worktable_mm))
+    pose = model.reported_pose(state.position_mm, joints, float(state.pwm_us), tuple(state.worktable_mm))
     initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: float(state.pwm_us)})
     return pose, initial
 
@@ -195,7 +195,7 @@ def time_scale_of(url: str) -> float:
         return 1.0
     from ..sim.protocol_sim import parse_sim_url
 
-    return parse_sim_url(url)[1]
+    return parse_sim_url(url).time_scale
 
 
 def _open_log(path: str):
