@@ -307,14 +307,14 @@ class Job:
                                      "whose time armctl cannot know); armctl waited until it stopped")
             return self._finish(Outcome.FINISHED, now)
         limit_s = self._deadline_s
-        if now > self._deadline_s:
+        if now >= self._deadline_s:
             # Visibly working: the job is still running, whatever the estimate says; once it
             # stops, there is time to confirm it is where the job ends.
             active = self._active_s is not None and now - self._active_s < REST_CHECK_S
             self._overran = self._overran or active
             settling = self._overran and now - self._active_s < REST_CHECK_S + SETTLE_SLACK_S
             limit_s = self._deadline_s + self._overrun_limit_s()
-            if not settling or now > limit_s:
+            if not settling or now >= limit_s:
                 view.messages.append(self._why_not_finished())
                 return self._finish(Outcome.NO_CONFIRMATION, now)
             if self._active_s is not None:
@@ -336,7 +336,8 @@ class Job:
 
     def _next_change_s(self, now: float, limit_s: float) -> float:
         """The first time after ``now`` at which, with no new status frame, the answer could
-        change: a rest or activity check maturing, the estimate running out, the deadline."""
+        change: a rest or activity check maturing, the estimate running out, the deadline
+        (``limit_s``, always after ``now``: a Wait never asks the host to wait for nothing)."""
         times = [limit_s]
         if self._rest is not None:
             times.append(self._rest[1] + REST_CHECK_S)
