@@ -36,11 +36,15 @@ Rules:
 from __future__ import annotations
 
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from enum import Enum, StrEnum
+from operator import attrgetter
 from typing import Iterable, Iterator
 
-from .protocol import ArcEnd, PauseToggle, ResetConnector, RunPositionStatus, StatusFrame
+from .protocol import (
+    ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
+    RunPositionStatus, StatusFrame,
+)
 
 ABORT_SEQUENCES = {
     "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
@@ -52,7 +56,11 @@ SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to com
 OVERRUN_MIN_S = 60.0  # the least time waited past the estimate for an arm still working
 TARGET_MM = 0.5  # how close the reported position must be to the last target (0.1 mm resolution)
 TARGET_DEG = 0.2
-_REST_KINDS = (0, 1, 2, 4)  # position, joints 1-3, joints 4-6, pause and PWM
+# The kinds whose readings say whether the arm is at rest — position, joints 1-3, joints 4-6,
+# pause and PWM — and their fields, read directly (this runs for every status frame).
+_REST_VALUES = {cls.KIND: attrgetter(*(f.name for f in fields(cls)))
+                for cls in (PositionStatus, JointsLowStatus, JointsHighStatus, PauseStatus)}
+_RUN_POSITION_KIND = RunPositionStatus.KIND
 RECENT_FRAMES = 64  # frames written kept for the end of the job (the trailing frames that move nothing)
 
 
@@ -195,10 +203,11 @@ class Job:
         view = self.view
         view.status_frames += 1
         kind = frame.KIND
-        if kind in _REST_KINDS:
+        values_of = _REST_VALUES.get(kind)
+        if values_of is not None:
+            values = values_of(frame)
             if kind == 4:
                 self._pause_reports.append(frame.paused)
-            values = tuple(frame.fields().values())
             if kind == 0:
                 view.position_mm = values
             reported = self._reported
@@ -212,7 +221,7 @@ class Job:
                 if self._moved_from is None or _moved_clearly(self._moved_from, motion):
                     self._moved_from = motion
                     self._active_s = now
-        elif kind == RunPositionStatus.KIND:
+        elif kind == _RUN_POSITION_KIND:
             if self._run_position is not None and frame.value != self._run_position:
                 self._active_s = now  # an SD program advancing, even with the arm standing still
             self._run_position = frame.value

@@ -34,6 +34,7 @@ PORT_ENV = "ARMCTL_PORT"
 READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
 VIRTUAL_MIN_STEP_S = 1e-6
+VIRTUAL_READ_CHUNK = 1 << 16  # more than any burst between two waits
 
 
 @dataclass(frozen=True)
@@ -277,7 +278,7 @@ class Link:
                 if end_s is not None and end_s < step_to:
                     step_to = end_s
             clock.advance_to(step_to)
-            data = port.read(port.in_waiting)
+            data = port.read(VIRTUAL_READ_CHUNK)  # a virtual port returns what is there at once
             if (data and self._take(data)) or (end_s is not None and clock.now_s >= end_s):
                 return
 
