@@ -194,3 +194,32 @@ def test_asking_again_without_news_gives_the_same_write():
     assert isinstance(first, Write) and job.next_action(0.0) is first
     job.wrote(0.0)
     assert job.view.frames_sent == 1 and job.view.last_sent is first.statement
+
+
+def test_the_engine_imports_no_io():
+    """armctl/job.py and the armctl modules it imports (transitively) name no clock, thread,
+    port or terminal library: the engine is pure, whoever hosts it."""
+    import ast
+    from pathlib import Path
+
+    package = Path(__file__).resolve().parent.parent / "armctl"
+    forbidden = {"time", "threading", "serial", "click", "rich", "queue", "socket", "select", "signal"}
+    seen, todo = set(), ["job"]
+    while todo:
+        name = todo.pop()
+        if name in seen:
+            continue
+        seen.add(name)
+        tree = ast.parse((package / f"{name.replace('.', '/')}.py").read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                roots = [alias.name.split(".")[0] for alias in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:  # within armctl: follow it
+                    todo.append(node.module)
+                    continue
+                roots = [node.module.split(".")[0]]
+            else:
+                continue
+            assert not forbidden & set(roots), f"armctl/{name}.py imports {roots}"
+    assert "protocol" in seen
