@@ -223,3 +223,51 @@ def test_the_engine_imports_no_io():
                 continue
             assert not forbidden & set(roots), f"armctl/{name}.py imports {roots}"
     assert "protocol" in seen
+
+
+# --- whatever the arm says: the engine ends, never spins, never writes the job after a stop ----
+
+from hypothesis import given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+READINGS = st.one_of(
+    st.none(),  # the frame was lost
+    st.tuples(st.floats(-300, 300), st.floats(-300, 300), st.floats(-300, 300)),  # a corrupted position
+)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    moves=st.integers(1, 3),
+    stop_at_s=st.one_of(st.none(), st.floats(0.0, 12.0)),
+    why=st.one_of(st.none(), st.just("a failure")),
+    silent_after_s=st.floats(0.0, 30.0),
+    pauses=st.lists(st.booleans(), max_size=40),
+    noise=st.lists(READINGS, max_size=40),
+)
+def test_the_engine_always_ends_and_never_spins(moves, stop_at_s, why, silent_after_s, pauses, noise):
+    text = "".join(THREE_MOVES.splitlines(keepends=True)[:moves])
+    job = make_job(text)
+    arm = FakeArm(job, silent_after_s=silent_after_s)
+    real_report, rounds = arm.report, iter(range(10**9))
+
+    def report(t: float) -> None:  # the fake arm's truth, with lost, corrupted and paused reports mixed in
+        k = next(rounds)
+        arm.paused = pauses[k % len(pauses)] if pauses and k < 3 * len(pauses) else arm.paused
+        reading = noise[k % len(noise)] if noise and k < 2 * len(noise) else ()
+        if reading is None:
+            return
+        if reading:
+            job.receive_status(PositionStatus(*(round(v, 1) for v in reading)), t)
+        real_report(t)
+
+    arm.report = report
+    action, now = drive(job, arm, stop_at_s=stop_at_s, why=why, limit_s=2_000.0)  # drive asserts Wait > now
+    assert action.outcome in set(Outcome) - {Outcome.RUNNING, Outcome.PORT_LOST}
+    if job.stop_requested:
+        stopped = next(i for i, w in enumerate(arm.written) if w.statement is None) if any(
+            w.statement is None for w in arm.written) else len(arm.written)
+        assert all(w.statement is None for w in arm.written[stopped:])
+        assert action.outcome == (Outcome.FAILED if why else Outcome.INTERRUPTED)
+    if action.outcome is Outcome.FINISHED:
+        assert job.view.arm_done_s is not None and job.view.arm_done_s <= now
