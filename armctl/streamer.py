@@ -224,6 +224,7 @@ class Streamer:
         self._peeked: tuple[Command, Segment] | None = None
         self._certain_tail_s = 0.0  # the time bound of the last frame written (even a G300's)
         self._cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
+        self._blind: deque[int] = deque()  # indexes of pending frames whose X/Y/Z cannot be judged (positions stop there)
         self.write_reason = WaitReason.READY  # why next_write_time answered as it did
         self.next_frame_motion_s = 0.0  # the motion of the frame next_write_time was asked about
         self.bound_evidence: Evidence | None = None  # what last advanced consumed_lower_bound
@@ -350,6 +351,8 @@ class Streamer:
         self.pending.append(frame)
         if segment.kind in ("line", "arc"):
             self._cartesian.append(frame.index)
+        if not self.kinematics_verified and (segment.kind == "joint" or segment.end.xyz_derived):
+            self._blind.append(frame.index)
         self.sent += 1
         return frame
 
@@ -452,7 +455,18 @@ class Streamer:
                 slack = sent.xyz_tolerance_mm / segment.length if segment.length > 0 else 1.0
             return fraction - slack, fraction + slack
 
-        earliest, candidates = self._scan(match, len(self.pending), now)
+        # A position says nothing about a frame whose X/Y/Z only the unverified kinematics know,
+        # nor about any frame after it: the arm may be on that frame, at a point that also lies
+        # on a later path (a wrist turning in place, then a move that starts there).
+        blind, first = self._blind, self.pending[0].index if self.pending else self.sent
+        while blind and blind[0] < first:
+            blind.popleft()  # consumed
+        end = blind[0] - first if blind else len(self.pending)
+        if blind and end == 0:
+            return
+        earliest, candidates = self._scan(match, end, now)
+        if earliest is None and end < len(self.pending):
+            return  # the arm may be on the frame that cannot be judged: no evidence
         self._use("position", earliest, candidates, now)
 
     def _observe_joint_half(self, offset: int, values, now: float) -> None:

@@ -234,7 +234,7 @@ def test_an_unverified_profiles_kinematics_never_prove_a_joint_move_from_x_y_z()
             x, y, z = segment.sample(t * segment.duration_s).xyz
             s.receive_status(PositionStatus(x, y, z), 0.1 + t * segment.duration_s)
         assert s.last_known_done() is None  # nothing before the joint move to confirm, either way
-        assert (s._last_candidate["position"] is not None) == verified
+        assert (s._last_candidate.get("position") is not None) == verified
         j = segment.sample(0.9 * segment.duration_s).joints
         s.receive_status(JointsLowStatus(*j[:3]), 1.0)
         s.receive_status(JointsLowStatus(*j[:3]), 1.1)
@@ -243,7 +243,8 @@ def test_an_unverified_profiles_kinematics_never_prove_a_joint_move_from_x_y_z()
 
 def test_robot_frame_reports_are_turned_into_the_frame_the_job_plans_in():
     model = MotionModel(parse_profile({"connector": {"status_xyz_frame": "robot"}}))
-    s = Streamer(model, model.initial_pose(), lead_s=60.0)
+    pose = model.initial_pose()  # as reported (X/Y/Z not derived from the unverified kinematics)
+    s = Streamer(model, model.reported_pose(pose.xyz, pose.joints, 1500.0, (0.0, 0.0, 0.0)), lead_s=60.0)
     s.wrote(SetWorktableOrigin(100.0, -50.0, 10.0), 0.0)
     first = LinearMove(150.0, 60.0, 140.0, 180.0, 0.0, 0.0, 1500.0, 600.0)  # worktable frame
     s.wrote(first, 0.05)
@@ -307,19 +308,19 @@ def _stop_mid_job(tmp_path, monkeypatch, profile_factor: float, arm_factor: floa
     lines += [f"G1 X{210 if k % 2 == 0 else 200} Y{(k % 7) * 3} Z250 F1200" for k in range(60)]
     (tmp_path / "job.txt").write_text("\n".join(lines) + "\n")
     (tmp_path / "armctl.toml").write_text(f"[connector]\nspeed_factor = {profile_factor}\n")
-    ports, real_open, real_refresh = [], armctl.link.open_port, armctl.runner.JobRunner._refresh
+    ports, real_open, real_refresh = [], armctl.link.open_port, armctl.runner.JobRunner._drain
 
     def open_port(*args, **kwargs):
         ports.append(real_open(*args, **kwargs))
         return ports[-1]
 
-    def refresh(self):
+    def refresh(self):  # the host loop drains status frames once per turn: a safe point to ask
         if self.view.frames_sent >= 30 and not self.stop_requested:
             self.request_stop()
         real_refresh(self)
 
     monkeypatch.setattr(armctl.link, "open_port", open_port)
-    monkeypatch.setattr(armctl.runner.JobRunner, "_refresh", refresh)
+    monkeypatch.setattr(armctl.runner.JobRunner, "_drain", refresh)
     result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--lead", str(lead_s),
                                        "--port", f"sim://?clock=virtual&speed_factor={arm_factor}"])
     assert result.exit_code == 130, result.output
