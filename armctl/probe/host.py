@@ -2,15 +2,18 @@
 
 Strategy: a thin edge.  The link's reader (a thread, or the virtual clock's waits) hands each
 status frame to ``on_status``, which only appends it to a deque; the loop drains the deque
-into the pure ``Probe``, asks for the next action, writes or waits.  Ctrl-C (and SIGTERM, which
-the CLI turns into KeyboardInterrupt) switches the probe to restoring and the loop runs on
-until the arm is as it was; a second Ctrl-C leaves at once, saying what is not restored.
+into the pure ``Probe``, asks for the next action, writes or waits.  Ctrl-C, SIGTERM and SIGHUP
+only set a flag (``deferred_stop``): the loop, between two actions, switches the probe to
+restoring and runs on until the arm is as it was; a second signal leaves at once
+(KeyboardInterrupt), and the probe's notes say what is not restored.
 """
 
 from __future__ import annotations
 
+import signal
 import threading
 from collections import deque
+from contextlib import contextmanager
 
 from .plan import Probe, Write
 
@@ -35,21 +38,13 @@ class FrameInbox:
             probe.feed(frame, now_s)
 
 
-def drive(link, probe: Probe, inbox: FrameInbox, progress=None) -> None:
-    """Run ``probe`` on ``link`` to its end; on KeyboardInterrupt restore first, then re-raise."""
-    try:
-        _loop(link, probe, inbox, progress)
-    except KeyboardInterrupt:
-        probe.interrupt()
-        try:
-            _loop(link, probe, inbox, progress)
-        except KeyboardInterrupt:
-            probe.notes.append("not restored: interrupted twice while restoring")
-        raise
-
-
-def _loop(link, probe: Probe, inbox: FrameInbox, progress) -> None:
+def drive(link, probe: Probe, inbox: FrameInbox, progress=None, stop: threading.Event | None = None) -> None:
+    """Run ``probe`` on ``link`` to its end.  ``stop`` set (a signal): restore, then end with
+    ``probe.interrupted`` true; the caller exits 130."""
+    stop = stop or threading.Event()
     while True:
+        if stop.is_set() and not probe.interrupted and not probe.done:
+            probe.interrupt()
         inbox.drain_into(probe)
         action = probe.next_action(link.clock())
         if action is None:
@@ -62,3 +57,27 @@ def _loop(link, probe: Probe, inbox: FrameInbox, progress) -> None:
             raise link.error
         if progress is not None:
             progress(probe)
+
+
+@contextmanager
+def deferred_stop(stop: threading.Event):
+    """Ctrl-C, SIGTERM, SIGHUP set ``stop`` (the probe restores the arm, then exits 130); a
+    second one raises KeyboardInterrupt at once."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    signals = [signal.SIGINT] + [getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
+
+    def handler(_signum, _frame):
+        if stop.is_set():
+            raise KeyboardInterrupt
+        stop.set()
+
+    previous = {number: signal.getsignal(number) for number in signals}
+    for number in signals:
+        signal.signal(number, handler)
+    try:
+        yield
+    finally:
+        for number, old in previous.items():
+            signal.signal(number, old)
