@@ -368,11 +368,7 @@ def restore(probe):
     known = getattr(probe, "known", None)
     if known is None:
         return None
-    state = probe.seen.agreed(PauseStatus.KIND, probe.now_s - 1.0, paused_of)
-    if state is not None and state[1]:
-        landed_s = yield Send(PauseToggle())
-        ok = yield from wait_until(probe, landed_s + READBACK_TIMEOUT_S, lambda: _running_since(probe, landed_s))
-        _note(probe, "pause state restored (running)" if ok else "not restored: the arm may still be paused")
+    yield from resume_if_paused(probe, probe.now_s - 1.0)
     # Let what is queued (delays, PWM-only frames, a small move) finish: quiet and past its planned end
     limit_s = probe.now_s + QUIET_LIMIT_S
     kinds = (PauseStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND)
@@ -381,7 +377,10 @@ def restore(probe):
         return probe.now_s >= known.busy_until_s and probe.now_s - _last_change_s(probe, kinds) >= QUIET_S
 
     yield from wait_until(probe, limit_s, quiet)
-    since_s = probe.now_s - 1.0
+    # judge by readings the arm built after the last frame landed and everything sent had ended
+    since_s = max(probe.line_free_s, known.busy_until_s)
+    yield from wait_until(probe, since_s + READBACK_TIMEOUT_S, lambda: _readings(probe, since_s) is not None)
+    yield from resume_if_paused(probe, since_s)  # a pause toggle that was still queued has acted by now
     if known.moved:
         from .motion import return_to_start
 
@@ -412,6 +411,14 @@ def check_as_found(probe):
         probe.notes.append("as found: " + ", ".join(good))
     if bad:
         probe.notes.append("NOT as found: " + ", ".join(bad) + f" (now {now})")
+
+
+def resume_if_paused(probe, since_s: float):
+    state = probe.seen.agreed(PauseStatus.KIND, since_s, paused_of)
+    if state is not None and state[1]:
+        landed_s = yield Send(PauseToggle())
+        ok = yield from wait_until(probe, landed_s + READBACK_TIMEOUT_S, lambda: _running_since(probe, landed_s))
+        _note(probe, "pause state restored (running)" if ok else "not restored: the arm may still be paused")
 
 
 def pwm_frame(probe, pwm_us: float) -> JointMove:
