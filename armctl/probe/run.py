@@ -86,6 +86,8 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
         for note in probe.notes:
             say(f"restore: {note}")
         say(f"arm time: {probe.arm_time_s:.1f} s")
+    if target is not None and (probe.interrupted or probe.stopped is not None):
+        say(f"--write: nothing written to {target} (the probe did not finish)")
     if probe.interrupted:
         click.echo("armctl: interrupted (the arm was restored first; see above)", err=True)
         return EXIT_INTERRUPTED
