@@ -49,12 +49,16 @@ class RecordingPort:
         return getattr(self._port, name)
 
 
-def probe_sim(options: str = "", motion: bool = False, rewrite=None, stop_when=None, profile=None):
-    """Run the probe on ``sim://?clock=virtual&options``: (probe, the simulated arm, the port)."""
+def probe_sim(options: str = "", motion: bool = False, rewrite=None, stop_when=None, profile=None, before=()):
+    """Run the probe on ``sim://?clock=virtual&options``: (probe, the simulated arm, the port).
+    ``before``: frames another program wrote just before the probe started."""
     import serial
 
     url = f"{VIRTUAL}&{options}" if options else VIRTUAL
-    port = RecordingPort(serial.serial_for_url(url, baudrate=9600, timeout=0), rewrite)
+    raw = serial.serial_for_url(url, baudrate=9600, timeout=0)
+    for frame in before:
+        raw.write(frame)
+    port = RecordingPort(raw, rewrite)
     inbox = FrameInbox()
     link = Link(port, url, on_status=inbox)
     stop = threading.Event()
@@ -205,6 +209,33 @@ def test_status_loss_and_corruption_never_claim_a_wrong_value(control):
             assert abs(found["speed_factor"] - 1.3) <= probe.finding("speed_factor").details["precision"]
         assert_as_found(model)
     assert stated >= 3 * len(truth) - 2  # "unsure" is allowed, not as the rule
+
+
+def test_a_moving_arm_is_left_alone():
+    move = JointMove(30.0, 0.0, 0.0, 0.0, 90.0, 0.0, pwm_us=1500.0, speed_deg_s=5.0).encode()
+    probe, model, port = probe_sim(before=[move])
+    assert probe.stopped is not None and "moving" in str(probe.stopped)
+    assert port.written == []  # nothing sent, nothing to restore
+
+
+def test_a_paused_arm_is_left_alone():
+    from armctl.protocol import PauseToggle
+
+    probe, model, port = probe_sim(before=[PauseToggle().encode()])
+    assert probe.stopped is not None and "paused" in str(probe.stopped)
+    assert port.written == [] and model.paused
+
+
+@pytest.mark.parametrize("got, hypothesis", [
+    ((6553.6 - 123.4, 6553.6 - 56.7, 6553.6 - 28.9), "unsigned"),
+    ((-12.3, -5.7, -2.9), "scale"),
+    ((1.0, 2.0, 3.0), "H1) or the sign/scale"),
+])
+def test_diagnose_origin_names_the_hypothesis(got, hypothesis):
+    from armctl.probe.steps import diagnose_origin
+
+    message, _ = diagnose_origin((-123.4, -56.7, -28.9), got)
+    assert hypothesis in message
 
 
 # --- wrong encodings: stop, explain, put the origin back --------------------------------------

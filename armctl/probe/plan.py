@@ -94,13 +94,29 @@ class Seen:
                 high = middle
         return entries[low:]
 
-    def agreed(self, kind: int, since_s: float = float("-inf"), key=lambda f: f) -> tuple[float, object] | None:
+    def agreed_runs(self, kind: int, since_s: float, key=lambda f: f) -> list[tuple[float, object]]:
+        """(start time, value) of every run of ``AGREEING_FRAMES``+ equal readings since ``since_s``."""
+        runs, value, count, start_s = [], None, 0, None
+        for t, frame in self.since(kind, since_s):
+            current = key(frame)
+            if count and current == value:
+                count += 1
+            else:
+                value, count, start_s = current, 1, t
+            if count == AGREEING_FRAMES:
+                runs.append((start_s, value))
+        return runs
+
+    def agreed(self, kind: int, since_s: float = float("-inf"), key=lambda f: f,
+               until_s: float = float("inf")) -> tuple[float, object] | None:
         """The latest value (``key(frame)``) that ``AGREEING_FRAMES`` consecutive frames of
-        ``kind`` built at or after ``since_s`` report, with the time its run began; or None."""
+        ``kind`` built from ``since_s`` to ``until_s`` report, with the time its run began; or None."""
         entries = self.since(kind, since_s)
         run, value, start_s = 0, None, None
         best = None
         for t, frame in entries:
+            if t > until_s:
+                break
             current = key(frame)
             if run and current == value:
                 run += 1

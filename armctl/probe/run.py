@@ -72,8 +72,15 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     stop = threading.Event()
     with link:
         probe = build_probe(profile, baud, link.clock(), motion)
-        with deferred_stop(stop), progress_display(as_json, say) as update:
-            drive(link, probe, inbox, update, stop)
+        try:
+            with deferred_stop(stop), progress_display(as_json, say) as update:
+                drive(link, probe, inbox, update, stop)
+        except KeyboardInterrupt:  # a second Ctrl-C while restoring: leave now, say what is left
+            for note in probe.notes:
+                click.echo(f"restore: {note}", err=True)
+            click.echo("armctl: interrupted while restoring: the arm may not be as it was found "
+                       f"(worktable origin {probe_origin(probe)}, PWM, pause state)", err=True)
+            return EXIT_INTERRUPTED
     if as_json:
         click.echo(json.dumps(json_object(probe), indent=2, ensure_ascii=False))
     else:
@@ -99,3 +106,8 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
         write_connector(target, values)
         say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {v!r}" for k, v in values.items()))
     return EXIT_OK
+
+
+def probe_origin(probe) -> str:
+    known = getattr(probe, "known", None)
+    return "unknown" if known is None else f"was {known.origin_mm}"

@@ -41,6 +41,7 @@ QUIET_LIMIT_S = 60.0  # restoring waits at most this long for queued frames to f
 ORIGIN_OFFSET_MM = (123.4, 56.7, 28.9)  # G54 test origin: negative, fractional, far from the old
 ORIGIN_TOLERANCE_MM = 0.051  # one status step (0.1 mm) rounds to ±0.05
 STILL_TOLERANCE_DEG = 0.02
+STILL_SPAN_S = 0.5  # the joints read the same over at least this long: the arm is still
 GRIPPER_SPEED_DEG_S = 10.0  # joint speed of a PWM-only frame (nothing moves; the slot needs a value)
 
 DOCUMENTED = {
@@ -67,9 +68,9 @@ class Known:
     poses: list = field(default_factory=list)  # (joints, robot X/Y/Z) where the arm rested
 
 
-def agreed_joints(probe, since_s: float):
-    low = probe.seen.agreed(JointsLowStatus.KIND, since_s, lambda f: (f.j1_deg, f.j2_deg, f.j3_deg))
-    high = probe.seen.agreed(JointsHighStatus.KIND, since_s, lambda f: (f.j4_deg, f.j5_deg, f.j6_deg))
+def agreed_joints(probe, since_s: float, until_s: float = float("inf")):
+    low = probe.seen.agreed(JointsLowStatus.KIND, since_s, lambda f: (f.j1_deg, f.j2_deg, f.j3_deg), until_s)
+    high = probe.seen.agreed(JointsHighStatus.KIND, since_s, lambda f: (f.j4_deg, f.j5_deg, f.j6_deg), until_s)
     if low is None or high is None:
         return None
     return (*low[1], *high[1])
@@ -101,19 +102,38 @@ def settle(probe):
 # --- listen --------------------------------------------------------------------------------------
 
 
+def _stillness(probe, since_s: float) -> bool | None:
+    """True: every agreed joint reading since ``since_s`` is the same, over ≥ ``STILL_SPAN_S``;
+    False: two differ (the arm moves); None: not enough readings yet."""
+    spans = []
+    for kind, key in ((JointsLowStatus.KIND, lambda f: (f.j1_deg, f.j2_deg, f.j3_deg)),
+                      (JointsHighStatus.KIND, lambda f: (f.j4_deg, f.j5_deg, f.j6_deg))):
+        runs = probe.seen.agreed_runs(kind, since_s, key)
+        if any(max(abs(a - b) for a, b in zip(runs[0][1], value)) > STILL_TOLERANCE_DEG for _, value in runs):
+            return False
+        last_s = probe.seen.by_kind[kind][-1][0] if runs else 0.0
+        spans.append(last_s - runs[0][0] if runs else 0.0)
+    return True if min(spans) >= STILL_SPAN_S else None
+
+
 def listen(probe):
     start_s = probe.now_s
     yield Wait(start_s + LISTEN_S)
-    if _readings(probe, start_s) is None:
-        yield Wait(start_s + FIRST_STATUS_TIMEOUT_S, lambda: _readings(probe, start_s) is not None)
+
+    def enough():
+        return _readings(probe, start_s) is not None and _stillness(probe, start_s) is not None
+
+    if not enough() and _stillness(probe, start_s) is not False:
+        yield Wait(start_s + FIRST_STATUS_TIMEOUT_S, lambda: enough() or _stillness(probe, start_s) is False)
     found = _readings(probe, start_s)
+    kinds = sorted({frame.KIND for _, frame in probe.seen.frames})
+    joints_read = {JointsLowStatus.KIND, JointsHighStatus.KIND} <= set(kinds)
+    if _stillness(probe, start_s) is not True and joints_read:
+        raise ProbeStop("the arm is moving (its joints do not read the same twice in a row): wait until it is "
+                        "still, then probe again")
     if found is None:
-        kinds = sorted({frame.KIND for _, frame in probe.seen.frames})
         raise ProbeStop(f"the arm's status did not show its pose, origin and PWM within {FIRST_STATUS_TIMEOUT_S:g} s "
                         f"(kinds read: {kinds or 'none'}): is the arm on, and the baud rate right?")
-    later = _readings(probe, probe.now_s - 0.6)
-    if later is not None and max(abs(a - b) for a, b in zip(later["joints"], found["joints"])) > STILL_TOLERANCE_DEG:
-        raise ProbeStop("the arm is moving: wait until it has finished, then probe again")
     if found["paused"]:
         raise ProbeStop("the arm reports it is paused: resume it (or reset it) and probe again; "
                         "the probe sends nothing to a paused arm")
