@@ -67,7 +67,7 @@ def probe_sim(options: str = "", motion: bool = False, rewrite=None, stop_when=N
         if stop_when is not None and stop_when(probe):
             stop.set()
 
-    probe = build_probe(profile or load_profile(), 9600, link.clock(), motion)
+    probe = build_probe(profile or load_profile(), 9600, link.clock(), motion, virtual_clock=True)
     drive(link, probe, inbox, progress, stop)
     return probe, port.model, port
 

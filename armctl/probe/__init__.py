@@ -12,8 +12,14 @@ from __future__ import annotations
 SETTINGS = ("fifo_frames", "control_frames", "status_xyz_frame", "speed_factor", "kinematics_verified")
 
 
-def build_probe(profile, baud: int, start_s: float, motion: bool):
-    """The probe's steps in order (motion only if allowed), ending with the restore step."""
+# How late a status frame's timestamp may be on a real port: the link's reader wakes every 20 ms,
+# and a USB serial adapter holds bytes up to ~16 ms (FTDI's default latency timer).
+REAL_PORT_TIMESTAMP_UNCERTAINTY_S = 0.04
+
+
+def build_probe(profile, baud: int, start_s: float, motion: bool, virtual_clock: bool = False):
+    """The probe's steps in order (motion only if allowed), ending with the restore step.
+    ``virtual_clock``: status timestamps are exact (``sim://?clock=virtual``)."""
     from . import fifo, motion as motion_steps, steps
     from .plan import Probe
 
@@ -25,4 +31,5 @@ def build_probe(profile, baud: int, start_s: float, motion: bool):
     plan += [("kinematics", motion_steps.kinematics_finding), ("status stream", steps.status_stream)]
     probe = Probe(plan, steps.restore, baud, start_s)
     probe.profile, probe.motion_allowed = profile, motion
+    probe.timestamp_uncertainty_s = 0.0 if virtual_clock else REAL_PORT_TIMESTAMP_UNCERTAINTY_S
     return probe

@@ -60,11 +60,16 @@ def fill_round(probe, values: list[int], start_us: int):
         last_landed_s = yield Send(pwm_frame(probe, value))
     deadline_s = end_s + ROUND_LIMIT_S
 
+    # Frames that repeat the PWM show nothing while they run: until a change is seen, allow them
+    # a frame time each (an arm slower than that could not keep up with the line anyway).
+    silent_s = QUIET_S + sum(1 for a, b in zip([start_us, *values], values) if a == b) * probe.frame_s
+
     def settled() -> bool:
         times = [t for t, _ in _changes(probe, end_s - 1.0) if t >= end_s]
+        if not times:
+            return probe.now_s - end_s >= silent_s
         gaps = [b - a for a, b in zip([end_s, *times], times)]
-        quiet_s = max(QUIET_S, 3 * max(gaps, default=0.0))
-        return probe.now_s - max(times[-1] if times else end_s, end_s) >= quiet_s
+        return probe.now_s - times[-1] >= max(QUIET_S, 3 * max(gaps))
 
     yield Wait(deadline_s, settled)
     sent = set(values)

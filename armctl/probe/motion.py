@@ -6,7 +6,7 @@ sample of the real path: the joint (or the distance from the start) it reports i
 model's path at model time τ by bisection, so that sample says ``factor = (t − landing) / τ``.
 A least-squares fit over the samples of a move gives its factor; each move is timed there and
 back, joint and linear.  Resolution: a status step (0.01°, 0.1 mm) against the move's speed,
-plus ``TIMING_UNCERTAINTY_S`` for a real port's timestamps; the stated precision covers both and
+plus ``probe.timestamp_uncertainty_s`` (a real port's reads: 0 on a virtual clock); the stated precision covers both and
 the spread of the moves.
 
 Moves (``--no-motion`` runs none): joint 5 by ``JOINT_STEP_DEG`` at ``JOINT_SPEED_DEG_S`` and
@@ -35,7 +35,6 @@ JOINT_SPEED_DEG_S = 2.0
 LINEAR_STEP_MM = 10.0
 LINEAR_SPEED_MM_MIN = 300.0
 SLOWEST_FACTOR = 4.0  # a move not finished by 4 × the model's time (+ a rotation) is given up
-TIMING_UNCERTAINTY_S = 0.01
 KINEMATICS_TOLERANCE_MM = 1.0
 ARRIVED_DEG, ARRIVED_MM = 0.02, 0.15
 SAMPLE_MARGIN = 3  # samples within this many status steps of either end are left out
@@ -52,16 +51,21 @@ def _robot_xyz(probe, reported):
     return tuple(r + o for r, o in zip(reported, probe.known.origin_mm))
 
 
-def record_pose(probe, since_s: float) -> None:
-    joints = agreed_joints(probe, since_s)
-    xyz = _reported_xyz(probe, since_s)
-    if joints is not None and xyz is not None:
-        probe.known.poses.append((joints, _robot_xyz(probe, xyz)))
+def record_pose(probe):
+    """``yield from`` this with the arm at rest: its joints and X/Y/Z, read fresh, kept for the
+    kinematics check."""
+    since_s = probe.now_s
+
+    def read():
+        return agreed_joints(probe, since_s) is not None and _reported_xyz(probe, since_s) is not None
+
+    if (yield from wait_until(probe, since_s + READBACK_TIMEOUT_S, read)):
+        probe.known.poses.append((agreed_joints(probe, since_s), _robot_xyz(probe, _reported_xyz(probe, since_s))))
 
 
 def kinematics_at_rest(probe):
     yield from settle(probe)
-    record_pose(probe, probe.now_s - 0.6)
+    yield from record_pose(probe)
     return None
 
 
@@ -142,7 +146,7 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
     # one sample's factor error: the status step at the path's slowest sampled speed, and the clock
     # the fit's error bound: half a status step at the mean speed, and the clock, over the longest τ
     slope = total / segment.duration_s
-    resolution = (quantum / 2 / slope + TIMING_UNCERTAINTY_S) / max(tau for _, tau in samples)
+    resolution = (quantum / 2 / slope + probe.timestamp_uncertainty_s) / max(tau for _, tau in samples)
     return factor, resolution, len(samples)
 
 
@@ -187,7 +191,7 @@ def _joint_moves(probe):
 
         result = yield from timed_move(probe, command, _pose(probe, there), JointsHighStatus.KIND, reading,
                                        progress, arrived, 0.01)
-        record_pose(probe, probe.now_s - 0.6)
+        yield from record_pose(probe)
         results.append(result)
     return results
 
@@ -217,7 +221,7 @@ def _linear_moves(probe):
         result = yield from timed_move(probe, command, pose, PositionStatus.KIND, reading, _xyz_progress(there),
                                        arrived, 0.1)
         pose = MotionModel(probe.profile, 1.0).plan(command, pose).end
-        record_pose(probe, probe.now_s - 0.6)
+        yield from record_pose(probe)
         results.append(result)
     return results
 

@@ -71,7 +71,7 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     link, baud = connect(port, baud, announce=say, profile=profile, on_status=inbox)
     stop = threading.Event()
     with link:
-        probe = build_probe(profile, baud, link.clock(), motion)
+        probe = build_probe(profile, baud, link.clock(), motion, link.is_virtual)
         try:
             with deferred_stop(stop), progress_display(as_json, say) as update:
                 drive(link, probe, inbox, update, stop)
