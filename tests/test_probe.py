@@ -9,13 +9,11 @@ in a fresh process.  "Arm time" is the probe's own virtual time, never the wall 
 from __future__ import annotations
 
 import json
-import os
 import signal
 import subprocess
 import sys
 import threading
 import time
-from pathlib import Path
 
 import pytest
 from click.testing import CliRunner

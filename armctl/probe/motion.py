@@ -24,9 +24,10 @@ from __future__ import annotations
 
 import math
 
+from ..kinematics import reach_problem
 from ..motion import PWM_CHANNEL_COUNT, ArmPose, MotionModel
 from ..protocol import JointMove, JointsHighStatus, LinearMove, PositionStatus
-from .plan import LIKELY, NOT_MEASURED, SURE, UNSURE, Finding, ProbeStop, Send
+from .plan import LIKELY, SURE, UNSURE, Finding, ProbeStop, Send
 from .steps import DOCUMENTED, READBACK_TIMEOUT_S, agreed_joints, settle, wait_until
 
 JOINT_INDEX = 4  # joint 5: the wrist; the tool tip moves least
@@ -175,22 +176,22 @@ def _joint_moves(probe):
     low, high = probe.profile.joint_limits_deg[JOINT_INDEX]
     start = tuple(known.joints_deg)
     step = JOINT_STEP_DEG if start[JOINT_INDEX] + JOINT_STEP_DEG <= high else -JOINT_STEP_DEG
+    if not low <= start[JOINT_INDEX] + step <= high:
+        return []  # no room for 5° either way: speed_factor then rests on the linear move alone
     target = list(start)
     target[JOINT_INDEX] += step
     results = []
     for there, back in ((start, tuple(target)), (tuple(target), start)):
         command = JointMove(*back, pwm_us=known.pwm_us, speed_deg_s=JOINT_SPEED_DEG_S)
-        high_reading = lambda f: (f.j4_deg, f.j5_deg, f.j6_deg)
-        progress = _joint_progress(there)
 
-        def reading(frame, high_reading=high_reading):
-            return (0.0, 0.0, 0.0, *high_reading(frame))
+        def reading(frame):  # kind 2 carries joints 4…6: placed where JOINT_INDEX finds them
+            return (0.0, 0.0, 0.0, frame.j4_deg, frame.j5_deg, frame.j6_deg)
 
         def arrived(value, back=back):
             return abs(value[JOINT_INDEX] - back[JOINT_INDEX]) <= ARRIVED_DEG
 
         result = yield from timed_move(probe, command, _pose(probe, there), JointsHighStatus.KIND, reading,
-                                       progress, arrived, 0.01)
+                                       _joint_progress(there), arrived, 0.01)
         yield from record_pose(probe)
         results.append(result)
     return results
@@ -202,12 +203,15 @@ def _linear_moves(probe):
     fk = probe.profile.kinematics.forward(joints)
     robot_start = tuple(fk[:3])
     attitude = tuple(fk[3:6])
-    low, high = probe.profile.workspace.z_mm
-    step = LINEAR_STEP_MM if robot_start[2] + LINEAR_STEP_MM <= high else -LINEAR_STEP_MM
-    robot_target = (robot_start[0], robot_start[1], robot_start[2] + step)
-    start_pose = _pose(probe, joints)
+    for step in (LINEAR_STEP_MM, -LINEAR_STEP_MM):  # up if the profile's workspace and reach allow, else down
+        robot_target = (robot_start[0], robot_start[1], robot_start[2] + step)
+        target_pose = (*(t - o for t, o in zip(robot_target, known.origin_mm)), *attitude)
+        if reach_problem(target_pose, probe.profile, known.origin_mm, near=joints) is None:
+            break
+    else:
+        return []
     results = []
-    pose = start_pose
+    pose = _pose(probe, joints)
     for there, goal in ((robot_start, robot_target), (robot_target, robot_start)):
         worktable = tuple(g - o for g, o in zip(goal, known.origin_mm))
         command = LinearMove(*worktable, *attitude, pwm_us=known.pwm_us, speed_mm_min=LINEAR_SPEED_MM_MIN)
@@ -234,7 +238,7 @@ def speed_factor(probe):
     poses = probe.known.poses
     if poses and _kinematics_error_mm(probe, *poses[0]) <= KINEMATICS_TOLERANCE_MM and probe.known.status_xyz_frame:
         linear = yield from _linear_moves(probe)
-        linear_note = ""
+        linear_note = "" if linear else f"; no linear move: {LINEAR_STEP_MM:g} mm up or down leaves the profile's reach"
     else:
         linear_note = "; no linear move: the profile's kinematics do not explain the reported X/Y/Z, so the tool's attitude is unknown"
     measured = [r for r in joint + linear if r is not None]
@@ -243,7 +247,7 @@ def speed_factor(probe):
     factors = [f for f, _, _ in measured]
     value = sum(factors) / len(factors)
     precision = max(max(r for _, r, _ in measured), (max(factors) - min(factors)) / 2)
-    precision = math.ceil(max(precision, 0.005) * 100) / 100
+    precision = math.ceil(round(max(precision, 0.005) * 100, 6)) / 100  # up to the next 0.01
     details = {"joint": [round(f, 4) for f, _, _ in filter(None, joint)],
                "linear": [round(f, 4) for f, _, _ in filter(None, linear)], "precision": precision}
     evidence = (f"joint 5 ±{JOINT_STEP_DEG:g}° at {JOINT_SPEED_DEG_S:g}°/s: {details['joint']}"
@@ -268,5 +272,3 @@ def return_to_start(probe):
     ok = yield from wait_until(probe, landed_s + 30.0, back)
     probe.notes.append("pose put back (joints as found)" if ok else "not restored: the arm did not report its start joints")
 
-
-__all__ = ["kinematics_at_rest", "kinematics_finding", "speed_factor", "return_to_start", "NOT_MEASURED"]

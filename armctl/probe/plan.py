@@ -139,9 +139,6 @@ def xyz_of(frame) -> tuple[float, float, float]:
     return (frame.x_mm, frame.y_mm, frame.z_mm)
 
 
-Step = Iterator  # a generator of Send | Wait, returning a Finding (or a list of them)
-
-
 class Probe:
     """Runs ``steps`` (callables taking the probe, returning a step generator) then ``restore``."""
 
