@@ -334,7 +334,7 @@ def test_no_terminal_and_no_yes_means_no_motion():
 
 @pytest.mark.realtime
 def test_sigint_restores_then_exits_130():
-    process = subprocess.Popen([sys.executable, "-m", "armctl", "probe", "--port", "sim://?speed=40", "--no-motion"],
+    process = subprocess.Popen([sys.executable, "-m", "armctl", "probe", "--port", "sim://?speed=5", "--no-motion"],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         for line in process.stdout:  # wait until the FIFO rounds run (the arm is busy, its FIFO full)
