@@ -347,3 +347,18 @@ def test_sigint_restores_then_exits_130():
         process.kill()
     assert process.returncode == 130, err
     assert "as found: worktable origin, PWM, running (not paused), joints" in out
+
+
+def test_an_arm_that_sends_no_status_gets_nothing_sent():
+    """The pure core alone: no frames fed, time passing; it stops, having asked to write nothing."""
+    from armctl.probe.plan import Wait
+
+    probe = build_probe(load_profile(), 9600, 0.0, motion=True, virtual_clock=True)
+    now_s, writes = 0.0, 0
+    while (action := probe.next_action(now_s)) is not None:
+        if isinstance(action, Wait):
+            now_s = max(now_s + 0.01, action.until_s)
+        else:
+            writes += 1
+    assert writes == 0
+    assert "did not show its pose" in str(probe.stopped)
