@@ -385,12 +385,14 @@ def _register_packaged_commands() -> None:
     from .jog.command import jog
     from .lint.command import lint
     from .plot.command import plot
+    from .probe.command import probe
 
     main.add_command(config)
     main.add_command(completion)
     main.add_command(jog)
     main.add_command(lint)
     main.add_command(plot)
+    main.add_command(probe)
 
 
 _register_packaged_commands()
