@@ -298,6 +298,11 @@ class Job:
         """Frames of the job are still to be written (the pacing strategy's answers are current)."""
         return self.phase is _Phase.STREAMING
 
+    @property
+    def aborting(self) -> bool:
+        """Frames of the abort sequence are being written (a write that fails now did not stop the arm)."""
+        return self.phase is _Phase.ABORTING
+
     # --- the end ----------------------------------------------------------------------------
 
     def _settle_deadline(self, now: float) -> float:

@@ -198,8 +198,7 @@ class JobRunner:
         try:
             self._loop()
         except PortError as error:
-            sending = job.phase.value == "aborting"
-            job.port_lost(f"the abort sequence was NOT sent: {error}" if sending else str(error))
+            job.port_lost(f"the abort sequence was NOT sent: {error}" if job.aborting else str(error))
             self.on_update(self.view)
 
     # --- -v: the pacing story ---------------------------------------------------------------

@@ -271,3 +271,28 @@ def test_the_engine_always_ends_and_never_spins(moves, stop_at_s, why, silent_af
         assert action.outcome == (Outcome.FAILED if why else Outcome.INTERRUPTED)
     if action.outcome is Outcome.FINISHED:
         assert job.view.arm_done_s is not None and job.view.arm_done_s <= now
+
+
+def test_a_port_lost_while_sending_the_abort_says_it_was_not_sent():
+    from armctl.runner import JobRunner
+
+    class LostPort:
+        """A link whose port goes away at the first abort frame."""
+
+        clock = staticmethod(lambda: 0.0)
+        error = None
+
+        def write(self, frame: bytes) -> None:
+            if frame == PauseToggle().encode():
+                from armctl.errors import PortError
+
+                raise PortError("the port /dev/ttyUSB0 went away")
+
+        def wait(self, until_s) -> None:
+            pass
+
+    job = make_job()
+    runner = JobRunner(LostPort(), job.streamer, [], job.view)
+    runner.abort((PauseToggle(),))
+    assert runner.view.outcome == "port lost"
+    assert runner.view.messages == ["the abort sequence was NOT sent: the port /dev/ttyUSB0 went away"]
