@@ -20,8 +20,9 @@ Rules:
   streamer also watches every write and frame when another strategy paces, so what is known
   executed, the resume line and the end of the job are judged the same way for every strategy.
 - Finished means: at rest (the position, joints and PWM unchanged for ``REST_CHECK_S``, no SD
-  program advancing, the estimate over), at the last frame's target, and not paused in two
-  agreeing reports.  The deadline is the queued motion × the slowest arm factor + a slack; an
+  program advancing, the estimate over), at the last frame's target, not paused in two
+  agreeing reports, and the frames after the last motion (which leave no trace) finished even
+  for an arm ``slowest_factor`` times slower than the model, counted from that motion's end.  The deadline is the queued motion × the slowest arm factor + a slack; an
   arm still visibly working past it is waited for (up to ``max(OVERRUN_MIN_S, the job)``) and
   the summary says so; anything else ends "no confirmation" with the likeliest reason.
 - Stopping (``request_stop``: Ctrl-C, a failure the host met): nothing more of the job is
@@ -45,6 +46,7 @@ from .protocol import (
     ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
     RunPositionStatus, StatusFrame,
 )
+from .streamer import ARRIVAL_SLACK_S, FRAME_SLACK_S
 
 ABORT_SEQUENCES = {
     "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
@@ -298,6 +300,11 @@ class Job:
         """Frames of the job are still to be written (the pacing strategy's answers are current)."""
         return self.phase is _Phase.STREAMING
 
+    @property
+    def aborting(self) -> bool:
+        """Frames of the abort sequence are being written (a write that fails now did not stop the arm)."""
+        return self.phase is _Phase.ABORTING
+
     # --- the end ----------------------------------------------------------------------------
 
     def _settle_deadline(self, now: float) -> float:
@@ -308,7 +315,8 @@ class Job:
         """Finished means: at rest, at the last target, not paused, and the estimate agrees.
         Anything else ends without claiming the job ran (frames cleared or dropped, a pause)."""
         view = self.view
-        if self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False:
+        if (self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False
+                and self._trailing_frames_surely_done(now)):
             self._confirm_all_done()
             view.arm_done_s = self._done_at(now)
             if self._overran:
@@ -329,6 +337,27 @@ class Job:
             if self._active_s is not None:
                 limit_s = min(limit_s, self._active_s + REST_CHECK_S + SETTLE_SLACK_S)
         return Wait(self._next_change_s(now, limit_s))
+
+    def _trailing_frames_surely_done(self, now: float) -> bool:
+        """The frames after the last motion (a delay, M codes, PWM-only moves) leave no trace: an
+        arm at rest at the last target says nothing about them, and an arm slower than the model
+        would still be in them when the estimate runs out.  They count as done once even an arm
+        ``slowest_factor`` times slower has finished them, begun no earlier than the last change
+        of the readings seen (the motion before them ended by then) and their own arrival."""
+        return now >= self._trailing_done_s()
+
+    def _trailing_done_s(self) -> float:
+        trailing = []
+        for sent in reversed(self._recent):
+            if _moves_arm(sent.segment):
+                break
+            trailing.append(sent)
+        done_s = self._motion[1] if self._motion is not None else 0.0
+        slowest = self.streamer.slowest_factor
+        for sent in reversed(trailing):
+            done_s = (max(done_s, sent.wire_end_s + ARRIVAL_SLACK_S) + sent.segment.duration_s * slowest
+                      + FRAME_SLACK_S)
+        return done_s
 
     def _settling(self, now: float) -> Wait | Finished:
         """After the abort sequence: until the arm is at rest — paused (the estimate cannot know
@@ -354,7 +383,7 @@ class Job:
             times.append(self._active_s + REST_CHECK_S)
         finish = self.streamer.estimated_finish_s()
         if finish is not None:
-            times.append(finish)
+            times += (finish, self._trailing_done_s())
         return min((t for t in times if t > now), default=limit_s)
 
     def _finish(self, outcome: Outcome, now: float) -> Finished:

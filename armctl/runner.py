@@ -7,8 +7,8 @@ what it asks, in one loop: drain the status frames the link has read into it, as
 (``Wait``: through the link, until that time or the next status frame) or stop
 (``Finished``).  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S``
 so Ctrl-C and the panel stay prompt; on a virtual clock the wait jumps straight to the next
-status burst or the engine's own next time, so 20 minutes of model time cost well under a
-second.
+status burst or the engine's own next time, so a virtual job costs its status frames and
+nothing else (``benchmarks/virtual_run.py`` measures it against the bare simulator).
 
 The link's reader thread (none on a virtual clock) only queues status frames with the time they
 were read; every ending — finished, Ctrl-C, a lost port, a failure such as a --log that cannot
@@ -108,11 +108,13 @@ class JobRunner:
         self.status_queue.put((frame, read_s - self._origin_s))
 
     def _drain(self) -> None:
-        get, job = self.status_queue.get_nowait, self.job
+        status_queue, job = self.status_queue, self.job
+        if status_queue.empty():
+            return
         log, explain = self.log is not None, _logger.isEnabledFor(logging.INFO)
         while True:
             try:
-                frame, at_s = get()
+                frame, at_s = status_queue.get_nowait()
             except queue.Empty:
                 return
             job.receive_status(frame, at_s)
@@ -196,8 +198,7 @@ class JobRunner:
         try:
             self._loop()
         except PortError as error:
-            sending = job.phase.value == "aborting"
-            job.port_lost(f"the abort sequence was NOT sent: {error}" if sending else str(error))
+            job.port_lost(f"the abort sequence was NOT sent: {error}" if job.aborting else str(error))
             self.on_update(self.view)
 
     # --- -v: the pacing story ---------------------------------------------------------------

@@ -11,7 +11,9 @@ and its ratio to the bare simulator doing the same 20 minutes with no host.
              run ÷ baseline is the host's and the engine's own cost, and survives load.
 
 This machine's speed drifts within minutes, so the figures are medians of pairs taken back to
-back in alternating order; only a ratio from one run counts.
+back in alternating order; only a ratio from one run counts.  The CPU time of each (this
+process's, ``time.process_time``) is printed too: other processes on the machine disturb it far
+less than the wall time.
 
     .venv/bin/python benchmarks/virtual_run.py             # 5 pairs
     .venv/bin/python benchmarks/virtual_run.py --pairs 9
@@ -41,9 +43,9 @@ def write_job(path: Path) -> None:
     path.write_text("\n".join(lines) + "\n", encoding="utf-8")
 
 
-def one_run(script_path: Path) -> tuple[float, list[tuple[float, bytes]], float, str]:
-    """Wall seconds of ``armctl run`` in this process; the frames written with their model
-    times; the last model time; the summary printed."""
+def one_run(script_path: Path) -> tuple[tuple[float, float], list[tuple[float, bytes]], float, str]:
+    """(wall, CPU) seconds of ``armctl run`` in this process; the frames written with their
+    model times; the last model time; the summary printed."""
     from armctl.cli import _read_script
     from armctl.link import connect as real_connect
     from armctl.ui.run_job import JobOptions, run_job
@@ -67,16 +69,16 @@ def one_run(script_path: Path) -> tuple[float, list[tuple[float, bytes]], float,
     snapshot = _read_script(str(script_path))
     out = io.StringIO()
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
-        start = time.perf_counter()
+        start, cpu_start = time.perf_counter(), time.process_time()
         code = run_job(options, snapshot, connect)
-        wall_s = time.perf_counter() - start
+        wall_s, cpu_s = time.perf_counter() - start, time.process_time() - cpu_start
     if code != 0:
         raise SystemExit(f"the run failed (exit {code}):\n{out.getvalue()}")
-    return wall_s, written, links[0].clock.now(), out.getvalue()
+    return (wall_s, cpu_s), written, links[0].clock.now(), out.getvalue()
 
 
-def baseline(written: list[tuple[float, bytes]], end_s: float) -> float:
-    """Wall seconds of the bare simulator replaying ``written`` and advancing to ``end_s``."""
+def baseline(written: list[tuple[float, bytes]], end_s: float) -> tuple[float, float]:
+    """(wall, CPU) seconds of the bare simulator replaying ``written`` and advancing to ``end_s``."""
     from armctl.protocol import StatusReader
     from armctl.sim.model import SimulatedArm
     from armctl.sim.protocol_sim import parse_sim_url
@@ -84,7 +86,7 @@ def baseline(written: list[tuple[float, bytes]], end_s: float) -> float:
     options, _ = parse_sim_url(URL)
     arm, reader = SimulatedArm(options), StatusReader()
     writes = list(written)
-    start = time.perf_counter()
+    start, cpu_start = time.perf_counter(), time.process_time()
     now, k, frames = 0.0, 0, 0
     while now < end_s:
         due_s = min(arm.next_output_time(), end_s)
@@ -93,7 +95,7 @@ def baseline(written: list[tuple[float, bytes]], end_s: float) -> float:
             k += 1
         now = due_s
         frames += len(reader.feed(arm.advance(now)))
-    return time.perf_counter() - start
+    return time.perf_counter() - start, time.process_time() - cpu_start
 
 
 def main() -> int:
@@ -104,25 +106,25 @@ def main() -> int:
         script = Path(tmp) / "twenty_minutes.txt"
         write_job(script)
         one_run(script)  # warm-up: imports, the grammar cache
-        runs, bases, ratios = [], [], []
+        runs, bases = [], []
+        _, written, end_s, summary = one_run(script)  # the frames to replay (the same every run)
         for pair in range(args.pairs):
             if pair % 2 == 0:
-                wall_s, written, end_s, summary = one_run(script)
-                base_s = baseline(written, end_s)
+                runs.append(one_run(script)[0])
+                bases.append(baseline(written, end_s))
             else:
-                _, written, end_s, _ = one_run(script)  # the frames to replay, untimed
-                base_s = baseline(written, end_s)
-                wall_s, _, _, summary = one_run(script)
-            runs.append(wall_s)
-            bases.append(base_s)
-            ratios.append(wall_s / base_s)
+                bases.append(baseline(written, end_s))
+                runs.append(one_run(script)[0])
     arm_time = next((line for line in summary.splitlines() if line.startswith("arm time:")), "arm time: ?")
     print(f"job: {MOVES} moves of {LENGTH_MM:g} mm at F{FEED_MM_MIN:g}, {arm_time}")
     print(f"model time simulated: {end_s:.1f} s")
-    print(f"run wall time:      median {statistics.median(runs):.3f} s (target <= {TARGET_WALL_S} s), "
-          f"runs {', '.join(f'{r:.3f}' for r in runs)}")
-    print(f"baseline wall time: median {statistics.median(bases):.3f} s (the bare simulator, same frames)")
-    print(f"ratio run / baseline: median {statistics.median(ratios):.2f}")
+    for k, what in enumerate(("wall", "CPU")):
+        run_s, base_s = [r[k] for r in runs], [b[k] for b in bases]
+        ratio = statistics.median(r / b for r, b in zip(run_s, base_s))
+        target = f" (target <= {TARGET_WALL_S} s)" if what == "wall" else ""
+        print(f"{what:>4}: run median {statistics.median(run_s):.3f} s{target}, runs {', '.join(f'{r:.3f}' for r in run_s)}; "
+              f"baseline (the bare simulator, same frames) median {statistics.median(base_s):.3f} s; "
+              f"ratio run / baseline median {ratio:.2f}")
     return 0
 
 

@@ -271,3 +271,40 @@ def test_the_engine_always_ends_and_never_spins(moves, stop_at_s, why, silent_af
         assert action.outcome == (Outcome.FAILED if why else Outcome.INTERRUPTED)
     if action.outcome is Outcome.FINISHED:
         assert job.view.arm_done_s is not None and job.view.arm_done_s <= now
+
+
+def test_a_port_lost_while_sending_the_abort_says_it_was_not_sent():
+    from armctl.runner import JobRunner
+
+    class LostPort:
+        """A link whose port goes away at the first abort frame."""
+
+        clock = staticmethod(lambda: 0.0)
+        error = None
+
+        def write(self, frame: bytes) -> None:
+            if frame == PauseToggle().encode():
+                from armctl.errors import PortError
+
+                raise PortError("the port /dev/ttyUSB0 went away")
+
+        def wait(self, until_s) -> None:
+            pass
+
+    job = make_job()
+    runner = JobRunner(LostPort(), job.streamer, [], job.view)
+    runner.abort((PauseToggle(),))
+    assert runner.view.outcome == "port lost"
+    assert runner.view.messages == ["the abort sequence was NOT sent: the port /dev/ttyUSB0 went away"]
+
+
+def test_frames_after_the_last_motion_are_done_only_when_even_a_slow_arm_has_run_them():
+    # Three delays leave no trace: at rest at the last target proves nothing about them, and an
+    # arm slower than the model (Hypothesis found one 1.4× slower) is still in the third when
+    # the estimate runs out; "finished" waits until an arm slowest_factor× slower is done.
+    job = make_job("G4 P300\nG4 P300\nG4 P300\n")
+    arm = FakeArm(job)
+    action, now = drive(job, arm)
+    assert action == Finished(Outcome.FINISHED)
+    assert now >= 3 * 0.3 * job.streamer.slowest_factor
+    assert job.view.arm_time_s == pytest.approx(0.9, abs=0.1)  # the arm time is still the model's
