@@ -135,6 +135,10 @@ ROTATION_S = len(STATUS_ROTATION) * STATUS_PERIOD_S
 # An observation is matched against this many of the oldest pending frames and as many around the
 # estimate's frame, so its cost does not grow with the queue (see ``Streamer._scan``).
 SCAN_WINDOW_FRAMES = 16
+# With kinematics not verified on the arm, where a joint move really ends may be this share of the
+# reach away from where the profile's forward kinematics put it (a link 10 % off): the time bound of
+# the Cartesian move that starts there allows for that much more path.
+UNVERIFIED_FK_SHARE = 0.1
 
 
 class WaitReason(StrEnum):
@@ -203,6 +207,7 @@ class Streamer:
         self.planner = Planner(model, start)
         connector = model.profile.connector
         self.kinematics_verified = connector.kinematics_verified
+        self._unknown_start_mm = UNVERIFIED_FK_SHARE * model.profile.workspace.reach_mm
         self.control_on_arrival = connector.control_on_arrival
         self.reports_robot_xyz = connector.reports_robot_xyz
         self.lead_s = lead_s
@@ -330,7 +335,8 @@ class Streamer:
         previous = self.pending[-1] if self.pending else None
         est_start = max(wire_end, previous.est_end_s if previous else wire_end)
         certain_start = max(wire_end + ARRIVAL_SLACK_S, self._certain_tail_s)
-        self._certain_tail_s = certain_start + segment.duration_s * self.slowest_factor + FRAME_SLACK_S
+        self._certain_tail_s = (certain_start + (segment.duration_s + self._unknown_start_s(segment)) * self.slowest_factor
+                                + FRAME_SLACK_S)
         frame = SentFrame(
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
@@ -420,10 +426,10 @@ class Streamer:
             sent = self.pending[k]
             if chain is None:  # the rest of it, from the least fraction the evidence allows
                 left_s = sent.segment.duration_s - _time_window(sent.segment, fraction, 1.0)[0]
-                chain = now + left_s * self.slowest_factor + FRAME_SLACK_S
+                chain = now + (left_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + FRAME_SLACK_S
             else:
                 start = max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
-                chain = start + sent.segment.duration_s * self.slowest_factor + FRAME_SLACK_S
+                chain = start + (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + FRAME_SLACK_S
             if chain >= sent.chain_end_s:
                 return  # no tighter than before, and neither are the frames after it
             sent.chain_end_s = chain
@@ -434,6 +440,17 @@ class Streamer:
             elif k + 1 < len(self.pending) and self.pending[k + 1].group_index != sent.index:
                 sent.certain_end_s = chain  # a G300 not followed by its G301: skipped
         self._certain_tail_s = chain
+
+    def _unknown_start_s(self, segment: Segment) -> float:
+        """The time bound's allowance for a Cartesian move that starts where only the profile's
+        kinematics say (the end of a joint move): with kinematics not verified on this arm, its
+        true start may lie ``UNVERIFIED_FK_SHARE`` of the reach away, so the move may be that much
+        longer than planned — covered at its own feed (half of it for a move that ramps from rest)."""
+        if self.kinematics_verified or segment.kind not in ("line", "arc") or not segment.start.xyz_derived:
+            return 0.0
+        command = segment.command
+        speed_mm_min = getattr(command, "speed_mm_min", None) or getattr(command, "speed1_mm_min", 0.0) / 2
+        return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3)
 
     def _consume_one(self) -> None:
         self._last_done_tag = self.pending.popleft().tag

@@ -282,11 +282,14 @@ def test_no_port_anywhere_is_the_simulator_and_says_so():
 
 def _profile_keys():
     """(section, key) of every numeric profile key, read from the schema."""
-    keys = []
+    from armctl.profile import _default_data
+
+    defaults, keys = _default_data(), []
     for section, rule in _SCHEMA.items():
         if isinstance(rule, dict):
             for key in rule:
-                if section not in ("lint",) and key != "channels":
+                # a boolean or a word ([connector] kinematics_verified, control_frames) is not a number
+                if section not in ("lint",) and key != "channels" and not isinstance(defaults[section][key], (bool, str)):
                     keys.append((section, key))
     return keys
 
