@@ -247,19 +247,27 @@ def _is_unit_slip(statement, arm) -> bool:
     return (_sent(statement, "F") or 0.0) > UNIT_SLIP_FACTOR * arm.profile.speed.max_joint_deg_s
 
 
+def speed_limit(command_type, speed) -> float | None:
+    """The most a frame of ``command_type`` may carry in its speed fields (F, and Q of a G230)
+    under the profile's ``speed`` (``Speeds``): L201's limit, which the feed override
+    (armctl/feed.py) also clamps to.  None for a frame without a speed."""
+    if command_type is JointMove:
+        return speed.max_joint_deg_s
+    return speed.max_linear_mm_min if command_type in CARTESIAN_MOVES else None
+
+
 @check("L201", on=CARTESIAN_MOVES + (JointMove,))
 def speed_above_max(statement, arm) -> Iterator[Finding]:
-    speed = arm.profile.speed
+    limit = speed_limit(type(statement.command), arm.profile.speed)
     if type(statement.command) is JointMove:
         value = _sent(statement, "F")
-        if value is not None and value > speed.max_joint_deg_s and not _is_unit_slip(statement, arm):
-            yield (_at(statement, "F"), f"F{value:g} deg/s is above the profile's joint maximum {speed.max_joint_deg_s:g} deg/s",
-                   f"write F{speed.max_joint_deg_s:g} or less", ("speed.max_joint_deg_s",))
+        if value is not None and value > limit and not _is_unit_slip(statement, arm):
+            yield (_at(statement, "F"), f"F{value:g} deg/s is above the profile's joint maximum {limit:g} deg/s",
+                   f"write F{limit:g} or less", ("speed.max_joint_deg_s",))
         return
     for letter in ("F", "Q"):
         value = _sent(statement, letter)
-        if value is not None and value > speed.max_linear_mm_min:
-            limit = speed.max_linear_mm_min
+        if value is not None and value > limit:
             yield (_at(statement, letter), f"{letter}{value:g} mm/min is above the profile's maximum {limit:g} mm/min",
                    f"write {letter}{limit:g} or less", ("speed.max_linear_mm_min",))
 
