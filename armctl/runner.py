@@ -474,9 +474,12 @@ class JobRunner:
     def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
         """One JSON line; a log that cannot be written (disk full, EIO) stops the job (``fail``):
         the record of what was sent is part of the job."""
+        self.log_record({"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra})
+
+    def log_record(self, record: dict) -> None:
+        """One JSON line in the --log (a frame, or a job record of armctl/joblog.py)."""
         if self.log is None:
             return
-        record = {"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra}
         try:
             self.log.write(json.dumps(record) + "\n")
         except (OSError, ValueError) as error:  # ValueError: the file was closed under us
