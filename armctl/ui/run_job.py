@@ -286,7 +286,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
         if resume is not None:
             state, options = _resume_from(resume, link, options, script)
             if options is None:
-                click.echo("nothing to resume: the arm is at the job's last target, every line ran")
+                click.echo("nothing to resume: every line of the job is proven executed")
                 if events is not None:
                     events.summary(_nothing_to_run())
                 return EXIT_OK
