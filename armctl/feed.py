@@ -102,7 +102,7 @@ class FeedOverride:
         if isinstance(command, ArcStart):
             self._arc_percent = percent
         elif isinstance(command, ArcEnd) and self._arc_percent is not None:
-            percent, self._arc_percent = self._arc_percent, None
+            percent = self._arc_percent  # a G301 always follows its G300, which set this
         result = scale_speed(command, percent, self.speed_limits)
         if type(command) in SPEED_FIELDS:
             self.clamped = result.clamped
