@@ -223,3 +223,23 @@ def _compiled(script: Path) -> list[dict]:
     result = CliRunner().invoke(main, ["compile", str(script), "--format", "json"])
     assert result.exit_code == 0, result.output
     return [json.loads(line) for line in result.stdout.splitlines()]
+
+
+def test_json_control_events_follow_the_view():
+    """paused/resumed/override events from the view's control state (what the engine sets)."""
+    import io
+    from types import SimpleNamespace
+
+    from armctl.ui.run_json import JsonEvents
+
+    out = io.StringIO()
+    events = JsonEvents(out, clock=lambda: 0.0)
+    view = SimpleNamespace(total_frames=3, estimated_job_s=1.0, lead_s=2.0, frames_sent=1, last_sent=None, last_done=None,
+                           elapsed_s=0.0, eta_s=1.0, position_mm=None, pause_state="running", feed_percent=100,
+                           feed_clamped=False)
+    events.started(view, "job.txt", 1)
+    for state, percent in [("pausing", 100), ("paused", 100), ("paused", 120), ("resuming", 120), ("running", 120)]:
+        view.pause_state, view.feed_percent = state, percent
+        events.update(view)
+    told = [json.loads(line)["event"] for line in out.getvalue().splitlines()]
+    assert [e for e in told if e != "progress"] == ["started", "paused", "override", "resumed"]
