@@ -83,6 +83,25 @@ def test_json_lines_from_the_installed_command():
     assert "using the built-in simulator" in completed.stderr  # the banner is not on stdout
 
 
+@pytest.mark.realtime
+def test_json_ctrl_c_mid_job_ends_with_one_interrupted_summary():
+    process = subprocess.Popen([*ARMCTL, "run", str(SCRIPTS / "timed_job.txt"), "--port", "sim://?speed=10", "--json"],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        first = json.loads(process.stdout.readline())
+        assert first["event"] == "started"
+        time.sleep(0.3)
+        process.send_signal(signal.SIGINT)
+        rest, err = process.communicate(timeout=30)
+    finally:
+        process.kill()
+    assert process.returncode == 130, err
+    summary = _check_stream([first, *_events(rest)])
+    assert summary["outcome"] == "interrupted" and summary["exit_code"] == 130
+    assert summary["resume_line"] is not None and "--from-line" in summary["resume_command"]
+
+
 def test_json_a_refused_script_is_one_summary_with_its_diagnostics():
     completed = subprocess.run([*ARMCTL, "run", str(COMPILE_ERROR), "--port", FAST_SIM, "--json"],
                                capture_output=True, text=True, timeout=60)

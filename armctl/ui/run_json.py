@@ -59,7 +59,8 @@ class JsonEvents:
             self.emit("progress", frames_sent=view.frames_sent, total_frames=view.total_frames,
                       last_line_sent=_line(view.last_sent), last_line_executed=done,
                       elapsed_s=round(view.elapsed_s, 3), eta_s=round(view.eta_s, 3),
-                      position_mm=None if view.position_mm is None else list(view.position_mm))
+                      position_mm=None if view.position_mm is None else list(view.position_mm),
+                      pause_state=state, feed_percent=percent)
 
     def summary(self, result: dict) -> None:
         if not self.summarised:
