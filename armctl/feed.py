@@ -8,7 +8,7 @@ F and Q of G220/G222/G230); acceleration (K), delays and control frames are left
 override changes how fast the arm goes, not how hard it accelerates or how long it waits.
 
 Never past the profile: a scaled speed is clamped to L201's own limit
-(``lint.rules.speed_limit``, one fact in one place), rounded down to what a 32-bit float can
+(``speed_limits.speed_limit``, which lint's rule calls too: one fact in one place), rounded down to what a 32-bit float can
 carry, so every scaled frame passes the lint speed rule; the result says when it clamped.
 100 % returns the very command given (byte for byte).  The two frames of an arc take one
 percentage: ``FeedOverride`` latches the G300's for its G301, so an arc is never half one
@@ -20,8 +20,8 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass, replace
 
-from .lint.rules import speed_limit
-from .protocol import AccelLinearMove, ArcEnd, ArcStart, Command, FLOAT_CODEC, JointMove, LinearMove, as_f32
+from .protocol import AccelLinearMove, ArcEnd, ArcStart, FLOAT_CODEC, Command, JointMove, LinearMove, as_f32
+from .speed_limits import speed_limit
 
 FEED_MIN_PERCENT, FEED_MAX_PERCENT, FEED_STEP_PERCENT = 10, 200, 10
 SPEED_FIELDS = {

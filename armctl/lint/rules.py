@@ -30,6 +30,7 @@ from ..kinematics import Unreachable, box_problem, has_solution, inverse
 from ..motion import arc_through, circle_through
 from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove, as_f32
 from ..script import SourceSpan
+from ..speed_limits import CARTESIAN_MOVES, speed_limit  # L201's limit, which the feed override clamps to
 from .registry import END, check
 from .tracker import cartesian_target, pwm_channel_of
 
@@ -40,7 +41,6 @@ UNIT_SLIP_FACTOR = 5.0  # a G6 F above 5× the joint maximum reads as mm/min
 SLOW_CARTESIAN_MM_MIN = 60.0  # a Cartesian F below 1 mm/s reads as deg/s
 PWM_TOLERANCE_US = 0.5  # "equal" PWM values, for the gripper's end state
 
-CARTESIAN_MOVES = (LinearMove, AccelLinearMove, ArcStart, ArcEnd)
 TOOL_DOWN_DEG = (180.0, 0.0, 0.0)  # the attitude tried to tell "attitude" from "distance" (A180 B0 C0)
 Finding = tuple  # (where: SourceSpan | WordAt, message, hint[, rests_on: tuple of profile keys])
 
@@ -245,15 +245,6 @@ def _sent(statement, letter: str) -> float | None:
 
 def _is_unit_slip(statement, arm) -> bool:
     return (_sent(statement, "F") or 0.0) > UNIT_SLIP_FACTOR * arm.profile.speed.max_joint_deg_s
-
-
-def speed_limit(command_type, speed) -> float | None:
-    """The most a frame of ``command_type`` may carry in its speed fields (F, and Q of a G230)
-    under the profile's ``speed`` (``Speeds``): L201's limit, which the feed override
-    (armctl/feed.py) also clamps to.  None for a frame without a speed."""
-    if command_type is JointMove:
-        return speed.max_joint_deg_s
-    return speed.max_linear_mm_min if command_type in CARTESIAN_MOVES else None
 
 
 @check("L201", on=CARTESIAN_MOVES + (JointMove,))
