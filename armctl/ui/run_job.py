@@ -181,13 +181,16 @@ def _wait_rotations(link, rotations: int, timeout_s: float) -> None:
 
 
 def _paused_twice(link, timeout_s: float) -> bool:
-    """Paused in two consecutive pause reports: one flipped byte must not make armctl toggle."""
+    """Paused in two consecutive pause reports (the engine's rule, ``agreed_pause``): one flipped
+    byte must not make armctl toggle."""
+    from ..job import agreed_pause
+
     state = link.snapshot()[0]
     if not state.paused:
         return False
     seen = state.last_seen.get(4)
     link.wait_until(lambda s: s.last_seen.get(4) != seen, timeout_s)
-    return bool(link.snapshot()[0].paused)
+    return agreed_pause((state.paused, link.snapshot()[0].paused)) is True
 
 
 def start_from_state(model, state):
@@ -195,17 +198,9 @@ def start_from_state(model, state):
     from ..script import InitialState
 
     joints = tuple(state.joints_deg)
-    pose = model.initial_pose(joints=joints, pwm_us=float(state.pwm_us), origin_mm=tuple(state.worktable_mm))
+    pose = model.reported_pose(state.position_mm, joints, float(state.pwm_us), tuple(state.worktable_mm))
     initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: float(state.pwm_us)})
     return pose, initial
-
-
-def time_scale_of(url: str) -> float:
-    if not url.startswith("sim://"):
-        return 1.0
-    from ..sim.protocol_sim import parse_sim_url
-
-    return parse_sim_url(url)[1]
 
 
 def _open_log(path: str):
@@ -301,7 +296,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
         view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=report.lines, lead_s=options.lead_s,
                        capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
         statements = script.compile(initial=initial, from_line=options.from_line)
-        runner = JobRunner(link, streamer, statements, view, time_scale=time_scale_of(link.url), log=log)
+        runner = JobRunner(link, streamer, statements, view, log=log)
         # the live panel's map: the same snapshot compiled the same way, sampled once before the
         # first frame (bounded: path_map.MAP_MAX_FRAMES); no panel, no map
         grid = _job_grid(script, model, start, initial, options) if _live(options) else None
@@ -415,7 +410,7 @@ def _stream(runner, options: JobOptions, view, grid=None, events=None, journal=N
             view.messages.append(str(error))
             return "port lost"
         except Exception as error:  # anything else mid-job: the same path as Ctrl-C
-            runner.failure = runner.failure or f"{type(error).__name__}: {error}"
+            runner.fail(f"{type(error).__name__}: {error}")
         why = runner.failure or "interrupted"
         display.note(f"\narmctl: {why}: no more frames are sent; sending the abort sequence "
                      f"({options.abort}) and waiting for the arm to come to rest …")
@@ -425,7 +420,7 @@ def _stream(runner, options: JobOptions, view, grid=None, events=None, journal=N
             pass
         except Exception as error:  # the abort itself failed: say so, the summary still follows
             view.messages.append(f"the abort did not complete: {type(error).__name__}: {error}")
-        if runner.failure and view.outcome != "port lost":
+        if runner.job.outcome is None and runner.failure:  # the abort was cut short: the engine did not end it
             view.outcome = "failed"
             view.messages.append(runner.failure)
         return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
