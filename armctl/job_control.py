@@ -30,8 +30,12 @@ from __future__ import annotations
 from enum import StrEnum
 
 from .feed import FeedOverride
+from .profile import CONTROL_FRAMES
 
-CONTROL_FRAME_MODES = ("queued", "arrival")
+def control_frames_of(profile) -> str:
+    """The arm's control-frame mode (H5): the profile's ``connector.control_frames`` — the one
+    place the job's control reads it."""
+    return profile.connector.control_frames
 
 
 class PauseState(StrEnum):
@@ -49,14 +53,15 @@ class JobControl:
     """The user's control of one job; ``speed_limits`` is the profile's ``Speeds``."""
 
     def __init__(self, speed_limits, control_frames: str = "queued") -> None:
-        if control_frames not in CONTROL_FRAME_MODES:
-            raise ValueError(f"control_frames must be one of {CONTROL_FRAME_MODES}, not {control_frames!r}")
+        if control_frames not in CONTROL_FRAMES:
+            raise ValueError(f"control_frames must be one of {CONTROL_FRAMES}, not {control_frames!r}")
         self.control_frames = control_frames
         self.feed = FeedOverride(speed_limits)
         self.state = PauseState.RUNNING
         self.arm_paused: bool | None = None  # the engine's twice-agreeing reading
         self._toggles_due = 0
         self._scaled: tuple | None = None  # (statement, percent, command): planned once, written the same
+        self.version = 0  # grows whenever anything a view shows changes (the engine copies it then)
 
     # --- asked by the user ---------------------------------------------------------------------
 
@@ -67,6 +72,7 @@ class JobControl:
             return False  # a toggle to an arm that reports it is paused would resume it
         self.state = PauseState.PAUSING
         self._toggles_due += 1
+        self.version += 1
         return True
 
     def resume(self) -> bool:
@@ -75,6 +81,7 @@ class JobControl:
             return False
         self.state = PauseState.RESUMING
         self._toggles_due += 1
+        self.version += 1
         return True
 
     def toggle(self) -> bool:
@@ -82,27 +89,39 @@ class JobControl:
 
     def set_feed_override(self, percent: int) -> int:
         """The new override, on the 10 % grid within 10…200 % (frames not yet written)."""
+        self.version += 1
         return self.feed.set_percent(percent)
 
     def step_feed_override(self, steps: int) -> int:
+        self.version += 1
         return self.feed.step(steps)
 
     # --- asked by the engine ------------------------------------------------------------------
 
     def observe(self, arm_paused: bool | None) -> None:
         """The arm's pause state as the engine reads it (None: the last two reports disagree)."""
-        self.arm_paused = arm_paused
+        if arm_paused is not self.arm_paused:
+            self.arm_paused = arm_paused
+            self.version += 1
         if self.state is PauseState.PAUSING and arm_paused is True:
             self.state = PauseState.PAUSED
+            self.version += 1
         elif self.state is PauseState.RESUMING and arm_paused is False and not self._toggles_due:
             self.state = PauseState.RUNNING
+            self.version += 1
 
     def take_toggle(self) -> bool:
         """Whether a pause toggle is to be written now; the engine writes it (wire permitting)."""
         if not self._toggles_due:
             return False
         self._toggles_due -= 1
+        self.version += 1
         return True
+
+    @property
+    def busy(self) -> bool:
+        """A toggle is due or a pause is asked or in force: the engine has something to do here."""
+        return self._toggles_due > 0 or self.state is not PauseState.RUNNING
 
     @property
     def toggle_due(self) -> bool:
@@ -132,7 +151,10 @@ class JobControl:
         cached = self._scaled
         percent = self.feed.percent
         if cached is None or cached[0] is not statement or cached[1] != percent:
+            clamped = self.feed.clamped
             cached = self._scaled = (statement, percent, self.feed.apply(statement.command))
+            if self.feed.clamped is not clamped:
+                self.version += 1
         return cached[2]
 
     @property

@@ -28,7 +28,7 @@ from typing import Iterable
 
 from .errors import ArmctlError, ResumeRefused
 from .protocol import ArcEnd
-from .runner import TARGET_DEG, TARGET_MM  # "at the target" as the end of a job judges it
+from .job import TARGET_DEG, TARGET_MM  # "at the target" as the end of a job judges it
 
 
 

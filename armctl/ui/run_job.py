@@ -341,7 +341,7 @@ def _resume_from(point, link, options: JobOptions, script):
     or (state, None) when every line ran."""
     from dataclasses import replace
 
-    from ..runner import SETTLE_SLACK_S
+    from ..job import SETTLE_SLACK_S
 
     state = _wait_for_rest(link, options.timeout_s + 2 * max(point.lead_s, options.lead_s) + SETTLE_SLACK_S)
     line = point.line_for(state.position_mm, tuple(state.joints_deg))
@@ -355,7 +355,7 @@ def _resume_from(point, link, options: JobOptions, script):
 
 def _wait_for_rest(link, timeout_s: float):
     """The arm's state once its position and joints stayed the same for REST_CHECK_S."""
-    from ..runner import REST_CHECK_S
+    from ..job import REST_CHECK_S
 
     deadline = link.clock() + timeout_s
     reading, since = None, link.clock()
@@ -393,14 +393,16 @@ def _journal(runner, log, script):
 
 def _stream(runner, options: JobOptions, view, grid=None, events=None, journal=None) -> str:
     from ..runner import ABORT_SEQUENCES
+    from .run_keys import FOOTER, keys_available, run_keys
 
     title = f"armctl run {options.script}"
     from ..output import quiet
 
-    display = _Display(title, _live(options), grid=grid)
+    keys = _live(options) and keys_available()
+    display = _Display(title, _live(options), grid=grid, footer=FOOTER if keys else None)
     shown = events.update if events is not None else (lambda view: None) if quiet() else display.update  # -q: the summary only
     runner.on_update = shown if journal is None else lambda view: (journal(view), shown(view))
-    with _deferred_ctrl_c(runner), display:
+    with _deferred_ctrl_c(runner), display, (run_keys(runner) if keys else nullcontext()):
         try:
             runner.run()
             return view.outcome
@@ -478,8 +480,8 @@ class _Display:
     would crop a panel taller than the screen.
     """
 
-    def __init__(self, title: str, live: bool, console=None, grid=None) -> None:
-        self.title, self.live, self.grid = title, live, grid
+    def __init__(self, title: str, live: bool, console=None, grid=None, footer: str | None = None) -> None:
+        self.title, self.live, self.grid, self.footer = title, live, grid, footer
         self._console = console  # tests pass a recording console; None: rich's own (stdout)
         self._live = None
         self._last = 0.0
@@ -515,7 +517,7 @@ class _Display:
             if now - self._last >= LIVE_REFRESH_S or view.outcome != "running":
                 from .run_panel import render_run
 
-                self._live.update(render_run(view, self.title, self._map_room()), refresh=True)  # throttled: draw now
+                self._live.update(render_run(view, self.title, self._map_room(), self.footer), refresh=True)  # throttled: draw now
                 self._last = now
         elif now - self._last >= PLAIN_PROGRESS_S:
             from .run_panel import progress_line
