@@ -31,6 +31,12 @@ Rules:
 - Paused means two agreeing pause reports (``agreed_pause``): one corrupted byte must never make
   armctl toggle the arm.  ``armctl run``'s start-up check uses the same rule.
 - The resume line is the first statement not known finished (an arc's G301 resumes at its G300).
+- Control of a running job (``pause``, ``resume``, ``set_feed_override``; the state machine is
+  armctl/job_control.py): a pause toggle asked for goes as soon as the wire is free, never held
+  behind the streamer's capacity or lead; nothing of the job is written while a pause is asked
+  or in force, and the end of the job waits for it.  The feed override is applied to the
+  statement about to be written, and the streamer plans that very command, so the lead and the
+  estimate follow it.  A stop sends its pause toggle only when the arm would otherwise run on.
 """
 
 from __future__ import annotations
