@@ -273,10 +273,6 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
 
     link, baud = connect(options.port, options.baud, profile=profile)
     with link, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
-        if log is not None:
-            from ..joblog import job_record
-
-            log.write(json.dumps(job_record(script.name, script.data, options.from_line, options.lead_s)) + "\n")
         state = read_arm(link, options.timeout_s, log)
         if resume is not None:
             state, options = _resume_from(resume, link, options, script)
@@ -297,6 +293,10 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
                        capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
         statements = script.compile(initial=initial, from_line=options.from_line)
         runner = JobRunner(link, streamer, statements, view, log=log)
+        if log is not None:  # which script it records (--resume checks it); a failed write stops the job like any
+            from ..joblog import job_record
+
+            runner.log_record(job_record(script.name, script.data, options.from_line, options.lead_s))
         # the live panel's map: the same snapshot compiled the same way, sampled once before the
         # first frame (bounded: path_map.MAP_MAX_FRAMES); no panel, no map
         grid = _job_grid(script, model, start, initial, options) if _live(options) else None
