@@ -122,3 +122,30 @@ def test_stop_while_pausing_sends_no_second_toggle():
     assert outcome is Outcome.INTERRUPTED
     assert sum(1 for _, w in writes if w.frame == PauseToggle().encode()) == 1
     assert any("already on its way" in m for m in job.view.messages)
+
+
+class _FullFifo:
+    """A pacing strategy that counts the FIFO as full: no frame of the job may go."""
+
+    def next_write_time(self, now, command=None):
+        return None
+
+    def receive_status(self, frame, now):
+        pass
+
+    def wrote(self, command, now, tag=None):
+        pass
+
+
+def test_a_toggle_is_not_held_behind_a_fifo_counted_full():
+    job, _, _ = make("arrival")
+    job.pacing = _FullFifo()
+    assert type(job.next_action(0.0)) is not Write  # the job's frames wait
+    assert job.pause()
+    action = job.next_action(0.01)
+    assert type(action) is Write and action.frame == PauseToggle().encode() and action.control
+    job.wrote(0.01)
+    assert type(job.next_action(0.02)) is not Write  # the feed is held, and the FIFO still full
+    assert job.resume()
+    action = job.next_action(0.2)  # once the wire is free again
+    assert type(action) is Write and action.frame == PauseToggle().encode()
