@@ -183,13 +183,14 @@ def test_resuming_a_finished_job_sends_nothing(tmp_path):
 
 # --- kill -9 mid-job, then --resume against the same arm -----------------------------------------
 
-CRASH_LINES = 30
+CRASH_LINES = 24
 
 
 def _crash_script(path: Path) -> Path:
-    """Distinct moves (X and PWM differ on every line), each about 0.1 s of arm time."""
-    lines = ["G1 X200 Y0 Z250 A180 B0 C0 S1000 F1500"]
-    lines += [f"G1 X{200 + 3 * k} S{1000 + 10 * k}" for k in range(1, CRASH_LINES)]
+    """Distinct moves (X and PWM differ on every line), each about 0.1 s of arm time, from the
+    simulator's start (fixed pose 0: X210 Y0 Z300)."""
+    lines = ["G1 X210 Y0 Z300 A180 B0 C0 S1000 F2400"]
+    lines += [f"G1 X{210 + 4 * k} S{1000 + 10 * k}" for k in range(1, CRASH_LINES)]
     path.write_text("\n".join(lines) + "\n")
     return path
 
@@ -224,12 +225,17 @@ def test_kill_9_mid_job_then_resume_runs_every_line_exactly_once(tmp_path):
             host.wait(timeout=10)
         finally:
             host.kill()
-        written = [r for r in map(json.loads, log.read_text().splitlines()) if r["dir"] == "tx"]
+        records = [json.loads(line) for line in log.read_text().splitlines()]
+        written = [r for r in records if r["dir"] == "tx"]
         assert 0 < len(written) < CRASH_LINES  # killed mid-job
-        resumed = subprocess.run([*ARMCTL, "run", str(script), "--port", ready[0], "--no-live", "--lead", "0.5",
-                                  "--resume", str(log)], capture_output=True, text=True, timeout=60)
-        assert resumed.returncode == 0, resumed.stdout + resumed.stderr
+        done_at_kill = [r for r in records if r["dir"] == "progress"][-1]["done_line"]
+        # the resumed host in this process (the killed one was a process of its own)
+        resumed = CliRunner().invoke(main, ["run", str(script), "--port", ready[0], "--no-live", "--lead", "0.5",
+                                            "--resume", str(log)])
+        assert resumed.exit_code == 0, resumed.output
         assert "done: the arm finished the job" in resumed.stdout
+        resumed_at = int(re.search(r"resuming .* at line (\d+)", resumed.stderr).group(1))
+        assert resumed_at > done_at_kill + 1  # the frames in flight at the kill ran: the arm's report proved it
     finally:
         stop.set()
         bridge.join(5.0)
