@@ -3,8 +3,9 @@
 Strategy: the run's only output on stdout — one JSON object a line, flushed as it is written,
 so a web UI, a job queue or a notebook can follow a job by reading lines.  Every object has an
 ``event``: ``started``; ``progress`` (every ``PROGRESS_EVERY_S`` of wall time, and whenever the
-last line known executed changes); ``paused``/``resumed``/``override`` when the job's control
-state changes; and last, exactly once, ``summary`` with the fields of the Python API's run
+last line known executed changes; with the pause state, the feed override and whether the last
+frame's speed was held to the profile's limit); ``paused``/``resumed``/``override`` when the
+job's control state changes; and last, exactly once, ``summary`` with the fields of the Python API's run
 result (``outcome``, ``frames_sent``, ``total_frames``, ``last_line_sent``,
 ``last_line_executed``, ``arm_time_s``, ``resume_line``, ``resume_command``, ``messages``,
 ``exit_code``).  A script that fails its check gives a summary with outcome ``refused`` and
@@ -51,7 +52,7 @@ class JsonEvents:
             self._state = state
         if percent != self._percent:
             self._percent = percent
-            self.emit("override", feed_percent=percent, clamped=bool(getattr(view, "feed_clamped", False)))
+            self.emit("override", feed_percent=percent)
         now = self.clock()
         done = _line(view.last_done)
         if done != self._last_done or self._last_s is None or now - self._last_s >= PROGRESS_EVERY_S:
@@ -60,7 +61,7 @@ class JsonEvents:
                       last_line_sent=_line(view.last_sent), last_line_executed=done,
                       elapsed_s=round(view.elapsed_s, 3), eta_s=round(view.eta_s, 3),
                       position_mm=None if view.position_mm is None else list(view.position_mm),
-                      pause_state=state, feed_percent=percent)
+                      pause_state=state, feed_percent=percent, feed_clamped=bool(getattr(view, "feed_clamped", False)))
 
     def summary(self, result: dict) -> None:
         if not self.summarised:
