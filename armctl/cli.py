@@ -320,6 +320,8 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
 
     if log_path is not None:
         _refuse_same_file(log_path, script, "--log")
+    if as_json and dry_run:
+        raise UsageFailure("--json with --dry-run: `armctl compile --json` gives the frames, `armctl estimate --json` the estimate")
     snapshot = _read_script(script)
     options = JobOptions(script, port, baud, lead_s, from_line, dry_run, log_path, not no_live, abort, profile_path, timeout_s,
                          as_json, resume_log)
