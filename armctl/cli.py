@@ -20,7 +20,7 @@ import click
 from . import __version__
 from .bench import SCENARIO_NAMES as BENCH_SCENARIOS  # the names only: imports nothing else
 from .cli_types import number
-from .errors import ArmctlError, ConfigError, ProfileError
+from .errors import ArmctlError, ConfigError, ProfileError, ResumeRefused
 from .inputs import InputTooLarge
 from .limits import BAUD_RANGE, BENCH_JOBS_RANGE, BENCH_LEAD_RANGE_S, LEAD_RANGE_S, LINE_RANGE, START_TIMEOUT_RANGE_S, STATUS_TIMEOUT_RANGE_S, TCP_PORT_RANGE
 
@@ -44,16 +44,19 @@ class ArmctlGroup(click.Group):
                 return super().invoke(ctx)
             finally:
                 _flush_stdout()
-        except (UsageFailure, ProfileError, ConfigError, InputTooLarge) as error:
-            _fail(str(error), EXIT_USAGE)
         except ArmctlError as error:
-            _fail(str(error), EXIT_PROBLEMS)
+            _fail(str(error), exit_code_for(error))
         except KeyboardInterrupt:
             _fail("interrupted", EXIT_INTERRUPTED)
         except BrokenPipeError:
             _reader_went_away()
         except OSError as error:
             _fail(_os_error_text(error), EXIT_USAGE)
+
+
+def exit_code_for(error: ArmctlError) -> int:
+    """2 for usage, configuration, a profile or an input armctl cannot use; 1 for the rest."""
+    return EXIT_USAGE if isinstance(error, (UsageFailure, ProfileError, ConfigError, InputTooLarge, ResumeRefused)) else EXIT_PROBLEMS
 
 
 def _flush_stdout() -> None:
@@ -305,7 +308,10 @@ def ports(as_json):
               help="What Ctrl-C sends after it stops feeding (see README: Stopping a job).")
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
 @click.option("--timeout", "timeout_s", type=number(*START_TIMEOUT_RANGE_S), default=3.0, show_default=True, help="Seconds to wait for the arm's status before starting.")
-def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort, profile_path, timeout_s):
+@click.option("--json", "as_json", is_flag=True, help="JSON lines on stdout: progress events, then one summary object.")
+@click.option("--resume", "resume_log", type=click.Path(exists=True, dir_okay=False), metavar="LOG",
+              help="Continue the job a --log of this script records, from the line the arm proves it reached.")
+def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort, profile_path, timeout_s, as_json, resume_log):
     """Check a motion script, then stream it to the arm without overflowing its buffer.
 
     SCRIPT (a file, or - for standard input) is read once: what was checked is what is sent.
@@ -314,8 +320,11 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
 
     if log_path is not None:
         _refuse_same_file(log_path, script, "--log")
+    if as_json and dry_run:
+        raise UsageFailure("--json with --dry-run: `armctl compile --json` gives the frames, `armctl estimate --json` the estimate")
     snapshot = _read_script(script)
-    options = JobOptions(script, port, baud, lead_s, from_line, dry_run, log_path, not no_live, abort, profile_path, timeout_s)
+    options = JobOptions(script, port, baud, lead_s, from_line, dry_run, log_path, not no_live, abort, profile_path, timeout_s,
+                         as_json, resume_log)
     sys.exit(run_job(options, snapshot, _connect))
 
 

@@ -36,5 +36,9 @@ class ConfigError(ArmctlError):
     """A value in armctl.toml that cannot be used."""
 
 
+class ResumeRefused(ArmctlError):
+    """``run --resume LOG`` names another script, an edited one, or a file that is no run log: exit 2."""
+
+
 class PortError(ArmctlError):
     """A serial port that cannot be opened, or that went away."""

@@ -32,6 +32,12 @@ Rules:
 - Paused means two agreeing pause reports (``agreed_pause``): one corrupted byte must never make
   armctl toggle the arm.  ``armctl run``'s start-up check uses the same rule.
 - The resume line is the first statement not known finished (an arc's G301 resumes at its G300).
+- Control of a running job (``pause``, ``resume``, ``set_feed_override``; the state machine is
+  armctl/job_control.py): a pause toggle asked for goes as soon as the wire is free, never held
+  behind the streamer's capacity or lead; nothing of the job is written while a pause is asked
+  or in force, and the end of the job waits for it.  The feed override is applied to the
+  statement about to be written, and the streamer plans that very command, so the lead and the
+  estimate follow it.  A stop sends its pause toggle only when the arm would otherwise run on.
 """
 
 from __future__ import annotations
@@ -42,6 +48,7 @@ from enum import Enum, StrEnum
 from operator import attrgetter
 from typing import Iterable, Iterator
 
+from .job_control import JobControl, control_frames_of
 from .protocol import (
     ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
     RunPositionStatus, StatusFrame,
@@ -83,6 +90,7 @@ class Write:
 
     frame: bytes
     statement: object | None
+    control: str | None = None  # "pause toggle" for one the user asked for (``Job.pause``/``resume``)
 
 
 @dataclass(frozen=True, slots=True)
@@ -120,6 +128,10 @@ class RunView:
     arm_done_s: float | None = None  # when the arm came to rest at the end (model time)
     outcome: str = Outcome.RUNNING  # an Outcome
     messages: list = field(default_factory=list)
+    pause_state: str = "running"  # armctl/job_control.py's PauseState: running, pausing, paused, resuming
+    pause_label: str = "running"  # what the panel shows (the arm's reports decide it)
+    feed_percent: int = 100  # the feed override of the frames written from now on
+    feed_clamped: bool = False  # the last frame scaled was held to the profile's speed limit
 
     @property
     def elapsed_s(self) -> float:
@@ -127,8 +139,9 @@ class RunView:
 
     @property
     def eta_s(self) -> float:
-        """Seconds until the arm should be done: what is queued, then what is still unsent."""
-        return self.queued_s + self.remaining_motion_s
+        """Seconds until the arm should be done: what is queued, then what is still unsent (at
+        the feed override: motion time taken as inverse to speed, ramps aside)."""
+        return self.queued_s + self.remaining_motion_s * 100 / self.feed_percent
 
     first_not_done: object = None  # the Statement to resume at: the first not known finished
 
@@ -170,8 +183,12 @@ class Job:
     judged by ``streamer``; see the module docstring."""
 
     def __init__(self, streamer, statements: Iterable, view: RunView, *, pacing=None,
-                 abort_sequence: tuple = ABORT_SEQUENCES["pause"]) -> None:
+                 abort_sequence: tuple = ABORT_SEQUENCES["pause"], control_frames: str | None = None) -> None:
         self.streamer = streamer
+        # pause, resume and the feed override (armctl/job_control.py), under the profile the
+        # streamer plans with: its speed limits (never passed) and its control-frame mode (H5)
+        profile = streamer.planner.model.profile
+        self.control = JobControl(profile.speed, control_frames or control_frames_of(profile))
         self.pacing = streamer if pacing is None else pacing
         self.statements: Iterator = iter(statements)
         self.view = view
@@ -194,6 +211,8 @@ class Job:
         self._deadline_s = 0.0
         self._overran = False
         self._write: Write | None = None  # the Write asked for and not yet done
+        self._command = None  # the command that Write carries (the feed override applied)
+        self._control_version = 0  # the control state the view shows
 
     # --- input ------------------------------------------------------------------------------
 
@@ -210,6 +229,7 @@ class Job:
             values = values_of(frame)
             if kind == 4:
                 self._pause_reports.append(frame.paused)
+                self.control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
             if kind == 0:
                 view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
             reported = self._reported
@@ -230,13 +250,18 @@ class Job:
 
     def wrote(self, now: float) -> None:
         """The host wrote the frame the last ``Write`` asked for, starting at ``now``."""
-        self._write = None
+        write, self._write = self._write, None
         if self.phase is _Phase.ABORTING:
             self._aborts.popleft()
             return
+        if write is not None and write.control is not None:  # a pause toggle the user asked for
+            self.control.take_toggle()
+            self.streamer.wire_free_s = max(self.streamer.wire_free_s, now) + self.streamer.frame_s
+            self._refresh(now)
+            return
         view = self.view
         statement = view.next_statement
-        command = statement.command
+        command = self._command
         sent = self.streamer.wrote(command, now, tag=statement)
         if self.pacing is not self.streamer:
             self.pacing.wrote(command, now, statement)
@@ -244,7 +269,8 @@ class Job:
         view.frames_sent += 1
         view.last_sent = statement
         view.next_statement = next(self.statements, None)
-        view.remaining_motion_s = max(0.0, view.remaining_motion_s - sent.segment.duration_s)
+        # the estimate's remaining motion is at 100 %: the frame's own time, unscaled
+        view.remaining_motion_s = max(0.0, view.remaining_motion_s - sent.segment.duration_s * self.control.feed.percent / 100)
         self._refresh(now)
 
     def request_stop(self, why: str | None = None) -> None:
@@ -252,6 +278,25 @@ class Job:
         the host met, e.g. a --log that cannot be written) makes the outcome FAILED."""
         self.failure = self.failure or why
         self.stop_requested = True
+
+    def pause(self) -> bool:
+        """Pause the job: a pause toggle, and nothing more written until ``resume`` (False when
+        already pausing or paused, the arm reports it is paused, or the job is stopping)."""
+        return self._controllable and self.control.pause()
+
+    def resume(self) -> bool:
+        """Resume a pause asked with ``pause``: the toggle goes first, then the job's frames."""
+        return self._controllable and self.control.resume()
+
+    @property
+    def _controllable(self) -> bool:
+        """Pause and resume act while the job streams or drains; a stop has its own sequence."""
+        return not self.stop_requested and self.phase in (_Phase.START, _Phase.STREAMING, _Phase.DRAINING)
+
+    def set_feed_override(self, percent: int) -> int:
+        """Rescale the speed of the frames not yet written (10…200 %, 10 % steps); returns the
+        percentage in force."""
+        return self.control.set_feed_override(percent)
 
     def port_lost(self, why: str | None = None) -> None:
         """The port went away: nothing more can be written or read."""
@@ -273,13 +318,18 @@ class Job:
         if self.stop_requested and self.phase in (_Phase.STREAMING, _Phase.DRAINING):
             self._begin_abort()
         self._refresh(now)
+        if self.control.busy and self.phase in (_Phase.STREAMING, _Phase.DRAINING):
+            held = self._control_action(now)
+            if held is not None:
+                return held
         if self.phase is _Phase.STREAMING:
             statement = view.next_statement
             if statement is not None:
-                when = self.pacing.next_write_time(now, statement.command)
+                command = self.control.command_for(statement)
+                when = self.pacing.next_write_time(now, command)
                 if when is not None and when <= now:
                     if self._write is None:
-                        self._write = Write(statement.command.encode(), statement)
+                        self._write, self._command = Write(command.encode(), statement), command
                     return self._write
                 return Wait(when)
             self.phase = _Phase.DRAINING
@@ -294,6 +344,27 @@ class Job:
             self.phase = _Phase.SETTLING
             self._deadline_s = self._settle_deadline(now)
         return self._settling(now)
+
+    def _control_action(self, now: float) -> Write | Wait | None:
+        """A pause toggle the user asked for goes as soon as the wire is free — never behind the
+        streamer's capacity or lead, so a resume is not held behind a FIFO it counts as full;
+        while a pause is asked or in force nothing else is written, and the end of the job
+        waits (its deadline starts again from the resume).  None: carry on."""
+        control = self.control
+        if control.toggle_due:
+            if self._write is not None and self._write.statement is not None:
+                self._write = None  # a frame asked for and not written yet: the toggle goes first
+            wire_s = self.streamer.wire_free_s
+            if wire_s > now:
+                return Wait(wire_s)
+            if self._write is None:
+                self._write = Write(PauseToggle().encode(), None, "pause toggle")
+            return self._write
+        if control.holds_feed:
+            if self.phase is _Phase.DRAINING:
+                self._deadline_s = self._settle_deadline(now)
+            return Wait(None)  # until the arm reports (pausing → paused) or the user resumes
+        return None
 
     @property
     def streaming(self) -> bool:
@@ -402,8 +473,11 @@ class Job:
         view = self.view
         view.outcome = Outcome.INTERRUPTED
         sequence = self.abort_sequence
-        if self.arm_paused and any(isinstance(c, PauseToggle) for c in sequence):
-            view.messages.append("the arm was already paused: no pause toggle sent (it would have resumed it)")
+        self.control.observe(self.arm_paused)
+        if not self.control.abort_needs_toggle() and any(isinstance(c, PauseToggle) for c in sequence):
+            why = ("a pause was already on its way" if self.control.state == "pausing"
+                   else "the arm was already paused")
+            view.messages.append(f"{why}: no pause toggle sent (it would have resumed it)")
             sequence = tuple(c for c in sequence if not isinstance(c, PauseToggle))
         self._aborts = deque(sequence)
         self._write = None
@@ -478,6 +552,11 @@ class Job:
         view.queued_s = streamer.queued_seconds(now)
         view.last_done = streamer.last_known_done()
         view.first_not_done = self._first_not_done()
+        control = self.control  # it follows the pause reports as they come (receive_status)
+        if control.version != self._control_version:  # the view follows only a change
+            self._control_version = control.version
+            view.pause_state, view.pause_label = control.state.value, control.label
+            view.feed_percent, view.feed_clamped = control.feed.percent, control.feed.clamped
 
     def _first_not_done(self):
         pending = self.streamer.pending

@@ -76,6 +76,7 @@ class JobRunner:
         self.log = log
         self.on_update = on_update or (lambda view: None)
         self.status_queue: queue.SimpleQueue = queue.SimpleQueue()
+        self.requests: queue.SimpleQueue = queue.SimpleQueue()  # ``control``: calls for the engine, from any thread
         self.stop_requested = False
         self._aborting = False
         self._told_wait: WaitReason | None = None  # the last wait reason logged
@@ -107,7 +108,15 @@ class JobRunner:
         queue the frame with the model time it was read."""
         self.status_queue.put((frame, read_s - self._origin_s))
 
+    def control(self, request: Callable[[Job], object]) -> None:
+        """Queue ``request(job)`` (e.g. ``Job.pause``) from any thread — the run panel's keys;
+        the loop carries it out at its next turn, between writes (within ``POLL_S``)."""
+        self.requests.put(request)
+
     def _drain(self) -> None:
+        requests = self.requests
+        while not requests.empty():  # the panel's keys first: their effect shows in this turn
+            requests.get_nowait()(self.job)
         status_queue, job = self.status_queue, self.job
         if status_queue.empty():
             return
@@ -151,7 +160,9 @@ class JobRunner:
                 link.write(action.frame)
                 job.wrote(now)
                 if self.log is not None:
-                    if action.statement is None:
+                    if action.control is not None:
+                        self._log("tx", action.frame, now, control=action.control)
+                    elif action.statement is None:
                         self._log("tx", action.frame, now, abort=True)
                     else:
                         self._log("tx", action.frame, now, line=action.statement.line)
@@ -254,9 +265,12 @@ class JobRunner:
     def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
         """One JSON line; a log that cannot be written (disk full, EIO) stops the job (``fail``):
         the record of what was sent is part of the job."""
+        self.log_record({"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra})
+
+    def log_record(self, record: dict) -> None:
+        """One JSON line in the --log (a frame, or a job record of armctl/joblog.py)."""
         if self.log is None:
             return
-        record = {"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra}
         try:
             self.log.write(json.dumps(record) + "\n")
         except (OSError, ValueError) as error:  # ValueError: the file was closed under us

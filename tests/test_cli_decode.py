@@ -177,6 +177,8 @@ def test_the_run_log_is_decoded_too(tmp_path):
     ran = CliRunner().invoke(main, ["run", str(job), "--port", "sim://?clock=virtual", "--no-live", "--log", str(log)])
     assert ran.exit_code == 0, ran.output
     records = [json.loads(line) for line in log.read_text().splitlines()]
+    assert {r["dir"] for r in records if "hex" not in r} == {"job", "progress"}  # no bytes: decode skips them
+    records = [r for r in records if "hex" in r]
     sent = [r for r in records if r["dir"] == "tx"]
     read = [r for r in records if r["dir"] == "rx"]
     assert sent and read

@@ -53,13 +53,16 @@ class JogOnPty:
         self.saved = termios.tcgetattr(self.slave)
         env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
         self.proc = subprocess.Popen(
-            [*_jog_command(), "--port", port, "--log", str(self.log_path), *args],
+            self.command(port, args),
             stdin=self.slave, stdout=self.slave, stderr=self.slave, cwd=tmp_path, env=env, start_new_session=True,
         )
         self.screen = bytearray()
         self._stop = threading.Event()
         self._reader = threading.Thread(target=self._read, daemon=True)
         self._reader.start()
+
+    def command(self, port: str, args: tuple) -> list[str]:
+        return [*_jog_command(), "--port", port, "--log", str(self.log_path), *args]
 
     def _read(self) -> None:
         # select first: a thread blocked in read() would keep the master open after close().

@@ -107,6 +107,17 @@ def test_compile_json_is_format_json_and_refuses_another_format():
     assert result.exit_code == 2 and "--json is --format json" in result.output
 
 
+def test_run_json_is_json_lines_ending_in_one_summary():
+    result = CliRunner().invoke(main, ["run", "job.txt", "--json", "--port", SIM])
+    assert result.exit_code == 0, result.output
+    events = _strict_json_lines(result.stdout)
+    assert events[0]["event"] == "started" and [e["event"] for e in events].count("summary") == 1
+    assert events[-1]["event"] == "summary" and events[-1]["outcome"] == "finished"
+    assert "L103" in result.stderr and "L103" not in result.stdout
+    dry = CliRunner().invoke(main, ["run", "job.txt", "--json", "--dry-run"])
+    assert dry.exit_code == 2 and dry.stdout == "" and "armctl compile --json" in dry.stderr
+
+
 def test_decode_json_names_every_chunk_and_keeps_the_summary_on_stderr(tmp_path):
     frames = CliRunner().invoke(main, ["compile", "job.txt"]).stdout
     (tmp_path / "frames.hex").write_text(frames + "ce0000807f000064cf\n" + "01 02\n", encoding="utf-8")

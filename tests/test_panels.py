@@ -152,6 +152,7 @@ RUN_PANEL = """\
 │ lines      ━━━━━━━━━━━━━━━━━━━━━━━━━━╸              2/3                                  │
 │ elapsed / ETA     1:05 / 0:02 left (estimate 1:15)                                       │
 │ queue (estimate)  ≤ 1 frames (limit 190) · 1.3 s of motion ahead (next frame when ≤ 2 s) │
+│ feed · state      100 % · running                                                        │
 │ position X Y Z    250.0  -120.0  101.3                                                   │
 │ last line sent    2  G1 Z60                                                              │
 │ last line done    1  G1 X250 Y-120 Z150 A180 B0 C0 S1000 F3000                           │
@@ -160,6 +161,15 @@ RUN_PANEL = """\
 
 def test_run_panel_as_text():
     assert rendered(render_run(a_view(), "armctl run job.txt"), width=100) == RUN_PANEL.splitlines()
+
+
+def test_run_panel_shows_the_override_the_pause_state_and_the_keys():
+    from armctl.ui.run_keys import FOOTER
+
+    view = a_view(feed_percent=150, feed_clamped=True, pause_state="pausing", pause_label="pausing…")
+    text = "\n".join(rendered(render_run(view, "armctl run job.txt", footer=FOOTER), width=120))
+    assert "feed · state      150 % (held to the profile's speed limit) · pausing…" in text
+    assert "keys: space/p pause/resume · s/q stop (as Ctrl-C) · +/= feed +10 % · - feed −10 %" in text
 
 
 def test_run_panel_shows_the_statement_without_its_comment_and_cuts_long_ones():
@@ -220,3 +230,5 @@ def test_progress_line():
     assert progress_line(a_view(frames_sent=0, last_sent=None, last_done=None, now_s=100.0)) == (
         "[0:00] frames 0/4 · line sent - · line done - · queue ≤1 frames 1.3s · ETA 0:02"
     )
+    assert progress_line(a_view(feed_percent=50, pause_state="paused", pause_label="paused")).endswith(
+        "· ETA 0:02 · feed 50 % · paused")  # the ETA of what is unsent at half speed: 1.3 + 2 × 0.5 s

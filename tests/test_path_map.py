@@ -119,6 +119,7 @@ RUN_PANEL_WITH_MAP = """\
 │ lines      ━━━━━━━━━━━━━━━━━━━━━━━━━━╸              4/6                                  │
 │ elapsed / ETA     0:10 / 0:04 left (estimate 0:20)                                       │
 │ queue (estimate)  ≤ 2 frames (limit 190) · 1.0 s of motion ahead (next frame when ≤ 2 s) │
+│ feed · state      100 % · running                                                        │
 │ position X Y Z    285.0  -10.0  150.0                                                    │
 │ last line sent    4  G301 X260 Y30 Z150                                                  │
 │ last line done    2  G1 X260                                                             │

@@ -45,9 +45,26 @@ def _raw_attributes(attributes: list) -> list:
 
 
 @contextmanager
+def _raw_mode(fd: int, keys_signal: bool, when: int):
+    """Raw input on ``fd`` inside the block (``keys_signal``: Ctrl-C still raises SIGINT); the
+    saved attributes back in ``finally``, however the block ends."""
+    saved = termios.tcgetattr(fd)
+    mode = _raw_attributes(saved)
+    if keys_signal:
+        mode[3] |= termios.ISIG  # lflag
+    try:
+        termios.tcsetattr(fd, when, mode)
+        yield
+    finally:
+        try:
+            termios.tcsetattr(fd, termios.TCSADRAIN, saved)
+        except (termios.error, OSError):
+            pass  # the terminal is gone: nothing left to restore
+
+
+@contextmanager
 def raw_terminal(fd: int):
     """Raw keyboard input on ``fd`` inside the block; the terminal as it was afterwards."""
-    saved = termios.tcgetattr(fd)
     raised = []
 
     def on_signal(number, frame):
@@ -57,15 +74,20 @@ def raw_terminal(fd: int):
 
     previous = {number: signal.signal(number, on_signal) for number in CAUGHT_SIGNALS}
     try:
-        termios.tcsetattr(fd, termios.TCSAFLUSH, _raw_attributes(saved))  # drops keys typed before
-        yield
+        with _raw_mode(fd, keys_signal=False, when=termios.TCSAFLUSH):  # TCSAFLUSH drops keys typed before
+            yield
     finally:
-        try:
-            termios.tcsetattr(fd, termios.TCSADRAIN, saved)
-        except (termios.error, OSError):
-            pass  # the terminal is gone: nothing left to restore
         for number, handler in previous.items():
             signal.signal(number, handler)
+
+
+@contextmanager
+def key_input(fd: int):
+    """Raw key input on ``fd`` for a program whose signals stay its own (``armctl run``'s
+    panel): like ``raw_terminal`` but Ctrl-C still raises SIGINT (the job's Ctrl-C path) and no
+    signal handler is touched; the terminal as it was afterwards, however the block ends."""
+    with _raw_mode(fd, keys_signal=True, when=termios.TCSANOW):
+        yield
 
 
 def read_input(fd: int, timeout_s: float) -> bytes:

@@ -30,6 +30,7 @@ from ..kinematics import Unreachable, box_problem, has_solution, inverse
 from ..motion import arc_through, circle_through
 from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove, as_f32
 from ..script import SourceSpan
+from ..speed_limits import CARTESIAN_MOVES, speed_limit  # L201's limit, which the feed override clamps to
 from .registry import END, check
 from .tracker import cartesian_target, pwm_channel_of
 
@@ -40,7 +41,6 @@ UNIT_SLIP_FACTOR = 5.0  # a G6 F above 5× the joint maximum reads as mm/min
 SLOW_CARTESIAN_MM_MIN = 60.0  # a Cartesian F below 1 mm/s reads as deg/s
 PWM_TOLERANCE_US = 0.5  # "equal" PWM values, for the gripper's end state
 
-CARTESIAN_MOVES = (LinearMove, AccelLinearMove, ArcStart, ArcEnd)
 TOOL_DOWN_DEG = (180.0, 0.0, 0.0)  # the attitude tried to tell "attitude" from "distance" (A180 B0 C0)
 Finding = tuple  # (where: SourceSpan | WordAt, message, hint[, rests_on: tuple of profile keys])
 
@@ -249,17 +249,16 @@ def _is_unit_slip(statement, arm) -> bool:
 
 @check("L201", on=CARTESIAN_MOVES + (JointMove,))
 def speed_above_max(statement, arm) -> Iterator[Finding]:
-    speed = arm.profile.speed
+    limit = speed_limit(type(statement.command), arm.profile.speed)
     if type(statement.command) is JointMove:
         value = _sent(statement, "F")
-        if value is not None and value > speed.max_joint_deg_s and not _is_unit_slip(statement, arm):
-            yield (_at(statement, "F"), f"F{value:g} deg/s is above the profile's joint maximum {speed.max_joint_deg_s:g} deg/s",
-                   f"write F{speed.max_joint_deg_s:g} or less", ("speed.max_joint_deg_s",))
+        if value is not None and value > limit and not _is_unit_slip(statement, arm):
+            yield (_at(statement, "F"), f"F{value:g} deg/s is above the profile's joint maximum {limit:g} deg/s",
+                   f"write F{limit:g} or less", ("speed.max_joint_deg_s",))
         return
     for letter in ("F", "Q"):
         value = _sent(statement, letter)
-        if value is not None and value > speed.max_linear_mm_min:
-            limit = speed.max_linear_mm_min
+        if value is not None and value > limit:
             yield (_at(statement, letter), f"{letter}{value:g} mm/min is above the profile's maximum {limit:g} mm/min",
                    f"write {letter}{limit:g} or less", ("speed.max_linear_mm_min",))
 

@@ -60,6 +60,8 @@ class JobOptions:
     abort: str
     profile_path: str | None
     timeout_s: float
+    json: bool = False  # --json: JSON lines on stdout (ui/run_json.py), everything else on stderr
+    resume_log: str | None = None  # --resume LOG: continue the job that LOG records
 
 
 def check_script(script, profile):
@@ -86,12 +88,20 @@ def check_from_line(script, from_line: int) -> None:
     _refuse_on_errors([d for d in check.diagnostics if d.severity == "error"], check.error_count)
 
 
+class ScriptRefused(SystemExit):
+    """Exit 1: the script has errors (printed on stderr); ``run --json`` reports ``diagnostics``."""
+
+    def __init__(self, diagnostics) -> None:
+        super().__init__(EXIT_PROBLEMS)
+        self.diagnostics = list(diagnostics)
+
+
 def _refuse_on_errors(diagnostics, errors: int) -> None:
     for diagnostic in diagnostics:
         click.echo(diagnostic.render(), err=True)
     if errors:
         click.echo(f"{errors} error{'s' if errors != 1 else ''}: nothing was sent to the arm", err=True)
-        sys.exit(EXIT_PROBLEMS)
+        raise ScriptRefused([d for d in diagnostics if d.severity == "error"])
 
 
 def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
@@ -215,6 +225,37 @@ def _log_file(path: str):
 def run_job(options: JobOptions, script, connect) -> int:
     """Run the job in ``script`` (the ``ScriptSnapshot`` read once; ``options.script`` is only
     the name the summary shows)."""
+    if options.json:
+        return _run_json(options, script, connect)
+    return _run_job(options, script, connect)
+
+
+def _run_json(options: JobOptions, script, connect) -> int:
+    """``--json``: the events and the one summary on stdout; what the run prints for people
+    (the banner, the summary's text, notes) goes to stderr."""
+    from contextlib import redirect_stdout
+    from dataclasses import replace
+
+    from .run_json import JsonEvents, failure_result
+
+    events = JsonEvents(sys.stdout)
+    with redirect_stdout(sys.stderr):
+        try:
+            return _run_job(replace(options, live=False), script, connect, events)
+        except ScriptRefused as refused:
+            events.summary(failure_result("refused", refused.code, diagnostics=refused.diagnostics))
+            raise
+        except ArmctlError as error:
+            from ..cli import exit_code_for
+
+            events.summary(failure_result("failed", exit_code_for(error), message=str(error)))
+            raise
+        except KeyboardInterrupt:
+            events.summary(failure_result("interrupted", EXIT_INTERRUPTED))
+            raise
+
+
+def _run_job(options: JobOptions, script, connect, events=None) -> int:
     from ..motion import MotionModel
     from ..profile import load_profile
     from ..runner import JobRunner, RunView
@@ -228,39 +269,140 @@ def run_job(options: JobOptions, script, connect) -> int:
     # A job too long to run (E012) was refused by check_script's lint, which judges the motion
     # time as estimate_job does; the estimate from the arm's own pose below judges it again over
     # the whole expansion, before anything is sent.  No third pass here.
+    resume = _read_resume_log(options, script) if options.resume_log else None
 
     link, baud = connect(options.port, options.baud, profile=profile)
     with link, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
         state = read_arm(link, options.timeout_s, log)
+        if resume is not None:
+            state, options = _resume_from(resume, link, options, script)
+            if options is None:
+                click.echo("nothing to resume: every line of the job is proven executed")
+                if events is not None:
+                    events.summary(_nothing_to_run())
+                return EXIT_OK
         start, initial = start_from_state(model, state)
         estimate = estimate_job(script, model, start, options.lead_s, baud, options.from_line, initial)
         if estimate.frames == 0:
             click.echo("nothing to send: the script has no frames" + (f" from line {options.from_line}" if options.from_line > 1 else ""))
+            if events is not None:
+                events.summary(_nothing_to_run())
             return EXIT_OK
         streamer = Streamer(model, start, lead_s=options.lead_s, baud=baud)
         view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=report.lines, lead_s=options.lead_s,
                        capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
         statements = script.compile(initial=initial, from_line=options.from_line)
         runner = JobRunner(link, streamer, statements, view, log=log)
+        if log is not None:  # which script it records (--resume checks it); a failed write stops the job like any
+            from ..joblog import job_record
+
+            runner.log_record(job_record(script.name, script.data, options.from_line, options.lead_s))
         # the live panel's map: the same snapshot compiled the same way, sampled once before the
         # first frame (bounded: path_map.MAP_MAX_FRAMES); no panel, no map
         grid = _job_grid(script, model, start, initial, options) if _live(options) else None
         link.on_status = runner.on_status
         wall_start = time.monotonic()
-        outcome = _stream(runner, options, view, grid)
+        if events is not None:
+            events.started(view, options.script, options.from_line)
+        outcome = _stream(runner, options, view, grid, events, _journal(runner, log, script))
         wall_s = time.monotonic() - wall_start
-        return _summary(view, outcome, wall_s, estimate, options, script)
+        code = _summary(view, outcome, wall_s, estimate, options, script)
+        if events is not None:
+            events.summary(job_result(view, outcome, options, script))
+        return code
 
 
-def _stream(runner, options: JobOptions, view, grid=None) -> str:
+def _nothing_to_run() -> dict:
+    from .run_json import failure_result
+
+    return failure_result("finished", EXIT_OK)  # nothing was left to send: the job is done
+
+
+def _read_resume_log(options: JobOptions, script):
+    """The resume point LOG records for this very script (read before --log, which may be the
+    same file, is opened for writing)."""
+    from ..errors import ResumeRefused
+    from ..joblog import read_resume_log
+
+    if options.from_line != 1:
+        raise ResumeRefused("--resume LOG decides the line to continue at: drop --from-line")
+    try:
+        with open(options.resume_log, encoding="utf-8", errors="replace") as stream:
+            return read_resume_log(stream, script.name, script.data)
+    except ResumeRefused as error:
+        raise ResumeRefused(f"--resume {options.resume_log}: {error}") from None
+    except OSError as error:
+        raise ResumeRefused(f"--resume {options.resume_log}: {error.strerror or error}") from None
+
+
+def _resume_from(point, link, options: JobOptions, script):
+    """Wait for the arm to come to rest (it runs out what was queued when the host died), then
+    the line its report proves: (the state to start from, the options with that --from-line),
+    or (state, None) when every line ran."""
+    from dataclasses import replace
+
+    from ..job import SETTLE_SLACK_S
+
+    state = _wait_for_rest(link, options.timeout_s + 2 * max(point.lead_s, options.lead_s) + SETTLE_SLACK_S)
+    line = point.line_for(state.position_mm, tuple(state.joints_deg))
+    if line is None:
+        return state, None
+    click.echo(f"armctl: resuming {options.script} at line {line}: the log and the arm's report prove every line before it ran",
+               err=True)
+    check_from_line(script, line)
+    return state, replace(options, from_line=line)
+
+
+def _wait_for_rest(link, timeout_s: float):
+    """The arm's state once its position and joints stayed the same for REST_CHECK_S."""
+    from ..job import REST_CHECK_S
+
+    deadline = link.clock() + timeout_s
+    reading, since = None, link.clock()
+    while True:
+        state = link.snapshot()[0]
+        now = link.clock()
+        if (state.position_mm, tuple(state.joints_deg)) != reading:
+            reading, since = (state.position_mm, tuple(state.joints_deg)), now
+        elif now - since >= REST_CHECK_S:
+            return state
+        if now >= deadline:
+            raise JobFailed(f"the arm did not come to rest within {timeout_s:g} s; nothing was sent")
+        link.wait_until(lambda _state: False, 0.05)
+
+
+def _journal(runner, log, script):
+    """--log's progress records (armctl/joblog.py), or None without --log."""
+    if log is None:
+        return None
+    from ..joblog import Journal
+
+    blocks = _BlockIndex(script.lines())
+
+    def resume_at(statement) -> int:
+        return (blocks.outermost_start(statement.line) or statement.line) if getattr(statement, "loop", ()) else statement.line
+
+    journal = Journal(runner.log_record, resume_at)
+
+    def update(view) -> None:
+        pending = runner.streamer.pending
+        journal.update(view, pending[-1].segment if pending else None)
+
+    return update
+
+
+def _stream(runner, options: JobOptions, view, grid=None, events=None, journal=None) -> str:
     from ..runner import ABORT_SEQUENCES
+    from .run_keys import FOOTER, keys_available, run_keys
 
     title = f"armctl run {options.script}"
     from ..output import quiet
 
-    display = _Display(title, _live(options), grid=grid)
-    runner.on_update = (lambda view: None) if quiet() else display.update  # -q: the summary only
-    with _deferred_ctrl_c(runner), display:
+    keys = _live(options) and keys_available()
+    display = _Display(title, _live(options), grid=grid, footer=FOOTER if keys else None)
+    shown = events.update if events is not None else (lambda view: None) if quiet() else display.update  # -q: the summary only
+    runner.on_update = shown if journal is None else lambda view: (journal(view), shown(view))
+    with _deferred_ctrl_c(runner), display, (run_keys(runner) if keys else nullcontext()):
         try:
             runner.run()
             return view.outcome
@@ -338,8 +480,8 @@ class _Display:
     would crop a panel taller than the screen.
     """
 
-    def __init__(self, title: str, live: bool, console=None, grid=None) -> None:
-        self.title, self.live, self.grid = title, live, grid
+    def __init__(self, title: str, live: bool, console=None, grid=None, footer: str | None = None) -> None:
+        self.title, self.live, self.grid, self.footer = title, live, grid, footer
         self._console = console  # tests pass a recording console; None: rich's own (stdout)
         self._live = None
         self._last = 0.0
@@ -375,7 +517,7 @@ class _Display:
             if now - self._last >= LIVE_REFRESH_S or view.outcome != "running":
                 from .run_panel import render_run
 
-                self._live.update(render_run(view, self.title, self._map_room()), refresh=True)  # throttled: draw now
+                self._live.update(render_run(view, self.title, self._map_room(), self.footer), refresh=True)  # throttled: draw now
                 self._last = now
         elif now - self._last >= PLAIN_PROGRESS_S:
             from .run_panel import progress_line
@@ -394,23 +536,39 @@ class _Display:
 _BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
 
 
+class _BlockIndex:
+    """The outermost repeat blocks of a script, found in one pass (``lines``: the script's
+    lines, e.g. ``ScriptSnapshot.lines()`` — the same text that was sent)."""
+
+    def __init__(self, lines) -> None:
+        self.blocks = []  # (first line, last line) of each outermost block, in order
+        depth, start = 0, None
+        for number, text in enumerate(lines, 1):
+            match = _BLOCK_LINE.match(text)
+            if match is None:
+                continue
+            if match.group(1).lower() == "repeat":
+                if depth == 0:
+                    start = number
+                depth += 1
+            elif depth:
+                depth -= 1
+                if depth == 0 and start is not None:
+                    self.blocks.append((start, number))
+
+    def outermost_start(self, line: int) -> int | None:
+        """The first line of the outermost block around ``line``, if any."""
+        from bisect import bisect_right
+
+        index = bisect_right(self.blocks, (line, float("inf"))) - 1
+        if index >= 0 and self.blocks[index][0] <= line <= self.blocks[index][1]:
+            return self.blocks[index][0]
+        return None
+
+
 def outermost_block_start(lines, line: int) -> int | None:
-    """The opening line of the outermost repeat block around ``line``, if any (``lines``: the
-    script's lines, e.g. ``ScriptSnapshot.lines()`` — the same text that was sent)."""
-    depth, start = 0, None
-    for number, text in enumerate(lines, 1):
-        match = _BLOCK_LINE.match(text)
-        if match is None:
-            continue
-        if match.group(1).lower() == "repeat":
-            if depth == 0:
-                start = number
-            depth += 1
-        elif depth:
-            depth -= 1
-            if depth == 0 and start is not None and start <= line <= number:
-                return start
-    return None
+    """The opening line of the outermost repeat block around ``line``, if any."""
+    return _BlockIndex(lines).outermost_start(line)
 
 
 def resume_command(options: JobOptions, line: int) -> str:
@@ -434,6 +592,35 @@ def resume_command(options: JobOptions, line: int) -> str:
     return shlex.join(words)
 
 
+def exit_code_of(outcome: str) -> int:
+    return EXIT_OK if outcome == "finished" else EXIT_INTERRUPTED if outcome == "interrupted" else EXIT_PROBLEMS
+
+
+def resume_point(view, script) -> tuple[int | None, str]:
+    """The line to resume at (--from-line cannot start inside a repeat block: its outermost
+    start) and what the summary says about passes that run again."""
+    resume = view.resume_line()
+    loop = getattr(view.first_not_done, "loop", ()) if resume is not None else ()
+    if not loop:
+        return resume, ""
+    return (_BlockIndex(script.lines()).outermost_start(resume) or resume,
+            f" (line {resume} is inside a repeat block, in pass {loop[-1] + 1}: the block "
+            "runs again from its first pass, so the passes already done are repeated)")
+
+
+def job_result(view, outcome: str, options: JobOptions, script) -> dict:
+    """The run's result with the Python API's field names (``run --json``'s summary)."""
+    resume = resume_point(view, script)[0] if outcome != "finished" else None
+    return {
+        "outcome": outcome, "frames_sent": view.frames_sent, "total_frames": view.total_frames,
+        "last_line_sent": None if view.last_sent is None else view.last_sent.line,
+        "last_line_executed": None if view.last_done is None else view.last_done.line,
+        "arm_time_s": None if view.arm_done_s is None else round(view.arm_done_s - view.started_s, 3),
+        "resume_line": resume, "resume_command": None if resume is None else resume_command(options, resume),
+        "messages": list(view.messages), "exit_code": exit_code_of(outcome),
+    }
+
+
 def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, script) -> int:
     sent = view.last_sent.line if view.last_sent is not None else None
     done = view.last_done.line if view.last_done is not None else None
@@ -450,18 +637,11 @@ def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, s
         return EXIT_OK
     click.echo(f"last line sent: {sent if sent is not None else 'none'}")
     click.echo(f"last line known executed: {done if done is not None else 'none'}")
-    resume = view.resume_line()
+    resume, where = resume_point(view, script)
     if resume is not None:
-        loop = getattr(view.first_not_done, "loop", ())
-        where = ""
-        if loop:
-            # --from-line cannot start inside a repeat block: resume at its outermost start.
-            resume = outermost_block_start(script.lines(), resume) or resume
-            where = (f" (line {view.resume_line()} is inside a repeat block, in pass {loop[-1] + 1}: the block "
-                     "runs again from its first pass, so the passes already done are repeated)")
         click.echo(f"resume with: {resume_command(options, resume)}{where}")
     if outcome == "interrupted":
         click.echo(f"stopped: interrupted; abort sequence: {options.abort}", err=True)
-        return EXIT_INTERRUPTED
-    click.echo(f"stopped: {outcome}", err=True)
-    return EXIT_PROBLEMS
+    else:
+        click.echo(f"stopped: {outcome}", err=True)
+    return exit_code_of(outcome)

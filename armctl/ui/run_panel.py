@@ -61,7 +61,17 @@ def render_map(grid: PathGrid, view: RunView) -> Text:
     return text
 
 
-def render_run(view: RunView, title: str, grid: PathGrid | None = None) -> Panel:
+def _control(view: RunView) -> Text:
+    """The feed override and the pause state (the arm's reports decide it)."""
+    text = Text(f"{view.feed_percent} %")
+    if view.feed_clamped:
+        text.append(" (held to the profile's speed limit)", "yellow")
+    text.append(" · ")
+    text.append(view.pause_label, "bold yellow" if view.pause_state != "running" or view.pause_label != "running" else None)
+    return text
+
+
+def render_run(view: RunView, title: str, grid: PathGrid | None = None, footer: str | None = None) -> Panel:
     frames = Table.grid(padding=(0, 1))
     frames.add_column(width=10)
     frames.add_column()
@@ -83,19 +93,24 @@ def render_run(view: RunView, title: str, grid: PathGrid | None = None) -> Panel
         f"(next frame when ≤ {view.lead_s:g} s)",
     )
     position = "—" if view.position_mm is None else "  ".join(f"{v:.1f}" for v in view.position_mm)
+    facts.add_row("feed · state", _control(view))
     facts.add_row("position X Y Z", position)
     facts.add_row("last line sent", _line(view.last_sent))
     facts.add_row("last line done", _line(view.last_done))
     if grid is not None:
         facts.add_row("path X/Y (top)", render_map(grid, view))
-    return Panel(Group(frames, facts), title=Text(title), expand=False)
+    parts = [frames, facts] + ([Text(footer, "dim")] if footer else [])
+    return Panel(Group(*parts), title=Text(title), expand=False)
 
 
 def progress_line(view: RunView) -> str:
     """A plain progress line for output that is not a terminal."""
     sent = view.last_sent.line if view.last_sent is not None else "-"
     done = view.last_done.line if view.last_done is not None else "-"
+    control = "" if view.feed_percent == 100 else f" · feed {view.feed_percent} %"
+    control += "" if view.pause_label == "running" else f" · {view.pause_label}"
     return (
         f"[{_clock(view.elapsed_s)}] frames {view.frames_sent}/{view.total_frames} · line sent {sent} · "
         f"line done {done} · queue ≤{view.queued_frames_bound} frames {view.queued_s:.1f}s · ETA {_clock(view.eta_s)}"
+        f"{control}"
     )

@@ -1,0 +1,82 @@
+"""``armctl run --json``: JSON lines of progress events, then one summary object.
+
+Strategy: the run's only output on stdout — one JSON object a line, flushed as it is written,
+so a web UI, a job queue or a notebook can follow a job by reading lines.  Every object has an
+``event``: ``started``; ``progress`` (every ``PROGRESS_EVERY_S`` of wall time, and whenever the
+last line known executed changes; with the pause state, the feed override and whether the last
+frame's speed was held to the profile's limit); ``paused``/``resumed``/``override`` when the
+job's control state changes; and last, exactly once, ``summary`` with the fields of the Python API's run
+result (``outcome``, ``frames_sent``, ``total_frames``, ``last_line_sent``,
+``last_line_executed``, ``arm_time_s``, ``resume_line``, ``resume_command``, ``messages``,
+``exit_code``).  A script that fails its check gives a summary with outcome ``refused`` and
+its diagnostics (lint's JSON records).  Everything meant for people goes to stderr.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+
+PROGRESS_EVERY_S = 1.0
+
+
+def _line(statement):
+    return None if statement is None else statement.line
+
+
+class JsonEvents:
+    """Writes the events of one run to ``stream`` (the real stdout)."""
+
+    def __init__(self, stream, clock=time.monotonic) -> None:
+        self.stream, self.clock = stream, clock
+        self._last_s = None
+        self._last_done = None
+        self._state, self._percent = "running", 100  # the control state last told
+        self.summarised = False
+
+    def emit(self, event: str, **fields) -> None:
+        self.stream.write(json.dumps({"event": event, **fields}, ensure_ascii=False) + "\n")
+        self.stream.flush()
+
+    def started(self, view, script: str, from_line: int) -> None:
+        self.emit("started", script=script, from_line=from_line, total_frames=view.total_frames,
+                  estimated_job_s=round(view.estimated_job_s, 3), lead_s=view.lead_s)
+        self._last_s = self.clock()
+
+    def update(self, view) -> None:
+        """The runner's ``on_update``: a progress event when due or when the line done moved."""
+        state, percent = getattr(view, "pause_state", "running"), getattr(view, "feed_percent", 100)
+        if state != self._state:  # "pausing" and "resuming" are on their way, not events
+            if state == "paused" or (state == "running" and self._state in ("paused", "resuming")):
+                self.emit("paused" if state == "paused" else "resumed", last_line_sent=_line(view.last_sent))
+            self._state = state
+        if percent != self._percent:
+            self._percent = percent
+            self.emit("override", feed_percent=percent)
+        now = self.clock()
+        done = _line(view.last_done)
+        if done != self._last_done or self._last_s is None or now - self._last_s >= PROGRESS_EVERY_S:
+            self._last_done, self._last_s = done, now
+            self.emit("progress", frames_sent=view.frames_sent, total_frames=view.total_frames,
+                      last_line_sent=_line(view.last_sent), last_line_executed=done,
+                      elapsed_s=round(view.elapsed_s, 3), eta_s=round(view.eta_s, 3),
+                      position_mm=None if view.position_mm is None else list(view.position_mm),
+                      pause_state=state, feed_percent=percent, feed_clamped=bool(getattr(view, "feed_clamped", False)))
+
+    def summary(self, result: dict) -> None:
+        if not self.summarised:
+            self.summarised = True
+            self.emit("summary", **result)
+
+
+def failure_result(outcome: str, exit_code: int, *, message: str | None = None, diagnostics=()) -> dict:
+    """The summary of a run that sent nothing: refused (the script's errors), failed before the
+    first frame (no arm, a bad --resume LOG), interrupted while starting, or nothing to send."""
+    from ..lint.formatters import as_record
+
+    result = {"outcome": outcome, "frames_sent": 0, "total_frames": 0, "last_line_sent": None,
+              "last_line_executed": None, "arm_time_s": None, "resume_line": None, "resume_command": None,
+              "messages": [] if message is None else [message], "exit_code": exit_code}
+    if diagnostics:
+        result["diagnostics"] = [as_record(diagnostic) for diagnostic in diagnostics]
+    return result
