@@ -37,11 +37,12 @@ class JobFailed(ArmctlError):
         self.result = result
 
 
-def lint_script(script, profile):
-    """``armctl lint``'s checks over the whole script (a ``ScriptSnapshot``): the report."""
+def lint_script(script, profile, initial=None):
+    """``armctl lint``'s checks over the whole script (a ``ScriptSnapshot``): the report.
+    ``initial``: the modal state known before line 1 (``Arm.move``'s line starts from the arm's)."""
     from .lint.engine import lint_lines
 
-    return lint_lines(script.lines(), script.name, profile)
+    return lint_lines(script.lines(), script.name, profile, initial=initial)
 
 
 def from_line_errors(script, from_line: int) -> ScriptError | None:
@@ -129,11 +130,18 @@ def _paused_twice(link, timeout_s: float) -> bool:
 
 def start_from_state(model, state):
     """The streamer's start pose and the compiler's initial state, from the arm's report."""
+    return start_at(model, tuple(state.joints_deg), float(state.pwm_us), tuple(state.worktable_mm))
+
+
+def start_at(model, joints: tuple | None = None, pwm_us: float | None = None, origin_mm: tuple = (0.0, 0.0, 0.0)):
+    """The start pose and initial state of an arm at ``joints`` with ``pwm_us`` (default: the
+    profile's fixed pose 0 and initial pulse, as ``armctl run --dry-run`` assumes)."""
     from .script import InitialState
 
-    joints = tuple(state.joints_deg)
-    pose = model.initial_pose(joints=joints, pwm_us=float(state.pwm_us), origin_mm=tuple(state.worktable_mm))
-    initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: float(state.pwm_us)})
+    pose = model.initial_pose(joints=joints, pwm_us=pwm_us, origin_mm=origin_mm)
+    joints = tuple(model.profile.poses[0]) if joints is None else joints
+    pwm_us = pose.pwm_us[0] if pwm_us is None else pwm_us
+    initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: pwm_us})
     return pose, initial
 
 
