@@ -41,6 +41,8 @@ __all__ = ["Arm", "ArmStatus", "ArmTimeout", "JobFailed", "Progress", "RunResult
 _logger = logging.getLogger(__name__)
 
 STATUS_TIMEOUT_S = 3.0  # what `armctl run --timeout` waits for the arm's status by default
+PROGRESS_EVERY_S = 0.25  # on_progress is called at least this often (arm clock), even when nothing moved on
+HOLD_POLL_S = 0.05  # while a job is held paused: how often the requests are looked at (arm clock)
 PAUSE_READ_TIMEOUT_S = 3.0  # how long two agreeing pause reports are waited for (one comes every 0.27 s)
 _MOVE_NAME = "<move>"
 _TEXT_NAME = "<script>"
@@ -88,7 +90,8 @@ class RunResult:
 @dataclass(frozen=True)
 class Progress:
     """What ``on_progress`` is given, from the worker thread, whenever a frame was written or
-    the frames known executed moved on (times in the arm's clock)."""
+    the frames known executed moved on, and at least every ``PROGRESS_EVERY_S`` (times in the
+    arm's clock)."""
 
     frames_sent: int
     total_frames: int
@@ -97,6 +100,7 @@ class Progress:
     elapsed_s: float
     eta_s: float
     position_mm: tuple[float, float, float] | None
+    paused: bool | None  # as two agreeing reports say (a pause toggle acts after the frames queued before it)
 
 
 @dataclass(frozen=True)
@@ -168,20 +172,22 @@ class _JobControl:
     """The requests for the job the worker is running, acted on between two writes."""
 
     def __init__(self, runner, link, on_progress, timeout_s: float | None) -> None:
-        from .pause import PauseReports
+        from .pause import PauseState
 
         self.runner, self.link = runner, link
         self.on_progress, self.timeout_s = on_progress, timeout_s
-        self.reports = PauseReports()
+        self.pause = PauseState()
         self.pause_requests: queue.SimpleQueue = queue.SimpleQueue()  # (want_paused, Future, asked_s)
         self._waiting: list = []
         self.stop_asked = False  # stop() or the timeout: the runner was asked to stop
+        self.holding = False  # pause() asked: no frame is written until resume()
         self.timed_out = False
         self._shown: tuple = ()
+        self._shown_s = float("-inf")
 
     def on_status(self, frame, read_s: float) -> None:
         if frame.KIND == 4:
-            self.reports.add(frame.paused)
+            self.pause.add(frame.paused)
         self.runner.on_status(frame, read_s)
 
     def request_stop(self) -> None:
@@ -190,19 +196,31 @@ class _JobControl:
             self.runner.request_stop()
 
     def on_update(self, view) -> None:
-        """The runner's hook, on the worker thread between two writes."""
+        """The runner's hook, on the worker thread between two writes.  After a pause toggle
+        it holds the feed — it does not return — until a resume, a stop or the timeout: in the
+        ``queued`` control mode (H5) a paused arm takes nothing but the resume at the head of
+        its FIFO, so any frame sent after the pause would keep it paused for good.  Meanwhile
+        the status frames queue up for the runner with the times they came."""
+        offset_s = view.now_s - self.link.clock()  # the runner's time is the link's, from another origin
+        while self._act(view, self.link.clock() + offset_s) and self.holding:
+            self.link.idle(HOLD_POLL_S)  # moves a virtual clock; on a wall clock, waits for a frame
+
+    def _act(self, view, now_s: float) -> bool:
+        """The timeout, the pause requests and the progress callback at ``now_s``; False once
+        the job is stopping (no pause toggles, no callbacks then)."""
         if self.stop_asked:
-            return  # stopping (or aborting): no pause toggles, no progress callbacks
-        if self.timeout_s is not None and view.now_s - view.started_s > self.timeout_s:
+            return False
+        if self.timeout_s is not None and now_s - view.started_s > self.timeout_s:
             self.timed_out = True
             self.request_stop()
-            return
-        self.act_on_pause_requests(view.now_s)
+            return False
+        self.act_on_pause_requests(now_s)
         if self.on_progress is not None:
             shown = (view.frames_sent, getattr(view.last_done, "line", None))
-            if shown != self._shown:
-                self._shown = shown
-                self.on_progress(_progress(view))
+            if shown != self._shown or now_s - self._shown_s >= PROGRESS_EVERY_S:
+                self._shown, self._shown_s = shown, now_s
+                self.on_progress(_progress(view, self.pause.agreed, now_s))
+        return not self.stop_asked
 
     def act_on_pause_requests(self, now_s: float) -> None:
         while True:
@@ -214,7 +232,11 @@ class _JobControl:
         still = []
         for want, future, asked_s in self._waiting:
             try:
-                sent = _toggle_if_needed(self.link, want, self.reports.agreed)
+                sent = self.pause.toggle_needed(want)
+                if sent:
+                    _write_toggle(self.link)
+                if sent is not None:
+                    self.holding = want  # hold the feed from the pause toggle on, until a resume
             except BaseException as error:
                 future.set_exception(error)
                 continue
@@ -238,16 +260,10 @@ class _JobControl:
         self._waiting = []
 
 
-def _toggle_if_needed(link, want_paused: bool, agreed: bool | None) -> bool | None:
-    """Send the pause toggle when the pause rule asks for it: True sent, False not needed,
-    None while the arm's pause state is not known (armctl/pause.py)."""
-    from .pause import pause_toggle_needed
+def _write_toggle(link) -> None:
     from .protocol import PauseToggle
 
-    needed = pause_toggle_needed(want_paused, agreed)
-    if needed:
-        link.write(PauseToggle().encode())
-    return needed
+    link.write(PauseToggle().encode())
 
 
 def _check(script, profile, initial):
@@ -260,11 +276,11 @@ def _check(script, profile, initial):
     return report
 
 
-def _progress(view) -> Progress:
+def _progress(view, paused: bool | None, now_s: float) -> Progress:
     position = view.position_mm
     return Progress(view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
-                    getattr(view.last_done, "line", None), view.elapsed_s, view.eta_s,
-                    None if position is None else tuple(position))
+                    getattr(view.last_done, "line", None), now_s - view.started_s, view.eta_s,
+                    None if position is None else tuple(position), paused)
 
 
 def _word(letter: str, value: float) -> str:
@@ -465,10 +481,10 @@ class Arm:
         job resumes an arm left paused.  Nothing to stop: does nothing."""
         with self._lock:
             self._stops += 1
-            for future in self._queued:
-                future.cancel()
-            self._queued.clear()
+            queued, self._queued = self._queued, []
             job = self._job
+        for future in queued:  # outside the lock: cancel() calls _queued_done at once
+            future.cancel()
         if job is not None:
             job.request_stop()
 
@@ -491,9 +507,12 @@ class Arm:
 
         def idle_toggle() -> bool:
             from .jobflow import reported_pause
+            from .pause import pause_toggle_needed
 
             link = self._link
-            sent = _toggle_if_needed(link, want_paused, reported_pause(link, PAUSE_READ_TIMEOUT_S))
+            sent = pause_toggle_needed(want_paused, reported_pause(link, PAUSE_READ_TIMEOUT_S))
+            if sent:
+                _write_toggle(link)
             if sent is None:
                 raise JobFailed("the arm's pause reports did not agree twice in a row: no pause toggle sent")
             if sent and not link.wait_until(lambda s: s.paused is want_paused, PAUSE_READ_TIMEOUT_S):
@@ -564,18 +583,16 @@ class Arm:
 
     def _queued_done(self, future: Future) -> None:
         """A queued move ended (on the worker): keep its error; a failure cancels the rest."""
+        error = None if future.cancelled() else future.exception()
         with self._lock:
             if future in self._queued:
                 self._queued.remove(future)
-            if future.cancelled():
-                return
-            error = future.exception()
             if error is None:
                 return
             self._deferred = self._deferred or error
-            for later in self._queued:
-                later.cancel()
-            self._queued.clear()
+            later, self._queued = self._queued, []
+        for queued in later:  # outside the lock: cancel() calls this method again at once
+            queued.cancel()
 
     def _run_job(self, script, from_line: int, on_progress, timeout_s, from_arm: bool) -> RunResult:
         """On the worker: read the arm, plan from its report, drive the runner, report."""

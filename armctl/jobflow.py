@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable
 
 from .errors import ArmctlError, ScriptError
-from .pause import PauseReports, pause_toggle_needed
+from .pause import PauseState, pause_toggle_needed
 
 _BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
 
@@ -106,18 +106,24 @@ def wait_rotations(link, rotations: int, timeout_s: float) -> None:
     link.wait_until(lambda s: s.frames >= frames + 9 * rotations, timeout_s)
 
 
-def reported_pause(link, timeout_s: float) -> bool | None:
-    """The arm's pause state as the last pause report and the next one agree on it (the
-    reader's state, so a held-back corrupt frame never counts); None when they disagree or the
-    next one does not come within ``timeout_s``."""
-    reports = PauseReports()
-    state = link.snapshot()[0]
-    reports.add(state.paused)
-    seen = state.last_seen.get(4)
-    if not link.wait_until(lambda s: s.last_seen.get(4) != seen, timeout_s):
-        return None
-    reports.add(link.snapshot()[0].paused)
-    return reports.agreed
+def reported_pause(link, timeout_s: float, reports: int = 3) -> bool | None:
+    """The arm's pause state as two consecutive pause reports agree on it (the reader's state,
+    so a held-back corrupt frame never counts), starting with the last one read; None when no
+    two agree within ``reports`` reports, or the next does not come within ``timeout_s``."""
+    state = PauseState()
+    now = link.snapshot()[0]
+    seen = now.last_seen.get(4)
+    if seen is not None:
+        state.add(now.paused)
+    for _ in range(reports):
+        if state.agreed is not None:
+            break
+        if not link.wait_until(lambda s: s.last_seen.get(4) != seen, timeout_s):
+            break
+        now = link.snapshot()[0]
+        seen = now.last_seen.get(4)
+        state.add(now.paused)
+    return state.agreed
 
 
 def _paused_twice(link, timeout_s: float) -> bool:
