@@ -6,7 +6,6 @@ commands that need them, so ``armctl --help`` stays fast.  The Python API (docs/
 """
 
 import sys
-from typing import TYPE_CHECKING
 
 __version__ = "0.1.0"
 
@@ -19,6 +18,7 @@ _API = {
 }
 __all__ = sorted(_API)
 
+TYPE_CHECKING = False  # true for type checkers; not typing's, whose import costs milliseconds here
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ imports them
     from .api import Arm, ArmStatus, ArmTimeout, Progress, RunResult
     from .errors import ArmctlError, ConfigError, PortError, ProfileError, ScriptError

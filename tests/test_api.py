@@ -11,7 +11,6 @@ job paused, resumed and stopped while it runs.
 from __future__ import annotations
 
 import os
-import re
 import signal
 import subprocess
 import sys
@@ -29,7 +28,6 @@ SCRIPTS = Path(__file__).resolve().parent / "data" / "scripts_cli"
 SHORT = SCRIPTS / "short_job.txt"  # 5 frames, under a second of arm time
 TIMED = SCRIPTS / "timed_job.txt"  # a pick and place, about 30 s of arm time
 VIRTUAL = "sim://?clock=virtual"
-ARMCTL = [sys.executable, "-m", "armctl"]
 
 EXAMPLE = """
 from armctl import Arm
@@ -264,32 +262,19 @@ def test_the_api_installs_no_signal_handler():
 
 
 @pytest.mark.realtime
-def test_the_example_against_armctl_sim_pty_in_another_process(tmp_path):
-    simulator = subprocess.Popen(
-        [*ARMCTL, "sim", "--pty"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+def test_the_example_against_armctl_sim_pty_in_another_process(tmp_path, sim_pty):
+    program = (
+        "from armctl import Arm\n"
+        "import sys\n"
+        "with Arm.open(port=sys.argv[1]) as arm:\n"
+        "    result = arm.run(sys.argv[2], timeout=10)\n"
+        "    arm.move(z=275, f=6000, wait=False, timeout=10)\n"
+        "    status = arm.status()\n"
+        "    print(result.outcome, result.frames_sent, round(status.position_mm[2]), arm.pause(), arm.resume())\n"
+        "    arm.stop()\n"
     )
-    try:
-        ready = simulator.stdout.readline()
-        path = re.fullmatch(r"simulated arm on (/dev/pts/\d+) \(Ctrl-C to stop\)\n", ready)
-        assert path, ready
-        program = (
-            "from armctl import Arm\n"
-            "import sys\n"
-            "with Arm.open(port=sys.argv[1]) as arm:\n"
-            "    result = arm.run(sys.argv[2], timeout=10)\n"
-            "    arm.move(z=275, f=6000, wait=False, timeout=10)\n"
-            "    status = arm.status()\n"
-            "    print(result.outcome, result.frames_sent, round(status.position_mm[2]), arm.pause(), arm.resume())\n"
-            "    arm.stop()\n"
-        )
-        done = subprocess.run([sys.executable, "-c", program, path.group(1), str(SHORT)],
-                              capture_output=True, text=True, timeout=60, cwd=tmp_path)
-        assert done.returncode == 0, done.stderr
-        assert done.stdout == "finished 5 275 True True\n"
-        assert done.stderr == ""
-        simulator.send_signal(signal.SIGINT)
-        assert simulator.wait(timeout=5) == 130
-    finally:
-        simulator.kill()
-        simulator.communicate()
+    done = subprocess.run([sys.executable, "-c", program, sim_pty, str(SHORT)],
+                          capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout == "finished 5 275 True True\n"
+    assert done.stderr == ""
