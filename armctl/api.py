@@ -341,7 +341,7 @@ class Arm:
         from .link import connect
         from .profile import load_profile
 
-        loaded = load_profile(profile)
+        loaded = load_profile(None if profile is None else os.fspath(profile))
         link, line_baud = connect(port, baud, profile=loaded)
         return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s)
 

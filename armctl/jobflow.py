@@ -227,7 +227,8 @@ def resume_line(view, lines: Iterable[str]) -> int | None:
     line not known executed, or — as no job can start inside a repeat block — the opening line
     of the outermost block around it (its passes already done then run again)."""
     resume = view.resume_line()
-    if resume is not None and getattr(view.first_not_done, "loop", ()):
+    loop = getattr(view.first_not_done, "loop", None)
+    if resume is not None and loop:
         return outermost_block_start(lines, resume) or resume
     return resume
 
