@@ -202,7 +202,7 @@ class _JobControl:
         its FIFO, so any frame sent after the pause would keep it paused for good.  Meanwhile
         the status frames queue up for the runner with the times they came."""
         offset_s = view.now_s - self.link.clock()  # the runner's time is the link's, from another origin
-        while self._act(view, self.link.clock() + offset_s) and self.holding:
+        while self._act(view, self.link.clock() + offset_s) and self.holding and self.link.error is None:
             self.link.idle(HOLD_POLL_S)  # moves a virtual clock; on a wall clock, waits for a frame
 
     def _act(self, view, now_s: float) -> bool:
@@ -443,8 +443,9 @@ class Arm:
     # --- reading and control -----------------------------------------------------------------
 
     def status(self, timeout: float | None = None) -> ArmStatus:
-        """The arm's decoded report, once every status kind has been seen (after the queued
-        moves ran); ``JobFailed`` when it is not complete within ``timeout`` seconds."""
+        """The arm's decoded report, once every status kind has been seen (after the moves and
+        the job asked for before it ran); ``JobFailed`` when it is not complete within
+        ``timeout`` seconds (default ``status_timeout_s``)."""
         timeout_s = self.status_timeout_s if timeout is None else timeout
 
         def read() -> ArmStatus:
@@ -466,8 +467,11 @@ class Arm:
 
     def pause(self) -> bool:
         """Pause the arm with the protocol's pause toggle — sent only when two agreeing reports
-        say it runs (armctl/pause.py: a toggle on a guess could resume it).  During a job the
-        streaming goes on (the frames wait in the arm's buffer).  True when a toggle was sent."""
+        say it runs, or that it is headed there (armctl/pause.py: a toggle on a guess could
+        resume it).  During a job it also holds the feed until ``resume``: in the ``queued``
+        control mode (H5) the arm pauses after the frames already queued and then takes nothing
+        but the resume.  True when a toggle was sent.  Called from ``on_progress`` it acts at
+        once if the arm's pause state is known, else at the next update (and returns False)."""
         return self._set_paused(True)
 
     def resume(self) -> bool:
