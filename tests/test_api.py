@@ -12,17 +12,21 @@ from __future__ import annotations
 
 import os
 import signal
+import struct
 import subprocess
 import sys
 import threading
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 import armctl
 from armctl import Arm, ArmTimeout, JobFailed, RunResult, ScriptError
 from armctl.protocol import JointMove, LinearMove, PauseToggle
-from armctl.script import ScriptSnapshot
+from armctl.api import move_line
+from armctl.script import InitialState, ScriptSnapshot, compile_text
 
 SCRIPTS = Path(__file__).resolve().parent / "data" / "scripts_cli"
 SHORT = SCRIPTS / "short_job.txt"  # 5 frames, under a second of arm time
@@ -126,8 +130,6 @@ def test_a_path_and_text_are_told_apart_and_an_unreadable_path_says_what_to_do(t
 
 
 def test_move_builds_one_line_through_the_compiler():
-    from armctl.api import move_line
-
     assert move_line(x=250, y=0, z=150.5, f=3000) == "G1 X250 Y0 Z150.5 F3000\n"
     assert move_line(j2=-30, j1=1e-7, f=20) == "G6 J1=0.0000001 J2=-30 F20\n"
     with pytest.raises(ValueError, match="not a finite number"):
@@ -278,3 +280,19 @@ def test_the_example_against_armctl_sim_pty_in_another_process(tmp_path, sim_pty
     assert done.returncode == 0, done.stderr
     assert done.stdout == "finished 5 275 True True\n"
     assert done.stderr == ""
+
+
+_FLOAT32_MAX = 3.4028234663852886e38
+finite = st.floats(min_value=-_FLOAT32_MAX, max_value=_FLOAT32_MAX, allow_nan=False, allow_infinity=False)
+
+
+@settings(max_examples=200, deadline=None)
+@given(x=finite, j2=finite)
+def test_move_words_reach_the_frame_as_the_compiler_reads_them(x, j2):
+    """move() only writes text: the compiler reads it back to exactly the value given (as the
+    float32 the frame carries), for any finite number — no exponent, no rounding of our own."""
+    initial = InitialState(pose=(200.0, 0.0, 250.0, 180.0, 0.0, 0.0), joints_deg=(0.0,) * 6, pwm_us={1: 1500.0})
+    (linear,) = [s.command for s in compile_text(move_line(x=x, f=3000), initial=initial)]
+    (joint,) = [s.command for s in compile_text(move_line(j2=j2, f=20), initial=initial)]
+    assert linear.x_mm == struct.unpack("<f", struct.pack("<f", x))[0]
+    assert joint.j2_deg == struct.unpack("<f", struct.pack("<f", j2))[0]
