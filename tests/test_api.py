@@ -202,7 +202,8 @@ def test_stop_from_another_thread_interrupts_the_running_job():
         assert rest.finished
 
 
-def test_pause_and_resume_a_running_job_it_finishes_every_frame_once():
+@pytest.mark.parametrize("control", ["queued", "arrival"])
+def test_pause_and_resume_a_running_job_it_finishes_every_frame_once(control):
     events = []
 
     def on_progress(progress):
@@ -211,7 +212,7 @@ def test_pause_and_resume_a_running_job_it_finishes_every_frame_once():
         elif len(events) == 1 and progress.elapsed_s - events[0][2] >= 3.0:
             events.append(("resume", arm.resume(), progress.elapsed_s))
 
-    with Arm.open(port=VIRTUAL) as arm:
+    with Arm.open(port=f"{VIRTUAL}&control={control}") as arm:
         result = arm.run(TIMED, on_progress=on_progress)
         assert [(name, sent) for name, sent, _ in events] == [("pause", True), ("resume", True)]
         assert result.finished
@@ -219,6 +220,36 @@ def test_pause_and_resume_a_running_job_it_finishes_every_frame_once():
         toggles = [i for i, c in enumerate(received) if isinstance(c, PauseToggle)]
         assert len(toggles) == 2 and toggles[1] == toggles[0] + 1  # the feed was held while paused (H5)
         assert [c for c in received if not isinstance(c, PauseToggle)] == compiled(TIMED)  # every frame once
+
+
+def test_pause_and_resume_from_another_thread_while_a_job_runs():
+    """pause() and resume() from a thread that is not the arm's: each is a request the worker
+    acts on between two writes, and the caller gets its answer."""
+    answers, helpers = [], []
+
+    def ask(method):
+        helper = threading.Thread(target=lambda: answers.append((method.__name__, method())))
+        helpers.append(helper)
+        helper.start()
+        # hold this callback (the worker) until the request is queued, so the next update sees it
+        for _ in range(10_000):
+            if arm._job.pause_requests.qsize() or not helper.is_alive():
+                return
+            threading.Event().wait(0.001)
+
+    def on_progress(progress):
+        if progress.frames_sent >= 3 and not helpers:
+            ask(arm.pause)
+        elif len(helpers) == 1 and progress.paused and not helpers[0].is_alive():
+            ask(arm.resume)
+
+    with Arm.open(port=VIRTUAL) as arm:
+        result = arm.run(TIMED, on_progress=on_progress)
+        for helper in helpers:
+            helper.join(10)
+        assert answers == [("pause", True), ("resume", True)]
+        assert result.finished
+        assert [c for c in commands_received(arm) if not isinstance(c, PauseToggle)] == compiled(TIMED)
 
 
 def test_pause_and_resume_an_idle_arm_follow_the_pause_rule():
