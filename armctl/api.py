@@ -182,6 +182,7 @@ class _JobControl:
         self.stop_asked = False  # stop() or the timeout: the runner was asked to stop
         self.holding = False  # pause() asked: no frame is written until resume()
         self.timed_out = False
+        self.callback_error: Exception | None = None  # what on_progress raised
         self._shown: tuple = ()
         self._shown_s = float("-inf")
 
@@ -219,7 +220,11 @@ class _JobControl:
             shown = (view.frames_sent, getattr(view.last_done, "line", None))
             if shown != self._shown or now_s - self._shown_s >= PROGRESS_EVERY_S:
                 self._shown, self._shown_s = shown, now_s
-                self.on_progress(_progress(view, self.pause.agreed, now_s))
+                try:
+                    self.on_progress(_progress(view, self.pause.agreed, now_s))
+                except Exception as error:  # stops the job (jobflow.drive); raised as the cause
+                    self.callback_error, self.stop_asked = error, True  # no callback while it aborts
+                    raise
         return not self.stop_asked
 
     def act_on_pause_requests(self, now_s: float) -> None:
@@ -635,5 +640,5 @@ class Arm:
                              f"(last line known executed: {result.last_line_done})", result)
         if outcome not in ("finished", "interrupted"):
             detail = "; ".join(result.messages)
-            raise JobFailed(f"the job ended {outcome}" + (f": {detail}" if detail else ""), result)
+            raise JobFailed(f"the job ended {outcome}" + (f": {detail}" if detail else ""), result) from control.callback_error
         return result

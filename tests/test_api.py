@@ -252,6 +252,21 @@ def test_pause_and_resume_from_another_thread_while_a_job_runs():
         assert [c for c in commands_received(arm) if not isinstance(c, PauseToggle)] == compiled(TIMED)
 
 
+def test_an_error_in_on_progress_stops_the_job_and_is_the_cause_of_job_failed():
+    def on_progress(progress):
+        if progress.frames_sent >= 2:
+            raise ValueError("the caller's own bug")
+
+    with Arm.open(port=VIRTUAL) as arm:
+        with pytest.raises(JobFailed, match="the job ended failed: .*ValueError: the caller's own bug") as raised:
+            arm.run(TIMED, on_progress=on_progress)
+        assert isinstance(raised.value.__cause__, ValueError)
+        result = raised.value.result
+        assert result.outcome == "failed" and result.resume_line is not None
+        assert isinstance(commands_received(arm)[-1], PauseToggle)  # the abort sequence went
+        assert arm.run(SHORT).finished  # and the arm goes on
+
+
 def test_pause_and_resume_an_idle_arm_follow_the_pause_rule():
     with Arm.open(port=VIRTUAL) as arm:
         assert arm.pause() is True
