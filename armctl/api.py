@@ -24,6 +24,7 @@ No signal handler is installed (the CLI installs its own, in the main thread onl
 from __future__ import annotations
 
 import logging
+import numbers
 import os
 import queue
 import threading
@@ -290,9 +291,9 @@ def _progress(view, paused: bool | None, now_s: float) -> Progress:
 
 def _word(letter: str, value: float) -> str:
     """``X250`` — a word as the language reads it: no exponent, no ``inf``/``nan``."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise TypeError(f"move(): {letter.lower()} must be a number, not {type(value).__name__}")
-    text = repr(value)  # the shortest text that reads back as the same float
+    text = repr(value if isinstance(value, int) else float(value))  # the shortest text that reads back as the same float
     if text in ("inf", "-inf", "nan"):
         raise ValueError(f"move(): {letter.lower()}={text} is not a finite number")
     number = format(Decimal(text), "f")

@@ -16,6 +16,7 @@ import struct
 import subprocess
 import sys
 import threading
+from fractions import Fraction
 from pathlib import Path
 
 import pytest
@@ -132,6 +133,7 @@ def test_a_path_and_text_are_told_apart_and_an_unreadable_path_says_what_to_do(t
 def test_move_builds_one_line_through_the_compiler():
     assert move_line(x=250, y=0, z=150.5, f=3000) == "G1 X250 Y0 Z150.5 F3000\n"
     assert move_line(j2=-30, j1=1e-7, f=20) == "G6 J1=0.0000001 J2=-30 F20\n"
+    assert move_line(z=Fraction(1, 4), s=1500) == "G1 Z0.25 S1500\n"  # any real number
     with pytest.raises(ValueError, match="not a finite number"):
         move_line(x=float("nan"))
     with pytest.raises(TypeError, match="must be a number"):
