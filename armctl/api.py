@@ -349,7 +349,11 @@ class Arm:
 
         loaded = load_profile(None if profile is None else os.fspath(profile))
         link, line_baud = connect(port, baud, profile=loaded)
-        return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s)
+        try:
+            return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s)
+        except BaseException:
+            link.close()
+            raise
 
     # --- the port ----------------------------------------------------------------------------
 
