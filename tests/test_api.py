@@ -344,3 +344,13 @@ def test_move_words_reach_the_frame_as_the_compiler_reads_them(x, j2):
     (joint,) = [s.command for s in compile_text(move_line(j2=j2, f=20), initial=initial)]
     assert linear.x_mm == struct.unpack("<f", struct.pack("<f", x))[0]
     assert joint.j2_deg == struct.unpack("<f", struct.pack("<f", j2))[0]
+
+
+def test_open_errors_are_the_commands_errors_and_print_nothing(capfd, tmp_path):
+    with pytest.raises(armctl.ConfigError, match="clock must be .wall. or .virtual."):
+        Arm.open(port="sim://?clock=sideways")
+    with pytest.raises(armctl.PortError, match="no such device"):
+        Arm.open(port=str(tmp_path / "ttyNOPE"))
+    with pytest.raises(armctl.ConfigError, match="--port is empty"):
+        Arm.open(port=" ")
+    assert capfd.readouterr() == ("", "")
