@@ -99,7 +99,7 @@ class ArmState:
         previous = self._current(frame.KIND)
         return previous is not None and self._jump_between(previous, frame, now - seen)
 
-    def _jump_between(self, before: StatusFrame, after: StatusFrame, elapsed_s: float) -> bool:
+    def _jump_between(self, before: StatusFrame | tuple, after: StatusFrame, elapsed_s: float) -> bool:
         elapsed_s = max(elapsed_s, 0.0)
         if isinstance(after, (PositionStatus,)) and self.max_speed_mm_s is not None:
             limit = self.max_speed_mm_s * elapsed_s + _JUMP_SLACK_MM
@@ -107,16 +107,17 @@ class ArmState:
             limit = self.max_joint_speed_deg_s * elapsed_s + _JUMP_SLACK_DEG
         else:
             return False
-        a, b = list(before.fields().values()), list(after.fields().values())
-        return max(abs(p - q) for p, q in zip(a, b)) > limit
+        a = before if type(before) is tuple else _values(before)
+        return max(abs(p - q) for p, q in zip(a, _values(after))) > limit
 
-    def _current(self, kind: int) -> StatusFrame | None:
+    def _current(self, kind: int) -> tuple | None:
+        """The values the state holds for a kind judged for jumps (as ``_values`` of its frame)."""
         if kind == PositionStatus.KIND and self.x_mm is not None:
-            return PositionStatus(self.x_mm, self.y_mm, self.z_mm)
+            return (self.x_mm, self.y_mm, self.z_mm)
         if kind == JointsLowStatus.KIND and self.joints_deg[0] is not None:
-            return JointsLowStatus(*self.joints_deg[0:3])
+            return tuple(self.joints_deg[0:3])
         if kind == JointsHighStatus.KIND and self.joints_deg[3] is not None:
-            return JointsHighStatus(*self.joints_deg[3:6])
+            return tuple(self.joints_deg[3:6])
         return None
 
     def _apply(self, frame: StatusFrame) -> None:
@@ -155,3 +156,15 @@ class ArmState:
             "file_status": self.file_status,
             "run_position": self.run_position,
         }
+
+
+_VALUE_NAMES = {
+    PositionStatus: ("x_mm", "y_mm", "z_mm"),
+    JointsLowStatus: ("j1_deg", "j2_deg", "j3_deg"),
+    JointsHighStatus: ("j4_deg", "j5_deg", "j6_deg"),
+}
+
+
+def _values(frame: StatusFrame) -> tuple:
+    """The three readings of a position or joints frame, in order (read directly: every frame)."""
+    return tuple(getattr(frame, name) for name in _VALUE_NAMES[type(frame)])

@@ -236,7 +236,7 @@ def compile_command(script: str, fmt: str, as_json: bool, output: str | None):
 
 port_option = click.option(
     "--port", "port", metavar="URL",
-    help="Device path or pyserial URL (socket://, rfc2217://, sim://?slowdown=1.3). "
+    help="Device path or pyserial URL (socket://, rfc2217://, sim://?speed_factor=1.3). "
     "Default: ARMCTL_PORT, else `port` in the project's armctl.toml, else in yours (`armctl config`), "
     "else the built-in simulator.",
 )
@@ -348,32 +348,32 @@ def estimate(script, lead_s, baud, profile_path, as_json):
 @main.command()
 @click.option("--pty", "use_pty", is_flag=True, help="Serve the simulated arm on a new pseudo-terminal and print its path.")
 @click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True), help="Serve one client on 127.0.0.1:PORT (socket://127.0.0.1:PORT).")
-@click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?slowdown=1.3&loss=0.05.")
+@click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?speed_factor=1.3&loss=0.05.")
 def sim(use_pty, tcp_port, sim_url):
     """Run the built-in simulated arm for other programs to talk to."""
     from .sim.bridge import INTERRUPTED, serve_pty, serve_tcp
-    from .sim.protocol_sim import is_virtual_clock, parse_sim_url
+    from .sim.protocol_sim import parse_sim_url
 
     if bool(use_pty) == bool(tcp_port):
         raise UsageFailure("choose one of --pty or --tcp PORT")
     try:
-        options, time_scale = parse_sim_url(sim_url)
+        options = parse_sim_url(sim_url)
         if isinstance(options.profile, str):  # read now, not when the first client connects
             from .profile import load_profile
 
             load_profile(options.profile)
     except (ConfigError, ProfileError) as error:
         raise ConfigError(f"--url: {error}") from None
-    if is_virtual_clock(sim_url):
+    if options.virtual_clock:
         raise UsageFailure("a served simulator runs in real time: drop clock=virtual from --url")
 
     def ready(where: str) -> None:
         click.echo(f"simulated arm on {where} (Ctrl-C to stop)")
 
     if use_pty:
-        ended = serve_pty(options, ready, time_scale=time_scale, keep_serving=True)
+        ended = serve_pty(options, ready, keep_serving=True)
     else:
-        ended = serve_tcp(tcp_port, options, ready, time_scale=time_scale)
+        ended = serve_tcp(tcp_port, options, ready)
     if ended == INTERRUPTED:  # the bridge closed what it opened; Ctrl-C exits 130 like every command
         raise KeyboardInterrupt
 
@@ -385,12 +385,14 @@ def _register_packaged_commands() -> None:
     from .jog.command import jog
     from .lint.command import lint
     from .plot.command import plot
+    from .probe.command import probe
 
     main.add_command(config)
     main.add_command(completion)
     main.add_command(jog)
     main.add_command(lint)
     main.add_command(plot)
+    main.add_command(probe)
 
 
 _register_packaged_commands()

@@ -14,12 +14,10 @@ from collections import deque
 from dataclasses import dataclass, field
 
 from .motion import ArmPose, MotionModel, Planner
-from .protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, RunProgram, frame_seconds
+from .protocol import DEFAULT_BAUD, RunProgram, frame_seconds
 from .script.source import MAX_JOB_MOTION_S, Diagnostic
 from .streamer import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S
 
-# The streamer never lets more frames be in flight than this (see streamer.py).
-FRAME_LIMIT = CONNECTOR_BUFFER_FRAMES - CAPACITY_MARGIN_FRAMES
 
 
 @dataclass
@@ -72,6 +70,8 @@ class JobEstimator:
     def __init__(self, model: MotionModel, start: ArmPose, lead_s: float = DEFAULT_LEAD_S, baud: int = DEFAULT_BAUD):
         self.planner = Planner(model, start)
         self.lead_s = lead_s
+        # the streamer never lets more frames be in flight than this (see streamer.py)
+        self.frame_limit = model.profile.connector.fifo_frames - CAPACITY_MARGIN_FRAMES
         self.frame_s = frame_seconds(baud)
         self.result = Estimate()
         self._wire_free = 0.0
@@ -86,8 +86,8 @@ class JobEstimator:
         ends = self._ends
         while ends and ends[0] <= write:
             ends.popleft()
-        if len(ends) >= FRAME_LIMIT:  # the FIFO bound: wait until the oldest queued frame ends
-            write = max(write, ends[len(ends) - FRAME_LIMIT])
+        if len(ends) >= self.frame_limit:  # the FIFO bound: wait until the oldest queued frame ends
+            write = max(write, ends[len(ends) - self.frame_limit])
         land = write + self.frame_s
         self._wire_free = land
         if result.frames and land > self._arm_free:

@@ -135,8 +135,15 @@ def _paused_twice(link, timeout_s: float) -> bool:
 
 
 def start_from_state(model, state):
-    """The streamer's start pose and the compiler's initial state, from the arm's report."""
-    return start_at(model, tuple(state.joints_deg), float(state.pwm_us), tuple(state.worktable_mm))
+    """The streamer's start pose and the compiler's initial state, from the arm's report: its
+    X/Y/Z and its joints as reported (``MotionModel.reported_pose``: an unverified profile's
+    kinematics never decide where the arm starts)."""
+    from .script import InitialState
+
+    joints = tuple(state.joints_deg)
+    pose = model.reported_pose(state.position_mm, joints, float(state.pwm_us), tuple(state.worktable_mm))
+    initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: float(state.pwm_us)})
+    return pose, initial
 
 
 def start_at(model, joints: tuple | None = None, pwm_us: float | None = None, origin_mm: tuple = (0.0, 0.0, 0.0)):
@@ -149,14 +156,6 @@ def start_at(model, joints: tuple | None = None, pwm_us: float | None = None, or
     pwm_us = pose.pwm_us[0] if pwm_us is None else pwm_us
     initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: pwm_us})
     return pose, initial
-
-
-def time_scale_of(url: str) -> float:
-    if not url.startswith("sim://"):
-        return 1.0
-    from .sim.protocol_sim import parse_sim_url
-
-    return parse_sim_url(url)[1]
 
 
 @dataclass(frozen=True)
@@ -187,7 +186,7 @@ def start_job(link, script, model, plan: JobPlan, lead_s: float, baud: int, tota
     view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=total_lines, lead_s=lead_s,
                    capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
     statements = script.compile(initial=plan.initial, from_line=plan.from_line)
-    return JobRunner(link, streamer, statements, view, time_scale=time_scale_of(link.url), log=log)
+    return JobRunner(link, streamer, statements, view, log=log)
 
 
 def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = lambda why: None) -> str:
@@ -208,7 +207,7 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
         view.messages.append(str(error))
         return "port lost"
     except Exception as error:  # anything else mid-job: the same path as Ctrl-C
-        runner.failure = runner.failure or f"{type(error).__name__}: {error}"
+        runner.fail(f"{type(error).__name__}: {error}")
     on_stopping(runner.failure or "interrupted")
     try:
         runner.abort(abort_sequence)
@@ -216,7 +215,7 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
         pass
     except Exception as error:  # the abort itself failed: say so, the summary still follows
         view.messages.append(f"the abort did not complete: {type(error).__name__}: {error}")
-    if runner.failure and view.outcome != "port lost":
+    if runner.job.outcome is None and runner.failure:  # the abort was cut short: the engine did not end it
         view.outcome = "failed"
         view.messages.append(runner.failure)
     return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent

@@ -25,9 +25,17 @@ LINE_RANGE = (1, 2**31 - 1)  # a line number in a script
 TCP_PORT_RANGE = (1, 65535)
 REPEAT_DELAY_RANGE_MS = (50.0, 5000.0)  # jog: a single key press moves at most this long
 
+# The arm profile's [connector] table (armctl/profile.py), the arm's unknowns.  fifo_frames: below 8
+# the streamer's margin (streamer.CAPACITY_MARGIN_FRAMES) leaves almost nothing to stream with;
+# 4096 frames (196 KB) is twenty times the document's 200 — a bigger number is a typo.  speed_factor:
+# an arm 4× faster or slower than its profile says has the wrong profile, not a slow arm.
+FIFO_RANGE_FRAMES = (8, 4096)
+SPEED_FACTOR_RANGE = (0.25, 4.0)
+
 # sim:// options
 SIM_TIME_SCALE_RANGE = (0.01, 1000.0)  # speed=: the simulated arm runs this many times faster
-SIM_SLOWDOWN_RANGE = (0.1, 10.0)  # slowdown=: motion takes this many times the model's time
-SIM_FIFO_RANGE_FRAMES = (1, 100_000)  # fifo=: the connector's buffer (the real one holds 200)
+SIM_SLOWDOWN_RANGE = (0.1, 10.0)  # speed_factor= (slowdown=): motion takes this many times the model's time
+SIM_FIFO_RANGE_FRAMES = (1, 100_000)  # fifo_frames= (fifo=): the connector's buffer (the document's holds 200)
+SIM_LINK_SCALE_RANGE = (0.5, 2.0)  # link_scale=: the simulated arm's link lengths × this (kinematics mismatch)
 SIM_SEED_RANGE = (0, 2**64 - 1)
 SIM_RATE_RANGE = (0.0, 1.0)  # loss=, corrupt=, noise=: a share of status frames

@@ -7,9 +7,11 @@ to the pure ``StatusReader`` and merges frames into an ``ArmState`` under a lock
 snapshots or wait on a condition.  OS failures become ``PortError`` with a sentence a user can
 act on (no such device, permission denied with the dialout hint, busy, vanished).
 
-A ``sim://?clock=virtual`` port has no reader thread: its clock moves only when a caller waits
-(``wait_until``, ``idle``), which reads each status burst at the model time it lands.  Callers
-that wait through the link work unchanged on either kind of port.
+The link owns the port's one ``Clock`` (armctl/clock.py: model seconds, on the wall — scaled
+for ``sim://?speed=N`` — or virtual).  A ``sim://?clock=virtual`` port has no reader thread: its
+clock moves only when a caller waits (``wait``, ``wait_until``, ``idle``), which jumps to the
+next status burst and reads it at the model time it lands.  Callers that wait through the link
+work unchanged on either kind of port.
 """
 
 from __future__ import annotations
@@ -18,11 +20,11 @@ import copy
 import errno
 import os
 import threading
-import time
 from dataclasses import dataclass
 from typing import Callable
 
 from .armstate import ArmState
+from .clock import Clock, as_clock, port_clock
 from .errors import ConfigError, PortError
 from .profile import CONFIG_NAME, check_config_value
 from .protocol import DEFAULT_BAUD, StatusFrame, StatusReader
@@ -32,6 +34,7 @@ PORT_ENV = "ARMCTL_PORT"
 READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
 VIRTUAL_MIN_STEP_S = 1e-6
+VIRTUAL_READ_CHUNK = 1 << 16  # more than any burst between two waits
 
 
 @dataclass(frozen=True)
@@ -96,7 +99,6 @@ def connect(port: str | None, baud: int | None, announce: Callable[[str], None] 
     baud = baud or config_baud(config.values, config.path_of("baud"))
     profile = profile or load_profile()
     link_options.setdefault("state", plausible_state(profile))
-    link_options.setdefault("clock", scaled_clock(choice.url))
     return Link.open(choice.url, baud, **link_options), baud
 
 
@@ -126,20 +128,11 @@ def config_baud(config: dict, path) -> int:
 
 def plausible_state(profile) -> ArmState:
     """An ArmState that holds back a value moving faster than twice the profile's top speeds
-    (a corrupted byte; the profile's numbers are illustrative, hence the factor)."""
-    speed = profile.speed
-    return ArmState(max_speed_mm_s=2 * speed.max_linear_mm_min / 60, max_joint_speed_deg_s=2 * speed.max_joint_deg_s)
-
-
-def scaled_clock(url: str) -> Callable[[], float]:
-    """The clock status frames are timed by: wall time, times ``speed`` for ``sim://?speed=N``
-    (the simulated arm then moves N× faster per wall second)."""
-    if not url.startswith("sim://"):
-        return time.monotonic
-    from .sim.protocol_sim import parse_sim_url
-
-    scale = parse_sim_url(url)[1]
-    return lambda: time.monotonic() * scale
+    (a corrupted byte; the profile's numbers are illustrative, hence the factor), the arm's
+    ``[connector] speed_factor`` included (0.5: it moves twice as fast as the model)."""
+    speed, factor = profile.speed, 2 / min(1.0, profile.connector.speed_factor)
+    return ArmState(max_speed_mm_s=factor * speed.max_linear_mm_min / 60,
+                    max_joint_speed_deg_s=factor * speed.max_joint_deg_s)
 
 
 def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_S, write_timeout: float | None = 2.0):
@@ -186,14 +179,15 @@ class Link:
         port,
         url: str,
         state: ArmState | None = None,
-        clock: Callable[[], float] = time.monotonic,
+        clock: Callable[[], float] | None = None,
         on_status: Callable[[StatusFrame, float], None] | None = None,
     ) -> None:
         self.port = port
         self.url = url
-        # A simulated port on a virtual clock: time is the model's and waiting moves it.
-        self.virtual_clock = getattr(port, "virtual_clock", None)
-        self.clock = self.virtual_clock or clock
+        # The port's one clock (armctl/clock.py); a simulated port on a virtual clock keeps its
+        # own, which only waiting moves, whatever clock is passed.
+        virtual = getattr(port, "virtual_clock", None)
+        self.clock: Clock = virtual or (port_clock(port, url) if clock is None else as_clock(clock))
         self.reader = StatusReader()
         self.state = state or ArmState()
         self.on_status = on_status
@@ -210,12 +204,12 @@ class Link:
         return link
 
     def start(self) -> None:
-        if self.virtual_clock is None:
+        if not self.clock.virtual:
             self._thread.start()
 
     @property
     def is_virtual(self) -> bool:
-        return self.virtual_clock is not None
+        return self.clock.virtual
 
     def close(self) -> None:
         self._stop.set()
@@ -259,22 +253,36 @@ class Link:
     def idle(self, seconds: float) -> None:
         """Wait up to ``seconds`` of the link's clock; returns early once a status frame has
         been read.  (On a real port the reader thread reads meanwhile; this only waits.)"""
-        if self.virtual_clock is None:
-            deadline = self.clock() + seconds  # the clock may be scaled: re-read it, never convert
+        self.wait(self.clock.now() + seconds)
+
+    def wait(self, until_s: float | None) -> None:
+        """Wait until the clock reads ``until_s`` (None: no limit) or a status frame has been
+        read, whichever comes first.  On a virtual clock this jumps: straight to the next
+        status burst or to ``until_s``, and at least a microsecond (a wait computed as a
+        difference of nearly equal floats could otherwise leave the clock where it is, and
+        the caller asking again forever)."""
+        clock = self.clock
+        if not clock.virtual:
             with self._changed:
                 frames = self.reader.frames
-                while self.reader.frames == frames and self.clock() < deadline and self.error is None:
+                while self.reader.frames == frames and self.error is None and (until_s is None or clock.now() < until_s):
                     self._changed.wait(READ_TIMEOUT_S)
             return
-        # At least a microsecond: a wait computed as a difference of nearly equal floats
-        # could otherwise leave the clock where it is, and the caller asking again forever.
-        end_s = self.clock() + max(seconds, VIRTUAL_MIN_STEP_S)
+        port = self.port
+        end_s = max(until_s, clock.now_s + VIRTUAL_MIN_STEP_S) if until_s is not None else None
         while True:
-            until_output = self.port.next_output_s()
-            step_to = end_s if until_output is None else min(end_s, self.clock() + until_output)
-            self.virtual_clock.advance_to(step_to)
-            data = self.port.read(self.port.in_waiting)
-            if (data and self._take(data)) or self.clock() >= end_s:
+            until_output = port.next_output_s()
+            if until_output is None:
+                if end_s is None:  # nothing will ever come and nothing bounds the wait
+                    end_s = clock.now_s + READ_TIMEOUT_S
+                step_to = end_s
+            else:
+                step_to = clock.now_s + max(until_output, VIRTUAL_MIN_STEP_S)
+                if end_s is not None and end_s < step_to:
+                    step_to = end_s
+            clock.advance_to(step_to)
+            data = port.read(VIRTUAL_READ_CHUNK)  # a virtual port returns what is there at once
+            if (data and self._take(data)) or (end_s is not None and clock.now_s >= end_s):
                 return
 
     def _set_error(self, error: PortError) -> None:
@@ -298,7 +306,7 @@ class Link:
     def wait_until(self, predicate: Callable[[ArmState], bool], timeout_s: float) -> bool:
         """Block until ``predicate(state)`` holds, the port fails (raises) or time runs out."""
         deadline = self.clock() + timeout_s
-        if self.virtual_clock is not None:
+        if self.clock.virtual:
             while not predicate(self.state):
                 if self.clock() >= deadline:
                     return False

@@ -35,6 +35,8 @@ Rules (the protocol is silent on all of them; change them here and nowhere else)
   (not ArcStart, not control frames).
 - ``speed_factor`` multiplies the duration of every motion (moves, servo waits): 1.3 = an
   arm 30 % slower than commanded, 0.7 = 30 % faster.  Delays and the overhead are not scaled.
+  It is the profile's ``[connector] speed_factor`` unless given (the simulator gives its own
+  arm's): this is the one place it is applied, so estimate, lint, the streamer and plot agree.
 
 Worktable frame (G54, SetWorktableOrigin X0 Y0 Z0, given in robot coordinates): a worktable
 point p is the robot point p + (X0, Y0, Z0); attitude is not rotated.  Commands' X/Y/Z and the
@@ -74,7 +76,8 @@ class ArmPose:
     ``pwm_us[k]`` is channel k + 1.  Treat it as immutable; ``replace`` makes a changed copy.
     """
 
-    __slots__ = ("kinematics", "_cartesian", "_joints", "_hint", "pwm_us", "e0_deg", "e1_deg", "origin_mm")
+    __slots__ = ("kinematics", "_cartesian", "_joints", "_hint", "pwm_us", "e0_deg", "e1_deg", "origin_mm",
+                 "xyz_derived", "joints_derived")
 
     def __init__(self, kinematics: Kinematics, *, cartesian: Sequence[float] | None = None,
                  joints: Sequence[float] | None = None, pwm_us: Sequence[float] = (1500.0,) * PWM_CHANNEL_COUNT,
@@ -85,6 +88,10 @@ class ArmPose:
         self.kinematics = kinematics
         self._cartesian = None if cartesian is None else CartesianPose(*cartesian)
         self._joints = None if joints is None else tuple(joints)
+        # X/Y/Z come from the profile's forward kinematics (built from joints alone), not from a
+        # command or a report: an unverified profile's FK must not decide what the arm did.
+        self.xyz_derived = cartesian is None
+        self.joints_derived = joints is None  # likewise: joints from the profile's IK
         self._hint = tuple(hint) if hint is not None else kinematics.home
         self.pwm_us = tuple(pwm_us)
         self.e0_deg, self.e1_deg = e0_deg, e1_deg
@@ -133,7 +140,8 @@ class ArmPose:
                 origin_mm=None) -> "ArmPose":
         """A copy with some parts changed.  A new origin alone keeps the arm where it is."""
         if cartesian is None and joints is None:
-            joints, cartesian = self._joints, self._cartesian
+            joints = None if self.joints_derived else self._joints
+            cartesian = None if self.xyz_derived else self._cartesian
             if origin_mm is not None and cartesian is not None:
                 shift = [self.origin_mm[k] - origin_mm[k] for k in range(3)]
                 cartesian = (cartesian[0] + shift[0], cartesian[1] + shift[1], cartesian[2] + shift[2], *cartesian[3:])
@@ -544,7 +552,11 @@ def on_path(segment: Segment, observed: Sequence[float], tolerance_mm: float = 0
 class MotionModel:
     """Plans protocol commands into segments with the profile's speeds and timing constants."""
 
-    def __init__(self, profile, speed_factor: float = 1.0):
+    def __init__(self, profile, speed_factor: float | None = None):
+        """``speed_factor``: the arm's real motion time ÷ the model's; None = the profile's
+        ``[connector] speed_factor`` (the host's view of the arm; the simulator gives its own)."""
+        if speed_factor is None:
+            speed_factor = profile.connector.speed_factor
         if not speed_factor > 0:
             raise ValueError(f"speed_factor must be greater than 0, not {speed_factor!r}")
         self.profile, self.speed_factor = profile, speed_factor
@@ -562,6 +574,19 @@ class MotionModel:
         pwm = self.profile.pwm.initial_us if pwm_us is None else pwm_us
         return ArmPose(self.kinematics, joints=self.profile.poses[0] if joints is None else joints,
                        pwm_us=(pwm,) * PWM_CHANNEL_COUNT, origin_mm=origin_mm)
+
+    def reported_pose(self, xyz_mm: Sequence[float], joints: Sequence[float], pwm_us: float,
+                      origin_mm: Sequence[float] = (0.0, 0.0, 0.0)) -> ArmPose:
+        """The arm where it reports it is: X/Y/Z and joints as reported, neither derived from the
+        other (an unverified profile's kinematics must not decide where a job starts); X/Y/Z
+        turned from robot into worktable coordinates when the arm reports those (the profile's
+        ``[connector] status_xyz_frame``).  Only the attitude, which no status frame reports, comes
+        from the joints through the profile's forward kinematics."""
+        if self.profile.connector.reports_robot_xyz:
+            xyz_mm = [value - origin for value, origin in zip(xyz_mm, origin_mm)]
+        attitude = self.kinematics.forward(joints)[3:]
+        return ArmPose(self.kinematics, cartesian=(*xyz_mm, *attitude), joints=joints,
+                       pwm_us=(pwm_us,) * PWM_CHANNEL_COUNT, origin_mm=origin_mm)
 
     def plan(self, command: Command, start: ArmPose, arc_start: ArcStart | None = None) -> Segment:
         """The segment ``command`` makes from ``start``.  An ArcEnd needs its ArcStart."""

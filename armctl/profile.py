@@ -18,10 +18,20 @@ default's numbers are ``ILLUSTRATIVE`` guesses about a generic arm, except the f
 protocol's own ranges (``PROTOCOL_KEYS``); a key the user's profile file or armctl.toml gives
 is named by that file; a measured value (a probe, later) is ``PROBE``.  Lint turns a finding
 that rests on an illustrative number into a warning that says so (armctl/lint/engine.py).
+
+The ``[connector]`` table holds what the vendor document leaves open about the arm's connector
+and status (``Connector``: ``fifo_frames``, ``control_frames``, ``status_xyz_frame``,
+``speed_factor``, ``kinematics_verified``).  Its packaged values are the document's reading (the
+H-decisions, README), so their source is ``DOCUMENT``, not a guess; ``Connector.is_default(key)``
+says whether a value is still that default (``armctl probe --write`` replaces them with measured
+ones).  The table may sit in a profile file, in armctl.toml's ``[profile]`` table, and at the top
+level of armctl.toml (``[connector]``, where ``probe --write`` puts it: it describes the arm on
+the port, so it is laid over whichever profile is in use, key by key, and wins).
 """
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import functools
 import math
@@ -33,7 +43,7 @@ from typing import Any, Callable
 
 from .errors import ConfigError, ProfileError
 from .kinematics import JOINT_COUNT, Kinematics, Links
-from .limits import BAUD_RANGE
+from .limits import BAUD_RANGE, FIFO_RANGE_FRAMES, SPEED_FACTOR_RANGE
 from .protocol import PWM_RANGE_US
 
 CONFIG_NAME = "armctl.toml"
@@ -45,6 +55,7 @@ FIXED_POSES = ("0", "1", "2", "3")
 ILLUSTRATIVE = "illustrative"  # the packaged default's guess: nobody measured it
 PROTOCOL = "protocol"  # a range the protocol itself fixes (PROTOCOL.md), true for every arm
 PROBE = "probe"  # measured on the arm
+DOCUMENT = "document"  # a [connector] default: the vendor document's reading (an H-decision)
 # Keys of the packaged default that are the protocol's own ranges, not guesses about an arm.
 PROTOCOL_KEYS = frozenset({"pwm.range_us", "pwm.channels", "speed.max_accel_mm_s2"})
 
@@ -94,6 +105,46 @@ class LintOptions:
     end_paused: bool | None = None
 
 
+CONTROL_FRAMES = ("queued", "arrival")  # H5, or its alternative
+STATUS_XYZ_FRAMES = ("worktable", "robot")  # what status kind 0 reports after G54
+
+
+@dataclass(frozen=True)
+class Connector:
+    """The arm's connector and status as they are, where the document leaves them open.
+
+    ``fifo_frames``: frames the connector accepts behind the frame the arm is executing.  The
+    document says 200; H6's two readings (the executing frame keeps its slot, or frees it) differ
+    only in this sum, the one number a host can observe, so it is one setting.
+    ``control_frames``: ``"queued"`` (H5: control frames wait in the FIFO behind motion) or
+    ``"arrival"`` (they act the moment they land).  ``status_xyz_frame``: ``"worktable"`` (status
+    kind 0 reports X/Y/Z in the frame G54 set) or ``"robot"``.  ``speed_factor``: the arm's real
+    motion time ÷ the model's (``MotionModel`` applies it, once, for every reader).
+    ``kinematics_verified``: the profile's links were checked against this arm; while false,
+    forward and inverse kinematics never decide what the arm consumed or where it starts."""
+
+    fifo_frames: int
+    control_frames: str
+    status_xyz_frame: str
+    speed_factor: float
+    kinematics_verified: bool
+    given: frozenset = field(default=frozenset(), compare=False)  # keys a file set (not the document's)
+
+    def is_default(self, key: str) -> bool:
+        """Whether ``key`` still has the document's default (no profile, armctl.toml or probe set it)."""
+        if key not in CONNECTOR_KEYS:
+            raise KeyError(key)
+        return key not in self.given
+
+    @property
+    def control_on_arrival(self) -> bool:
+        return self.control_frames == "arrival"
+
+    @property
+    def reports_robot_xyz(self) -> bool:
+        return self.status_xyz_frame == "robot"
+
+
 @dataclass(frozen=True)
 class Profile:
     name: str
@@ -105,6 +156,7 @@ class Profile:
     links: Links
     timing: Timing
     lint: LintOptions
+    connector: Connector
     source: str = field(default="", compare=False)  # where it was read from, for messages
     # "section.key" → ILLUSTRATIVE, PROTOCOL, PROBE or the file that gave it; see source_of
     sources: dict[str, str] = field(default_factory=dict, compare=False, repr=False)
@@ -212,6 +264,24 @@ def _boolean(value) -> bool:
     return value
 
 
+def _one_of(choices: tuple[str, ...]) -> Callable:
+    def check(value) -> str:
+        if value not in choices:
+            raise _Bad(f"must be {' or '.join(repr(c).replace(chr(39), chr(34)) for c in choices)}, not {_short_repr(value)}")
+        return value
+
+    return check
+
+
+def _whole_in(low: int, high: int) -> Callable:
+    def check(value) -> int:
+        if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+            raise _Bad(f"must be a whole number {low}…{high}, not {_short_repr(value)}")
+        return value
+
+    return check
+
+
 # Ranges: a desktop arm reaches well under 10 m, turns a joint at most two full turns
 # either way, moves at most 100 m/min; a timing constant is at most a minute.  Lengths and
 # speeds that the motion model divides by have a lower bound well above underflow.
@@ -253,8 +323,14 @@ _SCHEMA: dict[str, Any] = {
         "pwm_change_s": _seconds, "pose_smoothing": _smoothing,
     },
     "lint": {"end_gripper": _gripper_state, "end_paused": _boolean},
+    "connector": {
+        "fifo_frames": _whole_in(*FIFO_RANGE_FRAMES), "control_frames": _one_of(CONTROL_FRAMES),
+        "status_xyz_frame": _one_of(STATUS_XYZ_FRAMES), "speed_factor": _in(*SPEED_FACTOR_RANGE),
+        "kinematics_verified": _boolean,
+    },
 }
 _OPTIONAL_SECTIONS = {"lint"}
+CONNECTOR_KEYS = tuple(_SCHEMA["connector"])
 
 
 def unknown_key_hint(key: str, known) -> str:
@@ -314,7 +390,7 @@ def _sources(given: dict, source: str) -> dict[str, str]:
     sources = {}
     for section, rule in _SCHEMA.items():
         for key in ([f"{section}.{k}" for k in rule] if isinstance(rule, dict) else [section]):
-            sources[key] = PROTOCOL if key in PROTOCOL_KEYS else ILLUSTRATIVE
+            sources[key] = DOCUMENT if section == "connector" else PROTOCOL if key in PROTOCOL_KEYS else ILLUSTRATIVE
     for section, content in given.items():
         for key in ([f"{section}.{k}" for k in content] if isinstance(content, dict) else [section]):
             sources[key] = source
@@ -338,11 +414,28 @@ def _build(data: dict, source: str, prefix: str, sources: dict[str, str]) -> Pro
         links=Links(**data["links"]),
         timing=Timing(**data["timing"]),
         lint=LintOptions(**data.get("lint", {})),
+        connector=_connector(data["connector"], sources),
         source=source,
         sources=sources,
     )
     _cross_check(profile, source, prefix)
     return profile
+
+
+def _connector(values: dict, sources: dict[str, str]) -> Connector:
+    given = frozenset(k for k in CONNECTOR_KEYS if sources.get(f"connector.{k}", DOCUMENT) != DOCUMENT)
+    return Connector(**values, given=given)
+
+
+def with_connector(profile: Profile, table: dict, source: str) -> Profile:
+    """``profile`` with armctl.toml's top-level ``[connector]`` ``table`` laid over its own, key by
+    key (checked here; errors name ``source`` and ``connector.KEY``)."""
+    given = _check({"connector": table}, source)["connector"]
+    if not given:
+        return profile
+    sources = {**profile.sources, **{f"connector.{key}": source for key in given}}
+    values = {key: getattr(profile.connector, key) for key in CONNECTOR_KEYS} | given
+    return dataclasses.replace(profile, connector=_connector(values, sources), sources=sources)
 
 
 def _cross_check(profile: Profile, source: str, prefix: str) -> None:
@@ -503,6 +596,7 @@ def _config_table(value) -> dict:
 
 CONFIG_SCHEMA: dict[str, Callable] = {
     "port": _config_port, "baud": _config_baud, "profile": _config_profile, "lint": _config_table, "jog": _config_table,
+    "connector": _config_table,
 }
 
 
@@ -525,10 +619,18 @@ def _short_repr(value, limit: int = 60) -> str:
 
 def load_profile(path: Path | str | None = None, start: Path | None = None) -> Profile:
     """The profile to use: ``path`` if given, else the one the project or user armctl.toml
-    names (a path relative to that file), else the default."""
+    names (a path relative to that file), else the default; in every case with armctl.toml's
+    top-level ``[connector]`` table laid over it (it describes the arm on the port)."""
+    config = load_config(start)
+    profile = _chosen_profile(path, config)
+    if "connector" in config.values:
+        profile = with_connector(profile, config.values["connector"], str(config.path_of("connector")))
+    return profile
+
+
+def _chosen_profile(path: Path | str | None, config: Config) -> Profile:
     if path is not None:
         return parse_profile(read_toml(Path(path)), str(path))
-    config = load_config(start)
     if "profile" not in config.values:
         return default_profile()
     entry = config.values["profile"]  # read_config checked it: a table or a path string

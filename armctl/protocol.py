@@ -56,9 +56,8 @@ STATUS_WORD_CODEC = struct.Struct(">h")
 # PROTOCOL.md: a[2] = 0 or 1 both select PWM channel 1 in a linear move; armctl sends 1,
 # the value the vendor's own table shows.
 LINEAR_SUBCOMMAND_FOR_CHANNEL_1 = 1
-# H5 — control frames wait in the same FIFO as motion frames.  The simulator's option and
-# the streamer's assumptions both default to this constant.
-CONTROL_FRAMES_QUEUED = True
+# H5 (control frames wait in the same FIFO as motion frames) and H6 (the FIFO's size) are not
+# constants: they are the arm profile's [connector] settings, the document's reading by default.
 
 # Protocol ranges (PROTOCOL.md); a command outside them cannot be constructed.
 PWM_RANGE_US = (500.0, 2500.0)
@@ -752,7 +751,17 @@ class _ThreeWords(StatusFrame):
 
     @classmethod
     def _from_data(cls, data: bytes) -> "StatusFrame":
-        return cls(*_unwords(data, len(fields(cls)), cls.SCALE))
+        # Words read off the wire are on the grid and in range by construction: set them as
+        # they are (the same values __post_init__ would give), without checking each again —
+        # this runs for every status frame read, 40,000 in 20 minutes.
+        names = cls.__dict__.get("_names")
+        if names is None:
+            names = tuple(f.name for f in fields(cls))
+            type.__setattr__(cls, "_names", names)
+        frame = object.__new__(cls)
+        for name, value in zip(names, _unwords(data, len(names), cls.SCALE)):
+            object.__setattr__(frame, name, value)
+        return frame
 
 
 @dataclass(frozen=True)

@@ -1,8 +1,12 @@
 """The pacing core: when may the next frame be written to an arm that never acknowledges?
 
 Strategy: pure — status frames, writes and ``now`` come in as arguments; decisions come out.
-The connector holds at most 200 frames and silently drops the rest, and the arm says only
-where it is.  So for every frame written the streamer keeps its planned ``Segment`` (the shared
+The connector holds at most ``fifo_frames`` frames behind the one executing (the profile's
+``[connector]`` table; 200 by the document) and silently drops the rest, and the arm says only
+where it is.  What the document leaves open is read from the profile, never assumed here:
+``fifo_frames`` (the capacity), ``speed_factor`` (in the motion model's durations),
+``status_xyz_frame`` (robot-frame X/Y/Z are turned into the worktable frame of the segment they
+are matched against) and ``kinematics_verified`` (below).  So for every frame written the streamer keeps its planned ``Segment`` (the shared
 motion-time model), the moment its last byte left the wire, and two views of the arm:
 
 * a **lower bound of frames consumed**, advanced only on evidence:
@@ -11,20 +15,28 @@ motion-time model), the moment its last byte left the wire, and two views of the
     finished and left the FIFO.  The earliest candidate counts (a point on several pending
     paths — repeated targets — proves only the first).  An observation moves the bound only
     when the one before it in the same stream agrees (the smaller of the two counts), so one
-    corrupted status frame can never move it.  A joint move's X/Y/Z trace is matched against
-    chords of its forward kinematics with a tolerance widened by how far the chords cut
-    corners; joint halves prove nothing while a Cartesian segment is pending before them.
+    corrupted status frame can never move it.  Evidence comes from what the arm itself reports:
+    X/Y/Z for Cartesian frames, joints for joint frames.  Only with ``kinematics_verified`` is
+    a joint move's X/Y/Z trace matched (against chords of its forward kinematics, with a
+    tolerance widened by how far the chords cut corners), and a still frame matched on the half
+    of its pose that the profile's kinematics computed; without it an unverified FK/IK never
+    decides what the arm consumed.  Joint halves prove nothing while a Cartesian segment is
+    pending before them.
     An arc's G300 is held by the arm until its G301 has landed and finishes with it: evidence
     of the arc never confirms its G300 alone.  For a flat cost per status frame the search
     covers the oldest pending frames and a window around the estimate's frame (the rest only
     when neither matches); a match beyond an unsearched gap proves only the gap's first frame.
   - *time*: frames that leave no trace in the position (delays, M codes, control frames,
     PWM-only and attitude-only moves) are confirmed once even an arm ``slowest_factor`` times
-    slower than the model would have finished them, counting only time the arm was seen
+    slower than the model would have finished them (the model's durations already include the
+    configured ``speed_factor``, so the factor allows for an arm that much slower than its
+    profile says), counting only time the arm was seen
     running (kind-4 status), so a pause, or silence about the pause state, stops that clock
     and a resume pushes every pending deadline back by the whole pause.  The deadlines form a
     chain from frame to frame; agreeing evidence that frame k has begun restarts the chain at
-    k (else it would drift ahead by the slowest factor for as long as the arm is kept busy).
+    k (else it would drift ahead by the slowest factor for as long as the arm is kept busy),
+    from the least fraction of k's path both agreeing observations put the arm at (so a frame
+    seen at its end is confirmed soon after, not a whole slow-arm duration later).
   Lost or corrupted status frames can only hold the bound back, i.e. make it more careful.
 * an **estimate** of when each frame ends, from the model, re-anchored on every observation:
   each candidate segment says the arm is now within a window of that segment's time (a short
@@ -38,10 +50,18 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
 (a) frames written − lower bound < capacity − margin (never overflow the FIFO, whatever the
     estimate says);
 (b) the estimated motion waiting behind the frame in progress — including the new frame, when
-    ``next_write_time`` is told which it is — is at most ``lead_s``, so an abort (a pause frame
-    queued behind everything, H5) leaves the arm at most the lead plus the move in progress.
-    A frame is also allowed once no more than ``FEED_AHEAD_S`` (or the lead) is queued in all,
-    so the arm is never starved of a move longer than the lead by itself.
+    ``next_write_time`` is told which it is — is at most ``lead_s`` **in the arm's seconds**, so
+    an abort (a pause frame queued behind everything, H5) leaves the arm at most the lead plus
+    the move in progress.  Model seconds become the arm's through the configured speed_factor
+    (in the model) and the measured ``pace``: the arm's observed time ÷ the model's along one
+    segment, from two agreeing sightings on it at least ``PACE_MIN_SPAN_S`` of model time apart
+    (the largest of the last few, never below 1).  A frame is also allowed once no more than
+    ``FEED_AHEAD_S`` (or the lead) of the arm's seconds is queued in all, so the arm is never
+    starved of a move longer than the lead by itself.  The pace shapes only this rule: the
+    lower bound never reads it.
+(c) with ``control_frames = "arrival"`` a control frame (POSE, PROGRAM, G54, a pause toggle…)
+    acts the moment it lands, ahead of everything queued: one in a job is written only once the
+    lower bound says every frame before it has finished, so the arm runs the job in its order.
 
 Why it decided is data too, for whoever drives it (armctl/runner.py logs it with ``-v``):
 ``next_write_time`` leaves the binding constraint in ``write_reason`` (``WaitReason``: the FIFO's
@@ -65,7 +85,7 @@ from enum import StrEnum
 
 from .motion import ArmPose, MotionModel, Planner, Segment, distance_to_path
 from .protocol import (
-    CONNECTOR_BUFFER_FRAMES,
+    CONTROL_COMMANDS,
     ArcEnd,
     ArcStart,
     DEFAULT_BAUD,
@@ -84,8 +104,17 @@ DEFAULT_LEAD_S = 2.0
 # Frames kept free in the FIFO below its capacity: one for a frame the arm may still count while
 # executing it, the rest for what no model foresees.
 CAPACITY_MARGIN_FRAMES = 4
-# The time bound assumes the arm is never more than this many times slower than the model.
+# The time bound assumes the arm is never more than this many times slower than the model, whose
+# durations already include the profile's speed_factor: the slowest arm allowed for is relative
+# to the configured one.
 SLOWEST_ARM_FACTOR = 2.0
+# The measured pace (the arm's seconds ÷ the model's, see ``Streamer.pace``): a sample spans at
+# least this much model time on one segment (a status sighting is timed to a few ms), the pace is
+# the largest of the last PACE_SAMPLES samples (the slower reading wins), and at most PACE_MAX
+# (a pause in arrival mode freezes a segment: that is no pace).
+PACE_MIN_SPAN_S = 0.25
+PACE_SAMPLES = 4
+PACE_MAX = 4.0
 # Latest a frame may reach the connector after its last byte left the host (USB adapters,
 # kernel buffers), and slack per frame for the controller's own handling.
 ARRIVAL_SLACK_S = 0.05
@@ -115,6 +144,7 @@ class WaitReason(StrEnum):
     CAPACITY = "capacity"  # rule (a): the FIFO bound is reached; only new evidence allows a write
     LEAD = "lead"  # rule (b): the motion waiting behind the move in progress fills the lead
     WIRE = "wire"  # the previous frame is still leaving the host at the line's rate
+    IN_ORDER = "in order"  # rule (c): a control frame acting on arrival waits until the queue is known done
 
 
 class Evidence(StrEnum):
@@ -160,17 +190,23 @@ class Streamer:
         start: ArmPose,
         *,
         lead_s: float = DEFAULT_LEAD_S,
-        capacity: int = CONNECTOR_BUFFER_FRAMES,
+        capacity: int | None = None,
         margin: int = CAPACITY_MARGIN_FRAMES,
         baud: int = DEFAULT_BAUD,
         slowest_factor: float = SLOWEST_ARM_FACTOR,
         now: float = 0.0,
     ) -> None:
+        """``capacity``: frames the connector holds behind the one executing (None: the profile's
+        ``[connector] fifo_frames``)."""
         if lead_s <= 0:
             raise ValueError("lead_s must be greater than 0")
         self.planner = Planner(model, start)
+        connector = model.profile.connector
+        self.kinematics_verified = connector.kinematics_verified
+        self.control_on_arrival = connector.control_on_arrival
+        self.reports_robot_xyz = connector.reports_robot_xyz
         self.lead_s = lead_s
-        self.limit_frames = capacity - margin
+        self.limit_frames = (connector.fifo_frames if capacity is None else capacity) - margin
         self.frame_s = frame_seconds(baud)
         self.slowest_factor = slowest_factor
         self.pending: deque[SentFrame] = deque()  # frames not yet known consumed, oldest first
@@ -178,6 +214,7 @@ class Streamer:
         self.consumed_lower_bound = 0
         self.wire_free_s = now
         self._last_candidate: dict[str, int | None] = {}
+        self._last_fraction: dict[str, float | None] = {}  # the least fraction on that candidate
         self._last_done_tag = None
         # Arm-running clock for the time bound: seconds the arm was certainly not paused.
         self._running_seen_s: float | None = None
@@ -187,9 +224,13 @@ class Streamer:
         self._peeked: tuple[Command, Segment] | None = None
         self._certain_tail_s = 0.0  # the time bound of the last frame written (even a G300's)
         self._cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
+        self._blind: deque[int] = deque()  # indexes of pending frames whose X/Y/Z cannot be judged (positions stop there)
         self.write_reason = WaitReason.READY  # why next_write_time answered as it did
         self.next_frame_motion_s = 0.0  # the motion of the frame next_write_time was asked about
         self.bound_evidence: Evidence | None = None  # what last advanced consumed_lower_bound
+        self.pace = 1.0  # the arm's seconds ÷ the model's, measured (see the module docstring)
+        self._pace_samples: deque[float] = deque(maxlen=PACE_SAMPLES)
+        self._pace_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, model s, now)
 
     # --- writing ----------------------------------------------------------------------------
 
@@ -230,14 +271,18 @@ class Streamer:
         if not self.pending:
             self.write_reason = WaitReason.WIRE if self.wire_free_s > now else WaitReason.READY
             return max(now, self.wire_free_s)
+        if self.control_on_arrival and isinstance(command, CONTROL_COMMANDS):
+            self.write_reason = WaitReason.IN_ORDER  # rule (c): only evidence lets it go
+            return None
         duration_s = 0.0 if command is None else self._plan(command).duration_s
         self.next_frame_motion_s = duration_s
         tail_s = self.pending[-1].est_end_s
-        lead_ok_at = tail_s - min(self.lead_s, FEED_AHEAD_S)  # the arm must not run dry
-        if duration_s <= self.lead_s:
+        lead_s = self.lead_model_s  # the lead in the arm's seconds, as model seconds
+        lead_ok_at = tail_s - min(lead_s, FEED_AHEAD_S / self.pace)  # the arm must not run dry
+        if duration_s <= lead_s:
             # The waiting motion once frame j is in progress is tail − end of j: find the first
             # frame after which the new one fits within the lead; it may go once that one began.
-            threshold_s = tail_s + duration_s - self.lead_s
+            threshold_s = tail_s + duration_s - lead_s
             began_s = None
             for sent in self.pending:
                 if sent.est_end_s >= threshold_s:
@@ -250,6 +295,16 @@ class Streamer:
         else:
             self.write_reason = WaitReason.LEAD if lead_ok_at >= self.wire_free_s else WaitReason.WIRE
         return when
+
+    @property
+    def lead_model_s(self) -> float:
+        """The lead in model seconds: the arm runs ``pace`` times slower than the model."""
+        return self.lead_s / self.pace
+
+    def worktable_xyz(self, xyz) -> tuple[float, float, float]:
+        """A reported X/Y/Z in the worktable frame of the last frame written (the frame the job
+        plans in): robot coordinates less the origin when the arm reports those (status_xyz_frame)."""
+        return _in_frame(tuple(xyz), self.planner.pose.origin_mm) if self.reports_robot_xyz else tuple(xyz)
 
     def may_write(self, now: float, command: Command | None = None) -> bool:
         when = self.next_write_time(now, command)
@@ -291,11 +346,13 @@ class Streamer:
                 previous.certain_end_s = frame.certain_end_s
             else:
                 previous.certain_end_s = previous.chain_end_s  # the arm skips a G300 left alone
-        if segment.kind == "joint":
+        if segment.kind == "joint" and self.kinematics_verified:
             frame.xyz_tolerance_mm = POSITION_TOLERANCE_MM + JOINT_TRACE_SLACK * _trace_deviation_mm(segment)
         self.pending.append(frame)
         if segment.kind in ("line", "arc"):
             self._cartesian.append(frame.index)
+        if not self.kinematics_verified and (segment.kind == "joint" or segment.end.xyz_derived):
+            self._blind.append(frame.index)
         self.sent += 1
         return frame
 
@@ -315,6 +372,8 @@ class Streamer:
         self._advance_by_time()
 
     def _note_pause_state(self, paused: bool, now: float) -> None:
+        if paused:
+            self._pace_from.clear()  # a pace sample must not span a pause (arrival mode freezes a move)
         if paused and not self._paused and self._running_seen_s is not None:
             self._pause_began_s = self._running_seen_s  # it may have begun right after
         if not paused:
@@ -347,10 +406,11 @@ class Streamer:
         while self.pending and self.pending[0].index < index:
             self._consume_one()
 
-    def _restart_time_bound(self, index: int, now: float) -> None:
-        """Frame ``index`` has begun by ``now`` (agreed evidence): restart the time bound's chain
-        there, since a chain that began at the first frame of a long job drifts ahead by the
-        slowest-arm factor for as long as the arm is kept busy."""
+    def _restart_time_bound(self, index: int, now: float, fraction: float = 0.0) -> None:
+        """Frame ``index`` has begun by ``now`` and its arm is at least ``fraction`` along its path
+        (agreed evidence): restart the time bound's chain there, since a chain that began at the
+        first frame of a long job drifts ahead by the slowest-arm factor for as long as the arm
+        is kept busy."""
         if not self.pending:
             return
         chain = None
@@ -358,8 +418,12 @@ class Streamer:
             if k < 0:
                 return  # that frame is already known finished: nothing about the next ones
             sent = self.pending[k]
-            start = now if chain is None else max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
-            chain = start + sent.segment.duration_s * self.slowest_factor + FRAME_SLACK_S
+            if chain is None:  # the rest of it, from the least fraction the evidence allows
+                left_s = sent.segment.duration_s - _time_window(sent.segment, fraction, 1.0)[0]
+                chain = now + left_s * self.slowest_factor + FRAME_SLACK_S
+            else:
+                start = max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
+                chain = start + sent.segment.duration_s * self.slowest_factor + FRAME_SLACK_S
             if chain >= sent.chain_end_s:
                 return  # no tighter than before, and neither are the frames after it
             sent.chain_end_s = chain
@@ -376,9 +440,13 @@ class Streamer:
         self.consumed_lower_bound += 1
 
     def _observe(self, xyz, now: float) -> None:
+        verified, robot = self.kinematics_verified, self.reports_robot_xyz
+
         def match(sent: SentFrame):
             segment = sent.segment
-            distance, fraction = distance_to_path(segment, xyz)
+            if not verified and (segment.kind == "joint" or segment.end.xyz_derived):
+                return None  # its X/Y/Z exist only through the profile's unverified FK
+            distance, fraction = distance_to_path(segment, _in_frame(xyz, segment.start.origin_mm) if robot else xyz)
             if distance > sent.xyz_tolerance_mm:
                 return None
             if segment.kind == "joint":
@@ -387,7 +455,18 @@ class Streamer:
                 slack = sent.xyz_tolerance_mm / segment.length if segment.length > 0 else 1.0
             return fraction - slack, fraction + slack
 
-        earliest, candidates = self._scan(match, len(self.pending), now)
+        # A position says nothing about a frame whose X/Y/Z only the unverified kinematics know,
+        # nor about any frame after it: the arm may be on that frame, at a point that also lies
+        # on a later path (a wrist turning in place, then a move that starts there).
+        blind, first = self._blind, self.pending[0].index if self.pending else self.sent
+        while blind and blind[0] < first:
+            blind.popleft()  # consumed
+        end = blind[0] - first if blind else len(self.pending)
+        if blind and end == 0:
+            return
+        earliest, candidates = self._scan(match, end, now)
+        if earliest is None and end < len(self.pending):
+            return  # the arm may be on the frame that cannot be judged: no evidence
         self._use("position", earliest, candidates, now)
 
     def _observe_joint_half(self, offset: int, values, now: float) -> None:
@@ -402,7 +481,14 @@ class Streamer:
         end = cartesian[0] - first if cartesian else len(self.pending)
         if end == 0:
             return  # the arm may be on this Cartesian segment: no evidence from joints
-        earliest, candidates = self._scan(lambda sent: _joint_half_fraction(sent.segment, offset, values), end, now)
+        verified = self.kinematics_verified
+
+        def match(sent: SentFrame):
+            if not verified and sent.segment.end.joints_derived:
+                return None  # a still frame whose joints exist only through the profile's unverified IK
+            return _joint_half_fraction(sent.segment, offset, values)
+
+        earliest, candidates = self._scan(match, end, now)
         if earliest is None and end < len(self.pending):
             return  # the arm may be on the Cartesian segment after these: no evidence
         self._use(f"joints{offset}", earliest, candidates, now)
@@ -464,7 +550,10 @@ class Streamer:
         observation of the same stream agrees, so one corrupted frame cannot.
         """
         previous = self._last_candidate.get(stream)
+        previous_fraction = self._last_fraction.get(stream)
         self._last_candidate[stream] = earliest
+        fraction = next((lo for index, lo, _ in candidates if index == earliest), None)
+        self._last_fraction[stream] = fraction
         if earliest is None:
             return
         if previous is not None:
@@ -473,8 +562,36 @@ class Streamer:
             self._consume_before(agreed)
             if self.consumed_lower_bound > before:
                 self.bound_evidence = Evidence.POSITION if stream == "position" else Evidence.JOINTS
-            self._restart_time_bound(agreed, now)
+            both = (previous == earliest and fraction is not None and previous_fraction is not None)
+            self._restart_time_bound(agreed, now, max(0.0, min(previous_fraction, fraction)) if both else 0.0)
+            if agreed == earliest:
+                self._measure_pace(stream, earliest, candidates, now)
         self._reanchor(candidates, now)
+
+    def _measure_pace(self, stream: str, index: int, candidates, now: float) -> None:
+        """One more pace sample when this stream saw the arm on frame ``index`` before, at least
+        ``PACE_MIN_SPAN_S`` of model time earlier along its path (two sightings on one segment:
+        the arm ran between them, neither waiting for the line nor between frames)."""
+        if not self.pending or index < self.pending[0].index:
+            return
+        found = next(((lo, hi) for k, lo, hi in candidates if k == index), None)
+        segment = self.pending[index - self.pending[0].index].segment
+        if found is None or segment.length <= 0 and segment.kind != "joint":
+            self._pace_from.pop(stream, None)
+            return
+        lo, hi = found
+        if lo <= 0.0 or hi >= 1.0:
+            return  # a window cut at an end of the path: its middle is not where the arm was
+        model_s = segment.time_at_fraction((lo + hi) / 2)
+        last = self._pace_from.get(stream)
+        if last is None or last[0] != index or model_s < last[1]:
+            self._pace_from[stream] = (index, model_s, now)
+            return
+        if model_s - last[1] < PACE_MIN_SPAN_S:
+            return
+        self._pace_samples.append((now - last[2]) / (model_s - last[1]))
+        self._pace_from[stream] = (index, model_s, now)
+        self.pace = min(PACE_MAX, max(1.0, *self._pace_samples))
 
     def _reanchor(self, candidates: list[tuple[int, float, float]], now: float) -> None:
         """Re-time the pending frames from the candidate the estimate finds most plausible.
@@ -539,6 +656,11 @@ class Streamer:
     def last_known_done(self):
         """The tag of the last frame known finished, or None."""
         return self._last_done_tag
+
+
+def _in_frame(xyz, origin_mm) -> tuple[float, float, float]:
+    """Robot X/Y/Z in the worktable frame whose origin (in robot coordinates) is ``origin_mm``."""
+    return (xyz[0] - origin_mm[0], xyz[1] - origin_mm[1], xyz[2] - origin_mm[2])
 
 
 def _est_end(sent: SentFrame) -> float:

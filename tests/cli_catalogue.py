@@ -28,6 +28,7 @@ QUICK_INVOCATIONS = {
     "lint": ["{script}"],
     "plot": ["{script}", "-o", "{script}.svg", "--view", "xy"],
     "ports": [],
+    "probe": ["--port", VIRTUAL_SIM, "--no-motion", "--json"],
     "run": ["{script}", "--no-live", "--port", VIRTUAL_SIM],
     "sim": ["--pty"],  # with --tcp as well: "choose one", at once
     "status": ["--once", "--port", VIRTUAL_SIM],

@@ -140,7 +140,8 @@ def test_nan_and_out_of_range_options_exit_2_through_the_installed_command(args,
 def _sim_options():
     from armctl.sim.protocol_sim import OPTION_NAMES
 
-    return [name for name in OPTION_NAMES if name not in ("clock", "control", "profile")]
+    return [name for name in OPTION_NAMES
+            if name not in ("clock", "control", "control_frames", "status_xyz_frame", "profile")]
 
 
 def _sim_accepts(name: str, text: str) -> bool:
@@ -148,7 +149,9 @@ def _sim_accepts(name: str, text: str) -> bool:
 
     ranges = {"speed": limits.SIM_TIME_SCALE_RANGE, "slowdown": limits.SIM_SLOWDOWN_RANGE, "baud": limits.BAUD_RANGE,
               "fifo": limits.SIM_FIFO_RANGE_FRAMES, "seed": limits.SIM_SEED_RANGE, "loss": limits.SIM_RATE_RANGE,
-              "corrupt": limits.SIM_RATE_RANGE, "noise": limits.SIM_RATE_RANGE}
+              "corrupt": limits.SIM_RATE_RANGE, "noise": limits.SIM_RATE_RANGE,
+              "speed_factor": limits.SIM_SLOWDOWN_RANGE, "fifo_frames": limits.SIM_FIFO_RANGE_FRAMES,
+              "link_scale": limits.SIM_LINK_SCALE_RANGE}
     low, high = ranges[name]
     if not text.isascii():  # "١" is a number to int() and float(), not in a URL
         return False
@@ -171,7 +174,7 @@ def test_a_sim_option_is_parsed_or_refused_naming_it(name, text):
     from armctl.sim.protocol_sim import SimOptionError, parse_sim_url
 
     url = f"sim://?{name}={urllib.parse.quote(text)}"
-    if _sim_accepts(name, text.strip() if name in ("baud", "fifo", "seed") else text):
+    if _sim_accepts(name, text.strip() if name in ("baud", "fifo", "fifo_frames", "seed") else text):
         parse_sim_url(url)
     else:
         with pytest.raises(SimOptionError, match=rf"^{name} must be"):
@@ -185,7 +188,7 @@ def test_every_port_command_refuses_a_bad_sim_option_with_exit_2(name, text, scr
     url = f"{FAST_SIM}&{name}={urllib.parse.quote(text)}"
     result = _invoke(["status", "--once", "--port", url, "--timeout", "0.5"])
     _no_traceback(result)
-    accepted = _sim_accepts(name, text.strip() if name in ("baud", "fifo", "seed") else text)
+    accepted = _sim_accepts(name, text.strip() if name in ("baud", "fifo", "fifo_frames", "seed") else text)
     if accepted:
         assert result.exit_code in (0, 1), result.output
     else:

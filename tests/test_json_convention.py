@@ -45,6 +45,8 @@ COMMANDS = {
     "lint --format json": (["lint", "job.txt", "--format", "json"], "Found 1 warning",
                            lambda data: [f["code"] for f in data] == ["L103"]),
     "config": (["config", "--json"], None, lambda data: data["settings"]["port"]["source"] == "default"),
+    "probe": (["probe", "--no-motion", "--json", "--port", SIM], "using the built-in simulator",
+              lambda data: data["fifo_frames"] == 200),
 }
 
 

@@ -36,7 +36,7 @@ def test_default_profile_marks_its_numbers_illustrative():
     assert "ILLUSTRATIVE" in text
     for line in text.splitlines():  # every number in a [links] / [speed] / [timing] line says so
         if line and line[0].isalpha() and "=" in line and any(ch.isdigit() for ch in line.split("=", 1)[1]):
-            assert "illustrative" in line or "protocol" in line, line
+            assert "illustrative" in line or "protocol" in line or "document" in line, line
 
 
 def test_default_fixed_poses_lie_inside_the_joint_limits_and_workspace():

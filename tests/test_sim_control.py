@@ -35,7 +35,7 @@ from armctl.sim.model import SimOptions, SimulatedArm
 from armctl.sim.program import PROGRAM_RUN_S, STATUS_FINISHED, STATUS_RUNNING, STATUS_STOPPED
 
 PROFILE = default_profile()
-ARRIVAL = SimOptions(control_on_arrival=True)
+ARRIVAL = SimOptions(control_frames="arrival")
 
 
 def send(arm, *commands, at_s=None):
@@ -127,7 +127,7 @@ def test_on_arrival_pause_stops_mid_segment_and_resume_continues_where_it_stoppe
 
 def test_on_arrival_control_frames_take_no_fifo_slot():
     arm = SimulatedArm(ARRIVAL)
-    send(arm, Delay(100_000), *([Delay(1)] * 199))
+    send(arm, Delay(100_000), *([Delay(1)] * 200))
     send(arm, PauseToggle(), PauseToggle())
     arm.advance(20.0)
     assert arm.frames_dropped == 0 and arm.fifo_occupancy == 200
@@ -206,7 +206,7 @@ def test_an_arc_start_waits_for_its_arc_end_and_both_run_as_one_arc():
         arm.advance(landed_s + fraction * segment.duration_s)
         point = arm.pose.cartesian[:3]
         assert math.dist(point, arc.center) == pytest.approx(arc.radius_mm, abs=1e-6)
-    assert arm.fifo_occupancy == 2  # both frames hold their slots until the arc ends
+    assert len(arm.connector.executing) == 2 and arm.fifo_occupancy == 0  # both taken together, as one
     arm.advance_until_idle()
     assert first.end_s == second.end_s == pytest.approx(landed_s + segment.duration_s)
     assert arm.pose.cartesian[:3] == pytest.approx((end.x_mm, end.y_mm, end.z_mm))
@@ -321,7 +321,7 @@ def test_the_linear_joystick_moves_the_tool_along_z_and_stops_on_neutral():
 
 
 def test_the_joystick_is_slower_on_a_slower_arm_and_ignored_while_paused_on_arrival():
-    arm = SimulatedArm(SimOptions(control_on_arrival=True, speed_factor=2.0))
+    arm = SimulatedArm(SimOptions(control_frames="arrival", speed_factor=2.0))
     landed_s = send(arm, Joystick(0, (255,)))
     arm.advance(landed_s + 1.0)
     assert arm.pose.joints[0] == pytest.approx(PROFILE.speed.max_joint_deg_s / 2.0)

@@ -73,13 +73,13 @@ def test_sim_in_waiting_and_reset_input_buffer():
 
 
 def test_sim_url_options_reach_the_model():
-    options, time_scale = parse_sim_url(
+    options = parse_sim_url(
         "sim://?speed=4&slowdown=1.3&seed=7&baud=115200&control=arrival&loss=0.05&corrupt=0.01&noise=0.02&fifo=50"
     )
-    assert time_scale == 4
+    assert options.time_scale == 4
     assert options == SimOptions(
-        baud=115200, speed_factor=1.3, control_on_arrival=True, fifo_frames=50, status_loss_rate=0.05,
-        status_corrupt_rate=0.01, noise_rate=0.02, seed=7,
+        baud=115200, speed_factor=1.3, control_frames="arrival", fifo_frames=50, status_loss_rate=0.05,
+        status_corrupt_rate=0.01, noise_rate=0.02, seed=7, time_scale=4,
     )
     with serial.serial_for_url("sim://?slowdown=1.3", baudrate=19200) as port:
         assert port.model.options.baud == 19200 and port.model.options.speed_factor == 1.3

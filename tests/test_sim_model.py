@@ -22,7 +22,6 @@ from armctl.protocol import (
     byte_seconds,
     frame_seconds,
 )
-from armctl.sim.connector import FRAME_HOLDS_SLOT_UNTIL_DONE
 from armctl.sim.model import SimOptions, SimulatedArm
 
 FRAME_S = frame_seconds(9600)  # 50 ms
@@ -69,36 +68,36 @@ def test_the_baud_rate_sets_the_frame_time():
     assert [f.arrival_s for f in arm.frames_received] == pytest.approx([480 / 115200, 960 / 115200])
 
 
-def test_overflow_at_exactly_the_201st_queued_frame():
-    assert FRAME_HOLDS_SLOT_UNTIL_DONE  # the executing frame keeps its slot
-    arm = SimulatedArm()
-    write_all(arm, [LONG_DELAY] * 200)
-    arm.advance(201 * FRAME_S - 0.001)
-    assert arm.frames_dropped == 0 and arm.fifo_occupancy == 200
+@pytest.mark.parametrize("fifo_frames", [50, 200])
+def test_overflow_at_exactly_one_frame_more_than_fifo_frames_behind_the_executing_one(fifo_frames):
+    arm = SimulatedArm(SimOptions(fifo_frames=fifo_frames))
+    write_all(arm, [LONG_DELAY] * (fifo_frames + 1))  # the first runs, fifo_frames wait behind it
+    arm.advance((fifo_frames + 2) * FRAME_S - 0.001)
+    assert arm.frames_dropped == 0 and arm.fifo_occupancy == fifo_frames
     write_all(arm, [LONG_DELAY], now_s=arm.now_s)
     arm.advance(20.0)
     assert arm.frames_dropped == 1
-    assert arm.dropped_indexes == [200]
-    assert [f.accepted for f in arm.frames_received] == [True] * 200 + [False]
-    assert arm.peak_fifo_occupancy == 200
+    assert arm.dropped_indexes == [fifo_frames + 1]
+    assert [f.accepted for f in arm.frames_received] == [True] * (fifo_frames + 1) + [False]
+    assert arm.peak_fifo_occupancy == fifo_frames
 
 
 def test_the_slot_frees_when_the_first_frame_finishes():
     arm = SimulatedArm()
-    write_all(arm, [Delay(9_000)] + [LONG_DELAY] * 200)  # the first ends at 9.05 s, the 201st lands at 10.05 s
+    write_all(arm, [Delay(9_000)] + [LONG_DELAY] * 201)  # the first ends at 9.05 s, the 202nd lands at 10.1 s
     arm.advance(20.0)
     assert arm.frames_dropped == 0 and arm.fifo_occupancy == 200
 
 
 def test_h6_frames_landing_while_full_are_dropped_whole_and_later_frames_are_intact():
     arm = SimulatedArm()
-    write_all(arm, [Delay(12_000)] + [Delay(1)] * 199 + [MCode(7), MCode(8), MCode(9)])
+    write_all(arm, [Delay(12_000)] + [Delay(1)] * 200 + [MCode(7), MCode(8), MCode(9)])
     arm.advance(11.0)
-    assert arm.dropped_indexes == [200, 201, 202]
+    assert arm.dropped_indexes == [201, 202, 203]
     late = LinearMove(200, 10, 250, 180, 0, 0, 1500, 3000)
     write_all(arm, [late], now_s=13.0)
     arm.advance_until_idle()
-    assert arm.frames_received[-1].index == 203 and arm.frames_received[-1].command == late
+    assert arm.frames_received[-1].index == 204 and arm.frames_received[-1].command == late
     assert arm.execution_log[-1].command == late and arm.execution_log[-1].outcome == "done"
     assert arm.bad_frames == 0
 

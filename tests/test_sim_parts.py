@@ -16,7 +16,7 @@ from armctl.protocol import (
     decode_status,
     frame_seconds,
 )
-from armctl.sim.connector import FRAME_HOLDS_SLOT_UNTIL_DONE, Connector, Framer, decode_received
+from armctl.sim.connector import Connector, Framer, decode_received
 from armctl.sim.faults import StatusFaults
 from armctl.sim.model import SimulatedArm
 from armctl.sim.status import ArmSnapshot, StatusSchedule, build_status
@@ -89,24 +89,21 @@ def _frame(index):
     return decode_received(index, 0.0, Delay(1000).encode())
 
 
-def test_the_201st_frame_is_dropped_while_none_has_finished():
-    assert FRAME_HOLDS_SLOT_UNTIL_DONE
-    connector = Connector()
+def test_capacity_counts_the_frames_waiting_behind_the_one_executing():
+    connector = Connector()  # the document's 200 (fifo_frames: H6's readings are this one number)
     assert all(connector.land(_frame(k)) for k in range(200))
-    executing = connector.take()  # the arm takes one, but it holds its slot until done
-    assert connector.land(_frame(200)) is False
-    assert connector.dropped_indexes == [200]
-    connector.finish(executing)
+    assert connector.land(_frame(200)) is False  # nothing taken yet: 200 wait, the 201st is dropped
+    executing = connector.take()  # the arm takes one: a slot frees for the frames behind it
     assert connector.land(_frame(201)) is True
+    assert connector.land(_frame(202)) is False
+    assert connector.dropped_indexes == [200, 202]
+    connector.finish(executing)
     assert connector.peak_occupancy == 200
 
 
-def test_reading_where_a_slot_frees_when_execution_starts():
-    connector = Connector(hold_until_done=False)
-    for k in range(200):
-        connector.land(_frame(k))
-    connector.take()
-    assert connector.land(_frame(200)) is True
+def test_a_smaller_fifo():
+    connector = Connector(capacity_frames=50)
+    assert [connector.land(_frame(k)) for k in range(51)] == [True] * 50 + [False]
 
 
 def test_undecodable_frames_still_take_a_slot():

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from armctl.motion import MotionModel, distance_to_path
-from armctl.profile import load_profile
+from armctl.profile import load_profile, parse_profile
 from armctl.protocol import (
     ArcEnd, ArcStart, Delay, JointMove, JointsLowStatus, LinearMove, MCode, PauseStatus,
     PositionStatus,
@@ -168,9 +168,10 @@ def test_joint_halves_prove_nothing_while_a_cartesian_segment_is_pending_before_
 
 @pytest.mark.parametrize("target", [(160.0, 40.0, -30.0, 0.0, 60.0, 0.0), (-150.0, 30.0, 20.0, 40.0, 80.0, 90.0)])
 def test_a_wide_joint_move_matches_its_own_true_trace(target):
-    """Positions are matched against 16 chords of a joint move's trace; the tolerance must
-    cover how far the true trace bows away from them, or a later segment could win."""
-    s = streamer()
+    """With verified kinematics, positions are matched against 16 chords of a joint move's trace;
+    the tolerance must cover how far the true trace bows away from them, or a later segment could win."""
+    verified = MotionModel(parse_profile({"connector": {"kinematics_verified": True}}))
+    s = Streamer(verified, verified.initial_pose())
     write_all(s, [JointMove(*target, 1500.0, 90.0)])
     sent = s.pending[0]
     worst = max(distance_to_path(sent.segment, sent.segment.sample(sent.segment.duration_s * k / 400).xyz)[0]

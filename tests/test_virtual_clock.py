@@ -19,7 +19,7 @@ import armctl  # noqa: F401  (registers sim://)
 from armctl.cli import main
 from armctl.link import Link
 from armctl.protocol import STATUS_SIZE, Delay, StatusReader
-from armctl.sim.protocol_sim import is_virtual_clock, parse_sim_url
+from armctl.sim.protocol_sim import parse_sim_url
 from armctl.sim.realtime import VirtualClock
 
 TIMED = Path(__file__).resolve().parent / "data" / "scripts_cli" / "timed_job.txt"
@@ -42,8 +42,8 @@ def test_the_clock_only_moves_forward_when_told():
 
 
 def test_url_option_parses_and_refuses_a_speed_with_it():
-    assert is_virtual_clock(VIRTUAL) and not is_virtual_clock("sim://?speed=4")
-    assert parse_sim_url("sim://?clock=wall")[1] == 1.0
+    assert parse_sim_url(VIRTUAL).virtual_clock and not parse_sim_url("sim://?speed=4").virtual_clock
+    assert parse_sim_url("sim://?clock=wall").time_scale == 1.0
     with pytest.raises(serial.SerialException, match="speed has no meaning with clock=virtual"):
         serial.serial_for_url("sim://?clock=virtual&speed=4")
     with pytest.raises(serial.SerialException, match="clock must be 'wall' or 'virtual'"):

@@ -1,20 +1,29 @@
 """Run one job through one pacing strategy against the simulated arm, in virtual time.
 
-Strategy: the same loop a real host runs — read status bytes, feed them to the strategy, write
-the next frame when the strategy allows — but the clock jumps from event to event (the next
-status byte, the next moment the strategy may write), so an hour of arm time costs seconds.
-The simulator's true state (FIFO, drops, what executed when) is read only for the result,
-never by the strategy (except the omniscient baseline, which exists to be unfair).
+Strategy: the same job engine ``armctl run`` drives (armctl/job.py) — it feeds the strategy the
+status frames, writes when the strategy allows, and ends the job by the same rules (at rest at
+the last target, the deadline, the abort sequence) — with this module as its host: the clock
+jumps from event to event (the next status byte, the next moment the strategy may write, the
+engine's own next time), so an hour of arm time costs seconds.  Every strategy row goes through
+the engine; for the baselines armctl's streamer only watches (what is known done, the end of
+the job), the baseline paces.  The simulator's true state (FIFO, drops, what executed when) is
+read only for the result, never by the strategy (except the omniscient baseline, which exists
+to be unfair).  The result carries both: ``job_s`` is the simulator's truth (when the arm
+finished its last frame), ``arm_time_s`` and ``outcome`` are what the engine concluded, as
+``armctl run`` prints them ("arm time: …").
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Callable, Sequence
+from typing import Callable, NamedTuple, Sequence
 
+from ..job import Finished, Job, RunView, Write
+from ..motion import MotionModel
 from ..protocol import Command, PauseToggle, StatusReader
 from ..sim.connector import HISTORY_FRAMES
 from ..sim.model import SimulatedArm
+from ..streamer import Streamer
 
 EPSILON_S = 1e-9
 STILL_SAMPLE_S = 0.01  # how finely motion after an abort is measured
@@ -25,12 +34,14 @@ class RunResult:
     frames: int
     written: int
     dropped: int
-    job_s: float  # until the arm finished its last frame (or stopped for good)
+    job_s: float  # until the arm finished its last frame (or stopped for good): the simulator's truth
     peak_occupancy: int  # the FIFO's true peak
     peak_queued_s: float  # the most motion ever queued ahead of the arm when a frame landed
     moving_after_abort_s: float | None = None
     timed_out: bool = False
     aborted_at_s: float | None = None  # when the abort sequence was written
+    outcome: str = "running"  # the engine's (armctl/job.py Outcome), as ``armctl run`` would end
+    arm_time_s: float | None = None  # the engine's arm time, as ``armctl run`` prints it (finished jobs)
 
 
 @dataclass(frozen=True)
@@ -40,6 +51,28 @@ class Event:
 
     at_s: float
     command: Command
+
+
+class Frame(NamedTuple):
+    """A job frame as the engine takes it: the command and where it is (its index, 1-based)."""
+
+    command: Command
+    line: int
+
+
+def job_engine(commands: Sequence[Command], strategy, arm: SimulatedArm,
+               abort_sequence: Sequence[Command] = (PauseToggle(),)) -> Job:
+    """The engine for one run: armctl's streamer paces its own row; for a baseline a streamer
+    with the host's nominal model only watches, so every row ends by the same rules."""
+    streamer = getattr(strategy, "streamer", None)
+    pacing = None
+    if streamer is None:
+        streamer = Streamer(MotionModel(arm.profile), arm.pose, baud=arm.options.baud)
+        pacing = strategy
+    total = len(commands)
+    view = RunView(total_frames=total, estimated_job_s=0.0, lead_s=streamer.lead_s, capacity=streamer.limit_frames)
+    statements = (Frame(commands[k], k + 1) for k in range(total))  # lazily: a long job stays flat in memory
+    return Job(streamer, statements, view, pacing=pacing, abort_sequence=tuple(abort_sequence))
 
 
 def run_job(
@@ -55,51 +88,54 @@ def run_job(
     on_status: Callable[[float], None] | None = None,
     line: list[str] | None = None,
 ) -> RunResult:
-    """Stream ``commands`` with ``strategy`` until the arm is done (or aborted and still).
+    """Stream ``commands`` with ``strategy`` until the engine says the job is over (or, with
+    ``abort_after_frames``, until the abort sequence is written: the motion after it is then
+    measured on the arm itself).
 
     ``on_write(index, now)`` follows every job frame written, ``on_status(now)`` every batch of
-    status frames the strategy has read; ``line``, if given, gets "job", "event" or "abort" for
+    status frames the strategy has read (and the end of the job); ``line``, if given, gets "job", "event" or "abort" for
     each frame written, in the order they go on the wire (= the arm's arrival indexes).
     """
     line = _Discard() if line is None else line  # not kept unless asked for: memory stays flat
+    job = job_engine(commands, strategy, arm, abort_sequence)
     reader = StatusReader()
     pending_events = sorted(events, key=lambda e: e.at_s)
-    now = 0.0
+    now = arm.now_s  # a fresh arm's 0; an arm already read from (as ``armctl run`` does first) goes on
     written = 0
     aborted_at: float | None = None
     total = len(commands)
-    stop_after = total if abort_after_frames is None else min(abort_after_frames, total)
+    stop_after = None if abort_after_frames is None else min(abort_after_frames, total)
     while True:
         frames = reader.feed(arm.advance(now))
         for frame in frames:
-            strategy.receive_status(frame, now)
+            job.receive_status(frame, now)
         if frames and on_status is not None:
             on_status(now)
         while pending_events and pending_events[0].at_s <= now + EPSILON_S:
             arm.write(pending_events.pop(0).command.encode(), now)
             line.append("event")
-        when = None
-        if written < stop_after:
-            when = strategy.next_write_time(now, commands[written])
-            if when is not None and when <= now + EPSILON_S:
-                arm.write(commands[written].encode(), now)
+        if stop_after is not None and written >= stop_after and aborted_at is None:
+            aborted_at = now
+            job.request_stop()
+        action = job.next_action(now)
+        if type(action) is Write:
+            arm.write(action.frame, now)
+            job.wrote(now)
+            if action.statement is None:
+                line.append("abort")
+            else:
                 line.append("job")
-                strategy.wrote(commands[written], now, written)
                 if on_write is not None:
                     on_write(written, now)
                 written += 1
-                continue
-        elif aborted_at is None and abort_after_frames is not None:
-            aborted_at = now
-            for command in abort_sequence:
-                arm.write(command.encode(), now)
-                line.append("abort")
-            break
-        elif arm.idle and not pending_events:
+            continue
+        if type(action) is Finished or aborted_at is not None:
+            if on_status is not None:
+                on_status(now)  # the engine's last word: at rest at the last target confirms the rest
             break
         if now > time_limit_s:
-            return _result(arm, total, written, now, None, timed_out=True)
-        candidates = [arm.next_event_time(), when]
+            return _result(arm, total, written, now, None, job, timed_out=True)
+        candidates = [arm.next_event_time(), action.until_s]
         if pending_events:
             candidates.append(pending_events[0].at_s)
         upcoming = min((t for t in candidates if t is not None), default=None)
@@ -107,7 +143,7 @@ def run_job(
             break
         now = max(upcoming, now + EPSILON_S)
     moving_after = _motion_after(arm, aborted_at, time_limit_s) if aborted_at is not None else None
-    result = _result(arm, total, written, now, moving_after)
+    result = _result(arm, total, written, now, moving_after, job)
     result.aborted_at_s = aborted_at
     return result
 
@@ -149,11 +185,13 @@ def _motion_after(arm: SimulatedArm, aborted_at: float, time_limit_s: float) -> 
     return last_change - aborted_at
 
 
-def _result(arm: SimulatedArm, total: int, written: int, now: float, moving_after, timed_out=False) -> RunResult:
+def _result(arm: SimulatedArm, total: int, written: int, now: float, moving_after, job: Job,
+            timed_out=False) -> RunResult:
     executor = arm.executor  # its run-long counters: the execution log is only a recent window
     return RunResult(
         frames=total, written=written, dropped=arm.frames_dropped,
         job_s=now if executor.last_end_s is None else executor.last_end_s,
         peak_occupancy=arm.peak_fifo_occupancy, peak_queued_s=executor.peak_wait_s,
         moving_after_abort_s=moving_after, timed_out=timed_out,
+        outcome=str(job.view.outcome), arm_time_s=job.view.arm_time_s,
     )

@@ -31,7 +31,7 @@ import os
 import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 
 from ..motion import MotionModel
 from ..protocol import frame_seconds
@@ -50,7 +50,11 @@ FIXED_DELAY_S = 0.1  # the fixed-delay baseline: a frame every 100 ms, a common 
 def make_strategy(name: str, arm: SimulatedArm, lead_s: float, fixed_delay_s: float = FIXED_DELAY_S):
     """A fresh strategy for ``arm``; armctl's and stop-and-go plan with the nominal model."""
     baud = arm.options.baud
-    model = MotionModel(arm.profile)  # the host's model: it does not know the arm's speed_factor
+    # The host's model: the arm's own profile, as a probe finds it — its kinematics checked
+    # (kinematics_verified; the simulated arm's links are the profile's), its speed_factor not
+    # known (that is what the scenarios of a slower or faster arm measure).
+    profile = arm.profile
+    model = MotionModel(replace(profile, connector=replace(profile.connector, kinematics_verified=True)))
     if name == "armctl":
         return StreamerStrategy(model, arm.pose, lead_s, baud)
     if name == "naive":

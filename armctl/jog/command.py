@@ -115,7 +115,6 @@ def _open_files(record_path, log_path):
 def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, timeout_s) -> int:
     from ..link import connect, require_wall_clock
     from ..protocol import frame_seconds
-    from ..ui.run_job import time_scale_of
     from .edge import JogLoop, wait_for_pose
     from .keys import KeyDecoder
     from .session import JogSession
@@ -132,7 +131,7 @@ def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms,
             if problem is not None:
                 click.echo(f"armctl: {problem}", err=True)
                 return EXIT_FAILED
-            scale = time_scale_of(link.url)
+            scale = link.clock.scale  # sim://?speed=N: the arm lives N× faster than the wall
             session = JogSession(settings, keymap, profile, mode, line_s=frame_seconds(baud) / scale,
                                  time_scale=scale, recording=teach is not None)
             loop = JogLoop(link, session, KeyDecoder(settings.escape_ms / 1000.0), profile=profile, keymap=keymap,

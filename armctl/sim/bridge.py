@@ -49,7 +49,7 @@ def serve_pty(
     options: SimOptions,
     on_ready: Callable[[str], None],
     stop: threading.Event | None = None,
-    time_scale: float = 1.0,
+    time_scale: float | None = None,  # None: the options' (speed=)
     model: SimulatedArm | None = None,
     keep_serving: bool = False,
 ) -> str:
@@ -72,7 +72,7 @@ def serve_pty(
         os.close(slave_fd)
         raise
     os.close(slave_fd)  # so that POLLHUP tells whether a program has the slave open
-    arm = RealtimeArm(model or SimulatedArm(options), time_scale)
+    arm = RealtimeArm(model or SimulatedArm(options), options.time_scale if time_scale is None else time_scale)
     try:
         on_ready(path)
         return _pump_pty(master_fd, arm, stop, keep_serving)
@@ -118,7 +118,7 @@ def serve_tcp(
     options: SimOptions,
     on_ready: Callable[[str], None],
     stop: threading.Event | None = None,
-    time_scale: float = 1.0,
+    time_scale: float | None = None,  # None: the options' (speed=)
     model: SimulatedArm | None = None,
 ) -> str:
     """Serve one client on 127.0.0.1:``port`` (0 = any free port); ``on_ready`` gets the
@@ -135,7 +135,7 @@ def serve_tcp(
             return STOPPED
         with client:
             client.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            arm = RealtimeArm(model or SimulatedArm(options), time_scale)
+            arm = RealtimeArm(model or SimulatedArm(options), options.time_scale if time_scale is None else time_scale)
             return _pump_tcp(client, arm, stop)
     except KeyboardInterrupt:
         return INTERRUPTED

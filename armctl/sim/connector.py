@@ -13,10 +13,11 @@ Decisions (PROTOCOL.md):
 - The records for tests and the benchmark (``received``, ``dropped_indexes``, ``cleared_indexes``)
   keep the most recent ``HISTORY_FRAMES`` entries or more (``RecentList``); their counts cover
   the whole run.
-- ``FRAME_HOLDS_SLOT_UNTIL_DONE`` — armctl's reading of "buffer full": a frame keeps its slot
-  until the arm has *finished* executing it (the pessimistic reading).  So 200 frames fit,
-  counting the one being executed, and the 201st frame that lands while none has finished is
-  dropped.
+- ``capacity_frames`` counts the frames *waiting* behind the one the arm executes: H6's two
+  readings (the executing frame keeps its slot until done, or frees it when taken) differ only
+  in that one observable number, so the simulator takes the number (``SimOptions.fifo_frames``,
+  the profile's ``[connector] fifo_frames``), not a reading.  The frames the arm has taken stay in
+  ``executing`` until they finish, for the record only.
 """
 
 from __future__ import annotations
@@ -37,8 +38,6 @@ from ..protocol import (
     decode_command,
 )
 
-# H6, armctl's reading: a frame occupies its buffer slot until its execution has finished.
-FRAME_HOLDS_SLOT_UNTIL_DONE = True
 # The simulator's records (frames received, dropped, cleared; executions) keep only the most recent
 # this many entries, and counters for the rest, so a long virtual run takes flat memory.
 HISTORY_FRAMES = 1024
@@ -131,10 +130,9 @@ def decode_received(index: int, arrival_s: float, raw: bytes) -> ReceivedFrame:
 
 @dataclass
 class Connector:
-    """The 200-frame FIFO (H6), holding frames until the arm has finished them."""
+    """The FIFO (H6): ``capacity_frames`` frames wait behind the one executing (200 by the document)."""
 
     capacity_frames: int = CONNECTOR_BUFFER_FRAMES
-    hold_until_done: bool = FRAME_HOLDS_SLOT_UNTIL_DONE
     queue: deque = field(default_factory=deque)  # ReceivedFrame waiting, oldest first
     executing: list = field(default_factory=list)  # taken by the arm, still holding a slot
     # The most recent well-framed frames, by arrival index (``received.total`` counts them all).
@@ -145,8 +143,8 @@ class Connector:
 
     @property
     def occupancy(self) -> int:
-        """Slots in use: frames waiting plus frames still executing (if they hold slots)."""
-        return len(self.queue) + len(self.executing)
+        """Frames waiting: what ``capacity_frames`` bounds (the executing ones are behind the arm)."""
+        return len(self.queue)
 
     @property
     def dropped(self) -> int:
@@ -177,10 +175,9 @@ class Connector:
         return self.queue[offset] if offset < len(self.queue) else None
 
     def take(self) -> ReceivedFrame:
-        """The arm takes the head frame; it keeps its slot until ``finish`` if so decided."""
+        """The arm takes the head frame: it leaves the queue (and is recorded until ``finish``)."""
         frame = self.queue.popleft()
-        if self.hold_until_done:
-            self.executing.append(frame)
+        self.executing.append(frame)
         return frame
 
     def finish(self, frame: ReceivedFrame) -> None:

@@ -10,7 +10,7 @@ segment's end).  Control frames and M codes take no time of their own (the motio
 an M code only its command overhead).  Pure: no clock, no I/O.
 
 Decisions (each in one place, here):
-- **H5** (``control_on_arrival=False``, the default from ``protocol.CONTROL_FRAMES_QUEUED``):
+- **H5** (``control_on_arrival=False``: ``SimOptions.control_frames="queued"``, the document's reading):
   control frames wait in the FIFO and act when they reach its head, between commands.  While
   paused the arm consumes only a PauseToggle at the head (the resume); anything else at the
   head waits — so a resume queued behind other frames never arrives (a host must send nothing
@@ -96,6 +96,7 @@ class Executor:
         self.connector = connector
         self.speed_factor = speed_factor
         self.control_on_arrival = control_on_arrival
+        self.reports_robot_xyz = False  # status kind 0 in robot coordinates (SimOptions.status_xyz_frame)
         self.motion = MotionModel(profile, speed_factor)
         self.pose = self.motion.initial_pose()  # where the arm rests (valid while idle)
         self.origin_mm = tuple(self.pose.origin_mm)
@@ -321,6 +322,7 @@ class LiveSnapshot:
     def __init__(self, executor: Executor, now_s: float) -> None:
         self._executor, self._now_s = executor, now_s
         self._pose = None
+        self._robot_xyz = executor.reports_robot_xyz
         self.origin_mm = executor.origin_mm
         self.paused = executor.paused
         program = executor.program
@@ -336,8 +338,10 @@ class LiveSnapshot:
 
     @property
     def position_mm(self) -> tuple[float, float, float]:
-        """Tool X, Y, Z in the worktable frame in force now."""
+        """Tool X, Y, Z in the worktable frame in force now (robot frame for an arm that reports it)."""
         x, y, z = self.pose.robot_cartesian[:3]
+        if self._robot_xyz:
+            return (x, y, z)
         ox, oy, oz = self.origin_mm
         return (x - ox, y - oy, z - oz)
 

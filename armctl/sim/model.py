@@ -20,10 +20,11 @@ time is taken to happen at the current time.  No time, threading or serial impor
 
 from __future__ import annotations
 
+import dataclasses
 from collections import deque
 from dataclasses import dataclass
 
-from ..protocol import CONNECTOR_BUFFER_FRAMES, CONTROL_FRAMES_QUEUED, DEFAULT_BAUD, STATUS_PERIOD_S, STATUS_SIZE
+from ..protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, STATUS_PERIOD_S, STATUS_SIZE
 from .connector import Connector, Framer, ReceivedFrame, decode_received
 from .executor import Execution, Executor, LiveSnapshot
 from .faults import StatusFaults
@@ -34,18 +35,32 @@ from .wire import TIME_EPSILON_S, Wire
 
 @dataclass(frozen=True)
 class SimOptions:
-    """How the simulated arm and its line behave.  ``profile``: a ``Profile``, a path to a
-    profile TOML, or None for ``load_profile()``'s choice."""
+    """How the simulated arm and its line behave: everything a ``sim://`` URL says, parsed once
+    (armctl/sim/protocol_sim.py).  ``profile``: a ``Profile``, a path to a profile TOML, or None
+    for ``load_profile()``'s choice — the arm's speeds, limits and (``link_scale`` apart) links.
+
+    The arm's unknowns carry the names of the profile's ``[connector]`` settings, with the
+    document's readings as defaults (the packaged profile's, checked by a test): the simulated
+    arm impersonates any arm a profile may describe.  It takes them from here, never from its
+    profile: the profile is the host's belief, these are the arm's truth."""
 
     baud: int = DEFAULT_BAUD
     speed_factor: float = 1.0  # 1.3 = every motion takes 30 % longer than the model says
-    control_on_arrival: bool = not CONTROL_FRAMES_QUEUED  # H5 alternative when True
-    fifo_frames: int = CONNECTOR_BUFFER_FRAMES
+    control_frames: str = "queued"  # H5: control frames wait in the FIFO; "arrival": they act on landing
+    fifo_frames: int = CONNECTOR_BUFFER_FRAMES  # frames accepted behind the one executing (H6)
+    status_xyz_frame: str = "worktable"  # what status kind 0 reports after G54; or "robot"
+    link_scale: float = 1.0  # the arm's link lengths are the profile's × this (its kinematics differ)
     status_loss_rate: float = 0.0
     status_corrupt_rate: float = 0.0
     noise_rate: float = 0.0
     seed: int = 0
     profile: object = None
+    time_scale: float = 1.0  # speed=: the arm runs this many times faster than the wall clock
+    virtual_clock: bool = False  # clock=virtual: model time moves only while the host waits
+
+    @property
+    def control_on_arrival(self) -> bool:
+        return self.control_frames == "arrival"
 
     def __post_init__(self) -> None:
         if not self.baud > 0:
@@ -54,6 +69,12 @@ class SimOptions:
             raise ValueError(f"speed_factor must be positive, not {self.speed_factor!r}")
         if not self.fifo_frames > 0:
             raise ValueError(f"fifo_frames must be positive, not {self.fifo_frames!r}")
+        if self.control_frames not in ("queued", "arrival"):
+            raise ValueError(f"control_frames must be 'queued' or 'arrival', not {self.control_frames!r}")
+        if self.status_xyz_frame not in ("worktable", "robot"):
+            raise ValueError(f"status_xyz_frame must be 'worktable' or 'robot', not {self.status_xyz_frame!r}")
+        if not self.link_scale > 0:
+            raise ValueError(f"link_scale must be positive, not {self.link_scale!r}")
 
 
 def _load_profile(profile):
@@ -64,18 +85,29 @@ def _load_profile(profile):
     return load_profile(profile)
 
 
+def _arm_profile(options: SimOptions):
+    """The simulated arm's own profile: the options' profile with every link × ``link_scale``."""
+    profile = _load_profile(options.profile)
+    if options.link_scale == 1.0:
+        return profile
+    links = profile.links
+    scaled = type(links)(**{f.name: getattr(links, f.name) * options.link_scale for f in dataclasses.fields(links)})
+    return dataclasses.replace(profile, links=scaled)
+
+
 class SimulatedArm:
     """The arm, its connector and both directions of the line, in virtual time."""
 
     def __init__(self, options: SimOptions = SimOptions(), start_s: float = 0.0) -> None:
         self.options = options
-        self.profile = _load_profile(options.profile)
+        self.profile = _arm_profile(options)
         self.now_s = start_s
         self.host_line = Wire(options.baud, keeps_bytes=False)  # host → arm: timing only
         self.arm_line = Wire(options.baud)  # arm → host: the status bytes themselves
         self.framer = Framer()
         self.connector = Connector(capacity_frames=options.fifo_frames)
         self.executor = Executor(self.profile, self.connector, options.speed_factor, options.control_on_arrival, start_s)
+        self.executor.reports_robot_xyz = options.status_xyz_frame == "robot"
         self.schedule = StatusSchedule(STATUS_PERIOD_S, first_s=start_s)
         self.faults = StatusFaults(options.status_loss_rate, options.status_corrupt_rate, options.noise_rate, options.seed)
         self.status_frames_built = 0
@@ -227,7 +259,8 @@ class SimulatedArm:
         return self.executor.pose_at(self.now_s)
 
     def snapshot(self) -> LiveSnapshot:
-        """What a status frame would report now (X/Y/Z in the worktable frame, joints, …)."""
+        """What a status frame would report now (X/Y/Z in the worktable frame, or the robot frame
+        with ``status_xyz_frame="robot"``, joints, …)."""
         return self.executor.snapshot(self.now_s)
 
     @property

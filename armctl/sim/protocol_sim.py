@@ -2,28 +2,40 @@
 
 URL: ``sim://[?option=value&…]``, options (all optional):
 
-=========  ======================================================================  =========
-option     meaning                                                                 default
-=========  ======================================================================  =========
-speed      time scale: 4 = the arm runs 4× faster than the wall clock              1
-clock      ``wall``, or ``virtual``: model time moves only while armctl waits on   wall
-           the port (``run``, ``status`` without ``--watch``), so a job takes
-           milliseconds and runs identically on any machine
-slowdown   speed factor: 1.3 = every motion takes 30 % longer than commanded       1
-baud       line rate in bit/s (else the port's ``baudrate``)                       9600
-control    ``queued`` (H5: control frames wait in the FIFO) or ``arrival``          queued
-fifo       connector buffer size in frames                                         200
-loss       share of status frames lost                                             0
-corrupt    share of status frames with one byte flipped                            0
-noise      share of status frames preceded by random noise bytes                   0
-seed       seed of the faults                                                      0
-profile    path of an arm profile (TOML)                                           built-in
-=========  ======================================================================  =========
+================  ===============================================================  =========
+option            meaning                                                          default
+================  ===============================================================  =========
+speed             time scale: 4 = the arm runs 4× faster than the wall clock       1
+clock             ``wall``, or ``virtual``: model time moves only while armctl     wall
+                  waits on the port (``run``, ``status`` without ``--watch``), so
+                  a job takes milliseconds and runs identically on any machine
+fifo_frames       frames the connector accepts behind the one executing (alias     200
+                  ``fifo``)
+control_frames    ``queued`` (H5: control frames wait in the FIFO) or ``arrival``   queued
+                  (alias ``control``)
+status_xyz_frame  ``worktable`` or ``robot``: the frame of status kind 0's X/Y/Z    worktable
+                  after G54
+speed_factor      the arm's real motion time ÷ the model's: 1.3 = every motion     1
+                  takes 30 % longer than commanded (alias ``slowdown``)
+link_scale        the arm's link lengths are the profile's × this: its reported   1
+                  joints and X/Y/Z disagree with the profile's kinematics
+baud              line rate in bit/s (else the port's ``baudrate``)                9600
+loss              share of status frames lost                                      0
+corrupt           share of status frames with one byte flipped                     0
+noise             share of status frames preceded by random noise bytes            0
+seed              seed of the faults                                               0
+profile           path of an arm profile (TOML)                                    built-in
+================  ===============================================================  =========
+
+The first four after ``clock`` are the arm profile's ``[connector]`` settings under the same
+names: the simulated arm impersonates any arm a profile may describe (its profile's own
+``[connector]`` table is the host's belief and is not read here).
 
 Each number has a finite range (armctl/limits.py, also in the README); an unknown option, a
 bad or out-of-range value is a ``SimOptionError`` naming the option: a ``ConfigError`` for
 armctl (exit 2 on every command) and a ``SerialException`` for any other pyserial program.
-``_parse`` is the one parse of the URL; everything else calls it.
+``parse_sim_url`` is the one parse of the URL, into one ``SimOptions`` (time scale and clock
+included); everything else calls it.
 
 Strategy: a thin edge.  With ``clock=virtual`` nothing blocks: ``read`` returns what has
 arrived by the current model time, and ``Link`` moves ``virtual_clock`` forward instead of
@@ -49,15 +61,15 @@ from typing import Callable
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_bytes
 
 from ..errors import ConfigError
-from ..limits import (BAUD_RANGE, SIM_FIFO_RANGE_FRAMES, SIM_RATE_RANGE, SIM_SEED_RANGE, SIM_SLOWDOWN_RANGE,
-                      SIM_TIME_SCALE_RANGE)
+from ..limits import (BAUD_RANGE, SIM_FIFO_RANGE_FRAMES, SIM_LINK_SCALE_RANGE, SIM_RATE_RANGE, SIM_SEED_RANGE,
+                      SIM_SLOWDOWN_RANGE, SIM_TIME_SCALE_RANGE)
 from .model import SimOptions, SimulatedArm
 from .realtime import RealtimeArm, VirtualClock
 
-CONTROL_MODES = {"queued": False, "arrival": True}
 _USAGE = (
-    "expected sim://[?option=value&…] with options speed, clock=wall|virtual, slowdown, baud, "
-    "control=queued|arrival, fifo, loss, corrupt, noise, seed, profile"
+    "expected sim://[?option=value&…] with options speed, clock=wall|virtual, fifo_frames, "
+    "control_frames=queued|arrival, status_xyz_frame=worktable|robot, speed_factor, link_scale, baud, "
+    "loss, corrupt, noise, seed, profile"
 )
 
 
@@ -99,16 +111,17 @@ def _int_in(low: int, high: int) -> Callable[[str, str], int]:
     return parse
 
 
-def _control(name: str, text: str) -> bool:
-    if text not in CONTROL_MODES:
-        raise ValueError(f"{name} must be 'queued' or 'arrival', not {_shown(text)}")
-    return CONTROL_MODES[text]
+def _one_of(*choices: str) -> Callable[[str, str], str]:
+    def parse(name: str, text: str) -> str:
+        if text not in choices:
+            raise ValueError(f"{name} must be {' or '.join(map(repr, choices))}, not {_shown(text)}")
+        return text
+
+    return parse
 
 
 def _clock(name: str, text: str) -> bool:
-    if text not in ("wall", "virtual"):
-        raise ValueError(f"{name} must be 'wall' or 'virtual', not {_shown(text)}")
-    return text == "virtual"
+    return _one_of("wall", "virtual")(name, text) == "virtual"
 
 
 def _path(name: str, text: str) -> str:
@@ -117,42 +130,43 @@ def _path(name: str, text: str) -> str:
     return text
 
 
-# URL option → (SimOptions field, "time_scale" or "virtual", parser); ranges from armctl/limits.py
+_FIFO = _int_in(*SIM_FIFO_RANGE_FRAMES)
+_CONTROL = _one_of("queued", "arrival")
+_SPEED_FACTOR = _float_in(*SIM_SLOWDOWN_RANGE)
+# URL option → (SimOptions field, parser), the one table of options (the docstring's table says
+# what each means); ranges from armctl/limits.py.  An alias names the same field as the option
+# it stands for (the old short names, kept working).
 _OPTIONS: dict[str, tuple[str, Callable[[str, str], object]]] = {
     "speed": ("time_scale", _float_in(*SIM_TIME_SCALE_RANGE)),
-    "clock": ("virtual", _clock),
-    "slowdown": ("speed_factor", _float_in(*SIM_SLOWDOWN_RANGE)),
+    "clock": ("virtual_clock", _clock),
+    "fifo_frames": ("fifo_frames", _FIFO),
+    "control_frames": ("control_frames", _CONTROL),
+    "status_xyz_frame": ("status_xyz_frame", _one_of("worktable", "robot")),
+    "speed_factor": ("speed_factor", _SPEED_FACTOR),
+    "link_scale": ("link_scale", _float_in(*SIM_LINK_SCALE_RANGE)),
     "baud": ("baud", _int_in(*BAUD_RANGE)),
-    "control": ("control_on_arrival", _control),
-    "fifo": ("fifo_frames", _int_in(*SIM_FIFO_RANGE_FRAMES)),
     "loss": ("status_loss_rate", _float_in(*SIM_RATE_RANGE)),
     "corrupt": ("status_corrupt_rate", _float_in(*SIM_RATE_RANGE)),
     "noise": ("noise_rate", _float_in(*SIM_RATE_RANGE)),
     "seed": ("seed", _int_in(*SIM_SEED_RANGE)),
     "profile": ("profile", _path),
+    "fifo": ("fifo_frames", _FIFO),  # alias of fifo_frames
+    "control": ("control_frames", _CONTROL),  # alias of control_frames
+    "slowdown": ("speed_factor", _SPEED_FACTOR),  # alias of speed_factor
 }
 OPTION_NAMES = tuple(_OPTIONS)
 
 
-def parse_sim_url(url: str, baud: int | None = None) -> tuple[SimOptions, float]:
-    """``SimOptions`` and the time scale a ``sim://`` URL asks for; SimOptionError if bad."""
-    options, time_scale, _ = _parse(url, baud)
-    return options, time_scale
-
-
-def is_virtual_clock(url: str) -> bool:
-    """Whether a ``sim://`` URL asks for ``clock=virtual``; SimOptionError if the URL is bad."""
-    return _parse(url)[2]
-
-
-def _parse(url: str, baud: int | None = None) -> tuple[SimOptions, float, bool]:
+def parse_sim_url(url: str, baud: int | None = None) -> SimOptions:
+    """Everything a ``sim://`` URL asks for, time scale and clock included (``baud``: the port's
+    rate, unless the URL names one); SimOptionError if the URL is bad."""
     parts = urllib.parse.urlsplit(url)
     if parts.scheme != "sim":
         raise SimOptionError(f"{_shown(url)} does not start with sim:// ({_USAGE})")
     if parts.netloc or parts.path.strip("/") or parts.fragment:
         raise SimOptionError(f"{_shown(url)}: sim:// takes its options after '?', nothing else ({_USAGE})")
-    values: dict = {} if baud is None else {"baud": baud}
-    time_scale, virtual = 1.0, False
+    values: dict = {}
+    named: dict[str, str] = {}  # field → the option that set it (an option and its alias clash)
     try:
         for name, texts in urllib.parse.parse_qs(parts.query, keep_blank_values=True).items():
             if name not in _OPTIONS:
@@ -162,16 +176,15 @@ def _parse(url: str, baud: int | None = None) -> tuple[SimOptions, float, bool]:
             if len(texts) > 1:
                 raise ValueError(f"option {name!r} is given {len(texts)} times")
             target, parse = _OPTIONS[name]
-            value = parse(name, texts[0])
-            if target == "time_scale":
-                time_scale = value
-            elif target == "virtual":
-                virtual = value
-            else:
-                values[target] = value
-        if virtual and time_scale != 1.0:
+            if target in named:
+                raise ValueError(f"options {named[target]!r} and {name!r} both set {target}")
+            named[target] = name
+            values[target] = parse(name, texts[0])
+        if values.get("virtual_clock") and values.get("time_scale", 1.0) != 1.0:
             raise ValueError("speed has no meaning with clock=virtual (the clock waits for nobody)")
-        return SimOptions(**values), time_scale, virtual
+        if baud is not None:
+            values.setdefault("baud", baud)
+        return SimOptions(**values)
     except ValueError as error:
         raise SimOptionError(f"{error} in {_shown(url)} ({_USAGE})") from None
 
@@ -194,19 +207,19 @@ class Serial(SerialBase):
             raise SerialException("Port is already open.")
         if self._port is None:
             raise SerialException("Port must be configured before it can be used.")
-        options, time_scale, virtual = _parse(self.portstr, baud=self._baudrate)
+        options = parse_sim_url(self.portstr, baud=self._baudrate)
         self._baudrate = options.baud
         try:
             self.model = SimulatedArm(options)
         except Exception as error:  # a bad profile path or a profile that makes no sense
             raise SimOptionError(f"sim:// option profile: {error}") from None
-        self.virtual_clock = VirtualClock() if virtual else None
-        self._arm = RealtimeArm(self.model, time_scale, clock=self.virtual_clock or time.monotonic)
+        self.virtual_clock = VirtualClock() if options.virtual_clock else None
+        self._arm = RealtimeArm(self.model, options.time_scale, clock=self.virtual_clock or time.monotonic)
         self._received.clear()
         self._wake.clear()
         self.is_open = True
 
-    def from_url(self, url: str) -> tuple[SimOptions, float]:
+    def from_url(self, url: str) -> SimOptions:
         return parse_sim_url(url, baud=self._baudrate)
 
     def close(self) -> None:

@@ -19,21 +19,8 @@ import threading
 import time
 from typing import Callable
 
+from ..clock import VirtualClock  # noqa: F401  (the clock=virtual port's clock; imported from here)
 from .model import SimulatedArm
-
-
-class VirtualClock:
-    """Model seconds that pass only when ``advance_to`` is called; never goes back."""
-
-    def __init__(self, start_s: float = 0.0) -> None:
-        self.now_s = float(start_s)
-
-    def __call__(self) -> float:
-        return self.now_s
-
-    def advance_to(self, t_s: float) -> None:
-        if t_s > self.now_s:
-            self.now_s = float(t_s)
 
 
 class RealtimeArm:

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import click
 
 from ..errors import ScriptError
-from ..jobflow import outermost_block_start, resume_line, time_scale_of  # noqa: F401 - re-exported (tests, jog)
+from ..jobflow import outermost_block_start, resume_line  # noqa: F401 - re-exported (tests)
 from ..protocol import describe
 from ..streamer import DEFAULT_LEAD_S
 

@@ -1,0 +1,481 @@
+"""The job engine: when is a streamed job over, how does it stop, and what can be said about it?
+
+Strategy: pure, sans-I/O (after h11 and armctl/jog/session.py) — status frames, write
+completions and ``now`` come in as arguments; the next thing to do comes out.  A host (``armctl
+run``'s runner over a port, the benchmark's harness over a simulated arm, the Python API) loops:
+
+    feed every status frame read: ``receive_status(frame, now)``
+    ask ``next_action(now)``:
+        ``Write(frame, statement)`` → write the frame, then ``wrote(now)``
+        ``Wait(until_s)``           → wait until ``until_s`` or the next status frame (None: the frame)
+        ``Finished(outcome)``       → stop; ``view`` says what ran and where to resume
+
+so the rules that end a job live here once, whoever drives it, and a virtual-time host can jump
+straight to the next event: nothing here changes between status frames except at the times a
+``Wait`` names.
+
+Rules:
+- Streaming: the pacing strategy (the ``Streamer`` by default; the benchmark's baselines answer
+  the same ``receive_status / next_write_time / wrote``) says when the next frame may go.  The
+  streamer also watches every write and frame when another strategy paces, so what is known
+  executed, the resume line and the end of the job are judged the same way for every strategy.
+- Finished means: at rest (the position, joints and PWM unchanged for ``REST_CHECK_S``, no SD
+  program advancing, the estimate over), at the last frame's target, and not paused in two
+  agreeing reports.  The deadline is the queued motion × the slowest arm factor + a slack; an
+  arm still visibly working past it is waited for (up to ``max(OVERRUN_MIN_S, the job)``) and
+  the summary says so; anything else ends "no confirmation" with the likeliest reason.
+- Stopping (``request_stop``: Ctrl-C, a failure the host met): nothing more of the job is
+  written; the abort sequence goes instead — minus a pause toggle to an arm that reports it
+  is paused, which would resume it — then the engine waits for the arm to come to rest and
+  ends INTERRUPTED (or FAILED, with the reason among the messages).
+- Paused means two agreeing pause reports (``agreed_pause``): one corrupted byte must never make
+  armctl toggle the arm.  ``armctl run``'s start-up check uses the same rule.
+- The resume line is the first statement not known finished (an arc's G301 resumes at its G300).
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field, fields
+from enum import Enum, StrEnum
+from operator import attrgetter
+from typing import Iterable, Iterator
+
+from .protocol import (
+    ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
+    RunPositionStatus, StatusFrame,
+)
+
+ABORT_SEQUENCES = {
+    "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
+    "reset-connector": (ResetConnector(),),  # clears the FIFO when it acts (queued frames are lost)
+    "none": (),
+}
+REST_CHECK_S = 0.6  # the arm counts as at rest when it reported the same pose this long
+SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to come to rest
+OVERRUN_MIN_S = 60.0  # the least time waited past the estimate for an arm still working
+TARGET_MM = 0.5  # how close the reported position must be to the last target (0.1 mm resolution)
+TARGET_DEG = 0.2
+# The kinds whose readings say whether the arm is at rest — position, joints 1-3, joints 4-6,
+# pause and PWM — and their fields, read directly (this runs for every status frame).
+_REST_VALUES = {cls.KIND: attrgetter(*(f.name for f in fields(cls)))
+                for cls in (PositionStatus, JointsLowStatus, JointsHighStatus, PauseStatus)}
+_RUN_POSITION_KIND = RunPositionStatus.KIND
+RECENT_FRAMES = 64  # frames written kept for the end of the job (the trailing frames that move nothing)
+
+
+class Outcome(StrEnum):
+    """How a job ended (a str, so the summary and the view print and compare it as text)."""
+
+    RUNNING = "running"
+    FINISHED = "finished"
+    INTERRUPTED = "interrupted"
+    FAILED = "failed"
+    PORT_LOST = "port lost"
+    NO_CONFIRMATION = "no confirmation"
+
+
+@dataclass(frozen=True, slots=True)
+class Write:
+    """Write ``frame`` now, then call ``wrote(now)``; ``statement`` is None for an abort frame."""
+
+    frame: bytes
+    statement: object | None
+
+
+@dataclass(frozen=True, slots=True)
+class Wait:
+    """Nothing to do until ``until_s`` (None: until the next status frame) or the next status frame."""
+
+    until_s: float | None
+
+
+@dataclass(frozen=True, slots=True)
+class Finished:
+    outcome: Outcome
+
+
+@dataclass
+class RunView:
+    """What the run knows, for the panel, the plain progress lines and the summary."""
+
+    total_frames: int
+    estimated_job_s: float
+    lead_s: float
+    capacity: int
+    total_lines: int = 0
+    started_s: float = 0.0
+    now_s: float = 0.0
+    frames_sent: int = 0
+    last_sent: object = None  # the Statement of the last frame written
+    last_done: object = None  # the Statement of the last frame known finished
+    next_statement: object = None  # the first Statement not written
+    queued_frames_bound: int = 0
+    queued_s: float = 0.0
+    remaining_motion_s: float = 0.0
+    position_mm: tuple | None = None
+    status_frames: int = 0
+    arm_done_s: float | None = None  # when the arm came to rest at the end (model time)
+    outcome: str = Outcome.RUNNING  # an Outcome
+    messages: list = field(default_factory=list)
+
+    @property
+    def elapsed_s(self) -> float:
+        return self.now_s - self.started_s
+
+    @property
+    def eta_s(self) -> float:
+        """Seconds until the arm should be done: what is queued, then what is still unsent."""
+        return self.queued_s + self.remaining_motion_s
+
+    first_not_done: object = None  # the Statement to resume at: the first not known finished
+
+    @property
+    def frames_known_done(self) -> int:
+        """Frames the streamer knows finished (its lower bound): the ones written and not queued."""
+        return max(0, self.frames_sent - self.queued_frames_bound)
+
+    def resume_line(self) -> int | None:
+        """The line ``--from-line`` should name to continue after the last line known executed."""
+        return None if self.first_not_done is None else self.first_not_done.line
+
+    @property
+    def arm_time_s(self) -> float | None:
+        """From the first frame to the arm at rest at the end (None unless the job finished)."""
+        return None if self.arm_done_s is None else self.arm_done_s - self.started_s
+
+
+def agreed_pause(reports: Iterable[bool]) -> bool | None:
+    """The pause state when the last two pause reports agree (one corrupted byte must not make
+    armctl toggle the arm); None while they disagree or fewer than two were read."""
+    reports = tuple(reports)[-2:]
+    if len(reports) == 2 and reports[0] == reports[1]:
+        return reports[0]
+    return None
+
+
+class _Phase(Enum):
+    START = "start"
+    STREAMING = "streaming"  # frames of the job still to write
+    DRAINING = "draining"  # every frame written: waiting for the arm to finish
+    ABORTING = "aborting"  # writing the abort sequence
+    SETTLING = "settling"  # waiting for the arm to come to rest after the abort
+    DONE = "done"
+
+
+class Job:
+    """One job: ``statements`` (objects with ``command`` and ``line``) paced by ``pacing``,
+    judged by ``streamer``; see the module docstring."""
+
+    def __init__(self, streamer, statements: Iterable, view: RunView, *, pacing=None,
+                 abort_sequence: tuple = ABORT_SEQUENCES["pause"]) -> None:
+        self.streamer = streamer
+        self.pacing = streamer if pacing is None else pacing
+        self.statements: Iterator = iter(statements)
+        self.view = view
+        self.abort_sequence = tuple(abort_sequence)
+        self.phase = _Phase.START
+        self.stop_requested = False
+        self.failure: str | None = None  # why the job stops, when not by Ctrl-C
+        self.outcome: Outcome | None = None
+        # (position and joints as last reported, since when): the arm is at rest when none of
+        # them changed for REST_CHECK_S — a wrist turning in place changes only joints.
+        self._rest: tuple | None = None
+        self._motion: tuple | None = None  # the same for position and joints alone (no PWM)
+        self._moved_from: tuple | None = None  # the readings when they last changed by more than jitter
+        self._run_position: float | None = None  # the SD program's run position last reported
+        self._active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
+        self._reported: dict = {}
+        self._pause_reports: deque = deque(maxlen=2)  # the last two pause states reported
+        self._recent: deque = deque(maxlen=RECENT_FRAMES)  # the last frames written (SentFrame)
+        self._aborts: deque = deque()  # abort frames still to write
+        self._deadline_s = 0.0
+        self._overran = False
+        self._write: Write | None = None  # the Write asked for and not yet done
+
+    # --- input ------------------------------------------------------------------------------
+
+    def receive_status(self, frame: StatusFrame, now: float) -> None:
+        """Take one status frame read at ``now``."""
+        self.streamer.receive_status(frame, now)
+        if self.pacing is not self.streamer:
+            self.pacing.receive_status(frame, now)
+        view = self.view
+        view.status_frames += 1
+        kind = frame.KIND
+        values_of = _REST_VALUES.get(kind)
+        if values_of is not None:
+            values = values_of(frame)
+            if kind == 4:
+                self._pause_reports.append(frame.paused)
+            if kind == 0:
+                view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
+            reported = self._reported
+            reported[kind] = values
+            rest = (reported.get(0), reported.get(1), reported.get(2), reported.get(4))
+            if self._rest is None or self._rest[0] != rest:
+                self._rest = (rest, now)
+            motion = rest[:3]
+            if self._motion is None or self._motion[0] != motion:
+                self._motion = (motion, now)
+                if self._moved_from is None or _moved_clearly(self._moved_from, motion):
+                    self._moved_from = motion
+                    self._active_s = now
+        elif kind == _RUN_POSITION_KIND:
+            if self._run_position is not None and frame.value != self._run_position:
+                self._active_s = now  # an SD program advancing, even with the arm standing still
+            self._run_position = frame.value
+
+    def wrote(self, now: float) -> None:
+        """The host wrote the frame the last ``Write`` asked for, starting at ``now``."""
+        self._write = None
+        if self.phase is _Phase.ABORTING:
+            self._aborts.popleft()
+            return
+        view = self.view
+        statement = view.next_statement
+        command = statement.command
+        sent = self.streamer.wrote(command, now, tag=statement)
+        if self.pacing is not self.streamer:
+            self.pacing.wrote(command, now, statement)
+        self._recent.append(sent)
+        view.frames_sent += 1
+        view.last_sent = statement
+        view.next_statement = next(self.statements, None)
+        view.remaining_motion_s = max(0.0, view.remaining_motion_s - sent.segment.duration_s)
+        self._refresh(now)
+
+    def request_stop(self, why: str | None = None) -> None:
+        """Stop at the next action: the abort sequence, then wait for rest.  ``why`` (a failure
+        the host met, e.g. a --log that cannot be written) makes the outcome FAILED."""
+        self.failure = self.failure or why
+        self.stop_requested = True
+
+    def port_lost(self, why: str | None = None) -> None:
+        """The port went away: nothing more can be written or read."""
+        if why:
+            self.view.messages.append(why)
+        self._finish(Outcome.PORT_LOST, self.view.now_s)
+
+    # --- output -----------------------------------------------------------------------------
+
+    def next_action(self, now: float) -> Write | Wait | Finished:
+        """What the host does next; asking again without news gives the same answer."""
+        if self.outcome is not None:
+            return Finished(self.outcome)
+        view = self.view
+        if self.phase is _Phase.START:
+            view.started_s = now
+            view.next_statement = next(self.statements, None)
+            self.phase = _Phase.STREAMING
+        if self.stop_requested and self.phase in (_Phase.STREAMING, _Phase.DRAINING):
+            self._begin_abort()
+        self._refresh(now)
+        if self.phase is _Phase.STREAMING:
+            statement = view.next_statement
+            if statement is not None:
+                when = self.pacing.next_write_time(now, statement.command)
+                if when is not None and when <= now:
+                    if self._write is None:
+                        self._write = Write(statement.command.encode(), statement)
+                    return self._write
+                return Wait(when)
+            self.phase = _Phase.DRAINING
+            self._deadline_s = self._settle_deadline(now)
+        if self.phase is _Phase.DRAINING:
+            return self._draining(now)
+        if self.phase is _Phase.ABORTING:
+            if self._aborts:
+                if self._write is None:
+                    self._write = Write(self._aborts[0].encode(), None)
+                return self._write
+            self.phase = _Phase.SETTLING
+            self._deadline_s = self._settle_deadline(now)
+        return self._settling(now)
+
+    @property
+    def streaming(self) -> bool:
+        """Frames of the job are still to be written (the pacing strategy's answers are current)."""
+        return self.phase is _Phase.STREAMING
+
+    # --- the end ----------------------------------------------------------------------------
+
+    def _settle_deadline(self, now: float) -> float:
+        streamer = self.streamer
+        return now + streamer.queued_seconds(now) * streamer.slowest_factor + SETTLE_SLACK_S
+
+    def _draining(self, now: float) -> Wait | Finished:
+        """Finished means: at rest, at the last target, not paused, and the estimate agrees.
+        Anything else ends without claiming the job ran (frames cleared or dropped, a pause)."""
+        view = self.view
+        if self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False:
+            self._confirm_all_done()
+            view.arm_done_s = self._done_at(now)
+            if self._overran:
+                view.messages.append("the arm kept working past the estimate (moving, or running an SD program "
+                                     "whose time armctl cannot know); armctl waited until it stopped")
+            return self._finish(Outcome.FINISHED, now)
+        limit_s = self._deadline_s
+        if now >= self._deadline_s:
+            # Visibly working: the job is still running, whatever the estimate says; once it
+            # stops, there is time to confirm it is where the job ends.
+            active = self._active_s is not None and now - self._active_s < REST_CHECK_S
+            self._overran = self._overran or active
+            settling = self._overran and now - self._active_s < REST_CHECK_S + SETTLE_SLACK_S
+            limit_s = self._deadline_s + self._overrun_limit_s()
+            if not settling or now >= limit_s:
+                view.messages.append(self._why_not_finished())
+                return self._finish(Outcome.NO_CONFIRMATION, now)
+            if self._active_s is not None:
+                limit_s = min(limit_s, self._active_s + REST_CHECK_S + SETTLE_SLACK_S)
+        return Wait(self._next_change_s(now, limit_s))
+
+    def _settling(self, now: float) -> Wait | Finished:
+        """After the abort sequence: until the arm is at rest — paused (the estimate cannot know
+        for how long) or with the job's time over — or the deadline."""
+        outcome = Outcome.FAILED if self.failure else Outcome.INTERRUPTED
+        if now >= self._deadline_s:
+            return self._finish(outcome, now)
+        still = self._rest is not None and now - self._rest[1] >= REST_CHECK_S
+        if still and (self.arm_paused or self.arm_at_rest(now)):
+            if self._at_last_target():
+                self._confirm_all_done()
+            return self._finish(outcome, now)
+        return Wait(self._next_change_s(now, self._deadline_s))
+
+    def _next_change_s(self, now: float, limit_s: float) -> float:
+        """The first time after ``now`` at which, with no new status frame, the answer could
+        change: a rest or activity check maturing, the estimate running out, the deadline
+        (``limit_s``, always after ``now``: a Wait never asks the host to wait for nothing)."""
+        times = [limit_s]
+        if self._rest is not None:
+            times.append(self._rest[1] + REST_CHECK_S)
+        if self._active_s is not None:
+            times.append(self._active_s + REST_CHECK_S)
+        finish = self.streamer.estimated_finish_s()
+        if finish is not None:
+            times.append(finish)
+        return min((t for t in times if t > now), default=limit_s)
+
+    def _finish(self, outcome: Outcome, now: float) -> Finished:
+        view = self.view
+        if outcome in (Outcome.FAILED,) and self.failure:
+            view.messages.append(self.failure)
+        self.outcome = outcome
+        self.phase = _Phase.DONE
+        view.outcome = outcome
+        self._refresh(now)
+        return Finished(outcome)
+
+    def _begin_abort(self) -> None:
+        """Nothing more of the job is written; the abort sequence goes instead.  A pause toggle
+        is not sent to an arm that reports it is paused: it would resume it."""
+        view = self.view
+        view.outcome = Outcome.INTERRUPTED
+        sequence = self.abort_sequence
+        if self.arm_paused and any(isinstance(c, PauseToggle) for c in sequence):
+            view.messages.append("the arm was already paused: no pause toggle sent (it would have resumed it)")
+            sequence = tuple(c for c in sequence if not isinstance(c, PauseToggle))
+        self._aborts = deque(sequence)
+        self._write = None
+        self.phase = _Phase.ABORTING
+
+    def arm_at_rest(self, now: float) -> bool:
+        """The arm reported the same position, joints and PWM for REST_CHECK_S and the estimate
+        says the job is over."""
+        finish = self.streamer.estimated_finish_s()
+        if finish is not None and now < finish:
+            return False
+        if self._active_s is not None and now - self._active_s < REST_CHECK_S:
+            return False  # an SD program still advancing, even with the arm standing still
+        return self._rest is not None and now - self._rest[1] >= REST_CHECK_S
+
+    @property
+    def arm_paused(self) -> bool | None:
+        """The pause state when the last two pause reports agree (``agreed_pause``)."""
+        return agreed_pause(self._pause_reports)
+
+    def _at_last_target(self) -> bool:
+        """The arm reports the end of the last frame written (joints for a joint move)."""
+        if not self._recent:
+            return True
+        segment = self._recent[-1].segment
+        if segment.kind == "joint" or segment.end.xyz_derived:  # what the arm reports, not the profile's FK
+            joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
+            return len(joints) == 6 and max(abs(a - b) for a, b in zip(joints, segment.end.joints)) <= TARGET_DEG
+        position = self._reported.get(0)
+        return position is not None and max(abs(a - b) for a, b in zip(position, segment.end.xyz)) <= TARGET_MM
+
+    def _done_at(self, now: float) -> float:
+        """When the arm finished: the end of its last motion seen, plus the model's time for
+        the frames after that motion, which move nothing (delays, M codes, control frames,
+        PWM-only moves, a move to where the arm already is); never before the last change
+        seen at all (a PWM report), never after now."""
+        if self._motion is None:  # set with _rest: nothing reported yet
+            return now
+        done = self._motion[1]
+        for sent in reversed(self._recent):
+            if _moves_arm(sent.segment):
+                break
+            done += sent.segment.duration_s
+        return min(max(done, self._rest[1], self._active_s or 0.0), now)
+
+    def _overrun_limit_s(self) -> float:
+        """How long past the deadline a visibly working arm is waited for: readings that
+        jitter or are corrupted look like work, so the wait must end (an SD program longer
+        than this ends "no confirmation")."""
+        return max(OVERRUN_MIN_S, self.view.estimated_job_s)
+
+    def _why_not_finished(self) -> str:
+        if self.arm_paused:
+            return "the arm reports it is paused: the rest of the job waits in its buffer"
+        position = self._reported.get(0)
+        if self._rest is not None and position is not None and self._recent and not self._at_last_target():
+            target = ", ".join(f"{v:.1f}" for v in self._recent[-1].segment.end.xyz)
+            here = ", ".join(f"{v:.1f}" for v in position)
+            return (f"the arm stopped at ({here}) but the job's last target is ({target}): "
+                    "frames were lost or cleared (a RESET CONNECTOR, a full buffer?)")
+        return "the arm did not confirm the end of the job in time (status frames missing?)"
+
+    def _confirm_all_done(self) -> None:
+        self.streamer.confirm_all_done()
+
+    # --- the view ---------------------------------------------------------------------------
+
+    def _refresh(self, now: float) -> None:
+        view, streamer = self.view, self.streamer
+        view.now_s = now
+        view.queued_frames_bound = streamer.frames_in_flight_bound
+        view.queued_s = streamer.queued_seconds(now)
+        view.last_done = streamer.last_known_done()
+        view.first_not_done = self._first_not_done()
+
+    def _first_not_done(self):
+        pending = self.streamer.pending
+        if not pending:
+            return self.view.next_statement
+        if isinstance(pending[0].command, ArcEnd) and self.view.last_done is not None:
+            return self.view.last_done  # a G301 cannot be resumed alone: resume at its G300
+        return pending[0].tag
+
+
+def _moves_arm(segment) -> bool:
+    """Whether a frame's motion changes the reported position or joints."""
+    if segment.kind == "still":
+        return False
+    if segment.length > 0:
+        return True
+    return max(abs(a - b) for a, b in zip(segment.start.joints, segment.end.joints)) > 1e-6  # attitude only
+
+
+def _moved_clearly(before: tuple, after: tuple) -> bool:
+    """Position (kind 0) or joints (kinds 1, 2) changed by more than a reading's jitter."""
+    for kind, (old, new) in enumerate(zip(before, after)):
+        if old is None or new is None:
+            if old is not new:
+                return True
+            continue
+        limit = TARGET_MM if kind == 0 else TARGET_DEG
+        if max(abs(a - b) for a, b in zip(old, new)) > limit:
+            return True
+    return False

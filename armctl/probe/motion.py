@@ -1,0 +1,274 @@
+"""The probe's small, announced moves: the speed factor, and the kinematics check.
+
+Strategy: the speed factor is the arm's time over the model's for the same move.  The move
+starts when its frame lands (the arm is idle: ``settle``), and every status frame during it is a
+sample of the real path: the joint (or the distance from the start) it reports is found on the
+model's path at model time τ by bisection, so that sample says ``factor = (t − landing) / τ``.
+A least-squares fit over the samples of a move gives its factor; each move is timed there and
+back, joint and linear.  Resolution: a status step (0.01°, 0.1 mm) against the move's speed,
+plus ``probe.timestamp_uncertainty_s`` (a real port's reads: 0 on a virtual clock); the stated precision covers both and
+the spread of the moves.
+
+Moves (``--no-motion`` runs none): joint 5 by ``JOINT_STEP_DEG`` at ``JOINT_SPEED_DEG_S`` and
+back (the tool tip moves by tool length × sin 5°, under 10 mm); then, only if the profile's
+kinematics explain the reported X/Y/Z (the linear move's attitude comes from them), the tool
+``LINEAR_STEP_MM`` up (or down, if up leaves the workspace) at ``LINEAR_SPEED_MM_MIN`` and back.
+
+Kinematics: at every pose the arm rests in, the profile's forward kinematics of the reported
+joints must give the reported X/Y/Z (in robot coordinates: + origin if the status uses the
+worktable frame) within ``KINEMATICS_TOLERANCE_MM``.  ``kinematics_verified`` needs two distinct
+poses (one could agree by chance): without motion it stays false.
+"""
+
+from __future__ import annotations
+
+import math
+
+from ..kinematics import reach_problem
+from ..motion import PWM_CHANNEL_COUNT, ArmPose, MotionModel
+from ..protocol import JointMove, JointsHighStatus, LinearMove, PositionStatus
+from .plan import LIKELY, SURE, UNSURE, Finding, ProbeStop, Send
+from .steps import DOCUMENTED, READBACK_TIMEOUT_S, agreed_joints, settle, wait_until
+
+JOINT_INDEX = 4  # joint 5: the wrist; the tool tip moves least
+JOINT_STEP_DEG = 5.0
+JOINT_SPEED_DEG_S = 2.0
+LINEAR_STEP_MM = 10.0
+LINEAR_SPEED_MM_MIN = 300.0
+SLOWEST_FACTOR = 4.0  # a move not finished by 4 × the model's time (+ a rotation) is given up
+KINEMATICS_TOLERANCE_MM = 1.0
+ARRIVED_DEG, ARRIVED_MM = 0.02, 0.15
+SAMPLE_MARGIN = 3  # samples within this many status steps of either end are left out
+
+
+def _reported_xyz(probe, since_s: float):
+    got = probe.seen.agreed(PositionStatus.KIND, since_s, lambda f: (f.x_mm, f.y_mm, f.z_mm))
+    return None if got is None else got[1]
+
+
+def _robot_xyz(probe, reported):
+    if probe.known.status_xyz_frame == "robot":
+        return tuple(reported)
+    return tuple(r + o for r, o in zip(reported, probe.known.origin_mm))
+
+
+def record_pose(probe):
+    """``yield from`` this with the arm at rest: its joints and X/Y/Z, read fresh, kept for the
+    kinematics check."""
+    since_s = probe.now_s
+
+    def read():
+        return agreed_joints(probe, since_s) is not None and _reported_xyz(probe, since_s) is not None
+
+    if (yield from wait_until(probe, since_s + READBACK_TIMEOUT_S, read)):
+        probe.known.poses.append((agreed_joints(probe, since_s), _robot_xyz(probe, _reported_xyz(probe, since_s))))
+
+
+def kinematics_at_rest(probe):
+    yield from settle(probe)
+    yield from record_pose(probe)
+    return None
+
+
+def _kinematics_error_mm(probe, joints, robot_xyz) -> float:
+    fk = probe.profile.kinematics.forward(joints)
+    return math.dist(fk[:3], robot_xyz)
+
+
+def kinematics_finding(probe):
+    poses = probe.known.poses
+    default = DOCUMENTED["kinematics_verified"]
+    if probe.known.status_xyz_frame is None or not poses:
+        return Finding("kinematics_verified", default, None, "no pose with joints and X/Y/Z read", UNSURE)
+    errors = [_kinematics_error_mm(probe, joints, xyz) for joints, xyz in poses]
+    worst = max(errors)
+    distinct = len({tuple(round(j, 1) for j in joints) for joints, _ in poses})
+    evidence = (f"forward kinematics of the reported joints vs the reported X/Y/Z at {distinct} distinct pose(s): "
+                f"worst {worst:.2f} mm (tolerance {KINEMATICS_TOLERANCE_MM:g} mm)")
+    if worst > KINEMATICS_TOLERANCE_MM:
+        return Finding("kinematics_verified", default, False, evidence + ": the profile does not describe this arm", SURE)
+    if distinct < 2:
+        return Finding("kinematics_verified", default, False,
+                       evidence + ": they agree, but one pose is not proof (run without --no-motion)", LIKELY)
+    return Finding("kinematics_verified", default, True, evidence + ": they agree", SURE)
+
+
+# --- timed moves ---------------------------------------------------------------------------------
+
+
+def _invert(segment, progress_of, wanted: float) -> float | None:
+    """Model time τ at which ``progress_of(segment.sample(τ))`` reaches ``wanted`` (monotone)."""
+    low, high = 0.0, segment.duration_s
+    if not progress_of(segment.sample(low)) < wanted < progress_of(segment.sample(high)):
+        return None
+    for _ in range(50):
+        middle = (low + high) / 2
+        if progress_of(segment.sample(middle)) < wanted:
+            low = middle
+        else:
+            high = middle
+    return (low + high) / 2
+
+
+def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, arrived, quantum: float):
+    """Send ``command`` (the arm idle at ``start``), follow it to its end; the factor fitted and
+    its resolution, or None.  ``reading(frame)`` → a comparable value; ``progress_of(value)``
+    (also applied to the model's poses through ``reading_of_pose``) → distance from the start."""
+    segment = MotionModel(probe.profile, 1.0).plan(command, start)
+    landed_s = yield Send(command)
+    probe.known.moved = True
+    probe.known.busy_until_s = landed_s + SLOWEST_FACTOR * segment.duration_s
+    limit_s = landed_s + SLOWEST_FACTOR * segment.duration_s + READBACK_TIMEOUT_S
+
+    def done():
+        got = probe.seen.agreed(kind, landed_s, reading)
+        return got is not None and arrived(got[1])
+
+    ok = yield from wait_until(probe, limit_s, done)
+    if not ok:
+        raise ProbeStop(f"the arm did not finish a {segment.duration_s:.1f} s move within "
+                        f"{SLOWEST_FACTOR:g}× that time: stopped probing")
+    arrived_s = probe.seen.agreed(kind, landed_s, reading)[0]
+    probe.known.busy_until_s = probe.now_s
+    total = progress_of(segment.end)
+    samples = []
+    for t, frame in probe.seen.since(kind, landed_s):
+        if t > arrived_s:
+            break
+        progress = progress_of(reading(frame))
+        if not SAMPLE_MARGIN * quantum < progress < total - SAMPLE_MARGIN * quantum:
+            continue
+        tau = _invert(segment, lambda pose: progress_of(pose), progress)
+        if tau is not None and tau > 0:
+            samples.append((t - landed_s, tau))
+    if len(samples) < 3:
+        return None
+    factor = sum(t * tau for t, tau in samples) / sum(tau * tau for _, tau in samples)
+    # one sample's factor error: the status step at the path's slowest sampled speed, and the clock
+    # the fit's error bound: half a status step at the mean speed, and the clock, over the longest τ
+    slope = total / segment.duration_s
+    resolution = (quantum / 2 / slope + probe.timestamp_uncertainty_s) / max(tau for _, tau in samples)
+    return factor, resolution, len(samples)
+
+
+def _joint_progress(start_joints):
+    def progress(value):
+        joints = value.joints if isinstance(value, ArmPose) else value
+        return abs(joints[JOINT_INDEX] - start_joints[JOINT_INDEX])
+    return progress
+
+
+def _xyz_progress(start_xyz):
+    def progress(value):
+        xyz = value.robot_cartesian[:3] if isinstance(value, ArmPose) else value
+        return math.dist(xyz, start_xyz)
+    return progress
+
+
+def _pose(probe, joints) -> ArmPose:
+    known = probe.known
+    return ArmPose(probe.profile.kinematics, joints=joints, pwm_us=(float(known.pwm_us),) * PWM_CHANNEL_COUNT,
+                   origin_mm=known.origin_mm)
+
+
+def _joint_moves(probe):
+    known = probe.known
+    low, high = probe.profile.joint_limits_deg[JOINT_INDEX]
+    start = tuple(known.joints_deg)
+    step = JOINT_STEP_DEG if start[JOINT_INDEX] + JOINT_STEP_DEG <= high else -JOINT_STEP_DEG
+    if not low <= start[JOINT_INDEX] + step <= high:
+        return []  # no room for 5° either way: speed_factor then rests on the linear move alone
+    target = list(start)
+    target[JOINT_INDEX] += step
+    results = []
+    for there, back in ((start, tuple(target)), (tuple(target), start)):
+        command = JointMove(*back, pwm_us=known.pwm_us, speed_deg_s=JOINT_SPEED_DEG_S)
+
+        def reading(frame):  # kind 2 carries joints 4…6: placed where JOINT_INDEX finds them
+            return (0.0, 0.0, 0.0, frame.j4_deg, frame.j5_deg, frame.j6_deg)
+
+        def arrived(value, back=back):
+            return abs(value[JOINT_INDEX] - back[JOINT_INDEX]) <= ARRIVED_DEG
+
+        result = yield from timed_move(probe, command, _pose(probe, there), JointsHighStatus.KIND, reading,
+                                       _joint_progress(there), arrived, 0.01)
+        yield from record_pose(probe)
+        results.append(result)
+    return results
+
+
+def _linear_moves(probe):
+    known = probe.known
+    joints = tuple(known.joints_deg)
+    fk = probe.profile.kinematics.forward(joints)
+    robot_start = tuple(fk[:3])
+    attitude = tuple(fk[3:6])
+    for step in (LINEAR_STEP_MM, -LINEAR_STEP_MM):  # up if the profile's workspace and reach allow, else down
+        robot_target = (robot_start[0], robot_start[1], robot_start[2] + step)
+        target_pose = (*(t - o for t, o in zip(robot_target, known.origin_mm)), *attitude)
+        if reach_problem(target_pose, probe.profile, known.origin_mm, near=joints) is None:
+            break
+    else:
+        return []
+    results = []
+    pose = _pose(probe, joints)
+    for there, goal in ((robot_start, robot_target), (robot_target, robot_start)):
+        worktable = tuple(g - o for g, o in zip(goal, known.origin_mm))
+        command = LinearMove(*worktable, *attitude, pwm_us=known.pwm_us, speed_mm_min=LINEAR_SPEED_MM_MIN)
+
+        def reading(frame):
+            return _robot_xyz(probe, (frame.x_mm, frame.y_mm, frame.z_mm))
+
+        def arrived(value, goal=goal):
+            return math.dist(value, goal) <= ARRIVED_MM
+
+        result = yield from timed_move(probe, command, pose, PositionStatus.KIND, reading, _xyz_progress(there),
+                                       arrived, 0.1)
+        pose = MotionModel(probe.profile, 1.0).plan(command, pose).end
+        yield from record_pose(probe)
+        results.append(result)
+    return results
+
+
+def speed_factor(probe):
+    yield from settle(probe)
+    default = DOCUMENTED["speed_factor"]
+    joint = yield from _joint_moves(probe)
+    linear = []
+    poses = probe.known.poses
+    if poses and _kinematics_error_mm(probe, *poses[0]) <= KINEMATICS_TOLERANCE_MM and probe.known.status_xyz_frame:
+        linear = yield from _linear_moves(probe)
+        linear_note = "" if linear else f"; no linear move: {LINEAR_STEP_MM:g} mm up or down leaves the profile's reach"
+    else:
+        linear_note = "; no linear move: the profile's kinematics do not explain the reported X/Y/Z, so the tool's attitude is unknown"
+    measured = [r for r in joint + linear if r is not None]
+    if not measured:
+        return Finding("speed_factor", default, None, "too few status samples during the moves", UNSURE)
+    factors = [f for f, _, _ in measured]
+    value = sum(factors) / len(factors)
+    precision = max(max(r for _, r, _ in measured), (max(factors) - min(factors)) / 2)
+    precision = math.ceil(round(max(precision, 0.005) * 100, 6)) / 100  # up to the next 0.01
+    details = {"joint": [round(f, 4) for f, _, _ in filter(None, joint)],
+               "linear": [round(f, 4) for f, _, _ in filter(None, linear)], "precision": precision}
+    evidence = (f"joint 5 ±{JOINT_STEP_DEG:g}° at {JOINT_SPEED_DEG_S:g}°/s: {details['joint']}"
+                + (f"; tool ±{LINEAR_STEP_MM:g} mm at {LINEAR_SPEED_MM_MIN:g} mm/min: {details['linear']}" if linear else "")
+                + f" (arm time ÷ model time, fitted over {sum(n for _, _, n in measured)} status samples); ±{precision:g}"
+                + linear_note)
+    return Finding("speed_factor", default, round(value, 3), evidence, SURE, details)
+
+
+def return_to_start(probe):
+    """After an interrupted move: a slow joint move back to the joints the arm started at."""
+    known = probe.known
+    joints = agreed_joints(probe, probe.now_s - 0.6)
+    if joints is not None and max(abs(a - b) for a, b in zip(joints, known.joints_deg)) <= ARRIVED_DEG:
+        return
+    landed_s = yield Send(JointMove(*known.joints_deg, pwm_us=known.pwm_us, speed_deg_s=JOINT_SPEED_DEG_S))
+
+    def back():
+        now = agreed_joints(probe, landed_s)
+        return now is not None and max(abs(a - b) for a, b in zip(now, known.joints_deg)) <= ARRIVED_DEG
+
+    ok = yield from wait_until(probe, landed_s + 30.0, back)
+    probe.notes.append("pose put back (joints as found)" if ok else "not restored: the arm did not report its start joints")
+

@@ -1,0 +1,256 @@
+"""The probe's engine: steps as generators, driven by status frames and ``now``; pure.
+
+Strategy (sans-I/O, like armctl/jog/session.py): each measurement is a generator that yields
+what it needs — ``Send(command)`` (a frame to write) or ``Wait(until_s, ready)`` (feed me status
+frames until ``ready()`` holds or the time comes) — and returns a ``Finding``.  ``Probe`` runs
+the steps in order and turns their wishes into ``Write``/``Wait`` actions for a host: it paces
+writes to the line rate (never more than one frame ahead of the wire, so the host knows when
+each lands) and hands each step the landing time of its frame.  ``Seen`` keeps every status
+frame with its time.  ``interrupt()`` abandons the running step for the restore step, which
+is also the last step of a normal run: one mechanism puts back what the probe changed.
+
+No clock, no port, no threads: a host (armctl/probe/host.py) feeds frames and time; the tests
+feed a simulator in virtual time.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from dataclasses import dataclass, field
+from typing import Callable, Iterator
+
+from ..line import STATUS_SIZE
+from ..protocol import Command, PauseStatus, StatusFrame, byte_seconds, frame_seconds
+
+SURE, LIKELY, UNSURE, NOT_MEASURED = "sure", "likely", "unsure", "not measured"
+# Readings from the arm are trusted once two frames of a kind in a row agree: one status byte
+# flipped on the line (H9: no checksum) cannot then make the probe claim a value.
+AGREEING_FRAMES = 2
+
+
+class ProbeStop(Exception):
+    """A fact that makes the rest of the probe meaningless (a wrong encoding, no status): the
+    probe restores what it changed and stops with this message (exit 1)."""
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One measured setting (or fact): what the document says, what the arm showed, why, how sure."""
+
+    name: str
+    default: object
+    value: object  # None when not measured (or too unsure to state)
+    evidence: str
+    confidence: str = SURE
+    details: dict = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Send:
+    """A step's wish: write this frame (the step receives its landing time)."""
+
+    command: Command
+    raw: bytes | None = None  # the bytes, when they are not ``command.encode()`` (a byte-order test)
+
+
+@dataclass(frozen=True)
+class Wait:
+    """A step's wish: status frames until ``ready()`` holds or ``until_s``."""
+
+    until_s: float
+    ready: Callable[[], bool] | None = None
+
+
+@dataclass(frozen=True)
+class Write:
+    """For the host: write ``frame`` now."""
+
+    frame: bytes
+    command: Command
+
+
+class Seen:
+    """Every status frame read, with the time its last byte arrived (less its transit, so the
+    time the arm built it)."""
+
+    def __init__(self, transit_s: float) -> None:
+        self.transit_s = transit_s
+        self.frames: list[tuple[float, StatusFrame]] = []
+        self.by_kind: dict[int, list[tuple[float, StatusFrame]]] = defaultdict(list)
+
+    def feed(self, frame: StatusFrame, now_s: float) -> None:
+        entry = (now_s - self.transit_s, frame)
+        self.frames.append(entry)
+        self.by_kind[frame.KIND].append(entry)
+
+    def since(self, kind: int, since_s: float) -> list[tuple[float, StatusFrame]]:
+        entries = self.by_kind.get(kind, [])
+        low, high = 0, len(entries)
+        while low < high:  # the first entry built at or after since_s
+            middle = (low + high) // 2
+            if entries[middle][0] < since_s:
+                low = middle + 1
+            else:
+                high = middle
+        return entries[low:]
+
+    def agreed_runs(self, kind: int, since_s: float, key=lambda f: f) -> list[tuple[float, object]]:
+        """(start time, value) of every run of ``AGREEING_FRAMES``+ equal readings since ``since_s``."""
+        runs, value, count, start_s = [], None, 0, None
+        for t, frame in self.since(kind, since_s):
+            current = key(frame)
+            if count and current == value:
+                count += 1
+            else:
+                value, count, start_s = current, 1, t
+            if count == AGREEING_FRAMES:
+                runs.append((start_s, value))
+        return runs
+
+    def agreed(self, kind: int, since_s: float = float("-inf"), key=lambda f: f,
+               until_s: float = float("inf")) -> tuple[float, object] | None:
+        """The latest value (``key(frame)``) that ``AGREEING_FRAMES`` consecutive frames of
+        ``kind`` built from ``since_s`` to ``until_s`` report, with the time its run began; or None."""
+        entries = self.since(kind, since_s)
+        run, value, start_s = 0, None, None
+        best = None
+        for t, frame in entries:
+            if t > until_s:
+                break
+            current = key(frame)
+            if run and current == value:
+                run += 1
+            else:
+                run, value, start_s = 1, current, t
+            if run >= AGREEING_FRAMES:
+                best = (start_s, value)
+        return best
+
+
+def pwm_of(frame: PauseStatus) -> int:
+    return frame.pwm_us
+
+
+def paused_of(frame: PauseStatus) -> bool:
+    return frame.paused
+
+
+def xyz_of(frame) -> tuple[float, float, float]:
+    return (frame.x_mm, frame.y_mm, frame.z_mm)
+
+
+class Probe:
+    """Runs ``steps`` (callables taking the probe, returning a step generator) then ``restore``."""
+
+    def __init__(self, steps, restore, baud: int, start_s: float) -> None:
+        self.baud = baud
+        self.frame_s = frame_seconds(baud)
+        self.seen = Seen(STATUS_SIZE * byte_seconds(baud))
+        self.start_s = self.now_s = start_s
+        self.line_free_s = start_s  # when the last frame written has fully landed
+        self.findings: list[Finding] = []
+        self.notes: list[str] = []  # what the probe did that a user should know (restored …)
+        self.sent: list[tuple[float, Command]] = []  # landing time, command
+        self.stopped: ProbeStop | None = None
+        self.interrupted = False
+        self.done = False
+        self.current = ""  # the step running, for a progress display
+        self._steps = list(steps)
+        self._restore = restore
+        self._restoring = False
+        self._generator: Iterator | None = None
+        self._pending: Send | Wait | None = None
+        self._reply: float | None = None
+
+    # --- what a host calls --------------------------------------------------------------------
+
+    def feed(self, frame: StatusFrame, now_s: float) -> None:
+        self.now_s = max(self.now_s, now_s)
+        self.seen.feed(frame, now_s)
+
+    def interrupt(self) -> None:
+        """Ctrl-C: abandon the running step; restore what was changed, then stop."""
+        if not self._restoring:
+            self.interrupted = True
+            self._start_restore()
+
+    def next_action(self, now_s: float) -> Write | Wait | None:
+        """What to do now: write a frame, wait (feeding frames) or nothing more (None)."""
+        self.now_s = max(self.now_s, now_s)
+        while not self.done:
+            pending = self._pending
+            if pending is None:
+                pending = self._pending = self._advance()
+                if pending is None:
+                    continue
+            if isinstance(pending, Wait):
+                if (pending.ready is not None and pending.ready()) or self.now_s >= pending.until_s:
+                    self._pending, self._reply = None, self.now_s
+                    continue
+                return pending
+            # Send: at most one frame ahead of the wire, so its landing time is known
+            if self.line_free_s - self.now_s > self.frame_s * 1.001:
+                return Wait(self.line_free_s - self.frame_s)
+            self.line_free_s = max(self.now_s, self.line_free_s) + self.frame_s
+            self.sent.append((self.line_free_s, pending.command))
+            self._pending, self._reply = None, self.line_free_s
+            return Write(pending.raw or pending.command.encode(), pending.command)
+        return None
+
+    @property
+    def arm_time_s(self) -> float:
+        return self.now_s - self.start_s
+
+    # --- running the steps --------------------------------------------------------------------
+
+    def _advance(self) -> Send | Wait | None:
+        if self._generator is None:
+            if self._steps:
+                name, make = self._steps.pop(0)
+                self.current = name
+                made = make(self)
+                if not hasattr(made, "send"):  # a step that needs no frames: its result at once
+                    self._record(made)
+                    return None
+                self._generator, self._reply = made, None
+            elif not self._restoring:
+                self._start_restore()
+            else:
+                self.done = True
+                return None
+        try:
+            if self._reply is None:
+                return next(self._generator)
+            reply, self._reply = self._reply, None
+            return self._generator.send(reply)
+        except StopIteration as end:
+            self._generator = None
+            self._record(end.value)
+            return None
+        except ProbeStop as stop:
+            if self._restoring:  # restoring failed: say so, nothing more to try
+                self.notes.append(f"not restored: {stop}")
+                self.done = True
+                return None
+            self.stopped = stop
+            self._start_restore()
+            return None
+
+    def _record(self, result) -> None:
+        if isinstance(result, Finding):
+            self.findings.append(result)
+        elif result:
+            self.findings.extend(result)
+
+    def _start_restore(self) -> None:
+        self._steps.clear()
+        self._restoring = True
+        self._pending, self._reply = None, None
+        self.current = "restoring"
+        self._generator = self._restore(self)
+
+    def finding(self, name: str) -> Finding | None:
+        for found in self.findings:
+            if found.name == name:
+                return found
+        return None

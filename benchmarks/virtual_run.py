@@ -1,0 +1,130 @@
+"""Issue 11's virtual-time row: the wall time of a 20-minute job on ``sim://?clock=virtual``,
+and its ratio to the bare simulator doing the same 20 minutes with no host.
+
+  run        ``armctl run JOB --port sim://?clock=virtual`` in this process (ui/run_job.run_job:
+             lint, read the arm, estimate, stream through the job engine, wait for the end),
+             JOB = 12 moves of 100 mm at F60 (about 1,200 s of arm time, 40,000 status frames);
+             target <= 0.5 s of wall time.
+  baseline   the same simulated arm, fed the same frames at the same model times (recorded
+             from the run), advanced from status burst to status burst to the run's last model
+             time, each burst decoded (StatusReader): what any host pays at least.  The ratio
+             run ÷ baseline is the host's and the engine's own cost, and survives load.
+
+This machine's speed drifts within minutes, so the figures are medians of pairs taken back to
+back in alternating order; only a ratio from one run counts.
+
+    .venv/bin/python benchmarks/virtual_run.py             # 5 pairs
+    .venv/bin/python benchmarks/virtual_run.py --pairs 9
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import statistics
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+URL = "sim://?clock=virtual"
+TARGET_WALL_S = 0.5
+MOVES = 12
+FEED_MM_MIN = 60.0
+LENGTH_MM = 100.0
+
+
+def write_job(path: Path) -> None:
+    lines = ["G90", "G1 X250 Y-50 Z150 A180 B0 C0 F3000 S1000"]
+    lines += [f"G1 Y{50 if k % 2 == 0 else -50} F{FEED_MM_MIN:g}" for k in range(MOVES)]
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+
+
+def one_run(script_path: Path) -> tuple[float, list[tuple[float, bytes]], float, str]:
+    """Wall seconds of ``armctl run`` in this process; the frames written with their model
+    times; the last model time; the summary printed."""
+    from armctl.cli import _read_script
+    from armctl.link import connect as real_connect
+    from armctl.ui.run_job import JobOptions, run_job
+
+    written: list[tuple[float, bytes]] = []
+    links = []
+
+    def connect(port, baud, profile=None):
+        link, baud = real_connect(port, baud, announce=lambda text: None, profile=profile)
+        write, clock = link.write, link.clock
+
+        def recording(frame: bytes) -> None:
+            written.append((clock.now(), frame))
+            write(frame)
+
+        link.write = recording
+        links.append(link)
+        return link, baud
+
+    options = JobOptions(str(script_path), URL, None, 2.0, 1, False, None, False, "pause", None, 3.0)
+    snapshot = _read_script(str(script_path))
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(io.StringIO()):
+        start = time.perf_counter()
+        code = run_job(options, snapshot, connect)
+        wall_s = time.perf_counter() - start
+    if code != 0:
+        raise SystemExit(f"the run failed (exit {code}):\n{out.getvalue()}")
+    return wall_s, written, links[0].clock.now(), out.getvalue()
+
+
+def baseline(written: list[tuple[float, bytes]], end_s: float) -> float:
+    """Wall seconds of the bare simulator replaying ``written`` and advancing to ``end_s``."""
+    from armctl.protocol import StatusReader
+    from armctl.sim.model import SimulatedArm
+    from armctl.sim.protocol_sim import parse_sim_url
+
+    options, _ = parse_sim_url(URL)
+    arm, reader = SimulatedArm(options), StatusReader()
+    writes = list(written)
+    start = time.perf_counter()
+    now, k, frames = 0.0, 0, 0
+    while now < end_s:
+        due_s = min(arm.next_output_time(), end_s)
+        while k < len(writes) and writes[k][0] <= due_s:
+            arm.write(writes[k][1], writes[k][0])
+            k += 1
+        now = due_s
+        frames += len(reader.feed(arm.advance(now)))
+    return time.perf_counter() - start
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--pairs", type=int, default=5)
+    args = parser.parse_args()
+    with tempfile.TemporaryDirectory() as tmp:
+        script = Path(tmp) / "twenty_minutes.txt"
+        write_job(script)
+        one_run(script)  # warm-up: imports, the grammar cache
+        runs, bases, ratios = [], [], []
+        for pair in range(args.pairs):
+            if pair % 2 == 0:
+                wall_s, written, end_s, summary = one_run(script)
+                base_s = baseline(written, end_s)
+            else:
+                _, written, end_s, _ = one_run(script)  # the frames to replay, untimed
+                base_s = baseline(written, end_s)
+                wall_s, _, _, summary = one_run(script)
+            runs.append(wall_s)
+            bases.append(base_s)
+            ratios.append(wall_s / base_s)
+    arm_time = next((line for line in summary.splitlines() if line.startswith("arm time:")), "arm time: ?")
+    print(f"job: {MOVES} moves of {LENGTH_MM:g} mm at F{FEED_MM_MIN:g}, {arm_time}")
+    print(f"model time simulated: {end_s:.1f} s")
+    print(f"run wall time:      median {statistics.median(runs):.3f} s (target <= {TARGET_WALL_S} s), "
+          f"runs {', '.join(f'{r:.3f}' for r in runs)}")
+    print(f"baseline wall time: median {statistics.median(bases):.3f} s (the bare simulator, same frames)")
+    print(f"ratio run / baseline: median {statistics.median(ratios):.2f}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
