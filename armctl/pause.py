@@ -3,11 +3,14 @@
 Strategy: pure.  The toggle flips the arm between running and paused, so sending it to reach
 a state is only right when the arm is known to be in the other one — and one corrupted status
 byte must not decide that: the state counts as known only when the last two pause reports
-agree (``PauseState``, which also remembers a toggle sent that has not acted yet).  ``pause_toggle_needed`` is the one decision; ``armctl run``'s start
+agree (``job.agreed_pause``, the engine's; ``PauseState`` also remembers a toggle sent that has
+not acted yet).  ``pause_toggle_needed`` is the one decision; ``armctl run``'s start
 (resume an arm that reports it is paused) and ``armctl.Arm``'s ``pause``/``resume`` ask it.
 """
 
 from __future__ import annotations
+
+from .job import agreed_pause
 
 
 class PauseState:
@@ -31,12 +34,9 @@ class PauseState:
 
     @property
     def agreed(self) -> bool | None:
-        """The pause state when the last two reports agree on it; None while they disagree or
-        fewer than two came."""
-        pair = self._last_two
-        if len(pair) == 2 and pair[0] == pair[1] and pair[0] is not None:
-            return bool(pair[0])
-        return None
+        """The pause state when the last two reports agree on it (the job engine's rule,
+        ``job.agreed_pause``); None while they disagree or fewer than two came."""
+        return agreed_pause(self._last_two)
 
     @property
     def known(self) -> bool | None:
