@@ -1,12 +1,43 @@
 """armctl — drive a 6-axis desktop robot arm over its serial connector.
 
 Importing armctl is cheap on purpose: heavy modules (lark, rich, serial) are imported by the
-commands that need them, so ``armctl --help`` stays fast.
+commands that need them, so ``armctl --help`` stays fast.  The Python API (docs/api.md) —
+``from armctl import Arm`` — is imported on first use of one of its names (``__getattr__``).
 """
 
 import sys
 
 __version__ = "0.1.0"
+
+# name → the module that defines it, imported when the name is first used
+_API = {
+    "Arm": "armctl.api", "ArmStatus": "armctl.api", "ArmTimeout": "armctl.api", "Progress": "armctl.api",
+    "RunResult": "armctl.api", "JobFailed": "armctl.jobflow",
+    "ArmctlError": "armctl.errors", "ConfigError": "armctl.errors", "PortError": "armctl.errors",
+    "ProfileError": "armctl.errors", "ScriptError": "armctl.errors",
+}
+__all__ = sorted(_API)
+
+TYPE_CHECKING = False  # true for type checkers; not typing's, whose import costs milliseconds here
+if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ imports them
+    from .api import Arm, ArmStatus, ArmTimeout, Progress, RunResult
+    from .errors import ArmctlError, ConfigError, PortError, ProfileError, ScriptError
+    from .jobflow import JobFailed
+
+
+def __getattr__(name: str):
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module 'armctl' has no attribute {name!r}")
+    import importlib
+
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value  # once: the next lookup does not come here
+    return value
+
+
+def __dir__() -> list:
+    return sorted(set(globals()) | set(_API))
 
 
 def _add_sim_scheme(serial_module) -> None:

@@ -20,10 +20,12 @@ class FrameError(ArmctlError, ValueError):
 
 
 class ScriptError(ArmctlError):
-    """A motion script has one or more errors; ``diagnostics`` holds them all."""
+    """A motion script has one or more errors; ``diagnostics`` holds them (all of them, or the
+    first ``errors`` when a check stops early) and nothing was sent to the arm."""
 
-    def __init__(self, diagnostics):
+    def __init__(self, diagnostics, errors: int | None = None):
         self.diagnostics = list(diagnostics)
+        self.errors = len(self.diagnostics) if errors is None else errors
         first = self.diagnostics[0] if self.diagnostics else None
         super().__init__(str(first) if first else "script error")
 

@@ -81,10 +81,11 @@ def resolve_port(option: str | None, environ=os.environ, config: dict | None = N
     return PortChoice(SIMULATOR_URL, "default")
 
 
-def connect(port: str | None, baud: int | None, announce: Callable[[str], None] = print, profile=None,
+def connect(port: str | None, baud: int | None, announce: Callable[[str], None] | None = None, profile=None,
             **link_options):
     """What every port-using command does first: resolve the port (``--port``, ARMCTL_PORT,
-    armctl.toml, the simulator), announce the simulator, open it with a reader thread whose
+    armctl.toml, the simulator), tell ``announce`` (a command's stderr note; None for a library
+    caller, which prints nothing) when it is the simulator, open it with a reader thread whose
     state judges jumps against the arm's top speeds (H9). Returns the link and the baud rate."""
     from .profile import load_config, load_profile
 
@@ -93,7 +94,7 @@ def connect(port: str | None, baud: int | None, announce: Callable[[str], None] 
     if choice.is_simulator:
         check_sim_url(choice)
     banner = choice.banner()
-    if banner:
+    if banner and announce is not None:
         announce(banner)
     baud = baud or config_baud(config.values, config.path_of("baud"))
     profile = profile or load_profile()

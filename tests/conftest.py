@@ -161,3 +161,26 @@ def ctrl_c():
             timer.cancel()
             timer.join()
         signal.signal(signal.SIGINT, previous)
+
+
+@pytest.fixture
+def sim_pty():
+    """``armctl sim --pty`` started as another process, in real time: yields its device path;
+    afterwards Ctrl-C stops it, which must exit 130 (README: 130 Ctrl-C)."""
+    import subprocess
+    import sys
+
+    simulator = subprocess.Popen(
+        [sys.executable, "-m", "armctl", "sim", "--pty"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
+    try:
+        ready = simulator.stdout.readline()
+        path = re.fullmatch(r"simulated arm on (/dev/pts/\d+) \(Ctrl-C to stop\)\n", ready)
+        assert path, ready
+        yield path.group(1)
+        simulator.send_signal(signal.SIGINT)
+        assert simulator.wait(timeout=5) == 130
+    finally:
+        simulator.kill()
+        simulator.communicate()

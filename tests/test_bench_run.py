@@ -2,7 +2,7 @@
 the same arm time.
 
 The harness (armctl/bench/harness.py) is started where ``run`` starts: ``run`` first reads the
-arm (every status kind, then two more rotations: ui/run_job.read_arm) and plans from the pose
+arm (every status kind, then two more rotations: jobflow.read_arm) and plans from the pose
 it reported, so the harness's arm is read the same way and the job compiled from the same
 reported state.  Both then drive armctl/job.py against the same deterministic simulated arm, in
 virtual time, so the frames go at the same model times and the engine sees the same status
@@ -31,12 +31,12 @@ from armctl.script import compile_text
 from armctl.sim.model import SimulatedArm
 from armctl.sim.protocol_sim import parse_sim_url
 from armctl.streamer import DEFAULT_LEAD_S
-from armctl.ui.run_job import start_from_state
+from armctl.jobflow import start_from_state
 
 URL = "sim://?clock=virtual"
 SCRIPTS = Path(__file__).resolve().parent.parent / "scripts"
 ARM_TIME = re.compile(r"^arm time: ([\d.]+) s", re.M)
-READ_ROTATIONS = 2  # ui/run_job.read_arm: all nine kinds, then two more rotations
+READ_ROTATIONS = 2  # jobflow.read_arm: all nine kinds, then two more rotations
 
 
 def bench_arm_time_s(text: str) -> float:

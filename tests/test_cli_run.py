@@ -367,22 +367,9 @@ def test_a_port_lost_mid_job_exits_1_with_the_summary(serve, args):
 
 
 @pytest.mark.realtime
-def test_a_small_job_through_armctl_sim_pty_in_another_process():
-    simulator = subprocess.Popen(
-        [*ARMCTL, "sim", "--pty"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
-    )
-    try:
-        ready = simulator.stdout.readline()
-        path = re.fullmatch(r"simulated arm on (/dev/pts/\d+) \(Ctrl-C to stop\)\n", ready)
-        assert path, ready
-        result = run(SHORT, "--port", path.group(1), "--no-live")
-        assert result.exit_code == 0, result.output
-        assert "frames: 5 of 5 sent" in result.stdout
-        assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
-        assert result.stderr == ""  # a real device path: no simulator banner
-        simulator.send_signal(signal.SIGINT)
-        assert simulator.wait(timeout=5) == 130  # README: 130 Ctrl-C
-    finally:
-        simulator.kill()
-        simulator.communicate()
+def test_a_small_job_through_armctl_sim_pty_in_another_process(sim_pty):
+    result = run(SHORT, "--port", sim_pty, "--no-live")
+    assert result.exit_code == 0, result.output
+    assert "frames: 5 of 5 sent" in result.stdout
+    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stderr == ""  # a real device path: no simulator banner

@@ -165,9 +165,10 @@ class _MotionClock:
 
 
 def lint_lines(lines: Iterable[str], file: str, profile, selection: Optional[Selection] = None, *,
-               max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS) -> FileReport:
+               max_diagnostics: int = DEFAULT_MAX_DIAGNOSTICS, initial=None) -> FileReport:
     """Lint a script given as lines (an iterator is read once, lazily) against ``profile``;
-    ``selection`` defaults to every code."""
+    ``selection`` defaults to every code.  ``initial`` (a ``script.InitialState``, e.g. from the
+    arm's report): what the compiler knows before line 1; default nothing, as for a file."""
     selection = Selection() if selection is None else selection
     report = FileReport(file)
     collector = _Collector(report, selection, max_diagnostics, profile)
@@ -177,7 +178,7 @@ def lint_lines(lines: Iterable[str], file: str, profile, selection: Optional[Sel
     scanner = LineScanner(file, lambda: compilation.state.parameters, collector.add)
     # skip_repeats: a repeat pass that repeats the last one exactly has nothing new to say, so
     # lint's cost follows the text, not the repeat counts (see armctl/script/compiler.py)
-    compilation = compile_lines(scanner.watch(lines), file, max_diagnostics=max_diagnostics, skip_repeats=True)
+    compilation = compile_lines(scanner.watch(lines), file, initial, max_diagnostics=max_diagnostics, skip_repeats=True)
     arm = ArmTracker(profile)
     clock = _MotionClock(profile, compilation)
     for statement in compilation:

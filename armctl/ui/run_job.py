@@ -20,8 +20,6 @@ the abort (there is nothing to send it through).
 
 from __future__ import annotations
 
-import json
-import re
 import signal
 import sys
 import threading
@@ -31,9 +29,11 @@ from dataclasses import dataclass
 
 import click
 
-from ..errors import ArmctlError, PortError
-from ..protocol import PauseToggle, describe
-from ..streamer import DEFAULT_LEAD_S, Streamer
+from ..errors import ArmctlError, ScriptError
+from ..jobflow import JobFailed
+from ..jobflow import BlockIndex, outermost_block_start, resume_line  # noqa: F401 - outermost_block_start re-exported (tests)
+from ..protocol import describe
+from ..streamer import DEFAULT_LEAD_S
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_INTERRUPTED = 0, 1, 130
 LIVE_REFRESH_S = 0.1
@@ -41,10 +41,6 @@ PLAIN_PROGRESS_S = 2.0
 # The least terminal the panel's map is drawn in: its ~24 rows with the map, a few lines of
 # notes above; the map's rows are 60 columns with their label.
 MAP_MIN_WIDTH, MAP_MIN_HEIGHT = 80, 30
-
-
-class JobFailed(ArmctlError):
-    """The job could not start or did not finish; nothing more to add than the message."""
 
 
 @dataclass
@@ -68,11 +64,10 @@ def check_script(script, profile):
     """The same checks as ``armctl lint`` over the whole script (a ``ScriptSnapshot``) before
     anything is sent: any error prints every finding and exits 1; warnings are shown and the
     job goes on."""
-    from ..lint.engine import lint_lines
-
     from ..output import quiet
+    from ..jobflow import lint_script
 
-    report = lint_lines(script.lines(), script.name, profile)
+    report = lint_script(script, profile)
     shown = [d for d in report.diagnostics if d.severity == "error"] if quiet() else report.diagnostics  # -q: no warnings
     _refuse_on_errors(shown, report.errors)
     return report
@@ -81,11 +76,11 @@ def check_script(script, profile):
 def check_from_line(script, from_line: int) -> None:
     """A resume line the compiler cannot start at (inside an arc, inside a repeat block, past
     the end) is an error like any other: nothing is sent."""
-    if from_line <= 1:
-        return
-    check = script.compile(from_line=from_line)
-    check.finish()
-    _refuse_on_errors([d for d in check.diagnostics if d.severity == "error"], check.error_count)
+    from ..jobflow import from_line_errors
+
+    error = from_line_errors(script, from_line)
+    if error is not None:
+        _refuse_on_errors(error.diagnostics, error.errors)
 
 
 class ScriptRefused(SystemExit):
@@ -107,21 +102,12 @@ def _refuse_on_errors(diagnostics, errors: int) -> None:
 def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
     """The estimate of the job in ``script`` (a ``ScriptSnapshot``); a job whose motion time
     passes ``MAX_JOB_MOTION_S`` is refused (E012 at the line where it does; exit 1)."""
-    from ..estimate import JobEstimator, motion_time_overrun
+    from .. import jobflow
 
-    estimator = JobEstimator(model, start, lead_s, baud)
-    compilation = script.compile(initial=initial, from_line=from_line)
-    for statement in compilation:
-        estimator.add(statement.command)
-        overrun = motion_time_overrun(statement, estimator.result.motion_s)
-        if overrun is not None:
-            _refuse_on_errors([overrun], 1)
-    # This pass is the stream's twin (same snapshot, same initial state, same from_line): if it
-    # compiled cleanly, so will the stream, frame for frame; the arm's reported state can make
-    # a line fail that passed the check (a G91 offset from the real pose), and then nothing goes.
-    if compilation.error_count:
-        _refuse_on_errors([d for d in compilation.diagnostics if d.is_error], compilation.error_count)
-    return estimator.result
+    try:
+        return jobflow.estimate_job(script, model, start, lead_s, baud, from_line, initial)
+    except ScriptError as error:
+        _refuse_on_errors(error.diagnostics, error.errors)
 
 
 def print_estimate(result, header: str) -> None:
@@ -156,51 +142,10 @@ def _config_baud() -> int:
 
 
 def read_arm(link, timeout_s: float, log=None):
-    """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
-    kind has been replaced or held back, H9); resume an arm that twice reports it is paused."""
-    if not link.wait_until(lambda s: s.complete, timeout_s):
-        _, received, _, frames = link.snapshot()
-        heard = "nothing" if received == 0 else f"{received} bytes, {frames} status frames"
-        raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
-    _wait_rotations(link, 2, timeout_s)
-    if _paused_twice(link, timeout_s):
-        click.echo("armctl: the arm reports it is paused: sending one pause toggle to resume it", err=True)
-        frame = PauseToggle().encode()
-        link.write(frame)
-        if log is not None:
-            log.write(json.dumps({"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}) + "\n")
-        if not link.wait_until(lambda s: s.paused is False, max(timeout_s, 1.0)):
-            raise JobFailed("the arm stayed paused after a pause toggle; nothing else was sent")
-        _wait_rotations(link, 1, timeout_s)
-    return link.snapshot()[0]
+    """jobflow.read_arm, telling on stderr when it resumes a paused arm."""
+    from ..jobflow import read_arm
 
-
-def _wait_rotations(link, rotations: int, timeout_s: float) -> None:
-    frames = link.snapshot()[3]
-    link.wait_until(lambda s: s.frames >= frames + 9 * rotations, timeout_s)
-
-
-def _paused_twice(link, timeout_s: float) -> bool:
-    """Paused in two consecutive pause reports (the engine's rule, ``agreed_pause``): one flipped
-    byte must not make armctl toggle."""
-    from ..job import agreed_pause
-
-    state = link.snapshot()[0]
-    if not state.paused:
-        return False
-    seen = state.last_seen.get(4)
-    link.wait_until(lambda s: s.last_seen.get(4) != seen, timeout_s)
-    return agreed_pause((state.paused, link.snapshot()[0].paused)) is True
-
-
-def start_from_state(model, state):
-    """The streamer's start pose and the compiler's initial state, from the arm's report."""
-    from ..script import InitialState
-
-    joints = tuple(state.joints_deg)
-    pose = model.reported_pose(state.position_mm, joints, float(state.pwm_us), tuple(state.worktable_mm))
-    initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: float(state.pwm_us)})
-    return pose, initial
+    return read_arm(link, timeout_s, log, note=lambda text: click.echo(text, err=True))
 
 
 def _open_log(path: str):
@@ -257,8 +202,8 @@ def _run_json(options: JobOptions, script, connect) -> int:
 
 def _run_job(options: JobOptions, script, connect, events=None) -> int:
     from ..motion import MotionModel
+    from ..jobflow import plan_job, start_job
     from ..profile import load_profile
-    from ..runner import JobRunner, RunView
 
     profile = load_profile(options.profile_path)
     report = check_script(script, profile)
@@ -281,25 +226,25 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
                 if events is not None:
                     events.summary(_nothing_to_run())
                 return EXIT_OK
-        start, initial = start_from_state(model, state)
-        estimate = estimate_job(script, model, start, options.lead_s, baud, options.from_line, initial)
+        try:
+            plan = plan_job(script, model, state, options.lead_s, baud, options.from_line)
+        except ScriptError as error:
+            _refuse_on_errors(error.diagnostics, error.errors)
+        estimate = plan.estimate
         if estimate.frames == 0:
             click.echo("nothing to send: the script has no frames" + (f" from line {options.from_line}" if options.from_line > 1 else ""))
             if events is not None:
                 events.summary(_nothing_to_run())
             return EXIT_OK
-        streamer = Streamer(model, start, lead_s=options.lead_s, baud=baud)
-        view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=report.lines, lead_s=options.lead_s,
-                       capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
-        statements = script.compile(initial=initial, from_line=options.from_line)
-        runner = JobRunner(link, streamer, statements, view, log=log)
+        runner = start_job(link, script, model, plan, options.lead_s, baud, report.lines, log)
+        view = runner.view
         if log is not None:  # which script it records (--resume checks it); a failed write stops the job like any
             from ..joblog import job_record
 
             runner.log_record(job_record(script.name, script.data, options.from_line, options.lead_s))
         # the live panel's map: the same snapshot compiled the same way, sampled once before the
         # first frame (bounded: path_map.MAP_MAX_FRAMES); no panel, no map
-        grid = _job_grid(script, model, start, initial, options) if _live(options) else None
+        grid = _job_grid(script, model, plan.start, plan.initial, options) if _live(options) else None
         link.on_status = runner.on_status
         wall_start = time.monotonic()
         if events is not None:
@@ -377,7 +322,7 @@ def _journal(runner, log, script):
         return None
     from ..joblog import Journal
 
-    blocks = _BlockIndex(script.lines())
+    blocks = BlockIndex(script.lines())
 
     def resume_at(statement) -> int:
         return (blocks.outermost_start(statement.line) or statement.line) if getattr(statement, "loop", ()) else statement.line
@@ -392,6 +337,7 @@ def _journal(runner, log, script):
 
 
 def _stream(runner, options: JobOptions, view, grid=None, events=None, journal=None) -> str:
+    from ..jobflow import drive
     from ..runner import ABORT_SEQUENCES
     from .run_keys import FOOTER, keys_available, run_keys
 
@@ -403,29 +349,9 @@ def _stream(runner, options: JobOptions, view, grid=None, events=None, journal=N
     shown = events.update if events is not None else (lambda view: None) if quiet() else display.update  # -q: the summary only
     runner.on_update = shown if journal is None else lambda view: (journal(view), shown(view))
     with _deferred_ctrl_c(runner), display, (run_keys(runner) if keys else nullcontext()):
-        try:
-            runner.run()
-            return view.outcome
-        except KeyboardInterrupt:
-            pass  # Ctrl-C, or a failure the runner met (runner.failure) that asked it to stop
-        except PortError as error:
-            view.messages.append(str(error))
-            return "port lost"
-        except Exception as error:  # anything else mid-job: the same path as Ctrl-C
-            runner.fail(f"{type(error).__name__}: {error}")
-        why = runner.failure or "interrupted"
-        display.note(f"\narmctl: {why}: no more frames are sent; sending the abort sequence "
-                     f"({options.abort}) and waiting for the arm to come to rest …")
-        try:
-            runner.abort(ABORT_SEQUENCES[options.abort])
-        except KeyboardInterrupt:
-            pass
-        except Exception as error:  # the abort itself failed: say so, the summary still follows
-            view.messages.append(f"the abort did not complete: {type(error).__name__}: {error}")
-        if runner.job.outcome is None and runner.failure:  # the abort was cut short: the engine did not end it
-            view.outcome = "failed"
-            view.messages.append(runner.failure)
-        return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
+        return drive(runner, ABORT_SEQUENCES[options.abort], on_stopping=lambda why: display.note(
+            f"\narmctl: {why}: no more frames are sent; sending the abort sequence "
+            f"({options.abort}) and waiting for the arm to come to rest …"))
 
 
 def _live(options: JobOptions) -> bool:
@@ -533,44 +459,6 @@ class _Display:
         return self.grid if width >= MAP_MIN_WIDTH and height >= MAP_MIN_HEIGHT else None
 
 
-_BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
-
-
-class _BlockIndex:
-    """The outermost repeat blocks of a script, found in one pass (``lines``: the script's
-    lines, e.g. ``ScriptSnapshot.lines()`` — the same text that was sent)."""
-
-    def __init__(self, lines) -> None:
-        self.blocks = []  # (first line, last line) of each outermost block, in order
-        depth, start = 0, None
-        for number, text in enumerate(lines, 1):
-            match = _BLOCK_LINE.match(text)
-            if match is None:
-                continue
-            if match.group(1).lower() == "repeat":
-                if depth == 0:
-                    start = number
-                depth += 1
-            elif depth:
-                depth -= 1
-                if depth == 0 and start is not None:
-                    self.blocks.append((start, number))
-
-    def outermost_start(self, line: int) -> int | None:
-        """The first line of the outermost block around ``line``, if any."""
-        from bisect import bisect_right
-
-        index = bisect_right(self.blocks, (line, float("inf"))) - 1
-        if index >= 0 and self.blocks[index][0] <= line <= self.blocks[index][1]:
-            return self.blocks[index][0]
-        return None
-
-
-def outermost_block_start(lines, line: int) -> int | None:
-    """The opening line of the outermost repeat block around ``line``, if any."""
-    return _BlockIndex(lines).outermost_start(line)
-
-
 def resume_command(options: JobOptions, line: int) -> str:
     """The command that continues this job on the same arm: every option that shaped the run
     (port, baud, lead, profile, abort), quoted for a POSIX shell.  Without them a resume could
@@ -597,15 +485,14 @@ def exit_code_of(outcome: str) -> int:
 
 
 def resume_point(view, script) -> tuple[int | None, str]:
-    """The line to resume at (--from-line cannot start inside a repeat block: its outermost
-    start) and what the summary says about passes that run again."""
-    resume = view.resume_line()
+    """The line to resume at (jobflow.resume_line: --from-line cannot start inside a repeat
+    block, so its outermost start) and what the summary says about passes that run again."""
+    resume = resume_line(view, script.lines())
     loop = getattr(view.first_not_done, "loop", ()) if resume is not None else ()
     if not loop:
         return resume, ""
-    return (_BlockIndex(script.lines()).outermost_start(resume) or resume,
-            f" (line {resume} is inside a repeat block, in pass {loop[-1] + 1}: the block "
-            "runs again from its first pass, so the passes already done are repeated)")
+    return resume, (f" (line {view.resume_line()} is inside a repeat block, in pass {loop[-1] + 1}: the block "
+                    "runs again from its first pass, so the passes already done are repeated)")
 
 
 def job_result(view, outcome: str, options: JobOptions, script) -> dict:

@@ -1,0 +1,649 @@
+"""The Python API: ``from armctl import Arm`` — open an arm, move it, run a job, read it, pause it.
+
+Strategy: a thin client of the same steps ``armctl run`` takes (armctl/jobflow.py): a script
+is linted before anything leaves, the arm's report is read and the job compiled from it,
+the runner streams it with the streamer's pacing and ends it by the runner's end-of-job rules,
+and any early stop takes ``jobflow.drive``'s one path (stop feeding, the abort sequence, wait
+for the arm).  ``move`` writes ONE script line from its keywords and runs it as a job of one
+line: the same compiler, lint checks and streamer, never a second encoder.  Nothing here prints
+(the simulator banner is not announced; notes go to the ``armctl.api`` logger at INFO).
+
+Threads: each ``Arm`` has one worker thread that owns its link — every write, every wait, and
+the virtual clock of a ``sim://?clock=virtual`` port, which moves only while someone waits on
+it and so must have one owner.  Public calls put a task on the worker's queue; a blocking call
+waits for its task, ``move(wait=False)`` returns at once and its move streams while the caller
+goes on.  Tasks run in order, so a later ``move``, ``run``, ``status``, ``wait`` or ``close``
+sees every queued move executed, each exactly once.  A queued move that fails cancels the
+moves queued after it (the arm is no longer where they assume) and its error is raised by the
+next blocking call.  Control of a running job (``pause``, ``resume``, ``stop``, a timeout) is a
+request the worker acts on between two writes (the runner's ``on_update``), never a write from
+another thread.  Nothing is module-level state: several arms work at once in one process.
+No signal handler is installed (the CLI installs its own, in the main thread only).
+"""
+
+from __future__ import annotations
+
+import logging
+import numbers
+import os
+import queue
+import threading
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+from decimal import Decimal
+from typing import Any, Callable, Mapping, Union
+
+from .errors import ArmctlError, ScriptError
+from .jobflow import JobFailed
+from .streamer import DEFAULT_LEAD_S
+
+__all__ = ["Arm", "ArmStatus", "ArmTimeout", "JobFailed", "Progress", "RunResult"]
+
+_logger = logging.getLogger(__name__)
+
+STATUS_TIMEOUT_S = 3.0  # what `armctl run --timeout` waits for the arm's status by default
+PROGRESS_EVERY_S = 0.25  # on_progress is called at least this often (arm clock), even when nothing moved on
+HOLD_POLL_S = 0.05  # while a job is held paused: how often the requests are looked at (arm clock)
+PAUSE_READ_TIMEOUT_S = 3.0  # how long two agreeing pause reports are waited for (one comes every 0.27 s)
+_MOVE_NAME = "<move>"
+_TEXT_NAME = "<script>"
+# move()'s keywords, in the order the line is written: Cartesian (G1) and joint (G6) words
+_CARTESIAN = ("x", "y", "z", "a", "b", "c")
+_JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
+_OTHER = ("u", "v", "t", "h", "s", "f")
+
+ScriptSource = Union[str, "os.PathLike[str]"]
+
+
+class ArmTimeout(JobFailed):
+    """``timeout=`` passed before the arm proved the job done: the job was stopped as by
+    ``Arm.stop`` (no more frames, the abort sequence) and ``result`` says how far it went."""
+
+
+@dataclass(frozen=True)
+class RunResult:
+    """How a job (or a move) ended, as ``armctl run``'s summary says it.
+
+    ``outcome``: "finished" (the arm's reports proved every frame executed), "interrupted"
+    (``Arm.stop``), "failed", "port lost" or "no confirmation" (the last three are raised as
+    ``JobFailed`` with this result attached).  Lines are the script's line numbers; the move of
+    ``Arm.move`` is line 1.  ``resume_line``: where ``run(..., from_line=)`` continues the job
+    (None when nothing is left); ``arm_time_s``: from the first frame to the arm at rest, in
+    the arm's clock (None when it did not come to rest at the end).
+    """
+
+    outcome: str
+    frames_sent: int
+    total_frames: int
+    last_line_sent: int | None
+    last_line_done: int | None
+    arm_time_s: float | None
+    estimated_job_s: float
+    resume_line: int | None
+    messages: tuple[str, ...] = ()
+    warnings: tuple[str, ...] = ()  # lint warnings of the script, rendered
+
+    @property
+    def finished(self) -> bool:
+        return self.outcome == "finished"
+
+
+@dataclass(frozen=True)
+class Progress:
+    """What ``on_progress`` is given, from the worker thread, whenever a frame was written or
+    the frames known executed moved on, and at least every ``PROGRESS_EVERY_S`` (times in the
+    arm's clock)."""
+
+    frames_sent: int
+    total_frames: int
+    last_line_sent: int | None
+    last_line_done: int | None
+    elapsed_s: float
+    eta_s: float
+    position_mm: tuple[float, float, float] | None
+    paused: bool | None  # as two agreeing reports say (a pause toggle acts after the frames queued before it)
+
+
+@dataclass(frozen=True)
+class ArmStatus:
+    """The arm's decoded report: every value as last accepted (None until its kind was seen),
+    and ``ages_s``: for each group of values, seconds since it was last reported."""
+
+    position_mm: tuple[float, float, float] | None
+    joints_deg: tuple[float | None, ...]
+    worktable_mm: tuple[float | None, ...]
+    wrist_deg: tuple[float | None, float | None]
+    pwm_us: int | None
+    paused: bool | None
+    run_position: float | None
+    ages_s: Mapping[str, float | None] = field(default_factory=dict)
+
+
+# status kinds behind each group of ArmStatus (armctl/protocol.py's STATUS_ROTATION)
+_AGE_KINDS = {"position": (0,), "joints": (1, 2), "worktable": (3,), "pause_pwm": (4,), "wrist": (5,),
+              "program": (100, 102, 103)}
+
+
+_SKIPPED = object()  # a task not run: a queued move before it failed (its error is raised instead)
+_JOB_ENDED = object()  # a pause request the job ended before acting on
+
+
+class _Worker:
+    """One thread that runs tasks in order: the only one that touches the arm's link."""
+
+    def __init__(self, name: str) -> None:
+        self._tasks: queue.SimpleQueue = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._loop, name=name, daemon=True)
+        self._thread.start()
+
+    def submit(self, task: Callable[[], Any]) -> Future:
+        future: Future = Future()
+        self._tasks.put((task, future))
+        return future
+
+    def call(self, task: Callable[[], Any]) -> Any:
+        """Run ``task`` on the worker and return its result (at once when already on it)."""
+        if self.is_current():
+            return task()
+        return self.submit(task).result()
+
+    def is_current(self) -> bool:
+        return threading.current_thread() is self._thread
+
+    def stop(self) -> None:
+        self._tasks.put(None)
+        if not self.is_current():
+            self._thread.join()
+
+    def _loop(self) -> None:
+        while True:
+            item = self._tasks.get()
+            if item is None:
+                return
+            task, future = item
+            if not future.set_running_or_notify_cancel():
+                continue  # cancelled while queued (stop, or a queued move before it failed)
+            try:
+                future.set_result(task())
+            except BaseException as error:  # handed to whoever waits; the worker goes on
+                future.set_exception(error)
+
+
+class _JobControl:
+    """The requests for the job the worker is running, acted on between two writes."""
+
+    def __init__(self, runner, link, on_progress, timeout_s: float | None) -> None:
+        from .pause import PauseState
+
+        self.runner, self.link = runner, link
+        self.on_progress, self.timeout_s = on_progress, timeout_s
+        self.pause = PauseState()
+        self.pause_requests: queue.SimpleQueue = queue.SimpleQueue()  # (want_paused, Future, asked_s)
+        self._waiting: list = []
+        self.stop_asked = False  # stop() or the timeout: the runner was asked to stop
+        self.holding = False  # pause() asked: no frame is written until resume()
+        self.timed_out = False
+        self.callback_error: Exception | None = None  # what on_progress raised
+        self._shown: tuple = ()
+        self._shown_s = float("-inf")
+
+    def on_status(self, frame, read_s: float) -> None:
+        if frame.KIND == 4:
+            self.pause.add(frame.paused)
+        self.runner.on_status(frame, read_s)
+
+    def request_stop(self) -> None:
+        if not self.stop_asked:
+            self.stop_asked = True
+            self.runner.request_stop()
+
+    def on_update(self, view) -> None:
+        """The runner's hook, on the worker thread between two writes.  After a pause toggle
+        it holds the feed — it does not return — until a resume, a stop or the timeout: in the
+        ``queued`` control mode (H5) a paused arm takes nothing but the resume at the head of
+        its FIFO, so any frame sent after the pause would keep it paused for good.  Meanwhile
+        the status frames queue up for the runner with the times they came."""
+        offset_s = view.now_s - self.link.clock()  # the runner's time is the link's, from another origin
+        while self._act(view, self.link.clock() + offset_s) and self.holding and self.link.error is None:
+            self.link.idle(HOLD_POLL_S)  # moves a virtual clock; on a wall clock, waits for a frame
+
+    def _act(self, view, now_s: float) -> bool:
+        """The timeout, the pause requests and the progress callback at ``now_s``; False once
+        the job is stopping (no pause toggles, no callbacks then)."""
+        if self.stop_asked:
+            return False
+        if self.timeout_s is not None and now_s - view.started_s > self.timeout_s:
+            self.timed_out = True
+            self.request_stop()
+            return False
+        self.act_on_pause_requests(now_s)
+        if self.on_progress is not None:
+            shown = (view.frames_sent, getattr(view.last_done, "line", None))
+            if shown != self._shown or now_s - self._shown_s >= PROGRESS_EVERY_S:
+                self._shown, self._shown_s = shown, now_s
+                try:
+                    self.on_progress(_progress(view, self.pause.agreed, now_s))
+                except Exception as error:  # stops the job (jobflow.drive); raised as the cause
+                    self.callback_error, self.stop_asked = error, True  # no callback while it aborts
+                    raise
+        return not self.stop_asked
+
+    def act_on_pause_requests(self, now_s: float) -> None:
+        while True:
+            try:
+                want, future, asked_s = self.pause_requests.get_nowait()
+            except queue.Empty:
+                break
+            self._waiting.append((want, future, now_s if asked_s is None else asked_s))
+        still = []
+        for want, future, asked_s in self._waiting:
+            try:
+                sent = self.pause.toggle_needed(want)
+                if sent:
+                    _write_toggle(self.link)
+                if sent is not None:
+                    self.holding = want  # hold the feed from the pause toggle on, until a resume
+            except BaseException as error:
+                future.set_exception(error)
+                continue
+            if sent is not None:
+                future.set_result(sent)
+            elif now_s - asked_s > PAUSE_READ_TIMEOUT_S:
+                future.set_exception(JobFailed("the arm's pause reports did not agree twice in a row: no pause toggle sent"))
+            else:
+                still.append((want, future, asked_s))
+        self._waiting = still
+
+    def end(self) -> None:
+        """The job is over: a pause asked too late is done on the idle arm instead."""
+        while True:
+            try:
+                self._waiting.append(self.pause_requests.get_nowait())
+            except queue.Empty:
+                break
+        for _, future, _ in self._waiting:
+            future.set_result(_JOB_ENDED)
+        self._waiting = []
+
+
+def _write_toggle(link) -> None:
+    from .protocol import PauseToggle
+
+    link.write(PauseToggle().encode())
+
+
+def _check(script, profile, initial):
+    """Lint ``script``: the report, or ``ScriptError`` with its errors."""
+    from .jobflow import lint_script
+
+    report = lint_script(script, profile, initial)
+    if report.errors:
+        raise ScriptError([d for d in report.diagnostics if d.severity == "error"], errors=report.errors)
+    return report
+
+
+def _progress(view, paused: bool | None, now_s: float) -> Progress:
+    position = view.position_mm
+    return Progress(view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
+                    getattr(view.last_done, "line", None), now_s - view.started_s, view.eta_s,
+                    None if position is None else tuple(position), paused)
+
+
+def _word(letter: str, value: float) -> str:
+    """``X250`` — a word as the language reads it: no exponent, no ``inf``/``nan``."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise TypeError(f"move(): {letter.lower()} must be a number, not {type(value).__name__}")
+    text = repr(value if isinstance(value, int) else float(value))  # the shortest text that reads back as the same float
+    if text in ("inf", "-inf", "nan"):
+        raise ValueError(f"move(): {letter.lower()}={text} is not a finite number")
+    number = format(Decimal(text), "f")
+    letter = letter.upper()
+    return f"{letter}={number}" if letter.startswith("J") else f"{letter}{number}"
+
+
+def move_line(**words: float | None) -> str:
+    """The one script line ``Arm.move`` sends: G6 when a joint is named, else G1 (the
+    compiler judges every word: a Cartesian word on G6, say, is its error, not ours)."""
+    given = {name: value for name, value in words.items() if value is not None}
+    unknown = sorted(set(given) - set(_CARTESIAN + _JOINTS + _OTHER))
+    if unknown:
+        raise TypeError(f"move() got unexpected keyword arguments: {', '.join(unknown)}")
+    if not given:
+        raise ValueError("move() needs at least one word (x=…, j1=…, s=…, f=…)")
+    code = "G6" if any(name in given for name in _JOINTS) else "G1"
+    order = _JOINTS + _CARTESIAN + _OTHER if code == "G6" else _CARTESIAN + _JOINTS + _OTHER
+    return " ".join([code] + [_word(name, given[name]) for name in order if name in given]) + "\n"
+
+
+class Arm:
+    """One arm on one port (``Arm.open``); a context manager that closes it.
+
+    Every method is thread-safe; the link is driven by the arm's own worker thread.
+    """
+
+    def __init__(self, link, baud: int, profile, *, lead_s: float = DEFAULT_LEAD_S,
+                 status_timeout_s: float = STATUS_TIMEOUT_S) -> None:
+        """Use ``Arm.open``; this takes an open ``armctl.link.Link`` and owns it from now on."""
+        from .motion import MotionModel
+
+        self._link, self._baud, self._profile = link, baud, profile
+        self._model = MotionModel(profile)
+        self.lead_s, self.status_timeout_s = lead_s, status_timeout_s
+        self._lock = threading.Lock()
+        self._queued: list[Future] = []  # moves queued with wait=False, not yet finished
+        self._deferred: BaseException | None = None  # the error of a queued move, for the next blocking call
+        self._job: _JobControl | None = None
+        self._stops = 0  # how many times stop() was called: a queued move from before it is not sent
+        self._closed = False
+        self._worker = _Worker(f"armctl-arm {link.url}")
+
+    @classmethod
+    def open(cls, port: str | None = None, baud: int | None = None, profile: str | os.PathLike[str] | None = None,
+             *, lead_s: float = DEFAULT_LEAD_S, status_timeout_s: float = STATUS_TIMEOUT_S) -> Arm:
+        """Open the arm on ``port`` as the CLI resolves it: ``port``, else ``ARMCTL_PORT``, else
+        ``port`` in armctl.toml (the project's, then yours), else the built-in simulator
+        (``sim://``); ``baud`` and ``profile`` (a TOML path) likewise.  Prints nothing.
+        Raises ``ConfigError`` (a bad setting), ``ProfileError`` or ``PortError``."""
+        from .link import connect
+        from .profile import load_profile
+
+        loaded = load_profile(None if profile is None else os.fspath(profile))
+        link, line_baud = connect(port, baud, profile=loaded)
+        try:
+            return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s)
+        except BaseException:
+            link.close()
+            raise
+
+    # --- the port ----------------------------------------------------------------------------
+
+    @property
+    def url(self) -> str:
+        """The port's URL or device path."""
+        return self._link.url
+
+    @property
+    def baud(self) -> int:
+        return self._baud
+
+    def __enter__(self) -> Arm:
+        return self
+
+    def __exit__(self, kind, error, traceback) -> None:
+        if error is not None:
+            self.stop()  # the block failed (or Ctrl-C): stop the arm rather than finish its queue
+        self.close(_raise=error is None)
+
+    def close(self, *, _raise: bool = True) -> None:
+        """Wait for the queued moves (each executed exactly once), then close the port.
+        Raises the error of a queued move that failed, after closing."""
+        with self._lock:
+            if self._closed:
+                return
+            self._closed = True
+        try:
+            self._worker.call(lambda: None)  # every task queued before has run
+        finally:
+            self._worker.stop()
+            self._link.close()
+        if _raise:
+            self._raise_deferred()
+
+    # --- moving ------------------------------------------------------------------------------
+
+    def move(self, *, x: float | None = None, y: float | None = None, z: float | None = None,
+             a: float | None = None, b: float | None = None, c: float | None = None,
+             j1: float | None = None, j2: float | None = None, j3: float | None = None,
+             j4: float | None = None, j5: float | None = None, j6: float | None = None,
+             u: float | None = None, v: float | None = None, s: float | None = None,
+             t: int | None = None, h: int | None = None, f: float | None = None,
+             wait: bool = True, timeout: float | None = None) -> RunResult | None:
+        """Move with one script line built from the keywords (docs/language.md): ``G1`` with
+        X Y Z (mm) A B C (deg), or ``G6`` with J1…J6 (deg) when a joint is given; ``f`` the speed
+        (mm/min for G1, deg/s for G6), ``s`` the PWM pulse (µs), ``t`` its channel (G1), ``h``
+        the smoothing (G6), ``u``/``v`` the external axes.  Absolute coordinates; words left
+        out keep the arm's reported values (F has none: give ``f``).
+
+        ``wait=True``: returns when the arm's reports prove it at rest at the target (the
+        ``RunResult``); ``timeout`` seconds of the arm's clock, counted from when the move
+        starts, raises ``ArmTimeout``.  ``wait=False``: queued, returns None at once; the move
+        streams from the worker while you go on.  A line with errors raises ``ScriptError``
+        here, in both cases, and nothing is sent.
+        """
+        line = move_line(x=x, y=y, z=z, a=a, b=b, c=c, j1=j1, j2=j2, j3=j3, j4=j4, j5=j5, j6=j6,
+                         u=u, v=v, s=s, t=t, h=h, f=f)
+        from .script import ScriptSnapshot
+
+        return self._submit(ScriptSnapshot(_MOVE_NAME, line.encode("ascii")), 1, None, timeout, wait, from_arm=True)
+
+    def run(self, script: ScriptSource, *, from_line: int = 1, on_progress: Callable[[Progress], None] | None = None,
+            timeout: float | None = None) -> RunResult:
+        """Lint ``script``, stream it, wait until the arm's reports prove it done.
+
+        ``script``: a path (``pathlib.Path``, or a ``str`` without a line break) is read once
+        (what was checked is what is sent); a ``str`` holding a line break is the script's text
+        (a one-line script: end it with ``"\\n"``).  ``from_line`` starts at that line with the
+        modal state the lines before it set (a ``RunResult.resume_line``).  ``on_progress`` is
+        called from the worker thread with a ``Progress``; an exception it raises stops the job.
+        ``timeout``: seconds of the arm's clock from the start of this job; raises ``ArmTimeout``.
+
+        Raises ``ScriptError`` (the script's errors, nothing sent), ``JobFailed`` (the arm did
+        not answer, the job ended "failed", "port lost" or "no confirmation"; ``.result``).
+        Returns the ``RunResult`` of a job that finished or that ``stop()`` interrupted.
+        """
+        from .script.files import ScriptSnapshot, read_script
+
+        if isinstance(script, str) and ("\n" in script or "\r" in script):
+            snapshot = ScriptSnapshot(_TEXT_NAME, script.encode("utf-8", "surrogateescape"))
+        else:
+            path = os.fspath(script)
+            try:
+                snapshot = read_script(path)
+            except OSError as error:
+                hint = " (script text must hold a line break: end a one-line script with \\n)" if isinstance(script, str) else ""
+                raise JobFailed(f"cannot read {path}: {error.strerror or error}{hint}; nothing was sent") from None
+        result = self._submit(snapshot, from_line, on_progress, timeout, wait=True, from_arm=False)
+        assert result is not None
+        return result
+
+    def wait(self) -> None:
+        """Return when every move queued with ``wait=False`` has run (its error, if one failed)."""
+        self._call(lambda: None)
+
+    # --- reading and control -----------------------------------------------------------------
+
+    def status(self, timeout: float | None = None) -> ArmStatus:
+        """The arm's decoded report, once every status kind has been seen (after the moves and
+        the job asked for before it ran); ``JobFailed`` when it is not complete within
+        ``timeout`` seconds (default ``status_timeout_s``)."""
+        timeout_s = self.status_timeout_s if timeout is None else timeout
+
+        def read() -> ArmStatus:
+            link = self._link
+            if not link.wait_until(lambda s: s.complete, timeout_s):
+                raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s")
+            state, now = link.snapshot()[0], link.clock()
+
+            def age(kinds) -> float | None:
+                seen = [state.last_seen[k] for k in kinds if k in state.last_seen]
+                return now - min(seen) if seen else None
+
+            return ArmStatus(position_mm=state.position_mm, joints_deg=tuple(state.joints_deg),
+                             worktable_mm=tuple(state.worktable_mm), wrist_deg=(state.w0_deg, state.w1_deg),
+                             pwm_us=state.pwm_us, paused=state.paused, run_position=state.run_position,
+                             ages_s={name: age(kinds) for name, kinds in _AGE_KINDS.items()})
+
+        return self._call(read)
+
+    def pause(self) -> bool:
+        """Pause the arm with the protocol's pause toggle — sent only when two agreeing reports
+        say it runs, or that it is headed there (armctl/pause.py: a toggle on a guess could
+        resume it).  During a job it also holds the feed until ``resume``: in the ``queued``
+        control mode (H5) the arm pauses after the frames already queued and then takes nothing
+        but the resume.  True when a toggle was sent.  Called from ``on_progress`` it acts at
+        once if the arm's pause state is known, else at the next update (and returns False)."""
+        return self._set_paused(True)
+
+    def resume(self) -> bool:
+        """Resume a paused arm (the same rule as ``pause``). True when a toggle was sent."""
+        return self._set_paused(False)
+
+    def stop(self) -> None:
+        """Stop as ``armctl run``'s Ctrl-C does: cancel the queued moves, stop feeding the running
+        job, send the abort sequence (a pause toggle, not sent to an arm that reports it is
+        paused) and wait for the arm; the job's ``run`` returns outcome "interrupted".  The next
+        job resumes an arm left paused.  Nothing to stop: does nothing."""
+        with self._lock:
+            self._stops += 1
+            queued, self._queued = self._queued, []
+            job = self._job
+        for future in queued:  # outside the lock: cancel() calls _queued_done at once
+            future.cancel()
+        if job is not None:
+            job.request_stop()
+
+    # --- the worker --------------------------------------------------------------------------
+
+    def _set_paused(self, want_paused: bool) -> bool:
+        with self._lock:
+            job = self._job if self._job is not None and not self._job.stop_asked else None
+            if job is not None:
+                future: Future = Future()
+                job.pause_requests.put((want_paused, future, None))
+        if job is not None:
+            if self._worker.is_current():  # from on_progress: between two writes already
+                job.act_on_pause_requests(job.runner.view.now_s)
+                return future.done() and future.result() is True
+            sent = future.result()
+            if sent is not _JOB_ENDED:
+                return sent
+            # the job ended before the request was acted on: ask the idle arm
+
+        def idle_toggle() -> bool:
+            from .jobflow import reported_pause
+            from .pause import pause_toggle_needed
+
+            link = self._link
+            sent = pause_toggle_needed(want_paused, reported_pause(link, PAUSE_READ_TIMEOUT_S))
+            if sent:
+                _write_toggle(link)
+            if sent is None:
+                raise JobFailed("the arm's pause reports did not agree twice in a row: no pause toggle sent")
+            if sent and not link.wait_until(lambda s: s.paused is want_paused, PAUSE_READ_TIMEOUT_S):
+                raise JobFailed(f"the arm did not report it {'paused' if want_paused else 'resumed'} after a pause toggle")
+            return sent
+
+        return self._call(idle_toggle)
+
+    def _call(self, task: Callable[[], Any]) -> Any:
+        """Run ``task`` on the worker after everything queued — unless a queued move failed:
+        then its error is raised and ``task`` does not run."""
+        if self._closed:
+            raise ArmctlError(f"the arm on {self.url} is closed")
+
+        def unless_failed():
+            return _SKIPPED if self._deferred is not None else task()
+
+        try:
+            result = self._worker.call(unless_failed)
+        finally:
+            self._raise_deferred()
+        if result is _SKIPPED:  # another thread took the queued move's error first
+            raise JobFailed("not run: a move queued before it failed")
+        return result
+
+    def _raise_deferred(self) -> None:
+        with self._lock:
+            error, self._deferred = self._deferred, None
+        if error is not None:
+            raise error
+
+    def _submit(self, script, from_line: int, on_progress, timeout_s: float | None, wait: bool,
+                from_arm: bool) -> RunResult | None:
+        """Check ``script`` here (``ScriptError``, nothing sent), then run it on the worker.
+
+        ``from_arm``: the script is a move's one line, whose words left out are the arm's; it
+        is checked here from the profile's fixed pose (so a bad word fails at once, even with
+        ``wait=False``), and again on the worker from the arm's report before it is sent.  A
+        job (``run``) is checked as ``armctl run`` checks it: from nothing known."""
+        from .jobflow import from_line_errors, start_at
+
+        _check(script, self._profile, start_at(self._model)[1] if from_arm else None)
+        error = from_line_errors(script, from_line)
+        if error is not None:
+            raise error
+
+        def job() -> RunResult:
+            return self._run_job(script, from_line, on_progress, timeout_s, from_arm)
+
+        if wait:
+            return self._call(job)
+        if self._closed:
+            raise ArmctlError(f"the arm on {self.url} is closed")
+        stops = self._stops
+
+        def queued() -> RunResult | None:
+            if stops != self._stops:
+                return None  # stop() came after this move was queued (it cancels the queue)
+            if self._deferred is not None:
+                raise JobFailed("not sent: a move queued before it failed")
+            return job()
+
+        with self._lock:
+            future = self._worker.submit(queued)
+            self._queued.append(future)
+        future.add_done_callback(self._queued_done)
+        return None
+
+    def _queued_done(self, future: Future) -> None:
+        """A queued move ended (on the worker): keep its error; a failure cancels the rest."""
+        error = None if future.cancelled() else future.exception()
+        with self._lock:
+            if future in self._queued:
+                self._queued.remove(future)
+            if error is None:
+                return
+            self._deferred = self._deferred or error
+            later, self._queued = self._queued, []
+        for queued in later:  # outside the lock: cancel() calls this method again at once
+            queued.cancel()
+
+    def _run_job(self, script, from_line: int, on_progress, timeout_s, from_arm: bool) -> RunResult:
+        """On the worker: read the arm, plan from its report, drive the runner, report."""
+        from .jobflow import drive, plan_job, read_arm, resume_line, start_from_state, start_job
+        from .runner import ABORT_SEQUENCES
+
+        link = self._link
+        state = read_arm(link, self.status_timeout_s, note=_logger.info)
+        report = _check(script, self._profile, start_from_state(self._model, state)[1] if from_arm else None)
+        total_lines = report.lines
+        warnings = tuple(d.render() for d in report.diagnostics if d.severity != "error")
+        plan = plan_job(script, self._model, state, self.lead_s, self._baud, from_line)
+        if plan.estimate.frames == 0:
+            return RunResult("finished", 0, 0, None, None, 0.0, 0.0, None, warnings=warnings)
+        runner = start_job(link, script, self._model, plan, self.lead_s, self._baud, total_lines)
+        control = _JobControl(runner, link, on_progress, timeout_s)
+        runner.on_update = control.on_update
+        link.on_status = control.on_status
+        with self._lock:
+            self._job = control
+        try:
+            outcome = drive(runner, ABORT_SEQUENCES["pause"],
+                            on_stopping=lambda why: _logger.info("%s: %s: sending the abort sequence", link.url, why))
+        finally:
+            with self._lock:
+                self._job = None
+            link.on_status = None
+            control.end()
+        view = runner.view
+        arm_time_s = None if view.arm_done_s is None else view.arm_done_s - view.started_s
+        result = RunResult(outcome, view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
+                           getattr(view.last_done, "line", None), arm_time_s, plan.estimate.job_s,
+                           resume_line(view, script.lines()), tuple(view.messages), warnings)
+        if control.timed_out:
+            raise ArmTimeout(f"the arm did not prove the job done within {timeout_s:g} s: it was stopped "
+                             f"(last line known executed: {result.last_line_done})", result)
+        if outcome not in ("finished", "interrupted"):
+            detail = "; ".join(result.messages)
+            raise JobFailed(f"the job ended {outcome}" + (f": {detail}" if detail else ""), result) from control.callback_error
+        return result

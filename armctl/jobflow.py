@@ -1,0 +1,267 @@
+"""A job's steps around the runner, once, for ``armctl run`` and the Python API (armctl/api.py).
+
+Strategy: the steps a careful operator takes before streaming, each a function that says what
+it found and prints nothing — the caller decides how a finding is shown (``armctl run``: on
+stderr, then exit 1; ``armctl.Arm``: an exception or a log record).  Check the script
+(``lint_script``, ``from_line_errors``), read the arm (``read_arm``: every status kind, two more
+rotations, an arm that twice reports it is paused resumed), start from its reported state
+(``start_from_state``), estimate from there (``estimate_job``: refuses what compiles
+differently from the arm's pose, or runs too long), then build the runner (``start_job``) and drive it (``drive``: one path for every way a
+job stops early — stop feeding, send the abort sequence, wait for the arm — whoever asked).
+The pause rule — toggle only when two agreeing reports say the arm is in the other state — is
+armctl/pause.py's; this module reads the reports it needs from the link.
+
+Errors are ``ScriptError`` (diagnostics and the count of errors; nothing was sent) and
+``JobFailed`` (the arm did not answer, or the job did not finish).
+"""
+
+from __future__ import annotations
+
+import json
+import re
+from dataclasses import dataclass
+from typing import Any, Callable, Iterable
+
+from .errors import ArmctlError, ScriptError
+from .pause import PauseState, pause_toggle_needed
+
+_BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
+
+
+class JobFailed(ArmctlError):
+    """The job could not start or did not finish; ``result`` (an ``armctl.RunResult``, or None
+    when nothing was sent) says how far it went."""
+
+    def __init__(self, message: str, result: Any = None) -> None:
+        super().__init__(message)
+        self.result = result
+
+
+def lint_script(script, profile, initial=None):
+    """``armctl lint``'s checks over the whole script (a ``ScriptSnapshot``): the report.
+    ``initial``: the modal state known before line 1 (``Arm.move``'s line starts from the arm's)."""
+    from .lint.engine import lint_lines
+
+    return lint_lines(script.lines(), script.name, profile, initial=initial)
+
+
+def from_line_errors(script, from_line: int) -> ScriptError | None:
+    """A resume line the compiler cannot start at (inside an arc, inside a repeat block, past
+    the end) is an error like any other; None when ``from_line`` can start the job."""
+    if from_line <= 1:
+        return None
+    check = script.compile(from_line=from_line)
+    check.finish()
+    if not check.error_count:
+        return None
+    return ScriptError([d for d in check.diagnostics if d.severity == "error"], errors=check.error_count)
+
+
+def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
+    """The estimate of the job in ``script`` (a ``ScriptSnapshot``) from ``start``; raises
+    ``ScriptError`` for a job whose motion time passes ``MAX_JOB_MOTION_S`` (E012 at the line
+    where it does) or that does not compile from this initial state."""
+    from .estimate import JobEstimator, motion_time_overrun
+
+    estimator = JobEstimator(model, start, lead_s, baud)
+    compilation = script.compile(initial=initial, from_line=from_line)
+    for statement in compilation:
+        estimator.add(statement.command)
+        overrun = motion_time_overrun(statement, estimator.result.motion_s)
+        if overrun is not None:
+            raise ScriptError([overrun], errors=1)
+    # This pass is the stream's twin (same snapshot, same initial state, same from_line): if it
+    # compiled cleanly, so will the stream, frame for frame; the arm's reported state can make
+    # a line fail that passed the check (a G91 offset from the real pose), and then nothing goes.
+    if compilation.error_count:
+        raise ScriptError([d for d in compilation.diagnostics if d.is_error], errors=compilation.error_count)
+    return estimator.result
+
+
+def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None):
+    """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
+    kind has been replaced or held back, H9); resume an arm that twice reports it is paused
+    (``note`` is told so).  The arm's state; ``JobFailed`` when it does not answer."""
+    from .protocol import PauseToggle
+
+    if not link.wait_until(lambda s: s.complete, timeout_s):
+        _, received, _, frames = link.snapshot()
+        heard = "nothing" if received == 0 else f"{received} bytes, {frames} status frames"
+        raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
+    wait_rotations(link, 2, timeout_s)
+    if _paused_twice(link, timeout_s):
+        note("armctl: the arm reports it is paused: sending one pause toggle to resume it")
+        frame = PauseToggle().encode()
+        link.write(frame)
+        if log is not None:
+            log.write(json.dumps({"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}) + "\n")
+        if not link.wait_until(lambda s: s.paused is False, max(timeout_s, 1.0)):
+            raise JobFailed("the arm stayed paused after a pause toggle; nothing else was sent")
+        wait_rotations(link, 1, timeout_s)
+    return link.snapshot()[0]
+
+
+def wait_rotations(link, rotations: int, timeout_s: float) -> None:
+    frames = link.snapshot()[3]
+    link.wait_until(lambda s: s.frames >= frames + 9 * rotations, timeout_s)
+
+
+def reported_pause(link, timeout_s: float, reports: int = 3) -> bool | None:
+    """The arm's pause state as two consecutive pause reports agree on it (the reader's state,
+    so a held-back corrupt frame never counts), starting with the last one read; None when no
+    two agree within ``reports`` reports, or the next does not come within ``timeout_s``."""
+    state = PauseState()
+    now = link.snapshot()[0]
+    seen = now.last_seen.get(4)
+    if seen is not None:
+        state.add(now.paused)
+    for _ in range(reports):
+        if state.agreed is not None:
+            break
+        if not link.wait_until(lambda s: s.last_seen.get(4) != seen, timeout_s):
+            break
+        now = link.snapshot()[0]
+        seen = now.last_seen.get(4)
+        state.add(now.paused)
+    return state.agreed
+
+
+def _paused_twice(link, timeout_s: float) -> bool:
+    """Paused in two consecutive pause reports: one flipped byte must not make armctl toggle.
+    An arm whose last report says it runs needs no toggle to run: no second report is waited for."""
+    if not link.snapshot()[0].paused:
+        return False
+    return pause_toggle_needed(want_paused=False, agreed=reported_pause(link, timeout_s)) is True
+
+
+def start_from_state(model, state):
+    """The streamer's start pose and the compiler's initial state, from the arm's report: its
+    X/Y/Z and its joints as reported (``MotionModel.reported_pose``: an unverified profile's
+    kinematics never decide where the arm starts)."""
+    from .script import InitialState
+
+    joints = tuple(state.joints_deg)
+    pose = model.reported_pose(state.position_mm, joints, float(state.pwm_us), tuple(state.worktable_mm))
+    initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: float(state.pwm_us)})
+    return pose, initial
+
+
+def start_at(model, joints: tuple | None = None, pwm_us: float | None = None, origin_mm: tuple = (0.0, 0.0, 0.0)):
+    """The start pose and initial state of an arm at ``joints`` with ``pwm_us`` (default: the
+    profile's fixed pose 0 and initial pulse, as ``armctl run --dry-run`` assumes)."""
+    from .script import InitialState
+
+    pose = model.initial_pose(joints=joints, pwm_us=pwm_us, origin_mm=origin_mm)
+    joints = tuple(model.profile.poses[0]) if joints is None else joints
+    pwm_us = pose.pwm_us[0] if pwm_us is None else pwm_us
+    initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: pwm_us})
+    return pose, initial
+
+
+@dataclass(frozen=True)
+class JobPlan:
+    """A checked job on one arm: where it starts (the arm's report) and its estimate."""
+
+    start: Any  # motion.Pose
+    initial: Any  # script.InitialState
+    estimate: Any  # estimate.JobEstimate
+    from_line: int
+
+
+def plan_job(script, model, state, lead_s: float, baud: int, from_line: int = 1) -> JobPlan:
+    """Start from the arm's reported ``state`` and estimate ``script`` from there (``ScriptError``
+    when it cannot run from there)."""
+    start, initial = start_from_state(model, state)
+    return JobPlan(start, initial, estimate_job(script, model, start, lead_s, baud, from_line, initial), from_line)
+
+
+def start_job(link, script, model, plan: JobPlan, lead_s: float, baud: int, total_lines: int, log=None):
+    """The runner that streams ``script`` as ``plan`` says (not started: call ``run``), with the
+    link's status frames routed to it."""
+    from .runner import JobRunner, RunView
+    from .streamer import Streamer
+
+    estimate = plan.estimate
+    streamer = Streamer(model, plan.start, lead_s=lead_s, baud=baud)
+    view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=total_lines, lead_s=lead_s,
+                   capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
+    statements = script.compile(initial=plan.initial, from_line=plan.from_line)
+    return JobRunner(link, streamer, statements, view, log=log)
+
+
+def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = lambda why: None) -> str:
+    """Run the job to its end, and make every other ending take one path: Ctrl-C (the runner's
+    ``request_stop``), a failure the runner met (``runner.failure``) or any error mid-job stops
+    the feeding, tells ``on_stopping`` why, sends ``abort_sequence`` and waits for the arm to
+    come to rest.  Only a lost port skips the abort (there is nothing to send it through).
+    The outcome: "finished", "interrupted", "failed", "port lost" or "no confirmation"."""
+    from .errors import PortError
+
+    view = runner.view
+    try:
+        runner.run()
+        return view.outcome
+    except KeyboardInterrupt:
+        pass  # Ctrl-C, or a failure the runner met (runner.failure) that asked it to stop
+    except PortError as error:
+        view.messages.append(str(error))
+        return "port lost"
+    except Exception as error:  # anything else mid-job: the same path as Ctrl-C
+        runner.fail(f"{type(error).__name__}: {error}")
+    on_stopping(runner.failure or "interrupted")
+    try:
+        runner.abort(abort_sequence)
+    except KeyboardInterrupt:
+        pass
+    except Exception as error:  # the abort itself failed: say so, the summary still follows
+        view.messages.append(f"the abort did not complete: {type(error).__name__}: {error}")
+    if runner.job.outcome is None and runner.failure:  # the abort was cut short: the engine did not end it
+        view.outcome = "failed"
+        view.messages.append(runner.failure)
+    return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
+
+
+def resume_line(view, lines: Iterable[str]) -> int | None:
+    """The line ``--from-line`` (or ``Arm.run(from_line=)``) should name to continue: the first
+    line not known executed, or — as no job can start inside a repeat block — the opening line
+    of the outermost block around it (its passes already done then run again)."""
+    resume = view.resume_line()
+    loop = getattr(view.first_not_done, "loop", None)
+    if resume is not None and loop:
+        return outermost_block_start(lines, resume) or resume
+    return resume
+
+
+class BlockIndex:
+    """The outermost repeat blocks of a script, found in one pass (``lines``: the script's
+    lines, e.g. ``ScriptSnapshot.lines()`` — the same text that was sent)."""
+
+    def __init__(self, lines: Iterable[str]) -> None:
+        self.blocks: list[tuple[int, int]] = []  # (first line, last line) of each outermost block, in order
+        depth, start = 0, None
+        for number, text in enumerate(lines, 1):
+            match = _BLOCK_LINE.match(text)
+            if match is None:
+                continue
+            if match.group(1).lower() == "repeat":
+                if depth == 0:
+                    start = number
+                depth += 1
+            elif depth:
+                depth -= 1
+                if depth == 0 and start is not None:
+                    self.blocks.append((start, number))
+
+    def outermost_start(self, line: int) -> int | None:
+        """The first line of the outermost block around ``line``, if any."""
+        from bisect import bisect_right
+
+        index = bisect_right(self.blocks, (line, float("inf"))) - 1
+        if index >= 0 and self.blocks[index][0] <= line <= self.blocks[index][1]:
+            return self.blocks[index][0]
+        return None
+
+
+def outermost_block_start(lines, line: int) -> int | None:
+    """The opening line of the outermost repeat block around ``line``, if any."""
+    return BlockIndex(lines).outermost_start(line)
