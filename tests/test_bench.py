@@ -381,6 +381,7 @@ def test_armctl_with_a_probe_meets_the_mismatch_targets(name):
     assert cell.moving_after_abort_s <= cell.abort_limit_s
     assert cell.failures == []
     assert cell.outcome == "finished"
+    assert cell.not_once_run == []  # every job frame ran exactly once (the execution log)
     assert {strategy for scenario, strategy in armctl_cells() if scenario == name} == {"armctl", table.NO_PROBE,
                                                                                       "omniscient"}
 
@@ -389,6 +390,7 @@ def test_without_a_probe_a_fifo_smaller_than_assumed_loses_frames():
     cell = armctl_cells()[("fifo50", table.NO_PROBE)]
     assert cell.dropped > 0  # what the probe is for
     assert cell.ratio < 1.0  # the arm finished sooner than the job takes: the time reveals the loss
+    assert len(cell.not_once_run) == cell.dropped  # the exactly-once check sees each lost frame
 
 
 @pytest.mark.xfail(not table.HONEST_OUTCOMES, strict=True,

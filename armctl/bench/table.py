@@ -120,6 +120,7 @@ class Cell:
     physical_bound: float | None = None  # armctl's target for physical_ratio (None: none)
     outcome: str = ""  # the job engine's outcome of the whole run, as ``armctl run`` ends it
     not_once: list[int] | None = None  # resume scenarios: job frames (1-based) not run exactly once
+    not_once_run: list[int] | None = None  # issue-9 scenarios: the same, in the whole run
     failures: list[str] = field(default_factory=list)
     pending: list[str] = field(default_factory=list)  # targets whose mechanism has not landed yet
 
@@ -154,8 +155,10 @@ def run_cell(scenario: Scenario, strategy: str, lead_s: float = DEFAULT_LEAD_S,
     def strategy_for(arm):
         return make_strategy(strategy, arm, lead_s, fixed_delay_s, profile)
 
-    arm = SimulatedArm(scenario.options)
-    full: RunResult = run_job(scenario.commands, strategy_for(arm), arm, events=scenario.events)
+    arm, line = SimulatedArm(scenario.options), []
+    full: RunResult = run_job(scenario.commands, strategy_for(arm), arm, events=scenario.events, line=line)
+    # an issue-9 row: every job frame ran exactly once in the whole run (the execution log)
+    whole = frames_not_run_once(arm, _job_frames(line), scenario.frames) if scenario.probe else None
     moving = limit = None
     abort_dropped = 0
     if abort:
@@ -165,7 +168,8 @@ def run_cell(scenario: Scenario, strategy: str, lead_s: float = DEFAULT_LEAD_S,
         limit = stop_bound_s(arm, line, aborted.aborted_at_s, true_durations_s(scenario.commands, scenario.options),
                              lead_s)
     cell = Cell(scenario.name, strategy, scenario.frames, full.dropped, full.job_s, full.peak_occupancy,
-                full.peak_queued_s, moving, limit, abort_dropped, full.timed_out, outcome=full.outcome)
+                full.peak_queued_s, moving, limit, abort_dropped, full.timed_out, outcome=full.outcome,
+                not_once_run=whole)
     if scenario.resume and strategy in ("armctl", NO_PROBE):
         cell.not_once = not_run_once(scenario, strategy_for)
     return cell
@@ -178,10 +182,7 @@ def not_run_once(scenario: Scenario, strategy_for) -> list[int]:
     arm, line = SimulatedArm(scenario.options), []
     aborted = run_job(scenario.commands, strategy_for(arm), arm, abort_after_frames=scenario.frames // 2, line=line,
                       settle=True)
-    frame_of = {}  # arrival index → job frame (1-based)
-    for index, source in enumerate(line):
-        if source == "job":
-            frame_of[index] = len(frame_of) + 1
+    frame_of = _job_frames(line)
     resume_at = aborted.resume_line or scenario.frames + 1
     if resume_at <= scenario.frames:
         start_run(arm, line)
@@ -191,10 +192,25 @@ def not_run_once(scenario: Scenario, strategy_for) -> list[int]:
         for index in range(first, len(line)):
             if line[index] == "job":
                 frame_of[index], number = number, number + 1
+    return frames_not_run_once(arm, frame_of, scenario.frames)
+
+
+def _job_frames(line: list[str]) -> dict[int, int]:
+    """Arrival index → job frame (1-based), for the job frames of one run (``run_job``'s ``line``)."""
+    frame_of = {}
+    for index, source in enumerate(line):
+        if source == "job":
+            frame_of[index] = len(frame_of) + 1
+    return frame_of
+
+
+def frames_not_run_once(arm: SimulatedArm, frame_of: dict[int, int], total: int) -> list[int]:
+    """The job frames 1…``total`` that the arm did not run to their end exactly once, by its
+    execution log (``frame_of``: arrival index → job frame)."""
     if not arm.history_complete:
-        raise ValueError(f"{scenario.name}: the run is longer than the simulator's history")
+        raise ValueError("the run is longer than the simulator's history")
     runs = Counter(frame_of[e.index] for e in arm.execution_log if e.index in frame_of and e.outcome == DONE)
-    return [k for k in range(1, scenario.frames + 1) if runs[k] != 1]
+    return [k for k in range(1, total + 1) if runs[k] != 1]
 
 
 def _run_cell_args(args) -> Cell:
@@ -231,7 +247,7 @@ def run_bench(scenarios: list[Scenario], strategies=STRATEGY_NAMES, lead_s: floa
         if cell.strategy == "armctl":
             cell.failures = check_targets(cell)
             if cell.not_once and not RESUME_RULE_LANDED:
-                cell.pending = [f"{not_once_text(cell)}: {PENDING_HONEST}"]
+                cell.pending = [f"{not_once_text(cell.not_once, 'resume')}: {PENDING_HONEST}"]
         elif cell.strategy == NO_PROBE:
             cell.failures, cell.pending = check_unprobed(cell)
     return cells
@@ -270,14 +286,16 @@ def check_targets(cell: Cell) -> list[str]:
         failures.append(f"job time {cell.physical_ratio:.3f} × the physical bound > {cell.physical_bound:.2f}")
     if cell.moving_after_abort_s is not None and cell.moving_after_abort_s > cell.abort_limit_s + 1e-9:
         failures.append(f"moved {cell.moving_after_abort_s:.2f} s after the abort > {cell.abort_limit_s:.2f} s")
+    if cell.not_once_run:
+        failures.append(not_once_text(cell.not_once_run, "whole run"))
     if cell.not_once and RESUME_RULE_LANDED:
-        failures.append(not_once_text(cell))
+        failures.append(not_once_text(cell.not_once, "resume"))
     return failures
 
 
-def not_once_text(cell: Cell) -> str:
-    shown = ", ".join(map(str, cell.not_once[:5])) + (" …" if len(cell.not_once) > 5 else "")
-    return f"resume: {len(cell.not_once)} job frame(s) not run exactly once ({shown})"
+def not_once_text(frames: list[int], where: str) -> str:
+    shown = ", ".join(map(str, frames[:5])) + (" …" if len(frames) > 5 else "")
+    return f"{where}: {len(frames)} job frame(s) not run exactly once ({shown})"
 
 
 # --- output -----------------------------------------------------------------------------------
@@ -306,6 +324,8 @@ def _row(cell: Cell) -> tuple[str, ...]:
             verdict += "; " + "; ".join(cell.pending)
         elif cell.not_once is not None and not cell.not_once:
             verdict += " (resume: every frame once)"
+        if not cell.failures and cell.not_once_run == []:
+            verdict = verdict.replace("met", "met (whole run: every frame once)", 1)
     else:
         verdict = ""
     return (cell.scenario, cell.strategy, str(cell.frames), dropped, ratio, physical, str(cell.peak_occupancy),
