@@ -20,8 +20,9 @@ profile ``armctl probe`` finds on that arm (armctl/bench/probed.py), "armctl no 
 document's defaults.  The probed row has the targets above (1.02 × omniscient) and, with
 ``Scenario.resume``, exactly-once across an abort and its resume on the same arm (every job frame
 run once, by the simulator's execution log); the unprobed row only one: never "finished" (done)
-after frames were lost.  A target whose mechanism has not landed yet (``PENDING``) is printed
-as waiting, and does not fail the bench.
+after frames were lost.  A target whose mechanism is another branch's and has not landed yet
+(``Cell.pending``: wt-honest's loss outcome and resume rule) is printed as waiting, and does not
+fail the bench.
 
 The abort run leaves out a scenario's outside events (the pause scenario's pause and resume):
 they are pause toggles too, and would toggle against the abort's pause.
@@ -37,10 +38,9 @@ import json
 import os
 import sys
 import time
+from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field, replace
-
-from collections import Counter
 
 from ..job import Outcome
 from ..motion import MotionModel
@@ -132,18 +132,14 @@ def stop_bound_s(arm: SimulatedArm, line: list[str], aborted_at_s: float, durati
     ``durations_s``: each job frame's true duration (``true_durations_s``).  The move in
     progress is the job frame the arm was executing at ``aborted_at_s`` (none if it was idle);
     the next move, the first frame after it (or after the last frame begun) that takes time."""
-    job_frame = {}  # arrival index → job frame (0-based)
-    for index, source in enumerate(line):
-        if source == "job":
-            job_frame[index] = len(job_frame)
+    job_frame = _job_frames(line)
     begun = [e for e in arm.execution_log if e.index in job_frame and e.start_s <= aborted_at_s + EPSILON_S]
     in_progress_s, after = 0.0, 0
     if begun:
         last = max(begun, key=lambda e: (e.start_s, e.index))
-        k = job_frame[last.index]
+        after = job_frame[last.index]  # 1-based: the index of the frame after it
         if last.end_s is None or last.end_s > aborted_at_s + EPSILON_S:
-            in_progress_s = durations_s[k]
-        after = k + 1
+            in_progress_s = durations_s[after - 1]
     next_move_s = next((d for d in durations_s[after:] if d > 0), 0.0)
     return in_progress_s + max(lead_s, next_move_s)
 
