@@ -463,3 +463,11 @@ def test_bench_mismatch_rows_in_a_fresh_process():
     assert set(cells) == {"armctl", table.NO_PROBE, "omniscient"}
     armctl = cells["armctl"]
     assert armctl["dropped"] == 0 and armctl["moving_after_abort_s"] <= armctl["abort_limit_s"]
+
+
+def test_a_probe_that_does_not_finish_is_a_clear_error_not_the_defaults(monkeypatch):
+    from armctl.bench import probed
+
+    monkeypatch.setattr(probed, "PROBE_TIME_LIMIT_S", 0.5)  # arm seconds: far too short for a probe
+    with pytest.raises(probed.ProbeFailed, match="did not finish"):
+        probed.probed_settings.__wrapped__(SimOptions(seed=5))
