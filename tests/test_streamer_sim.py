@@ -24,10 +24,17 @@ def scenarios():
     return {s.name: s for s in build_scenarios("test")}
 
 
-def stream_checked(commands, options: SimOptions, events=(), lead_s: float = 2.0, settle_s: float = 10.0):
-    """Run the job through armctl's streamer; return the result and every (bound, truth) pair."""
+def stream_checked(commands, options: SimOptions, events=(), lead_s: float = 2.0, settle_s: float = 10.0,
+                   profile=None):
+    """Run the job through armctl's streamer; return the result and every (bound, truth) pair.
+    ``profile``: the host's (an issue-9 arm: the probed one), else the arm's own."""
     arm = SimulatedArm(options)
-    strategy = StreamerStrategy(MotionModel(arm.profile), arm.pose, lead_s, options.baud)
+    if profile is None:
+        strategy = StreamerStrategy(MotionModel(arm.profile), arm.pose, lead_s, options.baud)
+    else:
+        from armctl.bench.table import make_strategy
+
+        strategy = make_strategy("armctl", arm, lead_s, profile=profile)
     streamer = strategy.streamer
     line: list[str] = []
     checks: list[tuple[float, int, int]] = []
@@ -59,8 +66,11 @@ REPEATING = ("backforth", "periodic")
 @pytest.mark.parametrize("name", SCENARIO_NAMES)
 def test_every_scenario_streams_soundly(name):
     scenario = scenarios()[name]
+    from armctl.bench.table import host_profile
+
     result, checks, streamer = stream_checked(scenario.commands, scenario.options, scenario.events,
-                                              settle_s=60.0 if name in REPEATING else 10.0)
+                                              settle_s=60.0 if name in REPEATING else 10.0,
+                                              profile=host_profile(scenario, "armctl"))
     assert not result.timed_out
     assert result.dropped == 0
     assert result.written == scenario.frames

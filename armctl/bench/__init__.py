@@ -3,4 +3,5 @@ line can offer them without importing the benchmark itself."""
 
 SCENARIO_NAMES = (
     "long", "tiny", "mixed", "slow", "fast", "lossy", "arrival", "pause", "longfirst", "backforth", "periodic",
+    "fifo50", "resume", "robotxyz", "kinematics", "slow2x",
 )

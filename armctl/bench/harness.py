@@ -18,9 +18,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, NamedTuple, Sequence
 
-from ..job import Finished, Job, RunView, Write
+from ..job import Finished, Job, RunView, Write, agreed_pause
 from ..motion import MotionModel
-from ..protocol import Command, PauseToggle, StatusReader
+from ..protocol import Command, PauseStatus, PauseToggle, StatusReader, STATUS_PERIOD_S, STATUS_ROTATION
 from ..sim.connector import HISTORY_FRAMES
 from ..sim.model import SimulatedArm
 from ..streamer import Streamer
@@ -42,6 +42,7 @@ class RunResult:
     aborted_at_s: float | None = None  # when the abort sequence was written
     outcome: str = "running"  # the engine's (armctl/job.py Outcome), as ``armctl run`` would end
     arm_time_s: float | None = None  # the engine's arm time, as ``armctl run`` prints it (finished jobs)
+    resume_line: int | None = None  # the engine's resume line (1-based job frame), as the summary prints it
 
 
 @dataclass(frozen=True)
@@ -87,6 +88,7 @@ def run_job(
     on_write: Callable[[int, float], None] | None = None,
     on_status: Callable[[float], None] | None = None,
     line: list[str] | None = None,
+    settle: bool = False,
 ) -> RunResult:
     """Stream ``commands`` with ``strategy`` until the engine says the job is over (or, with
     ``abort_after_frames``, until the abort sequence is written: the motion after it is then
@@ -95,6 +97,8 @@ def run_job(
     ``on_write(index, now)`` follows every job frame written, ``on_status(now)`` every batch of
     status frames the strategy has read (and the end of the job); ``line``, if given, gets "job", "event" or "abort" for
     each frame written, in the order they go on the wire (= the arm's arrival indexes).
+    ``settle``: after the abort, run the engine to its end (as ``armctl run`` does before its
+    summary and resume line) instead of measuring the motion after the abort.
     """
     line = _Discard() if line is None else line  # not kept unless asked for: memory stays flat
     job = job_engine(commands, strategy, arm, abort_sequence)
@@ -129,7 +133,7 @@ def run_job(
                     on_write(written, now)
                 written += 1
             continue
-        if type(action) is Finished or aborted_at is not None:
+        if type(action) is Finished or (aborted_at is not None and not settle):
             if on_status is not None:
                 on_status(now)  # the engine's last word: at rest at the last target confirms the rest
             break
@@ -142,10 +146,32 @@ def run_job(
         if upcoming is None:
             break
         now = max(upcoming, now + EPSILON_S)
-    moving_after = _motion_after(arm, aborted_at, time_limit_s) if aborted_at is not None else None
+    moving_after = _motion_after(arm, aborted_at, time_limit_s) if aborted_at is not None and not settle else None
     result = _result(arm, total, written, now, moving_after, job)
     result.aborted_at_s = aborted_at
     return result
+
+
+# Whether ``start_run`` is the rule that resumes exactly once in both control modes (issue 9
+# item 3, wt-honest).  Until it is, the bench prints a resume scenario's exactly-once miss as
+# waiting for it instead of failing; set True when ``start_run`` calls the landed rule.
+RESUME_RULE_LANDED = False
+START_ROTATIONS = 3  # ``armctl run`` reads all nine kinds and two more rotations before it writes
+
+
+def start_run(arm: SimulatedArm, line: list[str]) -> None:
+    """What ``armctl run`` does on an arm before its first frame — today's rule, as
+    ui/run_job.read_arm has it: read the status a few rotations; an arm that twice reports it is
+    paused gets one pause toggle, then its report of running is waited for.  (Issue 9 item 3,
+    wt-honest, makes this rule follow the control mode; when it lands as a pure rule, call it here.)"""
+    reader, reports = StatusReader(), []
+    rotation_s = STATUS_PERIOD_S * len(STATUS_ROTATION)
+    until = arm.now_s + START_ROTATIONS * rotation_s
+    reports += [f.paused for f in reader.feed(arm.advance(until)) if isinstance(f, PauseStatus)]
+    if agreed_pause(reports) is True:
+        arm.write(PauseToggle().encode(), arm.now_s)
+        line.append("resume")
+        arm.advance(arm.now_s + START_ROTATIONS * rotation_s)
 
 
 class _Discard:
@@ -193,5 +219,5 @@ def _result(arm: SimulatedArm, total: int, written: int, now: float, moving_afte
         job_s=now if executor.last_end_s is None else executor.last_end_s,
         peak_occupancy=arm.peak_fifo_occupancy, peak_queued_s=executor.peak_wait_s,
         moving_after_abort_s=moving_after, timed_out=timed_out,
-        outcome=str(job.view.outcome), arm_time_s=job.view.arm_time_s,
+        outcome=str(job.view.outcome), arm_time_s=job.view.arm_time_s, resume_line=job.view.resume_line(),
     )

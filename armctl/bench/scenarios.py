@@ -32,10 +32,27 @@ Scenarios (``build_scenarios``):
 - ``backforth``: 10 ms moves back and forth between two points 1 mm apart, at 115200 baud (the moves
   are then arm-bound): every position lies on every pending path.
 - ``periodic``: round a pentagon of 10 mm sides, 100 ms a side: targets repeat every 5 frames.
+
+The arm-mismatch scenarios (issue 9: the arm differs from the document where it leaves things
+open).  Each runs armctl twice — **with a probed profile** (``armctl probe``'s core run against
+the same simulated arm, armctl/bench/probed.py) and **without** (the document's defaults) — plus
+the omniscient reference:
+
+- ``fifo50``: a FIFO of 50 frames where the document says 200: one 4.7 s move, then 3 mm moves
+  (30 ms each) at 115200 baud, so a host that trusts 200 queues a lead's worth (~67) of them
+  behind the long move.  (With 10 or 20 ms moves a host that knows the 50 frames cannot keep
+  the arm fed either: the 46 frames it may have in flight last less than two position reports.)
+- ``resume``: the mixed job on an arm whose control frames act on arrival, aborted at mid-job and
+  then resumed on the same arm from the printed resume line: every job frame must run once.
+- ``robotxyz``: the mixed job after a ``G54`` (the job sets the worktable origin, its Cartesian
+  targets are worktable coordinates); the arm's status X/Y/Z stay in robot coordinates.
+- ``kinematics``: the mixed job on an arm whose links are 5 % longer than the profile's.
+- ``slow2x``: the mixed job on an arm twice slower than the model, with the Ctrl-C run.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import random
 from dataclasses import dataclass, field
@@ -43,10 +60,11 @@ from dataclasses import dataclass, field
 from ..motion import MotionModel, Planner, circle_through
 from ..profile import load_profile
 from ..protocol import (
-    AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, MCode, PauseToggle, frame_seconds,
+    AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, MCode, PauseToggle, SetWorktableOrigin,
+    frame_seconds,
 )
 from ..kinematics import CartesianPose
-from ..sim.model import SimOptions, _load_profile
+from ..sim.model import SimOptions, _arm_profile
 from . import SCENARIO_NAMES  # noqa: F401  (re-exported: the names of build_scenarios' list)
 from .harness import Event
 
@@ -60,6 +78,7 @@ TRAVEL_Z = 240.0  # height of the moves between pick and place
 
 ARM_BOUND_RATIO = 1.01  # job time ÷ omniscient job time, arm-bound and line-bound scenarios
 OTHER_RATIO = 1.03  # the rest
+MISMATCH_RATIO = 1.02  # issue 9: armctl with a probed profile, on an arm that differs from the document
 
 
 @dataclass(frozen=True)
@@ -74,6 +93,10 @@ class Scenario:
     outside_stop_s: float = 0.0  # time the arm is held still from outside (added to the physical bound)
     note: str = ""
     meta: dict = field(default_factory=dict, compare=False)
+    # An arm-mismatch scenario: "armctl" plans with the probed profile, "armctl no probe" with the
+    # document's defaults (armctl/bench/probed.py); only those two and the omniscient host run.
+    probe: bool = False
+    resume: bool = False  # also abort at mid-job and resume on the same arm: every job frame runs once
 
     @property
     def frames(self) -> int:
@@ -106,11 +129,11 @@ def long_moves(frames: int, seed: int = 1) -> list[Command]:
     return commands
 
 
-def tiny_moves(frames: int) -> list[Command]:
+def tiny_moves(frames: int, step_mm: float = 1.0) -> list[Command]:
     """1 mm moves at 6000 mm/min (10 ms each) along a slow square spiral: line-bound."""
     commands: list[Command] = []
     x, y, z = 250.0, 0.0, 150.0
-    steps = ((1.0, 0.0), (0.0, 1.0), (-1.0, 0.0), (0.0, -1.0))
+    steps = ((step_mm, 0.0), (0.0, step_mm), (-step_mm, 0.0), (0.0, -step_mm))
     leg, direction, done_in_leg = 1, 0, 0
     for _ in range(frames):
         dx, dy = steps[direction]
@@ -152,14 +175,43 @@ def periodic(frames: int, period: int = 5, side_mm: float = 10.0) -> list[Comman
     return [_line(corners[k % period], 6000.0) for k in range(frames)]
 
 
+def long_then_tiny(frames: int, step_mm: float = 3.0) -> list[Command]:
+    """One long move (home to the box, 4.7 s at 2000 mm/min), then ``step_mm`` moves at 6000
+    mm/min (30 ms each) along a square spiral from its end: targets never repeat, and at 115200
+    baud (4.2 ms a frame) the line can queue hundreds of them behind the long move."""
+    return [_line((250.0, 0.0, 150.0), 2000.0)] + tiny_moves(frames - 1, step_mm)
+
+
+G54_ORIGIN_MM = (100.0, -20.0, 50.0)  # the robotxyz job's worktable origin (robot frame)
+
+
+def in_worktable(commands, origin_mm=G54_ORIGIN_MM) -> list[Command]:
+    """``commands`` (robot coordinates) as a job that first sets the worktable origin (G54) to
+    ``origin_mm`` and then gives every Cartesian target relative to it: the same path."""
+    ox, oy, oz = origin_mm
+    shifted: list[Command] = [SetWorktableOrigin(ox, oy, oz)]
+    for command in commands:
+        if isinstance(command, (LinearMove, AccelLinearMove, ArcStart, ArcEnd)):
+            command = dataclasses.replace(command, x_mm=round(command.x_mm - ox, 3), y_mm=round(command.y_mm - oy, 3),
+                                          z_mm=round(command.z_mm - oz, 3))
+        shifted.append(command)
+    return shifted
+
+
+def true_durations_s(commands, options: SimOptions) -> list[float]:
+    """Each frame's duration on the arm itself (the simulated arm's profile and speed_factor,
+    from its start pose): the arm's seconds, which no host knows."""
+    model = MotionModel(_arm_profile(options), options.speed_factor)
+    return [segment.duration_s for segment in Planner(model).feed_all(commands)]
+
+
 def physical_bound_s(commands, options: SimOptions, outside_stop_s: float = 0.0) -> float:
     """The physical floor of a job (PROTOCOL.md's last section, made exact): frame k cannot land
     before (k + 1) frame times and the arm must then still run it and every frame after it, so no
     host finishes before max over k of ((k + 1) × frame time + Σ motion from frame k on) — at
     least max(N × frame time, Σ motion), plus up to one frame time.  Motion at the arm's true
     speed (its ``speed_factor``), plus any time the arm is held still from outside."""
-    model = MotionModel(_load_profile(options.profile), options.speed_factor)
-    durations = [segment.duration_s for segment in Planner(model).feed_all(commands)]
+    durations = true_durations_s(commands, options)
     frame_s = frame_seconds(options.baud)
     floor_s, rest_s = 0.0, 0.0
     for k in range(len(durations) - 1, -1, -1):
@@ -284,5 +336,17 @@ def build_scenarios(size: str = "full", seed: int = 1) -> list[Scenario]:
                  note="no time target (issue 13 asks ≤ 1.02 × physical; see docs/bench.md)"),
         Scenario("periodic", "a pentagon round and round (period 5)", tuple(periodic(shape_frames)),
                  SimOptions(seed=seed), None, note="no time target (see docs/bench.md)"),
+        # issue 9: the arm differs from the document; armctl with and without a probe
+        Scenario("fifo50", "FIFO of 50 (not 200): a long move, then 30 ms moves, 115200 baud",
+                 tuple(long_then_tiny(shape_frames)), SimOptions(fifo_frames=50, baud=FAST_BAUD, seed=seed),
+                 MISMATCH_RATIO, probe=True),
+        Scenario("resume", "mixed, control on arrival, abort and resume", mixed,
+                 SimOptions(control_frames="arrival", seed=seed), MISMATCH_RATIO, probe=True, resume=True),
+        Scenario("robotxyz", "mixed after G54, status X/Y/Z in robot frame", tuple(in_worktable(mixed)),
+                 SimOptions(status_xyz_frame="robot", seed=seed), MISMATCH_RATIO, probe=True),
+        Scenario("kinematics", "mixed, links 5 % longer than the profile's", mixed,
+                 SimOptions(link_scale=1.05, seed=seed), MISMATCH_RATIO, probe=True),
+        Scenario("slow2x", "mixed, arm 2× slower, Ctrl-C", mixed, SimOptions(speed_factor=2.0, seed=seed),
+                 MISMATCH_RATIO, probe=True),
     ]
 
