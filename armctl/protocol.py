@@ -17,6 +17,7 @@ constant or function, marked with its label; the README lists where each one liv
 from __future__ import annotations
 
 import math
+import operator
 import struct
 from dataclasses import dataclass, fields
 from typing import ClassVar, Iterator, Union
@@ -163,18 +164,51 @@ class _MotionCommand(Command):
     # field name → float slot 1…11; fields not listed are integers handled by the subclass.
     SLOTS: ClassVar[dict[str, int]] = {}
 
+    _LAYOUT: ClassVar[tuple] = ((), 0, 0, None)  # from_fields: set below for each command
+
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
-        cls._FLOAT_NAMES = tuple(cls.SLOTS)  # not annotated: no dataclass field
-        cls._FLOATS_CODEC = struct.Struct(f"<{len(cls.SLOTS)}f")  # H1, all float fields at once
+        # not annotated: no dataclass fields
+        cls._FLOAT_NAMES = names = tuple(cls.SLOTS)
+        cls._FLOATS_CODEC = struct.Struct(f"<{len(names)}f")  # H1, all float fields at once
+        # itemgetter of one name gives the value, not a 1-tuple; a lambda would bind as a method
+        one = staticmethod(lambda state: (state[names[0]],))
+        cls._floats_of = operator.itemgetter(*names) if len(names) > 1 else one
+        # The whole frame in one pack (a compiler encodes one per line): head, command
+        # character, sub-command, the eleven slots (zero bytes where no field is), tail.
+        by_slot = {slot: name for name, slot in cls.SLOTS.items()}
+        cls._FRAME_CODEC = struct.Struct("<3B" + "".join("f" if k in by_slot else "4x" for k in range(1, 12)) + "B")
+        cls._slot_values = operator.itemgetter(*(by_slot[k] for k in sorted(by_slot))) if len(by_slot) > 1 else one
+
+    @classmethod
+    def from_fields(cls, *values):
+        """``cls(*values)`` with every field given, in declaration order, built without the
+        frozen dataclass's one ``object.__setattr__`` per field and with one dictionary update
+        (a compiler builds one per line): the same object, the same checks, the same
+        FieldError (anything unusual is simply ``cls(*values)``)."""
+        names, first, end, codec = cls._LAYOUT
+        if codec is None or len(values) != len(names):
+            return cls(*values)
+        floats = values[first:end]
+        if set(map(type, floats)) <= _PLAIN_NUMBERS:
+            try:
+                rounded = codec.unpack(codec.pack(*floats))
+            except (OverflowError, struct.error):
+                return cls(*values)
+            if math.isfinite(sum(rounded)):
+                self = object.__new__(cls)
+                self.__dict__.update(zip(names, values[:first] + rounded + values[end:]))
+                self._validate()
+                return self
+        return cls(*values)
 
     def __post_init__(self) -> None:
         # Every float field rounded to single precision in one pack/unpack and stored in one
-        # update (a compiler builds one such object per line).  Anything unusual — a value
+        # update.  Anything unusual — a value
         # that is no plain int/float, not finite, or too large for float32 — takes the
         # field-by-field path, which raises the precise FieldError.
         state, names = self.__dict__, self._FLOAT_NAMES
-        values = [state[name] for name in names]
+        values = self._floats_of(state)
         rounded = None
         if set(map(type, values)) <= _PLAIN_NUMBERS:
             try:
@@ -196,11 +230,8 @@ class _MotionCommand(Command):
         return 0
 
     def encode(self) -> bytes:
-        frame = bytearray(FRAME_SIZE)
-        frame[0], frame[1], frame[2], frame[47] = MOTION_HEAD, ord(self.CODE), self.subcommand(), MOTION_TAIL
-        for name, slot in self.SLOTS.items():
-            FLOAT_CODEC.pack_into(frame, _slot_offset(slot), getattr(self, name))
-        return bytes(frame)
+        return self._FRAME_CODEC.pack(MOTION_HEAD, ord(self.CODE), self.subcommand(), *self._slot_values(self.__dict__),
+                                      MOTION_TAIL)
 
     @classmethod
     def _from_frame(cls, frame: bytes) -> "_MotionCommand":
@@ -210,6 +241,16 @@ class _MotionCommand(Command):
     @classmethod
     def _ints_from_subcommand(cls, subcommand: int) -> dict:
         return {}
+
+
+def _positional_layout(cls) -> tuple:
+    """(field names, first float field, end of the float fields, their codec) for
+    ``from_fields``; codec None when the float fields are not all side by side."""
+    names = tuple(f.name for f in fields(cls))
+    at = sorted(names.index(name) for name in cls.SLOTS)
+    if at != list(range(at[0], at[0] + len(at))):
+        return names, 0, 0, None
+    return names, at[0], at[-1] + 1, struct.Struct(f"<{len(at)}f")
 
 
 def _slot_offset(slot: int) -> int:
@@ -255,9 +296,14 @@ class LinearMove(_MotionCommand):
     pwm_channel: int = 1
 
     def _validate(self) -> None:
-        object.__setattr__(self, "pwm_channel", _int("LinearMove", "pwm_channel", self.pwm_channel, 1, 4))
-        _check_pwm(self)
-        _check_positive(self, "speed_mm_min")
+        # the common case inline (one per compiled line); anything else takes the checks that word the error
+        channel, low, high = self.pwm_channel, *PWM_RANGE_US
+        if channel.__class__ is not int or not 1 <= channel <= 4:
+            object.__setattr__(self, "pwm_channel", _int("LinearMove", "pwm_channel", channel, 1, 4))
+        if not low <= self.pwm_us <= high:
+            _check_pwm(self)
+        if not self.speed_mm_min > 0:
+            _check_positive(self, "speed_mm_min")
 
     def subcommand(self) -> int:
         return LINEAR_SUBCOMMAND_FOR_CHANNEL_1 if self.pwm_channel == 1 else self.pwm_channel
@@ -429,6 +475,11 @@ class Delay(_MotionCommand):
 
     def _validate(self) -> None:
         _check_not_negative(self, "delay_ms")
+
+
+# from_fields' layout of each motion command (the dataclass fields exist only once @dataclass ran)
+for _cls in (LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Delay):
+    _cls._LAYOUT = _positional_layout(_cls)
 
 
 @dataclass(frozen=True)

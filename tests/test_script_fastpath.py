@@ -2,7 +2,7 @@
 
 Differential tests on generated input: for every line, ``parse_fast`` either declines (None)
 or returns exactly the node Lark builds — so the two agree on which lines they reject, since
-the fast path rejects nothing itself; ``resolve_plain`` either declines or returns exactly
+the fast path rejects nothing itself; ``resolve_planned`` (one plan per line shape) either declines or returns exactly
 what ``resolve`` does; and a whole compilation gives the same statements and diagnostics with
 and without the fast path.
 """
@@ -17,7 +17,7 @@ from armctl.script.fastpath import parse_fast
 from armctl.script.grammar import parse_line
 from armctl.script.modal import POISONED, ModalState
 from armctl.script.nodes import EMPTY
-from armctl.script.statements import CODES, resolve, resolve_plain
+from armctl.script.statements import CODES, plain_plan, resolve, resolve_planned
 from armctl.script.syntax_errors import LineSyntaxError
 
 # --- generated lines ---------------------------------------------------------------------------
@@ -97,7 +97,7 @@ written_values = st.one_of(st.floats(-1000, 1000), st.sampled_from([1.0, 2.0, 4.
 
 @settings(max_examples=400, deadline=None)
 @given(st.sampled_from(sorted(CODES)), st.data())
-def test_resolve_plain_agrees_with_resolve(number, data):
+def test_resolve_planned_agrees_with_resolve(number, data):
     spec = CODES[number]
     state = ModalState()
     for key in state.values:
@@ -106,10 +106,21 @@ def test_resolve_plain_agrees_with_resolve(number, data):
     letters = data.draw(st.lists(st.sampled_from(spec.letters), unique=True), label="letters")
     written = {letter: data.draw(written_values, label=letter) for letter in letters}
     full = resolve(spec, written, state)
-    plain = resolve_plain(spec, written, state.values)
+    plan = plain_plan(spec, tuple(written))
+    if plan is None:  # the general path judges this shape
+        return
+    plain = resolve_planned(plan, list(written.values()), state.values)
     assert (plain is not None) == full.ok
     if plain is not None:
         assert plain == (full.arguments, full.updates)
+
+
+def test_a_plan_covers_the_common_shapes():
+    """The hot path plans every shape a generated job writes (else the test above proves little)."""
+    for letters in (("X", "Y", "Z"), ("X", "Y", "Z", "A", "B", "C", "F", "S"), ("S", "F"), ()):
+        assert plain_plan(CODES[1], letters) is not None
+    assert plain_plan(CODES[6], ("J1", "J2", "S", "H")) is not None
+    assert plain_plan(CODES[1], ("T", "X")) is None and plain_plan(CODES[1], ("J1",)) is None
 
 
 def test_fast_path_examples():
