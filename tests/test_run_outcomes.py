@@ -15,7 +15,7 @@ import pytest
 from click.testing import CliRunner
 
 from armctl.cli import main
-from armctl.estimate import FRAME_LIMIT, JobEstimator
+from armctl.estimate import JobEstimator
 from armctl.link import config_baud, plausible_state
 from armctl.motion import MotionModel
 from armctl.profile import load_profile
@@ -86,7 +86,7 @@ def test_the_estimate_never_queues_more_frames_than_the_streamer_would():
     estimator = JobEstimator(model, model.initial_pose(), lead_s=600)
     for _ in range(600):
         estimator.add(Delay(500))
-    assert estimator.result.peak_queue_frames <= FRAME_LIMIT
+    assert estimator.result.peak_queue_frames <= estimator.frame_limit
 
 
 def test_the_state_links_use_judges_jumps_against_the_profile():
