@@ -139,7 +139,7 @@ GOOD_ATOMS = ["#<a>", "#<A_1>", "#<b>", "5.", "0", "12.5", ".5"]
 BAD_ATOMS = ["#<>", "#<1a>", "#a", "1.2.3", "1e5", "X", "", "[", "]"]
 
 
-def expressions(space, atom, depth: int = 3):
+def expressions(space, atom, depth: int = 2):
     """Expression text with spaces and comments anywhere."""
     if depth == 0:
         return atom
@@ -182,7 +182,7 @@ def expression_lines(draw, bad: bool):
     return "".join(parts)
 
 
-@settings(max_examples=1500, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.one_of(expression_lines(bad=False), expression_lines(bad=True), any_line))
 @example("G1 X[#<a>+1] Y#<b> Z10 ; c")
 @example("#<a> = [#<a> * 0.5 + -1]")

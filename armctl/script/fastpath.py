@@ -137,8 +137,12 @@ def _deeper(node, column: int, end: int, depth: int) -> tuple:
 def _operand(tokens: list, at: int, nesting: int) -> tuple:
     """A value with its unary signs (grammar: ``value`` and ``signed`` are alike): -x negates
     (a number folds into a number), +x is x.  Returns ((node, column, end, depth), next)."""
+    kind, text, column, end = tokens[at]
+    if kind == "#":  # the common cases first, without the general machinery below
+        return (Parameter(text[2:-1].lower(), column, end), column, end, 0), at + 1
+    if kind == "n":
+        return (float(text), column, end, 0), at + 1
     signs = []
-    kind = tokens[at][0]
     while kind == "-" or kind == "+":
         signs.append(tokens[at])
         at += 1
@@ -170,8 +174,10 @@ def _operand(tokens: list, at: int, nesting: int) -> tuple:
 
 
 def _binary(operator: str, left: tuple, right: tuple) -> tuple:
-    node = Binary(operator, left[0], right[0], left[1], right[2])
-    return _deeper(node, left[1], right[2], max(left[3], right[3]) + 1)
+    depth = max(left[3], right[3]) + 1
+    if depth > MAX_EXPRESSION_DEPTH:
+        raise _Decline  # Lark says why
+    return Binary(operator, left[0], right[0], left[1], right[2]), left[1], right[2], depth
 
 
 def _sum(tokens: list, at: int, nesting: int) -> tuple:
