@@ -221,15 +221,24 @@ def compile_command(script: str, fmt: str, as_json: bool, output: str | None):
     with PendingOutput(output, binary=fmt == "bin") as pending:
         out = pending.stream
         compilation = source_script.compile()
+        batch: list = []  # written 4,096 frames at a time: a write per frame costs more than encoding it
+
+        def flush() -> None:
+            out.write(b"".join(batch) if fmt == "bin" else "".join(batch))
+            batch.clear()
+
         for statement in compilation:
             frame = statement.command.encode()
             if fmt == "hex":
-                out.write(frame.hex() + "\n")
+                batch.append(frame.hex() + "\n")
             elif fmt == "bin":
-                out.write(frame)
+                batch.append(frame)
             else:
                 source = {"file": statement.span.file, "line": statement.line, "text": statement.span.text.rstrip("\r\n")}
-                out.write(json.dumps(frame_record(statement.command, frame, source)) + "\n")
+                batch.append(json.dumps(frame_record(statement.command, frame, source)) + "\n")
+            if len(batch) == 4096:
+                flush()
+        flush()
         if compilation.error_count:
             _report_script_errors(compilation)  # exits 1; the pending output is discarded
         pending.commit()

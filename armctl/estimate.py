@@ -16,8 +16,6 @@ from dataclasses import dataclass, field
 from .motion import ArmPose, MotionModel, Planner
 from .protocol import DEFAULT_BAUD, RunProgram, frame_seconds
 from .script.source import MAX_JOB_MOTION_S, Diagnostic
-from .streamer import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S
-
 
 
 @dataclass
@@ -67,9 +65,14 @@ class JobEstimator:
 
     MAX_NOTES = 5
 
-    def __init__(self, model: MotionModel, start: ArmPose, lead_s: float = DEFAULT_LEAD_S, baud: int = DEFAULT_BAUD):
+    def __init__(self, model: MotionModel, start: ArmPose, lead_s: float | None = None, baud: int = DEFAULT_BAUD):
+        """``lead_s`` defaults to the streamer's lead."""
+        # The streamer's numbers, imported here rather than with the module: lint imports this
+        # module for motion_time_overrun alone, and the streamer costs every start (issue 13).
+        from .streamer import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S
+
         self.planner = Planner(model, start)
-        self.lead_s = lead_s
+        self.lead_s = DEFAULT_LEAD_S if lead_s is None else lead_s
         # the streamer never lets more frames be in flight than this (see streamer.py)
         self.frame_limit = model.profile.connector.fifo_frames - CAPACITY_MARGIN_FRAMES
         self.frame_s = frame_seconds(baud)
@@ -113,7 +116,7 @@ class JobEstimator:
         return segment.duration_s
 
 
-def estimate_commands(commands, model: MotionModel, start: ArmPose, lead_s: float = DEFAULT_LEAD_S,
+def estimate_commands(commands, model: MotionModel, start: ArmPose, lead_s: float | None = None,
                       baud: int = DEFAULT_BAUD) -> Estimate:
     estimator = JobEstimator(model, start, lead_s, baud)
     for command in commands:

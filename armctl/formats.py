@@ -12,9 +12,12 @@ import json
 import math
 import re
 import string
-from typing import Iterable, Iterator
+from typing import TYPE_CHECKING, Iterable, Iterator
 
-from .protocol import Chunk, Command, StatusFrame, describe, f32_repr
+from .protocol import Command, f32_repr
+
+if TYPE_CHECKING:
+    from .status_frames import Chunk
 
 _HEX_DIGITS = frozenset(string.hexdigits.encode())
 _WHITESPACE = frozenset(string.whitespace.encode())
@@ -87,6 +90,8 @@ def _log_bytes(data: bytes) -> Iterator[bytes]:
 
 
 def describe_chunk(chunk: Chunk) -> str:
+    from .status_frames import StatusFrame, describe  # decode's: compile needs none of it (start-up)
+
     where = f"{chunk.offset:>6}"
     if isinstance(chunk.frame, Command):
         family = "motion " if chunk.data[0] == 0xEE else "control"
@@ -101,6 +106,8 @@ def describe_chunk(chunk: Chunk) -> str:
 def chunk_record(chunk: Chunk) -> dict:
     """``decode --json``: one object per chunk — its offset and bytes, its family (motion,
     control, status, invalid, junk) and, for a frame, its name and decoded fields."""
+    from .status_frames import StatusFrame
+
     record = {"offset": chunk.offset, "hex": chunk.data.hex()}
     frame = chunk.frame
     if isinstance(frame, Command):
@@ -123,6 +130,8 @@ def _short_hex(data: bytes, limit: int = 24) -> str:
 
 
 def summary_line(chunks: Iterable[Chunk]) -> str:
+    from .status_frames import StatusFrame
+
     commands = statuses = invalid = junk = 0
     for chunk in chunks:
         if isinstance(chunk.frame, Command):

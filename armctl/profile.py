@@ -32,12 +32,13 @@ the port, so it is laid over whichever profile is in use, key by key, and wins).
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import functools
 import math
+import os
+import pkgutil
+import sys
 import tomllib
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
 from typing import Any, Callable
 
@@ -336,6 +337,8 @@ CONNECTOR_KEYS = tuple(_SCHEMA["connector"])
 def unknown_key_hint(key: str, known) -> str:
     """`` (did you mean 'port'?)`` for a misspelt key, else the list of known keys: the one
     wording of every unknown key in armctl.toml and a profile."""
+    import difflib  # only when a key is unknown
+
     close = difflib.get_close_matches(key.rsplit(".", 1)[-1], list(known), n=1)
     return f" (did you mean {close[0]!r}?)" if close else f" (known: {', '.join(known)})"
 
@@ -456,7 +459,9 @@ def _cross_check(profile: Profile, source: str, prefix: str) -> None:
 @functools.lru_cache(maxsize=1)
 def _default_data() -> dict:
     package, name = DEFAULT_RESOURCE
-    text = resources.files(package).joinpath(name).read_bytes()
+    # pkgutil, not importlib.resources: the same bytes from a folder or a zip, without importing
+    # tempfile, shutil and the compression modules at every start (issue 13: start-up)
+    text = pkgutil.get_data(package, name)
     source = f"<packaged {name}>"
     return _check(_parse(text, source), source)
 
@@ -528,6 +533,12 @@ def find_config(start: Path | None = None) -> tuple[Path | None, dict]:
 def user_config_path() -> Path:
     """The user's armctl.toml: ``$XDG_CONFIG_HOME/armctl/armctl.toml`` (``~/.config/…`` when
     unset) on Linux and the BSDs, platformdirs' equivalent on macOS and Windows."""
+    if sys.platform.startswith(("linux", "freebsd", "openbsd", "netbsd")):
+        # platformdirs' own rule for these, without importing it at every start (issue 13)
+        # (the XDG rule: a relative or empty XDG_CONFIG_HOME is ignored); tests/test_user_config.py
+        # holds the two to agreeing
+        base = os.environ.get("XDG_CONFIG_HOME", "")
+        return Path(base if os.path.isabs(base) else os.path.expanduser("~/.config")) / "armctl" / CONFIG_NAME
     import platformdirs
 
     return Path(platformdirs.user_config_dir("armctl", appauthor=False)) / CONFIG_NAME

@@ -27,6 +27,7 @@ from pathlib import Path
 import pytest
 
 import armctl.protocol as protocol
+import armctl.status_frames as status_frames
 
 # The user's own armctl.toml (~/.config/armctl/armctl.toml) must not change what the tests see:
 # every test, and every armctl it starts, looks in an empty config directory instead.  Tests of
@@ -89,7 +90,8 @@ def load_golden(filename: str, frame_size: int) -> tuple[GoldenVector, ...]:
         if len(record["data"]) != frame_size:
             raise ValueError(f"{record['where']}: {record['name']} has {len(record['data'])} bytes, not {frame_size}")
         call = " ".join(record["call"])
-        obj = eval(call, {"__builtins__": {}}, dict(vars(protocol)))  # noqa: S307 - our own data file
+        names = {**vars(protocol), **vars(status_frames)}  # protocol's interface: status names load on first use
+        obj = eval(call, {"__builtins__": {}}, names)  # noqa: S307 - our own data file
         vectors.append(GoldenVector(record["name"], call, obj, bytes(record["data"]), record["decode_only"], record["where"]))
     names = [v.name for v in vectors]
     if len(set(names)) != len(names):

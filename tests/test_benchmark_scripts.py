@@ -1,5 +1,7 @@
 """The benchmark scripts the README shows say what to install instead of a traceback.
 
+benchmarks/cli_speed.py (issue 13's rows, gcodeparser the reference of one) does the same.
+
 Issue 10: ``python benchmarks/compile_speed.py`` as the README showed it ended in
 ModuleNotFoundError (gcodeparser, the bench extra, was never installed).
 """
@@ -10,19 +12,24 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 ROOT = Path(__file__).resolve().parents[1]
 
-# Runs the script as __main__ with gcodeparser hidden, as on an install without the extra.
-SCRIPT = ROOT / "benchmarks" / "compile_speed.py"
-WITHOUT_GCODEPARSER = (
-    "import runpy, sys; sys.modules['gcodeparser'] = None; "
-    f"sys.argv = [{str(SCRIPT)!r}, '--lines', '10']; "
-    "runpy.run_path(sys.argv[0], run_name='__main__')"
-)
+def without_gcodeparser(script: str) -> str:
+    """Runs ``script`` as __main__ with gcodeparser hidden, as on an install without the extra."""
+    path = ROOT / "benchmarks" / script
+    return (
+        "import runpy, sys; sys.modules['gcodeparser'] = None; "
+        f"sys.argv = [{str(path)!r}, '--lines', '10']; "
+        "runpy.run_path(sys.argv[0], run_name='__main__')"
+    )
 
 
-def test_compile_speed_without_the_bench_extra_says_what_to_install():
-    done = subprocess.run([sys.executable, "-c", WITHOUT_GCODEPARSER], capture_output=True, text=True, timeout=60, cwd=ROOT)
+@pytest.mark.parametrize("script", ["compile_speed.py", "cli_speed.py"])
+def test_benchmarks_without_the_bench_extra_say_what_to_install(script):
+    done = subprocess.run([sys.executable, "-c", without_gcodeparser(script)], capture_output=True, text=True,
+                          timeout=60, cwd=ROOT)
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr
     assert "pip install -e '.[bench]'" in done.stderr

@@ -215,8 +215,8 @@ def test_the_engine_imports_no_io():
             if isinstance(node, ast.Import):
                 roots = [alias.name.split(".")[0] for alias in node.names]
             elif isinstance(node, ast.ImportFrom):
-                if node.level:  # within armctl: follow it
-                    todo.append(node.module)
+                if node.level:  # within armctl: follow it ("from . import status_frames" names the module)
+                    todo.extend([node.module] if node.module else [alias.name for alias in node.names])
                     continue
                 roots = [node.module.split(".")[0]]
             else:

@@ -2,7 +2,7 @@
 
 Differential tests on generated input: for every line, ``parse_fast`` either declines (None)
 or returns exactly the node Lark builds — so the two agree on which lines they reject, since
-the fast path rejects nothing itself; ``resolve_plain`` either declines or returns exactly
+the fast path rejects nothing itself; ``resolve_planned`` (one plan per line shape) either declines or returns exactly
 what ``resolve`` does; and a whole compilation gives the same statements and diagnostics with
 and without the fast path.
 """
@@ -13,11 +13,11 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from armctl.script import InitialState, compile_lines
-from armctl.script.fastpath import parse_fast
+from armctl.script.fastpath import parse_expression_line, parse_fast
 from armctl.script.grammar import parse_line
 from armctl.script.modal import POISONED, ModalState
 from armctl.script.nodes import EMPTY
-from armctl.script.statements import CODES, resolve, resolve_plain
+from armctl.script.statements import CODES, plain_plan, resolve, resolve_planned
 from armctl.script.syntax_errors import LineSyntaxError
 
 # --- generated lines ---------------------------------------------------------------------------
@@ -79,6 +79,7 @@ def test_fast_path_answers_only_what_lark_answers_the_same_way(line):
     "G6 J1=10 J2=0 J3=0 J4=0 J5=0 J6=0", "G6 J1=5 H7", "G220 X1 K100", "G230 X1 Q5", "G300 X1 R5", "G301 X2",
     "G4 P100", "G4 P-1", "G54 X0 Y0 Z0", "G90", "G91", "M3", "RESET", "POSE 1", "#<a> = [#<a> + 1]", "G1 X#<a>",
     "G1 Q5", "G1 X1 ; c", "G1 (c) Y2", "N5 G1 Z3", "G1 X", "", "O<r> repeat [2]", "O<r> endrepeat", "G1 U5 V-5",
+    "G1 X[#<a> * 2] Y-#<a>", "#<a> = [#<a> / 0]", "G1 X[1/0]", "#<b> = -#<a>", "G1 X#<b>", "G1 S[#<a> * 9999]",
 ]), max_size=25))
 def test_compiling_with_and_without_the_fast_path_is_the_same(script):
     initial = InitialState(pose=(0, 0, 0, 0, 0, 0), pwm_us={1: 1500}, speed_mm_min=100, accel_mm_s2=10,
@@ -97,7 +98,7 @@ written_values = st.one_of(st.floats(-1000, 1000), st.sampled_from([1.0, 2.0, 4.
 
 @settings(max_examples=400, deadline=None)
 @given(st.sampled_from(sorted(CODES)), st.data())
-def test_resolve_plain_agrees_with_resolve(number, data):
+def test_resolve_planned_agrees_with_resolve(number, data):
     spec = CODES[number]
     state = ModalState()
     for key in state.values:
@@ -106,10 +107,21 @@ def test_resolve_plain_agrees_with_resolve(number, data):
     letters = data.draw(st.lists(st.sampled_from(spec.letters), unique=True), label="letters")
     written = {letter: data.draw(written_values, label=letter) for letter in letters}
     full = resolve(spec, written, state)
-    plain = resolve_plain(spec, written, state.values)
+    plan = plain_plan(spec, tuple(written))
+    if plan is None:  # the general path judges this shape
+        return
+    plain = resolve_planned(plan, list(written.values()), state.values)
     assert (plain is not None) == full.ok
     if plain is not None:
         assert plain == (full.arguments, full.updates)
+
+
+def test_a_plan_covers_the_common_shapes():
+    """The hot path plans every shape a generated job writes (else the test above proves little)."""
+    for letters in (("X", "Y", "Z"), ("X", "Y", "Z", "A", "B", "C", "F", "S"), ("S", "F"), ()):
+        assert plain_plan(CODES[1], letters) is not None
+    assert plain_plan(CODES[6], ("J1", "J2", "S", "H")) is not None
+    assert plain_plan(CODES[1], ("T", "X")) is None and plain_plan(CODES[1], ("J1",)) is None
 
 
 def test_fast_path_examples():
@@ -117,3 +129,83 @@ def test_fast_path_examples():
     assert parse_fast("; nothing") is EMPTY
     assert parse_fast("G1 X#<a>") is None  # expressions go to Lark
     assert parse_fast("RESET") is None
+
+
+# --- the expression fast path ------------------------------------------------------------------
+
+GOOD_SPACES = ["", "", " ", "  ", "\t", " (c) ", "(x)"]
+BAD_SPACES = [" ( ", ";", " ; c", "é", "\x00", ")"]
+GOOD_ATOMS = ["#<a>", "#<A_1>", "#<b>", "5.", "0", "12.5", ".5"]
+BAD_ATOMS = ["#<>", "#<1a>", "#a", "1.2.3", "1e5", "X", "", "[", "]"]
+
+
+def expressions(space, atom, depth: int = 2):
+    """Expression text with spaces and comments anywhere."""
+    if depth == 0:
+        return atom
+    inner = st.deferred(lambda: expressions(space, atom, depth - 1))
+    return st.one_of(
+        atom,
+        st.builds(lambda s, v: s + v, st.sampled_from(["-", "+", "--", "- ", "-+"]), inner),
+        st.builds(lambda a, s1, op, s2, b: a + s1 + op + s2 + b, inner, space, st.sampled_from("+-*/"), space, inner),
+        st.builds(lambda s1, v, s2: "[" + s1 + v + s2 + "]", space, inner, space),
+    )
+
+
+@st.composite
+def expression_lines(draw, bad: bool):
+    """Code lines with expression words, and assignments: all well formed, or with some of
+    their pieces drawn from malformed ones (``bad``)."""
+    def pick(good, wrong):
+        return st.one_of(st.sampled_from(good), st.sampled_from(good), st.sampled_from(wrong)) if bad else \
+            st.sampled_from(good)
+
+    space = pick(GOOD_SPACES, BAD_SPACES)
+    atom = st.one_of(st.from_regex(r"\A([0-9]{1,4}(\.[0-9]{0,3})?|\.[0-9]{1,3})\Z"), pick(GOOD_ATOMS, BAD_ATOMS))
+    value = st.one_of(st.builds(lambda v: "[" + v + "]", expressions(space, atom)), atom,
+                      st.builds(lambda s, v: s + v, st.sampled_from(["-", "+", "--", "-+"]), atom),
+                      st.builds(lambda s, v: s + "[" + v + "]", st.sampled_from(["-", "+"]), expressions(space, atom, 1)))
+    head = draw(pick(["G1", "g1", "G01", "M3", "N5 G1", "n5G1", " G1", "#<a>", "#<A_1>", "N2 #<b>", "G1X1"],
+                     ["(c) G1", "G", "#<a", "RESET", "O<r> repeat", "#<a> ="]))
+    parts = [head]
+    if "#" in head:
+        parts += [draw(space), draw(pick(["="], ["", "=="])), draw(space), draw(value)]
+    else:
+        for _ in range(draw(st.integers(0, 6))):
+            parts.append(draw(space) or " ")
+            letter = draw(pick(list("XYZABCSFxK") + ["J1=", "j6="], ["J7=", "JX", "1"]))
+            if draw(st.integers(0, 3)):
+                parts.append(letter + draw(pick(["", "", "-", "+"], [" ", "--"])) + draw(value))
+            else:
+                parts.append(letter + draw(st.from_regex(r"\A[+-]?([0-9]{1,4}(\.[0-9]{0,3})?|\.[0-9]{1,3})\Z")))
+    parts.append(draw(pick(["", " ; end", " (tail)"], [" ]", "[", " X"])))
+    return "".join(parts)
+
+
+@settings(max_examples=200, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.one_of(expression_lines(bad=False), expression_lines(bad=True), any_line))
+@example("G1 X[#<a>+1] Y#<b> Z10 ; c")
+@example("#<a> = [#<a> * 0.5 + -1]")
+@example("G1 J1=#<a> J2=[2]")
+@example("G1 X[" * 60 + "1" + "]" * 60)
+@example("G1 X[" + "1+" * 120 + "1]")
+@example("G1 X[" + "-" * 200 + "#<a>]")
+@example("G1 X[[" + "1+" * 60 + "1]" + "+1" * 60 + "]")  # brackets keep the depth of what they hold
+@example("#<a> = [1 / 2 * 3 - 4 / -#<b>]")
+def test_expression_fast_path_answers_only_what_lark_answers_the_same_way(line):
+    """Whenever it answers, the node is Lark's, word columns and expression columns included."""
+    fast = parse_expression_line(line)
+    if fast is not None:
+        slow = lark(line)
+        assert slow == fast
+        assert repr(slow) == repr(fast)  # every column of every expression node
+        assert getattr(slow, "spans", None) == getattr(fast, "spans", None)
+
+
+def test_expression_fast_path_reads_the_common_shapes():
+    """It answers for the lines it exists for (else the test above proves little)."""
+    for line in ("#<z> = 150", "G1 X[200 + 20] Y0 Z#<z> A180 F3000", "G1 X-#<a> J1=[#<a> * 2] ; c", "N3 #<a> = -[1]",
+                 "#<a> = [#<a> + 1]", "G1 X[1 / 2 * #<a>] Y[-1 - -2]"):
+        assert parse_expression_line(line) is not None, line
+    for line in ("RESET", "O<r> repeat [2]", "#<a> = 1 + 2", "G1 X[1", "G1 X[" + "1+" * 120 + "1]"):
+        assert parse_expression_line(line) is None, line

@@ -43,7 +43,7 @@ from . import messages
 from .blocks import Block, BlockCollector, Line, Problem
 from .execute import NOT_PLAIN, StatementExecution
 from .expressions import ExpressionError, Unavailable, evaluate, format_value
-from .fastpath import node_from_scan, scan
+from .fastpath import node_from_scan, parse_expression_line, scan
 from .grammar import parse_line
 from .modal import InitialState, ModalState
 from .nodes import EMPTY, BlockLine
@@ -223,6 +223,10 @@ class Compilation(StatementExecution):
         return True
 
     def _parse(self, number: int, text: str):
+        if self._fast:  # expression words and assignments, without Lark when they are plain enough
+            node = parse_expression_line(text)
+            if node is not None:
+                return node
         try:
             return parse_line(text)
         except LineSyntaxError as error:

@@ -5,7 +5,7 @@ that gives statements their meaning; the other half reads lines, pairs blocks an
 diagnostics.  Moves take one of three paths, each starting from the same untouched state:
 
   1. ``_plain_move`` — the hot path: a line the regex fast path scanned, in absolute mode,
-     with every value known (``resolve_plain``); no node is built.
+     with every value known (``resolve_planned``, one plan per line shape); no node is built.
   2. ``_move`` — a node without word columns (a fast-path line in a repeat body, or G91):
      the general ``resolve``; the first sign of trouble re-parses the line with Lark.
   3. ``_move_with_diagnostics`` — a Lark node with columns: report everything wrong with the
@@ -35,8 +35,8 @@ from .nodes import Assignment, CodeLine, KeywordLine
 from .source import SourceSpan
 from .statement import NO_WORDS, Statement
 from .statements import (
-    CODES, DISTANCE_MODES, PLACEHOLDER, PLACEHOLDERS, PWM_OF_ACTIVE_CHANNEL, MoveSpec, Resolution, blame, resolve,
-    resolve_plain,
+    CODES, DISTANCE_MODES, PLACEHOLDER, PLACEHOLDERS, PWM_OF_ACTIVE_CHANNEL, MoveSpec, PlainPlan, Resolution, blame,
+    plain_plan, resolve, resolve_planned,
 )
 
 FLOAT32_MAX = 3.4028234663852886e38
@@ -50,6 +50,25 @@ _KEYWORDS = {  # names → (command, what the number is or None, families it lea
     ("PROGRAM",): (RunProgram, "an SD-card program 0…15", (CARTESIAN, JOINTS)),
     ("MODE",): (StructureMode, "structure mode 0 or 1", ()),
 }
+
+
+# The hot path's plans by line shape (code letter, digits, word letters as written): at most
+# MAX_PLANS shapes are kept, so memory stays flat whatever a script writes.
+MAX_PLANS = 4096
+_PLANS: dict = {}
+
+
+def _plan(shape: tuple) -> Optional[PlainPlan]:
+    """The plan for a scanned line's shape (``plain_plan``), None if it is not a known G code."""
+    letter, digits, names = shape
+    plan = None
+    if letter in "Gg" and len(digits) <= 9:
+        spec = CODES.get(int(digits))
+        if spec is not None:
+            plan = plain_plan(spec, tuple(LETTERS[name] for name in names))
+    if len(_PLANS) < MAX_PLANS:
+        _PLANS[shape] = plan
+    return plan
 
 
 class StatementExecution:
@@ -87,25 +106,25 @@ class StatementExecution:
         Returns the statement to yield (or None: held back or before ``from_line``), or
         ``NOT_PLAIN`` without having changed anything — then the line takes the general path."""
         letter, digits, column, end_column, words = scanned
-        if (letter != "G" and letter != "g") or len(digits) > 9:
-            return NOT_PLAIN
-        spec = CODES.get(int(digits))
         state = self.state
-        if spec is None or state.relative:
+        if state.relative:
             return NOT_PLAIN
-        names = iter(words)
-        written = {LETTERS[name]: float(value) for name, value in zip(names, names)}
-        if 2 * len(written) != len(words) or not written.keys() <= spec.letter_set:
+        shape = (letter, digits, words[::2])
+        plan = _PLANS.get(shape, NOT_PLAIN)
+        if plan is NOT_PLAIN:
+            plan = _plan(shape)
+        if plan is None:
             return NOT_PLAIN
-        values = state.values
-        plain = resolve_plain(spec, written, values)
+        numbers = list(map(float, words[1::2]))
+        plain = resolve_planned(plan, numbers, state.values)
         if plain is None:
             return NOT_PLAIN
+        spec = plan.spec
         try:
-            command = spec.make(*plain[0])
+            command = spec.construct(*plain[0]) if spec.validate is None else spec.make(*plain[0])
         except FieldError:
             return NOT_PLAIN
-        return self._moved(spec, command, plain[1], number, text, column, end_column, written, ())
+        return self._moved(spec, command, plain[1], number, text, column, end_column, dict(zip(plan.letters, numbers)), ())
 
     def _moved(self, spec: MoveSpec, command, updates: dict, number: int, text: str, column: int, end_column: int,
                written: dict, loop: tuple) -> Optional[Statement]:

@@ -21,13 +21,14 @@ import sys
 from pathlib import Path
 from typing import NamedTuple
 
-from lark import Lark, Token, Transformer
-from lark import __version__ as lark_version
-from lark.exceptions import UnexpectedInput, VisitError
+from typing import TYPE_CHECKING
 
 from .expressions import Binary, Negate, Parameter
 from .nodes import EMPTY, Assignment, BlockLine, CodeLine, KeywordLine, Node, code_number
 from .syntax_errors import LineSyntaxError, explain
+
+if TYPE_CHECKING:  # Lark is imported on first use: most scripts never need it (fastpath.py)
+    from lark import Lark
 
 GRAMMAR_PACKAGE = "armctl.grammars"
 GRAMMAR_FILE = "armctl.lark"
@@ -70,14 +71,16 @@ def _split_word(text: str) -> tuple[str, str]:
     return LETTERS[text[0]], text[1:]
 
 
-class _NodeBuilder(Transformer):
-    """Callbacks the LALR parser calls on each reduction (``transformer=``)."""
+class _NodeBuilder:
+    """Callbacks the LALR parser calls on each reduction (``transformer=``: Lark looks them up
+    by rule name; no ``lark.Transformer`` base, so this module imports Lark only when a line
+    needs it).  A ``LineSyntaxError`` raised here reaches ``parse_line``'s caller as it is."""
 
     # --- lines ------------------------------------------------------------------------------
 
     def start(self, children):
         for child in children:
-            if not isinstance(child, Token):  # skip a lone LINE_NUMBER
+            if not isinstance(child, str):  # skip a lone LINE_NUMBER (a lark.Token is a str)
                 return child
         return EMPTY
 
@@ -104,7 +107,7 @@ class _NodeBuilder(Transformer):
         first, rest = children[0], children[1:]
         names, argument, argument_span, end = [first.upper()], None, None, first.end_column
         for child in rest:
-            if isinstance(child, Token):
+            if isinstance(child, str):  # a NAME token
                 names.append(child.upper())
                 end = child.end_column
             else:
@@ -196,6 +199,8 @@ def cache_path() -> str | bool:
     Lark rebuilds when it differs, also when the file is unreadable or corrupt, and carries on
     when it cannot write (its own ``try``; tests/test_grammar_cache.py).  In the user's own
     cache folder, not Lark's default of a shared temporary folder, since the file is a pickle."""
+    from lark import __version__ as lark_version
+
     try:
         base = os.environ.get("XDG_CACHE_HOME", "")
         folder = Path(base if os.path.isabs(base) else Path.home() / ".cache") / "armctl"
@@ -209,6 +214,8 @@ def parser() -> Lark:
     """The one LALR parser (built on first use, its tables cached: ``cache_path``)."""
     global _PARSER
     if _PARSER is None:
+        from lark import Lark
+
         _register_source_checkout_grammars()
         _PARSER = Lark.open_from_package(
             GRAMMAR_PACKAGE, GRAMMAR_FILE, parser="lalr", lexer="contextual", transformer=_NodeBuilder(),
@@ -222,11 +229,9 @@ def parse_line(text: str) -> Node:
 
     Raises ``LineSyntaxError`` (code, sentence, columns, hint) if it does not parse.
     """
+    from lark.exceptions import UnexpectedInput
+
     try:
         return parser().parse(text)
     except UnexpectedInput as error:
         raise explain(error, text) from None
-    except VisitError as error:  # a callback refused the line (expression depth)
-        if isinstance(error.orig_exc, LineSyntaxError):
-            raise error.orig_exc from None
-        raise

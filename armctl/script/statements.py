@@ -74,10 +74,11 @@ class MoveSpec:
     is_arc: bool = field(init=False)  # G300/G301: the compiler pairs them
     plain_plan: tuple = field(init=False)  # (index, letter, key) of the ordinary modal slots
     channel_slots: Optional[tuple] = field(init=False)  # (T index, S index) for G1, else None
+    construct: Callable[..., Command] = field(init=False)  # build, from every field positionally
 
     def make(self, *arguments) -> Command:
         """The command from positional constructor arguments; FieldError if a value is wrong."""
-        command = self.build(*arguments)
+        command = self.construct(*arguments)
         if self.validate is not None:
             self.validate(command)
         return command
@@ -98,6 +99,7 @@ class MoveSpec:
         set_(self, "key_of", {s.letter: s.key for s in self.slots if s.letter})
         set_(self, "index_of", index_of)
         set_(self, "field_names", tuple(names))
+        set_(self, "construct", getattr(self.build, "from_fields", self.build))
         set_(self, "is_arc", self.code in ("G300", "G301"))
         set_(self, "plain_plan", tuple((index_of[s.field], s.letter, s.key) for s in self.slots if not _special(s)))
         special = {_special(s): index_of[s.field] for s in self.slots if _special(s)}
@@ -265,47 +267,75 @@ def resolve(spec: MoveSpec, written: dict, state: ModalState) -> Resolution:
     return Resolution(ok, arguments, updates, missing, required, relative_unknown, blocked, bad_channel)
 
 
-def resolve_plain(spec: MoveSpec, written: dict, values: dict) -> Optional[tuple[list, dict]]:
-    """``resolve()``'s common case, lean: (arguments, updates) when nothing is missing, unknown,
-    poisoned or out of place; None otherwise (then ``resolve()`` says what is wrong).
+class PlainPlan(NamedTuple):
+    """How ``resolve_planned`` fills a statement's arguments from one shape of plain line: the
+    words' letters in the order written (``plain_plan`` builds it once per shape)."""
 
-    The caller must only use it in absolute mode (G90).  It agrees with ``resolve()`` whenever
-    it answers (tests/test_script_fastpath.py checks this on generated states)."""
-    arguments = list(spec.defaults)
-    updates = {}
-    get = written.get
-    for index, letter, key in spec.plain_plan:
-        value = get(letter)
-        if value is None:
-            if key is None:
-                return None
-            value = values[key]
-            if value.__class__ is not float:
-                return None
-        elif key is not None:
-            updates[key] = value
-        arguments[index] = value
-    if spec.channel_slots is not None:
-        channel_index, pwm_index = spec.channel_slots
-        channel = get("T")
-        if channel is None:
-            channel = values["T"]
-            if channel.__class__ is not float:
-                return None
-        elif channel in PWM_CHANNELS:
-            updates["T"] = channel
-        else:
+    spec: MoveSpec
+    letters: tuple  # canonical letters, as written
+    write_index: tuple  # the argument each written word fills (S excluded)
+    write_keys: tuple  # the modal key each written word sets (S excluded)
+    fetch: tuple  # (argument index, modal key) of the slots the line does not write
+    pwm: Optional[tuple]  # G1: (T's index, S's index, the position of S among the words or -1)
+
+
+def plain_plan(spec: MoveSpec, letters: tuple) -> Optional[PlainPlan]:
+    """The plan for a line of ``spec`` writing ``letters`` (canonical, as written), or None when
+    the general path must judge it (a repeated or foreign letter, a T, a slot without a key)."""
+    if len(set(letters)) != len(letters) or not set(letters) <= spec.letter_set or "T" in letters:
+        return None
+    pwm = spec.channel_slots is not None  # G1: S sets the PWM of the active channel (special slots)
+    slot_of = {letter: (index, key) for index, letter, key in spec.plain_plan if letter}
+    written = tuple(letter for letter in letters if not (pwm and letter == "S"))
+    if any(slot_of[letter][1] is None for letter in written):
+        return None
+    fetch = tuple((index, key) for index, letter, key in spec.plain_plan if letter not in letters)
+    if any(key is None for _, key in fetch):
+        return None  # a required word is missing: resolve() says so
+    return PlainPlan(
+        spec, letters, tuple(slot_of[letter][0] for letter in written), tuple(slot_of[letter][1] for letter in written),
+        fetch, (*spec.channel_slots, letters.index("S") if "S" in letters else -1) if pwm else None,
+    )
+
+
+def resolve_planned(plan: PlainPlan, numbers: list, values: dict) -> Optional[tuple[list, dict]]:
+    """``resolve()``'s common case, lean: (arguments, updates) for a line of ``plan``'s shape with
+    the words' ``numbers`` as written, when nothing is missing, unknown or poisoned; None
+    otherwise (then ``resolve()`` says what is wrong).  The caller must only use it in absolute
+    mode (G90).  It agrees with ``resolve()`` whenever it answers (tests/test_script_fastpath.py
+    checks this on generated states); a plan is built once per line shape, so a line costs no
+    dictionary of its words and no loop over every slot."""
+    arguments = list(plan.spec.defaults)
+    for index, key in plan.fetch:
+        value = values[key]
+        if value.__class__ is not float:
             return None
-        arguments[channel_index] = channel = int(channel)
-        key = PWM_KEYS[channel]
-        value = get("S")
-        if value is None:
-            value = values[key]
-            if value.__class__ is not float:
-                return None
-        else:
-            updates[key] = value
-        arguments[pwm_index] = value
+        arguments[index] = value
+    pwm = plan.pwm
+    if pwm is None:
+        for index, value in zip(plan.write_index, numbers):
+            arguments[index] = value
+        return arguments, dict(zip(plan.write_keys, numbers))
+    channel_index, pwm_index, s_at = pwm
+    if s_at < 0:
+        written = numbers
+    else:
+        written = numbers[:s_at] + numbers[s_at + 1:]
+    for index, value in zip(plan.write_index, written):
+        arguments[index] = value
+    updates = dict(zip(plan.write_keys, written))
+    channel = values["T"]
+    if channel.__class__ is not float:
+        return None
+    arguments[channel_index] = channel = int(channel)
+    key = PWM_KEYS[channel]
+    if s_at < 0:
+        value = values[key]
+        if value.__class__ is not float:
+            return None
+    else:
+        value = updates[key] = numbers[s_at]
+    arguments[pwm_index] = value
     return arguments, updates
 
 

@@ -11,8 +11,10 @@ character, or just after the last token when the line ends too early.
 from __future__ import annotations
 
 import re
+from typing import TYPE_CHECKING
 
-from lark.exceptions import UnexpectedCharacters, UnexpectedInput, UnexpectedToken
+if TYPE_CHECKING:  # Lark is imported on first use (armctl/script/grammar.py)
+    from lark.exceptions import UnexpectedInput
 
 KEYWORDS = ("RESET", "PAUSE", "POSE", "PROGRAM", "MODE")
 START_HINT = (
@@ -74,6 +76,8 @@ def _unclosed_bracket(text: str, column: int) -> int | None:
 
 def explain(error: UnexpectedInput, text: str) -> LineSyntaxError:
     """The sentence, columns and hint for a line Lark could not parse."""
+    from lark.exceptions import UnexpectedCharacters, UnexpectedToken
+
     if isinstance(error, UnexpectedToken):
         expected = set(error.expected)
         token = error.token

@@ -1,0 +1,397 @@
+"""Arm → host status frames, frames found in any byte stream, and every frame's readable form.
+
+Strategy: the part of armctl/protocol.py that a command which never reads the arm (compile,
+lint, estimate) does not need, kept apart so that such a command does not build its fourteen
+frozen dataclasses at every start (issue 13: start-up).  ``armctl.protocol`` still offers
+every name defined here (its module ``__getattr__`` imports this module on first use; the
+import system's lock defines the classes once even when two threads ask at once), so callers
+import from either.  The rules are protocol.py's: bytes and nothing else, no I/O.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, fields
+from typing import ClassVar, Iterator
+
+from .errors import FieldError, FrameError
+from .protocol import (
+    CONTROL_HEAD, CONTROL_TAIL, FLOAT_CODEC, FRAME_SIZE, MOTION_HEAD, MOTION_TAIL, STATUS_HEAD, STATUS_SIZE, STATUS_TAIL,
+    STATUS_WORD_CODEC, AnyCommand, Command, _f32, _int, decode_command, f32_repr,
+)
+
+# --- arm → host status frames -----------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class StatusFrame:
+    """Base of the 9 status kinds: ``0xCE d0..d5 kind 0xCF``."""
+
+    KIND: ClassVar[int] = -1
+    NAME: ClassVar[str] = ""
+
+    def encode(self) -> bytes:
+        frame = bytearray(STATUS_SIZE)
+        frame[0], frame[7], frame[8] = STATUS_HEAD, self.KIND, STATUS_TAIL
+        frame[1:7] = self._data().ljust(6, b"\0")
+        return bytes(frame)
+
+    def _data(self) -> bytes:  # pragma: no cover - every subclass overrides
+        raise NotImplementedError
+
+    def fields(self) -> dict:
+        return {f.name: getattr(self, f.name) for f in fields(self)}
+
+
+def _word(cls_name: str, name: str, value, scale: int) -> float:
+    """A value carried as a signed 16-bit word of ``value × scale``, normalised to that grid."""
+    number = _f64(cls_name, name, value)
+    raw = round(number * scale)
+    if not -32768 <= raw <= 32767:
+        raise FieldError(f"{cls_name}.{name} = {value} does not fit a 16-bit status word at ×{scale}")
+    return raw / scale
+
+
+def _f64(cls_name: str, name: str, value) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise FieldError(f"{cls_name}.{name} must be a finite number, not {value!r}")
+    return float(value)
+
+
+def _words(values, scale: int) -> bytes:
+    return b"".join(STATUS_WORD_CODEC.pack(round(v * scale)) for v in values)
+
+
+def _unwords(data: bytes, count: int, scale: int) -> list[float]:
+    return [STATUS_WORD_CODEC.unpack_from(data, 2 * k)[0] / scale for k in range(count)]
+
+
+MM_SCALE = 10  # status lengths are 0.1 mm
+DEG_SCALE = 100  # status angles are 0.01 deg (H8: kinds 3 and 5 reuse kinds 0 and 1's scales)
+
+
+@dataclass(frozen=True)
+class _ThreeWords(StatusFrame):
+    SCALE: ClassVar[int] = 1
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            object.__setattr__(self, f.name, _word(type(self).__name__, f.name, getattr(self, f.name), self.SCALE))
+
+    def _data(self) -> bytes:
+        return _words(self.fields().values(), self.SCALE)
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "StatusFrame":
+        # Words read off the wire are on the grid and in range by construction: set them as
+        # they are (the same values __post_init__ would give), without checking each again —
+        # this runs for every status frame read, 40,000 in 20 minutes.
+        names = cls.__dict__.get("_names")
+        if names is None:
+            names = tuple(f.name for f in fields(cls))
+            type.__setattr__(cls, "_names", names)
+        frame = object.__new__(cls)
+        for name, value in zip(names, _unwords(data, len(names), cls.SCALE)):
+            object.__setattr__(frame, name, value)
+        return frame
+
+
+@dataclass(frozen=True)
+class PositionStatus(_ThreeWords):
+    """Kind 0 — tool position X, Y, Z in mm."""
+
+    KIND: ClassVar[int] = 0
+    NAME: ClassVar[str] = "position"
+    SCALE: ClassVar[int] = MM_SCALE
+    x_mm: float
+    y_mm: float
+    z_mm: float
+
+
+@dataclass(frozen=True)
+class JointsLowStatus(_ThreeWords):
+    """Kind 1 — joints 1, 2, 3 (a0, a1, a2) in degrees."""
+
+    KIND: ClassVar[int] = 1
+    NAME: ClassVar[str] = "joints 1-3"
+    SCALE: ClassVar[int] = DEG_SCALE
+    j1_deg: float
+    j2_deg: float
+    j3_deg: float
+
+
+@dataclass(frozen=True)
+class JointsHighStatus(_ThreeWords):
+    """Kind 2 — joints 4, 5, 6 (b0/w0, b1/w1, aw) in degrees."""
+
+    KIND: ClassVar[int] = 2
+    NAME: ClassVar[str] = "joints 4-6"
+    SCALE: ClassVar[int] = DEG_SCALE
+    j4_deg: float
+    j5_deg: float
+    j6_deg: float
+
+
+@dataclass(frozen=True)
+class WorktableStatus(_ThreeWords):
+    """Kind 3 — worktable origin X0, Y0, Z0 in mm."""
+
+    KIND: ClassVar[int] = 3
+    NAME: ClassVar[str] = "worktable origin"
+    SCALE: ClassVar[int] = MM_SCALE
+    x_mm: float
+    y_mm: float
+    z_mm: float
+
+
+@dataclass(frozen=True)
+class WristStatus(_ThreeWords):
+    """Kind 5 — w0, w1 in degrees; d4..d5 unused."""
+
+    KIND: ClassVar[int] = 5
+    NAME: ClassVar[str] = "wrist"
+    SCALE: ClassVar[int] = DEG_SCALE
+    w0_deg: float
+    w1_deg: float
+
+
+@dataclass(frozen=True)
+class PauseStatus(StatusFrame):
+    """Kind 4 — d1 = pause state (raw byte, non-zero = paused); d4..d5 = PWM in µs."""
+
+    KIND: ClassVar[int] = 4
+    NAME: ClassVar[str] = "pause and PWM"
+    pause_state: int
+    pwm_us: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "pause_state", _int("PauseStatus", "pause_state", self.pause_state, 0, 255))
+        object.__setattr__(self, "pwm_us", _int("PauseStatus", "pwm_us", self.pwm_us, -32768, 32767))
+
+    @property
+    def paused(self) -> bool:
+        return self.pause_state != 0
+
+    def _data(self) -> bytes:
+        return bytes([0, self.pause_state, 0, 0]) + STATUS_WORD_CODEC.pack(self.pwm_us)
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "PauseStatus":
+        return cls(data[1], STATUS_WORD_CODEC.unpack_from(data, 4)[0])
+
+
+@dataclass(frozen=True)
+class _FloatStatus(StatusFrame):
+    value: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "value", _f32(type(self).__name__, "value", self.value))
+
+    def _data(self) -> bytes:
+        return FLOAT_CODEC.pack(self.value)
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "StatusFrame":
+        value = FLOAT_CODEC.unpack_from(data, 0)[0]
+        if not math.isfinite(value):
+            raise FieldError(f"{cls.NAME} carries {f32_repr(value)}, not a finite number")
+        return cls(value)
+
+
+@dataclass(frozen=True)
+class FileLengthStatus(_FloatStatus):
+    """Kind 100 — SD program file length (float, H8: little-endian)."""
+
+    KIND: ClassVar[int] = 100
+    NAME: ClassVar[str] = "SD file length"
+
+
+@dataclass(frozen=True)
+class RunPositionStatus(_FloatStatus):
+    """Kind 103 — SD program run position (float, H8: little-endian)."""
+
+    KIND: ClassVar[int] = 103
+    NAME: ClassVar[str] = "SD run position"
+
+
+@dataclass(frozen=True)
+class FileStatus(StatusFrame):
+    """Kind 102 — SD program file status, d0..d1 as a raw big-endian 16-bit number."""
+
+    KIND: ClassVar[int] = 102
+    NAME: ClassVar[str] = "SD file status"
+    raw: int
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "raw", _int("FileStatus", "raw", self.raw, 0, 0xFFFF))
+
+    def _data(self) -> bytes:
+        return self.raw.to_bytes(2, "big")
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "FileStatus":
+        return cls(int.from_bytes(data[0:2], "big"))
+
+
+STATUS_KINDS: dict[int, type[StatusFrame]] = {
+    k.KIND: k
+    for k in (
+        PositionStatus, JointsLowStatus, JointsHighStatus, WorktableStatus, PauseStatus, WristStatus,
+        FileLengthStatus, FileStatus, RunPositionStatus,
+    )
+}
+# The order in which the arm rotates through the kinds, one every STATUS_PERIOD_S.
+STATUS_ROTATION = (0, 1, 2, 3, 4, 5, 100, 102, 103)
+
+
+def is_status_frame(data: bytes, offset: int = 0) -> bool:
+    """H9 — a status frame is recognised by 0xCE … 0xCF around a known kind byte; nothing else."""
+    return (
+        len(data) - offset >= STATUS_SIZE
+        and data[offset] == STATUS_HEAD
+        and data[offset + 8] == STATUS_TAIL
+        and data[offset + 7] in STATUS_KINDS
+    )
+
+
+def decode_status(frame: bytes) -> StatusFrame:
+    """The status a 9-byte frame carries; raises FrameError if it is not one."""
+    frame = bytes(frame)
+    if len(frame) != STATUS_SIZE:
+        raise FrameError(f"a status frame is {STATUS_SIZE} bytes, not {len(frame)}")
+    if not is_status_frame(frame):
+        raise FrameError(f"not a status frame: {frame.hex(' ')}")
+    return STATUS_KINDS[frame[7]]._from_data(frame[1:7])
+
+
+class StatusReader:
+    """Finds status frames in a byte stream fed in arbitrary chunks.
+
+    H9 — there is no checksum, so after noise the reader slides one byte and tries again.
+    ``skipped_bytes`` counts every byte that belonged to no frame; ``frames`` every frame
+    returned.  Plausibility (a value that jumps faster than the arm can move) is judged where
+    the arm's state is merged, not here: this reader only knows bytes.
+    """
+
+    def __init__(self) -> None:
+        self._buffer = bytearray()
+        self.frames = 0
+        self.skipped_bytes = 0
+
+    @property
+    def pending(self) -> int:
+        """Bytes held back because they may begin a frame that has not fully arrived."""
+        return len(self._buffer)
+
+    def feed(self, data: bytes) -> list[StatusFrame]:
+        buffer = self._buffer
+        buffer += data
+        found: list[StatusFrame] = []
+        start = 0
+        while True:
+            head = buffer.find(STATUS_HEAD, start)
+            if head < 0:
+                self.skipped_bytes += len(buffer) - start
+                start = len(buffer)
+                break
+            self.skipped_bytes += head - start
+            start = head
+            if len(buffer) - start < STATUS_SIZE:
+                break  # wait for the rest of a frame that may have begun here
+            if is_status_frame(buffer, start):
+                try:
+                    found.append(decode_status(buffer[start : start + STATUS_SIZE]))
+                except (FrameError, FieldError):
+                    pass  # a well-framed frame with an impossible value: treated as noise
+                else:
+                    start += STATUS_SIZE
+                    continue
+            self.skipped_bytes += 1
+            start += 1
+        del buffer[:start]
+        self.frames += len(found)
+        return found
+
+
+# --- finding frames in any byte stream (armctl decode) ----------------------------------------
+
+
+@dataclass(frozen=True)
+class Chunk:
+    """A run of bytes at ``offset``: a frame (``frame`` set), a framed but invalid command
+    (``error`` set), or bytes that belong to no frame (both None)."""
+
+    offset: int
+    data: bytes
+    frame: AnyCommand | StatusFrame | None = None
+    error: str | None = None
+
+
+def scan_frames(data: bytes) -> Iterator[Chunk]:
+    """Split bytes holding command and status frames in any mix into chunks, in order."""
+    data = bytes(data)
+    position, junk_start = 0, 0
+
+    def junk_until(end: int) -> Iterator[Chunk]:
+        if end > junk_start:
+            yield Chunk(junk_start, data[junk_start:end])
+
+    while position < len(data):
+        chunk = _chunk_at(data, position)
+        if chunk is None:
+            position += 1
+            continue
+        yield from junk_until(position)
+        yield chunk
+        position += len(chunk.data)
+        junk_start = position
+    yield from junk_until(len(data))
+
+
+def _chunk_at(data: bytes, position: int) -> Chunk | None:
+    head = data[position]
+    if head in (MOTION_HEAD, CONTROL_HEAD) and len(data) - position >= FRAME_SIZE:
+        frame = data[position : position + FRAME_SIZE]
+        if frame[-1] == (MOTION_TAIL if head == MOTION_HEAD else CONTROL_TAIL):
+            try:
+                return Chunk(position, frame, decode_command(frame))
+            except FieldError as error:
+                return Chunk(position, frame, None, str(error))
+            except FrameError:
+                pass
+    if is_status_frame(data, position):
+        frame = data[position : position + STATUS_SIZE]
+        try:
+            return Chunk(position, frame, decode_status(frame))
+        except FieldError as error:  # well framed, impossible value (an inf or NaN float)
+            return Chunk(position, frame, None, str(error))
+        except FrameError:
+            return None
+    return None
+
+
+# --- readable form (armctl decode, logs) ------------------------------------------------------
+
+_UNIT_SUFFIXES = (
+    ("_mm_min", "mm/min"), ("_deg_s", "deg/s"), ("_mm_s2", "mm/s²"), ("_mm", "mm"), ("_deg", "deg"),
+    ("_us", "µs"), ("_ms", "ms"),
+)
+
+
+def describe(frame: Command | StatusFrame) -> str:
+    """One readable line: the frame's name and each field with its unit."""
+    parts = []
+    for name, value in frame.fields().items():
+        label, unit = name, ""
+        for suffix, suffix_unit in _UNIT_SUFFIXES:
+            if name.endswith(suffix):
+                label, unit = name[: -len(suffix)], " " + suffix_unit
+                break
+        if isinstance(value, float):
+            text = f32_repr(value)
+        elif isinstance(value, tuple):
+            text = ",".join(str(v) for v in value)
+        else:
+            text = str(value)
+        parts.append(f"{label}={text}{unit}")
+    return " ".join([frame.NAME, *parts])
