@@ -31,6 +31,14 @@ Rules:
 - Paused means two agreeing pause reports (``agreed_pause``): one corrupted byte must never make
   armctl toggle the arm.  ``armctl run``'s start-up check uses the same rule.
 - The resume line is the first statement not known finished (an arc's G301 resumes at its G300).
+- A summary claims only what evidence proves.  Each frame counts as confirmed by the arm's
+  reports or by time alone (``RunView.frames_by_reports`` / ``frames_by_time``).  Any sign of loss
+  — the streamer saw the arm skip frames (``Streamer.losses``), or the arm at rest at the end
+  sooner than the frames sent could take at the fastest plausible pace — ends FRAMES_LOST with
+  the evidence, and nothing from the first frame that may be lost on is claimed executed.
+  ``done`` (FINISHED) also needs a proven FIFO size (``fifo_proven``: probed, or a simulator
+  known to hold at least the profile's) or every frame confirmed by the arm's reports: time
+  alone cannot tell a frame run from a frame dropped; else the job ends UNPROVEN.
 """
 
 from __future__ import annotations
@@ -41,6 +49,7 @@ from enum import Enum, StrEnum
 from operator import attrgetter
 from typing import Iterable, Iterator
 
+from .streamer import FASTEST_ARM_FACTOR, LOSS_SLACK_S, ROTATION_S
 from .protocol import (
     ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
     RunPositionStatus, StatusFrame,
@@ -73,6 +82,8 @@ class Outcome(StrEnum):
     FAILED = "failed"
     PORT_LOST = "port lost"
     NO_CONFIRMATION = "no confirmation"
+    FRAMES_LOST = "frames may have been lost"
+    UNPROVEN = "finished, unproven"
 
 
 @dataclass(frozen=True, slots=True)
@@ -117,6 +128,8 @@ class RunView:
     status_frames: int = 0
     arm_done_s: float | None = None  # when the arm came to rest at the end (model time)
     outcome: str = Outcome.RUNNING  # an Outcome
+    frames_by_reports: int = 0  # frames confirmed by the arm's reports (position, joints, at rest at the end)
+    frames_by_time: int = 0  # frames confirmed only by time (the slowest-arm bound)
     messages: list = field(default_factory=list)
 
     @property
@@ -168,8 +181,11 @@ class Job:
     judged by ``streamer``; see the module docstring."""
 
     def __init__(self, streamer, statements: Iterable, view: RunView, *, pacing=None,
-                 abort_sequence: tuple = ABORT_SEQUENCES["pause"]) -> None:
+                 abort_sequence: tuple = ABORT_SEQUENCES["pause"], fifo_proven: bool = True) -> None:
+        """``fifo_proven``: the connector's FIFO is known to hold at least the profile's
+        ``fifo_frames`` (``armctl.link.fifo_proven`` decides for ``armctl run``)."""
         self.streamer = streamer
+        self.fifo_proven = fifo_proven
         self.pacing = streamer if pacing is None else pacing
         self.statements: Iterator = iter(statements)
         self.view = view
@@ -314,7 +330,8 @@ class Job:
             if self._overran:
                 view.messages.append("the arm kept working past the estimate (moving, or running an SD program "
                                      "whose time armctl cannot know); armctl waited until it stopped")
-            return self._finish(Outcome.FINISHED, now)
+            self._check_job_time(view.arm_done_s)
+            return self._finish(self._finished_outcome(), now)
         limit_s = self._deadline_s
         if now >= self._deadline_s:
             # Visibly working: the job is still running, whatever the estimate says; once it
@@ -325,10 +342,41 @@ class Job:
             limit_s = self._deadline_s + self._overrun_limit_s()
             if not settling or now >= limit_s:
                 view.messages.append(self._why_not_finished())
-                return self._finish(Outcome.NO_CONFIRMATION, now)
+                lost = bool(self.streamer.losses)
+                return self._finish(Outcome.FRAMES_LOST if lost else Outcome.NO_CONFIRMATION, now)
             if self._active_s is not None:
                 limit_s = min(limit_s, self._active_s + REST_CHECK_S + SETTLE_SLACK_S)
         return Wait(self._next_change_s(now, limit_s))
+
+    def _check_job_time(self, done_s: float) -> None:
+        """A sign of loss: the arm at rest at the last target sooner than the motion of every
+        frame written could take at the fastest plausible pace.  The arm time may be short by
+        up to a rotation (the last motion seen is reported up to a rotation late)."""
+        streamer = self.streamer
+        arm_s = done_s - self.view.started_s
+        least_s = streamer.motion_sent_s * FASTEST_ARM_FACTOR
+        if arm_s + ROTATION_S + LOSS_SLACK_S >= least_s:
+            return
+        streamer.losses.append(
+            f"the arm was at rest at the last target {arm_s:.1f} s after the first frame, but the frames sent take "
+            f"{streamer.motion_sent_s:.1f} s of motion (at least {least_s:.1f} s on an arm "
+            f"{1 / FASTEST_ARM_FACTOR:g}x faster than the model): some were not run (dropped by a full FIFO?)")
+        suspect = streamer.first_time_only_index or 0
+        if streamer.first_suspect_index is None or suspect < streamer.first_suspect_index:
+            streamer.first_suspect_index = suspect
+
+    def _finished_outcome(self) -> Outcome:
+        """FINISHED only when nothing says a frame was lost and the claim rests on proof."""
+        streamer = self.streamer
+        if streamer.losses:
+            return Outcome.FRAMES_LOST
+        if not self.fifo_proven and streamer.confirmed_by_time:
+            self.view.messages.append(
+                f"finished, unproven: {streamer.confirmed_by_time} frames were confirmed by time alone, and the "
+                "FIFO size is the document's, not measured on this arm: a frame it dropped would look the same; "
+                "run `armctl probe` once")
+            return Outcome.UNPROVEN
+        return Outcome.FINISHED
 
     def _settling(self, now: float) -> Wait | Finished:
         """After the abort sequence: until the arm is at rest — paused (the estimate cannot know
@@ -361,6 +409,7 @@ class Job:
         view = self.view
         if outcome in (Outcome.FAILED,) and self.failure:
             view.messages.append(self.failure)
+        view.messages.extend(self.streamer.losses)
         self.outcome = outcome
         self.phase = _Phase.DONE
         view.outcome = outcome
@@ -449,6 +498,12 @@ class Job:
         view.queued_s = streamer.queued_seconds(now)
         view.last_done = streamer.last_known_done()
         view.first_not_done = self._first_not_done()
+        view.frames_by_reports, view.frames_by_time = streamer.confirmed_by_reports, streamer.confirmed_by_time
+        suspect = streamer.first_suspect_index
+        if suspect is not None and suspect < streamer.consumed_lower_bound:
+            # nothing from the first frame that may have been lost on is claimed executed
+            view.last_done = streamer.tag_of(suspect - 1) if suspect > 0 else None
+            view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
 
     def _first_not_done(self):
         pending = self.streamer.pending

@@ -113,6 +113,23 @@ def check_sim_url(choice: PortChoice) -> None:
         raise ConfigError(f"{where}: {error}") from None
 
 
+def fifo_proven(url: str, connector) -> bool:
+    """Whether the connector's FIFO is known to hold at least the profile's ``fifo_frames``: the
+    profile's value was measured or set (armctl.toml, a profile file, ``armctl probe --write``),
+    or the port is a simulator whose own FIFO (its ``fifo_frames`` option) is at least that.
+    Otherwise a frame the arm dropped looks the same as one it ran, to time alone."""
+    if not connector.is_default("fifo_frames"):
+        return True
+    if url.startswith("sim://"):
+        from .sim.protocol_sim import parse_sim_url
+
+        try:
+            return parse_sim_url(url).fifo_frames >= connector.fifo_frames
+        except ConfigError:
+            return False
+    return False
+
+
 def require_wall_clock(link: "Link", command: str) -> None:
     """Commands that follow the arm as it moves (a live view, jogging) need time to pass by
     itself; a ``clock=virtual`` simulator only moves when waited on."""

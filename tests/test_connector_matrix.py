@@ -104,17 +104,23 @@ def test_a_fresh_process_with_the_written_profile_ends_done(job):
     assert f"frames: {JOB_FRAMES} of {JOB_FRAMES} sent" in done.stdout
 
 
-def test_a_fifo_smaller_than_the_profile_says_drops_frames_today(job, opened_ports):
-    """Documents today's behaviour (issue 9 item 3, the lead's part after merging): the profile's
-    document default (200) against an arm that holds 50.  The streamer trusts the profile and the
-    arm drops frames.  This job's last move is among them, so the run ends exit 1 ("frames were
-    lost or cleared") — but the summary still claims every line executed: the time bound
-    confirms frames that were dropped, not run.  The end-of-job rule "done requires a proven or
-    probed FIFO size" (``Connector.is_default("fifo_frames")``) and an honest count are to come."""
+def test_a_fifo_smaller_than_the_profile_says_ends_frames_may_have_been_lost(job, opened_ports):
+    """The profile's document default (200) against an arm that holds 50: the streamer trusts the
+    profile and the arm drops frames.  The run never says done: it ends "frames may have been
+    lost", exit 1, with the evidence (the arm skipped frames faster than they could run), and it
+    claims no line executed from the first frame dropped on (the time bound alone cannot tell a
+    dropped frame from a run one)."""
     result = CliRunner().invoke(main, ["run", str(job), "--no-live", "--lead", LEAD_S, "--baud", BAUD,
                                        "--port", "sim://?clock=virtual&fifo=50"])
     (port,) = opened_ports
-    assert port.model.frames_dropped > 0
+    dropped = port.model.dropped_indexes
+    assert dropped
     assert result.exit_code == 1, result.output
-    assert "frames were lost or cleared" in result.output
-    assert f"last line known executed: {JOB_FRAMES}" in result.stdout  # overstated today (TODO lead)
+    assert "done" not in result.stdout
+    assert "stopped: frames may have been lost" in result.output
+    assert "they were skipped (dropped by a full FIFO, or cleared)" in result.output
+    assert re.search(r"frames confirmed by the arm's reports: \d+; by time only: \d+", result.stdout)
+    known = int(re.search(r"last line known executed: (\d+)", result.stdout).group(1))
+    assert known <= min(dropped)  # line = frame index + 1 in this job: the first dropped line is not claimed
+    resume = int(re.search(r"--from-line (\d+)", result.stdout).group(1))
+    assert resume == known + 1

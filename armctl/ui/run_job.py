@@ -217,6 +217,7 @@ def run_job(options: JobOptions, script, connect) -> int:
     the name the summary shows)."""
     from ..motion import MotionModel
     from ..profile import load_profile
+    from ..link import fifo_proven
     from ..runner import JobRunner, RunView
 
     profile = load_profile(options.profile_path)
@@ -241,7 +242,7 @@ def run_job(options: JobOptions, script, connect) -> int:
         view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=report.lines, lead_s=options.lead_s,
                        capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
         statements = script.compile(initial=initial, from_line=options.from_line)
-        runner = JobRunner(link, streamer, statements, view, log=log)
+        runner = JobRunner(link, streamer, statements, view, log=log, fifo_proven=fifo_proven(link.url, profile.connector))
         # the live panel's map: the same snapshot compiled the same way, sampled once before the
         # first frame (bounded: path_map.MAP_MAX_FRAMES); no panel, no map
         grid = _job_grid(script, model, start, initial, options) if _live(options) else None
@@ -443,11 +444,16 @@ def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, s
         actual = view.arm_done_s - view.started_s
         click.echo(f"arm time: {actual:.1f} s from the first frame to the arm at rest; estimated {estimate.job_s:.1f} s "
                    f"({actual / estimate.job_s - 1:+.1%})" if estimate.job_s else f"arm time: {actual:.1f} s")
+    click.echo(f"frames confirmed by the arm's reports: {view.frames_by_reports}; by time only: {view.frames_by_time}")
     for message in view.messages:
         click.echo(f"note: {message}", err=True)
     if outcome == "finished":
         click.echo("done: the arm finished the job")
         return EXIT_OK
+    if outcome == "finished, unproven":
+        click.echo("finished, unproven: the arm is at rest at the last target, but the FIFO size is not proven; "
+                   "run `armctl probe` once")
+        return EXIT_PROBLEMS
     click.echo(f"last line sent: {sent if sent is not None else 'none'}")
     click.echo(f"last line known executed: {done if done is not None else 'none'}")
     resume = view.resume_line()
