@@ -60,6 +60,30 @@ ABORT_SEQUENCES = {
     "reset-connector": (ResetConnector(),),  # clears the FIFO when it acts (queued frames are lost)
     "none": (),
 }
+
+
+def abort_frames(name: str, control_on_arrival: bool) -> tuple:
+    """The frames of the abort sequence ``name`` for an arm whose control frames act as they land
+    (``control_frames = "arrival"``) or queue (H5).  On arrival a pause freezes the move in
+    progress and leaves the queue behind it intact: a RESET CONNECTOR follows (it acts as it lands
+    too), so nothing the run wrote is left waiting for a later resume to start unannounced, and
+    the resume line is right for the arm as it is (see ``resume_frames``)."""
+    frames = ABORT_SEQUENCES[name]
+    if control_on_arrival and name == "pause":
+        frames += (ResetConnector(),)
+    return frames
+
+
+def resume_frames(control_on_arrival: bool) -> tuple:
+    """What a run sends to an arm found paused (two agreeing reports), before anything else.
+    Queued (H5): one pause toggle — the pause acted at the head of the FIFO, so nothing of the
+    job waits behind it, and a RESET CONNECTOR would wait at the head of a paused arm forever.
+    On arrival: RESET CONNECTOR first (whatever is still queued — left by another program or an
+    older armctl — is cleared, not run a second time), then the toggle: the frozen move finishes,
+    and the run re-sends its line, an absolute move to where the arm then is (idempotent)."""
+    return (ResetConnector(), PauseToggle()) if control_on_arrival else (PauseToggle(),)
+
+
 REST_CHECK_S = 0.6  # the arm counts as at rest when it reported the same pose this long
 SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to come to rest
 OVERRUN_MIN_S = 60.0  # the least time waited past the estimate for an arm still working
@@ -246,7 +270,8 @@ class Job:
         """The host wrote the frame the last ``Write`` asked for, starting at ``now``."""
         self._write = None
         if self.phase is _Phase.ABORTING:
-            self._aborts.popleft()
+            if isinstance(self._aborts.popleft(), ResetConnector) and self.streamer.control_on_arrival:
+                self.streamer.cleared()  # it acted as it landed: what was queued may be gone
             return
         view = self.view
         statement = view.next_statement
@@ -422,6 +447,10 @@ class Job:
         view = self.view
         view.outcome = Outcome.INTERRUPTED
         sequence = self.abort_sequence
+        if self.streamer.control_on_arrival and sequence == abort_frames("pause", True):
+            view.messages.append("the arm acts on control frames as they land: the pause froze the move in progress "
+                                 "and a RESET CONNECTOR cleared the frames queued behind it; the resume command resumes "
+                                 "that move, then re-sends its line (an absolute move to where the arm then is)")
         if self.arm_paused and any(isinstance(c, PauseToggle) for c in sequence):
             view.messages.append("the arm was already paused: no pause toggle sent (it would have resumed it)")
             sequence = tuple(c for c in sequence if not isinstance(c, PauseToggle))

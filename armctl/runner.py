@@ -29,7 +29,7 @@ import queue
 from typing import Callable, Iterator
 
 from .errors import ArmctlError, PortError
-from .job import ABORT_SEQUENCES, Finished, Job, RunView, Wait, Write, _moved_clearly  # noqa: F401  (the runner's surface)
+from .job import ABORT_SEQUENCES, abort_frames, resume_frames, Finished, Job, RunView, Wait, Write, _moved_clearly  # noqa: F401  (the runner's surface)
 from .protocol import Command, StatusFrame
 from .streamer import Evidence, Streamer, WaitReason
 

@@ -246,6 +246,7 @@ class Streamer:
         # What proves each frame consumed (the summary's honesty): the arm's reports (a position
         # or joints on a later frame's path, the arm at rest at the last target) or time alone.
         self.confirmed_by_reports = 0
+        self._time_proves = True  # False once the FIFO may have been cleared (``cleared``)
         self.confirmed_by_time = 0
         self.motion_sent_s = 0.0  # the model's motion time of every frame written
         # Signs of loss (``losses``): each a sentence with its evidence; ``first_suspect_index``
@@ -414,8 +415,14 @@ class Streamer:
             self._running_seen_s = now
         self._paused = paused
 
+    def cleared(self) -> None:
+        """The connector may have discarded the frames still queued (a RESET CONNECTOR that acts
+        as it lands): the time bound assumes every frame written waits in the FIFO, so from now
+        on only the arm's reports confirm a pending frame."""
+        self._time_proves = False
+
     def _advance_by_time(self) -> None:
-        if self._running_seen_s is None or self._paused:
+        if self._running_seen_s is None or self._paused or not self._time_proves:
             return
         certain_now = self._running_seen_s
         while self.pending and self.pending[0].certain_end_s <= certain_now:

@@ -375,10 +375,13 @@ def test_a_small_job_through_armctl_sim_pty_in_another_process():
         path = re.fullmatch(r"simulated arm on (/dev/pts/\d+) \(Ctrl-C to stop\)\n", ready)
         assert path, ready
         result = run(SHORT, "--port", path.group(1), "--no-live")
-        assert result.exit_code == 0, result.output
+        # a device path with the document's FIFO size, not probed: the frames confirmed by time
+        # alone could have been dropped, so the run does not say done (exit 1)
+        assert result.exit_code == 1, result.output
         assert "frames: 5 of 5 sent" in result.stdout
-        assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
-        assert result.stderr == ""  # a real device path: no simulator banner
+        assert result.stdout.splitlines()[-1].startswith("finished, unproven:")
+        assert "run `armctl probe` once" in result.stdout
+        assert "simulator" not in result.stderr  # a real device path: no simulator banner
         simulator.send_signal(signal.SIGINT)
         assert simulator.wait(timeout=5) == 130  # README: 130 Ctrl-C
     finally:

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 import click
 
 from ..errors import ArmctlError, PortError
-from ..protocol import PauseToggle, describe
+from ..protocol import describe
 from ..streamer import DEFAULT_LEAD_S, Streamer
 
 EXIT_OK, EXIT_PROBLEMS, EXIT_INTERRUPTED = 0, 1, 130
@@ -145,24 +145,55 @@ def _config_baud() -> int:
     return config_baud(config.values, config.path_of("baud"))
 
 
-def read_arm(link, timeout_s: float, log=None):
+def read_arm(link, timeout_s: float, log=None, control_on_arrival: bool = False):
     """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
-    kind has been replaced or held back, H9); resume an arm that twice reports it is paused."""
+    kind has been replaced or held back, H9); resume an arm that twice reports it is paused, as
+    its control mode needs (``job.resume_frames``), and let a move the pause froze finish, so
+    the start pose is where the arm rests."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
         _, received, _, frames = link.snapshot()
         heard = "nothing" if received == 0 else f"{received} bytes, {frames} status frames"
         raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
     _wait_rotations(link, 2, timeout_s)
     if _paused_twice(link, timeout_s):
-        click.echo("armctl: the arm reports it is paused: sending one pause toggle to resume it", err=True)
-        frame = PauseToggle().encode()
-        link.write(frame)
-        if log is not None:
-            log.write(json.dumps({"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}) + "\n")
+        from ..job import resume_frames
+
+        frames = resume_frames(control_on_arrival)
+        click.echo("armctl: the arm reports it is paused: sending " + (
+            "a reset host connector (it acts on control frames as they land: nothing left queued runs twice) and "
+            if len(frames) > 1 else "") + "one pause toggle to resume it", err=True)
+        for command in frames:
+            frame = command.encode()
+            link.write(frame)
+            if log is not None:
+                log.write(json.dumps({"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}) + "\n")
         if not link.wait_until(lambda s: s.paused is False, max(timeout_s, 1.0)):
             raise JobFailed("the arm stayed paused after a pause toggle; nothing else was sent")
         _wait_rotations(link, 1, timeout_s)
+        if control_on_arrival:
+            _wait_still(link, timeout_s)
     return link.snapshot()[0]
+
+
+RESUME_SETTLE_S = 120.0  # the longest a move frozen by a pause may take to finish after the resume
+
+
+def _wait_still(link, timeout_s: float) -> None:
+    """Until the arm reports the same position and joints over two rotations (a frozen move
+    finished), at most ``RESUME_SETTLE_S``."""
+    def pose():
+        state = link.snapshot()[0]
+        return state.position_mm, tuple(state.joints_deg)
+
+    deadline_s = link.clock() + RESUME_SETTLE_S
+    before = pose()
+    while link.clock() < deadline_s:
+        _wait_rotations(link, 2, timeout_s)
+        now = pose()
+        if now == before:
+            return
+        before = now
+    raise JobFailed(f"the arm did not come to rest within {RESUME_SETTLE_S:g} s of the resume; nothing else was sent")
 
 
 def _wait_rotations(link, rotations: int, timeout_s: float) -> None:
@@ -232,7 +263,7 @@ def run_job(options: JobOptions, script, connect) -> int:
 
     link, baud = connect(options.port, options.baud, profile=profile)
     with link, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
-        state = read_arm(link, options.timeout_s, log)
+        state = read_arm(link, options.timeout_s, log, profile.connector.control_on_arrival)
         start, initial = start_from_state(model, state)
         estimate = estimate_job(script, model, start, options.lead_s, baud, options.from_line, initial)
         if estimate.frames == 0:
@@ -254,7 +285,7 @@ def run_job(options: JobOptions, script, connect) -> int:
 
 
 def _stream(runner, options: JobOptions, view, grid=None) -> str:
-    from ..runner import ABORT_SEQUENCES
+    from ..runner import abort_frames
 
     title = f"armctl run {options.script}"
     from ..output import quiet
@@ -276,7 +307,7 @@ def _stream(runner, options: JobOptions, view, grid=None) -> str:
         display.note(f"\narmctl: {why}: no more frames are sent; sending the abort sequence "
                      f"({options.abort}) and waiting for the arm to come to rest …")
         try:
-            runner.abort(ABORT_SEQUENCES[options.abort])
+            runner.abort(abort_frames(options.abort, runner.streamer.control_on_arrival))
         except KeyboardInterrupt:
             pass
         except Exception as error:  # the abort itself failed: say so, the summary still follows
