@@ -607,7 +607,7 @@ class Streamer:
             agreed = min(previous, earliest)
             if could_be_on is not None:
                 # a gap found is told once: the next one is judged from here
-                if self._check_gap(stream, agreed, now) or previous == earliest:
+                if self._check_gap(stream, agreed, now, could_be_on) or previous == earliest:
                     self._sighting[stream] = (earliest, now, could_be_on)
             before = self.consumed_lower_bound
             self._consume_before(agreed)
@@ -619,13 +619,15 @@ class Streamer:
                 self._measure_pace(stream, earliest, candidates, now)
         self._reanchor(candidates, now)
 
-    def _check_gap(self, stream: str, index: int, now: float) -> bool:
+    def _check_gap(self, stream: str, index: int, now: float, could_be_on) -> bool:
         """A sign of loss: the arm, seen by this stream at ``now`` at least at frame ``index``,
         got there from its last agreed sighting sooner than the frames in between could take at
         the fastest plausible pace (FASTEST_ARM_FACTOR): they were skipped — dropped by a full
         FIFO or cleared.  Sound on a good arm: lost status frames only lengthen the interval, and
         the earlier sighting counts at the latest frame its report may lie on (a repeated path,
-        a frame this stream cannot judge), so a return to the same place is no gap."""
+        a frame this stream cannot judge) that is no later than the latest frame this report
+        (``could_be_on``) may lie on — the arm runs its frames in order — so a return to the
+        same place is no gap."""
         last = self._sighting.get(stream)
         recent = self._recent_sent
         if last is None or not recent or index <= last[0] + 1:
@@ -633,14 +635,16 @@ class Streamer:
         first = recent[0].index
         if last[0] < first or index - first >= len(recent):
             return False  # out of the frames kept: no judgement
-        since, could_be_on = last[1], last[2]
+        since = last[1]
         at_k = recent[index - first]
         gap_s = at_k.motion_before_s - recent[last[0] - first].motion_before_s - recent[last[0] - first].segment.duration_s
         allowed_s = now - since + LOSS_SLACK_S
         if gap_s * FASTEST_ARM_FACTOR <= allowed_s:
             return False
         # Confirm: the latest frame the earlier report may lie on (the cost is paid only here).
-        upper = next((sent for sent in reversed(recent) if sent.index >= last[0] and could_be_on(sent)), None)
+        latest = next((sent.index for sent in reversed(recent) if could_be_on(sent)), index)
+        upper = next((sent for sent in reversed(recent)
+                      if last[0] <= sent.index <= latest and last[2](sent)), None)
         if upper is None or upper.index + 1 >= index:
             return False
         gap_s = at_k.motion_before_s - upper.motion_before_s - upper.segment.duration_s
@@ -652,7 +656,7 @@ class Streamer:
             f"{skipped} frame{'s' if skipped != 1 else ''} between take {gap_s:.2f} s of motion "
             f"(at least {gap_s * FASTEST_ARM_FACTOR:.2f} s on an arm {1 / FASTEST_ARM_FACTOR:g}x faster than the "
             "model): they were skipped (dropped by a full FIFO, or cleared)")
-        suspect = upper.index + 1
+        suspect = last[0]  # the arm may have been on a later frame through the same point: not claimed
         if self.first_suspect_index is None or suspect < self.first_suspect_index:
             self.first_suspect_index = suspect
         return True

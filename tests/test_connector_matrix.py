@@ -124,3 +124,53 @@ def test_a_fifo_smaller_than_the_profile_says_ends_frames_may_have_been_lost(job
     assert known <= min(dropped)  # line = frame index + 1 in this job: the first dropped line is not claimed
     resume = int(re.search(r"--from-line (\d+)", result.stdout).group(1))
     assert resume == known + 1
+
+
+# --- without a probe: never `done` after a loss that the time alone reveals ---------------------
+
+
+@pytest.mark.parametrize("fifo, control, frame, factor", [
+    (50, "queued", "worktable", 1.0), (50, "arrival", "robot", 0.7), (50, "queued", "robot", 2.0),
+    (120, "arrival", "worktable", 1.3), (120, "queued", "worktable", 0.7), (120, "arrival", "robot", 2.0),
+])
+def test_an_unprobed_profile_on_a_smaller_fifo_never_ends_done(job, opened_ports, fifo, control, frame, factor):
+    """The profile says only what the arm's control mode and status frame are (the FIFO stays the
+    document's 200, unprobed); the arm holds fewer and drops.  Whatever the arm's pace, the run
+    ends "frames may have been lost", exit 1, and claims no dropped line executed."""
+    (job.parent / "armctl.toml").write_text(
+        f'[connector]\ncontrol_frames = "{control}"\nstatus_xyz_frame = "{frame}"\nspeed_factor = {factor}\n',
+        encoding="utf-8")
+    result = CliRunner().invoke(main, ["run", str(job), "--no-live", "--lead", LEAD_S, "--baud", BAUD,
+                                       "--port", _url(fifo, control, frame, factor)])
+    (port,) = opened_ports
+    dropped = port.model.dropped_indexes
+    assert dropped, result.output
+    assert result.exit_code == 1, result.output
+    assert "stopped: frames may have been lost" in result.output
+    known = re.search(r"last line known executed: (\d+|none)", result.stdout).group(1)
+    assert known == "none" or int(known) <= min(dropped)
+
+
+def test_the_fifo_is_proven_by_a_probe_or_a_simulator_that_holds_at_least_the_profiles():
+    from armctl.link import fifo_proven
+    from armctl.profile import default_profile, parse_profile
+
+    document = default_profile().connector  # 200, the document's, not measured
+    assert fifo_proven("sim://", document)  # the simulator holds 200 unless told otherwise
+    assert fifo_proven("sim://?clock=virtual&fifo_frames=250", document)
+    assert not fifo_proven("sim://?clock=virtual&fifo_frames=50", document)
+    assert not fifo_proven("sim://?fifo=199", document)  # the alias says the same
+    assert not fifo_proven("/dev/ttyUSB0", document)
+    assert not fifo_proven("socket://localhost:7777", document)
+    probed = parse_profile({"connector": {"fifo_frames": 50}}).connector
+    assert fifo_proven("/dev/ttyUSB0", probed)
+
+
+def test_a_fresh_process_on_a_smaller_fifo_without_a_probe_says_frames_may_have_been_lost(job):
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", str(job), "--no-live", "--lead", LEAD_S, "--baud", BAUD,
+                           "--port", "sim://?clock=virtual&fifo_frames=50"],
+                          capture_output=True, text=True, timeout=120, cwd=job.parent)
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert done.stderr.splitlines()[-1] == "stopped: frames may have been lost"
+    assert re.search(r"^frames confirmed by the arm's reports: \d+; by time only: \d+$", done.stdout, re.M)
+    assert "Traceback" not in done.stderr
