@@ -51,7 +51,7 @@ from typing import Iterable, Iterator
 
 from .streamer import FASTEST_ARM_FACTOR, LOSS_SLACK_S, ROTATION_S
 from .protocol import (
-    ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
+    CONTROL_COMMANDS, ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
     RunPositionStatus, StatusFrame,
 )
 
@@ -232,6 +232,7 @@ class Job:
         self._deadline_s = 0.0
         self._overran = False
         self._write: Write | None = None  # the Write asked for and not yet done
+        self._resume_at_next = False  # frozen where the first pending frame ends and the next begins
 
     # --- input ------------------------------------------------------------------------------
 
@@ -413,6 +414,8 @@ class Job:
         if still and (self.arm_paused or self.arm_at_rest(now)):
             if self._at_last_target():
                 self._confirm_all_done()
+            elif self.arm_paused and self.streamer.control_on_arrival:
+                self._resume_at_next = self._frozen_at_a_boundary()
             return self._finish(outcome, now)
         return Wait(self._next_change_s(now, self._deadline_s))
 
@@ -534,8 +537,25 @@ class Job:
             view.last_done = streamer.tag_of(suspect - 1) if suspect > 0 else None
             view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
 
+    def _frozen_at_a_boundary(self) -> bool:
+        """A pause that acted as it landed froze the arm at the end of the first pending frame,
+        i.e. at the start of the next, a move: either is the frozen one.  The resume toggle
+        finishes it, so the resume line is the next frame: run once if the arm was on the first,
+        re-sent to where the arm then is (idempotent) if it was on the next.  (Resuming at the
+        first would drive the arm back to its end after the next had finished.)"""
+        pending = self.streamer.pending
+        if len(pending) < 2 or pending[1].segment.length <= 0 or isinstance(pending[1].command, CONTROL_COMMANDS):
+            return False
+        head = pending[0].segment
+        position = self._reported.get(0)
+        if head.kind not in ("line", "arc") or head.end.xyz_derived or position is None:
+            return False
+        return max(abs(a - b) for a, b in zip(position, head.end.xyz)) <= TARGET_MM
+
     def _first_not_done(self):
         pending = self.streamer.pending
+        if self._resume_at_next and len(pending) > 1:
+            return pending[1].tag
         if not pending:
             return self.view.next_statement
         if isinstance(pending[0].command, ArcEnd) and self.view.last_done is not None:

@@ -21,6 +21,8 @@ import shlex
 
 import pytest
 from click.testing import CliRunner
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 import armctl.link
 import armctl.runner
@@ -44,6 +46,10 @@ def one_arm(tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("ARMCTL_PORT", raising=False)
     (tmp_path / "job.txt").write_text(_job(), encoding="utf-8")
+    return _open_one_arm(monkeypatch)
+
+
+def _open_one_arm(monkeypatch) -> dict:
     ports: dict = {}
     real_open = armctl.link.open_port
 
@@ -83,11 +89,18 @@ def _job_targets() -> list[tuple]:
     return targets
 
 
+ARMS = [("", ""), ("fifo_frames = 50\nstatus_xyz_frame = \"robot\"\nspeed_factor = 0.7\n",
+                   "&fifo_frames=50&status_xyz_frame=robot&speed_factor=0.7"),
+        ("fifo_frames = 250\nspeed_factor = 2.0\n", "&fifo_frames=250&speed_factor=2.0")]
+
+
+@pytest.mark.parametrize("arm_toml, arm_url", ARMS, ids=["document", "fifo50-robot-0.7", "fifo250-2.0"])
 @pytest.mark.parametrize("control", ["queued", "arrival"])
 @pytest.mark.parametrize("abort", ["pause", "reset-connector"])
-def test_an_abort_and_its_printed_resume_run_every_line_exactly_once(one_arm, tmp_path, monkeypatch, control, abort):
-    (tmp_path / "armctl.toml").write_text(f'[connector]\ncontrol_frames = "{control}"\n', encoding="utf-8")
-    url = f"sim://?clock=virtual&control_frames={control}"
+def test_an_abort_and_its_printed_resume_run_every_line_exactly_once(one_arm, tmp_path, monkeypatch, control, abort,
+                                                                     arm_toml, arm_url):
+    (tmp_path / "armctl.toml").write_text(f'[connector]\ncontrol_frames = "{control}"\n{arm_toml}', encoding="utf-8")
+    url = f"sim://?clock=virtual&control_frames={control}{arm_url}"
     _stop_after(monkeypatch, STOP_AFTER_FRAMES)
     first = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--port", url, "--abort", abort])
     assert first.exit_code == 130, first.output
@@ -139,3 +152,31 @@ def test_the_arm_left_paused_with_a_queue_on_arrival_is_cleared_before_the_toggl
     assert result.exit_code == 0, result.output
     assert "reset host connector" in result.output
     assert (290.0, 0.0) not in _targets_done(arm)  # the queued frame never ran
+
+
+@settings(max_examples=16, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(stop_after=st.integers(2, 29), control=st.sampled_from(["queued", "arrival"]),
+       abort=st.sampled_from(["pause", "reset-connector"]), factor=st.sampled_from([0.7, 1.0, 1.3, 2.0]))
+def test_wherever_the_abort_comes_the_resume_runs_every_line_once(tmp_path_factory, stop_after, control, abort, factor):
+    """Any moment of the job (a pause that lands mid-move, at a boundary between two moves, while
+    the lead is being filled), either control mode, either abort, an arm slower or faster."""
+    directory = tmp_path_factory.mktemp("arm")
+    (directory / "job.txt").write_text(_job(), encoding="utf-8")
+    (directory / "armctl.toml").write_text(f'[connector]\ncontrol_frames = "{control}"\nspeed_factor = {factor}\n')
+    url = f"sim://?clock=virtual&control_frames={control}&speed_factor={factor}"
+    with pytest.MonkeyPatch.context() as monkeypatch:
+        monkeypatch.chdir(directory)
+        monkeypatch.delenv("ARMCTL_PORT", raising=False)
+        ports = _open_one_arm(monkeypatch)
+        _stop_after(monkeypatch, stop_after)
+        first = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--port", url, "--abort", abort])
+        assert first.exit_code == 130, first.output
+        words = shlex.split(re.search(r"^resume with: (.*)$", first.stdout, re.M).group(1))
+        second = CliRunner().invoke(main, words[1:] + ["--no-live"])
+    assert second.exit_code == 0, second.output
+    arm = ports[url].model
+    assert arm.frames_dropped == 0
+    done = _targets_done(arm)
+    collapsed = [t for k, t in enumerate(done) if k == 0 or done[k - 1] != t]
+    assert collapsed == _job_targets(), (first.output, second.output)
+    assert len(done) - len(collapsed) <= 1
