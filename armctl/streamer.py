@@ -63,6 +63,14 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
     acts the moment it lands, ahead of everything queued: one in a job is written only once the
     lower bound says every frame before it has finished, so the arm runs the job in its order.
 
+What the summary may claim is data too: every frame consumed counts as confirmed by the arm's
+reports or by time alone (``confirmed_by_reports`` / ``confirmed_by_time``), and ``losses``
+holds each sign of loss with its evidence: two agreed sightings of one stream, the later at
+least at frame k, the earlier at most at the latest frame its report may lie on (no later than
+the latest the later report may lie on: the arm runs its frames in order), between which the
+arm could not have run the frames in between even ``1 / FASTEST_ARM_FACTOR`` times faster than
+the model.  After ``cleared`` (a RESET CONNECTOR acting as it lands) time confirms nothing.
+
 Why it decided is data too, for whoever drives it (armctl/runner.py logs it with ``-v``):
 ``next_write_time`` leaves the binding constraint in ``write_reason`` (``WaitReason``: the FIFO's
 capacity, the lead, the wire, or none), and each advance of the lower bound leaves its evidence
