@@ -27,7 +27,9 @@ Rules:
 - Stopping (``request_stop``: Ctrl-C, a failure the host met): nothing more of the job is
   written; the abort sequence goes instead — minus a pause toggle to an arm that reports it
   is paused, which would resume it — then the engine waits for the arm to come to rest and
-  ends INTERRUPTED (or FAILED, with the reason among the messages).
+  ends INTERRUPTED (or FAILED, with the reason among the messages).  The control mode shapes
+  the sequence and the start of the next run (``abort_frames``, ``resume_frames``), so an abort
+  and its resume line run every line once.
 - Paused means two agreeing pause reports (``agreed_pause``): one corrupted byte must never make
   armctl toggle the arm.  ``armctl run``'s start-up check uses the same rule.
 - The resume line is the first statement not known finished (an arc's G301 resumes at its G300).
