@@ -234,6 +234,7 @@ class Job:
         self._deadline_s = 0.0
         self._overran = False
         self._write: Write | None = None  # the Write asked for and not yet done
+        self._last_move = None  # the last frame written that moves the arm (its SentFrame)
         self._resume_at_next = False  # frozen where the first pending frame ends and the next begins
 
     # --- input ------------------------------------------------------------------------------
@@ -283,6 +284,8 @@ class Job:
         if self.pacing is not self.streamer:
             self.pacing.wrote(command, now, statement)
         self._recent.append(sent)
+        if _moves_arm(sent.segment):
+            self._last_move = sent
         view.frames_sent += 1
         view.last_sent = statement
         view.next_statement = next(self.statements, None)
@@ -496,11 +499,9 @@ class Job:
         seen at all (a PWM report), never after now."""
         if self._motion is None:  # set with _rest: nothing reported yet
             return now
-        done = self._motion[1]
-        for sent in reversed(self._recent):
-            if _moves_arm(sent.segment):
-                break
-            done += sent.segment.duration_s
+        # every frame after the last one that moves, however many (not only the recent ones)
+        moved_until_s = 0.0 if self._last_move is None else self._last_move.motion_before_s + self._last_move.segment.duration_s
+        done = self._motion[1] + self.streamer.motion_sent_s - moved_until_s
         return min(max(done, self._rest[1], self._active_s or 0.0), now)
 
     def _overrun_limit_s(self) -> float:

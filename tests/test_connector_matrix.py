@@ -174,3 +174,16 @@ def test_a_fresh_process_on_a_smaller_fifo_without_a_probe_says_frames_may_have_
     assert done.stderr.splitlines()[-1] == "stopped: frames may have been lost"
     assert re.search(r"^frames confirmed by the arm's reports: \d+; by time only: \d+$", done.stdout, re.M)
     assert "Traceback" not in done.stderr
+
+
+def test_a_long_run_of_frames_that_move_nothing_is_no_false_alarm(tmp_path, monkeypatch):
+    """200 delays after the last move (more than the engine keeps of recent frames): the arm time
+    counts every one of them, so the job's time is no sign of loss, and the run is done."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("ARMCTL_PORT", raising=False)
+    (tmp_path / "job.txt").write_text("G1 X200 Y0 Z250 A180 B0 C0 S1500 F3000\n" + "G4 P500\n" * 200)
+    result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--port", "sim://?clock=virtual"])
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    actual, estimated = map(float, re.search(r"arm time: ([\d.]+) s .*estimated ([\d.]+) s", result.stdout).groups())
+    assert actual == pytest.approx(estimated, rel=0.02)
