@@ -485,7 +485,10 @@ class Job:
         """The arm reports the end of the last frame written (joints for a joint move)."""
         if not self._recent:
             return True
-        segment = self._recent[-1].segment
+        return self._at_end_of(self._recent[-1].segment)
+
+    def _at_end_of(self, segment) -> bool:
+        """The arm reports the end of ``segment`` (joints for a joint move)."""
         if segment.kind == "joint" or segment.end.xyz_derived:  # what the arm reports, not the profile's FK
             joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
             return len(joints) == 6 and max(abs(a - b) for a, b in zip(joints, segment.end.joints)) <= TARGET_DEG
@@ -541,19 +544,16 @@ class Job:
             view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
 
     def _frozen_at_a_boundary(self) -> bool:
-        """A pause that acted as it landed froze the arm at the end of the first pending frame,
-        i.e. at the start of the next, a move: either is the frozen one.  The resume toggle
+        """A pause that acted as it landed froze the arm at the end of the first pending frame
+        (or on it, if it moves nothing), i.e. at the start of the next, a move: either is the
+        frozen one.  The resume toggle
         finishes it, so the resume line is the next frame: run once if the arm was on the first,
         re-sent to where the arm then is (idempotent) if it was on the next.  (Resuming at the
         first would drive the arm back to its end after the next had finished.)"""
         pending = self.streamer.pending
-        if len(pending) < 2 or pending[1].segment.length <= 0 or isinstance(pending[1].command, CONTROL_COMMANDS):
+        if len(pending) < 2 or not _moves_arm(pending[1].segment) or isinstance(pending[1].command, CONTROL_COMMANDS):
             return False
-        head = pending[0].segment
-        position = self._reported.get(0)
-        if head.kind not in ("line", "arc") or head.end.xyz_derived or position is None:
-            return False
-        return max(abs(a - b) for a, b in zip(position, head.end.xyz)) <= TARGET_MM
+        return self._at_end_of(pending[0].segment)  # a first frame that moves nothing: the arm is at its end
 
     def _first_not_done(self):
         pending = self.streamer.pending

@@ -27,7 +27,7 @@ from hypothesis import strategies as st
 import armctl.link
 import armctl.runner
 from armctl.cli import main
-from armctl.protocol import LinearMove, PauseToggle, ResetConnector
+from armctl.protocol import JointMove, LinearMove, PauseToggle, ResetConnector
 from armctl.sim.executor import DONE
 
 STOP_AFTER_FRAMES = 14
@@ -80,8 +80,20 @@ def _stop_after(monkeypatch, frames: int) -> None:
 
 
 def _targets_done(arm) -> list[tuple]:
-    return [(round(e.command.x_mm, 1), round(e.command.y_mm, 1)) for e in arm.execution_log
-            if isinstance(e.command, LinearMove) and e.outcome == DONE]
+    return [(round(e.command.x_mm, 1), round(e.command.y_mm, 1)) if isinstance(e.command, LinearMove)
+            else (round(e.command.j1_deg, 1), round(e.command.j2_deg, 1)) for e in arm.execution_log
+            if isinstance(e.command, (LinearMove, JointMove)) and e.outcome == DONE]
+
+
+def _joint_job() -> str:
+    """Joint moves (G6) of about 0.5 s, each to joints of their own: evidence is the joints."""
+    lines = ["G6 J1=0 J2=0 J3=0 J4=0 J5=90 J6=0 S1000 F30 H3"]
+    lines += [f"G6 J1={3 * (k + 1)} J2={(k % 5) * 2} F30" for k in range(30)]
+    return "\n".join(lines) + "\n"
+
+
+def _joint_targets() -> list[tuple]:
+    return [(0.0, 0.0)] + [(3.0 * (k + 1), float((k % 5) * 2)) for k in range(30)]
 
 
 def _job_targets() -> list[tuple]:
@@ -154,14 +166,16 @@ def test_the_arm_left_paused_with_a_queue_on_arrival_is_cleared_before_the_toggl
     assert (290.0, 0.0) not in _targets_done(arm)  # the queued frame never ran
 
 
-@settings(max_examples=16, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@settings(max_examples=20, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(stop_after=st.integers(2, 29), control=st.sampled_from(["queued", "arrival"]),
-       abort=st.sampled_from(["pause", "reset-connector"]), factor=st.sampled_from([0.7, 1.0, 1.3, 2.0]))
-def test_wherever_the_abort_comes_the_resume_runs_every_line_once(tmp_path_factory, stop_after, control, abort, factor):
+       abort=st.sampled_from(["pause", "reset-connector"]), factor=st.sampled_from([0.7, 1.0, 1.3, 2.0]),
+       joints=st.booleans())
+def test_wherever_the_abort_comes_the_resume_runs_every_line_once(tmp_path_factory, stop_after, control, abort, factor,
+                                                                  joints):
     """Any moment of the job (a pause that lands mid-move, at a boundary between two moves, while
     the lead is being filled), either control mode, either abort, an arm slower or faster."""
     directory = tmp_path_factory.mktemp("arm")
-    (directory / "job.txt").write_text(_job(), encoding="utf-8")
+    (directory / "job.txt").write_text(_joint_job() if joints else _job(), encoding="utf-8")
     (directory / "armctl.toml").write_text(f'[connector]\ncontrol_frames = "{control}"\nspeed_factor = {factor}\n')
     url = f"sim://?clock=virtual&control_frames={control}&speed_factor={factor}"
     with pytest.MonkeyPatch.context() as monkeypatch:
@@ -178,5 +192,5 @@ def test_wherever_the_abort_comes_the_resume_runs_every_line_once(tmp_path_facto
     assert arm.frames_dropped == 0
     done = _targets_done(arm)
     collapsed = [t for k, t in enumerate(done) if k == 0 or done[k - 1] != t]
-    assert collapsed == _job_targets(), (first.output, second.output)
+    assert collapsed == (_joint_targets() if joints else _job_targets()), (first.output, second.output)
     assert len(done) - len(collapsed) <= 1
