@@ -28,7 +28,9 @@ Rules:
 - Stopping (``request_stop``: Ctrl-C, a failure the host met): nothing more of the job is
   written; the abort sequence goes instead — minus a pause toggle to an arm that reports it
   is paused, which would resume it — then the engine waits for the arm to come to rest and
-  ends INTERRUPTED (or FAILED, with the reason among the messages).
+  ends INTERRUPTED (or FAILED, with the reason among the messages).  The control mode shapes
+  the sequence and the start of the next run (``abort_frames``, ``resume_frames``), so an abort
+  and its resume line run every line once.
 - Paused means two agreeing pause reports (``agreed_pause``): one corrupted byte must never make
   armctl toggle the arm.  ``armctl run``'s start-up check uses the same rule.
 - The resume line is the first statement not known finished (an arc's G301 resumes at its G300).
@@ -38,6 +40,14 @@ Rules:
   or in force, and the end of the job waits for it.  The feed override is applied to the
   statement about to be written, and the streamer plans that very command, so the lead and the
   estimate follow it.  A stop sends its pause toggle only when the arm would otherwise run on.
+- A summary claims only what evidence proves.  Each frame counts as confirmed by the arm's
+  reports or by time alone (``RunView.frames_by_reports`` / ``frames_by_time``).  Any sign of loss
+  — the streamer saw the arm skip frames (``Streamer.losses``), or the arm at rest at the end
+  sooner than the frames sent could take at the fastest plausible pace — ends FRAMES_LOST with
+  the evidence, and nothing from the first frame that may be lost on is claimed executed.
+  ``done`` (FINISHED) also needs a proven FIFO size (``fifo_proven``: probed, or a simulator
+  known to hold at least the profile's) or every frame confirmed by the arm's reports: time
+  alone cannot tell a frame run from a frame dropped; else the job ends UNPROVEN.
 """
 
 from __future__ import annotations
@@ -49,8 +59,9 @@ from operator import attrgetter
 from typing import Iterable, Iterator
 
 from .job_control import JobControl, control_frames_of
+from .streamer import FASTEST_ARM_FACTOR, LOSS_SLACK_S, ROTATION_S
 from .protocol import (
-    ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
+    CONTROL_COMMANDS, ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
     RunPositionStatus, StatusFrame,
 )
 from .streamer import ARRIVAL_SLACK_S, FRAME_SLACK_S
@@ -60,6 +71,30 @@ ABORT_SEQUENCES = {
     "reset-connector": (ResetConnector(),),  # clears the FIFO when it acts (queued frames are lost)
     "none": (),
 }
+
+
+def abort_frames(name: str, control_on_arrival: bool) -> tuple:
+    """The frames of the abort sequence ``name`` for an arm whose control frames act as they land
+    (``control_frames = "arrival"``) or queue (H5).  On arrival a pause freezes the move in
+    progress and leaves the queue behind it intact: a RESET CONNECTOR follows (it acts as it lands
+    too), so nothing the run wrote is left waiting for a later resume to start unannounced, and
+    the resume line is right for the arm as it is (see ``resume_frames``)."""
+    frames = ABORT_SEQUENCES[name]
+    if control_on_arrival and name == "pause":
+        frames += (ResetConnector(),)
+    return frames
+
+
+def resume_frames(control_on_arrival: bool) -> tuple:
+    """What a run sends to an arm found paused (two agreeing reports), before anything else.
+    Queued (H5): one pause toggle — the pause acted at the head of the FIFO, so nothing of the
+    job waits behind it, and a RESET CONNECTOR would wait at the head of a paused arm forever.
+    On arrival: RESET CONNECTOR first (whatever is still queued — left by another program or an
+    older armctl — is cleared, not run a second time), then the toggle: the frozen move finishes,
+    and the run re-sends its line, an absolute move to where the arm then is (idempotent)."""
+    return (ResetConnector(), PauseToggle()) if control_on_arrival else (PauseToggle(),)
+
+
 REST_CHECK_S = 0.6  # the arm counts as at rest when it reported the same pose this long
 SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to come to rest
 OVERRUN_MIN_S = 60.0  # the least time waited past the estimate for an arm still working
@@ -82,6 +117,8 @@ class Outcome(StrEnum):
     FAILED = "failed"
     PORT_LOST = "port lost"
     NO_CONFIRMATION = "no confirmation"
+    FRAMES_LOST = "frames may have been lost"
+    UNPROVEN = "finished, unproven"
 
 
 @dataclass(frozen=True, slots=True)
@@ -127,6 +164,8 @@ class RunView:
     status_frames: int = 0
     arm_done_s: float | None = None  # when the arm came to rest at the end (model time)
     outcome: str = Outcome.RUNNING  # an Outcome
+    frames_by_reports: int = 0  # frames confirmed by the arm's reports (position, joints, at rest at the end)
+    frames_by_time: int = 0  # frames confirmed only by time (the slowest-arm bound)
     messages: list = field(default_factory=list)
     pause_state: str = "running"  # armctl/job_control.py's PauseState: running, pausing, paused, resuming
     pause_label: str = "running"  # what the panel shows (the arm's reports decide it)
@@ -183,8 +222,12 @@ class Job:
     judged by ``streamer``; see the module docstring."""
 
     def __init__(self, streamer, statements: Iterable, view: RunView, *, pacing=None,
-                 abort_sequence: tuple = ABORT_SEQUENCES["pause"], control_frames: str | None = None) -> None:
+                 abort_sequence: tuple = ABORT_SEQUENCES["pause"], control_frames: str | None = None,
+                 fifo_proven: bool = True) -> None:
+        """``fifo_proven``: the connector's FIFO is known to hold at least the profile's
+        ``fifo_frames`` (``armctl.link.fifo_proven`` decides for ``armctl run``)."""
         self.streamer = streamer
+        self.fifo_proven = fifo_proven
         # pause, resume and the feed override (armctl/job_control.py), under the profile the
         # streamer plans with: its speed limits (never passed) and its control-frame mode (H5)
         profile = streamer.planner.model.profile
@@ -213,6 +256,8 @@ class Job:
         self._write: Write | None = None  # the Write asked for and not yet done
         self._command = None  # the command that Write carries (the feed override applied)
         self._control_version = 0  # the control state the view shows
+        self._last_move = None  # the last frame written that moves the arm (its SentFrame)
+        self._resume_at_next = False  # frozen where the first pending frame ends and the next begins
 
     # --- input ------------------------------------------------------------------------------
 
@@ -252,7 +297,8 @@ class Job:
         """The host wrote the frame the last ``Write`` asked for, starting at ``now``."""
         write, self._write = self._write, None
         if self.phase is _Phase.ABORTING:
-            self._aborts.popleft()
+            if isinstance(self._aborts.popleft(), ResetConnector) and self.streamer.control_on_arrival:
+                self.streamer.cleared()  # it acted as it landed: what was queued may be gone
             return
         if write is not None and write.control is not None:  # a pause toggle the user asked for
             self.control.take_toggle()
@@ -266,6 +312,8 @@ class Job:
         if self.pacing is not self.streamer:
             self.pacing.wrote(command, now, statement)
         self._recent.append(sent)
+        if _moves_arm(sent.segment):
+            self._last_move = sent
         view.frames_sent += 1
         view.last_sent = statement
         view.next_statement = next(self.statements, None)
@@ -379,8 +427,11 @@ class Job:
     # --- the end ----------------------------------------------------------------------------
 
     def _settle_deadline(self, now: float) -> float:
+        """How long the end is waited for: the motion queued at the slowest pace, and no earlier
+        than the frames after the last motion can surely be done (a long run of delays leaves
+        no trace: only time tells, and an arm twice slower needs twice theirs)."""
         streamer = self.streamer
-        return now + streamer.queued_seconds(now) * streamer.slowest_factor + SETTLE_SLACK_S
+        return max(now + streamer.queued_seconds(now) * streamer.slowest_factor, self._trailing_done_s()) + SETTLE_SLACK_S
 
     def _draining(self, now: float) -> Wait | Finished:
         """Finished means: at rest, at the last target, not paused, and the estimate agrees.
@@ -393,7 +444,8 @@ class Job:
             if self._overran:
                 view.messages.append("the arm kept working past the estimate (moving, or running an SD program "
                                      "whose time armctl cannot know); armctl waited until it stopped")
-            return self._finish(Outcome.FINISHED, now)
+            self._check_job_time(view.arm_done_s)
+            return self._finish(self._finished_outcome(), now)
         limit_s = self._deadline_s
         if now >= self._deadline_s:
             # Visibly working: the job is still running, whatever the estimate says; once it
@@ -404,7 +456,8 @@ class Job:
             limit_s = self._deadline_s + self._overrun_limit_s()
             if not settling or now >= limit_s:
                 view.messages.append(self._why_not_finished())
-                return self._finish(Outcome.NO_CONFIRMATION, now)
+                lost = bool(self.streamer.losses)
+                return self._finish(Outcome.FRAMES_LOST if lost else Outcome.NO_CONFIRMATION, now)
             if self._active_s is not None:
                 limit_s = min(limit_s, self._active_s + REST_CHECK_S + SETTLE_SLACK_S)
         return Wait(self._next_change_s(now, limit_s))
@@ -418,17 +471,55 @@ class Job:
         return now >= self._trailing_done_s()
 
     def _trailing_done_s(self) -> float:
+        motion_end_s = self._motion[1] if self._motion is not None else 0.0
+        streamer, slowest = self.streamer, self.streamer.slowest_factor
+        # every frame after the last one that moves, however many (the recent ones are only the
+        # last RECENT_FRAMES): their model time at the slowest pace, from the end of that motion …
+        last = self._last_move
+        moved_until_s = 0.0 if last is None else last.motion_before_s + last.segment.duration_s
+        count = streamer.sent - (0 if last is None else last.index + 1)
+        all_s = motion_end_s + (streamer.motion_sent_s - moved_until_s) * slowest + count * FRAME_SLACK_S
+        # … and no earlier than the chain over the recent ones, each begun no earlier than it arrived
         trailing = []
         for sent in reversed(self._recent):
             if _moves_arm(sent.segment):
                 break
             trailing.append(sent)
-        done_s = self._motion[1] if self._motion is not None else 0.0
-        slowest = self.streamer.slowest_factor
+        done_s = motion_end_s
         for sent in reversed(trailing):
             done_s = (max(done_s, sent.wire_end_s + ARRIVAL_SLACK_S) + sent.segment.duration_s * slowest
                       + FRAME_SLACK_S)
-        return done_s
+        return max(done_s, all_s)
+
+    def _check_job_time(self, done_s: float) -> None:
+        """A sign of loss: the arm at rest at the last target sooner than the motion of every
+        frame written could take at the fastest plausible pace.  The arm time may be short by
+        up to a rotation (the last motion seen is reported up to a rotation late)."""
+        streamer = self.streamer
+        arm_s = done_s - self.view.started_s
+        least_s = streamer.motion_sent_s * FASTEST_ARM_FACTOR
+        if arm_s + ROTATION_S + LOSS_SLACK_S >= least_s:
+            return
+        streamer.losses.append(
+            f"the arm was at rest at the last target {arm_s:.1f} s after the first frame, but the frames sent take "
+            f"{streamer.motion_sent_s:.1f} s of motion (at least {least_s:.1f} s on an arm "
+            f"{1 / FASTEST_ARM_FACTOR:g}x faster than the model): some were not run (dropped by a full FIFO?)")
+        suspect = streamer.first_time_only_index or 0
+        if streamer.first_suspect_index is None or suspect < streamer.first_suspect_index:
+            streamer.first_suspect_index = suspect
+
+    def _finished_outcome(self) -> Outcome:
+        """FINISHED only when nothing says a frame was lost and the claim rests on proof."""
+        streamer = self.streamer
+        if streamer.losses:
+            return Outcome.FRAMES_LOST
+        if not self.fifo_proven and streamer.confirmed_by_time:
+            self.view.messages.append(
+                f"finished, unproven: {streamer.confirmed_by_time} frames were confirmed by time alone, and the "
+                "FIFO size is the document's, not measured on this arm: a frame it dropped would look the same; "
+                "run `armctl probe` once")
+            return Outcome.UNPROVEN
+        return Outcome.FINISHED
 
     def _settling(self, now: float) -> Wait | Finished:
         """After the abort sequence: until the arm is at rest — paused (the estimate cannot know
@@ -440,6 +531,8 @@ class Job:
         if still and (self.arm_paused or self.arm_at_rest(now)):
             if self._at_last_target():
                 self._confirm_all_done()
+            elif self.arm_paused and self.streamer.control_on_arrival:
+                self._resume_at_next = self._frozen_at_a_boundary()
             return self._finish(outcome, now)
         return Wait(self._next_change_s(now, self._deadline_s))
 
@@ -461,6 +554,7 @@ class Job:
         view = self.view
         if outcome in (Outcome.FAILED,) and self.failure:
             view.messages.append(self.failure)
+        view.messages.extend(self.streamer.losses)
         self.outcome = outcome
         self.phase = _Phase.DONE
         view.outcome = outcome
@@ -473,6 +567,10 @@ class Job:
         view = self.view
         view.outcome = Outcome.INTERRUPTED
         sequence = self.abort_sequence
+        if self.streamer.control_on_arrival and sequence == abort_frames("pause", True):
+            view.messages.append("the arm acts on control frames as they land: the pause froze the move in progress "
+                                 "and a RESET CONNECTOR cleared the frames queued behind it; the resume command resumes "
+                                 "that move, then re-sends its line (an absolute move to where the arm then is)")
         self.control.observe(self.arm_paused)
         if not self.control.abort_needs_toggle() and any(isinstance(c, PauseToggle) for c in sequence):
             why = ("a pause was already on its way" if self.control.state == "pausing"
@@ -502,7 +600,10 @@ class Job:
         """The arm reports the end of the last frame written (joints for a joint move)."""
         if not self._recent:
             return True
-        segment = self._recent[-1].segment
+        return self._at_end_of(self._recent[-1].segment)
+
+    def _at_end_of(self, segment) -> bool:
+        """The arm reports the end of ``segment`` (joints for a joint move)."""
         if segment.kind == "joint" or segment.end.xyz_derived:  # what the arm reports, not the profile's FK
             joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
             return len(joints) == 6 and max(abs(a - b) for a, b in zip(joints, segment.end.joints)) <= TARGET_DEG
@@ -516,11 +617,9 @@ class Job:
         seen at all (a PWM report), never after now."""
         if self._motion is None:  # set with _rest: nothing reported yet
             return now
-        done = self._motion[1]
-        for sent in reversed(self._recent):
-            if _moves_arm(sent.segment):
-                break
-            done += sent.segment.duration_s
+        # every frame after the last one that moves, however many (not only the recent ones)
+        moved_until_s = 0.0 if self._last_move is None else self._last_move.motion_before_s + self._last_move.segment.duration_s
+        done = self._motion[1] + self.streamer.motion_sent_s - moved_until_s
         return min(max(done, self._rest[1], self._active_s or 0.0), now)
 
     def _overrun_limit_s(self) -> float:
@@ -557,9 +656,29 @@ class Job:
             self._control_version = control.version
             view.pause_state, view.pause_label = control.state.value, control.label
             view.feed_percent, view.feed_clamped = control.feed.percent, control.feed.clamped
+        view.frames_by_reports, view.frames_by_time = streamer.confirmed_by_reports, streamer.confirmed_by_time
+        suspect = streamer.first_suspect_index
+        if suspect is not None and suspect < streamer.consumed_lower_bound:
+            # nothing from the first frame that may have been lost on is claimed executed
+            view.last_done = streamer.tag_of(suspect - 1) if suspect > 0 else None
+            view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
+
+    def _frozen_at_a_boundary(self) -> bool:
+        """A pause that acted as it landed froze the arm at the end of the first pending frame
+        (or on it, if it moves nothing), i.e. at the start of the next, a move: either is the
+        frozen one.  The resume toggle
+        finishes it, so the resume line is the next frame: run once if the arm was on the first,
+        re-sent to where the arm then is (idempotent) if it was on the next.  (Resuming at the
+        first would drive the arm back to its end after the next had finished.)"""
+        pending = self.streamer.pending
+        if len(pending) < 2 or not _moves_arm(pending[1].segment) or isinstance(pending[1].command, CONTROL_COMMANDS):
+            return False
+        return self._at_end_of(pending[0].segment)  # a first frame that moves nothing: the arm is at its end
 
     def _first_not_done(self):
         pending = self.streamer.pending
+        if self._resume_at_next and len(pending) > 1:
+            return pending[1].tag
         if not pending:
             return self.view.next_statement
         if isinstance(pending[0].command, ArcEnd) and self.view.last_done is not None:

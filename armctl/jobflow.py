@@ -78,11 +78,15 @@ def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
     return estimator.result
 
 
-def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None):
+def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
+             control_on_arrival: bool = False):
     """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
-    kind has been replaced or held back, H9); resume an arm that twice reports it is paused
-    (``note`` is told so).  The arm's state; ``JobFailed`` when it does not answer."""
-    from .protocol import PauseToggle
+    kind has been replaced or held back, H9); resume an arm that twice reports it is paused, as
+    its control mode needs (``job.resume_frames``: on an arm that acts on control frames as they
+    land, a RESET CONNECTOR first, so nothing left queued runs twice), and let a move the pause
+    froze finish, so the start pose is where the arm rests (``note`` is told).  The arm's state;
+    ``JobFailed`` when it does not answer."""
+    from .job import resume_frames
 
     if not link.wait_until(lambda s: s.complete, timeout_s):
         _, received, _, frames = link.snapshot()
@@ -90,15 +94,42 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
         raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
     wait_rotations(link, 2, timeout_s)
     if _paused_twice(link, timeout_s):
-        note("armctl: the arm reports it is paused: sending one pause toggle to resume it")
-        frame = PauseToggle().encode()
-        link.write(frame)
-        if log is not None:
-            log.write(json.dumps({"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}) + "\n")
+        commands = resume_frames(control_on_arrival)
+        note("armctl: the arm reports it is paused: sending " + (
+            "a reset host connector (it acts on control frames as they land: nothing left queued runs twice) and "
+            if len(commands) > 1 else "") + "one pause toggle to resume it")
+        for command in commands:
+            frame = command.encode()
+            link.write(frame)
+            if log is not None:
+                log.write(json.dumps({"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}) + "\n")
         if not link.wait_until(lambda s: s.paused is False, max(timeout_s, 1.0)):
             raise JobFailed("the arm stayed paused after a pause toggle; nothing else was sent")
         wait_rotations(link, 1, timeout_s)
+        if control_on_arrival:
+            _wait_still(link, timeout_s)
     return link.snapshot()[0]
+
+
+RESUME_SETTLE_S = 120.0  # the longest a move frozen by a pause may take to finish after the resume
+
+
+def _wait_still(link, timeout_s: float) -> None:
+    """Until the arm reports the same position and joints over two rotations (a frozen move
+    finished), at most ``RESUME_SETTLE_S``."""
+    def pose():
+        state = link.snapshot()[0]
+        return state.position_mm, tuple(state.joints_deg)
+
+    deadline_s = link.clock() + RESUME_SETTLE_S
+    before = pose()
+    while link.clock() < deadline_s:
+        wait_rotations(link, 2, timeout_s)
+        now = pose()
+        if now == before:
+            return
+        before = now
+    raise JobFailed(f"the arm did not come to rest within {RESUME_SETTLE_S:g} s of the resume; nothing else was sent")
 
 
 def wait_rotations(link, rotations: int, timeout_s: float) -> None:
@@ -178,6 +209,7 @@ def plan_job(script, model, state, lead_s: float, baud: int, from_line: int = 1)
 def start_job(link, script, model, plan: JobPlan, lead_s: float, baud: int, total_lines: int, log=None):
     """The runner that streams ``script`` as ``plan`` says (not started: call ``run``), with the
     link's status frames routed to it."""
+    from .link import fifo_proven
     from .runner import JobRunner, RunView
     from .streamer import Streamer
 
@@ -186,7 +218,8 @@ def start_job(link, script, model, plan: JobPlan, lead_s: float, baud: int, tota
     view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=total_lines, lead_s=lead_s,
                    capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
     statements = script.compile(initial=plan.initial, from_line=plan.from_line)
-    return JobRunner(link, streamer, statements, view, log=log)
+    # ``done`` needs a FIFO size that is proven (probed, or a simulator known to hold it): link.fifo_proven
+    return JobRunner(link, streamer, statements, view, log=log, fifo_proven=fifo_proven(link.url, model.profile.connector))
 
 
 def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = lambda why: None) -> str:

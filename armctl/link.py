@@ -114,6 +114,19 @@ def check_sim_url(choice: PortChoice) -> None:
         raise ConfigError(f"{where}: {error}") from None
 
 
+def fifo_proven(url: str, connector) -> bool:
+    """``connector.fifo_proven`` for the port at ``url``: a ``sim://`` port says its own FIFO size."""
+    port_fifo_frames = None
+    if url.startswith("sim://"):
+        from .sim.protocol_sim import parse_sim_url
+
+        try:
+            port_fifo_frames = parse_sim_url(url).fifo_frames
+        except ConfigError:
+            pass
+    return connector.fifo_proven(port_fifo_frames)
+
+
 def require_wall_clock(link: "Link", command: str) -> None:
     """Commands that follow the arm as it moves (a live view, jogging) need time to pass by
     itself; a ``clock=virtual`` simulator only moves when waited on."""

@@ -137,6 +137,15 @@ class Connector:
             raise KeyError(key)
         return key not in self.given
 
+    def fifo_proven(self, port_fifo_frames: int | None = None) -> bool:
+        """Whether the connector is known to hold at least ``fifo_frames``: the value was measured
+        or set (armctl.toml, a profile file, ``armctl probe --write``), or the port says its own
+        FIFO (``port_fifo_frames``: a simulator's option) is at least that.  Otherwise a frame the
+        arm dropped looks, to time alone, the same as one it ran."""
+        if not self.is_default("fifo_frames"):
+            return True
+        return port_fifo_frames is not None and port_fifo_frames >= self.fifo_frames
+
     @property
     def control_on_arrival(self) -> bool:
         return self.control_frames == "arrival"

@@ -29,7 +29,7 @@ import queue
 from typing import Callable, Iterator
 
 from .errors import ArmctlError, PortError
-from .job import ABORT_SEQUENCES, Finished, Job, RunView, Wait, Write, _moved_clearly  # noqa: F401  (the runner's surface)
+from .job import ABORT_SEQUENCES, abort_frames, resume_frames, Finished, Job, RunView, Wait, Write, _moved_clearly  # noqa: F401  (the runner's surface)
 from .protocol import Command, StatusFrame
 from .streamer import Evidence, Streamer, WaitReason
 
@@ -62,6 +62,7 @@ class JobRunner:
         on_update: Callable[[RunView], None] | None = None,
         durations: Callable[[Command], float] | None = None,
         pacing=None,
+        fifo_proven: bool = True,
     ) -> None:
         # ``time_scale`` and ``durations`` are accepted for older callers: the link's clock is
         # model time already (scaled for sim://?speed=N), and the streamer plans durations.
@@ -69,7 +70,7 @@ class JobRunner:
         self.link = link
         self.streamer = streamer
         self.view = view
-        self.job = Job(streamer, statements, view, pacing=pacing)
+        self.job = Job(streamer, statements, view, pacing=pacing, fifo_proven=fifo_proven)
         self.clock = link.clock if clock is None else clock
         self._virtual = getattr(self.clock, "virtual", False)
         self._origin_s = self.clock()  # model seconds count from here (the log's t)

@@ -63,6 +63,14 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
     acts the moment it lands, ahead of everything queued: one in a job is written only once the
     lower bound says every frame before it has finished, so the arm runs the job in its order.
 
+What the summary may claim is data too: every frame consumed counts as confirmed by the arm's
+reports or by time alone (``confirmed_by_reports`` / ``confirmed_by_time``), and ``losses``
+holds each sign of loss with its evidence: two agreed sightings of one stream, the later at
+least at frame k, the earlier at most at the latest frame its report may lie on (no later than
+the latest the later report may lie on: the arm runs its frames in order), between which the
+arm could not have run the frames in between even ``1 / FASTEST_ARM_FACTOR`` times faster than
+the model.  After ``cleared`` (a RESET CONNECTOR acting as it lands) time confirms nothing.
+
 Why it decided is data too, for whoever drives it (armctl/runner.py logs it with ``-v``):
 ``next_write_time`` leaves the binding constraint in ``write_reason`` (``WaitReason``: the FIFO's
 capacity, the lead, the wire, or none), and each advance of the lower bound leaves its evidence
@@ -108,6 +116,17 @@ CAPACITY_MARGIN_FRAMES = 4
 # durations already include the profile's speed_factor: the slowest arm allowed for is relative
 # to the configured one.
 SLOWEST_ARM_FACTOR = 2.0
+# The other side of the same trust: the arm is never more than 1 / this faster than the model.
+# A frame the arm skipped (dropped by a full FIFO, cleared) shows as the arm getting somewhere
+# sooner than the frames in between could take even at that pace (see ``Streamer.losses``).
+# Symmetric to SLOWEST_ARM_FACTOR: the matrix of arms (speed_factor 0.7…2.0 against a profile
+# of 1.0) stays inside it, so a good arm never raises the alarm.
+FASTEST_ARM_FACTOR = 0.5
+# Added to the time between the two sightings that frame a suspected gap: a status frame is
+# sampled up to a period before it is read, and each sighting is timed to one period.
+LOSS_SLACK_S = 2 * STATUS_PERIOD_S
+# Frames kept for the loss check (how far back a sighting's frame can be looked up).
+RECENT_SENT_FRAMES = 512
 # The measured pace (the arm's seconds ÷ the model's, see ``Streamer.pace``): a sample spans at
 # least this much model time on one segment (a status sighting is timed to a few ms), the pace is
 # the largest of the last PACE_SAMPLES samples (the slower reading wins), and at most PACE_MAX
@@ -174,6 +193,7 @@ class SentFrame:
     chain_end_s: float = 0.0  # the time bound as a chain of frames (a G300's certain end is its G301's)
     group_index: int = -1  # the first frame of its group: an arc's G301 finishes with its G300
     xyz_tolerance_mm: float = POSITION_TOLERANCE_MM  # how near its path an X/Y/Z must be to match
+    motion_before_s: float = 0.0  # the model's motion time of every frame written before it
 
 
 @dataclass(frozen=True)
@@ -236,6 +256,19 @@ class Streamer:
         self.pace = 1.0  # the arm's seconds ÷ the model's, measured (see the module docstring)
         self._pace_samples: deque[float] = deque(maxlen=PACE_SAMPLES)
         self._pace_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, model s, now)
+        # What proves each frame consumed (the summary's honesty): the arm's reports (a position
+        # or joints on a later frame's path, the arm at rest at the last target) or time alone.
+        self.confirmed_by_reports = 0
+        self._time_proves = True  # False once the FIFO may have been cleared (``cleared``)
+        self.confirmed_by_time = 0
+        self.motion_sent_s = 0.0  # the model's motion time of every frame written
+        # Signs of loss (``losses``): each a sentence with its evidence; ``first_suspect_index``
+        # is the earliest frame that may not have run (None: no sign).
+        self.losses: list[str] = []
+        self.first_suspect_index: int | None = None
+        self.first_time_only_index: int | None = None  # the first frame confirmed by time alone
+        self._recent_sent: deque[SentFrame] = deque(maxlen=RECENT_SENT_FRAMES)
+        self._sighting: dict[str, tuple] = {}  # stream → (index, at_s, could_be_on) of its last agreed sighting
 
     # --- writing ----------------------------------------------------------------------------
 
@@ -340,8 +373,10 @@ class Streamer:
         frame = SentFrame(
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
-            chain_end_s=self._certain_tail_s, group_index=self.sent,
+            chain_end_s=self._certain_tail_s, group_index=self.sent, motion_before_s=self.motion_sent_s,
         )
+        self.motion_sent_s += segment.duration_s
+        self._recent_sent.append(frame)
         if isinstance(command, ArcStart):
             # The arm holds a G300 at the head until its G301 has landed and runs both as one
             # segment: the G300 finishes only with the arc, whenever its G301 is written.
@@ -394,12 +429,18 @@ class Streamer:
             self._running_seen_s = now
         self._paused = paused
 
+    def cleared(self) -> None:
+        """The connector may have discarded the frames still queued (a RESET CONNECTOR that acts
+        as it lands): the time bound assumes every frame written waits in the FIFO, so from now
+        on only the arm's reports confirm a pending frame."""
+        self._time_proves = False
+
     def _advance_by_time(self) -> None:
-        if self._running_seen_s is None or self._paused:
+        if self._running_seen_s is None or self._paused or not self._time_proves:
             return
         certain_now = self._running_seen_s
         while self.pending and self.pending[0].certain_end_s <= certain_now:
-            self._consume_one()
+            self._consume_one(by_reports=False)
             self.bound_evidence = Evidence.TIME
 
     def _consume_before(self, index: int) -> None:
@@ -410,7 +451,7 @@ class Streamer:
             if 0 < k < len(self.pending):
                 index = self.pending[k].group_index
         while self.pending and self.pending[0].index < index:
-            self._consume_one()
+            self._consume_one(by_reports=True)
 
     def _restart_time_bound(self, index: int, now: float, fraction: float = 0.0) -> None:
         """Frame ``index`` has begun by ``now`` and its arm is at least ``fraction`` along its path
@@ -452,9 +493,15 @@ class Streamer:
         speed_mm_min = getattr(command, "speed_mm_min", None) or getattr(command, "speed1_mm_min", 0.0) / 2
         return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3)
 
-    def _consume_one(self) -> None:
+    def _consume_one(self, by_reports: bool) -> None:
         self._last_done_tag = self.pending.popleft().tag
         self.consumed_lower_bound += 1
+        if by_reports:
+            self.confirmed_by_reports += 1
+        else:
+            if self.confirmed_by_time == 0:
+                self.first_time_only_index = self.consumed_lower_bound - 1
+            self.confirmed_by_time += 1
 
     def _observe(self, xyz, now: float) -> None:
         verified, robot = self.kinematics_verified, self.reports_robot_xyz
@@ -481,10 +528,14 @@ class Streamer:
         end = blind[0] - first if blind else len(self.pending)
         if blind and end == 0:
             return
+        def could_be_on(sent: SentFrame) -> bool:  # for the loss check: a frame this report may lie on
+            segment = sent.segment
+            return (not verified and (segment.kind == "joint" or segment.end.xyz_derived)) or match(sent) is not None
+
         earliest, candidates = self._scan(match, end, now)
         if earliest is None and end < len(self.pending):
             return  # the arm may be on the frame that cannot be judged: no evidence
-        self._use("position", earliest, candidates, now)
+        self._use("position", earliest, candidates, now, could_be_on)
 
     def _observe_joint_half(self, offset: int, values, now: float) -> None:
         """Joint halves say nothing about a Cartesian segment (that would need IK), so a match
@@ -505,10 +556,13 @@ class Streamer:
                 return None  # a still frame whose joints exist only through the profile's unverified IK
             return _joint_half_fraction(sent.segment, offset, values)
 
+        def could_be_on(sent: SentFrame) -> bool:  # for the loss check: joints cannot judge a Cartesian frame
+            return sent.segment.kind not in ("joint", "still") or match(sent) is not None
+
         earliest, candidates = self._scan(match, end, now)
         if earliest is None and end < len(self.pending):
             return  # the arm may be on the Cartesian segment after these: no evidence
-        self._use(f"joints{offset}", earliest, candidates, now)
+        self._use(f"joints{offset}", earliest, candidates, now, could_be_on)
 
     def _scan(self, match, end: int, now: float):
         """Match one observation against the pending frames before ``end``: (earliest, candidates).
@@ -560,11 +614,12 @@ class Streamer:
         return (candidates[0][0] if candidates else None), candidates
 
     def _use(self, stream: str, earliest: int | None, candidates: list[tuple[int, float, float]],
-             now: float) -> None:
+             now: float, could_be_on=None) -> None:
         """Move the lower bound and the estimate on one observation's candidate segments.
 
         ``earliest`` is where the arm is at least; the bound moves there only when the previous
-        observation of the same stream agrees, so one corrupted frame cannot.
+        observation of the same stream agrees, so one corrupted frame cannot.  ``could_be_on``
+        (a frame → whether this report may have been taken on it) serves the loss check.
         """
         previous = self._last_candidate.get(stream)
         previous_fraction = self._last_fraction.get(stream)
@@ -575,6 +630,10 @@ class Streamer:
             return
         if previous is not None:
             agreed = min(previous, earliest)
+            if could_be_on is not None:
+                # a gap found is told once: the next one is judged from here
+                if self._check_gap(stream, agreed, now, could_be_on) or previous == earliest:
+                    self._sighting[stream] = (earliest, now, could_be_on)
             before = self.consumed_lower_bound
             self._consume_before(agreed)
             if self.consumed_lower_bound > before:
@@ -584,6 +643,55 @@ class Streamer:
             if agreed == earliest:
                 self._measure_pace(stream, earliest, candidates, now)
         self._reanchor(candidates, now)
+
+    def _check_gap(self, stream: str, index: int, now: float, could_be_on) -> bool:
+        """A sign of loss: the arm, seen by this stream at ``now`` at least at frame ``index``,
+        got there from its last agreed sighting sooner than the frames in between could take at
+        the fastest plausible pace (FASTEST_ARM_FACTOR): they were skipped — dropped by a full
+        FIFO or cleared.  Sound on a good arm: lost status frames only lengthen the interval, and
+        the earlier sighting counts at the latest frame its report may lie on (a repeated path,
+        a frame this stream cannot judge) that is no later than the latest frame this report
+        (``could_be_on``) may lie on — the arm runs its frames in order — so a return to the
+        same place is no gap."""
+        last = self._sighting.get(stream)
+        recent = self._recent_sent
+        if last is None or not recent or index <= last[0] + 1:
+            return False
+        first = recent[0].index
+        if last[0] < first or index - first >= len(recent):
+            return False  # out of the frames kept: no judgement
+        since = last[1]
+        at_k = recent[index - first]
+        gap_s = at_k.motion_before_s - recent[last[0] - first].motion_before_s - recent[last[0] - first].segment.duration_s
+        allowed_s = now - since + LOSS_SLACK_S
+        if gap_s * FASTEST_ARM_FACTOR <= allowed_s:
+            return False
+        # Confirm: the latest frame the earlier report may lie on (the cost is paid only here).
+        latest = next((sent.index for sent in reversed(recent) if could_be_on(sent)), index)
+        upper = next((sent for sent in reversed(recent)
+                      if last[0] <= sent.index <= latest and last[2](sent)), None)
+        if upper is None or upper.index + 1 >= index:
+            return False
+        gap_s = at_k.motion_before_s - upper.motion_before_s - upper.segment.duration_s
+        if gap_s * FASTEST_ARM_FACTOR <= allowed_s:
+            return False
+        skipped = index - upper.index - 1
+        self.losses.append(
+            f"the arm got from {_where(upper)} to {_where(at_k)} in {now - since:.2f} s, but the "
+            f"{skipped} frame{'s' if skipped != 1 else ''} between take {gap_s:.2f} s of motion "
+            f"(at least {gap_s * FASTEST_ARM_FACTOR:.2f} s on an arm {1 / FASTEST_ARM_FACTOR:g}x faster than the "
+            "model): they were skipped (dropped by a full FIFO, or cleared)")
+        suspect = last[0]  # the arm may have been on a later frame through the same point: not claimed
+        if self.first_suspect_index is None or suspect < self.first_suspect_index:
+            self.first_suspect_index = suspect
+        return True
+
+    def tag_of(self, index: int):
+        """The tag of frame ``index`` if it is among the frames kept, else None."""
+        recent = self._recent_sent
+        if not recent or not recent[0].index <= index <= recent[-1].index:
+            return None
+        return recent[index - recent[0].index].tag
 
     def _measure_pace(self, stream: str, index: int, candidates, now: float) -> None:
         """One more pace sample when this stream saw the arm on frame ``index`` before, at least
@@ -667,12 +775,18 @@ class Streamer:
         run — except a trailing G300, which the arm holds until its G301 comes."""
         pending = self.pending
         while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
-            self._consume_one()
+            self._consume_one(by_reports=True)
             self.bound_evidence = Evidence.AT_REST
 
     def last_known_done(self):
         """The tag of the last frame known finished, or None."""
         return self._last_done_tag
+
+
+def _where(sent: SentFrame) -> str:
+    """A frame as the user knows it: its script line when the tag has one."""
+    line = getattr(sent.tag, "line", None)
+    return f"frame {sent.index + 1}" if line is None else f"frame {sent.index + 1} (line {line})"
 
 
 def _in_frame(xyz, origin_mm) -> tuple[float, float, float]:

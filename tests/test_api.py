@@ -323,6 +323,9 @@ def test_the_example_against_armctl_sim_pty_in_another_process(tmp_path, sim_pty
         "    print(result.outcome, result.frames_sent, round(status.position_mm[2]), arm.pause(), arm.resume())\n"
         "    arm.stop()\n"
     )
+    # the arm's FIFO size as `armctl probe --write` records it: a device path is proven only so
+    # (without it the run ends "finished, unproven")
+    (tmp_path / "armctl.toml").write_text("[connector]\nfifo_frames = 200\n")
     done = subprocess.run([sys.executable, "-c", program, sim_pty, str(SHORT)],
                           capture_output=True, text=True, timeout=60, cwd=tmp_path)
     assert done.returncode == 0, done.stderr

@@ -393,26 +393,23 @@ def test_without_a_probe_a_fifo_smaller_than_assumed_loses_frames():
     assert len(cell.not_once_run) == cell.dropped  # the exactly-once check sees each lost frame
 
 
-@pytest.mark.xfail(not table.HONEST_OUTCOMES, strict=True,
-                   reason="waits for wt-honest: the engine's outcome 'frames may have been lost' (issue 9 item 3)")
 def test_without_a_probe_a_loss_the_time_reveals_never_ends_done():
-    # The --quick job (300 frames): today its arm ends at the last target and the run says done.
+    # The --quick job (300 frames): the arm ends at the last target, but sooner than the frames
+    # sent could take: the run says the frames may have been lost, never done.
     fifo50 = next(s for s in build_scenarios("quick") if s.name == "fifo50")
     cell = table.run_bench([fifo50], strategies=["armctl"], jobs=1, abort=False)[1]
     assert cell.strategy == table.NO_PROBE and cell.dropped > 0 and cell.ratio < 1.0
     assert cell.outcome != "finished"
-    assert cell.failures == [] and cell.pending == []
+    assert cell.failures == []
 
 
-def test_a_waiting_row_is_said_and_a_real_miss_fails():
+def test_an_unprobed_row_that_says_done_after_a_loss_fails():
     cell = table.Cell("fifo50", table.NO_PROBE, 10, 3, 1.0, 5, 1.0, None, None, outcome="finished")
-    failures, pending = table.check_unprobed(cell)
-    if table.HONEST_OUTCOMES:
-        assert failures and not pending
-    else:
-        assert pending and not failures and "wt-honest" in pending[0]
+    assert table.check_unprobed(cell)  # a miss
     assert table.check_unprobed(table.Cell("x", table.NO_PROBE, 10, 0, 1.0, 5, 1.0, None, None,
-                                           outcome="finished")) == ([], [])
+                                           outcome="finished")) == []
+    assert table.check_unprobed(table.Cell("x", table.NO_PROBE, 10, 3, 1.0, 5, 1.0, None, None,
+                                           outcome="frames may have been lost")) == []
 
 
 def test_resume_is_exactly_once_when_the_pause_runs_behind_the_queue():
@@ -427,32 +424,31 @@ def test_resume_is_exactly_once_when_the_pause_runs_behind_the_queue():
 
 
 def test_the_exactly_once_check_sees_frames_run_twice():
-    """Control frames on arrival: today's start of ``armctl run`` resumes the frozen queue and
-    then sends those frames again — the check must catch it (until wt-honest's rule lands)."""
-    from armctl.bench.harness import RESUME_RULE_LANDED
+    """Control frames on arrival: the old start of ``armctl run`` (one pause toggle, whatever the
+    control mode) resumes the frozen queue and then sends those frames again — the check sees it."""
 
-    cell = armctl_cells()[("resume", "armctl")]
-    if RESUME_RULE_LANDED:
-        assert cell.not_once == []
-    else:
-        assert cell.not_once and cell.pending and cell.failures == []
+    from armctl.bench import harness
+
+    scenario = scenarios()["resume"]
+    profile = table.host_profile(scenario, "armctl")
+    start_run = harness.start_run
+    try:
+        table.start_run = lambda arm, line, arrival: start_run(arm, line, False)  # the old rule: a lone toggle
+        twice = table.not_run_once(scenario, lambda arm: table.make_strategy("armctl", arm, 2.0, profile=profile))
+    finally:
+        table.start_run = start_run
+    assert twice
 
 
-@pytest.mark.xfail(strict=True, reason="waits for wt-honest: run's start follows the control mode (issue 9 item 3); "
-                   "then make harness.start_run call it and set RESUME_RULE_LANDED")
 def test_resume_on_an_arm_acting_on_arrival_runs_every_frame_once():
     assert armctl_cells()[("resume", "armctl")].not_once == []
 
 
-def test_bench_says_which_row_waits():
-    from armctl.bench.harness import RESUME_RULE_LANDED
-
+def test_bench_says_every_target_met():
     result = bench_cli("--size", "test", "--scenario", "resume", "--scenario", "slow2x", "--jobs", "1")
     assert result.exit_code == 0, result.output
     assert "armctl no probe" in result.output and "slow2x" in result.output
-    if not RESUME_RULE_LANDED:
-        assert "resume (armctl) waits for wt-honest" in result.output
-        assert "see the waiting rows above" in result.output
+    assert "every target met in every scenario." in result.output
 
 
 def test_bench_mismatch_rows_in_a_fresh_process():

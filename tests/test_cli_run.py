@@ -369,7 +369,10 @@ def test_a_port_lost_mid_job_exits_1_with_the_summary(serve, args):
 @pytest.mark.realtime
 def test_a_small_job_through_armctl_sim_pty_in_another_process(sim_pty):
     result = run(SHORT, "--port", sim_pty, "--no-live")
-    assert result.exit_code == 0, result.output
+    # a device path with the document's FIFO size, not probed: the frames confirmed by time
+    # alone could have been dropped, so the run does not say done (exit 1)
+    assert result.exit_code == 1, result.output
     assert "frames: 5 of 5 sent" in result.stdout
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
-    assert result.stderr == ""  # a real device path: no simulator banner
+    assert result.stdout.splitlines()[-1].startswith("finished, unproven:")
+    assert "run `armctl probe` once" in result.stdout
+    assert "simulator" not in result.stderr  # a real device path: no simulator banner

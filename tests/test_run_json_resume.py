@@ -207,6 +207,9 @@ def _wait_for(predicate, timeout_s: float) -> bool:
 @pytest.mark.realtime
 def test_kill_9_mid_job_then_resume_runs_every_line_exactly_once(tmp_path):
     script, log = _crash_script(tmp_path / "crash.txt"), tmp_path / "crash.log"
+    # the arm's FIFO size as `armctl probe --write` records it: on a device path `done` needs it
+    profile = tmp_path / "arm.toml"
+    profile.write_text("[connector]\nfifo_frames = 200\n")
     arm = SimulatedArm(SimOptions())
     stop, ready = threading.Event(), []
     bridge = threading.Thread(target=serve_pty, args=(SimOptions(), ready.append, stop),
@@ -215,7 +218,7 @@ def test_kill_9_mid_job_then_resume_runs_every_line_exactly_once(tmp_path):
     try:
         assert _wait_for(lambda: ready, 5.0)
         host = subprocess.Popen([*ARMCTL, "run", str(script), "--port", ready[0], "--no-live", "--lead", "0.5",
-                                 "--log", str(log)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+                                 "--profile", str(profile), "--log", str(log)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         try:
             def proven_some():
                 text = log.read_text() if log.exists() else ""
@@ -231,7 +234,7 @@ def test_kill_9_mid_job_then_resume_runs_every_line_exactly_once(tmp_path):
         done_at_kill = [r for r in records if r["dir"] == "progress"][-1]["done_line"]
         # the resumed host in this process (the killed one was a process of its own)
         resumed = CliRunner().invoke(main, ["run", str(script), "--port", ready[0], "--no-live", "--lead", "0.5",
-                                            "--resume", str(log)])
+                                            "--profile", str(profile), "--resume", str(log)])
         assert resumed.exit_code == 0, resumed.output
         assert "done: the arm finished the job" in resumed.stdout
         resumed_at = int(re.search(r"resuming .* at line (\d+)", resumed.stderr).group(1))

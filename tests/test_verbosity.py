@@ -27,7 +27,7 @@ from armctl.streamer import CAPACITY_MARGIN_FRAMES, Evidence, Streamer, WaitReas
 MODEL = MotionModel(load_profile())
 JOB = str(Path(__file__).parent.parent / "scripts" / "pick_and_place.txt")
 SIM = "sim://?clock=virtual"
-SUMMARY_PREFIXES = ("frames: ", "time: ", "arm time: ", "done: ")
+SUMMARY_PREFIXES = ("frames: ", "time: ", "arm time: ", "frames confirmed by the arm's reports: ", "done: ")
 WARNING_SCRIPT = "G1 X500 Y0 Z150 A180 B-90 C0 S1500 F3000\n"  # L103 against the illustrative workspace
 
 
@@ -139,8 +139,8 @@ def test_quiet_run_prints_only_the_summary(tmp_path):
         assert result.exit_code == 0, result.output
         assert result.stderr == ""  # no banner, no warning (L103), no log
         lines = result.stdout.splitlines()
-        assert [text.startswith(prefix) for text, prefix in zip(lines, SUMMARY_PREFIXES)] == [True] * 4, lines
-        assert len(lines) == 4
+        assert [text.startswith(prefix) for text, prefix in zip(lines, SUMMARY_PREFIXES)] == [True] * 5, lines
+        assert len(lines) == 5
 
 
 def test_quiet_run_in_a_fresh_process(tmp_path):
@@ -148,7 +148,8 @@ def test_quiet_run_in_a_fresh_process(tmp_path):
     done = subprocess.run([sys.executable, "-m", "armctl", "-q", "run", JOB, "--port", SIM, "--no-live"],
                           capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
     assert done.returncode == 0 and done.stderr == "", done.stderr
-    assert [text.split(":")[0] for text in done.stdout.splitlines()] == ["frames", "time", "arm time", "done"]
+    assert [text.split(":")[0] for text in done.stdout.splitlines()] == ["frames", "time", "arm time",
+                                                                             "frames confirmed by the arm's reports", "done"]
 
 
 def test_quiet_still_prints_errors(tmp_path):

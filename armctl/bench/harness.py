@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, NamedTuple, Sequence
 
-from ..job import Finished, Job, RunView, Write, agreed_pause
+from ..job import Finished, Job, RunView, Write, agreed_pause, resume_frames
 from ..motion import MotionModel
 from ..protocol import Command, PauseStatus, PauseToggle, StatusReader, STATUS_PERIOD_S, STATUS_ROTATION
 from ..sim.connector import HISTORY_FRAMES
@@ -73,7 +73,10 @@ def job_engine(commands: Sequence[Command], strategy, arm: SimulatedArm,
     total = len(commands)
     view = RunView(total_frames=total, estimated_job_s=0.0, lead_s=streamer.lead_s, capacity=streamer.limit_frames)
     statements = (Frame(commands[k], k + 1) for k in range(total))  # lazily: a long job stays flat in memory
-    return Job(streamer, statements, view, pacing=pacing, abort_sequence=tuple(abort_sequence))
+    # ``done`` needs a proven FIFO size, as for ``armctl run`` (link.fifo_proven): probed, or the
+    # simulated arm's own FIFO at least the host profile's
+    proven = streamer.planner.model.profile.connector.fifo_proven(arm.options.fifo_frames)
+    return Job(streamer, statements, view, pacing=pacing, abort_sequence=tuple(abort_sequence), fifo_proven=proven)
 
 
 def run_job(
@@ -152,26 +155,27 @@ def run_job(
     return result
 
 
-# Whether ``start_run`` is the rule that resumes exactly once in both control modes (issue 9
-# item 3, wt-honest).  Until it is, the bench prints a resume scenario's exactly-once miss as
-# waiting for it instead of failing; set True when ``start_run`` calls the landed rule.
-RESUME_RULE_LANDED = False
 START_ROTATIONS = 3  # ``armctl run`` reads all nine kinds and two more rotations before it writes
+RESUME_SETTLE_S = 120.0  # as jobflow.read_arm: the longest a move frozen by a pause may take to finish
 
 
-def start_run(arm: SimulatedArm, line: list[str]) -> None:
-    """What ``armctl run`` does on an arm before its first frame — today's rule, as
-    ui/run_job.read_arm has it: read the status a few rotations; an arm that twice reports it is
-    paused gets one pause toggle, then its report of running is waited for.  (Issue 9 item 3,
-    wt-honest, makes this rule follow the control mode; when it lands as a pure rule, call it here.)"""
+def start_run(arm: SimulatedArm, line: list[str], control_on_arrival: bool) -> None:
+    """What ``armctl run`` does on an arm before its first frame (jobflow.read_arm): read the
+    status a few rotations; an arm that twice reports it is paused gets ``job.resume_frames`` for
+    the control mode the host believes (on arrival a RESET CONNECTOR first, then the toggle), and
+    on arrival the move the pause froze is let finish."""
     reader, reports = StatusReader(), []
     rotation_s = STATUS_PERIOD_S * len(STATUS_ROTATION)
     until = arm.now_s + START_ROTATIONS * rotation_s
     reports += [f.paused for f in reader.feed(arm.advance(until)) if isinstance(f, PauseStatus)]
     if agreed_pause(reports) is True:
-        arm.write(PauseToggle().encode(), arm.now_s)
-        line.append("resume")
+        for command in resume_frames(control_on_arrival):
+            arm.write(command.encode(), arm.now_s)
+            line.append("resume")
         arm.advance(arm.now_s + START_ROTATIONS * rotation_s)
+        deadline_s = arm.now_s + RESUME_SETTLE_S
+        while control_on_arrival and not arm.idle and arm.now_s < deadline_s:
+            arm.advance(arm.now_s + rotation_s)
 
 
 class _Discard:

@@ -141,11 +141,12 @@ def _config_baud() -> int:
     return config_baud(config.values, config.path_of("baud"))
 
 
-def read_arm(link, timeout_s: float, log=None):
+def read_arm(link, timeout_s: float, log=None, control_on_arrival: bool = False):
     """jobflow.read_arm, telling on stderr when it resumes a paused arm."""
     from ..jobflow import read_arm
 
-    return read_arm(link, timeout_s, log, note=lambda text: click.echo(text, err=True))
+    return read_arm(link, timeout_s, log, note=lambda text: click.echo(text, err=True),
+                    control_on_arrival=control_on_arrival)
 
 
 def _open_log(path: str):
@@ -218,7 +219,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
 
     link, baud = connect(options.port, options.baud, profile=profile)
     with link, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
-        state = read_arm(link, options.timeout_s, log)
+        state = read_arm(link, options.timeout_s, log, profile.connector.control_on_arrival)
         if resume is not None:
             state, options = _resume_from(resume, link, options, script)
             if options is None:
@@ -338,7 +339,7 @@ def _journal(runner, log, script):
 
 def _stream(runner, options: JobOptions, view, grid=None, events=None, journal=None) -> str:
     from ..jobflow import drive
-    from ..runner import ABORT_SEQUENCES
+    from ..runner import abort_frames
     from .run_keys import FOOTER, keys_available, run_keys
 
     title = f"armctl run {options.script}"
@@ -349,7 +350,7 @@ def _stream(runner, options: JobOptions, view, grid=None, events=None, journal=N
     shown = events.update if events is not None else (lambda view: None) if quiet() else display.update  # -q: the summary only
     runner.on_update = shown if journal is None else lambda view: (journal(view), shown(view))
     with _deferred_ctrl_c(runner), display, (run_keys(runner) if keys else nullcontext()):
-        return drive(runner, ABORT_SEQUENCES[options.abort], on_stopping=lambda why: display.note(
+        return drive(runner, abort_frames(options.abort, runner.streamer.control_on_arrival), on_stopping=lambda why: display.note(
             f"\narmctl: {why}: no more frames are sent; sending the abort sequence "
             f"({options.abort}) and waiting for the arm to come to rest …"))
 
@@ -517,11 +518,16 @@ def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, s
         actual = view.arm_done_s - view.started_s
         click.echo(f"arm time: {actual:.1f} s from the first frame to the arm at rest; estimated {estimate.job_s:.1f} s "
                    f"({actual / estimate.job_s - 1:+.1%})" if estimate.job_s else f"arm time: {actual:.1f} s")
+    click.echo(f"frames confirmed by the arm's reports: {view.frames_by_reports}; by time only: {view.frames_by_time}")
     for message in view.messages:
         click.echo(f"note: {message}", err=True)
     if outcome == "finished":
         click.echo("done: the arm finished the job")
         return EXIT_OK
+    if outcome == "finished, unproven":
+        click.echo("finished, unproven: the arm is at rest at the last target, but the FIFO size is not proven; "
+                   "run `armctl probe` once")
+        return EXIT_PROBLEMS
     click.echo(f"last line sent: {sent if sent is not None else 'none'}")
     click.echo(f"last line known executed: {done if done is not None else 'none'}")
     resume, where = resume_point(view, script)
