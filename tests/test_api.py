@@ -235,7 +235,7 @@ def test_pause_and_resume_from_another_thread_while_a_job_runs():
         helper.start()
         # hold this callback (the worker) until the request is queued, so the next update sees it
         for _ in range(10_000):
-            if arm._job.pause_requests.qsize() or not helper.is_alive():
+            if not arm._job.runner.requests.empty() or not helper.is_alive():
                 return
             threading.Event().wait(0.001)
 
