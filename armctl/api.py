@@ -30,7 +30,7 @@ import os
 import queue
 import threading
 from concurrent.futures import Future
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from decimal import Decimal
 from typing import Any, Callable, Mapping, Union
 
@@ -62,30 +62,68 @@ class ArmTimeout(JobFailed):
 
 @dataclass(frozen=True)
 class RunResult:
-    """How a job (or a move) ended, as ``armctl run``'s summary says it.
+    """How a job (or a move) ended — the one result: ``Arm.run`` returns it and ``armctl run
+    --json`` prints it as its summary (``to_json``), both built by ``RunResult.of``.
 
     ``outcome``: "finished" (the arm's reports proved every frame executed), "interrupted"
-    (``Arm.stop``), "failed", "port lost" or "no confirmation" (the last three are raised as
-    ``JobFailed`` with this result attached).  Lines are the script's line numbers; the move of
-    ``Arm.move`` is line 1.  ``resume_line``: where ``run(..., from_line=)`` continues the job
-    (None when nothing is left); ``arm_time_s``: from the first frame to the arm at rest, in
-    the arm's clock (None when it did not come to rest at the end).
+    (``Arm.stop``, Ctrl-C), "failed", "port lost" or "no confirmation" (the API raises the last
+    three as ``JobFailed`` with this result attached); ``armctl run --json`` adds "refused" (the
+    script's errors, nothing sent).  Lines are the script's line numbers; the move of
+    ``Arm.move`` is line 1.  ``last_line_executed``: the last line the arm's reports prove
+    executed.  ``arm_time_s``: from the first frame to the arm at rest, in the arm's clock, to
+    the millisecond (None when it did not come to rest at the end).  ``resume_line``: where
+    ``run(..., from_line=)`` / ``--from-line`` continues the job (None when nothing is left);
+    ``resume_command``: the ``armctl run`` command line that does it (None from the API: it
+    knows no command line).  ``exit_code``: what ``armctl run`` exits with for this outcome.
     """
 
     outcome: str
     frames_sent: int
     total_frames: int
     last_line_sent: int | None
-    last_line_done: int | None
+    last_line_executed: int | None
     arm_time_s: float | None
     estimated_job_s: float
     resume_line: int | None
+    resume_command: str | None = None
     messages: tuple[str, ...] = ()
-    warnings: tuple[str, ...] = ()  # lint warnings of the script, rendered
+    exit_code: int = 0
 
     @property
     def finished(self) -> bool:
         return self.outcome == "finished"
+
+    @classmethod
+    def of(cls, view, outcome: str, lines, *, estimated_job_s: float,
+           resume_command: Callable[[int], str] | None = None) -> RunResult:
+        """The result of a job the runner drove: ``view`` its ``RunView``, ``lines`` the
+        script's lines (the resume line moves out of repeat blocks), ``resume_command(line)``
+        the command line that resumes it."""
+        from .jobflow import resume_line
+
+        resume = resume_line(view, lines) if outcome != "finished" else None
+        arm_time_s = view.arm_time_s
+        return cls(outcome, view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
+                   getattr(view.last_done, "line", None), None if arm_time_s is None else round(arm_time_s, 3),
+                   estimated_job_s, resume, None if resume is None or resume_command is None else resume_command(resume),
+                   tuple(view.messages), exit_code_of(outcome))
+
+    @classmethod
+    def nothing_sent(cls, outcome: str, *, exit_code: int | None = None, message: str | None = None) -> RunResult:
+        """A job that sent nothing: nothing left to send ("finished"), or (``armctl run``)
+        refused, failed before the first frame, interrupted while starting."""
+        return cls(outcome, 0, 0, None, None, None if outcome != "finished" else 0.0, 0.0, None,
+                   messages=() if message is None else (message,), exit_code=exit_code_of(outcome) if exit_code is None else exit_code)
+
+    def to_json(self) -> dict:
+        """The result as a JSON object's fields (``armctl run --json``'s summary)."""
+        return {f.name: list(value) if isinstance(value, tuple) else value
+                for f in fields(self) for value in (getattr(self, f.name),)}
+
+
+def exit_code_of(outcome: str) -> int:
+    """What ``armctl run`` exits with after a job that ended ``outcome`` (docs/cli.md's codes)."""
+    return 0 if outcome == "finished" else 130 if outcome == "interrupted" else 1
 
 
 @dataclass(frozen=True)
@@ -97,7 +135,7 @@ class Progress:
     frames_sent: int
     total_frames: int
     last_line_sent: int | None
-    last_line_done: int | None
+    last_line_executed: int | None  # the last line the arm's reports prove executed
     elapsed_s: float
     eta_s: float
     position_mm: tuple[float, float, float] | None
@@ -590,17 +628,19 @@ class Arm:
 
     def _run_job(self, script, from_line: int, on_progress, timeout_s, from_arm: bool) -> RunResult:
         """On the worker: read the arm, plan from its report, drive the runner, report."""
-        from .jobflow import drive, plan_job, read_arm, resume_line, start_from_state, start_job
+        from .jobflow import drive, plan_job, read_arm, start_from_state, start_job
         from .runner import ABORT_SEQUENCES
 
         link = self._link
         state = read_arm(link, self.status_timeout_s, note=_logger.info)
         report = _check(script, self._profile, start_from_state(self._model, state)[1] if from_arm else None)
         total_lines = report.lines
-        warnings = tuple(d.render() for d in report.diagnostics if d.severity != "error")
+        for diagnostic in report.diagnostics:  # as `armctl run` prints them on stderr: for people, not the result
+            if diagnostic.severity != "error":
+                _logger.info("%s", diagnostic.render())  # INFO: with no handler set up, WARNING would print
         plan = plan_job(script, self._model, state, self.lead_s, self._baud, from_line)
         if plan.estimate.frames == 0:
-            return RunResult("finished", 0, 0, None, None, 0.0, 0.0, None, warnings=warnings)
+            return RunResult.nothing_sent("finished")
         runner = start_job(link, script, self._model, plan, self.lead_s, self._baud, total_lines)
         control = _JobControl(runner, on_progress, timeout_s)
         runner.on_update = control.on_update
@@ -615,14 +655,10 @@ class Arm:
                 self._job = None
                 control.end()
             link.on_status = None
-        view = runner.view
-        arm_time_s = None if view.arm_done_s is None else view.arm_done_s - view.started_s
-        result = RunResult(outcome, view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
-                           getattr(view.last_done, "line", None), arm_time_s, plan.estimate.job_s,
-                           resume_line(view, script.lines()), tuple(view.messages), warnings)
+        result = RunResult.of(runner.view, outcome, script.lines(), estimated_job_s=plan.estimate.job_s)
         if control.timed_out:
             raise ArmTimeout(f"the arm did not prove the job done within {timeout_s:g} s: it was stopped "
-                             f"(last line known executed: {result.last_line_done})", result)
+                             f"(last line known executed: {result.last_line_executed})", result)
         if outcome not in ("finished", "interrupted"):
             detail = "; ".join(result.messages)
             raise JobFailed(f"the job ended {outcome}" + (f": {detail}" if detail else ""), result) from control.callback_error

@@ -253,7 +253,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
         wall_s = time.monotonic() - wall_start
         code = _summary(view, outcome, wall_s, estimate, options, script)
         if events is not None:
-            events.summary(job_result(view, outcome, options, script))
+            events.summary(job_result(view, outcome, options, script, estimate))
         return code
 
 
@@ -480,10 +480,6 @@ def resume_command(options: JobOptions, line: int) -> str:
     return shlex.join(words)
 
 
-def exit_code_of(outcome: str) -> int:
-    return EXIT_OK if outcome == "finished" else EXIT_INTERRUPTED if outcome == "interrupted" else EXIT_PROBLEMS
-
-
 def resume_point(view, script) -> tuple[int | None, str]:
     """The line to resume at (jobflow.resume_line: --from-line cannot start inside a repeat
     block, so its outermost start) and what the summary says about passes that run again."""
@@ -495,17 +491,12 @@ def resume_point(view, script) -> tuple[int | None, str]:
                     "runs again from its first pass, so the passes already done are repeated)")
 
 
-def job_result(view, outcome: str, options: JobOptions, script) -> dict:
-    """The run's result with the Python API's field names (``run --json``'s summary)."""
-    resume = resume_point(view, script)[0] if outcome != "finished" else None
-    return {
-        "outcome": outcome, "frames_sent": view.frames_sent, "total_frames": view.total_frames,
-        "last_line_sent": None if view.last_sent is None else view.last_sent.line,
-        "last_line_executed": None if view.last_done is None else view.last_done.line,
-        "arm_time_s": None if view.arm_done_s is None else round(view.arm_done_s - view.started_s, 3),
-        "resume_line": resume, "resume_command": None if resume is None else resume_command(options, resume),
-        "messages": list(view.messages), "exit_code": exit_code_of(outcome),
-    }
+def job_result(view, outcome: str, options: JobOptions, script, estimate) -> dict:
+    """``run --json``'s summary: the Python API's ``RunResult``, built by the same ``RunResult.of``."""
+    from ..api import RunResult
+
+    return RunResult.of(view, outcome, script.lines(), estimated_job_s=estimate.job_s,
+                        resume_command=lambda line: resume_command(options, line)).to_json()
 
 
 def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, script) -> int:
@@ -531,4 +522,6 @@ def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, s
         click.echo(f"stopped: interrupted; abort sequence: {options.abort}", err=True)
     else:
         click.echo(f"stopped: {outcome}", err=True)
+    from ..api import exit_code_of
+
     return exit_code_of(outcome)
