@@ -15,9 +15,10 @@ waits for its task, ``move(wait=False)`` returns at once and its move streams wh
 goes on.  Tasks run in order, so a later ``move``, ``run``, ``status``, ``wait`` or ``close``
 sees every queued move executed, each exactly once.  A queued move that fails cancels the
 moves queued after it (the arm is no longer where they assume) and its error is raised by the
-next blocking call.  Control of a running job (``pause``, ``resume``, ``stop``, a timeout) is a
-request the worker acts on between two writes (the runner's ``on_update``), never a write from
-another thread.  Nothing is module-level state: several arms work at once in one process.
+next blocking call.  Control of a running job (``pause``, ``resume``, ``feed_override``) is a
+request to the job engine that the worker carries out between two writes
+(``JobRunner.control``, as the run panel's keys); ``stop`` and a timeout take the Ctrl-C path
+(``JobRunner.request_stop``, then ``jobflow.drive``'s abort) — never a write from another thread.  Nothing is module-level state: several arms work at once in one process.
 No signal handler is installed (the CLI installs its own, in the main thread only).
 """
 
@@ -29,7 +30,7 @@ import os
 import queue
 import threading
 from concurrent.futures import Future
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, fields
 from decimal import Decimal
 from typing import Any, Callable, Mapping, Union
 
@@ -43,7 +44,6 @@ _logger = logging.getLogger(__name__)
 
 STATUS_TIMEOUT_S = 3.0  # what `armctl run --timeout` waits for the arm's status by default
 PROGRESS_EVERY_S = 0.25  # on_progress is called at least this often (arm clock), even when nothing moved on
-HOLD_POLL_S = 0.05  # while a job is held paused: how often the requests are looked at (arm clock)
 PAUSE_READ_TIMEOUT_S = 3.0  # how long two agreeing pause reports are waited for (one comes every 0.27 s)
 _MOVE_NAME = "<move>"
 _TEXT_NAME = "<script>"
@@ -62,30 +62,73 @@ class ArmTimeout(JobFailed):
 
 @dataclass(frozen=True)
 class RunResult:
-    """How a job (or a move) ended, as ``armctl run``'s summary says it.
+    """How a job (or a move) ended — the one result: ``Arm.run`` returns it and ``armctl run
+    --json`` prints it as its summary (``to_json``), both built by ``RunResult.of``.
 
-    ``outcome``: "finished" (the arm's reports proved every frame executed), "interrupted"
-    (``Arm.stop``), "failed", "port lost" or "no confirmation" (the last three are raised as
-    ``JobFailed`` with this result attached).  Lines are the script's line numbers; the move of
-    ``Arm.move`` is line 1.  ``resume_line``: where ``run(..., from_line=)`` continues the job
-    (None when nothing is left); ``arm_time_s``: from the first frame to the arm at rest, in
-    the arm's clock (None when it did not come to rest at the end).
+    ``outcome``: "finished" (the arm's reports proved every frame executed), "finished, unproven"
+    (the arm ended, but some frames rest on time alone and the FIFO size was never probed: a
+    dropped frame would look the same), "interrupted" (``Arm.stop``, Ctrl-C), "failed", "port
+    lost", "no confirmation" or "frames may have been lost" (the API raises these four as
+    ``JobFailed`` with this result attached); ``armctl run --json`` adds "refused" (the script's
+    errors, nothing sent).  ``frames_by_reports`` / ``frames_by_time``: the frames the arm's
+    reports confirmed, and those confirmed by time alone (the slowest-arm bound).  Lines are the script's line numbers; the move of
+    ``Arm.move`` is line 1.  ``last_line_executed``: the last line the arm's reports prove
+    executed.  ``arm_time_s``: from the first frame to the arm at rest, in the arm's clock, to
+    the millisecond (None when it did not come to rest at the end).  ``resume_line``: where
+    ``run(..., from_line=)`` / ``--from-line`` continues the job (None when nothing is left);
+    ``resume_command``: the ``armctl run`` command line that does it (None from the API: it
+    knows no command line).  ``exit_code``: what ``armctl run`` exits with for this outcome.
     """
 
     outcome: str
     frames_sent: int
     total_frames: int
     last_line_sent: int | None
-    last_line_done: int | None
+    last_line_executed: int | None
     arm_time_s: float | None
     estimated_job_s: float
     resume_line: int | None
+    resume_command: str | None = None
     messages: tuple[str, ...] = ()
-    warnings: tuple[str, ...] = ()  # lint warnings of the script, rendered
+    exit_code: int = 0
+    frames_by_reports: int = 0
+    frames_by_time: int = 0
 
     @property
     def finished(self) -> bool:
         return self.outcome == "finished"
+
+    @classmethod
+    def of(cls, view, outcome: str, lines, *, estimated_job_s: float,
+           resume_command: Callable[[int], str] | None = None) -> RunResult:
+        """The result of a job the runner drove: ``view`` its ``RunView``, ``lines`` the
+        script's lines (the resume line moves out of repeat blocks), ``resume_command(line)``
+        the command line that resumes it."""
+        from .jobflow import resume_line
+
+        resume = resume_line(view, lines) if outcome != "finished" else None
+        arm_time_s = view.arm_time_s
+        return cls(outcome, view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
+                   getattr(view.last_done, "line", None), None if arm_time_s is None else round(arm_time_s, 3),
+                   estimated_job_s, resume, None if resume is None or resume_command is None else resume_command(resume),
+                   tuple(view.messages), exit_code_of(outcome), view.frames_by_reports, view.frames_by_time)
+
+    @classmethod
+    def nothing_sent(cls, outcome: str, *, exit_code: int | None = None, message: str | None = None) -> RunResult:
+        """A job that sent nothing: nothing left to send ("finished"), or (``armctl run``)
+        refused, failed before the first frame, interrupted while starting."""
+        return cls(outcome, 0, 0, None, None, None if outcome != "finished" else 0.0, 0.0, None,
+                   messages=() if message is None else (message,), exit_code=exit_code_of(outcome) if exit_code is None else exit_code)
+
+    def to_json(self) -> dict:
+        """The result as a JSON object's fields (``armctl run --json``'s summary)."""
+        return {f.name: list(value) if isinstance(value, tuple) else value
+                for f in fields(self) for value in (getattr(self, f.name),)}
+
+
+def exit_code_of(outcome: str) -> int:
+    """What ``armctl run`` exits with after a job that ended ``outcome`` (docs/cli.md's codes)."""
+    return 0 if outcome == "finished" else 130 if outcome == "interrupted" else 1
 
 
 @dataclass(frozen=True)
@@ -97,7 +140,7 @@ class Progress:
     frames_sent: int
     total_frames: int
     last_line_sent: int | None
-    last_line_done: int | None
+    last_line_executed: int | None  # the last line the arm's reports prove executed
     elapsed_s: float
     eta_s: float
     position_mm: tuple[float, float, float] | None
@@ -125,7 +168,7 @@ _AGE_KINDS = {"position": (0,), "joints": (1, 2), "worktable": (3,), "pause_pwm"
 
 
 _SKIPPED = object()  # a task not run: a queued move before it failed (its error is raised instead)
-_JOB_ENDED = object()  # a pause request the job ended before acting on
+_JOB_ENDED = object()  # a request the job ended before carrying out
 
 
 class _Worker:
@@ -170,100 +213,61 @@ class _Worker:
 
 
 class _JobControl:
-    """The requests for the job the worker is running, acted on between two writes."""
+    """The job the worker is running, as the API's calls reach it: pause, resume and the feed
+    override are requests to the job engine (``JobRunner.control``, carried out by the worker
+    between two writes — the engine holds the feed while paused, in either control-frame mode);
+    the timeout and ``on_progress`` are looked at whenever the runner reports (``on_update``)."""
 
-    def __init__(self, runner, link, on_progress, timeout_s: float | None) -> None:
-        from .pause import PauseState
-
-        self.runner, self.link = runner, link
+    def __init__(self, runner, on_progress, timeout_s: float | None) -> None:
+        self.runner = runner
         self.on_progress, self.timeout_s = on_progress, timeout_s
-        self.pause = PauseState()
-        self.pause_requests: queue.SimpleQueue = queue.SimpleQueue()  # (want_paused, Future, asked_s)
-        self._waiting: list = []
         self.stop_asked = False  # stop() or the timeout: the runner was asked to stop
-        self.holding = False  # pause() asked: no frame is written until resume()
         self.timed_out = False
         self.callback_error: Exception | None = None  # what on_progress raised
+        self._asked: list[Future] = []  # requests handed to the runner (answered _JOB_ENDED if it ends first)
         self._shown: tuple = ()
         self._shown_s = float("-inf")
 
-    def on_status(self, frame, read_s: float) -> None:
-        if frame.KIND == 4:
-            self.pause.add(frame.paused)
-        self.runner.on_status(frame, read_s)
+    def request(self, action: Callable[[Any], Any]) -> Future:
+        """``action(job)`` on the worker at the runner's next turn; its answer in the Future.
+        Called with ``Arm._lock`` held while this is the running job (``end`` runs under the
+        lock too: a request is either carried out or answered ``_JOB_ENDED``)."""
+        future: Future = Future()
+        self._asked.append(future)
+        self.runner.control(lambda job: future.done() or future.set_result(action(job)))
+        return future
 
     def request_stop(self) -> None:
         if not self.stop_asked:
             self.stop_asked = True
-            self.runner.request_stop()
+            self.runner.request_stop()  # the Ctrl-C path: jobflow.drive sends the abort sequence
 
     def on_update(self, view) -> None:
-        """The runner's hook, on the worker thread between two writes.  After a pause toggle
-        it holds the feed — it does not return — until a resume, a stop or the timeout: in the
-        ``queued`` control mode (H5) a paused arm takes nothing but the resume at the head of
-        its FIFO, so any frame sent after the pause would keep it paused for good.  Meanwhile
-        the status frames queue up for the runner with the times they came."""
-        offset_s = view.now_s - self.link.clock()  # the runner's time is the link's, from another origin
-        while self._act(view, self.link.clock() + offset_s) and self.holding and self.link.error is None:
-            self.link.idle(HOLD_POLL_S)  # moves a virtual clock; on a wall clock, waits for a frame
-
-    def _act(self, view, now_s: float) -> bool:
-        """The timeout, the pause requests and the progress callback at ``now_s``; False once
-        the job is stopping (no pause toggles, no callbacks then)."""
+        """The runner's hook, on the worker between two of its turns: the timeout, then
+        ``on_progress`` (none once the job is stopping)."""
         if self.stop_asked:
-            return False
+            return
+        now_s = view.now_s
         if self.timeout_s is not None and now_s - view.started_s > self.timeout_s:
             self.timed_out = True
             self.request_stop()
-            return False
-        self.act_on_pause_requests(now_s)
+            return
         if self.on_progress is not None:
             shown = (view.frames_sent, getattr(view.last_done, "line", None))
             if shown != self._shown or now_s - self._shown_s >= PROGRESS_EVERY_S:
                 self._shown, self._shown_s = shown, now_s
                 try:
-                    self.on_progress(_progress(view, self.pause.agreed, now_s))
+                    self.on_progress(_progress(view, self.runner.job.arm_paused, now_s))
                 except Exception as error:  # stops the job (jobflow.drive); raised as the cause
                     self.callback_error, self.stop_asked = error, True  # no callback while it aborts
                     raise
-        return not self.stop_asked
-
-    def act_on_pause_requests(self, now_s: float) -> None:
-        while True:
-            try:
-                want, future, asked_s = self.pause_requests.get_nowait()
-            except queue.Empty:
-                break
-            self._waiting.append((want, future, now_s if asked_s is None else asked_s))
-        still = []
-        for want, future, asked_s in self._waiting:
-            try:
-                sent = self.pause.toggle_needed(want)
-                if sent:
-                    _write_toggle(self.link)
-                if sent is not None:
-                    self.holding = want  # hold the feed from the pause toggle on, until a resume
-            except BaseException as error:
-                future.set_exception(error)
-                continue
-            if sent is not None:
-                future.set_result(sent)
-            elif now_s - asked_s > PAUSE_READ_TIMEOUT_S:
-                future.set_exception(JobFailed("the arm's pause reports did not agree twice in a row: no pause toggle sent"))
-            else:
-                still.append((want, future, asked_s))
-        self._waiting = still
 
     def end(self) -> None:
-        """The job is over: a pause asked too late is done on the idle arm instead."""
-        while True:
-            try:
-                self._waiting.append(self.pause_requests.get_nowait())
-            except queue.Empty:
-                break
-        for _, future, _ in self._waiting:
-            future.set_result(_JOB_ENDED)
-        self._waiting = []
+        """The job is over: a request it did not carry out is done on the idle arm instead."""
+        for future in self._asked:
+            if not future.done():
+                future.set_result(_JOB_ENDED)
+        self._asked = []
 
 
 def _write_toggle(link) -> None:
@@ -476,17 +480,32 @@ class Arm:
         return self._call(read)
 
     def pause(self) -> bool:
-        """Pause the arm with the protocol's pause toggle — sent only when two agreeing reports
-        say it runs, or that it is headed there (armctl/pause.py: a toggle on a guess could
-        resume it).  During a job it also holds the feed until ``resume``: in the ``queued``
-        control mode (H5) the arm pauses after the frames already queued and then takes nothing
-        but the resume.  True when a toggle was sent.  Called from ``on_progress`` it acts at
-        once if the arm's pause state is known, else at the next update (and returns False)."""
+        """Pause the arm.  During a job (``run``, or a ``move`` with ``wait=False``) this asks
+        the job engine, as the run panel's key does: the protocol's pause toggle, and no frame
+        written until ``resume`` (in the ``queued`` control mode, H5, the arm pauses after the
+        frames already queued).  On an idle arm the toggle is sent only when two agreeing
+        reports say it runs (armctl/job_control.py's pause rule: a toggle on a guess could
+        resume it), and the call returns once the arm reports it paused.  True when a pause was
+        asked (a toggle goes), False when there is nothing to pause."""
         return self._set_paused(True)
 
     def resume(self) -> bool:
-        """Resume a paused arm (the same rule as ``pause``). True when a toggle was sent."""
+        """Resume: during a job, a pause asked with ``pause`` (the toggle goes first, then the
+        job's frames); on an idle arm, an arm that reports it is paused.  True when a toggle goes."""
         return self._set_paused(False)
+
+    def feed_override(self, percent: float) -> int:
+        """Rescale the speed of the running job's frames not yet written, as the run panel's
+        −/+ keys do: ``percent`` of the script's speeds, put on the engine's grid (10…200 %,
+        in steps of 10: armctl/feed.py) and never past the profile's limits; the effect shows
+        within the lead.  Returns the percentage in force.  The override lasts for this job
+        only; ``ArmctlError`` when no job is running."""
+        if isinstance(percent, bool) or not isinstance(percent, numbers.Real) or percent != percent:
+            raise TypeError(f"feed_override(): percent must be a number, not {percent!r}")
+        answer = self._ask_job(lambda job: job.set_feed_override(float(percent)))
+        if answer is _JOB_ENDED:
+            raise ArmctlError(f"no job is running on {self.url}: there is no feed to override")
+        return answer
 
     def stop(self) -> None:
         """Stop as ``armctl run``'s Ctrl-C does: cancel the queued moves, stop feeding the running
@@ -504,24 +523,28 @@ class Arm:
 
     # --- the worker --------------------------------------------------------------------------
 
-    def _set_paused(self, want_paused: bool) -> bool:
+    def _ask_job(self, action: Callable[[Any], Any]) -> Any:
+        """``action(job)`` carried out by the running job's engine at the runner's next turn
+        (at once when called on the worker, from ``on_progress``: that is between two turns);
+        ``_JOB_ENDED`` when no job is running or it ended first."""
         with self._lock:
             job = self._job if self._job is not None and not self._job.stop_asked else None
-            if job is not None:
-                future: Future = Future()
-                job.pause_requests.put((want_paused, future, None))
-        if job is not None:
-            if self._worker.is_current():  # from on_progress: between two writes already
-                job.act_on_pause_requests(job.runner.view.now_s)
-                return future.done() and future.result() is True
-            sent = future.result()
-            if sent is not _JOB_ENDED:
-                return sent
-            # the job ended before the request was acted on: ask the idle arm
+            if job is None:
+                return _JOB_ENDED
+            if self._worker.is_current():
+                return action(job.runner.job)
+            future = job.request(action)
+        return future.result()
+
+    def _set_paused(self, want_paused: bool) -> bool:
+        answer = self._ask_job((lambda job: job.pause()) if want_paused else (lambda job: job.resume()))
+        if answer is not _JOB_ENDED:
+            return answer
+        # no job running, or it ended before carrying the request out: ask the idle arm
 
         def idle_toggle() -> bool:
+            from .job_control import pause_toggle_needed
             from .jobflow import reported_pause
-            from .pause import pause_toggle_needed
 
             link = self._link
             sent = pause_toggle_needed(want_paused, reported_pause(link, PAUSE_READ_TIMEOUT_S))
@@ -610,7 +633,7 @@ class Arm:
 
     def _run_job(self, script, from_line: int, on_progress, timeout_s, from_arm: bool) -> RunResult:
         """On the worker: read the arm, plan from its report, drive the runner, report."""
-        from .jobflow import drive, plan_job, read_arm, resume_line, start_from_state, start_job
+        from .jobflow import drive, plan_job, read_arm, start_from_state, start_job
         from .runner import abort_frames
 
         link = self._link
@@ -618,14 +641,16 @@ class Arm:
         state = read_arm(link, self.status_timeout_s, note=_logger.info, control_on_arrival=arrival)
         report = _check(script, self._profile, start_from_state(self._model, state)[1] if from_arm else None)
         total_lines = report.lines
-        warnings = tuple(d.render() for d in report.diagnostics if d.severity != "error")
+        for diagnostic in report.diagnostics:  # as `armctl run` prints them on stderr: for people, not the result
+            if diagnostic.severity != "error":
+                _logger.info("%s", diagnostic.render())  # INFO: with no handler set up, WARNING would print
         plan = plan_job(script, self._model, state, self.lead_s, self._baud, from_line)
         if plan.estimate.frames == 0:
-            return RunResult("finished", 0, 0, None, None, 0.0, 0.0, None, warnings=warnings)
+            return RunResult.nothing_sent("finished")
         runner = start_job(link, script, self._model, plan, self.lead_s, self._baud, total_lines)
-        control = _JobControl(runner, link, on_progress, timeout_s)
+        control = _JobControl(runner, on_progress, timeout_s)
         runner.on_update = control.on_update
-        link.on_status = control.on_status
+        link.on_status = runner.on_status
         with self._lock:
             self._job = control
         try:
@@ -634,16 +659,12 @@ class Arm:
         finally:
             with self._lock:
                 self._job = None
+                control.end()
             link.on_status = None
-            control.end()
-        view = runner.view
-        arm_time_s = None if view.arm_done_s is None else view.arm_done_s - view.started_s
-        result = RunResult(outcome, view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
-                           getattr(view.last_done, "line", None), arm_time_s, plan.estimate.job_s,
-                           resume_line(view, script.lines()), tuple(view.messages), warnings)
+        result = RunResult.of(runner.view, outcome, script.lines(), estimated_job_s=plan.estimate.job_s)
         if control.timed_out:
             raise ArmTimeout(f"the arm did not prove the job done within {timeout_s:g} s: it was stopped "
-                             f"(last line known executed: {result.last_line_done})", result)
+                             f"(last line known executed: {result.last_line_executed})", result)
         # "finished, unproven": the arm's reports say it ended, but the FIFO size was never probed
         # and some frames rest on time alone — a result to read (``finished`` is False), not a failure
         if outcome not in ("finished", "finished, unproven", "interrupted"):

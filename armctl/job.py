@@ -58,7 +58,7 @@ from enum import Enum, StrEnum
 from operator import attrgetter
 from typing import Iterable, Iterator
 
-from .job_control import JobControl, control_frames_of
+from .job_control import JobControl, agreed_pause, control_frames_of  # noqa: F401  (agreed_pause: the pause rule, re-exported)
 from .streamer import FASTEST_ARM_FACTOR, LOSS_SLACK_S, ROTATION_S
 from .protocol import (
     CONTROL_COMMANDS, ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
@@ -197,15 +197,6 @@ class RunView:
     def arm_time_s(self) -> float | None:
         """From the first frame to the arm at rest at the end (None unless the job finished)."""
         return None if self.arm_done_s is None else self.arm_done_s - self.started_s
-
-
-def agreed_pause(reports: Iterable[bool]) -> bool | None:
-    """The pause state when the last two pause reports agree (one corrupted byte must not make
-    armctl toggle the arm); None while they disagree or fewer than two were read."""
-    reports = tuple(reports)[-2:]
-    if len(reports) == 2 and reports[0] == reports[1]:
-        return reports[0]
-    return None
 
 
 class _Phase(Enum):

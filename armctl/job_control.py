@@ -1,4 +1,13 @@
-"""Control of a running job: pause, resume and the feed override, as a pure state machine.
+"""Control of a running job: pause, resume and the feed override, as a pure state machine —
+and the pause rule, once, for everything that sends a pause toggle.
+
+The rule: the toggle flips the arm between running and paused, so it is sent to reach a state
+only when the arm is known to be in the other one, and one corrupted status byte must not
+decide that — the arm's state counts as known when its last two pause reports agree
+(``agreed_pause``); ``pause_toggle_needed`` is the one decision.  ``armctl run``'s start
+(armctl/jobflow.py: resume an arm that reports it is paused), the engine's pause, resume and
+abort (``JobControl``, below) and ``armctl.Arm`` on an idle arm all ask it.  A toggle sent and
+not yet acted on is ``JobControl``'s "pausing…"/"resuming…" state.
 
 Strategy: the user asks (``pause``, ``resume``, ``toggle``, ``set_feed_override``); the job
 engine asks back — is a pause toggle due to be written (``take_toggle``), may frames be
@@ -28,9 +37,28 @@ undo the pause.
 from __future__ import annotations
 
 from enum import StrEnum
+from typing import Iterable
 
 from .feed import FeedOverride
 from .profile import CONTROL_FRAMES
+
+def agreed_pause(reports: Iterable[bool | None]) -> bool | None:
+    """The pause state when the last two pause reports agree (one corrupted byte must not make
+    armctl toggle the arm); None while they disagree or fewer than two were read."""
+    reports = tuple(reports)[-2:]
+    if len(reports) == 2 and reports[0] == reports[1]:
+        return reports[0]
+    return None
+
+
+def pause_toggle_needed(want_paused: bool, agreed: bool | None) -> bool | None:
+    """Whether to send the pause toggle so the arm ends ``want_paused``: True only when two
+    agreeing reports say it is in the other state, False when they say it already is; None
+    while the state is not known (a toggle on a guess may do the opposite: read again)."""
+    if agreed is None:
+        return None
+    return agreed != want_paused
+
 
 def control_frames_of(profile) -> str:
     """The arm's control-frame mode (H5): the profile's ``connector.control_frames`` — the one
@@ -68,8 +96,10 @@ class JobControl:
     def pause(self) -> bool:
         """Ask for a pause; False when there is nothing to pause (pausing, paused, or the arm
         reports it is paused already)."""
-        if self.state is not PauseState.RUNNING or self.arm_paused:
+        if self.state is not PauseState.RUNNING or pause_toggle_needed(True, self.arm_paused) is False:
             return False  # a toggle to an arm that reports it is paused would resume it
+        # (reports that disagree do not refuse it: the job started from a running arm, and the
+        # feed is held from now on whatever the arm does)
         self.state = PauseState.PAUSING
         self._toggles_due += 1
         self.version += 1
@@ -143,7 +173,7 @@ class JobControl:
         arm is paused (it would resume it); yes after a resume toggle (the arm would run on)."""
         if self.state is PauseState.RESUMING:
             return True
-        return self.state is PauseState.RUNNING and not self.arm_paused
+        return self.state is PauseState.RUNNING and pause_toggle_needed(True, self.arm_paused) is not False
 
     def command_for(self, statement):
         """The command to plan and write for ``statement``: the override applied once per

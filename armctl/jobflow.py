@@ -9,7 +9,7 @@ rotations, an arm that twice reports it is paused resumed), start from its repor
 differently from the arm's pose, or runs too long), then build the runner (``start_job``) and drive it (``drive``: one path for every way a
 job stops early — stop feeding, send the abort sequence, wait for the arm — whoever asked).
 The pause rule — toggle only when two agreeing reports say the arm is in the other state — is
-armctl/pause.py's; this module reads the reports it needs from the link.
+armctl/job_control.py's (the engine's); this module reads the reports it needs from the link.
 
 Errors are ``ScriptError`` (diagnostics and the count of errors; nothing was sent) and
 ``JobFailed`` (the arm did not answer, or the job did not finish).
@@ -23,7 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Iterable
 
 from .errors import ArmctlError, ScriptError
-from .pause import PauseState, pause_toggle_needed
+from .job_control import agreed_pause, pause_toggle_needed
 
 _BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
 
@@ -141,20 +141,20 @@ def reported_pause(link, timeout_s: float, reports: int = 3) -> bool | None:
     """The arm's pause state as two consecutive pause reports agree on it (the reader's state,
     so a held-back corrupt frame never counts), starting with the last one read; None when no
     two agree within ``reports`` reports, or the next does not come within ``timeout_s``."""
-    state = PauseState()
+    read: list = []
     now = link.snapshot()[0]
     seen = now.last_seen.get(4)
     if seen is not None:
-        state.add(now.paused)
+        read.append(now.paused)
     for _ in range(reports):
-        if state.agreed is not None:
+        if agreed_pause(read) is not None:
             break
         if not link.wait_until(lambda s: s.last_seen.get(4) != seen, timeout_s):
             break
         now = link.snapshot()[0]
         seen = now.last_seen.get(4)
-        state.add(now.paused)
-    return state.agreed
+        read.append(now.paused)
+    return agreed_pause(read)
 
 
 def _paused_twice(link, timeout_s: float) -> bool:

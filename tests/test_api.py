@@ -72,7 +72,7 @@ def test_the_issue_example_against_the_simulator_in_process(capfd):
     result, status, progress = names["result"], names["status"], names["progress"]
     assert isinstance(result, RunResult)
     assert (result.outcome, result.frames_sent, result.total_frames) == ("finished", 5, 5)
-    assert (result.last_line_sent, result.last_line_done, result.resume_line) == (6, 6, None)
+    assert (result.last_line_sent, result.last_line_executed, result.resume_line) == (6, 6, None)
     assert result.arm_time_s is not None and result.arm_time_s > 0
     assert progress and progress[-1].frames_sent == 5 and progress[-1].total_frames == 5
     # the job ends at X220 Y10 Z280 (short_job.txt): the status is the arm's report after it
@@ -235,7 +235,7 @@ def test_pause_and_resume_from_another_thread_while_a_job_runs():
         helper.start()
         # hold this callback (the worker) until the request is queued, so the next update sees it
         for _ in range(10_000):
-            if arm._job.pause_requests.qsize() or not helper.is_alive():
+            if not arm._job.runner.requests.empty() or not helper.is_alive():
                 return
             threading.Event().wait(0.001)
 

@@ -11,6 +11,7 @@ every frame of the script exactly once, in order.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import re
@@ -24,6 +25,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
+from armctl.api import RunResult
 from armctl.cli import main
 from armctl.errors import ResumeRefused
 from armctl.joblog import NotProven, ResumePoint, read_resume_log
@@ -36,8 +38,9 @@ SHORT = SCRIPTS / "short_job.txt"
 COMPILE_ERROR = SCRIPTS / "compile_error_job.txt"
 FAST_SIM = "sim://?clock=virtual"
 ARMCTL = [sys.executable, "-m", "armctl"]
-RESULT_FIELDS = {"outcome", "frames_sent", "total_frames", "last_line_sent", "last_line_executed", "arm_time_s",
-                 "resume_line", "resume_command", "messages", "exit_code"}
+# the summary is the Python API's result, field for field (the one place that builds both)
+RESULT_FIELDS = {field.name for field in dataclasses.fields(RunResult)}
+assert RESULT_FIELDS >= {"outcome", "frames_sent", "last_line_sent", "last_line_executed", "arm_time_s", "resume_line"}
 
 
 @pytest.fixture(autouse=True)
@@ -72,6 +75,19 @@ def test_json_lines_in_process():
     assert summary["arm_time_s"] > 0 and summary["resume_line"] is None
     assert any(e["event"] == "progress" for e in events)
     assert "done: the arm finished the job" in result.stderr  # for people: stderr
+
+
+def test_json_summary_is_the_api_result_of_the_same_job():
+    """One engine, one result: the same job on the same simulator gives the same object."""
+    from armctl import Arm
+
+    cli = CliRunner().invoke(main, ["run", str(SHORT), "--port", FAST_SIM, "--json"])
+    summary = _check_stream(_events(cli.stdout))
+    del summary["event"]
+    with Arm.open(port=FAST_SIM) as arm:
+        result = arm.run(SHORT)
+    assert result.to_json() == summary
+    assert summary["arm_time_s"] > 0 and summary["exit_code"] == 0
 
 
 def test_json_lines_from_the_installed_command():

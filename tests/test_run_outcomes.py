@@ -80,6 +80,24 @@ def test_resume_inside_a_repeat_block_names_the_outermost_block_start(tmp_path):
     assert compile_file(script, from_line=2).finish() == []  # the line it names is one run accepts
 
 
+def test_the_summary_of_a_job_stopped_in_a_repeat_block_says_the_passes_done_run_again(capsys):
+    """The text summary reads the job's RunResult (the --json summary) and adds the note."""
+    from types import SimpleNamespace
+
+    from armctl.api import RunResult
+    from armctl.ui import run_job
+
+    result = RunResult("interrupted", 3, 9, 4, 4, None, 2.0, 2, "armctl run loops.txt --from-line 2", ("stopped",), 130)
+    view = SimpleNamespace(arm_time_s=None, first_not_done=SimpleNamespace(loop=(0, 1)), resume_line=lambda: 4)
+    options = SimpleNamespace(abort="pause")
+    assert run_job._summary(result, view, 1.0, SimpleNamespace(job_s=2.0), options) == 130
+    out = capsys.readouterr()
+    assert "frames: 3 of 9 sent" in out.out and "last line known executed: 4" in out.out
+    assert ("resume with: armctl run loops.txt --from-line 2 (line 4 is inside a repeat block, in pass 2: "
+            "the block runs again from its first pass") in out.out
+    assert "note: stopped" in out.err and "stopped: interrupted; abort sequence: pause" in out.err
+
+
 def test_the_estimate_never_queues_more_frames_than_the_streamer_would():
     profile = load_profile()
     model = MotionModel(profile)

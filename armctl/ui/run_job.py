@@ -31,7 +31,7 @@ import click
 
 from ..errors import ArmctlError, ScriptError
 from ..jobflow import JobFailed
-from ..jobflow import BlockIndex, outermost_block_start, resume_line  # noqa: F401 - outermost_block_start re-exported (tests)
+from ..jobflow import BlockIndex, outermost_block_start  # noqa: F401 - outermost_block_start re-exported (tests)
 from ..protocol import describe
 from ..streamer import DEFAULT_LEAD_S
 
@@ -252,9 +252,10 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
             events.started(view, options.script, options.from_line)
         outcome = _stream(runner, options, view, grid, events, _journal(runner, log, script))
         wall_s = time.monotonic() - wall_start
-        code = _summary(view, outcome, wall_s, estimate, options, script)
+        result = job_result(view, outcome, options, script, estimate)
+        code = _summary(result, view, wall_s, estimate, options)
         if events is not None:
-            events.summary(job_result(view, outcome, options, script))
+            events.summary(result.to_json())
         return code
 
 
@@ -481,60 +482,50 @@ def resume_command(options: JobOptions, line: int) -> str:
     return shlex.join(words)
 
 
-def exit_code_of(outcome: str) -> int:
-    return EXIT_OK if outcome == "finished" else EXIT_INTERRUPTED if outcome == "interrupted" else EXIT_PROBLEMS
-
-
-def resume_point(view, script) -> tuple[int | None, str]:
-    """The line to resume at (jobflow.resume_line: --from-line cannot start inside a repeat
-    block, so its outermost start) and what the summary says about passes that run again."""
-    resume = resume_line(view, script.lines())
+def _repeat_note(view, resume: int | None) -> str:
+    """What the summary says when the resume line is a repeat block's start (jobflow.resume_line:
+    --from-line cannot start inside one): the passes already done run again."""
     loop = getattr(view.first_not_done, "loop", ()) if resume is not None else ()
     if not loop:
-        return resume, ""
-    return resume, (f" (line {view.resume_line()} is inside a repeat block, in pass {loop[-1] + 1}: the block "
-                    "runs again from its first pass, so the passes already done are repeated)")
+        return ""
+    return (f" (line {view.resume_line()} is inside a repeat block, in pass {loop[-1] + 1}: the block "
+            "runs again from its first pass, so the passes already done are repeated)")
 
 
-def job_result(view, outcome: str, options: JobOptions, script) -> dict:
-    """The run's result with the Python API's field names (``run --json``'s summary)."""
-    resume = resume_point(view, script)[0] if outcome != "finished" else None
-    return {
-        "outcome": outcome, "frames_sent": view.frames_sent, "total_frames": view.total_frames,
-        "last_line_sent": None if view.last_sent is None else view.last_sent.line,
-        "last_line_executed": None if view.last_done is None else view.last_done.line,
-        "arm_time_s": None if view.arm_done_s is None else round(view.arm_done_s - view.started_s, 3),
-        "resume_line": resume, "resume_command": None if resume is None else resume_command(options, resume),
-        "messages": list(view.messages), "exit_code": exit_code_of(outcome),
-    }
+def job_result(view, outcome: str, options: JobOptions, script, estimate):
+    """The run's result: the Python API's ``RunResult``, built by the same ``RunResult.of`` —
+    ``run --json``'s summary (``to_json``) and what the text summary says."""
+    from ..api import RunResult
+
+    return RunResult.of(view, outcome, script.lines(), estimated_job_s=estimate.job_s,
+                        resume_command=lambda line: resume_command(options, line))
 
 
-def _summary(view, outcome: str, wall_s: float, estimate, options: JobOptions, script) -> int:
-    sent = view.last_sent.line if view.last_sent is not None else None
-    done = view.last_done.line if view.last_done is not None else None
-    click.echo(f"frames: {view.frames_sent} of {view.total_frames} sent")
+def _summary(result, view, wall_s: float, estimate, options: JobOptions) -> int:
+    """The text summary of ``result`` (the arm time unrounded, from ``view``); the exit code."""
+    click.echo(f"frames: {result.frames_sent} of {result.total_frames} sent")
     click.echo(f"time: {wall_s:.1f} s wall")
-    if view.arm_done_s is not None:
-        actual = view.arm_done_s - view.started_s
+    if view.arm_time_s is not None:
+        actual = view.arm_time_s
         click.echo(f"arm time: {actual:.1f} s from the first frame to the arm at rest; estimated {estimate.job_s:.1f} s "
                    f"({actual / estimate.job_s - 1:+.1%})" if estimate.job_s else f"arm time: {actual:.1f} s")
-    click.echo(f"frames confirmed by the arm's reports: {view.frames_by_reports}; by time only: {view.frames_by_time}")
-    for message in view.messages:
+    click.echo(f"frames confirmed by the arm's reports: {result.frames_by_reports}; by time only: {result.frames_by_time}")
+    for message in result.messages:
         click.echo(f"note: {message}", err=True)
-    if outcome == "finished":
+    if result.finished:
         click.echo("done: the arm finished the job")
-        return EXIT_OK
-    if outcome == "finished, unproven":
+        return result.exit_code
+    if result.outcome == "finished, unproven":
         click.echo("finished, unproven: the arm is at rest at the last target, but the FIFO size is not proven; "
                    "run `armctl probe` once")
-        return EXIT_PROBLEMS
+        return result.exit_code
+    sent, done = result.last_line_sent, result.last_line_executed
     click.echo(f"last line sent: {sent if sent is not None else 'none'}")
     click.echo(f"last line known executed: {done if done is not None else 'none'}")
-    resume, where = resume_point(view, script)
-    if resume is not None:
-        click.echo(f"resume with: {resume_command(options, resume)}{where}")
-    if outcome == "interrupted":
+    if result.resume_line is not None:
+        click.echo(f"resume with: {result.resume_command}{_repeat_note(view, result.resume_line)}")
+    if result.outcome == "interrupted":
         click.echo(f"stopped: interrupted; abort sequence: {options.abort}", err=True)
     else:
-        click.echo(f"stopped: {outcome}", err=True)
-    return exit_code_of(outcome)
+        click.echo(f"stopped: {result.outcome}", err=True)
+    return result.exit_code

@@ -5,11 +5,12 @@ so a web UI, a job queue or a notebook can follow a job by reading lines.  Every
 ``event``: ``started``; ``progress`` (every ``PROGRESS_EVERY_S`` of wall time, and whenever the
 last line known executed changes; with the pause state, the feed override and whether the last
 frame's speed was held to the profile's limit); ``paused``/``resumed``/``override`` when the
-job's control state changes; and last, exactly once, ``summary`` with the fields of the Python API's run
-result (``outcome``, ``frames_sent``, ``total_frames``, ``last_line_sent``,
-``last_line_executed``, ``arm_time_s``, ``resume_line``, ``resume_command``, ``messages``,
-``exit_code``).  A script that fails its check gives a summary with outcome ``refused`` and
-its diagnostics (lint's JSON records).  Everything meant for people goes to stderr.
+job's control state changes; and last, exactly once, ``summary``: the Python API's
+``RunResult`` itself (``RunResult.to_json``: ``outcome``, ``frames_sent``, ``total_frames``,
+``last_line_sent``, ``last_line_executed``, ``arm_time_s``, ``estimated_job_s``,
+``resume_line``, ``resume_command``, ``messages``, ``exit_code``).  A script that
+fails its check gives a summary with outcome ``refused`` and, besides, its ``diagnostics``
+(lint's JSON records).  Everything meant for people goes to stderr.
 """
 
 from __future__ import annotations
@@ -70,13 +71,13 @@ class JsonEvents:
 
 
 def failure_result(outcome: str, exit_code: int, *, message: str | None = None, diagnostics=()) -> dict:
-    """The summary of a run that sent nothing: refused (the script's errors), failed before the
+    """The summary of a run that sent nothing (``RunResult.nothing_sent``): refused (the
+    script's errors, which it adds as ``diagnostics``: lint's JSON records), failed before the
     first frame (no arm, a bad --resume LOG), interrupted while starting, or nothing to send."""
+    from ..api import RunResult
     from ..lint.formatters import as_record
 
-    result = {"outcome": outcome, "frames_sent": 0, "total_frames": 0, "last_line_sent": None,
-              "last_line_executed": None, "arm_time_s": None, "resume_line": None, "resume_command": None,
-              "messages": [] if message is None else [message], "exit_code": exit_code}
+    result = RunResult.nothing_sent(outcome, exit_code=exit_code, message=message).to_json()
     if diagnostics:
         result["diagnostics"] = [as_record(diagnostic) for diagnostic in diagnostics]
     return result
