@@ -45,11 +45,16 @@ class StatusFrame:
 
 def _word(cls_name: str, name: str, value, scale: int) -> float:
     """A value carried as a signed 16-bit word of ``value × scale``, normalised to that grid."""
+    return _raw_word(cls_name, name, value, scale) / scale
+
+
+def _raw_word(cls_name: str, name: str, value, scale: int) -> int:
+    """The signed 16-bit word carrying ``value × scale``; FieldError if it does not fit."""
     number = _f64(cls_name, name, value)
     raw = round(number * scale)
     if not -32768 <= raw <= 32767:
         raise FieldError(f"{cls_name}.{name} = {value} does not fit a 16-bit status word at ×{scale}")
-    return raw / scale
+    return raw
 
 
 def _f64(cls_name: str, name: str, value) -> float:
@@ -82,14 +87,31 @@ class _ThreeWords(StatusFrame):
         return _words(self.fields().values(), self.SCALE)
 
     @classmethod
-    def _from_data(cls, data: bytes) -> "StatusFrame":
-        # Words read off the wire are on the grid and in range by construction: set them as
-        # they are (the same values __post_init__ would give), without checking each again —
-        # this runs for every status frame read, 40,000 in 20 minutes.
+    def _field_names(cls) -> tuple[str, ...]:
         names = cls.__dict__.get("_names")
         if names is None:
             names = tuple(f.name for f in fields(cls))
             type.__setattr__(cls, "_names", names)
+        return names
+
+    @classmethod
+    def encode_values(cls, *values) -> bytes:
+        """``cls(*values).encode()``, the same bytes and the same FieldError, without building
+        the frame: the simulator sends one per 30 ms (40,000 in 20 minutes).  A value stored
+        as ``raw / SCALE`` packs back to ``raw`` (the product is within an ulp of an integer
+        far below 2**52), so the word is the one ``encode`` packs."""
+        names, scale, name = cls._field_names(), cls.SCALE, cls.__name__
+        if len(values) != len(names):
+            raise TypeError(f"{name} takes {len(names)} values, not {len(values)}")
+        data = b"".join(STATUS_WORD_CODEC.pack(_raw_word(name, f, v, scale)) for f, v in zip(names, values))
+        return bytes((STATUS_HEAD,)) + data.ljust(6, b"\0") + bytes((cls.KIND, STATUS_TAIL))
+
+    @classmethod
+    def _from_data(cls, data: bytes) -> "StatusFrame":
+        # Words read off the wire are on the grid and in range by construction: set them as
+        # they are (the same values __post_init__ would give), without checking each again —
+        # this runs for every status frame read, 40,000 in 20 minutes.
+        names = cls._field_names()
         frame = object.__new__(cls)
         for name, value in zip(names, _unwords(data, len(names), cls.SCALE)):
             object.__setattr__(frame, name, value)
