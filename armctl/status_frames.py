@@ -11,6 +11,7 @@ import from either.  The rules are protocol.py's: bytes and nothing else, no I/O
 from __future__ import annotations
 
 import math
+import struct
 from dataclasses import dataclass, fields
 from typing import ClassVar, Iterator
 
@@ -71,6 +72,8 @@ def _unwords(data: bytes, count: int, scale: int) -> list[float]:
     return [STATUS_WORD_CODEC.unpack_from(data, 2 * k)[0] / scale for k in range(count)]
 
 
+_STATUS_HEAD_BYTE = bytes((STATUS_HEAD,))
+
 MM_SCALE = 10  # status lengths are 0.1 mm
 DEG_SCALE = 100  # status angles are 0.01 deg (H8: kinds 3 and 5 reuse kinds 0 and 1's scales)
 
@@ -92,6 +95,9 @@ class _ThreeWords(StatusFrame):
         if names is None:
             names = tuple(f.name for f in fields(cls))
             type.__setattr__(cls, "_names", names)
+            # the frame's bytes after the head: its words, zeros to six data bytes, kind, tail
+            codec = struct.Struct(STATUS_WORD_CODEC.format[0] + "h" * len(names) + f"{6 - 2 * len(names)}xBB")
+            type.__setattr__(cls, "_codec", codec)
         return names
 
     @classmethod
@@ -103,8 +109,8 @@ class _ThreeWords(StatusFrame):
         names, scale, name = cls._field_names(), cls.SCALE, cls.__name__
         if len(values) != len(names):
             raise TypeError(f"{name} takes {len(names)} values, not {len(values)}")
-        data = b"".join(STATUS_WORD_CODEC.pack(_raw_word(name, f, v, scale)) for f, v in zip(names, values))
-        return bytes((STATUS_HEAD,)) + data.ljust(6, b"\0") + bytes((cls.KIND, STATUS_TAIL))
+        words = [_raw_word(name, f, v, scale) for f, v in zip(names, values)]
+        return _STATUS_HEAD_BYTE + cls._codec.pack(*words, cls.KIND, STATUS_TAIL)
 
     @classmethod
     def _from_data(cls, data: bytes) -> "StatusFrame":
