@@ -11,6 +11,7 @@ one frame later).
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from operator import attrgetter
 
 from .protocol import (
     STATUS_PERIOD_S,
@@ -165,6 +166,9 @@ _VALUE_NAMES = {
 }
 
 
+_VALUE_GETTERS = {frame_class: attrgetter(*names) for frame_class, names in _VALUE_NAMES.items()}
+
+
 def _values(frame: StatusFrame) -> tuple:
     """The three readings of a position or joints frame, in order (read directly: every frame)."""
-    return tuple(getattr(frame, name) for name in _VALUE_NAMES[type(frame)])
+    return _VALUE_GETTERS[type(frame)](frame)

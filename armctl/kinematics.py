@@ -266,23 +266,31 @@ def inverse(
     Unreachable naming the reason.
     """
     near = tuple(near) if near is not None else (0.0,) * JOINT_COUNT
-    raw = solutions(pose, links, near)
-    if not raw:
-        raise Unreachable(f"pose X{pose[0]:.1f} Y{pose[1]:.1f} Z{pose[2]:.1f} is out of the arm's reach")
-    best, best_cost, worst = None, math.inf, None
-    for solution in raw:
-        fitted = []
-        for k, angle in enumerate(solution):
-            value = _fit(angle, near[k], None if limits is None else limits[k])
-            if value is None:
+    # The solutions of ``solutions``, in its order, fitted joint by joint as ``_fit`` fits them
+    # and costed as the sum of squares in joint order; but the first three joints of an arm
+    # placement are fitted once for both wrist flips, and a solution is dropped as soon as its
+    # cost so far reaches the best's (every term is >= 0; ``worst`` only matters while there
+    # is no best): the simulator asks this of every joints status frame, 40,000 in 20 minutes
+    # (tests/test_kinematics.py holds it equal to the plain enumeration).
+    lim = (None,) * JOINT_COUNT if limits is None else limits
+    near_j4 = math.radians(near[3])
+    best, best_cost, worst, reachable = None, math.inf, None, False
+    for j1, j2, t, flange in _arm_solutions(pose, links, near):
+        reachable = True
+        arm_fitted, arm_cost = _fitted_cost((j1, j2, t - j2), near, lim, 0, 0, best_cost)
+        if arm_fitted is None:
+            if worst is None:
+                worst = arm_cost
+            continue
+        for wrist in _wrist_of(j1, t, flange, near_j4):
+            wrist_fitted, cost = _fitted_cost(wrist, near, lim, 3, arm_cost, best_cost)
+            if wrist_fitted is None:
                 if worst is None:
-                    worst = (k, angle)
-                break
-            fitted.append(value)
-        else:
-            cost = sum((a - h) ** 2 for a, h in zip(fitted, near))
-            if cost < best_cost:
-                best, best_cost = tuple(fitted), cost
+                    worst = cost
+                continue
+            best, best_cost = arm_fitted + wrist_fitted, cost
+    if not reachable:
+        raise Unreachable(f"pose X{pose[0]:.1f} Y{pose[1]:.1f} Z{pose[2]:.1f} is out of the arm's reach")
     if best is None:
         k, angle = worst
         low, high = limits[k]
@@ -291,6 +299,23 @@ def inverse(
             f" outside its limits {low:g}…{high:g}°"
         )
     return best
+
+
+def _fitted_cost(angles_rad, near, limits, first: int, cost, bound):
+    """(the angles in degrees as ``inverse`` fits them, ``cost`` + their squared distance to
+    ``near``) for joints ``first``, ``first`` + 1, …; (None, (k, angle)) for the first that
+    does not fit its limits; (None, None) as soon as the cost reaches ``bound``."""
+    fitted = []
+    for k, angle in enumerate(angles_rad, first):
+        angle = wrap_deg(math.degrees(angle))
+        value = _fit(angle, near[k], limits[k])
+        if value is None:
+            return None, (k, angle)
+        cost += (value - near[k]) ** 2
+        if not cost < bound:  # the very test inverse keeps a solution by
+            return None, None
+        fitted.append(value)
+    return tuple(fitted), cost
 
 
 def has_solution(

@@ -83,7 +83,7 @@ def baseline(written: list[tuple[float, bytes]], end_s: float) -> tuple[float, f
     from armctl.sim.model import SimulatedArm
     from armctl.sim.protocol_sim import parse_sim_url
 
-    options, _ = parse_sim_url(URL)
+    options = parse_sim_url(URL)
     arm, reader = SimulatedArm(options), StatusReader()
     writes = list(written)
     start, cpu_start = time.perf_counter(), time.process_time()

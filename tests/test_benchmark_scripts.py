@@ -40,3 +40,17 @@ def test_readme_installs_the_bench_extra_before_the_benchmark():
     readme = (ROOT / "README.md").read_text(encoding="utf-8").splitlines()
     run = next(i for i, line in enumerate(readme) if "benchmarks/compile_speed.py" in line and line.startswith("$"))
     assert "pip install -e '.[bench]'" in readme[run - 1]
+
+
+def test_virtual_run_baseline_replays_frames_on_the_simulator():
+    # issue 11's row (benchmarks/virtual_run.py) broke silently when parse_sim_url changed
+    # shape: its baseline is run here on a second of arm time.
+    import importlib.util
+
+    from armctl.protocol import Delay
+
+    spec = importlib.util.spec_from_file_location("virtual_run", ROOT / "benchmarks" / "virtual_run.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    wall_s, cpu_s = module.baseline([(0.0, Delay(500).encode())], 1.0)
+    assert wall_s > 0 and cpu_s >= 0

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from armctl.kinematics import (
     CartesianPose, Kinematics, Links, Unreachable, forward, has_solution, inverse, reach_problem, reachable, rotation_matrix,
-    solutions, wrap_deg,
+    _fit, solutions, wrap_deg,
 )
 from armctl.profile import parse_profile
 
@@ -196,3 +196,48 @@ def test_has_solution_finds_both_answers():
     assert has_solution((250, 0, 150, 180, 0, 0), links, home, limits)
     assert not has_solution((600, 0, 150, 180, 0, 0), links, home, limits)  # out of reach
     assert not has_solution(tuple(forward((0, 0, 0, 0, 90, 0), links)), links, home, [(-170, 170), (5, 100)] + list(limits[2:]))
+
+
+# --- inverse's pruned search is the plain enumeration (issue 11: the simulator's IK per frame) ---
+
+
+def _inverse_by_enumeration(pose, links, near, limits):
+    """inverse as first written: fit every solution of ``solutions``, keep the nearest."""
+    raw = solutions(pose, links, near)
+    if not raw:
+        return "out of the arm's reach"
+    best, best_cost, worst = None, math.inf, None
+    for solution in raw:
+        fitted = []
+        for k, angle in enumerate(solution):
+            value = _fit(angle, near[k], None if limits is None else limits[k])
+            if value is None:
+                if worst is None:
+                    worst = (k, angle)
+                break
+            fitted.append(value)
+        else:
+            cost = sum((a - h) ** 2 for a, h in zip(fitted, near))
+            if cost < best_cost:
+                best, best_cost = tuple(fitted), cost
+    return best if best is not None else f"J{worst[0] + 1} = {worst[1]:.1f}°"
+
+
+@settings(max_examples=600, deadline=None)
+@given(
+    st.floats(-450, 450), st.floats(-450, 450), st.floats(-100, 600), _ANGLE, _ANGLE, _ANGLE,
+    st.one_of(st.none(), st.sampled_from(POSES), st.tuples(*(st.floats(-180, 180) for _ in range(6)))),
+    st.sampled_from([LIMITS, None, ((-30, 30),) * 6]),
+    st.one_of(st.none(), st.tuples(*(st.floats(-60, 60) for _ in range(6)))),
+)
+def test_inverse_is_exactly_the_nearest_of_all_solutions(x, y, z, b0, b1, w, near, limits, from_joints):
+    near = HOME if near is None else near
+    # Poses the arm can take (FK of joints), as the simulator asks, and arbitrary ones.
+    pose = tuple(forward(from_joints, LINKS)) if from_joints is not None else (x, y, z, b0, b1, w)
+    expected = _inverse_by_enumeration(pose, LINKS, near, limits)
+    try:
+        found = inverse(pose, LINKS, near, limits)
+    except Unreachable as error:
+        assert isinstance(expected, str) and expected in str(error)
+    else:
+        assert found == expected  # bit for bit: the status frames must not change

@@ -3,13 +3,22 @@ status schedule and the seeded faults."""
 
 from __future__ import annotations
 
+import dataclasses
+import math
+
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from armctl.errors import FieldError
 from armctl.protocol import (
     STATUS_ROTATION,
     Delay,
+    JointsHighStatus,
+    JointsLowStatus,
+    PositionStatus,
+    WorktableStatus,
+    WristStatus,
     LinearMove,
     PauseToggle,
     StatusReader,
@@ -19,7 +28,7 @@ from armctl.protocol import (
 from armctl.sim.connector import Connector, Framer, decode_received
 from armctl.sim.faults import StatusFaults
 from armctl.sim.model import SimulatedArm
-from armctl.sim.status import ArmSnapshot, StatusSchedule, build_status
+from armctl.sim.status import ArmSnapshot, StatusSchedule, build_status, status_bytes
 from armctl.sim.wire import Wire
 
 MOVE = LinearMove(200, 0, 150, 0, 0, 0, 1500, 3000).encode()
@@ -134,6 +143,35 @@ def test_every_kind_builds_and_out_of_range_values_are_clamped():
     assert frames[0].z_mm == pytest.approx(3276.7)
     assert frames[4].paused and frames[4].pwm_us == 1500
     assert frames[5].fields() == {"w0_deg": 4.0, "w1_deg": 5.0}
+
+
+_VALUE = st.one_of(st.floats(allow_nan=True, allow_infinity=True), st.floats(-400, 400), st.integers(-40000, 40000),
+                   st.sampled_from([3276.75, -3276.75, 327.675, -327.675, 0.005, -0.005, 0.05, -0.05]))
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.sampled_from([PositionStatus, JointsLowStatus, JointsHighStatus, WorktableStatus, WristStatus]),
+       st.lists(_VALUE, min_size=3, max_size=3))
+def test_encode_values_is_the_frames_encoding_bytes_and_errors_alike(frame_class, values):
+    values = values[: len(frame_class._field_names())]
+    try:
+        expected = frame_class(*values).encode()
+    except FieldError as error:
+        with pytest.raises(FieldError) as raised:
+            frame_class.encode_values(*values)
+        assert str(raised.value) == str(error)
+    else:
+        assert frame_class.encode_values(*values) == expected
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.tuples(*[_VALUE] * 3), st.tuples(*[_VALUE] * 6), st.tuples(*[_VALUE] * 3), st.booleans(), _VALUE)
+def test_status_bytes_are_build_status_encoded(position, joints, origin, paused, pwm):
+    assume(all(isinstance(v, int) or math.isfinite(v) for v in (*position, *joints, *origin, pwm)))
+    snapshot = dataclasses.replace(SNAPSHOT, position_mm=position, joints_deg=joints, origin_mm=origin, paused=paused,
+                                   pwm_us=pwm)
+    for kind in STATUS_ROTATION:
+        assert status_bytes(kind, snapshot) == build_status(kind, snapshot).encode()
 
 
 def _run_faults(seed, count=4000, **rates):

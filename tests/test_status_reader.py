@@ -12,7 +12,7 @@ from __future__ import annotations
 import struct
 
 import pytest
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from armctl.errors import FieldError, FrameError
@@ -308,6 +308,7 @@ def test_frames_between_junk_without_status_heads_are_all_found(pieces, tail):
 
 @FAST
 @given(data=st.binary(max_size=200) | noisy_stream)
+@example(data=b"\xce\x00\x00\x80\x7f\x00\x00d\xcf")  # an SD file length of inf: a 9-byte error chunk
 def test_scan_frames_tiles_any_input(data):
     chunks = list(scan_frames(data))
     assert b"".join(c.data for c in chunks) == data
@@ -317,10 +318,10 @@ def test_scan_frames_tiles_any_input(data):
         offset += len(chunk.data)
         if chunk.frame is None and chunk.error is None:
             assert previous is None or previous.frame is not None or previous.error is not None, "junk not merged"
-        elif chunk.error is not None:
-            assert chunk.frame is None and len(chunk.data) == 48
+        elif chunk.error is not None:  # a well-framed command or status frame with an impossible value
+            assert chunk.frame is None and len(chunk.data) in (48, 9)
             with pytest.raises(FieldError):
-                decode_command(chunk.data)
+                (decode_command if len(chunk.data) == 48 else decode_status)(chunk.data)
         elif isinstance(chunk.frame, StatusFrame):
             assert len(chunk.data) == 9 and decode_status(chunk.data) == chunk.frame
         else:

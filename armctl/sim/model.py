@@ -29,7 +29,7 @@ from .connector import Connector, Framer, ReceivedFrame, decode_received
 from .executor import Execution, Executor, LiveSnapshot
 from .faults import StatusFaults
 from .program import SdProgram
-from .status import StatusSchedule, build_status
+from .status import StatusSchedule, status_bytes
 from .wire import TIME_EPSILON_S, Wire
 
 
@@ -198,7 +198,7 @@ class SimulatedArm:
 
     def _emit_status(self, at_s: float) -> None:
         kind = self.schedule.pop()
-        frame = build_status(kind, self.executor.snapshot(at_s)).encode()
+        frame = status_bytes(kind, self.executor.snapshot(at_s))
         self.arm_line.send(self.faults.apply(frame), at_s)
         self.status_frames_built += 1
 

@@ -1,7 +1,7 @@
 """The arm's status output: one 9-byte frame every 30 ms, rotating through the nine kinds.
 
 Strategy: ``StatusSchedule`` knows *when* (frame ``n`` is built at ``n · STATUS_PERIOD_S``) and
-*which kind* (``STATUS_ROTATION[n mod 9]``); ``build_status`` knows *what*, from an
+*which kind* (``STATUS_ROTATION[n mod 9]``); ``build_status`` knows *what* (``status_bytes``, its bytes), from an
 ``ArmSnapshot`` (or any object with its attributes — the executor's is lazy, so a frame
 reading only the pause state samples no pose) taken at that very moment.  Values are clamped to what a status word
 can carry (a 16-bit word overflows at ±3276.7 mm or ±327.67°), so a wild pose never raises.
@@ -62,21 +62,25 @@ def _deg(values) -> list[float]:
     return [_clamp(v, DEG_SCALE) for v in values]
 
 
+# The kinds carried as three (or two) status words: their frame and the values they report.
+_WORD_KINDS = {
+    0: (PositionStatus, lambda snapshot: _mm(snapshot.position_mm)),
+    1: (JointsLowStatus, lambda snapshot: _deg(snapshot.joints_deg[0:3])),
+    2: (JointsHighStatus, lambda snapshot: _deg(snapshot.joints_deg[3:6])),
+    3: (WorktableStatus, lambda snapshot: _mm(snapshot.origin_mm)),
+    5: (WristStatus, lambda snapshot: _deg(snapshot.joints_deg[3:5])),
+}
+
+
 def build_status(kind: int, snapshot: ArmSnapshot) -> StatusFrame:
     """The status frame of ``kind`` describing ``snapshot``."""
-    if kind == 0:
-        return PositionStatus(*_mm(snapshot.position_mm))
-    if kind == 1:
-        return JointsLowStatus(*_deg(snapshot.joints_deg[0:3]))
-    if kind == 2:
-        return JointsHighStatus(*_deg(snapshot.joints_deg[3:6]))
-    if kind == 3:
-        return WorktableStatus(*_mm(snapshot.origin_mm))
+    words = _WORD_KINDS.get(kind)
+    if words is not None:
+        frame_class, values = words
+        return frame_class(*values(snapshot))
     if kind == 4:
         pwm_us = int(round(max(-32768, min(_WORD_MAX, snapshot.pwm_us))))
         return PauseStatus(PAUSED_STATE_BYTE if snapshot.paused else 0, pwm_us)
-    if kind == 5:
-        return WristStatus(*_deg(snapshot.joints_deg[3:5]))
     if kind == 100:
         return FileLengthStatus(snapshot.program_length)
     if kind == 102:
@@ -84,6 +88,16 @@ def build_status(kind: int, snapshot: ArmSnapshot) -> StatusFrame:
     if kind == 103:
         return RunPositionStatus(snapshot.program_position)
     raise ValueError(f"no status kind {kind}")
+
+
+def status_bytes(kind: int, snapshot: ArmSnapshot) -> bytes:
+    """``build_status(kind, snapshot).encode()``, the word kinds packed straight from their
+    values (``encode_values``: the same bytes without building a frame, 40,000 in 20 minutes)."""
+    words = _WORD_KINDS.get(kind)
+    if words is not None:
+        frame_class, values = words
+        return frame_class.encode_values(*values(snapshot))
+    return build_status(kind, snapshot).encode()
 
 
 class StatusSchedule:
