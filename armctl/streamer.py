@@ -268,6 +268,7 @@ class Streamer:
         self.first_suspect_index: int | None = None
         self.first_time_only_index: int | None = None  # the first frame confirmed by time alone
         self._recent_sent: deque[SentFrame] = deque(maxlen=RECENT_SENT_FRAMES)
+        self._reversed_on: int | None = None  # the finished frame the last position report lay on (reversal check)
         self._sighting: dict[str, tuple] = {}  # stream → (index, at_s, could_be_on) of its last agreed sighting
 
     # --- writing ----------------------------------------------------------------------------
@@ -535,7 +536,40 @@ class Streamer:
         earliest, candidates = self._scan(match, end, now)
         if earliest is None and end < len(self.pending):
             return  # the arm may be on the frame that cannot be judged: no evidence
+        self._check_reversal(xyz if earliest is None and not blind else None, match)
         self._use("position", earliest, candidates, now, could_be_on)
+
+    def _check_reversal(self, xyz, match) -> None:
+        """A sign of loss: the arm reported, twice in a row, on the inside of the path of a frame
+        already known finished (the lower bound never passes the truth) and on no pending path —
+        it went back over its job, which an arm running its frames in order never does.  ``xyz``
+        is None when the report lies on a pending path (or one that cannot be judged).  Only
+        straight and arc moves with a start the arm reported count, away from their ends (where
+        the next frame begins); two reports on the same finished frame, not one, so a corrupted
+        frame never raises it."""
+        previous, self._reversed_on = self._reversed_on, None
+        if xyz is None or not self.pending:
+            return
+        first = self.pending[0].index
+        for sent in self._recent_sent:
+            if sent.index >= first:
+                break
+            segment = sent.segment
+            if segment.kind not in ("line", "arc") or segment.length <= 4 * sent.xyz_tolerance_mm:
+                continue
+            if segment.start.xyz_derived and not self.kinematics_verified:
+                continue  # its path starts where only the profile's kinematics say
+            found = match(sent)
+            if found is None or found[0] <= 0.0 or found[1] >= 1.0:
+                continue
+            self._reversed_on = sent.index
+            if previous != sent.index:
+                return
+            self.losses.append(f"the arm was seen back on {_where(sent)}, a frame already finished, twice in a row "
+                               "and on no frame still to run: it did not run the job in order")
+            if self.first_suspect_index is None or first < self.first_suspect_index:
+                self.first_suspect_index = first
+            return
 
     def _observe_joint_half(self, offset: int, values, now: float) -> None:
         """Joint halves say nothing about a Cartesian segment (that would need IK), so a match
