@@ -10,10 +10,8 @@ restoring and runs on until the arm is as it was; a second signal leaves at once
 
 from __future__ import annotations
 
-import signal
 import threading
 from collections import deque
-from contextlib import contextmanager
 
 from .plan import Probe, Write
 
@@ -59,25 +57,14 @@ def drive(link, probe: Probe, inbox: FrameInbox, progress=None, stop: threading.
             progress(probe)
 
 
-@contextmanager
 def deferred_stop(stop: threading.Event):
     """Ctrl-C, SIGTERM, SIGHUP set ``stop`` (the probe restores the arm, then exits 130); a
     second one raises KeyboardInterrupt at once."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    signals = [signal.SIGINT] + [getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
+    from ..stop_signals import stop_signals
 
-    def handler(_signum, _frame):
+    def on_stop(_signum: int) -> None:
         if stop.is_set():
             raise KeyboardInterrupt
         stop.set()
 
-    previous = {number: signal.getsignal(number) for number in signals}
-    for number in signals:
-        signal.signal(number, handler)
-    try:
-        yield
-    finally:
-        for number, old in previous.items():
-            signal.signal(number, old)
+    return stop_signals(on_stop)

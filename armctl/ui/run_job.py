@@ -20,9 +20,7 @@ the abort (there is nothing to send it through).
 
 from __future__ import annotations
 
-import signal
 import sys
-import threading
 import time
 from contextlib import contextmanager, nullcontext
 from dataclasses import dataclass
@@ -369,30 +367,20 @@ def _job_grid(script, model, start, initial, options: JobOptions):
     return job_grid(script.compile(initial=initial, from_line=options.from_line), model, start)
 
 
-@contextmanager
 def _deferred_ctrl_c(runner):
-    """While streaming, Ctrl-C (or SIGTERM, SIGHUP) asks the runner to stop at its next safe point
-    (between writes), so the records of a frame written are never half made; a second one acts at once."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    # SIGTERM (timeout, systemd, a CI cancelling) and SIGHUP (the terminal closed) stop a job
-    # the same way: an arm left running with no summary and no resume line is the worst ending.
-    signals = [signal.SIGINT] + [getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)]
+    """While streaming, Ctrl-C (or SIGTERM, SIGHUP: armctl/stop_signals.py) asks the runner to stop
+    at its next safe point (between writes), so the records of a frame written are never half
+    made; a second one acts at once."""
+    import signal
 
-    def stop(signum, _frame):
+    from ..stop_signals import stop_signals
+
+    def on_stop(signum: int) -> None:
         if signum != signal.SIGINT:
             runner.view.messages.append(f"stopped by {signal.Signals(signum).name}")
         runner.request_stop()
 
-    previous = {number: signal.getsignal(number) for number in signals}
-    for number in signals:
-        signal.signal(number, stop)
-    try:
-        yield
-    finally:
-        for number, handler in previous.items():
-            signal.signal(number, handler)
+    return stop_signals(on_stop)
 
 
 class _Display:
