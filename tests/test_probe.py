@@ -361,3 +361,17 @@ def test_an_arm_that_sends_no_status_gets_nothing_sent():
             writes += 1
     assert writes == 0
     assert "did not show its pose" in str(probe.stopped)
+
+
+@pytest.mark.parametrize("target", ["/dev/full", "big.toml"])
+def test_write_refuses_a_device_or_an_endless_file_before_anything_is_sent(tmp_path, target):
+    """--write replaces its file: a device must never be replaced, and reading it (/dev/full gives
+    zeros without end) must not hang; an armctl.toml is read bounded (1 MiB) like every other."""
+    if target == "big.toml":
+        (tmp_path / target).write_bytes(b"#" * (2 * 1024 * 1024))
+    done = subprocess.run([sys.executable, "-m", "armctl", "probe", "--port", VIRTUAL, "--no-motion", "--write", target],
+                          capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert ("not a regular file" if target == "/dev/full" else "longer than 1 MiB") in done.stderr
+    assert "Traceback" not in done.stderr
+    assert "listening to the status" not in done.stdout + done.stderr  # refused before the probe's first step

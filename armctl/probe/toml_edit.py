@@ -91,18 +91,28 @@ def _after_last_key(lines: list[str], start: int, end: int) -> int:
 
 
 def check_writable(path: Path) -> None:
-    """Before the probe sends anything: an existing file must be valid TOML."""
-    if path.exists():
-        try:
-            text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError) as error:
-            raise ConfigError(f"cannot read {path}: {error}") from None
-        updated(text, {}, str(path))
+    """Before the probe sends anything: an existing file must be a regular file (the write
+    replaces it: a device such as /dev/full must never be) and valid TOML."""
+    updated(_existing_text(path), {}, str(path))
+
+
+def _existing_text(path: Path) -> str:
+    """The file's text, "" if there is none; read bounded, as every armctl.toml is (an endless
+    input is an error, not a hang)."""
+    from ..inputs import MAX_TOML_BYTES, read_file_bounded
+
+    if not path.exists():
+        return ""
+    if not path.is_file():
+        raise ConfigError(f"{path} is not a regular file: --write writes an armctl.toml")
+    try:
+        return read_file_bounded(str(path), limit_bytes=MAX_TOML_BYTES).decode("utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        raise ConfigError(f"cannot read {path}: {error}") from None
 
 
 def write_connector(path: Path, values: dict) -> None:
-    text = path.read_text(encoding="utf-8") if path.exists() else ""
-    result = updated(text, values, str(path))
+    result = updated(_existing_text(path), values, str(path))
     temporary = path.with_name(f".{path.name}.probe-tmp")
     temporary.write_text(result, encoding="utf-8")
     os.replace(temporary, path)
