@@ -287,3 +287,14 @@ def test_json_control_events_follow_the_view():
         events.update(view)
     told = [json.loads(line)["event"] for line in out.getvalue().splitlines()]
     assert [e for e in told if e != "progress"] == ["started", "paused", "override", "resumed"]
+
+
+def test_resume_from_an_endless_file_is_refused_not_read_forever(tmp_path):
+    """--resume reads its log bounded, as every input: /dev/zero (zeros without a line break, no
+    end) is exit 2 with a message, not a hang or a MemoryError."""
+    script = tmp_path / "job.txt"
+    script.write_text("G1 X200 Y0 Z250 A180 B0 C0 S1500 F3000\n")
+    done = subprocess.run([*ARMCTL, "run", str(script), "--resume", "/dev/zero", "--port", "sim://?clock=virtual"],
+                          capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    assert done.returncode == 2, done.stderr
+    assert "--resume /dev/zero: longer than" in done.stderr and "Traceback" not in done.stderr

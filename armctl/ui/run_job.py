@@ -271,9 +271,11 @@ def _read_resume_log(options: JobOptions, script):
 
     if options.from_line != 1:
         raise ResumeRefused("--resume LOG decides the line to continue at: drop --from-line")
-    try:
-        with open(options.resume_log, encoding="utf-8", errors="replace") as stream:
-            return read_resume_log(stream, script.name, script.data)
+    from ..inputs import read_file_bounded
+
+    try:  # bounded, as every input: an endless file (/dev/zero) is an error, not a hang
+        text = read_file_bounded(options.resume_log, f"--resume {options.resume_log}").decode("utf-8", errors="replace")
+        return read_resume_log(text.splitlines(), script.name, script.data)
     except ResumeRefused as error:
         raise ResumeRefused(f"--resume {options.resume_log}: {error}") from None
     except OSError as error:
