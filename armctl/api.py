@@ -126,6 +126,24 @@ class RunResult:
                 for f in fields(self) for value in (getattr(self, f.name),)}
 
 
+def _check_timeout(timeout_s: float | None, limits: str = "JOB_TIMEOUT_RANGE_S") -> float | None:
+    """A ``timeout=`` is None or a number of seconds in its range (NaN or ±inf would never fire,
+    or fire at once)."""
+    return None if timeout_s is None else _in_range("timeout", timeout_s, limits)
+
+
+def _in_range(name: str, value, limits: str, whole: bool = False) -> float:
+    """``value`` if it is a number (a whole one if ``whole``) inside ``armctl.limits.<limits>``
+    (the CLI's ranges), else ValueError naming it."""
+    from . import limits as ranges
+
+    low, high = getattr(ranges, limits)
+    kinds = int if whole else (int, float)
+    if isinstance(value, bool) or not isinstance(value, kinds) or not low <= value <= high:
+        raise ValueError(f"{name}={value!r} must be a {'whole ' if whole else ''}number from {low:g} to {high:g}")
+    return value
+
+
 def exit_code_of(outcome: str) -> int:
     """What ``armctl run`` exits with after a job that ended ``outcome`` (docs/cli.md's codes)."""
     return 0 if outcome == "finished" else 130 if outcome == "interrupted" else 1
@@ -351,6 +369,11 @@ class Arm:
         from .link import connect
         from .profile import load_profile
 
+        # the CLI's ranges (armctl/limits.py), checked before the port opens
+        _in_range("lead_s", lead_s, "LEAD_RANGE_S")
+        _in_range("status_timeout_s", status_timeout_s, "STATUS_TIMEOUT_RANGE_S")
+        if baud is not None:
+            _in_range("baud", baud, "BAUD_RANGE", whole=True)
         loaded = load_profile(None if profile is None else os.fspath(profile))
         link, line_baud = connect(port, baud, profile=loaded)
         try:
@@ -460,7 +483,7 @@ class Arm:
         """The arm's decoded report, once every status kind has been seen (after the moves and
         the job asked for before it ran); ``JobFailed`` when it is not complete within
         ``timeout`` seconds (default ``status_timeout_s``)."""
-        timeout_s = self.status_timeout_s if timeout is None else timeout
+        timeout_s = self.status_timeout_s if timeout is None else _check_timeout(timeout, "STATUS_TIMEOUT_RANGE_S")
 
         def read() -> ArmStatus:
             link = self._link
@@ -590,6 +613,8 @@ class Arm:
         ``wait=False``), and again on the worker from the arm's report before it is sent.  A
         job (``run``) is checked as ``armctl run`` checks it: from nothing known."""
         from .jobflow import from_line_errors, start_at
+
+        _check_timeout(timeout_s)
 
         _check(script, self._profile, start_at(self._model)[1] if from_arm else None)
         error = from_line_errors(script, from_line)

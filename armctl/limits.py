@@ -21,6 +21,7 @@ BENCH_LEAD_RANGE_S = (0.001, 60.0)  # the benchmark may also show what a lead to
 BENCH_JOBS_RANGE = (1, 64)  # parallel benchmark processes
 STATUS_TIMEOUT_RANGE_S = (0.05, 600.0)  # waiting for the arm's first status
 START_TIMEOUT_RANGE_S = (0.1, 600.0)  # waiting for the arm before a job or jog starts
+JOB_TIMEOUT_RANGE_S = (0.001, 7 * 24 * 3600.0)  # the Python API's timeout= for a move or a job (arm seconds; a job may run 24 h)
 LINE_RANGE = (1, 2**31 - 1)  # a line number in a script
 TCP_PORT_RANGE = (1, 65535)
 REPEAT_DELAY_RANGE_MS = (50.0, 5000.0)  # jog: a single key press moves at most this long

@@ -357,3 +357,27 @@ def test_open_errors_are_the_commands_errors_and_print_nothing(capfd, tmp_path):
     with pytest.raises(armctl.ConfigError, match="--port is empty"):
         Arm.open(port=" ")
     assert capfd.readouterr() == ("", "")
+
+
+@pytest.mark.parametrize("kwargs, name", [
+    ({"lead_s": float("nan")}, "lead_s"), ({"lead_s": 0}, "lead_s"), ({"status_timeout_s": float("inf")}, "status_timeout_s"),
+    ({"baud": float("nan")}, "baud"), ({"baud": 9600.5}, "baud"), ({"baud": True}, "baud"),
+])
+def test_open_refuses_numbers_outside_the_clis_ranges_before_the_port_opens(kwargs, name, monkeypatch):
+    import armctl.link
+
+    opened = []
+    monkeypatch.setattr(armctl.link, "open_port", lambda *args, **kw: opened.append(args))
+    with pytest.raises(ValueError, match=name):
+        Arm.open(port=VIRTUAL, **kwargs)
+    assert opened == []
+
+
+@pytest.mark.parametrize("timeout", [float("nan"), float("inf"), -1, 0, "5"])
+def test_a_timeout_that_could_never_fire_or_fires_at_once_is_refused(timeout):
+    with Arm.open(port=VIRTUAL) as arm:
+        with pytest.raises(ValueError, match="timeout"):
+            arm.move(x=250, y=0, z=150, f=3000, timeout=timeout)
+        with pytest.raises(ValueError, match="timeout"):
+            arm.status(timeout=timeout)
+        assert arm.move(x=250, y=0, z=150, f=3000, timeout=30).finished  # nothing was queued by the refusals
