@@ -25,6 +25,7 @@ from typing import Any, Callable, Iterable
 from .errors import ArmctlError, ScriptError
 from .job_control import agreed_pause, pause_toggle_needed
 
+READ_ROTATIONS = 2  # after all nine status kinds: two more rotations (a corrupted first frame of a kind replaced, H9)
 _BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
 
 
@@ -92,7 +93,7 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
         _, received, _, frames = link.snapshot()
         heard = "nothing" if received == 0 else f"{received} bytes, {frames} status frames"
         raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
-    wait_rotations(link, 2, timeout_s)
+    wait_rotations(link, READ_ROTATIONS, timeout_s)
     if _paused_twice(link, timeout_s):
         commands = resume_frames(control_on_arrival)
         note("armctl: the arm reports it is paused: sending " + (
@@ -115,21 +116,31 @@ RESUME_SETTLE_S = 120.0  # the longest a move frozen by a pause may take to fini
 
 
 def _wait_still(link, timeout_s: float) -> None:
-    """Until the arm reports the same position and joints over two rotations (a frozen move
-    finished), at most ``RESUME_SETTLE_S``."""
-    def pose():
-        state = link.snapshot()[0]
-        return state.position_mm, tuple(state.joints_deg)
+    """Until the move a pause froze has finished (the arm at rest), at most ``RESUME_SETTLE_S``."""
+    try:
+        wait_for_rest(link, RESUME_SETTLE_S)
+    except JobFailed:
+        raise JobFailed(f"the arm did not come to rest within {RESUME_SETTLE_S:g} s of the resume; "
+                        "nothing else was sent") from None
 
-    deadline_s = link.clock() + RESUME_SETTLE_S
-    before = pose()
-    while link.clock() < deadline_s:
-        wait_rotations(link, 2, timeout_s)
-        now = pose()
-        if now == before:
-            return
-        before = now
-    raise JobFailed(f"the arm did not come to rest within {RESUME_SETTLE_S:g} s of the resume; nothing else was sent")
+
+def wait_for_rest(link, timeout_s: float):
+    """The arm's state once its position and joints stayed the same for ``job.REST_CHECK_S`` (the
+    engine's own test of rest); ``JobFailed`` after ``timeout_s``."""
+    from .job import REST_CHECK_S
+
+    deadline = link.clock() + timeout_s
+    reading, since = None, link.clock()
+    while True:
+        state = link.snapshot()[0]
+        now = link.clock()
+        if (state.position_mm, tuple(state.joints_deg)) != reading:
+            reading, since = (state.position_mm, tuple(state.joints_deg)), now
+        elif now - since >= REST_CHECK_S:
+            return state
+        if now >= deadline:
+            raise JobFailed(f"the arm did not come to rest within {timeout_s:g} s; nothing was sent")
+        link.wait_until(lambda _state: False, 0.05)
 
 
 def wait_rotations(link, rotations: int, timeout_s: float) -> None:

@@ -23,6 +23,7 @@ from click.testing import CliRunner
 from armctl.bench.harness import run_job
 from armctl.bench.strategies import StreamerStrategy
 from armctl.cli import main
+from armctl.jobflow import READ_ROTATIONS  # read_arm: all nine kinds, then two more rotations
 from armctl.link import plausible_state
 from armctl.motion import MotionModel
 from armctl.profile import load_profile
@@ -36,7 +37,6 @@ from armctl.jobflow import start_from_state
 URL = "sim://?clock=virtual"
 SCRIPTS = Path(__file__).resolve().parent.parent / "scripts"
 ARM_TIME = re.compile(r"^arm time: ([\d.]+) s", re.M)
-READ_ROTATIONS = 2  # jobflow.read_arm: all nine kinds, then two more rotations
 
 
 def bench_arm_time_s(text: str) -> float:

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 from typing import Callable, NamedTuple, Sequence
 
 from ..job import Finished, Job, RunView, Write, agreed_pause, resume_frames
+from ..jobflow import READ_ROTATIONS, RESUME_SETTLE_S
 from ..motion import MotionModel
 from ..protocol import Command, PauseStatus, PauseToggle, StatusReader, STATUS_PERIOD_S, STATUS_ROTATION
 from ..sim.connector import HISTORY_FRAMES
@@ -155,8 +156,7 @@ def run_job(
     return result
 
 
-START_ROTATIONS = 3  # ``armctl run`` reads all nine kinds and two more rotations before it writes
-RESUME_SETTLE_S = 120.0  # as jobflow.read_arm: the longest a move frozen by a pause may take to finish
+START_ROTATIONS = 1 + READ_ROTATIONS  # ``armctl run`` reads all nine kinds and two more rotations before it writes
 
 
 def start_run(arm: SimulatedArm, line: list[str], control_on_arrival: bool) -> None:

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import click
 
 from ..errors import ArmctlError, ScriptError
-from ..jobflow import JobFailed
+from ..jobflow import wait_for_rest
 from ..jobflow import BlockIndex, outermost_block_start  # noqa: F401 - outermost_block_start re-exported (tests)
 from ..protocol import describe
 from ..streamer import DEFAULT_LEAD_S
@@ -290,7 +290,7 @@ def _resume_from(point, link, options: JobOptions, script):
 
     from ..job import SETTLE_SLACK_S
 
-    state = _wait_for_rest(link, options.timeout_s + 2 * max(point.lead_s, options.lead_s) + SETTLE_SLACK_S)
+    state = wait_for_rest(link, options.timeout_s + 2 * max(point.lead_s, options.lead_s) + SETTLE_SLACK_S)
     line = point.line_for(state.position_mm, tuple(state.joints_deg))
     if line is None:
         return state, None
@@ -298,24 +298,6 @@ def _resume_from(point, link, options: JobOptions, script):
                err=True)
     check_from_line(script, line)
     return state, replace(options, from_line=line)
-
-
-def _wait_for_rest(link, timeout_s: float):
-    """The arm's state once its position and joints stayed the same for REST_CHECK_S."""
-    from ..job import REST_CHECK_S
-
-    deadline = link.clock() + timeout_s
-    reading, since = None, link.clock()
-    while True:
-        state = link.snapshot()[0]
-        now = link.clock()
-        if (state.position_mm, tuple(state.joints_deg)) != reading:
-            reading, since = (state.position_mm, tuple(state.joints_deg)), now
-        elif now - since >= REST_CHECK_S:
-            return state
-        if now >= deadline:
-            raise JobFailed(f"the arm did not come to rest within {timeout_s:g} s; nothing was sent")
-        link.wait_until(lambda _state: False, 0.05)
 
 
 def _journal(runner, log, script):
