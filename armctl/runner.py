@@ -104,10 +104,22 @@ class JobRunner:
         """Model seconds since the runner was made (the link's clock)."""
         return self.clock() - self._origin_s
 
-    def on_status(self, frame: StatusFrame, read_s: float) -> None:
-        """Called by the link (its reader thread, or the waiting caller on a virtual clock):
-        queue the frame with the model time it was read."""
-        self.status_queue.put((frame, read_s - self._origin_s))
+    def on_status(self, frame: StatusFrame, read_s: float) -> bool | None:
+        """Called by the link with each frame and the model time it was read.  From its reader
+        thread (a wall clock): queue it for the loop.  On a virtual clock the caller is the loop
+        itself, waiting in ``link.wait``: the engine takes the frame at once (the requests queued
+        before it first, as ``_drain`` orders them), and the answer says whether the wait must
+        return — only when the frame is news to the engine (``Job.receive_status``), a request
+        is queued or a stop asked; otherwise the link reads on to the next burst."""
+        at_s = read_s - self._origin_s
+        if not self._virtual:
+            self.status_queue.put((frame, at_s))
+            return None
+        requests = self.requests
+        while not requests.empty():
+            requests.get_nowait()(self.job)
+        news = self._receive(frame, at_s)
+        return news or self.stop_requested or not requests.empty()
 
     def control(self, request: Callable[[Job], object]) -> None:
         """Queue ``request(job)`` (e.g. ``Job.pause``) from any thread — the run panel's keys;
@@ -118,20 +130,24 @@ class JobRunner:
         requests = self.requests
         while not requests.empty():  # the panel's keys first: their effect shows in this turn
             requests.get_nowait()(self.job)
-        status_queue, job = self.status_queue, self.job
+        status_queue = self.status_queue
         if status_queue.empty():
             return
-        log, explain = self.log is not None, _logger.isEnabledFor(logging.INFO)
         while True:
             try:
                 frame, at_s = status_queue.get_nowait()
             except queue.Empty:
                 return
-            job.receive_status(frame, at_s)
-            if explain:
-                self._explain_bound(at_s)  # the streamer names new evidence only when the bound moved
-            if log:
-                self._log("rx", frame.encode(), at_s, kind=frame.KIND)
+            self._receive(frame, at_s)
+
+    def _receive(self, frame: StatusFrame, at_s: float) -> bool:
+        """One status frame into the engine (and -v's story, the --log); whether it was news."""
+        news = self.job.receive_status(frame, at_s)
+        if _logger.isEnabledFor(logging.INFO):
+            self._explain_bound(at_s)  # the streamer names new evidence only when the bound moved
+        if self.log is not None:
+            self._log("rx", frame.encode(), at_s, kind=frame.KIND)
+        return news is not False
 
     # --- the job ----------------------------------------------------------------------------
 
@@ -175,7 +191,7 @@ class JobRunner:
                 until_s = action.until_s
                 if not self._virtual:  # a wall clock: wake at least every POLL_S (Ctrl-C, the panel)
                     until_s = now + POLL_S if until_s is None else min(until_s, now + POLL_S)
-                link.wait(None if until_s is None else until_s + self._origin_s)
+                link.wait(None if until_s is None else until_s + self._origin_s, news_only=True)
             else:
                 self._explain_bound(now)  # the arm at rest at the last target
                 on_update(view)
