@@ -29,7 +29,7 @@ from .connector import Connector, Framer, ReceivedFrame, decode_received
 from .executor import Execution, Executor, LiveSnapshot
 from .faults import StatusFaults
 from .program import SdProgram
-from .status import StatusSchedule, status_bytes
+from .status import StatusEncoder, StatusSchedule
 from .wire import TIME_EPSILON_S, Wire
 
 
@@ -110,6 +110,7 @@ class SimulatedArm:
         self.executor.reports_robot_xyz = options.status_xyz_frame == "robot"
         self.schedule = StatusSchedule(STATUS_PERIOD_S, first_s=start_s)
         self.faults = StatusFaults(options.status_loss_rate, options.status_corrupt_rate, options.noise_rate, options.seed)
+        self._status = StatusEncoder()  # status_bytes, straight from the executor
         self.status_frames_built = 0
         self._landings: deque[tuple[float, bytes]] = deque()  # frames framed, not yet landed
 
@@ -197,8 +198,7 @@ class SimulatedArm:
         self.now_s = max(limit_s, executor.now_s)
 
     def _emit_status(self, at_s: float) -> None:
-        kind = self.schedule.pop()
-        frame = status_bytes(kind, self.executor.snapshot(at_s))
+        frame = self._status.encode(self.schedule.pop(), self.executor, at_s)
         self.arm_line.send(self.faults.apply(frame), at_s)
         self.status_frames_built += 1
 
