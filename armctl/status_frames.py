@@ -99,6 +99,7 @@ class _ThreeWords(StatusFrame):
             # the frame's bytes after the head: its words, zeros to six data bytes, kind, tail
             codec = struct.Struct(STATUS_WORD_CODEC.format[0] + "h" * len(names) + f"{6 - 2 * len(names)}xBB")
             type.__setattr__(cls, "_codec", codec)
+            type.__setattr__(cls, "_unpack_words", struct.Struct(STATUS_WORD_CODEC.format[0] + "h" * len(names)).unpack_from)
         return names
 
     @classmethod
@@ -118,10 +119,10 @@ class _ThreeWords(StatusFrame):
         # Words read off the wire are on the grid and in range by construction: set them as
         # they are (the same values __post_init__ would give), without checking each again —
         # this runs for every status frame read, 40,000 in 20 minutes.
-        names = cls._field_names()
+        names, scale = cls._field_names(), cls.SCALE
         frame = object.__new__(cls)
-        for name, value in zip(names, _unwords(data, len(names), cls.SCALE)):
-            object.__setattr__(frame, name, value)
+        # _unwords' values (word ÷ scale), all words in one unpack; set past the frozen __setattr__
+        frame.__dict__.update(zip(names, [word / scale for word in cls._unpack_words(data)]))
         return frame
 
 
@@ -313,6 +314,11 @@ class StatusReader:
         return len(self._buffer)
 
     def feed(self, data: bytes) -> list[StatusFrame]:
+        if not self._buffer:  # the common case: whole frames, nothing held, nothing to skip
+            found = self._aligned(data)
+            if found is not None:
+                self.frames += len(found)
+                return found
         buffer = self._buffer
         buffer += data
         found: list[StatusFrame] = []
@@ -339,6 +345,26 @@ class StatusReader:
             start += 1
         del buffer[:start]
         self.frames += len(found)
+        return found
+
+    @staticmethod
+    def _aligned(data: bytes) -> list[StatusFrame] | None:
+        """The frames of a burst made of whole, valid status frames and nothing else (what a
+        clean line delivers, 40,000 in 20 minutes) — what the scan below finds in it; None for
+        anything else (noise, a frame cut short or damaged, a value no frame can carry), which
+        the scan takes from the start."""
+        size = len(data)
+        if not size or size % STATUS_SIZE:
+            return None
+        found = []
+        for start in range(0, size, STATUS_SIZE):
+            frame_class = STATUS_KINDS.get(data[start + 7])
+            if frame_class is None or data[start] != STATUS_HEAD or data[start + 8] != STATUS_TAIL:
+                return None
+            try:
+                found.append(frame_class._from_data(bytes(data[start + 1 : start + 7])))
+            except (FrameError, FieldError):
+                return None
         return found
 
 
