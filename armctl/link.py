@@ -266,7 +266,8 @@ class Link:
                 update(frame, now)
                 if on_status is None or on_status(frame, now) is not False or not news_only:
                     news += 1
-            self._changed.notify_all()
+            if not self.clock.virtual:  # a virtual link's waits run the simulator: nobody sleeps on it
+                self._changed.notify_all()
         return news
 
     def idle(self, seconds: float) -> None:

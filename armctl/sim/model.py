@@ -179,18 +179,20 @@ class SimulatedArm:
 
     def _run_until(self, now_s: float) -> None:
         limit_s = max(now_s, self.now_s)
+        due_by_s = limit_s + TIME_EPSILON_S
         executor, landings, schedule = self.executor, self._landings, self.schedule
+        next_executor_s = executor.next_event_s
         while True:
-            executor_s = executor.next_event_s()
+            executor_s = next_executor_s()
             landing_s = landings[0][0] if landings else None
             status_s = schedule.next_s
-            if executor_s is not None and executor_s <= limit_s + TIME_EPSILON_S and (
+            if executor_s is not None and executor_s <= due_by_s and (
                 landing_s is None or executor_s <= landing_s) and executor_s <= status_s:
                 executor.run_until(executor_s)
-            elif landing_s is not None and landing_s <= limit_s + TIME_EPSILON_S and landing_s <= status_s:
+            elif landing_s is not None and landing_s <= due_by_s and landing_s <= status_s:
                 _, raw = landings.popleft()
-                self.executor.land(decode_received(self.connector.next_index(), landing_s, raw), landing_s)
-            elif status_s <= limit_s + TIME_EPSILON_S:
+                executor.land(decode_received(self.connector.next_index(), landing_s, raw), landing_s)
+            elif status_s <= due_by_s:
                 self._emit_status(status_s)
             else:
                 break

@@ -310,20 +310,16 @@ class Serial(SerialBase):
         and ``read`` one after the other (so the same model times to the last bit), without the
         wall-clock machinery between them: ``Link.wait`` calls it once per status burst."""
         arm = self._check_open()
-        clock, model = self.virtual_clock, self.model
+        clock, model, received = self.virtual_clock, self.model, self._received
         with arm.lock:
             now_s = clock.now_s
-            model_now_s = arm.model_now_s()
-            step_to = now_s + max(max(0.0, (model.next_output_time() - model_now_s) / arm.time_scale), min_step_s)
+            step_to = now_s + max(max(0.0, (model.next_output_time() - arm.model_now_s()) / arm.time_scale), min_step_s)
             if end_s is not None and end_s < step_to:
                 step_to = end_s
             clock.advance_to(step_to)
-            received = self._received
-            received += model.advance(arm.model_now_s())
-            if len(received) <= size:
-                data = bytes(received)
-                received.clear()
-            else:
+            data = model.advance(arm.model_now_s())
+            if received or len(data) > size:  # bytes left from before, or more than asked for
+                received += data
                 data = bytes(received[:size])
                 del received[:size]
         return data
