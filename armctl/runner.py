@@ -116,10 +116,12 @@ class JobRunner:
             self.status_queue.put((frame, at_s))
             return None
         requests = self.requests
-        while not requests.empty():
-            requests.get_nowait()(self.job)
-        news = self._receive(frame, at_s)
-        return news or self.stop_requested or not requests.empty()
+        if not requests.empty():
+            while not requests.empty():
+                requests.get_nowait()(self.job)
+            self._receive(frame, at_s)
+            return True  # the engine's answer after a request is news
+        return self._receive(frame, at_s) or self.stop_requested or not requests.empty()
 
     def control(self, request: Callable[[Job], object]) -> None:
         """Queue ``request(job)`` (e.g. ``Job.pause``) from any thread — the run panel's keys;

@@ -354,6 +354,14 @@ class StatusReader:
         anything else (noise, a frame cut short or damaged, a value no frame can carry), which
         the scan takes from the start."""
         size = len(data)
+        if size == STATUS_SIZE:  # one frame per burst, as the arm sends them
+            frame_class = STATUS_KINDS.get(data[7])
+            if frame_class is None or data[0] != STATUS_HEAD or data[8] != STATUS_TAIL:
+                return None
+            try:
+                return [frame_class._from_data(bytes(data[1:7]))]
+            except (FrameError, FieldError):
+                return None
         if not size or size % STATUS_SIZE:
             return None
         found = []
