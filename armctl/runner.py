@@ -6,12 +6,14 @@ what it asks, in one loop: drain the status frames the link has read into it, as
 ``next_action``, and write (``Write``: link.write, the --log record, ``wrote``), wait
 (``Wait``: through the link, until that time or the next status frame) or stop
 (``Finished``).  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S``
-so Ctrl-C and the panel stay prompt; on a virtual clock the wait jumps straight to the next
-status burst or the engine's own next time, so a virtual job costs its status frames and
-nothing else (``benchmarks/virtual_run.py`` measures it against the bare simulator).
+so Ctrl-C and the panel stay prompt; on a virtual clock the engine takes each frame as the link
+reads it (``on_status``) and the wait jumps from burst to burst until a frame is news to the
+engine (``Job.receive_status``), a request or a stop is queued, or the engine's own next time
+comes: a virtual job costs its status frames, and a turn of this loop only for a frame that can
+change the next action (``benchmarks/virtual_run.py`` measures it against the bare simulator).
 
 The link's reader thread (none on a virtual clock) only queues status frames with the time they
-were read; every ending — finished, Ctrl-C, a lost port, a failure such as a --log that cannot
+were read (the loop drains them into the engine); every ending — finished, Ctrl-C, a lost port, a failure such as a --log that cannot
 be written — leaves a ``RunView`` that says the last line sent, the last line known executed and
 where to resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks
 to stop at the next safe point, and the caller sends the abort sequence (``abort``).
