@@ -75,6 +75,14 @@ def _unwords(data: bytes, count: int, scale: int) -> list[float]:
 
 _STATUS_HEAD_BYTE = bytes((STATUS_HEAD,))
 
+
+def _as_read(cls, **values) -> "StatusFrame":
+    """A frame of ``cls`` holding ``values`` read off the wire, which are what its checks would
+    give by construction: set past the frozen ``__setattr__`` and the checks (one frame per 30 ms)."""
+    frame = object.__new__(cls)
+    frame.__dict__.update(values)
+    return frame
+
 MM_SCALE = 10  # status lengths are 0.1 mm
 DEG_SCALE = 100  # status angles are 0.01 deg (H8: kinds 3 and 5 reuse kinds 0 and 1's scales)
 
@@ -207,7 +215,9 @@ class PauseStatus(StatusFrame):
 
     @classmethod
     def _from_data(cls, data: bytes) -> "PauseStatus":
-        return cls(data[1], STATUS_WORD_CODEC.unpack_from(data, 4)[0])
+        # a byte and a signed word off the wire are in range by construction (what
+        # __post_init__ checks): set as read, every status frame read (as _ThreeWords does)
+        return _as_read(cls, pause_state=data[1], pwm_us=STATUS_WORD_CODEC.unpack_from(data, 4)[0])
 
 
 @dataclass(frozen=True)
@@ -225,7 +235,7 @@ class _FloatStatus(StatusFrame):
         value = FLOAT_CODEC.unpack_from(data, 0)[0]
         if not math.isfinite(value):
             raise FieldError(f"{cls.NAME} carries {f32_repr(value)}, not a finite number")
-        return cls(value)
+        return _as_read(cls, value=value)  # a finite float32 already: what _f32 would give
 
 
 @dataclass(frozen=True)
@@ -260,7 +270,7 @@ class FileStatus(StatusFrame):
 
     @classmethod
     def _from_data(cls, data: bytes) -> "FileStatus":
-        return cls(int.from_bytes(data[0:2], "big"))
+        return _as_read(cls, raw=int.from_bytes(data[0:2], "big"))  # 0…0xFFFF by construction
 
 
 STATUS_KINDS: dict[int, type[StatusFrame]] = {

@@ -4,9 +4,12 @@ else (a damaged frame, a value no frame carries, a torn tail) to the scan untouc
 
 from __future__ import annotations
 
+from dataclasses import fields
+
 from hypothesis import given, settings, strategies as st
 
-from armctl.protocol import STATUS_KINDS, StatusReader
+from armctl.errors import FieldError, FrameError
+from armctl.protocol import STATUS_KINDS, StatusReader, decode_status
 
 frame_shaped = st.tuples(st.binary(min_size=6, max_size=6), st.sampled_from(sorted(STATUS_KINDS)) | st.integers(0, 255),
                          st.sampled_from([0xCF, 0xCF, 0xCF, 0x00]), st.sampled_from([0xCE, 0xCE, 0xCE, 0x01])).map(
@@ -32,3 +35,18 @@ def test_a_clean_burst_takes_the_aligned_path_and_noise_does_not():
     assert StatusReader._aligned(frame * 3) is not None
     assert StatusReader._aligned(frame[:-1] + b"\x00") is None
     assert StatusReader._aligned(b"\x00" + frame) is None
+
+
+
+@settings(max_examples=300, deadline=None)
+@given(frame=frame_shaped)
+def test_a_frame_read_equals_the_frame_its_checked_constructor_builds(frame):
+    """Frames are read past their constructors' checks: the values must be what they give."""
+    try:
+        read = decode_status(frame)
+    except (FrameError, FieldError):
+        return
+    values = [getattr(read, f.name) for f in fields(read)]
+    checked = type(read)(*values)
+    assert read == checked
+    assert [type(v) for v in values] == [type(getattr(checked, f.name)) for f in fields(read)]
