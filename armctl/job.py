@@ -275,7 +275,7 @@ class Job:
         values_of = _REST_VALUES.get(kind)
         if values_of is not None:
             values = values_of(frame)
-            if kind == 4:  # news to the streaming decision only through the control state (or the bound)
+            if kind == 4:  # news while streaming only through the control state (or the bound)
                 self._pause_reports.append(frame.paused)
                 version = self.control.version
                 self.control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running

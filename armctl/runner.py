@@ -13,9 +13,9 @@ comes: a virtual job costs its status frames, and a turn of this loop only for a
 change the next action (``benchmarks/virtual_run.py`` measures it against the bare simulator).
 
 The link's reader thread (none on a virtual clock) only queues status frames with the time they
-were read (the loop drains them into the engine); every ending — finished, Ctrl-C, a lost port, a failure such as a --log that cannot
-be written — leaves a ``RunView`` that says the last line sent, the last line known executed and
-where to resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks
+were read (the loop drains them into the engine); every ending — finished, Ctrl-C, a lost port,
+a failure such as a --log that cannot be written — leaves a ``RunView`` that says the last line
+sent, the last line known executed and where to resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks
 to stop at the next safe point, and the caller sends the abort sequence (``abort``).
 
 With ``-v`` it tells the pacing story through ``logging`` (logger ``armctl.runner``): the
