@@ -82,15 +82,17 @@ class ArmState:
     def update(self, frame: StatusFrame, now: float) -> bool:
         """Merge one status frame read at ``now``; False when it was held back as suspect."""
         self.frames += 1
-        if self._is_jump(frame, now):
-            held = self._held.get(frame.KIND)
+        kind = frame.KIND
+        if kind in _JUDGED_KINDS and self._is_jump(frame, now):  # only these can jump (_jump_between)
+            held = self._held.get(kind)
             if held is None or self._jump_between(held[0], frame, now - held[1]):
-                self._held[frame.KIND] = (frame, now)
+                self._held[kind] = (frame, now)
                 self.suspect_frames += 1
                 return False
-        self._held.pop(frame.KIND, None)
-        self._apply(frame)
-        self.last_seen[frame.KIND] = now
+        if self._held:
+            self._held.pop(kind, None)
+        _APPLY[kind](self, frame)
+        self.last_seen[kind] = now
         return True
 
     def _is_jump(self, frame: StatusFrame, now: float) -> bool:
@@ -122,24 +124,35 @@ class ArmState:
         return None
 
     def _apply(self, frame: StatusFrame) -> None:
-        if isinstance(frame, PositionStatus):
-            self.x_mm, self.y_mm, self.z_mm = frame.x_mm, frame.y_mm, frame.z_mm
-        elif isinstance(frame, JointsLowStatus):
-            self.joints_deg[0:3] = [frame.j1_deg, frame.j2_deg, frame.j3_deg]
-        elif isinstance(frame, JointsHighStatus):
-            self.joints_deg[3:6] = [frame.j4_deg, frame.j5_deg, frame.j6_deg]
-        elif isinstance(frame, WorktableStatus):
-            self.worktable_mm = [frame.x_mm, frame.y_mm, frame.z_mm]
-        elif isinstance(frame, PauseStatus):
-            self.paused, self.pwm_us = frame.paused, frame.pwm_us
-        elif isinstance(frame, WristStatus):
-            self.w0_deg, self.w1_deg = frame.w0_deg, frame.w1_deg
-        elif isinstance(frame, FileLengthStatus):
-            self.file_length = frame.value
-        elif isinstance(frame, FileStatus):
-            self.file_status = frame.raw
-        elif isinstance(frame, RunPositionStatus):
-            self.run_position = frame.value
+        _APPLY[frame.KIND](self, frame)
+
+    # What each kind sets (``_APPLY`` below: one lookup per frame, not a chain of isinstance).
+    def _apply_position(self, frame: PositionStatus) -> None:
+        self.x_mm, self.y_mm, self.z_mm = frame.x_mm, frame.y_mm, frame.z_mm
+
+    def _apply_joints_low(self, frame: JointsLowStatus) -> None:
+        self.joints_deg[0:3] = [frame.j1_deg, frame.j2_deg, frame.j3_deg]
+
+    def _apply_joints_high(self, frame: JointsHighStatus) -> None:
+        self.joints_deg[3:6] = [frame.j4_deg, frame.j5_deg, frame.j6_deg]
+
+    def _apply_worktable(self, frame: WorktableStatus) -> None:
+        self.worktable_mm = [frame.x_mm, frame.y_mm, frame.z_mm]
+
+    def _apply_pause(self, frame: PauseStatus) -> None:
+        self.paused, self.pwm_us = frame.paused, frame.pwm_us
+
+    def _apply_wrist(self, frame: WristStatus) -> None:
+        self.w0_deg, self.w1_deg = frame.w0_deg, frame.w1_deg
+
+    def _apply_file_length(self, frame: FileLengthStatus) -> None:
+        self.file_length = frame.value
+
+    def _apply_file_status(self, frame: FileStatus) -> None:
+        self.file_status = frame.raw
+
+    def _apply_run_position(self, frame: RunPositionStatus) -> None:
+        self.run_position = frame.value
 
     def to_json(self) -> dict:
         """The object ``armctl status --json`` prints."""
@@ -158,6 +171,20 @@ class ArmState:
             "run_position": self.run_position,
         }
 
+
+_APPLY = {
+    PositionStatus.KIND: ArmState._apply_position,
+    JointsLowStatus.KIND: ArmState._apply_joints_low,
+    JointsHighStatus.KIND: ArmState._apply_joints_high,
+    WorktableStatus.KIND: ArmState._apply_worktable,
+    PauseStatus.KIND: ArmState._apply_pause,
+    WristStatus.KIND: ArmState._apply_wrist,
+    FileLengthStatus.KIND: ArmState._apply_file_length,
+    FileStatus.KIND: ArmState._apply_file_status,
+    RunPositionStatus.KIND: ArmState._apply_run_position,
+}
+# The kinds whose values are judged for jumps (``_jump_between``): the others are taken as read.
+_JUDGED_KINDS = frozenset((PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND))
 
 _VALUE_NAMES = {
     PositionStatus: ("x_mm", "y_mm", "z_mm"),

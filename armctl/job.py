@@ -252,20 +252,36 @@ class Job:
 
     # --- input ------------------------------------------------------------------------------
 
-    def receive_status(self, frame: StatusFrame, now: float) -> None:
-        """Take one status frame read at ``now``."""
-        self.streamer.receive_status(frame, now)
-        if self.pacing is not self.streamer:
+    def receive_status(self, frame: StatusFrame, now: float) -> bool:
+        """Take one status frame read at ``now``.  True when it may change what ``next_action``
+        answers; False when it cannot: while streaming, a kind the engine only counts (worktable,
+        wrist, SD file length and status), a pause report that changes no control state, or an
+        SD run position that did not move, with nothing newly known consumed and no pause asked
+        or in force — a virtual-time host reads on past it without asking (``Wait``'s promise:
+        nothing changes between status frames but at its time)."""
+        streamer = self.streamer
+        consumed = streamer.consumed_lower_bound
+        streamer.receive_status(frame, now)
+        # Past streaming every frame is news: the end-of-job checks compare times their own way
+        # (``now - since >= REST_CHECK_S``), which may hold a rounding error before the time the
+        # Wait named; a frame read then must find them as it always did.
+        news = self.control.busy or self.phase is not _Phase.STREAMING
+        if self.pacing is not streamer:
             self.pacing.receive_status(frame, now)
+            news = True  # another strategy may act on any frame
         view = self.view
         view.status_frames += 1
         kind = frame.KIND
         values_of = _REST_VALUES.get(kind)
         if values_of is not None:
             values = values_of(frame)
-            if kind == 4:
+            if kind == 4:  # news while streaming only through the control state (or the bound)
                 self._pause_reports.append(frame.paused)
+                version = self.control.version
                 self.control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
+                news = news or self.control.version != version
+            else:
+                news = True  # position and joints: the streamer's evidence and estimate
             if kind == 0:
                 view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
             reported = self._reported
@@ -282,7 +298,9 @@ class Job:
         elif kind == _RUN_POSITION_KIND:
             if self._run_position is not None and frame.value != self._run_position:
                 self._active_s = now  # an SD program advancing, even with the arm standing still
+                news = True
             self._run_position = frame.value
+        return news or streamer.consumed_lower_bound != consumed
 
     def wrote(self, now: float) -> None:
         """The host wrote the frame the last ``Write`` asked for, starting at ``now``."""
@@ -688,12 +706,14 @@ def _moves_arm(segment) -> bool:
 
 def _moved_clearly(before: tuple, after: tuple) -> bool:
     """Position (kind 0) or joints (kinds 1, 2) changed by more than a reading's jitter."""
-    for kind, (old, new) in enumerate(zip(before, after)):
+    limit = TARGET_MM  # position first, then the joint halves (plain loops: every status frame)
+    for old, new in zip(before, after):
         if old is None or new is None:
             if old is not new:
                 return True
-            continue
-        limit = TARGET_MM if kind == 0 else TARGET_DEG
-        if max(abs(a - b) for a, b in zip(old, new)) > limit:
-            return True
+        else:
+            for a, b in zip(old, new):
+                if abs(a - b) > limit:
+                    return True
+        limit = TARGET_DEG
     return False

@@ -10,7 +10,9 @@ act on (no such device, permission denied with the dialout hint, busy, vanished)
 The link owns the port's one ``Clock`` (armctl/clock.py: model seconds, on the wall — scaled
 for ``sim://?speed=N`` — or virtual).  A ``sim://?clock=virtual`` port has no reader thread: its
 clock moves only when a caller waits (``wait``, ``wait_until``, ``idle``), which jumps to the
-next status burst and reads it at the model time it lands.  Callers that wait through the link
+next status burst and reads it at the model time it lands (``Serial.step_virtual``: the
+simulator driven directly, no wall-clock machinery); a caller whose ``on_status`` says which
+frames are news (the job runner) is woken only by those.  Callers that wait through the link
 work unchanged on either kind of port.
 """
 
@@ -250,30 +252,37 @@ class Link:
             if data:
                 self._take(data)
 
-    def _take(self, data: bytes) -> int:
-        """Feed bytes read to the status reader and the state; the number of frames found."""
+    def _take(self, data: bytes, news_only: bool = False) -> int:
+        """Feed bytes read to the status reader and the state; the number of frames found — with
+        ``news_only``, less those ``on_status`` answered False for (a frame that cannot change
+        what its caller does next)."""
         now = self.clock()
         frames = self.reader.feed(data)
+        news = 0
         with self._changed:
             self.bytes_received += len(data)
+            update, on_status = self.state.update, self.on_status
             for frame in frames:
-                self.state.update(frame, now)
-                if self.on_status is not None:
-                    self.on_status(frame, now)
-            self._changed.notify_all()
-        return len(frames)
+                update(frame, now)
+                if on_status is None or on_status(frame, now) is not False or not news_only:
+                    news += 1
+            if not self.clock.virtual:  # a virtual link's waits run the simulator: nobody sleeps on it
+                self._changed.notify_all()
+        return news
 
     def idle(self, seconds: float) -> None:
         """Wait up to ``seconds`` of the link's clock; returns early once a status frame has
         been read.  (On a real port the reader thread reads meanwhile; this only waits.)"""
         self.wait(self.clock.now() + seconds)
 
-    def wait(self, until_s: float | None) -> None:
+    def wait(self, until_s: float | None, news_only: bool = False) -> None:
         """Wait until the clock reads ``until_s`` (None: no limit) or a status frame has been
         read, whichever comes first.  On a virtual clock this jumps: straight to the next
         status burst or to ``until_s``, and at least a microsecond (a wait computed as a
         difference of nearly equal floats could otherwise leave the clock where it is, and
-        the caller asking again forever)."""
+        the caller asking again forever).  ``news_only`` (virtual clock): a frame ``on_status``
+        answers False for does not end the wait — the link drives the simulator on, burst after
+        burst, without returning to a caller that has nothing new to decide (runner.py)."""
         clock = self.clock
         if not clock.virtual:
             with self._changed:
@@ -281,21 +290,11 @@ class Link:
                 while self.reader.frames == frames and self.error is None and (until_s is None or clock.now() < until_s):
                     self._changed.wait(READ_TIMEOUT_S)
             return
-        port = self.port
         end_s = max(until_s, clock.now_s + VIRTUAL_MIN_STEP_S) if until_s is not None else None
-        while True:
-            until_output = port.next_output_s()
-            if until_output is None:
-                if end_s is None:  # nothing will ever come and nothing bounds the wait
-                    end_s = clock.now_s + READ_TIMEOUT_S
-                step_to = end_s
-            else:
-                step_to = clock.now_s + max(until_output, VIRTUAL_MIN_STEP_S)
-                if end_s is not None and end_s < step_to:
-                    step_to = end_s
-            clock.advance_to(step_to)
-            data = port.read(VIRTUAL_READ_CHUNK)  # a virtual port returns what is there at once
-            if (data and self._take(data)) or (end_s is not None and clock.now_s >= end_s):
+        step, take = self.port.step_virtual, self._take
+        while True:  # burst after burst until one holds news for on_status, or end_s
+            data = step(end_s, VIRTUAL_MIN_STEP_S, VIRTUAL_READ_CHUNK)
+            if (data and take(data, news_only)) or (end_s is not None and clock.now_s >= end_s):
                 return
 
     def _set_error(self, error: PortError) -> None:

@@ -6,14 +6,16 @@ what it asks, in one loop: drain the status frames the link has read into it, as
 ``next_action``, and write (``Write``: link.write, the --log record, ``wrote``), wait
 (``Wait``: through the link, until that time or the next status frame) or stop
 (``Finished``).  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S``
-so Ctrl-C and the panel stay prompt; on a virtual clock the wait jumps straight to the next
-status burst or the engine's own next time, so a virtual job costs its status frames and
-nothing else (``benchmarks/virtual_run.py`` measures it against the bare simulator).
+so Ctrl-C and the panel stay prompt; on a virtual clock the engine takes each frame as the link
+reads it (``on_status``) and the wait jumps from burst to burst until a frame is news to the
+engine (``Job.receive_status``), a request or a stop is queued, or the engine's own next time
+comes: a virtual job costs its status frames, and a turn of this loop only for a frame that can
+change the next action (``benchmarks/virtual_run.py`` measures it against the bare simulator).
 
 The link's reader thread (none on a virtual clock) only queues status frames with the time they
-were read; every ending — finished, Ctrl-C, a lost port, a failure such as a --log that cannot
-be written — leaves a ``RunView`` that says the last line sent, the last line known executed and
-where to resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks
+were read (the loop drains them into the engine); every ending — finished, Ctrl-C, a lost port,
+a failure such as a --log that cannot be written — leaves a ``RunView`` that says the last line
+sent, the last line known executed and where to resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks
 to stop at the next safe point, and the caller sends the abort sequence (``abort``).
 
 With ``-v`` it tells the pacing story through ``logging`` (logger ``armctl.runner``): the
@@ -104,10 +106,24 @@ class JobRunner:
         """Model seconds since the runner was made (the link's clock)."""
         return self.clock() - self._origin_s
 
-    def on_status(self, frame: StatusFrame, read_s: float) -> None:
-        """Called by the link (its reader thread, or the waiting caller on a virtual clock):
-        queue the frame with the model time it was read."""
-        self.status_queue.put((frame, read_s - self._origin_s))
+    def on_status(self, frame: StatusFrame, read_s: float) -> bool | None:
+        """Called by the link with each frame and the model time it was read.  From its reader
+        thread (a wall clock): queue it for the loop.  On a virtual clock the caller is the loop
+        itself, waiting in ``link.wait``: the engine takes the frame at once (the requests queued
+        before it first, as ``_drain`` orders them), and the answer says whether the wait must
+        return — only when the frame is news to the engine (``Job.receive_status``), a request
+        is queued or a stop asked; otherwise the link reads on to the next burst."""
+        at_s = read_s - self._origin_s
+        if not self._virtual:
+            self.status_queue.put((frame, at_s))
+            return None
+        requests = self.requests
+        if not requests.empty():
+            while not requests.empty():
+                requests.get_nowait()(self.job)
+            self._receive(frame, at_s)
+            return True  # the engine's answer after a request is news
+        return self._receive(frame, at_s) or self.stop_requested or not requests.empty()
 
     def control(self, request: Callable[[Job], object]) -> None:
         """Queue ``request(job)`` (e.g. ``Job.pause``) from any thread — the run panel's keys;
@@ -118,20 +134,24 @@ class JobRunner:
         requests = self.requests
         while not requests.empty():  # the panel's keys first: their effect shows in this turn
             requests.get_nowait()(self.job)
-        status_queue, job = self.status_queue, self.job
+        status_queue = self.status_queue
         if status_queue.empty():
             return
-        log, explain = self.log is not None, _logger.isEnabledFor(logging.INFO)
         while True:
             try:
                 frame, at_s = status_queue.get_nowait()
             except queue.Empty:
                 return
-            job.receive_status(frame, at_s)
-            if explain:
-                self._explain_bound(at_s)  # the streamer names new evidence only when the bound moved
-            if log:
-                self._log("rx", frame.encode(), at_s, kind=frame.KIND)
+            self._receive(frame, at_s)
+
+    def _receive(self, frame: StatusFrame, at_s: float) -> bool:
+        """One status frame into the engine (and -v's story, the --log); whether it was news."""
+        news = self.job.receive_status(frame, at_s)
+        if _logger.isEnabledFor(logging.INFO):
+            self._explain_bound(at_s)  # the streamer names new evidence only when the bound moved
+        if self.log is not None:
+            self._log("rx", frame.encode(), at_s, kind=frame.KIND)
+        return news is not False
 
     # --- the job ----------------------------------------------------------------------------
 
@@ -175,7 +195,7 @@ class JobRunner:
                 until_s = action.until_s
                 if not self._virtual:  # a wall clock: wake at least every POLL_S (Ctrl-C, the panel)
                     until_s = now + POLL_S if until_s is None else min(until_s, now + POLL_S)
-                link.wait(None if until_s is None else until_s + self._origin_s)
+                link.wait(None if until_s is None else until_s + self._origin_s, news_only=True)
             else:
                 self._explain_bound(now)  # the arm at rest at the last target
                 on_update(view)

@@ -29,7 +29,7 @@ from .connector import Connector, Framer, ReceivedFrame, decode_received
 from .executor import Execution, Executor, LiveSnapshot
 from .faults import StatusFaults
 from .program import SdProgram
-from .status import StatusSchedule, status_bytes
+from .status import StatusEncoder, StatusSchedule
 from .wire import TIME_EPSILON_S, Wire
 
 
@@ -110,6 +110,7 @@ class SimulatedArm:
         self.executor.reports_robot_xyz = options.status_xyz_frame == "robot"
         self.schedule = StatusSchedule(STATUS_PERIOD_S, first_s=start_s)
         self.faults = StatusFaults(options.status_loss_rate, options.status_corrupt_rate, options.noise_rate, options.seed)
+        self._status = StatusEncoder()  # status_bytes, straight from the executor
         self.status_frames_built = 0
         self._landings: deque[tuple[float, bytes]] = deque()  # frames framed, not yet landed
 
@@ -178,18 +179,20 @@ class SimulatedArm:
 
     def _run_until(self, now_s: float) -> None:
         limit_s = max(now_s, self.now_s)
+        due_by_s = limit_s + TIME_EPSILON_S
         executor, landings, schedule = self.executor, self._landings, self.schedule
+        next_executor_s = executor.next_event_s
         while True:
-            executor_s = executor.next_event_s()
+            executor_s = next_executor_s()
             landing_s = landings[0][0] if landings else None
             status_s = schedule.next_s
-            if executor_s is not None and executor_s <= limit_s + TIME_EPSILON_S and (
+            if executor_s is not None and executor_s <= due_by_s and (
                 landing_s is None or executor_s <= landing_s) and executor_s <= status_s:
                 executor.run_until(executor_s)
-            elif landing_s is not None and landing_s <= limit_s + TIME_EPSILON_S and landing_s <= status_s:
+            elif landing_s is not None and landing_s <= due_by_s and landing_s <= status_s:
                 _, raw = landings.popleft()
-                self.executor.land(decode_received(self.connector.next_index(), landing_s, raw), landing_s)
-            elif status_s <= limit_s + TIME_EPSILON_S:
+                executor.land(decode_received(self.connector.next_index(), landing_s, raw), landing_s)
+            elif status_s <= due_by_s:
                 self._emit_status(status_s)
             else:
                 break
@@ -197,8 +200,7 @@ class SimulatedArm:
         self.now_s = max(limit_s, executor.now_s)
 
     def _emit_status(self, at_s: float) -> None:
-        kind = self.schedule.pop()
-        frame = status_bytes(kind, self.executor.snapshot(at_s))
+        frame = self._status.encode(self.schedule.pop(), self.executor, at_s)
         self.arm_line.send(self.faults.apply(frame), at_s)
         self.status_frames_built += 1
 

@@ -303,6 +303,27 @@ class Serial(SerialBase):
         """Model seconds until the next status burst has reached the host (None: never)."""
         return self._check_open().wall_seconds_until_output() if self.virtual_clock else None
 
+    def step_virtual(self, end_s: float | None, min_step_s: float, size: int) -> bytes:
+        """``clock=virtual`` only: move the clock to when the next status burst has fully reached
+        the host — at least ``min_step_s`` on, never past ``end_s`` (None: no limit) — and read up
+        to ``size`` bytes.  The same arithmetic as ``next_output_s``, the clock's ``advance_to``
+        and ``read`` one after the other (so the same model times to the last bit), without the
+        wall-clock machinery between them: ``Link.wait`` calls it once per status burst."""
+        arm = self._check_open()
+        clock, model, received = self.virtual_clock, self.model, self._received
+        with arm.lock:
+            now_s = clock.now_s
+            step_to = now_s + max(max(0.0, (model.next_output_time() - arm.model_now_s()) / arm.time_scale), min_step_s)
+            if end_s is not None and end_s < step_to:
+                step_to = end_s
+            clock.advance_to(step_to)
+            data = model.advance(arm.model_now_s())
+            if received or len(data) > size:  # bytes left from before, or more than asked for
+                received += data
+                data = bytes(received[:size])
+                del received[:size]
+        return data
+
     def cancel_read(self) -> None:
         self._wake.set()
 

@@ -53,6 +53,8 @@ class Wire:
 
     def take(self, now_s: float) -> bytes:
         """Every byte whose last bit has arrived by ``now_s`` and was not taken before."""
+        if not self._runs:
+            return b""
         out = bytearray()
         while self._runs:
             run = self._runs[0]

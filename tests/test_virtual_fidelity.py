@@ -1,0 +1,83 @@
+"""A virtual-time run is the same run however fast the host gets (issue 11: a 20-minute job in
+≤ 0.5 s of wall time must not buy its speed with different behaviour).
+
+The digests below were recorded from ``armctl run … --port sim://?clock=virtual`` before the
+virtual-time fast paths (the link pumping the simulator to the next event, the engine woken only
+by news, the simulator's precompiled status frames, the reader's aligned-burst path): every
+status frame the engine received with the model time it was read, every frame written with the
+model time it was written, the summary's arm time and the --log's records.  A change to any of
+them — a frame skipped, built differently, read or written at another model time — changes the
+digest.  Scripts cover Cartesian lines and arcs (joints from IK), joint moves, an SD program (its
+run position advancing), a worktable origin, and a simulator with status faults and
+control frames acting on arrival.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+from armctl.cli import main
+from armctl.job import Job
+from armctl.link import Link
+
+SCRIPTS = Path(__file__).resolve().parent.parent / "scripts"
+
+CASES = {
+    "joint_routine": ("joint_routine.txt", "sim://?clock=virtual"),
+    "square_circle": ("draw_square_circle.txt", "sim://?clock=virtual"),
+    "sd_program": ("sd_program.txt", "sim://?clock=virtual"),
+    "worktable": ("worktable_origin.txt", "sim://?clock=virtual&status_xyz_frame=robot"),
+    "faults": ("pick_and_place.txt", "sim://?clock=virtual&noise=0.05&loss=0.02&corrupt=0.02&seed=7&control=arrival"),
+}
+
+EXPECTED = {  # (the engine's frames read and written with their model times, the --log) digests
+    "faults": ("b6244c4e97f04915", ""),
+    "joint_routine": ("ee1999375b03d886", ""),
+    "sd_program": ("ecf99bc42452b1e6", ""),
+    "square_circle": ("524c8bc0952ad401", ""),
+    "worktable": ("560e9c7e84cdac67", ""),
+    "square_circle+log": ("524c8bc0952ad401", "8c79141f45bf5816"),
+}
+
+
+def _record(monkeypatch, tmp_path, name: str, with_log: bool) -> tuple[str, str]:
+    script, url = CASES[name]
+    events: list[str] = []
+    receive, write = Job.receive_status, Link.write
+
+    def receive_status(self, frame, now):
+        events.append(f"rx {now!r} {frame.encode().hex()}")
+        return receive(self, frame, now)
+
+    def link_write(self, frame):
+        events.append(f"tx {self.clock.now()!r} {bytes(frame).hex()}")
+        return write(self, frame)
+
+    monkeypatch.setattr(Job, "receive_status", receive_status)
+    monkeypatch.setattr(Link, "write", link_write)
+    args = ["run", str(SCRIPTS / script), "--no-live", "--port", url]
+    log = tmp_path / "run.log"
+    if with_log:
+        args += ["--log", str(log)]
+    result = CliRunner().invoke(main, args, env={"ARMCTL_PORT": None})
+    assert result.exit_code == 0, result.output
+    arm_time = re.search(r"^arm time: .*$", result.stdout, re.M)
+    assert arm_time, result.stdout
+    events.append(arm_time.group(0))
+    assert sum(e.startswith("rx") for e in events) > 100  # the run read the arm for a while
+    log_digest = hashlib.sha256(log.read_bytes()).hexdigest()[:16] if with_log else ""
+    return hashlib.sha256("\n".join(events).encode()).hexdigest()[:16], log_digest
+
+
+@pytest.mark.parametrize("name", sorted(CASES))
+def test_a_virtual_run_reads_and_writes_what_it_did_before(monkeypatch, tmp_path, name):
+    assert _record(monkeypatch, tmp_path, name, with_log=False) == EXPECTED[name]
+
+
+def test_a_virtual_run_with_a_log_reads_writes_and_logs_what_it_did_before(monkeypatch, tmp_path):
+    assert _record(monkeypatch, tmp_path, "square_circle", with_log=True) == EXPECTED["square_circle+log"]
