@@ -40,6 +40,7 @@ from .streamer import DEFAULT_LEAD_S
 
 if TYPE_CHECKING:
     from .job import RunView
+    from .jobflow import JobPlan
     from .joblog import ResumePoint
     from .profile import Profile
 
@@ -196,10 +197,11 @@ class JobObserver:
     position, the ETA.  It changes while the job runs: read it in the call, do not keep it.
     """
 
-    def started(self, view: RunView, start: Any, initial: Any) -> None:
-        """Before the first frame: the job's ``view``, and where it starts (the arm's reported
-        pose, a ``motion.Pose``, and the compiler's initial state: the panel's map is drawn from
-        them)."""
+    def started(self, view: RunView, plan: JobPlan) -> None:
+        """Before the first frame: the job's ``view``, and its ``plan`` (``armctl.jobflow.JobPlan``:
+        ``start``, the arm's reported pose; ``initial``, the compiler's initial state — the
+        panel's map is drawn from them; ``estimate``; ``from_line``, after a ``resume`` the line
+        the log proved)."""
 
     def update(self, view: RunView) -> None:
         """After every turn of the engine that wrote a frame, waited or ended (often: throttle)."""
@@ -309,10 +311,11 @@ class _JobControl:
         result's messages.  Asked again while stopping: stop waiting for the arm (a second Ctrl-C)."""
         if why is not None:
             self.runner.view.messages.append(why)
-        if not self.stop_asked:
+        if not self.stop_asked and not self.runner.stop_requested:
             self.stop_asked = True
             self.runner.request_stop()
-        else:
+        else:  # stopping already (asked, the timeout, a failure the runner met): a second Ctrl-C
+            self.stop_asked = True
             self.runner.cut_short()
 
     def on_update(self, view) -> None:
@@ -755,7 +758,7 @@ class Arm:
     def _run_job(self, script, from_line: int, spec: _JobSpec, from_arm: bool, stops: int) -> RunResult:
         """On the worker: read the arm, plan from its report, drive the runner, report.  A
         ``stop()`` that came after the call and before the first frame ends it with nothing sent."""
-        from .jobflow import drive, journal_for, plan_job, read_arm, resume_start, start_from_state, start_job
+        from .jobflow import drive, from_line_errors, journal_for, plan_job, read_arm, resume_start, start_from_state, start_job
         from .joblog import job_record
         from .runner import abort_frames
 
@@ -766,6 +769,9 @@ class Arm:
             state, from_line = resume_start(link, spec.resume, self.status_timeout_s, self.lead_s)
             if from_line is None:
                 return RunResult.nothing_sent("finished", message="nothing to resume: every line of the job is proven executed")
+            error = from_line_errors(script, from_line)
+            if error is not None:
+                raise error
             observer.note(f"armctl: resuming {script.name} at line {from_line}: the log and the arm's report prove every line "
                           "before it ran")
         report = _check(script, self._profile, start_from_state(self._model, state)[1] if from_arm else None)
@@ -790,7 +796,7 @@ class Arm:
         try:
             if stopped:
                 control.request_stop()
-            observer.started(runner.view, plan.start, plan.initial)
+            observer.started(runner.view, plan)
             outcome = drive(runner, abort_frames(spec.abort, arrival), on_stopping=lambda why: observer.note(
                 f"\narmctl: {why}: no more frames are sent; sending the abort sequence ({spec.abort}) and waiting for "
                 "the arm to come to rest …"))
@@ -804,8 +810,9 @@ class Arm:
             raise ArmTimeout(f"the arm did not prove the job done within {spec.timeout_s:g} s: it was stopped "
                              f"(last line known executed: {result.last_line_executed})", result)
         # "finished, unproven": the arm's reports say it ended, but the FIFO size was never probed
-        # and some frames rest on time alone — a result to read (``finished`` is False), not a
-        # failure; ``armctl run`` exits 0 for it too (``exit_code``, one rule: ``exit_code_of``)
+        # and some frames rest on time alone — returned, not raised (the arm did what it was told
+        # as far as anyone can tell), with ``finished`` False and ``exit_code`` 1: the exit code
+        # ``armctl run`` takes from this same result (one rule: ``exit_code_of``)
         if outcome not in ("finished", "finished, unproven", "interrupted"):
             detail = "; ".join(result.messages)
             raise JobFailed(f"the job ended {outcome}" + (f": {detail}" if detail else ""), result) from control.callback_error
