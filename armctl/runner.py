@@ -195,10 +195,11 @@ class JobRunner:
         self.stop_requested = True
 
     def cut_short(self) -> None:
-        """A second stop from another thread (``Arm.stop`` again): the abort stops waiting for the
-        arm at the loop's next turn, as a second Ctrl-C does in the loop's own thread."""
-        self._cut = True
-        self.stop_requested = True
+        """A second stop from another thread (``Arm.stop`` again): once the abort has begun, it
+        stops waiting for the arm at the loop's next turn, as a second Ctrl-C does in the loop's
+        own thread; before that it is the first stop again (the abort sequence always goes)."""
+        if self._aborting:
+            self._cut = True
 
     def fail(self, why: str) -> None:
         """A failure mid-job (not a lost port): stop at the next safe point, like Ctrl-C, and

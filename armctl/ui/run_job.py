@@ -422,15 +422,6 @@ def _repeat_note(view, resume: int | None) -> str:
             "runs again from its first pass, so the passes already done are repeated)")
 
 
-def job_result(view, outcome: str, options: JobOptions, script, estimate):
-    """The run's result: the Python API's ``RunResult``, built by the same ``RunResult.of`` —
-    ``run --json``'s summary (``to_json``) and what the text summary says."""
-    from ..api import RunResult
-
-    return RunResult.of(view, outcome, script.lines(), estimated_job_s=estimate.job_s,
-                        resume_command=lambda line: resume_command(options, line))
-
-
 def _summary(result, view, wall_s: float, estimate, options: JobOptions) -> int:
     """The text summary of ``result`` (the arm time unrounded, from ``view``); the exit code."""
     click.echo(f"frames: {result.frames_sent} of {result.total_frames} sent")
