@@ -1,12 +1,15 @@
 """The Python API: ``from armctl import Arm`` — open an arm, move it, run a job, read it, pause it.
 
-Strategy: a thin client of the same steps ``armctl run`` takes (armctl/jobflow.py): a script
-is linted before anything leaves, the arm's report is read and the job compiled from it,
-the runner streams it with the streamer's pacing and ends it by the runner's end-of-job rules,
-and any early stop takes ``jobflow.drive``'s one path (stop feeding, the abort sequence, wait
-for the arm).  ``move`` writes ONE script line from its keywords and runs it as a job of one
-line: the same compiler, lint checks and streamer, never a second encoder.  Nothing here prints
-(the simulator banner is not announced; notes go to the ``armctl.api`` logger at INFO).
+Strategy: the steps a job takes, once (armctl/jobflow.py), and ``armctl run`` is a client of
+this module, not a second host: a script is linted before anything leaves, the arm's report is
+read and the job compiled from it (or, with ``resume=``, from the line a ``--log`` and the arm's
+report prove), the runner streams it with the streamer's pacing, journals it to ``log=`` and
+ends it by the engine's end-of-job rules, and any early stop takes ``jobflow.drive``'s one path
+(stop feeding, the abort sequence, wait for the arm).  ``move`` writes ONE script line from its
+keywords and runs it as a job of one line: the same compiler, lint checks and streamer, never a
+second encoder.  Nothing here prints: what a job has to say goes to a ``JobObserver`` (its
+default: the ``armctl.api`` logger at INFO); ``armctl run``'s observer draws the panel, the
+``--json`` events and the notes on stderr (armctl/ui/run_job.py).
 
 Threads: each ``Arm`` has one worker thread that owns its link — every write, every wait, and
 the virtual clock of a ``sim://?clock=virtual`` port, which moves only while someone waits on
@@ -15,13 +18,15 @@ waits for its task, ``move(wait=False)`` returns at once and its move streams wh
 goes on.  Tasks run in order, so a later ``move``, ``run``, ``status``, ``wait`` or ``close``
 sees every queued move executed, each exactly once.  A queued move that fails cancels the
 moves queued after it (the arm is no longer where they assume) and its error is raised by the
-next blocking call.  Control of a running job (``pause``, ``resume``, ``feed_override``) is a
-request to the job engine that the worker carries out between two writes
-(``JobRunner.control``, as the run panel's keys); ``stop`` and a timeout take the Ctrl-C path
-(``JobRunner.request_stop``, then ``jobflow.drive``'s abort) — never a write from another thread.  Nothing is module-level state: several arms work at once in one process.
-No signal handler is installed (the CLI installs its own, in the main thread only).
+next blocking call.  Control of a running job (``pause``, ``resume``, ``toggle_pause``,
+``feed_override`` — the run panel's keys call these) is a request to the job engine that the
+worker carries out between two writes (``JobRunner.control``); ``stop`` and a timeout take the
+Ctrl-C path (``JobRunner.request_stop``, then ``jobflow.drive``'s abort; a second ``stop`` once
+the abort went, ``JobRunner.cut_short``) — never a write from another thread.  Observers and
+``on_progress`` run on the worker.  Nothing is module-level state: several arms work at once in
+one process.  No signal handler is installed (``armctl run`` installs its own, in the main
+thread only, and calls ``stop``).
 """
-
 from __future__ import annotations
 
 import logging
