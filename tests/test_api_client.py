@@ -227,3 +227,22 @@ def test_open_takes_a_connect_seam_and_a_loaded_profile():
     with Arm.open(VIRTUAL, profile=load_profile(None), connect=_recording_connect(written)) as arm:
         result = arm.run(SHORT)
     assert result.finished and len(written) == result.frames_sent
+
+
+@pytest.mark.realtime
+def test_an_unprobed_arm_ends_finished_unproven_with_exit_1_in_the_api_and_in_armctl_run(tmp_path, sim_pty):
+    """One fact in one place: ``armctl run``'s outcome and exit code are the ``RunResult``'s.
+    A device path whose FIFO size was never probed (no armctl.toml) cannot prove a frame was
+    not dropped: the API returns "finished, unproven" (not raised), exit_code 1; the CLI's
+    --json summary is that result, and it exits with that code."""
+    import subprocess
+    import sys
+
+    with Arm.open(port=sim_pty) as arm:
+        api = arm.run(SHORT, timeout=10)
+    assert (api.outcome, api.finished, api.exit_code) == ("finished, unproven", False, 1)
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", str(SHORT), "--port", sim_pty, "--json"],
+                          capture_output=True, text=True, timeout=60, cwd=tmp_path)
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert summary["event"] == "summary"
+    assert (summary["outcome"], summary["exit_code"], done.returncode) == (api.outcome, api.exit_code, 1), done.stderr
