@@ -316,12 +316,15 @@ class _JobControl:
         result's messages.  Asked again while stopping: stop waiting for the arm (a second Ctrl-C)."""
         if why is not None:
             self.runner.view.messages.append(why)
-        if not self.stop_asked and not self.runner.stop_requested:
-            self.stop_asked = True
-            self.runner.request_stop()
-        else:  # stopping already (asked, the timeout, a failure the runner met): a second Ctrl-C
-            self.stop_asked = True
-            self.runner.cut_short()
+        first = not self.stop_asked and not self.runner.stop_requested
+        self.stop_asked = True
+        if first:
+            try:
+                self.runner.request_stop()
+                return
+            except KeyboardInterrupt:  # the runner began stopping on its own meanwhile (a failure)
+                pass
+        self.runner.cut_short()  # stopping already (asked, the timeout, a failure): a second Ctrl-C
 
     def on_update(self, view) -> None:
         """The runner's hook, on the worker between two of its turns: the timeout, then
