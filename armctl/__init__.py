@@ -12,7 +12,7 @@ __version__ = "0.1.0"
 # name → the module that defines it, imported when the name is first used
 _API = {
     "Arm": "armctl.api", "ArmStatus": "armctl.api", "ArmTimeout": "armctl.api", "Progress": "armctl.api",
-    "RunResult": "armctl.api", "JobFailed": "armctl.jobflow",
+    "RunResult": "armctl.api", "JobObserver": "armctl.api", "JobFailed": "armctl.jobflow",
     "ArmctlError": "armctl.errors", "ConfigError": "armctl.errors", "PortError": "armctl.errors",
     "ProfileError": "armctl.errors", "ScriptError": "armctl.errors",
 }
@@ -20,7 +20,7 @@ __all__ = sorted(_API)
 
 TYPE_CHECKING = False  # true for type checkers; not typing's, whose import costs milliseconds here
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ imports them
-    from .api import Arm, ArmStatus, ArmTimeout, Progress, RunResult
+    from .api import Arm, ArmStatus, ArmTimeout, JobObserver, Progress, RunResult
     from .errors import ArmctlError, ConfigError, PortError, ProfileError, ScriptError
     from .jobflow import JobFailed
 

@@ -1,12 +1,15 @@
 """The Python API: ``from armctl import Arm`` — open an arm, move it, run a job, read it, pause it.
 
-Strategy: a thin client of the same steps ``armctl run`` takes (armctl/jobflow.py): a script
-is linted before anything leaves, the arm's report is read and the job compiled from it,
-the runner streams it with the streamer's pacing and ends it by the runner's end-of-job rules,
-and any early stop takes ``jobflow.drive``'s one path (stop feeding, the abort sequence, wait
-for the arm).  ``move`` writes ONE script line from its keywords and runs it as a job of one
-line: the same compiler, lint checks and streamer, never a second encoder.  Nothing here prints
-(the simulator banner is not announced; notes go to the ``armctl.api`` logger at INFO).
+Strategy: the steps a job takes, once (armctl/jobflow.py), and ``armctl run`` is a client of
+this module, not a second host: a script is linted before anything leaves, the arm's report is
+read and the job compiled from it (or, with ``resume=``, from the line a ``--log`` and the arm's
+report prove), the runner streams it with the streamer's pacing, journals it to ``log=`` and
+ends it by the engine's end-of-job rules, and any early stop takes ``jobflow.drive``'s one path
+(stop feeding, the abort sequence, wait for the arm).  ``move`` writes ONE script line from its
+keywords and runs it as a job of one line: the same compiler, lint checks and streamer, never a
+second encoder.  Nothing here prints: what a job has to say goes to a ``JobObserver`` (its
+default: the ``armctl.api`` logger at INFO); ``armctl run``'s observer draws the panel, the
+``--json`` events and the notes on stderr (armctl/ui/run_job.py).
 
 Threads: each ``Arm`` has one worker thread that owns its link — every write, every wait, and
 the virtual clock of a ``sim://?clock=virtual`` port, which moves only while someone waits on
@@ -15,13 +18,15 @@ waits for its task, ``move(wait=False)`` returns at once and its move streams wh
 goes on.  Tasks run in order, so a later ``move``, ``run``, ``status``, ``wait`` or ``close``
 sees every queued move executed, each exactly once.  A queued move that fails cancels the
 moves queued after it (the arm is no longer where they assume) and its error is raised by the
-next blocking call.  Control of a running job (``pause``, ``resume``, ``feed_override``) is a
-request to the job engine that the worker carries out between two writes
-(``JobRunner.control``, as the run panel's keys); ``stop`` and a timeout take the Ctrl-C path
-(``JobRunner.request_stop``, then ``jobflow.drive``'s abort) — never a write from another thread.  Nothing is module-level state: several arms work at once in one process.
-No signal handler is installed (the CLI installs its own, in the main thread only).
+next blocking call.  Control of a running job (``pause``, ``resume``, ``toggle_pause``,
+``feed_override`` — the run panel's keys call these) is a request to the job engine that the
+worker carries out between two writes (``JobRunner.control``); ``stop`` and a timeout take the
+Ctrl-C path (``JobRunner.request_stop``, then ``jobflow.drive``'s abort; a second ``stop`` once
+the abort went, ``JobRunner.cut_short``) — never a write from another thread.  Observers and
+``on_progress`` run on the worker.  Nothing is module-level state: several arms work at once in
+one process.  No signal handler is installed (``armctl run`` installs its own, in the main
+thread only, and calls ``stop``).
 """
-
 from __future__ import annotations
 
 import logging
@@ -32,13 +37,19 @@ import threading
 from concurrent.futures import Future
 from dataclasses import dataclass, field, fields
 from decimal import Decimal
-from typing import Any, Callable, Mapping, Union
+from typing import IO, TYPE_CHECKING, Any, Callable, Mapping, Union
 
 from .errors import ArmctlError, ScriptError
 from .jobflow import JobFailed
 from .streamer import DEFAULT_LEAD_S
 
-__all__ = ["Arm", "ArmStatus", "ArmTimeout", "JobFailed", "Progress", "RunResult"]
+if TYPE_CHECKING:
+    from .job import RunView
+    from .jobflow import JobPlan
+    from .joblog import ResumePoint
+    from .profile import Profile
+
+__all__ = ["Arm", "ArmStatus", "ArmTimeout", "JobFailed", "JobObserver", "Progress", "RunResult"]
 
 _logger = logging.getLogger(__name__)
 
@@ -180,6 +191,37 @@ class ArmStatus:
     ages_s: Mapping[str, float | None] = field(default_factory=dict)
 
 
+class JobObserver:
+    """Follows one job as ``Arm.run(..., observer=)`` runs it — what ``armctl run`` builds its
+    live panel, its ``--json`` events and its stderr notes from.  Subclass it and override what
+    you need; every method is called from the arm's worker thread, and none may block for long
+    (the job waits for it).  An exception raised by one stops the job, as ``on_progress``'s does.
+
+    ``view`` is the job engine's live ``RunView`` (armctl/job.py): frames sent and known done,
+    the last line sent and known executed, the pause state and the feed override, the arm's
+    position, the ETA.  It changes while the job runs: read it in the call, do not keep it.
+    """
+
+    def started(self, view: RunView, plan: JobPlan) -> None:
+        """Before the first frame: the job's ``view``, and its ``plan`` (``armctl.jobflow.JobPlan``:
+        ``start``, the arm's reported pose; ``initial``, the compiler's initial state — the
+        panel's map is drawn from them; ``estimate``; ``from_line``, after a ``resume`` the line
+        the log proved)."""
+
+    def update(self, view: RunView) -> None:
+        """After every turn of the engine that wrote a frame, waited or ended (often: throttle)."""
+
+    def note(self, text: str) -> None:
+        """A message for people (resuming an arm found paused, the line a resume starts at,
+        why a job is stopping).  Default: the ``armctl.api`` logger at INFO."""
+        _logger.info("%s", text)
+
+    def warning(self, diagnostic: Any) -> None:
+        """A lint warning of the script (``Diagnostic``; errors raise ``ScriptError`` instead).
+        Default: the ``armctl.api`` logger at INFO."""
+        _logger.info("%s", diagnostic.render())
+
+
 # status kinds behind each group of ArmStatus (armctl/protocol.py's STATUS_ROTATION)
 _AGE_KINDS = {"position": (0,), "joints": (1, 2), "worktable": (3,), "pause_pwm": (4,), "wrist": (5,),
               "program": (100, 102, 103)}
@@ -230,15 +272,29 @@ class _Worker:
                 future.set_exception(error)
 
 
+@dataclass(frozen=True)
+class _JobSpec:
+    """What a call asked of one job, besides the script: its hooks, log, abort and resume."""
+
+    on_progress: Callable[[Progress], None] | None = None
+    timeout_s: float | None = None
+    observer: JobObserver = field(default_factory=lambda: JobObserver())
+    log: IO[str] | None = None
+    abort: str = "pause"
+    resume: Any = None  # a joblog.ResumePoint
+
+
 class _JobControl:
     """The job the worker is running, as the API's calls reach it: pause, resume and the feed
     override are requests to the job engine (``JobRunner.control``, carried out by the worker
     between two writes — the engine holds the feed while paused, in either control-frame mode);
     the timeout and ``on_progress`` are looked at whenever the runner reports (``on_update``)."""
 
-    def __init__(self, runner, on_progress, timeout_s: float | None) -> None:
+    def __init__(self, runner, on_progress, timeout_s: float | None, observer: JobObserver | None = None,
+                 journal: Callable[[Any], None] | None = None) -> None:
         self.runner = runner
         self.on_progress, self.timeout_s = on_progress, timeout_s
+        self.observer, self.journal = observer, journal
         self.stop_asked = False  # stop() or the timeout: the runner was asked to stop
         self.timed_out = False
         self.callback_error: Exception | None = None  # what on_progress raised
@@ -255,14 +311,28 @@ class _JobControl:
         self.runner.control(lambda job: future.done() or future.set_result(action(job)))
         return future
 
-    def request_stop(self) -> None:
-        if not self.stop_asked:
-            self.stop_asked = True
-            self.runner.request_stop()  # the Ctrl-C path: jobflow.drive sends the abort sequence
+    def request_stop(self, why: str | None = None) -> None:
+        """The Ctrl-C path (``jobflow.drive`` sends the abort sequence); ``why`` goes into the
+        result's messages.  Asked again while stopping: stop waiting for the arm (a second Ctrl-C)."""
+        if why is not None:
+            self.runner.view.messages.append(why)
+        first = not self.stop_asked and not self.runner.stop_requested
+        self.stop_asked = True
+        if first:
+            try:
+                self.runner.request_stop()
+                return
+            except KeyboardInterrupt:  # the runner began stopping on its own meanwhile (a failure)
+                pass
+        self.runner.cut_short()  # stopping already (asked, the timeout, a failure): a second Ctrl-C
 
     def on_update(self, view) -> None:
         """The runner's hook, on the worker between two of its turns: the timeout, then
         ``on_progress`` (none once the job is stopping)."""
+        if self.journal is not None:
+            self.journal(view)  # --log's progress records, to the end (the abort included)
+        if self.observer is not None:
+            self.observer.update(view)  # the live view follows the abort too
         if self.stop_asked:
             return
         now_s = view.now_s
@@ -360,22 +430,27 @@ class Arm:
         self._worker = _Worker(f"armctl-arm {link.url}")
 
     @classmethod
-    def open(cls, port: str | None = None, baud: int | None = None, profile: str | os.PathLike[str] | None = None,
-             *, lead_s: float = DEFAULT_LEAD_S, status_timeout_s: float = STATUS_TIMEOUT_S) -> Arm:
+    def open(cls, port: str | None = None, baud: int | None = None, profile: str | os.PathLike[str] | Profile | None = None,
+             *, lead_s: float = DEFAULT_LEAD_S, status_timeout_s: float = STATUS_TIMEOUT_S,
+             connect: Callable[..., tuple[Any, int]] | None = None) -> Arm:
         """Open the arm on ``port`` as the CLI resolves it: ``port``, else ``ARMCTL_PORT``, else
         ``port`` in armctl.toml (the project's, then yours), else the built-in simulator
-        (``sim://``); ``baud`` and ``profile`` (a TOML path) likewise.  Prints nothing.
+        (``sim://``); ``baud`` and ``profile`` (a TOML path, or a ``Profile`` already loaded)
+        likewise.  Prints nothing.  ``connect``: the function that opens the port,
+        ``connect(port, baud, profile=)`` → (an ``armctl.link.Link``, the baud rate) — default
+        ``armctl.link.connect`` with no banner (``armctl run`` passes one that prints the
+        simulator's banner; a benchmark one that records the frames written).
         Raises ``ConfigError`` (a bad setting), ``ProfileError`` or ``PortError``."""
-        from .link import connect
-        from .profile import load_profile
+        from .link import connect as open_link
+        from .profile import Profile, load_profile
 
         # the CLI's ranges (armctl/limits.py), checked before the port opens
         _in_range("lead_s", lead_s, "LEAD_RANGE_S")
         _in_range("status_timeout_s", status_timeout_s, "STATUS_TIMEOUT_RANGE_S")
         if baud is not None:
             _in_range("baud", baud, "BAUD_RANGE", whole=True)
-        loaded = load_profile(None if profile is None else os.fspath(profile))
-        link, line_baud = connect(port, baud, profile=loaded)
+        loaded = profile if isinstance(profile, Profile) else load_profile(None if profile is None else os.fspath(profile))
+        link, line_baud = (open_link if connect is None else connect)(port, baud, profile=loaded)
         try:
             return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s)
         except BaseException:
@@ -441,10 +516,11 @@ class Arm:
                          u=u, v=v, s=s, t=t, h=h, f=f)
         from .script import ScriptSnapshot
 
-        return self._submit(ScriptSnapshot(_MOVE_NAME, line.encode("ascii")), 1, None, timeout, wait, from_arm=True)
+        return self._submit(ScriptSnapshot(_MOVE_NAME, line.encode("ascii")), 1, _JobSpec(timeout_s=timeout), wait, from_arm=True)
 
     def run(self, script: ScriptSource, *, from_line: int = 1, on_progress: Callable[[Progress], None] | None = None,
-            timeout: float | None = None) -> RunResult:
+            timeout: float | None = None, observer: JobObserver | None = None, log: IO[str] | None = None,
+            abort: str = "pause", resume: str | os.PathLike[str] | ResumePoint | None = None) -> RunResult:
         """Lint ``script``, stream it, wait until the arm's reports prove it done.
 
         ``script``: a path (``pathlib.Path``, or a ``str`` without a line break) is read once
@@ -453,14 +529,26 @@ class Arm:
         modal state the lines before it set (a ``RunResult.resume_line``).  ``on_progress`` is
         called from the worker thread with a ``Progress``; an exception it raises stops the job.
         ``timeout``: seconds of the arm's clock from the start of this job; raises ``ArmTimeout``.
+        ``observer``: a ``JobObserver`` that follows the job (the live view, notes, warnings).
+        ``log``: a text file the job's journal goes to as it runs (``armctl run --log``: every
+        frame written and read, and the records ``resume`` reads after a crash).  ``abort``:
+        what a stop sends after it stops feeding — "pause", "reset-connector" or "none"
+        (``armctl run --abort``).  ``resume``: a ``--log`` of this very script (a path, or
+        ``armctl.joblog.ResumePoint``): wait for the arm to come to rest, then continue at the
+        line the log and the arm's report prove (``from_line`` must be left at 1).
 
         Raises ``ScriptError`` (the script's errors, nothing sent), ``JobFailed`` (the arm did
-        not answer, the job ended "failed", "port lost" or "no confirmation"; ``.result``).
+        not answer, the job ended "failed", "port lost" or "no confirmation"; ``.result``),
+        ``ResumeRefused`` (a ``resume`` log of another script; nothing sent).
         Returns the ``RunResult`` of a job that finished or that ``stop()`` interrupted.
         """
         from .script.files import ScriptSnapshot, read_script
 
-        if isinstance(script, str) and ("\n" in script or "\r" in script):
+        if abort not in ("pause", "reset-connector", "none"):
+            raise ValueError(f"abort={abort!r} must be 'pause', 'reset-connector' or 'none'")
+        if isinstance(script, ScriptSnapshot):
+            snapshot = script  # read once already (``armctl run`` reads stdin or the file itself)
+        elif isinstance(script, str) and ("\n" in script or "\r" in script):
             snapshot = ScriptSnapshot(_TEXT_NAME, script.encode("utf-8", "surrogateescape"))
         else:
             path = os.fspath(script)
@@ -469,7 +557,12 @@ class Arm:
             except OSError as error:
                 hint = " (script text must hold a line break: end a one-line script with \\n)" if isinstance(script, str) else ""
                 raise JobFailed(f"cannot read {path}: {error.strerror or error}{hint}; nothing was sent") from None
-        result = self._submit(snapshot, from_line, on_progress, timeout, wait=True, from_arm=False)
+        if resume is not None:
+            from .jobflow import read_resume_point
+
+            resume = read_resume_point(resume, snapshot, from_line)  # before anything: ResumeRefused, nothing sent
+        job = _JobSpec(on_progress, timeout, observer or JobObserver(), log, abort, resume)
+        result = self._submit(snapshot, from_line, job, wait=True, from_arm=False)
         assert result is not None
         return result
 
@@ -517,24 +610,38 @@ class Arm:
         job's frames); on an idle arm, an arm that reports it is paused.  True when a toggle goes."""
         return self._set_paused(False)
 
-    def feed_override(self, percent: float) -> int:
+    def toggle_pause(self) -> bool:
+        """The run panel's pause key: during a job, resume it if a pause was asked, else pause
+        it — in one request to the engine, so two quick presses cannot both pause.  Returns
+        True when a toggle goes; ``ArmctlError`` when no job is running (nothing is sent to an
+        idle arm: use ``pause``/``resume``, which read its reports first)."""
+        answer = self._ask_job(lambda job: job.resume() or job.pause())
+        if answer is _JOB_ENDED:
+            raise ArmctlError(f"no job is running on {self.url}: nothing to pause")
+        return answer
+
+    def feed_override(self, percent: float, *, relative: bool = False) -> int:
         """Rescale the speed of the running job's frames not yet written, as the run panel's
         −/+ keys do: ``percent`` of the script's speeds, put on the engine's grid (10…200 %,
         in steps of 10: armctl/feed.py) and never past the profile's limits; the effect shows
         within the lead.  Returns the percentage in force.  The override lasts for this job
-        only; ``ArmctlError`` when no job is running."""
+        only; ``ArmctlError`` when no job is running.  ``relative=True``: ``percent`` is added
+        to the percentage in force, in the engine's turn (the panel's −/+ keys: ∓10)."""
         if isinstance(percent, bool) or not isinstance(percent, numbers.Real) or percent != percent:
             raise TypeError(f"feed_override(): percent must be a number, not {percent!r}")
-        answer = self._ask_job(lambda job: job.set_feed_override(float(percent)))
+        answer = self._ask_job(lambda job: job.set_feed_override(float(percent) + (job.control.feed.percent if relative else 0)))
         if answer is _JOB_ENDED:
             raise ArmctlError(f"no job is running on {self.url}: there is no feed to override")
         return answer
 
-    def stop(self) -> None:
+    def stop(self, why: str | None = None) -> None:
         """Stop as ``armctl run``'s Ctrl-C does: cancel the queued moves, stop feeding the running
         job, send the abort sequence (a pause toggle, not sent to an arm that reports it is
         paused) and wait for the arm; the job's ``run`` returns outcome "interrupted".  The next
-        job resumes an arm left paused.  Nothing to stop: does nothing."""
+        job resumes an arm left paused.  Nothing to stop: does nothing.  A job being read or
+        planned when it comes sends nothing (outcome "interrupted").  ``why``: a note the
+        result's ``messages`` carry (``armctl run``: "stopped by SIGTERM").  Called again while
+        the job stops: the wait for the arm to come to rest is cut short (a second Ctrl-C)."""
         with self._lock:
             self._stops += 1
             queued, self._queued = self._queued, []
@@ -542,7 +649,7 @@ class Arm:
         for future in queued:  # outside the lock: cancel() calls _queued_done at once
             future.cancel()
         if job is not None:
-            job.request_stop()
+            job.request_stop(why)
 
     # --- the worker --------------------------------------------------------------------------
 
@@ -604,8 +711,7 @@ class Arm:
         if error is not None:
             raise error
 
-    def _submit(self, script, from_line: int, on_progress, timeout_s: float | None, wait: bool,
-                from_arm: bool) -> RunResult | None:
+    def _submit(self, script, from_line: int, spec: _JobSpec, wait: bool, from_arm: bool) -> RunResult | None:
         """Check ``script`` here (``ScriptError``, nothing sent), then run it on the worker.
 
         ``from_arm``: the script is a move's one line, whose words left out are the arm's; it
@@ -614,21 +720,22 @@ class Arm:
         job (``run``) is checked as ``armctl run`` checks it: from nothing known."""
         from .jobflow import from_line_errors, start_at
 
-        _check_timeout(timeout_s)
+        _check_timeout(spec.timeout_s)
 
         _check(script, self._profile, start_at(self._model)[1] if from_arm else None)
         error = from_line_errors(script, from_line)
         if error is not None:
             raise error
 
+        stops = self._stops
+
         def job() -> RunResult:
-            return self._run_job(script, from_line, on_progress, timeout_s, from_arm)
+            return self._run_job(script, from_line, spec, from_arm, stops)
 
         if wait:
             return self._call(job)
         if self._closed:
             raise ArmctlError(f"the arm on {self.url} is closed")
-        stops = self._stops
 
         def queued() -> RunResult | None:
             if stops != self._stops:
@@ -656,31 +763,51 @@ class Arm:
         for queued in later:  # outside the lock: cancel() calls this method again at once
             queued.cancel()
 
-    def _run_job(self, script, from_line: int, on_progress, timeout_s, from_arm: bool) -> RunResult:
-        """On the worker: read the arm, plan from its report, drive the runner, report."""
-        from .jobflow import drive, plan_job, read_arm, start_from_state, start_job
+    def _run_job(self, script, from_line: int, spec: _JobSpec, from_arm: bool, stops: int) -> RunResult:
+        """On the worker: read the arm, plan from its report, drive the runner, report.  A
+        ``stop()`` that came after the call and before the first frame ends it with nothing sent."""
+        from .jobflow import drive, from_line_errors, journal_for, plan_job, read_arm, resume_start, start_from_state, start_job
+        from .joblog import job_record
         from .runner import abort_frames
 
-        link = self._link
+        link, observer = self._link, spec.observer
         arrival = self._profile.connector.control_on_arrival
-        state = read_arm(link, self.status_timeout_s, note=_logger.info, control_on_arrival=arrival)
+        state = read_arm(link, self.status_timeout_s, spec.log, note=observer.note, control_on_arrival=arrival)
+        if spec.resume is not None:
+            state, from_line = resume_start(link, spec.resume, self.status_timeout_s, self.lead_s)
+            if from_line is None:
+                return RunResult.nothing_sent("finished", message="nothing to resume: every line of the job is proven executed")
+            error = from_line_errors(script, from_line)
+            if error is not None:
+                raise error
+            observer.note(f"armctl: resuming {script.name} at line {from_line}: the log and the arm's report prove every line "
+                          "before it ran")
         report = _check(script, self._profile, start_from_state(self._model, state)[1] if from_arm else None)
-        total_lines = report.lines
-        for diagnostic in report.diagnostics:  # as `armctl run` prints them on stderr: for people, not the result
+        for diagnostic in report.diagnostics:  # for people, not the result (armctl run prints its own, before)
             if diagnostic.severity != "error":
-                _logger.info("%s", diagnostic.render())  # INFO: with no handler set up, WARNING would print
+                observer.warning(diagnostic)
         plan = plan_job(script, self._model, state, self.lead_s, self._baud, from_line)
         if plan.estimate.frames == 0:
-            return RunResult.nothing_sent("finished")
-        runner = start_job(link, script, self._model, plan, self.lead_s, self._baud, total_lines)
-        control = _JobControl(runner, on_progress, timeout_s)
+            where = f" from line {from_line}" if from_line > 1 else ""
+            return RunResult.nothing_sent("finished", message=f"nothing to send: the script has no frames{where}")
+        if stops != self._stops:  # stop() (Ctrl-C) while the arm was read: no frame goes
+            return RunResult.nothing_sent("interrupted")
+        runner = start_job(link, script, self._model, plan, self.lead_s, self._baud, report.lines, spec.log)
+        if spec.log is not None:  # which script it records (resume= checks it); a failed write stops the job like any
+            runner.log_record(job_record(script.name, script.data, from_line, self.lead_s))
+        control = _JobControl(runner, spec.on_progress, spec.timeout_s, observer, journal_for(runner, script, spec.log))
         runner.on_update = control.on_update
         link.on_status = runner.on_status
         with self._lock:
             self._job = control
+            stopped = stops != self._stops  # a stop() between the check above and here
         try:
-            outcome = drive(runner, abort_frames("pause", arrival),
-                            on_stopping=lambda why: _logger.info("%s: %s: sending the abort sequence", link.url, why))
+            if stopped:
+                control.request_stop()
+            observer.started(runner.view, plan)
+            outcome = drive(runner, abort_frames(spec.abort, arrival), on_stopping=lambda why: observer.note(
+                f"\narmctl: {why}: no more frames are sent; sending the abort sequence ({spec.abort}) and waiting for "
+                "the arm to come to rest …"))
         finally:
             with self._lock:
                 self._job = None
@@ -688,10 +815,12 @@ class Arm:
             link.on_status = None
         result = RunResult.of(runner.view, outcome, script.lines(), estimated_job_s=plan.estimate.job_s)
         if control.timed_out:
-            raise ArmTimeout(f"the arm did not prove the job done within {timeout_s:g} s: it was stopped "
+            raise ArmTimeout(f"the arm did not prove the job done within {spec.timeout_s:g} s: it was stopped "
                              f"(last line known executed: {result.last_line_executed})", result)
         # "finished, unproven": the arm's reports say it ended, but the FIFO size was never probed
-        # and some frames rest on time alone — a result to read (``finished`` is False), not a failure
+        # and some frames rest on time alone — returned, not raised (the arm did what it was told
+        # as far as anyone can tell), with ``finished`` False and ``exit_code`` 1: the exit code
+        # ``armctl run`` takes from this same result (one rule: ``exit_code_of``)
         if outcome not in ("finished", "finished, unproven", "interrupted"):
             detail = "; ".join(result.messages)
             raise JobFailed(f"the job ended {outcome}" + (f": {detail}" if detail else ""), result) from control.callback_error

@@ -8,6 +8,8 @@ rotations, an arm that twice reports it is paused resumed), start from its repor
 (``start_from_state``), estimate from there (``estimate_job``: refuses what compiles
 differently from the arm's pose, or runs too long), then build the runner (``start_job``) and drive it (``drive``: one path for every way a
 job stops early — stop feeding, send the abort sequence, wait for the arm — whoever asked).
+A ``--log`` is a journal (``journal_for``: armctl/joblog.py's records) that ``read_resume_point``
+reads back and ``resume_start`` turns into the line to continue at, from the arm's report.
 The pause rule — toggle only when two agreeing reports say the arm is in the other state — is
 armctl/job_control.py's (the engine's); this module reads the reports it needs from the link.
 
@@ -263,6 +265,58 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
         view.outcome = "failed"
         view.messages.append(runner.failure)
     return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
+
+
+def read_resume_point(log, script, from_line: int = 1):
+    """The resume point a ``--log`` (a path, or a ``joblog.ResumePoint`` already read) records
+    for this very ``script`` — read bounded, as every input; ``ResumeRefused`` (exit 2) for
+    another script, an edited one, a file that is no log, or a ``from_line`` given as well."""
+    from .errors import ResumeRefused
+    from .inputs import read_file_bounded
+    from .joblog import ResumePoint, read_resume_log
+
+    if from_line != 1:
+        raise ResumeRefused("--resume LOG decides the line to continue at: drop --from-line")
+    if isinstance(log, ResumePoint):
+        return log
+    name = str(log)
+    try:  # bounded: an endless file (/dev/zero) is an error, not a hang
+        text = read_file_bounded(name, f"--resume {name}").decode("utf-8", errors="replace")
+        return read_resume_log(text.splitlines(), script.name, script.data)
+    except ResumeRefused as error:
+        raise ResumeRefused(f"--resume {name}: {error}") from None
+    except OSError as error:
+        raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
+
+
+def resume_start(link, point, timeout_s: float, lead_s: float):
+    """Wait for the arm to come to rest (it runs out what was queued when the host died), then
+    the line its report proves: (the state to start from, the line), or (state, None) when
+    every line ran; ``joblog.NotProven`` when the report proves neither."""
+    from .job import SETTLE_SLACK_S
+
+    state = wait_for_rest(link, timeout_s + 2 * max(point.lead_s, lead_s) + SETTLE_SLACK_S)
+    return state, point.line_for(state.position_mm, tuple(state.joints_deg))
+
+
+def journal_for(runner, script, log) -> Callable[[Any], None] | None:
+    """``--log``'s progress records (armctl/joblog.py) as a runner's ``on_update``; None without a log."""
+    if log is None:
+        return None
+    from .joblog import Journal
+
+    blocks = BlockIndex(script.lines())
+
+    def resume_at(statement) -> int:
+        return (blocks.outermost_start(statement.line) or statement.line) if getattr(statement, "loop", ()) else statement.line
+
+    journal = Journal(runner.log_record, resume_at)
+
+    def update(view) -> None:
+        pending = runner.streamer.pending
+        journal.update(view, pending[-1].segment if pending else None)
+
+    return update
 
 
 def resume_line(view, lines: Iterable[str]) -> int | None:

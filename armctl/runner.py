@@ -82,6 +82,7 @@ class JobRunner:
         self.requests: queue.SimpleQueue = queue.SimpleQueue()  # ``control``: calls for the engine, from any thread
         self.stop_requested = False
         self._aborting = False
+        self._cut = False  # cut_short: the abort's wait for the arm ends at the next turn
         self._told_wait: WaitReason | None = None  # the last wait reason logged
         self._wire_frames = 0  # frames in a row that waited for the wire alone (WIRE_STORY_FRAMES)
         self._wire_counted_at = -1  # frames_sent when a wire wait was last counted (once a frame)
@@ -170,7 +171,7 @@ class JobRunner:
     def _loop(self) -> Finished:
         job, link, view, on_update = self.job, self.link, self.view, self.on_update
         while True:
-            if self.stop_requested and not self._aborting:
+            if self.stop_requested and (self._cut or not self._aborting):
                 raise KeyboardInterrupt  # Ctrl-C is deferred to here: between writes, never inside one
             self._drain()
             if link.error is not None:
@@ -212,6 +213,13 @@ class JobRunner:
         if self.stop_requested:
             raise KeyboardInterrupt
         self.stop_requested = True
+
+    def cut_short(self) -> None:
+        """A second stop from another thread (``Arm.stop`` again): once the abort has begun, it
+        stops waiting for the arm at the loop's next turn, as a second Ctrl-C does in the loop's
+        own thread; before that it is the first stop again (the abort sequence always goes)."""
+        if self._aborting:
+            self._cut = True
 
     def fail(self, why: str) -> None:
         """A failure mid-job (not a lost port): stop at the next safe point, like Ctrl-C, and

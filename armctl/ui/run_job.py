@@ -1,23 +1,24 @@
-"""``armctl run`` and ``armctl estimate``: check, connect, stream, report.
+"""``armctl run`` and ``armctl estimate``: check, then a client of the Python API; report.
 
-Strategy: the sequence a careful operator would follow, each step a function — check the
-whole script (nothing leaves before it passes), read the arm's state, estimate, stream with a
-live view, and always end with a summary that says what ran and how to resume.  The pacing
-itself is the pure Streamer's; the clock and the port are the runner's.
+Strategy: ``armctl run`` is the Python API (``armctl.Arm``, armctl/api.py) plus presentation.
+It checks the whole script first, printing every finding (nothing is opened before it passes),
+then ``Arm.open`` and ``Arm.run`` do the job — read the arm, plan, stream through the one job
+engine, end it, journal it to ``--log``, resume from a log — and this module only shows it: the
+live panel or plain progress lines or ``--json`` events (a ``JobObserver``), notes on stderr
+above the panel, the panel's keys and Ctrl-C as calls on the arm (``toggle_pause``,
+``feed_override``, ``stop``), the summary, and the exit code the ``RunResult`` carries.
 
 What was checked is exactly what is sent: the script is read once, before anything else, into
 an immutable ``ScriptSnapshot`` (armctl/script/files.py), and every step — the lint check, the
 ``--from-line`` check, the estimate, the stream and the resume line of the summary — compiles
-that same snapshot, never the file again.  Compiling is deterministic (the same lines and the
-same initial state give the same frames), so an edit to the file or its replacement while the
-job streams changes nothing that is sent; stdin (``run -``) works the same way.
+that same snapshot, never the file again (``Arm.run`` takes the snapshot itself).  Compiling is
+deterministic, so an edit to the file while the job streams changes nothing that is sent;
+stdin (``run -``) works the same way.
 
 Any failure mid-job — Ctrl-C, a ``--log`` that cannot be written, an unexpected error — takes
-one path: stop feeding, send the abort sequence, wait for the arm, print the summary with the
-last line sent, the last line known executed and the resume line.  Only a lost port skips
-the abort (there is nothing to send it through).
+the API's one path (``jobflow.drive``): stop feeding, send the abort sequence, wait for the
+arm; then the summary says the last line sent, the last line known executed and the resume line.
 """
-
 from __future__ import annotations
 
 import sys
@@ -28,8 +29,8 @@ from dataclasses import dataclass
 import click
 
 from ..errors import ArmctlError, ScriptError
-from ..jobflow import wait_for_rest
-from ..jobflow import BlockIndex, outermost_block_start  # noqa: F401 - outermost_block_start re-exported (tests)
+from ..jobflow import JobFailed
+from ..jobflow import outermost_block_start  # noqa: F401 - re-exported (tests)
 from ..protocol import describe
 from ..streamer import DEFAULT_LEAD_S
 
@@ -139,14 +140,6 @@ def _config_baud() -> int:
     return config_baud(config.values, config.path_of("baud"))
 
 
-def read_arm(link, timeout_s: float, log=None, control_on_arrival: bool = False):
-    """jobflow.read_arm, telling on stderr when it resumes a paused arm."""
-    from ..jobflow import read_arm
-
-    return read_arm(link, timeout_s, log, note=lambda text: click.echo(text, err=True),
-                    control_on_arrival=control_on_arrival)
-
-
 def _open_log(path: str):
     """The --log file, line-buffered: a write failure (disk full) shows at the line that failed."""
     return open(path, "w", encoding="utf-8", buffering=1)
@@ -168,7 +161,7 @@ def _log_file(path: str):
 
 def run_job(options: JobOptions, script, connect) -> int:
     """Run the job in ``script`` (the ``ScriptSnapshot`` read once; ``options.script`` is only
-    the name the summary shows)."""
+    the name the summary shows); ``connect`` opens the port (``Arm.open``'s ``connect``)."""
     if options.json:
         return _run_json(options, script, connect)
     return _run_job(options, script, connect)
@@ -200,61 +193,58 @@ def _run_json(options: JobOptions, script, connect) -> int:
 
 
 def _run_job(options: JobOptions, script, connect, events=None) -> int:
+    """Check (printing every finding), then the job through the Python API: ``Arm.open`` and
+    ``Arm.run``; this keeps the presentation — the panel or the JSON events, the notes, the
+    keys and Ctrl-C as calls on the arm, the summary and the exit code."""
+    from ..api import Arm
+    from ..jobflow import read_resume_point
     from ..motion import MotionModel
-    from ..jobflow import plan_job, start_job
     from ..profile import load_profile
 
     profile = load_profile(options.profile_path)
-    report = check_script(script, profile)
+    check_script(script, profile)
     check_from_line(script, options.from_line)
-    model = MotionModel(profile)
     if options.dry_run:
-        return dry_run(options, script, model)
-    # A job too long to run (E012) was refused by check_script's lint, which judges the motion
-    # time as estimate_job does; the estimate from the arm's own pose below judges it again over
-    # the whole expansion, before anything is sent.  No third pass here.
-    resume = _read_resume_log(options, script) if options.resume_log else None
+        return dry_run(options, script, MotionModel(profile))
+    # read before --log (which may be the same file) is opened for writing, and before the port
+    resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
+    watch = _RunObserver(options, script, MotionModel(profile), events)
+    with Arm.open(options.port, options.baud, profile, lead_s=options.lead_s, status_timeout_s=options.timeout_s,
+                  connect=connect) as arm, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
+        with _stop_signals(arm, watch), (_keys(arm) if watch.keys else nullcontext()):
+            try:
+                result = arm.run(script, from_line=options.from_line, observer=watch, log=log, abort=options.abort,
+                                 resume=resume)
+            except ScriptError as error:  # the script cannot run from where the arm is: nothing was sent
+                _refuse_on_errors(error.diagnostics, error.errors)
+            except JobFailed as error:
+                if error.result is None:
+                    raise
+                result = error.result
+            finally:
+                watch.display.__exit__(None, None, None)
+        return _report(result, watch, options, events)  # before the port and the log close, as the job's end
 
-    link, baud = connect(options.port, options.baud, profile=profile)
-    with link, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
-        state = read_arm(link, options.timeout_s, log, profile.connector.control_on_arrival)
-        if resume is not None:
-            state, options = _resume_from(resume, link, options, script)
-            if options is None:
-                click.echo("nothing to resume: every line of the job is proven executed")
-                if events is not None:
-                    events.summary(_nothing_to_run())
-                return EXIT_OK
-        try:
-            plan = plan_job(script, model, state, options.lead_s, baud, options.from_line)
-        except ScriptError as error:
-            _refuse_on_errors(error.diagnostics, error.errors)
-        estimate = plan.estimate
-        if estimate.frames == 0:
-            click.echo("nothing to send: the script has no frames" + (f" from line {options.from_line}" if options.from_line > 1 else ""))
-            if events is not None:
-                events.summary(_nothing_to_run())
-            return EXIT_OK
-        runner = start_job(link, script, model, plan, options.lead_s, baud, report.lines, log)
-        view = runner.view
-        if log is not None:  # which script it records (--resume checks it); a failed write stops the job like any
-            from ..joblog import job_record
 
-            runner.log_record(job_record(script.name, script.data, options.from_line, options.lead_s))
-        # the live panel's map: the same snapshot compiled the same way, sampled once before the
-        # first frame (bounded: path_map.MAP_MAX_FRAMES); no panel, no map
-        grid = _job_grid(script, model, plan.start, plan.initial, options) if _live(options) else None
-        link.on_status = runner.on_status
-        wall_start = time.monotonic()
+def _report(result, watch, options: JobOptions, events) -> int:
+    """The summary (text, and with --json the summary object); the exit code."""
+    if watch.view is None:  # no frame was sent
+        if result.outcome == "interrupted":
+            raise KeyboardInterrupt  # Ctrl-C before the job started: as any Ctrl-C outside a job
+        for message in result.messages:
+            click.echo(message)
         if events is not None:
-            events.started(view, options.script, options.from_line)
-        outcome = _stream(runner, options, view, grid, events, _journal(runner, log, script))
-        wall_s = time.monotonic() - wall_start
-        result = job_result(view, outcome, options, script, estimate)
-        code = _summary(result, view, wall_s, estimate, options)
-        if events is not None:
-            events.summary(result.to_json())
-        return code
+            events.summary(_nothing_to_run())
+        return EXIT_OK
+    from dataclasses import replace
+
+    wall_s = time.monotonic() - watch.wall_start
+    if result.resume_line is not None:
+        result = replace(result, resume_command=resume_command(options, result.resume_line))
+    code = _summary(result, watch.view, wall_s, watch.estimate, options)
+    if events is not None:
+        events.summary(result.to_json())
+    return code
 
 
 def _nothing_to_run() -> dict:
@@ -263,79 +253,63 @@ def _nothing_to_run() -> dict:
     return failure_result("finished", EXIT_OK)  # nothing was left to send: the job is done
 
 
-def _read_resume_log(options: JobOptions, script):
-    """The resume point LOG records for this very script (read before --log, which may be the
-    same file, is opened for writing)."""
-    from ..errors import ResumeRefused
-    from ..joblog import read_resume_log
+class _RunObserver:
+    """``armctl run``'s ``JobObserver`` (duck-typed: the API's import stays lazy): the live panel,
+    the plain progress lines or the --json events, and the notes on stderr above the panel."""
 
-    if options.from_line != 1:
-        raise ResumeRefused("--resume LOG decides the line to continue at: drop --from-line")
-    from ..inputs import read_file_bounded
+    def __init__(self, options: JobOptions, script, model, events) -> None:
+        from ..output import quiet
+        from .run_keys import FOOTER, keys_available
 
-    try:  # bounded, as every input: an endless file (/dev/zero) is an error, not a hang
-        text = read_file_bounded(options.resume_log, f"--resume {options.resume_log}").decode("utf-8", errors="replace")
-        return read_resume_log(text.splitlines(), script.name, script.data)
-    except ResumeRefused as error:
-        raise ResumeRefused(f"--resume {options.resume_log}: {error}") from None
-    except OSError as error:
-        raise ResumeRefused(f"--resume {options.resume_log}: {error.strerror or error}") from None
+        self.options, self.script, self.model, self.events = options, script, model, events
+        self.keys = _live(options) and keys_available()
+        self.display = _Display(f"armctl run {options.script}", _live(options), footer=FOOTER if self.keys else None)
+        self.quiet = quiet()
+        self.view = None  # the job's RunView, once started
+        self.wall_start = time.monotonic()
 
+    def started(self, view, plan) -> None:
+        self.view, self.estimate, self.wall_start = view, plan.estimate, time.monotonic()
+        if self.display.live:  # the panel's map: the job compiled as it is sent, sampled once before the first frame
+            self.display.grid = _job_grid(self.script, self.model, plan.start, plan.initial, plan.from_line)
+        self.display.__enter__()
+        if self.events is not None:
+            self.events.started(view, self.options.script, plan.from_line)
 
-def _resume_from(point, link, options: JobOptions, script):
-    """Wait for the arm to come to rest (it runs out what was queued when the host died), then
-    the line its report proves: (the state to start from, the options with that --from-line),
-    or (state, None) when every line ran."""
-    from dataclasses import replace
+    def update(self, view) -> None:
+        if self.events is not None:
+            self.events.update(view)
+        elif not self.quiet:  # -q: the summary only
+            self.display.update(view)
 
-    from ..job import SETTLE_SLACK_S
+    def note(self, text: str) -> None:
+        self.display.note(text)
 
-    state = wait_for_rest(link, options.timeout_s + 2 * max(point.lead_s, options.lead_s) + SETTLE_SLACK_S)
-    line = point.line_for(state.position_mm, tuple(state.joints_deg))
-    if line is None:
-        return state, None
-    click.echo(f"armctl: resuming {options.script} at line {line}: the log and the arm's report prove every line before it ran",
-               err=True)
-    check_from_line(script, line)
-    return state, replace(options, from_line=line)
-
-
-def _journal(runner, log, script):
-    """--log's progress records (armctl/joblog.py), or None without --log."""
-    if log is None:
-        return None
-    from ..joblog import Journal
-
-    blocks = BlockIndex(script.lines())
-
-    def resume_at(statement) -> int:
-        return (blocks.outermost_start(statement.line) or statement.line) if getattr(statement, "loop", ()) else statement.line
-
-    journal = Journal(runner.log_record, resume_at)
-
-    def update(view) -> None:
-        pending = runner.streamer.pending
-        journal.update(view, pending[-1].segment if pending else None)
-
-    return update
+    def warning(self, diagnostic) -> None:
+        pass  # check_script printed the script's warnings before the port was opened
 
 
-def _stream(runner, options: JobOptions, view, grid=None, events=None, journal=None) -> str:
-    from ..jobflow import drive
-    from ..runner import abort_frames
-    from .run_keys import FOOTER, keys_available, run_keys
+def _stop_signals(arm, watch):
+    """Ctrl-C (or SIGTERM, SIGHUP: armctl/stop_signals.py) is ``arm.stop()``: the job stops at
+    its next safe point (between writes), sends the abort sequence and waits for the arm; a
+    second one cuts the wait short.  Before the first frame, Ctrl-C stops at once, as outside a job."""
+    import signal
 
-    title = f"armctl run {options.script}"
-    from ..output import quiet
+    from ..stop_signals import stop_signals
 
-    keys = _live(options) and keys_available()
-    display = _Display(title, _live(options), grid=grid, footer=FOOTER if keys else None)
-    shown = events.update if events is not None else (lambda view: None) if quiet() else display.update  # -q: the summary only
-    runner.on_update = shown if journal is None else lambda view: (journal(view), shown(view))
-    with _deferred_ctrl_c(runner), display, (run_keys(runner) if keys else nullcontext()):
-        return drive(runner, abort_frames(options.abort, runner.streamer.control_on_arrival), on_stopping=lambda why: display.note(
-            f"\narmctl: {why}: no more frames are sent; sending the abort sequence "
-            f"({options.abort}) and waiting for the arm to come to rest …"))
+    def on_stop(signum: int) -> None:
+        if watch.view is None and signum == signal.SIGINT:
+            arm.stop()  # the arm is being read: nothing will be sent
+            raise KeyboardInterrupt
+        arm.stop(None if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}")
+
+    return stop_signals(on_stop)
+
+
+def _keys(arm):
+    from .run_keys import run_keys
+
+    return run_keys(arm)
 
 
 def _live(options: JobOptions) -> bool:
@@ -345,26 +319,10 @@ def _live(options: JobOptions) -> bool:
     return options.live and sys.stdout.isatty() and not quiet()
 
 
-def _job_grid(script, model, start, initial, options: JobOptions):
+def _job_grid(script, model, start, initial, from_line: int):
     from .path_map import job_grid
 
-    return job_grid(script.compile(initial=initial, from_line=options.from_line), model, start)
-
-
-def _deferred_ctrl_c(runner):
-    """While streaming, Ctrl-C (or SIGTERM, SIGHUP: armctl/stop_signals.py) asks the runner to stop
-    at its next safe point (between writes), so the records of a frame written are never half
-    made; a second one acts at once."""
-    import signal
-
-    from ..stop_signals import stop_signals
-
-    def on_stop(signum: int) -> None:
-        if signum != signal.SIGINT:
-            runner.view.messages.append(f"stopped by {signal.Signals(signum).name}")
-        runner.request_stop()
-
-    return stop_signals(on_stop)
+    return job_grid(script.compile(initial=initial, from_line=from_line), model, start)
 
 
 class _Display:
@@ -462,15 +420,6 @@ def _repeat_note(view, resume: int | None) -> str:
         return ""
     return (f" (line {view.resume_line()} is inside a repeat block, in pass {loop[-1] + 1}: the block "
             "runs again from its first pass, so the passes already done are repeated)")
-
-
-def job_result(view, outcome: str, options: JobOptions, script, estimate):
-    """The run's result: the Python API's ``RunResult``, built by the same ``RunResult.of`` —
-    ``run --json``'s summary (``to_json``) and what the text summary says."""
-    from ..api import RunResult
-
-    return RunResult.of(view, outcome, script.lines(), estimated_job_s=estimate.job_s,
-                        resume_command=lambda line: resume_command(options, line))
 
 
 def _summary(result, view, wall_s: float, estimate, options: JobOptions) -> int:

@@ -2,9 +2,10 @@
 
 Strategy: a thread reads the terminal raw (``jog.terminal.key_input``: no echo, no line
 buffering, Ctrl-C still a signal) and turns bytes into key names with jog's ``KeyDecoder``;
-each key becomes a request the runner carries out in its own loop, between writes
-(``JobRunner.control``) — the thread never touches the engine.  Stop is the Ctrl-C path
-(``request_stop``).  The terminal is restored however the block ends (``key_input``'s
+each key is a call on the ``armctl.Arm`` that runs the job — ``toggle_pause``,
+``feed_override(±10, relative=True)``, ``stop`` (the Ctrl-C path) — which the arm's worker
+carries out between two writes: the thread never touches the engine.  A key pressed when no
+job runs (before the first frame, after the last) does nothing.  The terminal is restored however the block ends (``key_input``'s
 ``finally``); the thread ends with it.  Only a live panel on a terminal reads keys: piped,
 ``--no-live``, ``--json`` or ``-q`` runs read none.  ``KEYS`` is the one table the keys and the
 panel's footer come from.
@@ -20,18 +21,22 @@ from contextlib import contextmanager
 from ..feed import FEED_STEP_PERCENT
 
 
-def _toggle(job) -> None:
-    job.resume() or job.pause()
+def _toggle(arm) -> None:
+    arm.toggle_pause()
 
 
 def _feed(steps: int):
-    return lambda job: job.set_feed_override(job.control.feed.percent + steps * FEED_STEP_PERCENT)
+    return lambda arm: arm.feed_override(steps * FEED_STEP_PERCENT, relative=True)
 
 
-# (key names as jog/keys.py names them, what the footer says, the request); "stop" is the runner's own
+def _stop(arm) -> None:
+    arm.stop()
+
+
+# (key names as jog/keys.py names them, what the footer says, the call on the arm)
 KEY_TABLE = (
     (("space", "p"), "pause/resume", _toggle),
-    (("s", "q"), "stop (as Ctrl-C)", "stop"),
+    (("s", "q"), "stop (as Ctrl-C)", _stop),
     (("+", "="), f"feed +{FEED_STEP_PERCENT} %", _feed(+1)),
     (("-",), f"feed −{FEED_STEP_PERCENT} %", _feed(-1)),
 )
@@ -53,21 +58,23 @@ def keys_available(stream=None) -> bool:
         return False
 
 
-def handle_key(name: str, runner) -> bool:
-    """Carry out one key; False when it means nothing here."""
+def handle_key(name: str, arm) -> bool:
+    """Carry out one key on ``arm`` (an ``armctl.Arm``); False when it means nothing here."""
+    from ..errors import ArmctlError
+
     request = KEYS.get(name)
     if request is None:
         return False
-    if request == "stop":
-        runner.control(lambda job: runner.request_stop())  # the Ctrl-C path, in the runner's loop
-    else:
-        runner.control(request)
+    try:
+        request(arm)
+    except ArmctlError:
+        pass  # no job running (yet, or any more): the key has nothing to act on
     return True
 
 
 @contextmanager
-def run_keys(runner, fd: int | None = None):
-    """Read keys for ``runner`` while the block runs (a daemon thread); the terminal restored after."""
+def run_keys(arm, fd: int | None = None):
+    """Read keys for ``arm`` while the block runs (a daemon thread); the terminal restored after."""
     from ..jog.keys import KeyDecoder
     from ..jog.terminal import TerminalGone, key_input, read_input
 
@@ -83,7 +90,7 @@ def run_keys(runner, fd: int | None = None):
                 return
             now = time.monotonic()
             for key in decoder.feed(data, now) + decoder.expire(now):
-                handle_key(key.name, runner)
+                handle_key(key.name, arm)
 
     with key_input(fd):
         thread = threading.Thread(target=read, name="armctl-run-keys", daemon=True)
