@@ -114,6 +114,9 @@ def test_resolve_planned_agrees_with_resolve(number, data):
     assert (plain is not None) == full.ok
     if plain is not None:
         assert plain == (full.arguments, full.updates)
+        # the hot path calls plan.run on the scanned words (number strings) directly
+        words = tuple(item for letter, value in written.items() for item in (letter, repr(value)))
+        assert plan.run(words, state.values) == (tuple(full.arguments), full.updates, written)
 
 
 def test_a_plan_covers_the_common_shapes():

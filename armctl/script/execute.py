@@ -5,7 +5,7 @@ that gives statements their meaning; the other half reads lines, pairs blocks an
 diagnostics.  Moves take one of three paths, each starting from the same untouched state:
 
   1. ``_plain_move`` — the hot path: a line the regex fast path scanned, in absolute mode,
-     with every value known (``resolve_planned``, one plan per line shape); no node is built.
+     with every value known (``resolve_planned``: one plan per line shape, compiled once); no node is built.
   2. ``_move`` — a node without word columns (a fast-path line in a repeat body, or G91):
      the general ``resolve``; the first sign of trouble re-parses the line with Lark.
   3. ``_move_with_diagnostics`` — a Lark node with columns: report everything wrong with the
@@ -36,7 +36,7 @@ from .source import SourceSpan
 from .statement import NO_WORDS, Statement
 from .statements import (
     CODES, DISTANCE_MODES, PLACEHOLDER, PLACEHOLDERS, PWM_OF_ACTIVE_CHANNEL, MoveSpec, PlainPlan, Resolution, blame,
-    plain_plan, resolve, resolve_planned,
+    plain_plan, resolve,
 )
 
 FLOAT32_MAX = 3.4028234663852886e38
@@ -115,8 +115,7 @@ class StatementExecution:
             plan = _plan(shape)
         if plan is None:
             return NOT_PLAIN
-        numbers = list(map(float, words[1::2]))
-        plain = resolve_planned(plan, numbers, state.values)
+        plain = plan.run(words, state.values)
         if plain is None:
             return NOT_PLAIN
         spec = plan.spec
@@ -124,7 +123,7 @@ class StatementExecution:
             command = spec.construct(*plain[0]) if spec.validate is None else spec.make(*plain[0])
         except FieldError:
             return NOT_PLAIN
-        return self._moved(spec, command, plain[1], number, text, column, end_column, dict(zip(plan.letters, numbers)), ())
+        return self._moved(spec, command, plain[1], number, text, column, end_column, plain[2], ())
 
     def _moved(self, spec: MoveSpec, command, updates: dict, number: int, text: str, column: int, end_column: int,
                written: dict, loop: tuple) -> Optional[Statement]:
