@@ -165,7 +165,7 @@ class _MotionCommand(Command):
     # field name → float slot 1…11; fields not listed are integers handled by the subclass.
     SLOTS: ClassVar[dict[str, int]] = {}
 
-    _LAYOUT: ClassVar[tuple] = ((), 0, 0, None)  # from_fields: set below for each command
+    _FIELD_NAMES: ClassVar[tuple] = ()  # from_fields: set below for each command
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
@@ -184,24 +184,44 @@ class _MotionCommand(Command):
     @classmethod
     def from_fields(cls, *values):
         """``cls(*values)`` with every field given, in declaration order, built without the
-        frozen dataclass's one ``object.__setattr__`` per field and with one dictionary update
-        (a compiler builds one per line): the same object, the same checks, the same
-        FieldError (anything unusual is simply ``cls(*values)``)."""
-        names, first, end, codec = cls._LAYOUT
-        if codec is None or len(values) != len(names):
-            return cls(*values)
-        floats = values[first:end]
-        if set(map(type, floats)) <= _PLAIN_NUMBERS:
-            try:
-                rounded = codec.unpack(codec.pack(*floats))
-            except (OverflowError, struct.error):
-                return cls(*values)
-            if math.isfinite(sum(rounded)):
-                self = object.__new__(cls)
-                self.__dict__.update(zip(names, values[:first] + rounded + values[end:]))
-                self._validate()
-                return self
-        return cls(*values)
+        frozen dataclass's one ``object.__setattr__`` per field (a compiler builds one per
+        line): the same object, the same checks, the same FieldError.  When every float field
+        is a ``float`` it is straight-line code compiled once per class (``_compile_from_fields``):
+        one pack/unpack rounds them all, one dict literal stores every field; anything else —
+        an int, a bool, a value too large for float32, inf or NaN — is simply ``cls(*values)``."""
+        build = cls.__dict__.get("_from_floats")
+        if build is None:
+            build = cls._compile_from_fields()
+        return build(*values) if len(values) == len(cls._FIELD_NAMES) else cls(*values)
+
+    @classmethod
+    def _compile_from_fields(cls):
+        names = cls._FIELD_NAMES
+        floats = [name for name in names if name in cls.SLOTS]
+        rounded = [f"r_{name}" for name in floats]
+        given = ", ".join(names)
+        value_of = dict(zip(floats, rounded))
+        source = "\n".join([
+            f"def from_floats({given}):",
+            f"    if {' and '.join(f'{name}.__class__ is float' for name in floats)}:",
+            "        try:",
+            f"            {', '.join(rounded)}, = unpack(pack({', '.join(floats)}))",
+            "        except OverflowError:",
+            f"            return cls({given})",
+            f"        if isfinite({' + '.join(rounded)}):",  # each at most float32's max: finite unless one is not
+            "            self = new(cls)",
+            f"            self.__dict__.update({{{', '.join(f'{name!r}: {value_of.get(name, name)}' for name in names)}}})",
+            "            self._validate()",
+            "            return self",
+            f"    return cls({given})",
+            "",
+        ])
+        codec = struct.Struct(f"<{len(floats)}f")  # H1
+        namespace = {"cls": cls, "unpack": codec.unpack, "pack": codec.pack, "isfinite": math.isfinite,
+                     "new": object.__new__}
+        exec(compile(source, f"<{cls.__name__}.from_fields>", "exec"), namespace)  # noqa: S102 - our own source
+        cls._from_floats = build = namespace["from_floats"]
+        return build
 
     def __post_init__(self) -> None:
         # Every float field rounded to single precision in one pack/unpack and stored in one
@@ -242,16 +262,6 @@ class _MotionCommand(Command):
     @classmethod
     def _ints_from_subcommand(cls, subcommand: int) -> dict:
         return {}
-
-
-def _positional_layout(cls) -> tuple:
-    """(field names, first float field, end of the float fields, their codec) for
-    ``from_fields``; codec None when the float fields are not all side by side."""
-    names = tuple(f.name for f in fields(cls))
-    at = sorted(names.index(name) for name in cls.SLOTS)
-    if at != list(range(at[0], at[0] + len(at))):
-        return names, 0, 0, None
-    return names, at[0], at[-1] + 1, struct.Struct(f"<{len(at)}f")
 
 
 def _slot_offset(slot: int) -> int:
@@ -478,9 +488,9 @@ class Delay(_MotionCommand):
         _check_not_negative(self, "delay_ms")
 
 
-# from_fields' layout of each motion command (the dataclass fields exist only once @dataclass ran)
+# from_fields' field order of each motion command (the dataclass fields exist only once @dataclass ran)
 for _cls in (LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Delay):
-    _cls._LAYOUT = _positional_layout(_cls)
+    _cls._FIELD_NAMES = tuple(f.name for f in fields(_cls))
 
 
 @dataclass(frozen=True)

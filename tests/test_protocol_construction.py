@@ -78,3 +78,20 @@ def test_from_fields_builds_what_the_constructor_builds(cls, data):
     values = tuple(data.draw(NUMBERS if name in cls.SLOTS else st.sampled_from([0, 1, 2, 3, 4, 5, 7, 1.0, True]),
                              label=name) for name in names)
     assert _built(cls.from_fields, cls, values) == _built(cls, cls, values)
+
+
+FLOATS = st.one_of(
+    st.floats(allow_nan=True, allow_infinity=True), st.floats(-1e4, 1e4),
+    st.sampled_from([0.0, -0.0, 3.4028234663852886e38, 3.4028235677973366e38, 1e39, -1e39, 1e-46, 1500.0, 3000.0]),
+)
+
+
+@settings(max_examples=300, deadline=None)
+@given(st.sampled_from([LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Delay]), st.data())
+def test_from_fields_with_every_float_field_a_float(cls, data):
+    """What the compiler passes (every float field a float): from_fields' compiled straight-line
+    path against the dataclass's own constructor, rounding, overflow, inf and NaN included."""
+    names = [f.name for f in dataclass_fields(cls)]
+    values = tuple(data.draw(FLOATS if name in cls.SLOTS else st.sampled_from([0, 1, 2, 3, 4, 5, 7, 1.0, True]),
+                             label=name) for name in names)
+    assert _built(cls.from_fields, cls, values) == _built(cls, cls, values)
