@@ -95,3 +95,26 @@ def test_from_fields_with_every_float_field_a_float(cls, data):
     values = tuple(data.draw(FLOATS if name in cls.SLOTS else st.sampled_from([0, 1, 2, 3, 4, 5, 7, 1.0, True]),
                              label=name) for name in names)
     assert _built(cls.from_fields, cls, values) == _built(cls, cls, values)
+
+
+def test_shared_eq_hash_repr_are_the_dataclass_ones(all_command_vectors):
+    """Commands share Command's __eq__, __hash__ and __repr__ (start-up: the dataclass module
+    compiles each generated method separately); they answer as the generated ones would, on
+    every golden command, against a frozen dataclass with the same fields."""
+    import dataclasses
+
+    commands = [vector.obj for vector in all_command_vectors]
+    assert len({type(c) for c in commands}) == 15
+    for command in commands:
+        cls = type(command)
+        twin_cls = dataclasses.make_dataclass(cls.__qualname__, [f.name for f in dataclass_fields(cls)], frozen=True)
+        twin = twin_cls(**command.fields())
+        assert repr(command) == repr(twin)
+        assert hash(command) == hash(twin)
+        for other in commands:
+            same = other == command
+            assert same == (type(other) is cls and twin_cls(**other.fields()) == twin)
+            assert (other != command) is not same
+        assert command.__eq__(twin) is NotImplemented
+        with pytest.raises(dataclasses.FrozenInstanceError):
+            command.extra = 1
