@@ -25,6 +25,7 @@ from dataclasses import dataclass, fields
 from typing import ClassVar, Union
 
 from .errors import FieldError, FrameError
+from .records import record
 
 # --- the link -------------------------------------------------------------------------------
 
@@ -141,51 +142,15 @@ def f32_repr(value: float) -> str:
 
 # --- host → arm commands ----------------------------------------------------------------------
 
-# Every command is a frozen dataclass whose __eq__, __hash__ and __repr__ are Command's, shared:
-# the dataclass module compiles each generated method separately at import, and 17 classes × 6
-# methods were a tenth of a short command's start-up.  They behave as the generated ones: equal
-# only to the same class with equal fields, the hash of the fields' tuple, ``Name(field=value, …)``.
-_command = dataclass(frozen=True, eq=False, repr=False)
+# Every command is a frozen dataclass (``record``: its __eq__, __hash__ and __repr__ shared, not
+# compiled for each of the 18 classes at import; armctl/records.py).
 
 
-def _field_values_getter(cls):
-    """``self`` → the tuple of its field values in declaration order (the generated methods' tuple)."""
-    names = tuple(f.name for f in fields(cls))
-    if len(names) > 1:
-        get = operator.attrgetter(*names)
-    elif names:
-        name = names[0]
-        get = lambda self: (getattr(self, name),)  # noqa: E731 - attrgetter of one name gives no tuple
-    else:
-        get = lambda self: ()  # noqa: E731
-    cls._field_values = staticmethod(get)
-    cls._FIELDS_FOR = cls
-    return get
-
-
-@_command
+@record
 class Command:
     """Base of the 15 host→arm commands."""
 
     NAME: ClassVar[str] = ""
-    _FIELDS_FOR: ClassVar[type] = None  # the class _field_values was made for (subclasses make their own)
-
-    def _values(self) -> tuple:
-        cls = self.__class__
-        get = cls._field_values if cls._FIELDS_FOR is cls else _field_values_getter(cls)
-        return get(self)
-
-    def __eq__(self, other):
-        if other.__class__ is self.__class__:
-            return self._values() == other._values()
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash(self._values())
-
-    def __repr__(self) -> str:
-        names = (f.name for f in fields(self))
-        return f"{self.__class__.__qualname__}({', '.join(f'{n}={v!r}' for n, v in zip(names, self._values()))})"
 
     def encode(self) -> bytes:  # pragma: no cover - every subclass overrides
         raise NotImplementedError
@@ -195,7 +160,7 @@ class Command:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
-@_command
+@record
 class _MotionCommand(Command):
     """A 0xEE … 0xEF frame: a[1] an ASCII command character, a[2] a sub-command byte and up
     to eleven float slots f1…f11 at a[3 + 4·(k−1)]."""
@@ -325,7 +290,7 @@ def _check_not_negative(obj, name: str) -> None:
         raise FieldError(f"{type(obj).__name__}.{name} must not be negative, not {f32_repr(getattr(obj, name))}")
 
 
-@_command
+@record
 class LinearMove(_MotionCommand):
     """'1' — the tool tip moves in a straight line to the pose (G1)."""
 
@@ -365,7 +330,7 @@ class LinearMove(_MotionCommand):
         return {"pwm_channel": max(subcommand, 1)}
 
 
-@_command
+@record
 class AccelLinearMove(_MotionCommand):
     """'2' — linear move with acceleration; ``mode`` is a[2] (G220 / G222 / G230 → 0 / 1 / 2).
 
@@ -408,7 +373,7 @@ class AccelLinearMove(_MotionCommand):
         return {"mode": subcommand}
 
 
-@_command
+@record
 class JointMove(_MotionCommand):
     """'3' — all six joints move synchronously to the angles (G6); a[2] = start/stop smoothing."""
 
@@ -448,7 +413,7 @@ class JointMove(_MotionCommand):
         return (self.j1_deg, self.j2_deg, self.j3_deg, self.j4_deg, self.j5_deg, self.j6_deg)
 
 
-@_command
+@record
 class ArcStart(_MotionCommand):
     """'4'/0 — first frame of an arc (G300): the intermediate point, radius and initial speed.
 
@@ -486,7 +451,7 @@ class ArcStart(_MotionCommand):
         return {}
 
 
-@_command
+@record
 class ArcEnd(_MotionCommand):
     """'4'/1 — second frame of an arc (G301): the end point and end speed (mm/min, H3)."""
 
@@ -513,7 +478,7 @@ class ArcEnd(_MotionCommand):
         return 1
 
 
-@_command
+@record
 class Delay(_MotionCommand):
     """'6' — wait ``delay_ms`` milliseconds (G4 P…). There is no command '5'."""
 
@@ -532,7 +497,7 @@ for _cls in (LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Delay):
     _cls._FIELD_NAMES = tuple(f.name for f in fields(_cls))
 
 
-@_command
+@record
 class MCode(Command):
     """'7' — an M code; the number goes verbatim into a[3..6] (H4: int32 little-endian)."""
 
@@ -555,7 +520,7 @@ class MCode(Command):
         return cls(M_CODE_CODEC.unpack_from(frame, 3)[0])
 
 
-@_command
+@record
 class _ControlCommand(Command):
     """A 0xFC … 0xFD frame: a[1], a[2] binary bytes, then an argument in a[3…]."""
 
@@ -577,7 +542,7 @@ class _ControlCommand(Command):
         return cls()
 
 
-@_command
+@record
 class ResetArm(_ControlCommand):
     """Control 12/3 — reset the arm (RESET)."""
 
@@ -586,7 +551,7 @@ class ResetArm(_ControlCommand):
     A2: ClassVar[int] = 3
 
 
-@_command
+@record
 class ResetConnector(_ControlCommand):
     """Control 12/6 — reset the host connector (RESET CONNECTOR)."""
 
@@ -595,7 +560,7 @@ class ResetConnector(_ControlCommand):
     A2: ClassVar[int] = 6
 
 
-@_command
+@record
 class SetWorktableOrigin(_ControlCommand):
     """Control 20/1 — later coordinates are relative to robot point (X0, Y0, Z0) (G54)."""
 
@@ -619,7 +584,7 @@ class SetWorktableOrigin(_ControlCommand):
         return cls(*(FLOAT_CODEC.unpack_from(frame, _slot_offset(k))[0] for k in (1, 2, 3)))
 
 
-@_command
+@record
 class RunProgram(_ControlCommand):
     """Control 30/2 — run an SD-card program: 0 the taught one, 1…15 Route_a…Route_o (PROGRAM n)."""
 
@@ -640,7 +605,7 @@ class RunProgram(_ControlCommand):
         return cls(frame[3])
 
 
-@_command
+@record
 class PauseToggle(_ControlCommand):
     """Control 30/3, a[3]=2 — the first frame pauses, the next resumes (PAUSE)."""
 
@@ -658,7 +623,7 @@ class PauseToggle(_ControlCommand):
         return cls()
 
 
-@_command
+@record
 class GoToPose(_ControlCommand):
     """Control 30/5 — go to fixed pose 0…3 (POSE n)."""
 
@@ -679,7 +644,7 @@ class GoToPose(_ControlCommand):
         return cls(frame[3])
 
 
-@_command
+@record
 class Joystick(_ControlCommand):
     """Control 30/7 — analog joystick.
 
@@ -722,7 +687,7 @@ class Joystick(_ControlCommand):
         return cls(axis, tuple(frame[4 : 4 + count]))
 
 
-@_command
+@record
 class StructureMode(_ControlCommand):
     """Control 30/9 — structure mode 0 (a[3]=0) or 1 (a[3]=9) (MODE 0 / MODE 1)."""
 

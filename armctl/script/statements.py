@@ -18,7 +18,7 @@ into a located diagnostic by the compiler, with ``blame()`` naming the word to b
 from __future__ import annotations
 
 import re
-from dataclasses import MISSING, dataclass, field
+from dataclasses import MISSING, field
 from dataclasses import fields as dataclass_fields
 from typing import Callable, NamedTuple, Optional
 
@@ -26,6 +26,8 @@ from ..errors import FieldError
 from ..protocol import (
     PWM_CHANNELS, AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, SetWorktableOrigin, f32_repr,
 )
+from ..records import record
+from ..records import record
 from .modal import (
     CARTESIAN, CARTESIAN_SPEED, JOINT_KEYS, JOINT_SPEED, JOINTS, POISONED, POSE_KEYS, PWM_KEYS, ModalState,
 )
@@ -41,7 +43,7 @@ def _special(slot) -> int:
     return _PWM_OF_CHANNEL if slot.key == PWM_OF_ACTIVE_CHANNEL else 0
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class Slot:
     """One constructor field: written by ``letter`` (None: only read from the state), falling
     back to modal ``key`` (None: required on every line), offset from it under G91 if
@@ -54,7 +56,7 @@ class Slot:
     meaning: str = ""
 
 
-@dataclass(frozen=True)
+@record
 class MoveSpec:
     code: str
     build: Callable[..., Command]
