@@ -143,10 +143,10 @@ def f32_repr(value: float) -> str:
 # --- host → arm commands ----------------------------------------------------------------------
 
 # Every command is a frozen dataclass (``record``: its __eq__, __hash__ and __repr__ shared, not
-# compiled for each of the 18 classes at import; armctl/records.py).
+# compiled for each class at import; armctl/records.py).  The three bases have no fields and are
+# never built, so they are plain classes: a frozen dataclass may extend a plain class.
 
 
-@record
 class Command:
     """Base of the 15 host→arm commands."""
 
@@ -160,7 +160,6 @@ class Command:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
-@record
 class _MotionCommand(Command):
     """A 0xEE … 0xEF frame: a[1] an ASCII command character, a[2] a sub-command byte and up
     to eleven float slots f1…f11 at a[3 + 4·(k−1)]."""
@@ -520,7 +519,6 @@ class MCode(Command):
         return cls(M_CODE_CODEC.unpack_from(frame, 3)[0])
 
 
-@record
 class _ControlCommand(Command):
     """A 0xFC … 0xFD frame: a[1], a[2] binary bytes, then an argument in a[3…]."""
 
