@@ -198,6 +198,12 @@ class _MotionCommand(Command):
         return build(*values) if len(values) == len(cls._FIELD_NAMES) else cls(*values)
 
     @classmethod
+    def fields_builder(cls):
+        """``from_fields`` for a caller that always passes every field positionally (the
+        compiler's hot path calls it once per line): the compiled function itself."""
+        return cls.__dict__.get("_from_floats") or cls._compile_from_fields()
+
+    @classmethod
     def _compile_from_fields(cls):
         names = cls._FIELD_NAMES
         floats = [name for name in names if name in cls.SLOTS]

@@ -115,15 +115,13 @@ class StatementExecution:
             plan = _plan(shape)
         if plan is None:
             return NOT_PLAIN
-        plain = plan.run(words, state.values)
-        if plain is None:
-            return NOT_PLAIN
-        spec = plan.spec
         try:
-            command = spec.construct(*plain[0]) if spec.validate is None else spec.make(*plain[0])
+            plain = plan.run(words, state.values)  # resolve(), then the protocol constructor
         except FieldError:
             return NOT_PLAIN
-        return self._moved(spec, command, plain[1], number, text, column, end_column, plain[2], ())
+        if plain is None:
+            return NOT_PLAIN
+        return self._moved(plan.spec, plain[0], plain[1], number, text, column, end_column, plain[2], ())
 
     def _moved(self, spec: MoveSpec, command, updates: dict, number: int, text: str, column: int, end_column: int,
                written: dict, loop: tuple) -> Optional[Statement]:

@@ -279,10 +279,13 @@ class PlainPlan(NamedTuple):
     write_keys: tuple  # the modal key each written word sets (S excluded)
     fetch: tuple  # (argument index, modal key) of the slots the line does not write
     pwm: Optional[tuple]  # G1: (T's index, S's index, the position of S among the words or -1)
-    # run(words, values) → (arguments, updates, written) or None: resolve()'s common case for
-    # this shape as straight-line code (see _plan_function); ``words`` alternates the letters
-    # and the numbers as written (strings or floats), ``written`` maps letter → number.
+    # run(words, values) → (command, updates, written) or None: the compiler's hot path for this
+    # shape, resolve() and the protocol constructor as straight-line code (see _plan_functions);
+    # ``words`` alternates the letters and the numbers as written (strings or floats), ``written``
+    # maps letter → number; a value the protocol refuses raises its FieldError.  ``arguments``
+    # is the same with the constructor's arguments in place of the command (resolve_planned).
     run: Callable
+    arguments: Callable
 
 
 def plain_plan(spec: MoveSpec, letters: tuple) -> Optional[PlainPlan]:
@@ -302,16 +305,18 @@ def plain_plan(spec: MoveSpec, letters: tuple) -> Optional[PlainPlan]:
     write_keys = tuple(slot_of[letter][1] for letter in written)
     pwm_plan = (*spec.channel_slots, letters.index("S") if "S" in letters else -1) if pwm else None
     return PlainPlan(spec, letters, write_index, write_keys, fetch, pwm_plan,
-                     _plan_function(spec, letters, write_index, write_keys, fetch, pwm_plan))
+                     *_plan_functions(spec, letters, write_index, write_keys, fetch, pwm_plan))
 
 
-def _plan_function(spec: MoveSpec, letters: tuple, write_index: tuple, write_keys: tuple, fetch: tuple,
-                   pwm: Optional[tuple]) -> Callable:
-    """``resolve_planned`` for one line shape as straight-line Python, compiled once per shape
-    (as ``dataclasses`` compiles ``__init__``): a line then costs a float() per word, a lookup
-    and a class test per value it takes from the state, and one tuple and two dicts — no loop
-    over slots, no list to fill.  It does exactly what ``resolve_planned``'s definition below
-    says; tests/test_script_fastpath.py holds it to ``resolve()`` on generated states."""
+def _plan_functions(spec: MoveSpec, letters: tuple, write_index: tuple, write_keys: tuple, fetch: tuple,
+                    pwm: Optional[tuple]) -> tuple[Callable, Callable]:
+    """``run`` and ``arguments`` for one line shape (see ``PlainPlan``) as straight-line Python,
+    compiled once per shape (as ``dataclasses`` compiles ``__init__``): a line then costs a
+    float() per word, a lookup and a class test per value it takes from the state, one call of
+    the protocol constructor with every field positionally (``fields_builder``: no argument
+    list, no per-field setattr) and two dicts — no loop over slots.  They do exactly what
+    ``resolve_planned``'s definition says, then ``spec.make``; tests/test_script_fastpath.py
+    holds both to ``resolve()`` and ``spec.make`` on generated states."""
     body = [f"    n{k} = float(words[{2 * k + 1}])" for k in range(len(letters))]
     argument = {index: repr(default) if type(default) in (int, float) else f"defaults[{index}]"
                 for index, default in enumerate(spec.defaults)}
@@ -335,11 +340,16 @@ def _plan_function(spec: MoveSpec, letters: tuple, write_index: tuple, write_key
         argument[channel_index], argument[pwm_index] = "channel", "pwm"
     arguments = ", ".join(argument[index] for index in range(len(spec.defaults)))
     written_dict = ", ".join(f"{letter!r}: {number}" for letter, number in zip(letters, numbers))
-    body.append(f"    return ({arguments},), updates, {{{written_dict}}}")
-    source = "def run(words, values):\n" + "\n".join(body) + "\n"
-    namespace = {"PWM_KEYS": PWM_KEYS, "defaults": spec.defaults}
+    build = getattr(spec.build, "fields_builder", lambda: spec.construct)()
+    run = body + [f"    command = build({arguments})"]
+    if spec.validate is not None:
+        run.append("    validate(command)")
+    run.append(f"    return command, updates, {{{written_dict}}}")
+    source = "\n".join(["def run(words, values):", *run, "def arguments(words, values):", *body,
+                         f"    return ({arguments},), updates, {{{written_dict}}}", ""])
+    namespace = {"PWM_KEYS": PWM_KEYS, "defaults": spec.defaults, "build": build, "validate": spec.validate}
     exec(compile(source, f"<plan {spec.code} {' '.join(letters)}>", "exec"), namespace)  # noqa: S102 - our own source
-    return namespace["run"]
+    return namespace["run"], namespace["arguments"]
 
 
 def resolve_planned(plan: PlainPlan, numbers: list, values: dict) -> Optional[tuple[list, dict]]:
@@ -349,10 +359,11 @@ def resolve_planned(plan: PlainPlan, numbers: list, values: dict) -> Optional[tu
     mode (G90).  Arguments: the written words in their slots (S in the active channel's PWM
     slot), every other slot from the modal state (each must hold a float), the channel from T;
     updates: each written word's modal key (S: the active channel's PWM key).  It is
-    ``plan.run``, which the compiler's hot path calls directly; it agrees with ``resolve()``
-    whenever it answers (tests/test_script_fastpath.py checks this on generated states)."""
+    ``plan.arguments``; the compiler's hot path calls ``plan.run``, the same followed by the
+    constructor.  It agrees with ``resolve()`` whenever it answers (tests/test_script_fastpath.py
+    checks this on generated states)."""
     words = [item for pair in zip(plan.letters, numbers) for item in pair]
-    found = plan.run(words, values)
+    found = plan.arguments(words, values)
     if found is None:
         return None
     return list(found[0]), found[1]
