@@ -100,16 +100,18 @@ class StatementExecution:
 
     # --- moves (G1 G220 G222 G230 G6 G300 G301 G4 G54) -------------------------------------
 
-    def _plain_move(self, number: int, text: str, scanned) -> Optional[Statement]:
-        """The hot path: a scanned G line in absolute mode with every value known.
+    def _plain_move(self, number: int, text: str, match) -> Optional[Statement]:
+        """The hot path: a G line the fast path's regex matched (``match``: see
+        ``scanned_parts``), in absolute mode, with every value known.
 
         Returns the statement to yield (or None: held back or before ``from_line``), or
         ``NOT_PLAIN`` without having changed anything — then the line takes the general path."""
-        letter, digits, column, end_column, words = scanned
         state = self.state
         if state.relative:
             return NOT_PLAIN
-        shape = (letter, digits, words[::2])
+        groups = match.groups()
+        words = groups[2 : match.lastindex]
+        shape = (groups[0], groups[1], words[::2])
         plan = _PLANS.get(shape, NOT_PLAIN)
         if plan is NOT_PLAIN:
             plan = _plan(shape)
@@ -121,7 +123,7 @@ class StatementExecution:
             return NOT_PLAIN
         if plain is None:
             return NOT_PLAIN
-        return self._moved(plan.spec, plain[0], plain[1], number, text, column, end_column, plain[2], ())
+        return self._moved(plan.spec, plain[0], plain[1], number, text, match.start(1) + 1, match.end(2) + 1, plain[2], ())
 
     def _moved(self, spec: MoveSpec, command, updates: dict, number: int, text: str, column: int, end_column: int,
                written: dict, loop: tuple) -> Optional[Statement]:
