@@ -41,6 +41,7 @@ from .statements import (
 
 FLOAT32_MAX = 3.4028234663852886e38
 NOT_PLAIN = object()  # _plain_move: take the general path
+_new_statement = tuple.__new__  # _moved builds a Statement (a NamedTuple) from all its fields
 
 _KEYWORDS = {  # names → (command, what the number is or None, families it leaves unknown)
     ("RESET",): (ResetArm, None, (CARTESIAN, JOINTS)),
@@ -135,8 +136,9 @@ class StatementExecution:
         if forgets:
             values.update(UNKNOWN[forgets])
             state.unknown_because[forgets] = (spec.code, number)
-        statement = Statement(command, self.file, number, column, end_column, text, spec.code, written,
-                              state.relative, loop)
+        # every field given, in order: the tuple itself, without NamedTuple's Python-level __new__
+        statement = _new_statement(Statement, (command, self.file, number, column, end_column, text, spec.code, written,
+                                               state.relative, loop))
         if self._arc is None and not spec.is_arc:
             return statement if number >= self.from_line else None
         return self._sequence(spec.code, number, text, (column, end_column), statement)
