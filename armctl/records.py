@@ -9,7 +9,8 @@ method generated) and then gives the class:
 
   __init__   the one per-class method: its source is the generated one's (positional or
              keyword, defaults, ``default_factory``, ``__post_init__``; a frozen class assigns
-             through ``object.__setattr__``), compiled the first time the class is built;
+             through ``object.__setattr__``), compiled the first time the class is built or
+             ``inspect.signature`` asks for it;
   __setattr__, __delattr__ (frozen)  refuse a field or any name on the class itself with
              ``FrozenInstanceError``, as generated; ``__getstate__``/``__setstate__`` for a
              frozen class with slots (pickle, copy), as dataclass adds them;
@@ -30,6 +31,7 @@ from __future__ import annotations
 
 import operator
 from dataclasses import MISSING, FrozenInstanceError, dataclass, fields
+from types import MethodType
 
 __all__ = ["record"]
 
@@ -44,7 +46,16 @@ def _getter(names: tuple):
     return lambda self: ()
 
 
-_FACTORY = object()  # a parameter's default when its field has a default_factory (as generated)
+class _Factory:
+    """A parameter's default when its field has a default_factory (as generated: ``<factory>``)."""
+
+    __slots__ = ()
+
+    def __repr__(self) -> str:
+        return "<factory>"
+
+
+_FACTORY = _Factory()
 
 
 def _init_function(cls, frozen: bool):
@@ -77,7 +88,35 @@ def _init_function(cls, frozen: bool):
     exec(compile(source, f"<{cls.__qualname__}.__init__>", "exec"), namespace)  # noqa: S102 - our own source
     function = namespace["__init__"]
     function.__qualname__ = f"{cls.__qualname__}.__init__"
+    function.__annotations__ = {**{f.name: f.type for f in fields(cls) if f.init}, "return": None}  # as generated
     return function
+
+
+class _FirstBuild:
+    """A record's ``__init__`` until the class is first built (or its signature asked for):
+    then the real one is compiled, becomes the class's ``__init__`` and runs."""
+
+    __slots__ = ("cls", "frozen")
+
+    def __init__(self, cls, frozen: bool) -> None:
+        self.cls, self.frozen = cls, frozen
+
+    def _compiled(self):
+        function = _init_function(self.cls, self.frozen)
+        self.cls.__init__ = function
+        return function
+
+    def __get__(self, instance, owner=None):
+        return self if instance is None else MethodType(self, instance)
+
+    def __call__(self, instance, *args, **kwargs) -> None:
+        self._compiled()(instance, *args, **kwargs)
+
+    @property
+    def __signature__(self):  # inspect.signature(cls), help(cls): the real parameters
+        from inspect import signature
+
+        return signature(self._compiled())
 
 
 def record(cls=None, /, *, frozen: bool = True, slots: bool = False):
@@ -98,11 +137,6 @@ def record(cls=None, /, *, frozen: bool = True, slots: bool = False):
         hashed = _getter(tuple(f.name for f in every if (f.compare if f.hash is None else f.hash)))
         shown = tuple(f.name for f in every if f.repr)
         shown_values = _getter(shown)
-
-        def __init__(self, *args, **kwargs):  # the first build compiles the real one
-            function = _init_function(cls, frozen)
-            cls.__init__ = function
-            function(self, *args, **kwargs)
 
         def __eq__(self, other):
             if other.__class__ is self.__class__:
@@ -133,7 +167,7 @@ def record(cls=None, /, *, frozen: bool = True, slots: bool = False):
             for f, value in zip(fields(self), state):
                 object.__setattr__(self, f.name, value)
 
-        methods = {"__init__": __init__, "__repr__": __repr__}
+        methods = {"__init__": _FirstBuild(cls, frozen), "__repr__": __repr__}
         if "__eq__" not in own:
             methods["__eq__"] = __eq__
             if "__hash__" not in own:
@@ -147,7 +181,7 @@ def record(cls=None, /, *, frozen: bool = True, slots: bool = False):
         for name, method in methods.items():
             if name in own and name not in ("__hash__", "__setattr__", "__delattr__"):
                 continue
-            if method is not None:
+            if method is not None and name != "__init__":
                 method.__qualname__ = f"{cls.__qualname__}.{name}"
             setattr(cls, name, method)
         params = cls.__dataclass_params__  # what the class is, for fields(), replace() and subclasses

@@ -88,6 +88,17 @@ def test_record_pickles_and_copies(options):
         assert twin == thing and twin.c == (1,) and type(twin) is ours
 
 
+@pytest.mark.parametrize("options", OPTIONS, ids=str)
+def test_record_signature_is_the_dataclass_one_before_and_after_the_first_build(options):
+    import inspect
+
+    ours, theirs = _twins(**options)
+    assert str(inspect.signature(ours)) == str(inspect.signature(theirs))  # asked before any build
+    ours, _ = _twins(**options)
+    ours(1.0)
+    assert str(inspect.signature(ours)) == str(inspect.signature(theirs))
+
+
 def test_record_signature_errors_are_the_dataclass_ones():
     ours, theirs = _twins(frozen=True, slots=False)
     for call in (lambda cls: cls(), lambda cls: cls(1.0, "b", None, [], 5), lambda cls: cls(1.0, e=3)):
