@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import sys
+from itertools import islice
 
 import click
 
@@ -221,24 +222,19 @@ def compile_command(script: str, fmt: str, as_json: bool, output: str | None):
     with PendingOutput(output, binary=fmt == "bin") as pending:
         out = pending.stream
         compilation = source_script.compile()
-        batch: list = []  # written 4,096 frames at a time: a write per frame costs more than encoding it
-
-        def flush() -> None:
-            out.write(b"".join(batch) if fmt == "bin" else "".join(batch))
-            batch.clear()
-
-        for statement in compilation:
-            frame = statement.command.encode()
-            if fmt == "hex":
-                batch.append(frame.hex() + "\n")
-            elif fmt == "bin":
-                batch.append(frame)
-            else:
+        if fmt == "json":
+            def record(statement) -> str:
                 source = {"file": statement.span.file, "line": statement.line, "text": statement.span.text.rstrip("\r\n")}
-                batch.append(json.dumps(frame_record(statement.command, frame, source)) + "\n")
-            if len(batch) == 4096:
-                flush()
-        flush()
+                return json.dumps(frame_record(statement.command, statement.command.encode(), source)) + "\n"
+            pieces = map(record, compilation)
+        elif fmt == "hex":
+            pieces = (statement.command.encode().hex() + "\n" for statement in compilation)
+        else:
+            pieces = (statement.command.encode() for statement in compilation)
+        empty = b"" if fmt == "bin" else ""
+        # written 4,096 frames at a time: a write per frame costs more than encoding it
+        for batch in iter(lambda: list(islice(pieces, 4096)), []):
+            out.write(empty.join(batch))
         if compilation.error_count:
             _report_script_errors(compilation)  # exits 1; the pending output is discarded
         pending.commit()

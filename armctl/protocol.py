@@ -25,6 +25,7 @@ from dataclasses import dataclass, fields
 from typing import ClassVar, Union
 
 from .errors import FieldError, FrameError
+from .records import record
 
 # --- the link -------------------------------------------------------------------------------
 
@@ -141,8 +142,11 @@ def f32_repr(value: float) -> str:
 
 # --- host → arm commands ----------------------------------------------------------------------
 
+# Every command is a frozen dataclass (``record``: its __eq__, __hash__ and __repr__ shared, not
+# compiled for each class at import; armctl/records.py).  The three bases have no fields and are
+# never built, so they are plain classes: a frozen dataclass may extend a plain class.
 
-@dataclass(frozen=True)
+
 class Command:
     """Base of the 15 host→arm commands."""
 
@@ -156,7 +160,6 @@ class Command:
         return {f.name: getattr(self, f.name) for f in fields(self)}
 
 
-@dataclass(frozen=True)
 class _MotionCommand(Command):
     """A 0xEE … 0xEF frame: a[1] an ASCII command character, a[2] a sub-command byte and up
     to eleven float slots f1…f11 at a[3 + 4·(k−1)]."""
@@ -165,7 +168,7 @@ class _MotionCommand(Command):
     # field name → float slot 1…11; fields not listed are integers handled by the subclass.
     SLOTS: ClassVar[dict[str, int]] = {}
 
-    _LAYOUT: ClassVar[tuple] = ((), 0, 0, None)  # from_fields: set below for each command
+    _FIELD_NAMES: ClassVar[tuple] = ()  # from_fields: set below for each command
 
     def __init_subclass__(cls, **kwargs) -> None:
         super().__init_subclass__(**kwargs)
@@ -184,24 +187,50 @@ class _MotionCommand(Command):
     @classmethod
     def from_fields(cls, *values):
         """``cls(*values)`` with every field given, in declaration order, built without the
-        frozen dataclass's one ``object.__setattr__`` per field and with one dictionary update
-        (a compiler builds one per line): the same object, the same checks, the same
-        FieldError (anything unusual is simply ``cls(*values)``)."""
-        names, first, end, codec = cls._LAYOUT
-        if codec is None or len(values) != len(names):
-            return cls(*values)
-        floats = values[first:end]
-        if set(map(type, floats)) <= _PLAIN_NUMBERS:
-            try:
-                rounded = codec.unpack(codec.pack(*floats))
-            except (OverflowError, struct.error):
-                return cls(*values)
-            if math.isfinite(sum(rounded)):
-                self = object.__new__(cls)
-                self.__dict__.update(zip(names, values[:first] + rounded + values[end:]))
-                self._validate()
-                return self
-        return cls(*values)
+        frozen dataclass's one ``object.__setattr__`` per field (a compiler builds one per
+        line): the same object, the same checks, the same FieldError.  When every float field
+        is a ``float`` it is straight-line code compiled once per class (``_compile_from_fields``):
+        one pack/unpack rounds them all, one dict literal stores every field; anything else —
+        an int, a bool, a value too large for float32, inf or NaN — is simply ``cls(*values)``."""
+        build = cls.__dict__.get("_from_floats")
+        if build is None:
+            build = cls._compile_from_fields()
+        return build(*values) if len(values) == len(cls._FIELD_NAMES) else cls(*values)
+
+    @classmethod
+    def fields_builder(cls):
+        """``from_fields`` for a caller that always passes every field positionally (the
+        compiler's hot path calls it once per line): the compiled function itself."""
+        return cls.__dict__.get("_from_floats") or cls._compile_from_fields()
+
+    @classmethod
+    def _compile_from_fields(cls):
+        names = cls._FIELD_NAMES
+        floats = [name for name in names if name in cls.SLOTS]
+        rounded = [f"r_{name}" for name in floats]
+        given = ", ".join(names)
+        value_of = dict(zip(floats, rounded))
+        source = "\n".join([
+            f"def from_floats({given}):",
+            f"    if {' and '.join(f'{name}.__class__ is float' for name in floats)}:",
+            "        try:",
+            f"            {', '.join(rounded)}, = unpack(pack({', '.join(floats)}))",
+            "        except OverflowError:",
+            f"            return cls({given})",
+            f"        if isfinite({' + '.join(rounded)}):",  # each at most float32's max: finite unless one is not
+            "            self = new(cls)",
+            f"            self.__dict__.update({{{', '.join(f'{name!r}: {value_of.get(name, name)}' for name in names)}}})",
+            "            self._validate()",
+            "            return self",
+            f"    return cls({given})",
+            "",
+        ])
+        codec = struct.Struct(f"<{len(floats)}f")  # H1
+        namespace = {"cls": cls, "unpack": codec.unpack, "pack": codec.pack, "isfinite": math.isfinite,
+                     "new": object.__new__}
+        exec(compile(source, f"<{cls.__name__}.from_fields>", "exec"), namespace)  # noqa: S102 - our own source
+        cls._from_floats = build = namespace["from_floats"]
+        return build
 
     def __post_init__(self) -> None:
         # Every float field rounded to single precision in one pack/unpack and stored in one
@@ -244,16 +273,6 @@ class _MotionCommand(Command):
         return {}
 
 
-def _positional_layout(cls) -> tuple:
-    """(field names, first float field, end of the float fields, their codec) for
-    ``from_fields``; codec None when the float fields are not all side by side."""
-    names = tuple(f.name for f in fields(cls))
-    at = sorted(names.index(name) for name in cls.SLOTS)
-    if at != list(range(at[0], at[0] + len(at))):
-        return names, 0, 0, None
-    return names, at[0], at[-1] + 1, struct.Struct(f"<{len(at)}f")
-
-
 def _slot_offset(slot: int) -> int:
     return 3 + 4 * (slot - 1)
 
@@ -276,7 +295,7 @@ def _check_not_negative(obj, name: str) -> None:
         raise FieldError(f"{type(obj).__name__}.{name} must not be negative, not {f32_repr(getattr(obj, name))}")
 
 
-@dataclass(frozen=True)
+@record
 class LinearMove(_MotionCommand):
     """'1' — the tool tip moves in a straight line to the pose (G1)."""
 
@@ -316,7 +335,7 @@ class LinearMove(_MotionCommand):
         return {"pwm_channel": max(subcommand, 1)}
 
 
-@dataclass(frozen=True)
+@record
 class AccelLinearMove(_MotionCommand):
     """'2' — linear move with acceleration; ``mode`` is a[2] (G220 / G222 / G230 → 0 / 1 / 2).
 
@@ -359,7 +378,7 @@ class AccelLinearMove(_MotionCommand):
         return {"mode": subcommand}
 
 
-@dataclass(frozen=True)
+@record
 class JointMove(_MotionCommand):
     """'3' — all six joints move synchronously to the angles (G6); a[2] = start/stop smoothing."""
 
@@ -399,7 +418,7 @@ class JointMove(_MotionCommand):
         return (self.j1_deg, self.j2_deg, self.j3_deg, self.j4_deg, self.j5_deg, self.j6_deg)
 
 
-@dataclass(frozen=True)
+@record
 class ArcStart(_MotionCommand):
     """'4'/0 — first frame of an arc (G300): the intermediate point, radius and initial speed.
 
@@ -437,7 +456,7 @@ class ArcStart(_MotionCommand):
         return {}
 
 
-@dataclass(frozen=True)
+@record
 class ArcEnd(_MotionCommand):
     """'4'/1 — second frame of an arc (G301): the end point and end speed (mm/min, H3)."""
 
@@ -464,7 +483,7 @@ class ArcEnd(_MotionCommand):
         return 1
 
 
-@dataclass(frozen=True)
+@record
 class Delay(_MotionCommand):
     """'6' — wait ``delay_ms`` milliseconds (G4 P…). There is no command '5'."""
 
@@ -478,12 +497,12 @@ class Delay(_MotionCommand):
         _check_not_negative(self, "delay_ms")
 
 
-# from_fields' layout of each motion command (the dataclass fields exist only once @dataclass ran)
+# from_fields' field order of each motion command (the dataclass fields exist only once @dataclass ran)
 for _cls in (LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Delay):
-    _cls._LAYOUT = _positional_layout(_cls)
+    _cls._FIELD_NAMES = tuple(f.name for f in fields(_cls))
 
 
-@dataclass(frozen=True)
+@record
 class MCode(Command):
     """'7' — an M code; the number goes verbatim into a[3..6] (H4: int32 little-endian)."""
 
@@ -506,7 +525,6 @@ class MCode(Command):
         return cls(M_CODE_CODEC.unpack_from(frame, 3)[0])
 
 
-@dataclass(frozen=True)
 class _ControlCommand(Command):
     """A 0xFC … 0xFD frame: a[1], a[2] binary bytes, then an argument in a[3…]."""
 
@@ -528,7 +546,7 @@ class _ControlCommand(Command):
         return cls()
 
 
-@dataclass(frozen=True)
+@record
 class ResetArm(_ControlCommand):
     """Control 12/3 — reset the arm (RESET)."""
 
@@ -537,7 +555,7 @@ class ResetArm(_ControlCommand):
     A2: ClassVar[int] = 3
 
 
-@dataclass(frozen=True)
+@record
 class ResetConnector(_ControlCommand):
     """Control 12/6 — reset the host connector (RESET CONNECTOR)."""
 
@@ -546,7 +564,7 @@ class ResetConnector(_ControlCommand):
     A2: ClassVar[int] = 6
 
 
-@dataclass(frozen=True)
+@record
 class SetWorktableOrigin(_ControlCommand):
     """Control 20/1 — later coordinates are relative to robot point (X0, Y0, Z0) (G54)."""
 
@@ -570,7 +588,7 @@ class SetWorktableOrigin(_ControlCommand):
         return cls(*(FLOAT_CODEC.unpack_from(frame, _slot_offset(k))[0] for k in (1, 2, 3)))
 
 
-@dataclass(frozen=True)
+@record
 class RunProgram(_ControlCommand):
     """Control 30/2 — run an SD-card program: 0 the taught one, 1…15 Route_a…Route_o (PROGRAM n)."""
 
@@ -591,7 +609,7 @@ class RunProgram(_ControlCommand):
         return cls(frame[3])
 
 
-@dataclass(frozen=True)
+@record
 class PauseToggle(_ControlCommand):
     """Control 30/3, a[3]=2 — the first frame pauses, the next resumes (PAUSE)."""
 
@@ -609,7 +627,7 @@ class PauseToggle(_ControlCommand):
         return cls()
 
 
-@dataclass(frozen=True)
+@record
 class GoToPose(_ControlCommand):
     """Control 30/5 — go to fixed pose 0…3 (POSE n)."""
 
@@ -630,7 +648,7 @@ class GoToPose(_ControlCommand):
         return cls(frame[3])
 
 
-@dataclass(frozen=True)
+@record
 class Joystick(_ControlCommand):
     """Control 30/7 — analog joystick.
 
@@ -673,7 +691,7 @@ class Joystick(_ControlCommand):
         return cls(axis, tuple(frame[4 : 4 + count]))
 
 
-@dataclass(frozen=True)
+@record
 class StructureMode(_ControlCommand):
     """Control 30/9 — structure mode 0 (a[3]=0) or 1 (a[3]=9) (MODE 0 / MODE 1)."""
 

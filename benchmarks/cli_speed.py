@@ -31,12 +31,15 @@ armctl/script/grammar.py), after one warm-up run of each command.
     .venv/bin/pip install -e '.[bench]'                             # gcodeparser, the reference
     .venv/bin/python benchmarks/cli_speed.py                        # the issue's sizes
     .venv/bin/python benchmarks/cli_speed.py --lines 20000 --pairs 9 --check
+    .venv/bin/python benchmarks/cli_speed.py --keep /tmp/speed     # keep the scripts: rerun a row by hand
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import importlib.util
+import shlex
 import os
 import random
 import resource
@@ -140,6 +143,8 @@ def main(argv: list[str] | None = None) -> int:
                         "the other rows take a third as many, at least 3)")
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--check", action="store_true", help="exit 1 if a row misses its target")
+    parser.add_argument("--keep", metavar="DIR", help="write the generated scripts into DIR and keep them, so each "
+                        "row's commands (printed below the table) can be run again by hand; default: a temporary folder")
     options = parser.parse_args(argv)
     if importlib.util.find_spec("gcodeparser") is None:
         print("cli_speed: the package gcodeparser is not installed; install the bench extra "
@@ -148,8 +153,9 @@ def main(argv: list[str] | None = None) -> int:
     armctl = armctl_command()
     bare = [sys.executable, "-c", BARE_IMPORTS]
     few = max(options.pairs // 3, 3)
-    with tempfile.TemporaryDirectory(prefix="armctl-cli-speed-") as folder:
+    with (contextlib.nullcontext(options.keep) if options.keep else tempfile.TemporaryDirectory(prefix="armctl-cli-speed-")) as folder:
         work = Path(folder)
+        work.mkdir(parents=True, exist_ok=True)
         env = {key: value for key, value in os.environ.items() if key != "PYTHONDONTWRITEBYTECODE"}
         env["XDG_CACHE_HOME"] = str(work / "cache")
         walk, small, plain, expressions = work / "walk.txt", work / "small.txt", work / "plain.txt", work / "expr.txt"
@@ -205,6 +211,14 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{'row':<46} {'measured':>10} {'target':>10}")
     for name, measured, target, ok, detail in rows:
         print(f"{name:<46} {measured:>10} {target:>10} {'ok' if ok else 'MISSED'}  ({detail})")
+    shown = lambda command: shlex.join(["python" if part == sys.executable else part for part in command])  # noqa: E731
+    print(f"commands (in {options.keep or 'a temporary folder'}, with XDG_CACHE_HOME=cache there and bytecode "
+          f"writing allowed; python is {sys.executable}; each timed as its whole process's CPU time, paired with the second):")
+    for name, (first, second) in zip([row[0] for row in rows], [
+        (compile_plain, gcodeparser), (compile_expressions, bare), (lint_expressions, bare), (lint_walk, bare),
+        (lint_small, bare),
+    ]):
+        print(f"  {name}: {shown(first)}  vs  {shown(second)}")
     print("reproduce: .venv/bin/python benchmarks/cli_speed.py "
           f"--lines {options.lines} --compile-lines {options.compile_lines} "
           f"--expression-lines {options.expression_lines} --pairs {options.pairs} --seed {options.seed}")

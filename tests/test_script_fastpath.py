@@ -9,9 +9,13 @@ and without the fast path.
 
 from __future__ import annotations
 
+import re
+
+import pytest
 from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
+from armctl.errors import FieldError
 from armctl.script import InitialState, compile_lines
 from armctl.script.fastpath import parse_expression_line, parse_fast
 from armctl.script.grammar import parse_line
@@ -114,6 +118,20 @@ def test_resolve_planned_agrees_with_resolve(number, data):
     assert (plain is not None) == full.ok
     if plain is not None:
         assert plain == (full.arguments, full.updates)
+        # the hot path calls plan.run on the scanned words (number strings): resolve(), then the
+        # protocol constructor — the same command, or the same FieldError, as spec.make
+        words = tuple(item for letter, value in written.items() for item in (letter, repr(value)))
+        assert plan.arguments(words, state.values) == (tuple(full.arguments), full.updates, written)
+        try:
+            expected = spec.make(*full.arguments)
+        except FieldError as error:
+            with pytest.raises(FieldError, match=re.escape(str(error))):
+                plan.run(words, state.values)
+        else:
+            command, updates, words_written = plan.run(words, state.values)
+            assert (type(command), command, updates, words_written) == (type(expected), expected, full.updates, written)
+    else:
+        assert plan.run(tuple(item for pair in written.items() for item in pair), state.values) is None
 
 
 def test_a_plan_covers_the_common_shapes():

@@ -16,9 +16,10 @@ ignored; blocks still open at the end of the file are reported and closed there.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import NamedTuple, Optional, Union
 
+from ..records import record
 from .nodes import BlockLine, Node
 
 
@@ -30,7 +31,7 @@ class Line(NamedTuple):
     node: Node
 
 
-@dataclass(slots=True)
+@record(frozen=False, slots=True)
 class Block:
     """An ``O<label> repeat`` block: its opening line, its body, and where it ended."""
 

@@ -43,7 +43,7 @@ from . import messages
 from .blocks import Block, BlockCollector, Line, Problem
 from .execute import NOT_PLAIN, StatementExecution
 from .expressions import ExpressionError, Unavailable, evaluate, format_value
-from .fastpath import node_from_scan, parse_expression_line, scan
+from .fastpath import match_code_line, match_empty_line, node_from_scan, parse_expression_line, scanned_parts
 from .grammar import parse_line
 from .modal import InitialState, ModalState
 from .nodes import EMPTY, BlockLine
@@ -153,8 +153,25 @@ class Compilation(StatementExecution):
                     break
                 if not verdict:
                     continue
-            scanned = scan(text) if fast else None
+            match = match_code_line(text) if fast else None
             counted = False  # lines_run already counts this line (the hot path below)
+            if match is not None and not open_blocks:  # the hot path: a plain G line, no node built
+                counted = True
+                self.lines_run += 1
+                if self.lines_run > MAX_LINES_RUN:
+                    self._too_large(number, text)
+                statement = plain_move(number, text, match)
+                if statement is not NOT_PLAIN:
+                    if statement is not None:
+                        yield statement
+                    elif out:
+                        yield from out
+                        out.clear()
+                    continue
+            if match is not None:
+                scanned = scanned_parts(match)
+            else:  # as scan(text) says, without matching the code line twice
+                scanned = EMPTY if fast and match_empty_line(text) else None
             if scanned is None:
                 node = self._parse(number, text)
                 if node is None or node is EMPTY:
@@ -162,19 +179,6 @@ class Compilation(StatementExecution):
             elif scanned is EMPTY:
                 continue
             else:
-                if not open_blocks:  # the hot path: a plain G line, no node built
-                    counted = True
-                    self.lines_run += 1
-                    if self.lines_run > MAX_LINES_RUN:
-                        self._too_large(number, text)
-                    statement = plain_move(number, text, scanned)
-                    if statement is not NOT_PLAIN:
-                        if statement is not None:
-                            yield statement
-                        elif out:
-                            yield from out
-                            out.clear()
-                        continue
                 node = node_from_scan(scanned)
             if open_blocks or type(node) is BlockLine:
                 yield from self._block_line(Line(number, text, node))

@@ -5,7 +5,7 @@ that gives statements their meaning; the other half reads lines, pairs blocks an
 diagnostics.  Moves take one of three paths, each starting from the same untouched state:
 
   1. ``_plain_move`` — the hot path: a line the regex fast path scanned, in absolute mode,
-     with every value known (``resolve_planned``, one plan per line shape); no node is built.
+     with every value known (``resolve_planned``: one plan per line shape, compiled once); no node is built.
   2. ``_move`` — a node without word columns (a fast-path line in a repeat body, or G91):
      the general ``resolve``; the first sign of trouble re-parses the line with Lark.
   3. ``_move_with_diagnostics`` — a Lark node with columns: report everything wrong with the
@@ -36,11 +36,12 @@ from .source import SourceSpan
 from .statement import NO_WORDS, Statement
 from .statements import (
     CODES, DISTANCE_MODES, PLACEHOLDER, PLACEHOLDERS, PWM_OF_ACTIVE_CHANNEL, MoveSpec, PlainPlan, Resolution, blame,
-    plain_plan, resolve, resolve_planned,
+    plain_plan, resolve,
 )
 
 FLOAT32_MAX = 3.4028234663852886e38
 NOT_PLAIN = object()  # _plain_move: take the general path
+_new_statement = tuple.__new__  # _moved builds a Statement (a NamedTuple) from all its fields
 
 _KEYWORDS = {  # names → (command, what the number is or None, families it leaves unknown)
     ("RESET",): (ResetArm, None, (CARTESIAN, JOINTS)),
@@ -100,31 +101,30 @@ class StatementExecution:
 
     # --- moves (G1 G220 G222 G230 G6 G300 G301 G4 G54) -------------------------------------
 
-    def _plain_move(self, number: int, text: str, scanned) -> Optional[Statement]:
-        """The hot path: a scanned G line in absolute mode with every value known.
+    def _plain_move(self, number: int, text: str, match) -> Optional[Statement]:
+        """The hot path: a G line the fast path's regex matched (``match``: see
+        ``scanned_parts``), in absolute mode, with every value known.
 
         Returns the statement to yield (or None: held back or before ``from_line``), or
         ``NOT_PLAIN`` without having changed anything — then the line takes the general path."""
-        letter, digits, column, end_column, words = scanned
         state = self.state
         if state.relative:
             return NOT_PLAIN
-        shape = (letter, digits, words[::2])
+        groups = match.groups()
+        words = groups[2 : match.lastindex]
+        shape = (groups[0], groups[1], words[::2])
         plan = _PLANS.get(shape, NOT_PLAIN)
         if plan is NOT_PLAIN:
             plan = _plan(shape)
         if plan is None:
             return NOT_PLAIN
-        numbers = list(map(float, words[1::2]))
-        plain = resolve_planned(plan, numbers, state.values)
-        if plain is None:
-            return NOT_PLAIN
-        spec = plan.spec
         try:
-            command = spec.construct(*plain[0]) if spec.validate is None else spec.make(*plain[0])
+            plain = plan.run(words, state.values)  # resolve(), then the protocol constructor
         except FieldError:
             return NOT_PLAIN
-        return self._moved(spec, command, plain[1], number, text, column, end_column, dict(zip(plan.letters, numbers)), ())
+        if plain is None:
+            return NOT_PLAIN
+        return self._moved(plan.spec, plain[0], plain[1], number, text, match.start(1) + 1, match.end(2) + 1, plain[2], ())
 
     def _moved(self, spec: MoveSpec, command, updates: dict, number: int, text: str, column: int, end_column: int,
                written: dict, loop: tuple) -> Optional[Statement]:
@@ -136,8 +136,9 @@ class StatementExecution:
         if forgets:
             values.update(UNKNOWN[forgets])
             state.unknown_because[forgets] = (spec.code, number)
-        statement = Statement(command, self.file, number, column, end_column, text, spec.code, written,
-                              state.relative, loop)
+        # every field given, in order: the tuple itself, without NamedTuple's Python-level __new__
+        statement = _new_statement(Statement, (command, self.file, number, column, end_column, text, spec.code, written,
+                                               state.relative, loop))
         if self._arc is None and not spec.is_arc:
             return statement if number >= self.from_line else None
         return self._sequence(spec.code, number, text, (column, end_column), statement)

@@ -12,8 +12,9 @@ Parameters are LinuxCNC-style named globals, case-insensitive (names are stored 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
 from typing import Mapping, Union
+
+from ..records import record
 
 
 class _Poisoned:
@@ -41,7 +42,7 @@ class ExpressionError(Exception):
         self.column, self.end_column = column, end_column
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class Parameter:
     """``#<name>`` — the current value of a named parameter (``name`` is lower-case)."""
 
@@ -65,7 +66,7 @@ class Parameter:
         return f"#<{self.name}>"
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class Negate:
     """``-value``."""
 
@@ -88,7 +89,7 @@ _OPERATIONS = {
 }
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class Binary:
     """``left op right`` with ``op`` one of + - * /; the columns span both operands."""
 

@@ -31,19 +31,23 @@ from .nodes import EMPTY, Assignment, CodeLine, Node, code_number
 
 _NUMBER = r"[+-]?+(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)"
 _LETTER = r"(?:[Jj][1-6]=|[A-Za-z])"
-_GAP = r"(?:[ \t]++|\([^)\n]*+\))*+"  # spaces and inline comments
+# spaces and inline comments: a run of spaces, then any comments each followed by spaces (the
+# same strings as "(?:spaces|comment)*", matched without trying the alternation at every space)
+_GAP = r"[ \t]*+(?:\([^)\n]*+\)[ \t]*+)*+"
 _COMMENT = r"(?:;[^\n]*+)?+"
 
-# Python cannot capture a repeated group, so the words are MAX_WORDS optional groups in a row:
-# one pass both validates the line and captures every word.  Words are a prefix of the slots
-# (a slot that does not match leaves the next one at the same place, where it cannot match
-# either), so match.lastindex tells how many there are.  No valid line has more words than a
-# statement has letters (11); a longer line goes to Lark.
+# Python cannot capture a repeated group, so the words are MAX_WORDS optional groups, each
+# nested in the one before: one pass both validates the line and captures every word.  Words
+# are a prefix of the slots, so match.lastindex tells how many there are, and the first slot
+# that does not match ends the words without the later slots being tried.  No valid line has
+# more words than a statement has letters (11); a longer line goes to Lark.  The word letter is
+# _LETTER with the common letters tried first (J alone or J1= … J6= last): the same matches.
 MAX_WORDS = 12
-_WORD_SLOT = rf"(?:{_GAP}({_LETTER})({_NUMBER}))?+"
-_CODE_LINE = re.compile(
-    rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+([GgMm])([0-9]++)" + _WORD_SLOT * MAX_WORDS + rf"{_GAP}{_COMMENT}\Z"
-)
+_WORD = rf"{_GAP}([A-IK-Za-ik-z]|[Jj](?:[1-6]=)?)({_NUMBER})"
+_WORD_SLOTS = ""
+for _ in range(MAX_WORDS):
+    _WORD_SLOTS = rf"(?:{_WORD}{_WORD_SLOTS})?+"
+_CODE_LINE = re.compile(rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+([GgMm])([0-9]++){_WORD_SLOTS}{_GAP}{_COMMENT}\Z")
 _EMPTY_LINE = re.compile(rf"{_GAP}(?:[Nn][0-9]++{_GAP})?+{_COMMENT}\Z")
 
 
@@ -55,6 +59,15 @@ def scan(text: str):
     match = _CODE_LINE.match(text)
     if match is None:
         return EMPTY if _EMPTY_LINE.match(text) else None
+    return scanned_parts(match)
+
+
+# the compiler's hot path matches first, then asks scanned_parts (or, with no match, match_empty_line)
+match_code_line, match_empty_line = _CODE_LINE.match, _EMPTY_LINE.match
+
+
+def scanned_parts(match):
+    """``scan``'s answer for a line ``match_code_line`` matched."""
     groups = match.groups()
     return groups[0], groups[1], match.start(1) + 1, match.end(2) + 1, groups[2 : match.lastindex]
 

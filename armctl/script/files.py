@@ -22,10 +22,10 @@ from __future__ import annotations
 import io
 import os
 import sys
-from dataclasses import dataclass
 from typing import BinaryIO, Iterator, Union
 
 from ..inputs import MAX_INPUT_BYTES, InputTooLarge, read_bounded, read_file_bounded
+from ..records import record
 from .compiler import MAX_LINE_LENGTH, Compilation, compile_lines
 from .modal import InitialState
 
@@ -92,7 +92,7 @@ def compile_file(path: Union[str, os.PathLike], initial: InitialState | None = N
     return compile_lines(read_lines(path), os.fspath(path), initial, **options)
 
 
-@dataclass(frozen=True)
+@record
 class ScriptSnapshot:
     """A script's bytes as read once; every pass over it sees exactly the same lines."""
 

@@ -22,9 +22,10 @@ the public, typed way to seed the state (from the arm's reported state or a prof
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Mapping, Optional, Sequence
 
+from ..records import record
 from .expressions import POISONED  # noqa: F401 - re-exported: the state's "error already reported"
 
 POSE_KEYS = ("X", "Y", "Z", "A", "B", "C")
@@ -42,7 +43,7 @@ JOINTS = "joint target"
 UNKNOWN = {CARTESIAN: dict.fromkeys(POSE_KEYS), JOINTS: dict.fromkeys(JOINT_KEYS)}
 
 
-@dataclass(frozen=True)
+@record
 class InitialState:
     """What is known before the first line (default: nothing but the protocol's defaults).
 

@@ -14,9 +14,10 @@ point at a word.  ``spans`` is excluded from equality, so a fast-path node equal
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import field
 from typing import Optional, Union
 
+from ..records import record
 from .expressions import Value
 
 Span = tuple[int, int]  # (column, end_column)
@@ -32,7 +33,7 @@ def code_number(digits: str) -> int:
     return int(stripped or "0") if len(stripped) <= 18 else HUGE_CODE_NUMBER
 
 
-@dataclass(slots=True)
+@record(frozen=False, slots=True)
 class CodeLine:
     """``G1 X10 Y-2 J1=[#<a> + 1]`` — a G or M code and its words in source order.
 
@@ -54,7 +55,7 @@ class CodeLine:
         return f"{self.letter}{self.number}"
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class KeywordLine:
     """``RESET``, ``RESET CONNECTOR``, ``PAUSE``, ``POSE 2``, ``PROGRAM 5``, ``MODE 1`` — or an
     unknown name, which the compiler reports.  ``names`` are upper-case."""
@@ -70,7 +71,7 @@ class KeywordLine:
         return " ".join(self.names)
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class Assignment:
     """``#<name> = value`` (``name`` lower-case, without ``#<`` ``>``)."""
 
@@ -81,7 +82,7 @@ class Assignment:
     value_span: Span
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class BlockLine:
     """``O<label> repeat [n]`` or ``O<label> endrepeat`` (``label`` as ``O<name>`` lower-case
     inside the brackets, ``keyword`` lower-case; any other keyword is reported)."""

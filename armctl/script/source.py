@@ -14,8 +14,9 @@ bytes as visible stand-ins so a diagnostic can always be printed.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from typing import NamedTuple
+
+from ..records import record
 
 ERROR = "error"
 WARNING = "warning"
@@ -51,7 +52,7 @@ RULES: dict[str, Rule] = {
 }
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class SourceSpan:
     """A run of characters on one source line.
 
@@ -72,7 +73,7 @@ class SourceSpan:
         return self.text[self.column - 1 : self.end_column - 1]
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class Diagnostic:
     """One finding about a script: where, which code, how bad, what, and how to fix it."""
 

@@ -18,7 +18,7 @@ into a located diagnostic by the compiler, with ``blame()`` naming the word to b
 from __future__ import annotations
 
 import re
-from dataclasses import MISSING, dataclass, field
+from dataclasses import MISSING, field
 from dataclasses import fields as dataclass_fields
 from typing import Callable, NamedTuple, Optional
 
@@ -26,6 +26,8 @@ from ..errors import FieldError
 from ..protocol import (
     PWM_CHANNELS, AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, SetWorktableOrigin, f32_repr,
 )
+from ..records import record
+from ..records import record
 from .modal import (
     CARTESIAN, CARTESIAN_SPEED, JOINT_KEYS, JOINT_SPEED, JOINTS, POISONED, POSE_KEYS, PWM_KEYS, ModalState,
 )
@@ -41,7 +43,7 @@ def _special(slot) -> int:
     return _PWM_OF_CHANNEL if slot.key == PWM_OF_ACTIVE_CHANNEL else 0
 
 
-@dataclass(frozen=True, slots=True)
+@record(slots=True)
 class Slot:
     """One constructor field: written by ``letter`` (None: only read from the state), falling
     back to modal ``key`` (None: required on every line), offset from it under G91 if
@@ -54,7 +56,7 @@ class Slot:
     meaning: str = ""
 
 
-@dataclass(frozen=True)
+@record
 class MoveSpec:
     code: str
     build: Callable[..., Command]
@@ -268,8 +270,8 @@ def resolve(spec: MoveSpec, written: dict, state: ModalState) -> Resolution:
 
 
 class PlainPlan(NamedTuple):
-    """How ``resolve_planned`` fills a statement's arguments from one shape of plain line: the
-    words' letters in the order written (``plain_plan`` builds it once per shape)."""
+    """How the hot path fills a statement's arguments from one shape of plain line: the words'
+    letters in the order written (``plain_plan`` builds it once per shape)."""
 
     spec: MoveSpec
     letters: tuple  # canonical letters, as written
@@ -277,6 +279,13 @@ class PlainPlan(NamedTuple):
     write_keys: tuple  # the modal key each written word sets (S excluded)
     fetch: tuple  # (argument index, modal key) of the slots the line does not write
     pwm: Optional[tuple]  # G1: (T's index, S's index, the position of S among the words or -1)
+    # run(words, values) → (command, updates, written) or None: the compiler's hot path for this
+    # shape, resolve() and the protocol constructor as straight-line code (see _plan_functions);
+    # ``words`` alternates the letters and the numbers as written (strings or floats), ``written``
+    # maps letter → number; a value the protocol refuses raises its FieldError.  ``arguments``
+    # is the same with the constructor's arguments in place of the command (resolve_planned).
+    run: Callable
+    arguments: Callable
 
 
 def plain_plan(spec: MoveSpec, letters: tuple) -> Optional[PlainPlan]:
@@ -292,51 +301,72 @@ def plain_plan(spec: MoveSpec, letters: tuple) -> Optional[PlainPlan]:
     fetch = tuple((index, key) for index, letter, key in spec.plain_plan if letter not in letters)
     if any(key is None for _, key in fetch):
         return None  # a required word is missing: resolve() says so
-    return PlainPlan(
-        spec, letters, tuple(slot_of[letter][0] for letter in written), tuple(slot_of[letter][1] for letter in written),
-        fetch, (*spec.channel_slots, letters.index("S") if "S" in letters else -1) if pwm else None,
-    )
+    write_index = tuple(slot_of[letter][0] for letter in written)
+    write_keys = tuple(slot_of[letter][1] for letter in written)
+    pwm_plan = (*spec.channel_slots, letters.index("S") if "S" in letters else -1) if pwm else None
+    return PlainPlan(spec, letters, write_index, write_keys, fetch, pwm_plan,
+                     *_plan_functions(spec, letters, write_index, write_keys, fetch, pwm_plan))
+
+
+def _plan_functions(spec: MoveSpec, letters: tuple, write_index: tuple, write_keys: tuple, fetch: tuple,
+                    pwm: Optional[tuple]) -> tuple[Callable, Callable]:
+    """``run`` and ``arguments`` for one line shape (see ``PlainPlan``) as straight-line Python,
+    compiled once per shape (as ``dataclasses`` compiles ``__init__``): a line then costs a
+    float() per word, a lookup and a class test per value it takes from the state, one call of
+    the protocol constructor with every field positionally (``fields_builder``: no argument
+    list, no per-field setattr) and two dicts — no loop over slots.  They do exactly what
+    ``resolve_planned``'s definition says, then ``spec.make``; tests/test_script_fastpath.py
+    holds both to ``resolve()`` and ``spec.make`` on generated states."""
+    body = [f"    n{k} = float(words[{2 * k + 1}])" for k in range(len(letters))]
+    argument = {index: repr(default) if type(default) in (int, float) else f"defaults[{index}]"
+                for index, default in enumerate(spec.defaults)}
+    numbers = [f"n{k}" for k in range(len(letters))]
+    written = [number for k, number in enumerate(numbers) if not (pwm is not None and k == pwm[2])]
+    for index, number in zip(write_index, written):
+        argument[index] = number
+    for index, key in fetch:
+        body += [f"    v{index} = values[{key!r}]", f"    if v{index}.__class__ is not float:", "        return None"]
+        argument[index] = f"v{index}"
+    updates = ", ".join(f"{key!r}: {number}" for key, number in zip(write_keys, written))
+    body.append(f"    updates = {{{updates}}}")
+    if pwm is not None:
+        channel_index, pwm_index, s_at = pwm
+        body += ["    channel = values['T']", "    if channel.__class__ is not float:", "        return None",
+                 "    channel = int(channel)"]
+        if s_at < 0:
+            body += ["    pwm = values[PWM_KEYS[channel]]", "    if pwm.__class__ is not float:", "        return None"]
+        else:
+            body += [f"    pwm = updates[PWM_KEYS[channel]] = n{s_at}"]
+        argument[channel_index], argument[pwm_index] = "channel", "pwm"
+    arguments = ", ".join(argument[index] for index in range(len(spec.defaults)))
+    written_dict = ", ".join(f"{letter!r}: {number}" for letter, number in zip(letters, numbers))
+    build = getattr(spec.build, "fields_builder", lambda: spec.construct)()
+    run = body + [f"    command = build({arguments})"]
+    if spec.validate is not None:
+        run.append("    validate(command)")
+    run.append(f"    return command, updates, {{{written_dict}}}")
+    source = "\n".join(["def run(words, values):", *run, "def arguments(words, values):", *body,
+                         f"    return ({arguments},), updates, {{{written_dict}}}", ""])
+    namespace = {"PWM_KEYS": PWM_KEYS, "defaults": spec.defaults, "build": build, "validate": spec.validate}
+    exec(compile(source, f"<plan {spec.code} {' '.join(letters)}>", "exec"), namespace)  # noqa: S102 - our own source
+    return namespace["run"], namespace["arguments"]
 
 
 def resolve_planned(plan: PlainPlan, numbers: list, values: dict) -> Optional[tuple[list, dict]]:
     """``resolve()``'s common case, lean: (arguments, updates) for a line of ``plan``'s shape with
     the words' ``numbers`` as written, when nothing is missing, unknown or poisoned; None
     otherwise (then ``resolve()`` says what is wrong).  The caller must only use it in absolute
-    mode (G90).  It agrees with ``resolve()`` whenever it answers (tests/test_script_fastpath.py
-    checks this on generated states); a plan is built once per line shape, so a line costs no
-    dictionary of its words and no loop over every slot."""
-    arguments = list(plan.spec.defaults)
-    for index, key in plan.fetch:
-        value = values[key]
-        if value.__class__ is not float:
-            return None
-        arguments[index] = value
-    pwm = plan.pwm
-    if pwm is None:
-        for index, value in zip(plan.write_index, numbers):
-            arguments[index] = value
-        return arguments, dict(zip(plan.write_keys, numbers))
-    channel_index, pwm_index, s_at = pwm
-    if s_at < 0:
-        written = numbers
-    else:
-        written = numbers[:s_at] + numbers[s_at + 1:]
-    for index, value in zip(plan.write_index, written):
-        arguments[index] = value
-    updates = dict(zip(plan.write_keys, written))
-    channel = values["T"]
-    if channel.__class__ is not float:
+    mode (G90).  Arguments: the written words in their slots (S in the active channel's PWM
+    slot), every other slot from the modal state (each must hold a float), the channel from T;
+    updates: each written word's modal key (S: the active channel's PWM key).  It is
+    ``plan.arguments``; the compiler's hot path calls ``plan.run``, the same followed by the
+    constructor.  It agrees with ``resolve()`` whenever it answers (tests/test_script_fastpath.py
+    checks this on generated states)."""
+    words = [item for pair in zip(plan.letters, numbers) for item in pair]
+    found = plan.arguments(words, values)
+    if found is None:
         return None
-    arguments[channel_index] = channel = int(channel)
-    key = PWM_KEYS[channel]
-    if s_at < 0:
-        value = values[key]
-        if value.__class__ is not float:
-            return None
-    else:
-        value = updates[key] = numbers[s_at]
-    arguments[pwm_index] = value
-    return arguments, updates
+    return list(found[0]), found[1]
 
 
 _FIELD_IN_MESSAGE = re.compile(r"^\w+\.(\w+)")
