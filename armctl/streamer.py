@@ -68,7 +68,7 @@ reports or by time alone (``confirmed_by_reports`` / ``confirmed_by_time``), and
 holds each sign of loss with its evidence: two agreed sightings of one stream, the later at
 least at frame k, the earlier at most at the latest frame its report may lie on (no later than
 the latest the later report may lie on: the arm runs its frames in order), between which the
-arm could not have run the frames in between even ``1 / FASTEST_ARM_FACTOR`` times faster than
+arm could not have run the frames in between even ``speed_tolerance`` times faster than
 the model.  After ``cleared`` (a RESET CONNECTOR acting as it lands) time confirms nothing.
 
 Why it decided is data too, for whoever drives it (armctl/runner.py logs it with ``-v``):
@@ -112,16 +112,18 @@ DEFAULT_LEAD_S = 2.0
 # Frames kept free in the FIFO below its capacity: one for a frame the arm may still count while
 # executing it, the rest for what no model foresees.
 CAPACITY_MARGIN_FRAMES = 4
-# The time bound assumes the arm is never more than this many times slower than the model, whose
-# durations already include the profile's speed_factor: the slowest arm allowed for is relative
-# to the configured one.
+# The time bound assumes the arm is never more than ``speed_tolerance`` times slower than the model,
+# whose durations already include the profile's speed_factor: the slowest arm allowed for is
+# relative to the configured one.  That is a hypothesis about the arm the document leaves open, so
+# it is the profile's ``[connector] speed_tolerance`` (the document-level 2.0 below; ``armctl
+# probe`` measures it): these constants are the document's reading, for whoever has no profile.
 SLOWEST_ARM_FACTOR = 2.0
 # The other side of the same trust: the arm is never more than 1 / this faster than the model.
 # A frame the arm skipped (dropped by a full FIFO, cleared) shows as the arm getting somewhere
 # sooner than the frames in between could take even at that pace (see ``Streamer.losses``).
-# Symmetric to SLOWEST_ARM_FACTOR: the matrix of arms (speed_factor 0.7…2.0 against a profile
-# of 1.0) stays inside it, so a good arm never raises the alarm.
-FASTEST_ARM_FACTOR = 0.5
+# Symmetric to the slowest factor (1 / speed_tolerance): the matrix of arms (speed_factor 0.7…2.0
+# against a profile of 1.0) stays inside the document's 2.0, so a good arm never raises the alarm.
+FASTEST_ARM_FACTOR = 1 / SLOWEST_ARM_FACTOR
 # Added to the time between the two sightings that frame a suspected gap: a status frame is
 # sampled up to a period before it is read, and each sighting is timed to one period.
 LOSS_SLACK_S = 2 * STATUS_PERIOD_S
@@ -135,7 +137,9 @@ PACE_MIN_SPAN_S = 0.25
 PACE_SAMPLES = 4
 PACE_MAX = 4.0
 # Latest a frame may reach the connector after its last byte left the host (USB adapters,
-# kernel buffers), and slack per frame for the controller's own handling.
+# kernel buffers), and slack per frame for the controller's own handling at the document-level
+# tolerance (SLOWEST_ARM_FACTOR); a tolerance t allows (t − 1) / (SLOWEST_ARM_FACTOR − 1) of it
+# (``frame_slack_s``): the probe that measures t bounds a frame's start delay with it.
 ARRIVAL_SLACK_S = 0.05
 FRAME_SLACK_S = 0.02
 # How close a reported value must be to a path to count as evidence (the status resolution is
@@ -158,6 +162,14 @@ SCAN_WINDOW_FRAMES = 16
 # reach away from where the profile's forward kinematics put it (a link 10 % off): the time bound of
 # the Cartesian move that starts there allows for that much more path.
 UNVERIFIED_FK_SHARE = 0.1
+
+
+def frame_slack_s(slowest_factor: float) -> float:
+    """The time bound's slack per frame for an arm up to ``slowest_factor`` times slower than the
+    model: FRAME_SLACK_S at the document's SLOWEST_ARM_FACTOR, in proportion to the factor's
+    excess over 1 (an arm probed to run as its profile says leaves no room for unmodelled handling
+    either: the probe's timed moves bound a frame's start delay with the same margin)."""
+    return FRAME_SLACK_S * max(0.0, slowest_factor - 1.0) / (SLOWEST_ARM_FACTOR - 1.0)
 
 
 class WaitReason(StrEnum):
@@ -217,11 +229,12 @@ class Streamer:
         capacity: int | None = None,
         margin: int = CAPACITY_MARGIN_FRAMES,
         baud: int = DEFAULT_BAUD,
-        slowest_factor: float = SLOWEST_ARM_FACTOR,
+        slowest_factor: float | None = None,
         now: float = 0.0,
     ) -> None:
         """``capacity``: frames the connector holds behind the one executing (None: the profile's
-        ``[connector] fifo_frames``)."""
+        ``[connector] fifo_frames``); ``slowest_factor``: how many times slower than the model the
+        arm may run (None: the profile's ``[connector] speed_tolerance``)."""
         if lead_s <= 0:
             raise ValueError("lead_s must be greater than 0")
         self.planner = Planner(model, start)
@@ -233,7 +246,9 @@ class Streamer:
         self.lead_s = lead_s
         self.limit_frames = (connector.fifo_frames if capacity is None else capacity) - margin
         self.frame_s = frame_seconds(baud)
-        self.slowest_factor = slowest_factor
+        self.slowest_factor = connector.speed_tolerance if slowest_factor is None else slowest_factor
+        self.fastest_factor = 1 / self.slowest_factor  # the loss checks: the arm at most this much faster
+        self.frame_slack_s = frame_slack_s(self.slowest_factor)
         self.pending: deque[SentFrame] = deque()  # frames not yet known consumed, oldest first
         self.sent = 0
         self.consumed_lower_bound = 0
@@ -269,6 +284,8 @@ class Streamer:
         self.first_time_only_index: int | None = None  # the first frame confirmed by time alone
         self._recent_sent: deque[SentFrame] = deque(maxlen=RECENT_SENT_FRAMES)
         self._reversed_on: int | None = None  # the finished frame the last position report lay on (reversal check)
+        self._span_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, least model s, now): first sighting on it
+        self._too_slow: tuple[float, SentFrame] | None = None  # the arm seen slower than slowest_factor on a frame
         self._sighting: dict[str, tuple] = {}  # stream → (index, at_s, could_be_on) of its last agreed sighting
 
     # --- writing ----------------------------------------------------------------------------
@@ -370,7 +387,7 @@ class Streamer:
         est_start = max(wire_end, previous.est_end_s if previous else wire_end)
         certain_start = max(wire_end + ARRIVAL_SLACK_S, self._certain_tail_s)
         self._certain_tail_s = (certain_start + (segment.duration_s + self._unknown_start_s(segment)) * self.slowest_factor
-                                + FRAME_SLACK_S)
+                                + self.frame_slack_s)
         frame = SentFrame(
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
@@ -416,6 +433,7 @@ class Streamer:
     def _note_pause_state(self, paused: bool, now: float) -> None:
         if paused:
             self._pace_from.clear()  # a pace sample must not span a pause (arrival mode freezes a move)
+            self._span_from.clear()
         if paused and not self._paused and self._running_seen_s is not None:
             self._pause_began_s = self._running_seen_s  # it may have begun right after
         if not paused:
@@ -468,10 +486,10 @@ class Streamer:
             sent = self.pending[k]
             if chain is None:  # the rest of it, from the least fraction the evidence allows
                 left_s = sent.segment.duration_s - _time_window(sent.segment, fraction, 1.0)[0]
-                chain = now + (left_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + FRAME_SLACK_S
+                chain = now + (left_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + self.frame_slack_s
             else:
                 start = max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
-                chain = start + (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + FRAME_SLACK_S
+                chain = start + (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + self.frame_slack_s
             if chain >= sent.chain_end_s:
                 return  # no tighter than before, and neither are the frames after it
             sent.chain_end_s = chain
@@ -681,7 +699,7 @@ class Streamer:
     def _check_gap(self, stream: str, index: int, now: float, could_be_on) -> bool:
         """A sign of loss: the arm, seen by this stream at ``now`` at least at frame ``index``,
         got there from its last agreed sighting sooner than the frames in between could take at
-        the fastest plausible pace (FASTEST_ARM_FACTOR): they were skipped — dropped by a full
+        the fastest plausible pace (``fastest_factor``): they were skipped — dropped by a full
         FIFO or cleared.  Sound on a good arm: lost status frames only lengthen the interval, and
         the earlier sighting counts at the latest frame its report may lie on (a repeated path,
         a frame this stream cannot judge) that is no later than the latest frame this report
@@ -698,7 +716,7 @@ class Streamer:
         at_k = recent[index - first]
         gap_s = at_k.motion_before_s - recent[last[0] - first].motion_before_s - recent[last[0] - first].segment.duration_s
         allowed_s = now - since + LOSS_SLACK_S
-        if gap_s * FASTEST_ARM_FACTOR <= allowed_s:
+        if gap_s * self.fastest_factor <= allowed_s:
             return False
         # Confirm: the latest frame the earlier report may lie on (the cost is paid only here).
         latest = next((sent.index for sent in reversed(recent) if could_be_on(sent)), index)
@@ -707,13 +725,13 @@ class Streamer:
         if upper is None or upper.index + 1 >= index:
             return False
         gap_s = at_k.motion_before_s - upper.motion_before_s - upper.segment.duration_s
-        if gap_s * FASTEST_ARM_FACTOR <= allowed_s:
+        if gap_s * self.fastest_factor <= allowed_s:
             return False
         skipped = index - upper.index - 1
         self.losses.append(
             f"the arm got from {_where(upper)} to {_where(at_k)} in {now - since:.2f} s, but the "
             f"{skipped} frame{'s' if skipped != 1 else ''} between take {gap_s:.2f} s of motion "
-            f"(at least {gap_s * FASTEST_ARM_FACTOR:.2f} s on an arm {1 / FASTEST_ARM_FACTOR:g}x faster than the "
+            f"(at least {gap_s * self.fastest_factor:.2f} s on an arm {1 / self.fastest_factor:g}x faster than the "
             "model): they were skipped (dropped by a full FIFO, or cleared)")
         suspect = last[0]  # the arm may have been on a later frame through the same point: not claimed
         if self.first_suspect_index is None or suspect < self.first_suspect_index:
@@ -742,6 +760,7 @@ class Streamer:
         if lo <= 0.0 or hi >= 1.0:
             return  # a window cut at an end of the path: its middle is not where the arm was
         model_s = segment.time_at_fraction((lo + hi) / 2)
+        self._check_slowness(stream, index, segment, lo, hi, now)
         last = self._pace_from.get(stream)
         if last is None or last[0] != index or model_s < last[1]:
             self._pace_from[stream] = (index, model_s, now)
@@ -751,6 +770,26 @@ class Streamer:
         self._pace_samples.append((now - last[2]) / (model_s - last[1]))
         self._pace_from[stream] = (index, model_s, now)
         self.pace = min(PACE_MAX, max(1.0, *self._pace_samples))
+
+    def _check_slowness(self, stream: str, index: int, segment: Segment, lo: float, hi: float, now: float) -> None:
+        """The time bound's hypothesis checked along one frame: from the first agreed sighting of
+        this stream on it to this one, the arm covered at most the model time between the far
+        edges of the two windows, in at least the time between the readings less a status period
+        at each end (a frame is sampled up to a period before it is read).  More than
+        ``slowest_factor`` times the model even so: the arm is slower than the time bound allows
+        (kept for ``check_time_bound``).  Pauses clear the first sighting, as they do the pace's."""
+        first = self._span_from.get(stream)
+        t_lo, t_hi = segment.time_at_fraction(lo), segment.time_at_fraction(hi)
+        if first is None or first[0] != index or t_lo < first[1]:
+            self._span_from[stream] = (index, t_lo, now)
+            return
+        model_span_s = t_hi - first[1]
+        arm_span_s = now - first[2] - 2 * STATUS_PERIOD_S
+        if model_span_s <= 0 or arm_span_s <= 0:
+            return
+        slowest = arm_span_s / model_span_s
+        if slowest > self.slowest_factor and (self._too_slow is None or slowest > self._too_slow[0]):
+            self._too_slow = (slowest, self.pending[index - self.pending[0].index])
 
     def _reanchor(self, candidates: list[tuple[int, float, float]], now: float) -> None:
         """Re-time the pending frames from the candidate the estimate finds most plausible.
@@ -811,6 +850,24 @@ class Streamer:
         while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             self._consume_one(by_reports=True)
             self.bound_evidence = Evidence.AT_REST
+
+    def check_time_bound(self) -> None:
+        """A sign of loss, told at the end of a job: the arm was seen running a frame slower than
+        ``slowest_factor`` times the model (``_check_slowness``), so it is slower than the
+        profile's ``speed_tolerance`` allows and what the time bound confirmed it may not have run
+        when more frames were written (dropped by a full FIFO).  Said only when time confirmed a
+        frame (else the bound decided nothing) and time was still trusted (not ``cleared``)."""
+        if self._too_slow is None or not self.confirmed_by_time or not self._time_proves:
+            return
+        slowest, sent = self._too_slow
+        self._too_slow = None
+        self.losses.append(
+            f"the arm ran {_where(sent)} at least {slowest:.2f}x slower than the model, but the time bound allows "
+            f"{self.slowest_factor:g}x (the profile's [connector] speed_tolerance): frames confirmed by time alone "
+            "may not have run when more were written (dropped by a full FIFO?); run `armctl probe` again")
+        suspect = self.first_time_only_index or 0
+        if self.first_suspect_index is None or suspect < self.first_suspect_index:
+            self.first_suspect_index = suspect
 
     def last_known_done(self):
         """The tag of the last frame known finished, or None."""
