@@ -693,7 +693,7 @@ class Streamer:
             both = (previous == earliest and fraction is not None and previous_fraction is not None)
             self._restart_time_bound(agreed, now, max(0.0, min(previous_fraction, fraction)) if both else 0.0)
             if agreed == earliest:
-                self._measure_pace(stream, earliest, candidates, now)
+                self._measure_pace(stream, earliest, candidates, now, could_be_on)
         self._reanchor(candidates, now)
 
     def _check_gap(self, stream: str, index: int, now: float, could_be_on) -> bool:
@@ -745,7 +745,7 @@ class Streamer:
             return None
         return recent[index - recent[0].index].tag
 
-    def _measure_pace(self, stream: str, index: int, candidates, now: float) -> None:
+    def _measure_pace(self, stream: str, index: int, candidates, now: float, could_be_on=None) -> None:
         """One more pace sample when this stream saw the arm on frame ``index`` before, at least
         ``PACE_MIN_SPAN_S`` of model time earlier along its path (two sightings on one segment:
         the arm ran between them, neither waiting for the line nor between frames)."""
@@ -760,7 +760,8 @@ class Streamer:
         if lo <= 0.0 or hi >= 1.0:
             return  # a window cut at an end of the path: its middle is not where the arm was
         model_s = segment.time_at_fraction((lo + hi) / 2)
-        self._check_slowness(stream, index, segment, lo, hi, now)
+        if could_be_on is not None:
+            self._check_slowness(stream, index, segment, lo, hi, now, could_be_on)
         last = self._pace_from.get(stream)
         if last is None or last[0] != index or model_s < last[1]:
             self._pace_from[stream] = (index, model_s, now)
@@ -771,13 +772,16 @@ class Streamer:
         self._pace_from[stream] = (index, model_s, now)
         self.pace = min(PACE_MAX, max(1.0, *self._pace_samples))
 
-    def _check_slowness(self, stream: str, index: int, segment: Segment, lo: float, hi: float, now: float) -> None:
+    def _check_slowness(self, stream: str, index: int, segment: Segment, lo: float, hi: float, now: float,
+                        could_be_on) -> None:
         """The time bound's hypothesis checked along one frame: from the first agreed sighting of
         this stream on it to this one, the arm covered at most the model time between the far
         edges of the two windows, in at least the time between the readings less a status period
         at each end (a frame is sampled up to a period before it is read).  More than
-        ``slowest_factor`` times the model even so: the arm is slower than the time bound allows
-        (kept for ``check_time_bound``).  Pauses clear the first sighting, as they do the pace's."""
+        ``slowest_factor`` times the model even so — and this report may lie on no later frame
+        (``could_be_on``: a repeated path would let the arm be a lap further on, the cost paid
+        only here) — the arm is slower than the time bound allows (kept for
+        ``check_time_bound``).  Pauses clear the first sighting, as they do the pace's."""
         first = self._span_from.get(stream)
         t_lo, t_hi = segment.time_at_fraction(lo), segment.time_at_fraction(hi)
         if first is None or first[0] != index or t_lo < first[1]:
@@ -788,8 +792,12 @@ class Streamer:
         if model_span_s <= 0 or arm_span_s <= 0:
             return
         slowest = arm_span_s / model_span_s
-        if slowest > self.slowest_factor and (self._too_slow is None or slowest > self._too_slow[0]):
-            self._too_slow = (slowest, self.pending[index - self.pending[0].index])
+        if slowest <= self.slowest_factor or (self._too_slow is not None and slowest <= self._too_slow[0]):
+            return
+        k = index - self.pending[0].index
+        if any(could_be_on(self.pending[j]) for j in range(k + 1, len(self.pending))):
+            return  # the arm may be on a later frame through the same point: no judgement
+        self._too_slow = (slowest, self.pending[k])
 
     def _reanchor(self, candidates: list[tuple[int, float, float]], now: float) -> None:
         """Re-time the pending frames from the candidate the estimate finds most plausible.
