@@ -30,7 +30,9 @@ motion-time model), the moment its last byte left the wire, and two views of the
     PWM-only and attitude-only moves) are confirmed once even an arm ``slowest_factor`` times
     slower than the model would have finished them (the model's durations already include the
     configured ``speed_factor``, so the factor allows for an arm that much slower than its
-    profile says), counting only time the arm was seen
+    profile says; it is the profile's ``[connector] speed_tolerance``, 2 by the document's
+    silence, measured by ``armctl probe``; each frame adds ``frame_slack_s``, 20 ms at 2 and
+    in proportion to the factor's excess over 1), counting only time the arm was seen
     running (kind-4 status), so a pause, or silence about the pause state, stops that clock
     and a resume pushes every pending deadline back by the whole pause.  The deadlines form a
     chain from frame to frame; agreeing evidence that frame k has begun restarts the chain at
@@ -63,6 +65,27 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
     acts the moment it lands, ahead of everything queued: one in a job is written only once the
     lower bound says every frame before it has finished, so the arm runs the job in its order.
 
+Repeated targets (a zig-zag, back and forth, a closed path) are what position cannot prove:
+every report lies on every pending path through that point, so it proves only the oldest
+pending frame, and the rest is confirmed by time.  At the document's 2x (+ 20 ms a frame) a
+10 ms move is confirmed every 40 ms, so frames consumed but unproven grow by ~75 a second
+until the FIFO bound throttles the job to the proof's rate (``armctl bench``'s ``backforth``:
+2.98x its physical bound).  Two ways were weighed (issue 13):
+  - *order*: a direction reversal seen between sightings proves one more frame began — but
+    status positions come every 90 ms while such an arm turns every 10 ms, so order is aliased:
+    one frame proven where nine ran.  Not used.
+  - *timing*, chosen: the hypothesis behind the time bound is a setting of the arm profile
+    (``speed_tolerance``) that the probe measures (speed_factor to ±0.01 on its timed moves, and
+    the moves' start delay) and writes with a margin (at least 5 %).  Unproven frames then grow
+    at 1 − d / (d·t + slack) of the arm's rate — 13 a second for 10 ms moves at 1.05 — so 1,000
+    of them never fill the FIFO bound (196) with unproven frames: the job reaches its physical
+    bound.  The lag still grows with a job's length (about 15 s of uninterrupted 10 ms
+    back-and-forth throttles again); only a position on one pending path re-anchors it.
+  The hypothesis is checked as the job runs: two agreed sightings on one frame, a status period
+  of slack at each end, that put the arm slower than ``slowest_factor`` (and on no later frame
+  through the same point) end the job "frames may have been lost", never done, when time
+  confirmed anything (``check_time_bound``).
+
 What the summary may claim is data too: every frame consumed counts as confirmed by the arm's
 reports or by time alone (``confirmed_by_reports`` / ``confirmed_by_time``), and ``losses``
 holds each sign of loss with its evidence: two agreed sightings of one stream, the later at
@@ -79,8 +102,11 @@ in ``bound_evidence`` (``Evidence``: position, joints, time, the arm at rest at 
 The lead is the knob between a prompt stop and the line's pace: behind a move longer than the
 lead, short line-bound moves wait until the queue behind it is within the lead, so the line
 idles for most of that move (``armctl bench``'s ``longfirst`` row shows the cost; a longer
-``--lead`` removes it).  Writing them earlier would let an abort leave the arm moving for the
-lead plus that whole move after it has ended: the stop bound is not traded for speed.
+``--lead`` removes it).  Writing them earlier would leave more than the lead queued behind the
+move in progress, so an abort near its end (or a feed override, whose effect shows within the
+lead — in either control-frame mode) would wait longer than the lead after it: the stop bound
+is not traded for speed.  The idle is exactly the lead's: at 2 s, 50 of the 40 ms moves wait
+behind the 4.7 s move and the line has nothing to send for the rest of it (docs/bench.md).
 """
 
 from __future__ import annotations
