@@ -273,6 +273,8 @@ class Streamer:
         self.limit_frames = (connector.fifo_frames if capacity is None else capacity) - margin
         self.frame_s = frame_seconds(baud)
         self.slowest_factor = connector.speed_tolerance if slowest_factor is None else slowest_factor
+        self._tolerance = self.slowest_factor  # relative to the measured pace (``_measure_pace``)
+        self._least_factor_confirmed: float | None = None  # the factor in force when time first confirmed a frame
         self.fastest_factor = 1 / self.slowest_factor  # the loss checks: the arm at most this much faster
         self.frame_slack_s = frame_slack_s(self.slowest_factor)
         self.pending: deque[SentFrame] = deque()  # frames not yet known consumed, oldest first
@@ -310,7 +312,8 @@ class Streamer:
         self.first_time_only_index: int | None = None  # the first frame confirmed by time alone
         self._recent_sent: deque[SentFrame] = deque(maxlen=RECENT_SENT_FRAMES)
         self._reversed_on: int | None = None  # the finished frame the last position report lay on (reversal check)
-        self._span_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, least model s, now): first sighting on it
+        self._span_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, least model s, at): first pair on a frame
+        self._span_last: dict[str, tuple[int, float, float, float]] = {}  # stream → (index, model s lo, hi, at): last sighting
         self._too_slow: tuple[float, SentFrame] | None = None  # the arm seen slower than slowest_factor on a frame
         self._sighting: dict[str, tuple] = {}  # stream → (index, at_s, could_be_on) of its last agreed sighting
 
@@ -460,6 +463,7 @@ class Streamer:
         if paused:
             self._pace_from.clear()  # a pace sample must not span a pause (arrival mode freezes a move)
             self._span_from.clear()
+            self._span_last.clear()
         if paused and not self._paused and self._running_seen_s is not None:
             self._pause_began_s = self._running_seen_s  # it may have begun right after
         if not paused:
@@ -546,6 +550,7 @@ class Streamer:
         else:
             if self.confirmed_by_time == 0:
                 self.first_time_only_index = self.consumed_lower_bound - 1
+                self._least_factor_confirmed = self.slowest_factor
             self.confirmed_by_time += 1
 
     def _observe(self, xyz, now: float) -> None:
@@ -797,28 +802,55 @@ class Streamer:
         self._pace_samples.append((now - last[2]) / (model_s - last[1]))
         self._pace_from[stream] = (index, model_s, now)
         self.pace = min(PACE_MAX, max(1.0, *self._pace_samples))
+        # An arm measured slower than its profile's speed_factor: the time bound allows that much
+        # more from here on (only ever more careful; whatever it confirmed before is judged by
+        # ``_check_slowness``).
+        wider = self._tolerance * self.pace
+        if wider > self.slowest_factor:
+            self._widen_time_bound(wider)
+
+    def _widen_time_bound(self, factor: float) -> None:
+        """From now on the time bound allows an arm ``factor`` times slower than the model; the
+        pending frames' deadlines move back by what the wider factor adds to each of them and to
+        every pending frame before it (a chain can only end later, never earlier)."""
+        extra = factor - self.slowest_factor
+        self.slowest_factor = factor
+        added_s = 0.0
+        for sent in self.pending:
+            added_s += (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * extra
+            sent.chain_end_s += added_s
+            sent.certain_end_s += added_s  # inf (a G300 waiting for its G301) stays inf
+        self._certain_tail_s += added_s
 
     def _check_slowness(self, stream: str, index: int, segment: Segment, lo: float, hi: float, now: float,
                         could_be_on) -> None:
-        """The time bound's hypothesis checked along one frame: from the first agreed sighting of
-        this stream on it to this one, the arm covered at most the model time between the far
-        edges of the two windows, in at least the time between the readings less a status period
-        at each end (a frame is sampled up to a period before it is read).  More than
-        ``slowest_factor`` times the model even so — and this report may lie on no later frame
-        (``could_be_on``: a repeated path would let the arm be a lap further on, the cost paid
-        only here) — the arm is slower than the time bound allows (kept for
-        ``check_time_bound``).  Pauses clear the first sighting, as they do the pace's."""
-        first = self._span_from.get(stream)
+        """The time bound's hypothesis checked along one frame, on pairs of agreed sightings of
+        this stream on it, so that one corrupted report (one that still lies on the path) cannot
+        raise it: with sightings a then b, the arm was at least at min(a, b) at b's time and at
+        most at max(a, b) at a's (it runs a frame forwards).  The first pair on the frame gives
+        the first bound, each later pair the second; the arm then covered at most the model time
+        between them, in at least the time between those readings less a status period at each
+        end (a frame is sampled up to a period before it is read).  More than ``slowest_factor``
+        times the model even so — and this report may lie on no later frame (``could_be_on``: a
+        repeated path would let the arm be a lap further on; the cost is paid only here) — the
+        arm is slower than the time bound allows (kept for ``check_time_bound``).  Pauses clear
+        the sightings, as they do the pace's."""
         t_lo, t_hi = segment.time_at_fraction(lo), segment.time_at_fraction(hi)
-        if first is None or first[0] != index or t_lo < first[1]:
-            self._span_from[stream] = (index, t_lo, now)
+        last = self._span_last.get(stream)
+        self._span_last[stream] = (index, t_lo, t_hi, now)
+        if last is None or last[0] != index:
+            self._span_from.pop(stream, None)
             return
-        model_span_s = t_hi - first[1]
-        arm_span_s = now - first[2] - 2 * STATUS_PERIOD_S
+        first = self._span_from.get(stream)
+        if first is None or first[0] != index:
+            self._span_from[stream] = (index, min(last[1], t_lo), now)  # at least there, at b's time
+            return
+        model_span_s = max(last[2], t_hi) - first[1]  # at most there, at a's time
+        arm_span_s = last[3] - first[2] - 2 * STATUS_PERIOD_S
         if model_span_s <= 0 or arm_span_s <= 0:
             return
         slowest = arm_span_s / model_span_s
-        if slowest <= self.slowest_factor or (self._too_slow is not None and slowest <= self._too_slow[0]):
+        if slowest <= self._tolerance or (self._too_slow is not None and slowest <= self._too_slow[0]):
             return
         k = index - self.pending[0].index
         if any(could_be_on(self.pending[j]) for j in range(k + 1, len(self.pending))):
@@ -886,19 +918,20 @@ class Streamer:
             self.bound_evidence = Evidence.AT_REST
 
     def check_time_bound(self) -> None:
-        """A sign of loss, told at the end of a job: the arm was seen running a frame slower than
-        ``slowest_factor`` times the model (``_check_slowness``), so it is slower than the
-        profile's ``speed_tolerance`` allows and what the time bound confirmed it may not have run
-        when more frames were written (dropped by a full FIFO).  Said only when time confirmed a
-        frame (else the bound decided nothing) and time was still trusted (not ``cleared``)."""
-        if self._too_slow is None or not self.confirmed_by_time or not self._time_proves:
+        """A sign of loss, told at the end of a job: the arm was proven to run a frame slower than
+        the profile's ``speed_tolerance`` (``_check_slowness``) and slower than the factor the
+        time bound used when it first confirmed a frame (before a measured pace widened it), so
+        what time confirmed may not have run when more frames were written (dropped by a full
+        FIFO).  Said only when time confirmed a frame and was still trusted (not ``cleared``)."""
+        least = self._least_factor_confirmed
+        if self._too_slow is None or least is None or self._too_slow[0] <= least or not self._time_proves:
             return
         slowest, sent = self._too_slow
         self._too_slow = None
         self.losses.append(
-            f"the arm ran {_where(sent)} at least {slowest:.2f}x slower than the model, but the time bound allows "
-            f"{self.slowest_factor:g}x (the profile's [connector] speed_tolerance): frames confirmed by time alone "
-            "may not have run when more were written (dropped by a full FIFO?); run `armctl probe` again")
+            f"the arm ran {_where(sent)} at least {slowest:.2f}x slower than the model, but the time bound allowed "
+            f"{least:g}x (the profile's [connector] speed_tolerance) when it confirmed frames: they may not have run "
+            "when more were written (dropped by a full FIFO?); run `armctl probe` again")
         suspect = self.first_time_only_index or 0
         if self.first_suspect_index is None or suspect < self.first_suspect_index:
             self.first_suspect_index = suspect
