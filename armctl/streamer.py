@@ -81,10 +81,15 @@ until the FIFO bound throttles the job to the proof's rate (``armctl bench``'s `
     of them never fill the FIFO bound (196) with unproven frames: the job reaches its physical
     bound.  The lag still grows with a job's length (about 15 s of uninterrupted 10 ms
     back-and-forth throttles again); only a position on one pending path re-anchors it.
-  The hypothesis is checked as the job runs: two agreed sightings on one frame, a status period
-  of slack at each end, that put the arm slower than ``slowest_factor`` (and on no later frame
-  through the same point) end the job "frames may have been lost", never done, when time
-  confirmed anything (``check_time_bound``).
+  The hypothesis is checked as the job runs, twice.  A measured ``pace`` (the arm slower than
+  its profile's speed_factor) widens the bound to ``speed_tolerance × pace`` for every pending
+  frame and every later one (``_widen_time_bound``: only ever more careful), so an arm 1.3x or
+  2x slower than a profile probed at 1.05 drops nothing once one frame long enough to time has
+  run.  And pairs of agreed sightings along one frame (a status period of slack at each end, one
+  corrupted report cannot decide) that prove the arm slower than the tolerance, on no later
+  frame through the same point, end the job "frames may have been lost", never done, when time
+  confirmed frames at a narrower factor (``check_time_bound``): frames confirmed before any
+  pace could be measured (delays, then a long move) may have been overrun.
 
 What the summary may claim is data too: every frame consumed counts as confirmed by the arm's
 reports or by time alone (``confirmed_by_reports`` / ``confirmed_by_time``), and ``losses``
