@@ -59,12 +59,12 @@ from operator import attrgetter
 from typing import Iterable, Iterator
 
 from .job_control import JobControl, agreed_pause, control_frames_of  # noqa: F401  (agreed_pause: the pause rule, re-exported)
-from .streamer import FASTEST_ARM_FACTOR, LOSS_SLACK_S, ROTATION_S
+from .streamer import LOSS_SLACK_S, ROTATION_S
 from .protocol import (
     CONTROL_COMMANDS, ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
     RunPositionStatus, StatusFrame,
 )
-from .streamer import ARRIVAL_SLACK_S, FRAME_SLACK_S
+from .streamer import ARRIVAL_SLACK_S
 
 ABORT_SEQUENCES = {
     "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
@@ -487,7 +487,7 @@ class Job:
         last = self._last_move
         moved_until_s = 0.0 if last is None else last.motion_before_s + last.segment.duration_s
         count = streamer.sent - (0 if last is None else last.index + 1)
-        all_s = motion_end_s + (streamer.motion_sent_s - moved_until_s) * slowest + count * FRAME_SLACK_S
+        all_s = motion_end_s + (streamer.motion_sent_s - moved_until_s) * slowest + count * streamer.frame_slack_s
         # … and no earlier than the chain over the recent ones, each begun no earlier than it arrived
         trailing = []
         for sent in reversed(self._recent):
@@ -497,7 +497,7 @@ class Job:
         done_s = motion_end_s
         for sent in reversed(trailing):
             done_s = (max(done_s, sent.wire_end_s + ARRIVAL_SLACK_S) + sent.segment.duration_s * slowest
-                      + FRAME_SLACK_S)
+                      + streamer.frame_slack_s)
         return max(done_s, all_s)
 
     def _check_job_time(self, done_s: float) -> None:
@@ -505,14 +505,15 @@ class Job:
         frame written could take at the fastest plausible pace.  The arm time may be short by
         up to a rotation (the last motion seen is reported up to a rotation late)."""
         streamer = self.streamer
+        streamer.check_time_bound()  # the other side: an arm slower than the time bound allows
         arm_s = done_s - self.view.started_s
-        least_s = streamer.motion_sent_s * FASTEST_ARM_FACTOR
+        least_s = streamer.motion_sent_s * streamer.fastest_factor
         if arm_s + ROTATION_S + LOSS_SLACK_S >= least_s:
             return
         streamer.losses.append(
             f"the arm was at rest at the last target {arm_s:.1f} s after the first frame, but the frames sent take "
             f"{streamer.motion_sent_s:.1f} s of motion (at least {least_s:.1f} s on an arm "
-            f"{1 / FASTEST_ARM_FACTOR:g}x faster than the model): some were not run (dropped by a full FIFO?)")
+            f"{1 / streamer.fastest_factor:g}x faster than the model): some were not run (dropped by a full FIFO?)")
         suspect = streamer.first_time_only_index or 0
         if streamer.first_suspect_index is None or suspect < streamer.first_suspect_index:
             streamer.first_suspect_index = suspect

@@ -106,6 +106,9 @@ class LintOptions:
     end_paused: bool | None = None
 
 
+# [connector] speed_tolerance: 1 (the arm exactly as its speed_factor says) … 4 (as SPEED_FACTOR_RANGE:
+# an arm further off has the wrong speed_factor, not a tolerance).
+SPEED_TOLERANCE_RANGE = (1.0, 4.0)
 CONTROL_FRAMES = ("queued", "arrival")  # H5, or its alternative
 STATUS_XYZ_FRAMES = ("worktable", "robot")  # what status kind 0 reports after G54
 
@@ -122,13 +125,18 @@ class Connector:
     kind 0 reports X/Y/Z in the frame G54 set) or ``"robot"``.  ``speed_factor``: the arm's real
     motion time ÷ the model's (``MotionModel`` applies it, once, for every reader).
     ``kinematics_verified``: the profile's links were checked against this arm; while false,
-    forward and inverse kinematics never decide what the arm consumed or where it starts."""
+    forward and inverse kinematics never decide what the arm consumed or where it starts.
+    ``speed_tolerance`` (≥ 1): how far the arm may stray from ``speed_factor``, either way — the
+    streamer's time bound confirms a frame once an arm that many times slower (plus
+    ``speed_tolerance − 1`` × 20 ms of handling) has finished it, and a sign of loss needs the arm
+    that many times faster.  The document pins nothing: 2.0; ``armctl probe`` measures it."""
 
     fifo_frames: int
     control_frames: str
     status_xyz_frame: str
     speed_factor: float
     kinematics_verified: bool
+    speed_tolerance: float = 2.0
     given: frozenset = field(default=frozenset(), compare=False)  # keys a file set (not the document's)
 
     def is_default(self, key: str) -> bool:
@@ -336,7 +344,7 @@ _SCHEMA: dict[str, Any] = {
     "connector": {
         "fifo_frames": _whole_in(*FIFO_RANGE_FRAMES), "control_frames": _one_of(CONTROL_FRAMES),
         "status_xyz_frame": _one_of(STATUS_XYZ_FRAMES), "speed_factor": _in(*SPEED_FACTOR_RANGE),
-        "kinematics_verified": _boolean,
+        "kinematics_verified": _boolean, "speed_tolerance": _in(*SPEED_TOLERANCE_RANGE),
     },
 }
 _OPTIONAL_SECTIONS = {"lint"}

@@ -30,7 +30,9 @@ motion-time model), the moment its last byte left the wire, and two views of the
     PWM-only and attitude-only moves) are confirmed once even an arm ``slowest_factor`` times
     slower than the model would have finished them (the model's durations already include the
     configured ``speed_factor``, so the factor allows for an arm that much slower than its
-    profile says), counting only time the arm was seen
+    profile says; it is the profile's ``[connector] speed_tolerance``, 2 by the document's
+    silence, measured by ``armctl probe``; each frame adds ``frame_slack_s``, 20 ms at 2 and
+    in proportion to the factor's excess over 1), counting only time the arm was seen
     running (kind-4 status), so a pause, or silence about the pause state, stops that clock
     and a resume pushes every pending deadline back by the whole pause.  The deadlines form a
     chain from frame to frame; agreeing evidence that frame k has begun restarts the chain at
@@ -63,12 +65,38 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
     acts the moment it lands, ahead of everything queued: one in a job is written only once the
     lower bound says every frame before it has finished, so the arm runs the job in its order.
 
+Repeated targets (a zig-zag, back and forth, a closed path) are what position cannot prove:
+every report lies on every pending path through that point, so it proves only the oldest
+pending frame, and the rest is confirmed by time.  At the document's 2x (+ 20 ms a frame) a
+10 ms move is confirmed every 40 ms, so frames consumed but unproven grow by ~75 a second
+until the FIFO bound throttles the job to the proof's rate (``armctl bench``'s ``backforth``:
+2.98x its physical bound).  Two ways were weighed (issue 13):
+  - *order*: a direction reversal seen between sightings proves one more frame began — but
+    status positions come every 90 ms while such an arm turns every 10 ms, so order is aliased:
+    one frame proven where nine ran.  Not used.
+  - *timing*, chosen: the hypothesis behind the time bound is a setting of the arm profile
+    (``speed_tolerance``) that the probe measures (speed_factor to ±0.01 on its timed moves, and
+    the moves' start delay) and writes with a margin (at least 5 %).  Unproven frames then grow
+    at 1 − d / (d·t + slack) of the arm's rate — 13 a second for 10 ms moves at 1.05 — so 1,000
+    of them never fill the FIFO bound (196) with unproven frames: the job reaches its physical
+    bound.  The lag still grows with a job's length (about 15 s of uninterrupted 10 ms
+    back-and-forth throttles again); only a position on one pending path re-anchors it.
+  The hypothesis is checked as the job runs, twice.  A measured ``pace`` (the arm slower than
+  its profile's speed_factor) widens the bound to ``speed_tolerance × pace`` for every pending
+  frame and every later one (``_widen_time_bound``: only ever more careful), so an arm 1.3x or
+  2x slower than a profile probed at 1.05 drops nothing once one frame long enough to time has
+  run.  And pairs of agreed sightings along one frame (a status period of slack at each end, one
+  corrupted report cannot decide) that prove the arm slower than the tolerance, on no later
+  frame through the same point, end the job "frames may have been lost", never done, when time
+  confirmed frames at a narrower factor (``check_time_bound``): frames confirmed before any
+  pace could be measured (delays, then a long move) may have been overrun.
+
 What the summary may claim is data too: every frame consumed counts as confirmed by the arm's
 reports or by time alone (``confirmed_by_reports`` / ``confirmed_by_time``), and ``losses``
 holds each sign of loss with its evidence: two agreed sightings of one stream, the later at
 least at frame k, the earlier at most at the latest frame its report may lie on (no later than
 the latest the later report may lie on: the arm runs its frames in order), between which the
-arm could not have run the frames in between even ``1 / FASTEST_ARM_FACTOR`` times faster than
+arm could not have run the frames in between even ``speed_tolerance`` times faster than
 the model.  After ``cleared`` (a RESET CONNECTOR acting as it lands) time confirms nothing.
 
 Why it decided is data too, for whoever drives it (armctl/runner.py logs it with ``-v``):
@@ -79,8 +107,11 @@ in ``bound_evidence`` (``Evidence``: position, joints, time, the arm at rest at 
 The lead is the knob between a prompt stop and the line's pace: behind a move longer than the
 lead, short line-bound moves wait until the queue behind it is within the lead, so the line
 idles for most of that move (``armctl bench``'s ``longfirst`` row shows the cost; a longer
-``--lead`` removes it).  Writing them earlier would let an abort leave the arm moving for the
-lead plus that whole move after it has ended: the stop bound is not traded for speed.
+``--lead`` removes it).  Writing them earlier would leave more than the lead queued behind the
+move in progress, so an abort near its end (or a feed override, whose effect shows within the
+lead — in either control-frame mode) would wait longer than the lead after it: the stop bound
+is not traded for speed.  The idle is exactly the lead's: at 2 s, 50 of the 40 ms moves wait
+behind the 4.7 s move and the line has nothing to send for the rest of it (docs/bench.md).
 """
 
 from __future__ import annotations
@@ -112,16 +143,18 @@ DEFAULT_LEAD_S = 2.0
 # Frames kept free in the FIFO below its capacity: one for a frame the arm may still count while
 # executing it, the rest for what no model foresees.
 CAPACITY_MARGIN_FRAMES = 4
-# The time bound assumes the arm is never more than this many times slower than the model, whose
-# durations already include the profile's speed_factor: the slowest arm allowed for is relative
-# to the configured one.
+# The time bound assumes the arm is never more than ``speed_tolerance`` times slower than the model,
+# whose durations already include the profile's speed_factor: the slowest arm allowed for is
+# relative to the configured one.  That is a hypothesis about the arm the document leaves open, so
+# it is the profile's ``[connector] speed_tolerance`` (the document-level 2.0 below; ``armctl
+# probe`` measures it): these constants are the document's reading, for whoever has no profile.
 SLOWEST_ARM_FACTOR = 2.0
 # The other side of the same trust: the arm is never more than 1 / this faster than the model.
 # A frame the arm skipped (dropped by a full FIFO, cleared) shows as the arm getting somewhere
 # sooner than the frames in between could take even at that pace (see ``Streamer.losses``).
-# Symmetric to SLOWEST_ARM_FACTOR: the matrix of arms (speed_factor 0.7…2.0 against a profile
-# of 1.0) stays inside it, so a good arm never raises the alarm.
-FASTEST_ARM_FACTOR = 0.5
+# Symmetric to the slowest factor (1 / speed_tolerance): the matrix of arms (speed_factor 0.7…2.0
+# against a profile of 1.0) stays inside the document's 2.0, so a good arm never raises the alarm.
+FASTEST_ARM_FACTOR = 1 / SLOWEST_ARM_FACTOR
 # Added to the time between the two sightings that frame a suspected gap: a status frame is
 # sampled up to a period before it is read, and each sighting is timed to one period.
 LOSS_SLACK_S = 2 * STATUS_PERIOD_S
@@ -135,7 +168,9 @@ PACE_MIN_SPAN_S = 0.25
 PACE_SAMPLES = 4
 PACE_MAX = 4.0
 # Latest a frame may reach the connector after its last byte left the host (USB adapters,
-# kernel buffers), and slack per frame for the controller's own handling.
+# kernel buffers), and slack per frame for the controller's own handling at the document-level
+# tolerance (SLOWEST_ARM_FACTOR); a tolerance t allows (t − 1) / (SLOWEST_ARM_FACTOR − 1) of it
+# (``frame_slack_s``): the probe that measures t bounds a frame's start delay with it.
 ARRIVAL_SLACK_S = 0.05
 FRAME_SLACK_S = 0.02
 # How close a reported value must be to a path to count as evidence (the status resolution is
@@ -158,6 +193,14 @@ SCAN_WINDOW_FRAMES = 16
 # reach away from where the profile's forward kinematics put it (a link 10 % off): the time bound of
 # the Cartesian move that starts there allows for that much more path.
 UNVERIFIED_FK_SHARE = 0.1
+
+
+def frame_slack_s(slowest_factor: float) -> float:
+    """The time bound's slack per frame for an arm up to ``slowest_factor`` times slower than the
+    model: FRAME_SLACK_S at the document's SLOWEST_ARM_FACTOR, in proportion to the factor's
+    excess over 1 (an arm probed to run as its profile says leaves no room for unmodelled handling
+    either: the probe's timed moves bound a frame's start delay with the same margin)."""
+    return FRAME_SLACK_S * max(0.0, slowest_factor - 1.0) / (SLOWEST_ARM_FACTOR - 1.0)
 
 
 class WaitReason(StrEnum):
@@ -217,11 +260,12 @@ class Streamer:
         capacity: int | None = None,
         margin: int = CAPACITY_MARGIN_FRAMES,
         baud: int = DEFAULT_BAUD,
-        slowest_factor: float = SLOWEST_ARM_FACTOR,
+        slowest_factor: float | None = None,
         now: float = 0.0,
     ) -> None:
         """``capacity``: frames the connector holds behind the one executing (None: the profile's
-        ``[connector] fifo_frames``)."""
+        ``[connector] fifo_frames``); ``slowest_factor``: how many times slower than the model the
+        arm may run (None: the profile's ``[connector] speed_tolerance``)."""
         if lead_s <= 0:
             raise ValueError("lead_s must be greater than 0")
         self.planner = Planner(model, start)
@@ -233,7 +277,11 @@ class Streamer:
         self.lead_s = lead_s
         self.limit_frames = (connector.fifo_frames if capacity is None else capacity) - margin
         self.frame_s = frame_seconds(baud)
-        self.slowest_factor = slowest_factor
+        self.slowest_factor = connector.speed_tolerance if slowest_factor is None else slowest_factor
+        self._tolerance = self.slowest_factor  # relative to the measured pace (``_measure_pace``)
+        self._least_factor_confirmed: float | None = None  # the factor in force when time first confirmed a frame
+        self.fastest_factor = 1 / self.slowest_factor  # the loss checks: the arm at most this much faster
+        self.frame_slack_s = frame_slack_s(self.slowest_factor)
         self.pending: deque[SentFrame] = deque()  # frames not yet known consumed, oldest first
         self.sent = 0
         self.consumed_lower_bound = 0
@@ -269,6 +317,9 @@ class Streamer:
         self.first_time_only_index: int | None = None  # the first frame confirmed by time alone
         self._recent_sent: deque[SentFrame] = deque(maxlen=RECENT_SENT_FRAMES)
         self._reversed_on: int | None = None  # the finished frame the last position report lay on (reversal check)
+        self._span_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, least model s, at): first pair on a frame
+        self._span_last: dict[str, tuple[int, float, float, float]] = {}  # stream → (index, model s lo, hi, at): last sighting
+        self._too_slow: tuple[float, SentFrame] | None = None  # the arm seen slower than slowest_factor on a frame
         self._sighting: dict[str, tuple] = {}  # stream → (index, at_s, could_be_on) of its last agreed sighting
 
     # --- writing ----------------------------------------------------------------------------
@@ -370,7 +421,7 @@ class Streamer:
         est_start = max(wire_end, previous.est_end_s if previous else wire_end)
         certain_start = max(wire_end + ARRIVAL_SLACK_S, self._certain_tail_s)
         self._certain_tail_s = (certain_start + (segment.duration_s + self._unknown_start_s(segment)) * self.slowest_factor
-                                + FRAME_SLACK_S)
+                                + self.frame_slack_s)
         frame = SentFrame(
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
@@ -416,6 +467,8 @@ class Streamer:
     def _note_pause_state(self, paused: bool, now: float) -> None:
         if paused:
             self._pace_from.clear()  # a pace sample must not span a pause (arrival mode freezes a move)
+            self._span_from.clear()
+            self._span_last.clear()
         if paused and not self._paused and self._running_seen_s is not None:
             self._pause_began_s = self._running_seen_s  # it may have begun right after
         if not paused:
@@ -468,10 +521,10 @@ class Streamer:
             sent = self.pending[k]
             if chain is None:  # the rest of it, from the least fraction the evidence allows
                 left_s = sent.segment.duration_s - _time_window(sent.segment, fraction, 1.0)[0]
-                chain = now + (left_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + FRAME_SLACK_S
+                chain = now + (left_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + self.frame_slack_s
             else:
                 start = max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
-                chain = start + (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + FRAME_SLACK_S
+                chain = start + (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + self.frame_slack_s
             if chain >= sent.chain_end_s:
                 return  # no tighter than before, and neither are the frames after it
             sent.chain_end_s = chain
@@ -502,6 +555,7 @@ class Streamer:
         else:
             if self.confirmed_by_time == 0:
                 self.first_time_only_index = self.consumed_lower_bound - 1
+                self._least_factor_confirmed = self.slowest_factor
             self.confirmed_by_time += 1
 
     def _observe(self, xyz, now: float) -> None:
@@ -675,13 +729,13 @@ class Streamer:
             both = (previous == earliest and fraction is not None and previous_fraction is not None)
             self._restart_time_bound(agreed, now, max(0.0, min(previous_fraction, fraction)) if both else 0.0)
             if agreed == earliest:
-                self._measure_pace(stream, earliest, candidates, now)
+                self._measure_pace(stream, earliest, candidates, now, could_be_on)
         self._reanchor(candidates, now)
 
     def _check_gap(self, stream: str, index: int, now: float, could_be_on) -> bool:
         """A sign of loss: the arm, seen by this stream at ``now`` at least at frame ``index``,
         got there from its last agreed sighting sooner than the frames in between could take at
-        the fastest plausible pace (FASTEST_ARM_FACTOR): they were skipped — dropped by a full
+        the fastest plausible pace (``fastest_factor``): they were skipped — dropped by a full
         FIFO or cleared.  Sound on a good arm: lost status frames only lengthen the interval, and
         the earlier sighting counts at the latest frame its report may lie on (a repeated path,
         a frame this stream cannot judge) that is no later than the latest frame this report
@@ -698,7 +752,7 @@ class Streamer:
         at_k = recent[index - first]
         gap_s = at_k.motion_before_s - recent[last[0] - first].motion_before_s - recent[last[0] - first].segment.duration_s
         allowed_s = now - since + LOSS_SLACK_S
-        if gap_s * FASTEST_ARM_FACTOR <= allowed_s:
+        if gap_s * self.fastest_factor <= allowed_s:
             return False
         # Confirm: the latest frame the earlier report may lie on (the cost is paid only here).
         latest = next((sent.index for sent in reversed(recent) if could_be_on(sent)), index)
@@ -707,13 +761,13 @@ class Streamer:
         if upper is None or upper.index + 1 >= index:
             return False
         gap_s = at_k.motion_before_s - upper.motion_before_s - upper.segment.duration_s
-        if gap_s * FASTEST_ARM_FACTOR <= allowed_s:
+        if gap_s * self.fastest_factor <= allowed_s:
             return False
         skipped = index - upper.index - 1
         self.losses.append(
             f"the arm got from {_where(upper)} to {_where(at_k)} in {now - since:.2f} s, but the "
             f"{skipped} frame{'s' if skipped != 1 else ''} between take {gap_s:.2f} s of motion "
-            f"(at least {gap_s * FASTEST_ARM_FACTOR:.2f} s on an arm {1 / FASTEST_ARM_FACTOR:g}x faster than the "
+            f"(at least {gap_s * self.fastest_factor:.2f} s on an arm {1 / self.fastest_factor:g}x faster than the "
             "model): they were skipped (dropped by a full FIFO, or cleared)")
         suspect = last[0]  # the arm may have been on a later frame through the same point: not claimed
         if self.first_suspect_index is None or suspect < self.first_suspect_index:
@@ -727,7 +781,7 @@ class Streamer:
             return None
         return recent[index - recent[0].index].tag
 
-    def _measure_pace(self, stream: str, index: int, candidates, now: float) -> None:
+    def _measure_pace(self, stream: str, index: int, candidates, now: float, could_be_on=None) -> None:
         """One more pace sample when this stream saw the arm on frame ``index`` before, at least
         ``PACE_MIN_SPAN_S`` of model time earlier along its path (two sightings on one segment:
         the arm ran between them, neither waiting for the line nor between frames)."""
@@ -742,6 +796,8 @@ class Streamer:
         if lo <= 0.0 or hi >= 1.0:
             return  # a window cut at an end of the path: its middle is not where the arm was
         model_s = segment.time_at_fraction((lo + hi) / 2)
+        if could_be_on is not None:
+            self._check_slowness(stream, index, segment, lo, hi, now, could_be_on)
         last = self._pace_from.get(stream)
         if last is None or last[0] != index or model_s < last[1]:
             self._pace_from[stream] = (index, model_s, now)
@@ -751,6 +807,60 @@ class Streamer:
         self._pace_samples.append((now - last[2]) / (model_s - last[1]))
         self._pace_from[stream] = (index, model_s, now)
         self.pace = min(PACE_MAX, max(1.0, *self._pace_samples))
+        # An arm measured slower than its profile's speed_factor: the time bound allows that much
+        # more from here on (only ever more careful; whatever it confirmed before is judged by
+        # ``_check_slowness``).
+        wider = self._tolerance * self.pace
+        if wider > self.slowest_factor:
+            self._widen_time_bound(wider)
+
+    def _widen_time_bound(self, factor: float) -> None:
+        """From now on the time bound allows an arm ``factor`` times slower than the model; the
+        pending frames' deadlines move back by what the wider factor adds to each of them and to
+        every pending frame before it (a chain can only end later, never earlier)."""
+        extra = factor - self.slowest_factor
+        self.slowest_factor = factor
+        added_s = 0.0
+        for sent in self.pending:
+            added_s += (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * extra
+            sent.chain_end_s += added_s
+            sent.certain_end_s += added_s  # inf (a G300 waiting for its G301) stays inf
+        self._certain_tail_s += added_s
+
+    def _check_slowness(self, stream: str, index: int, segment: Segment, lo: float, hi: float, now: float,
+                        could_be_on) -> None:
+        """The time bound's hypothesis checked along one frame, on pairs of agreed sightings of
+        this stream on it, so that one corrupted report (one that still lies on the path) cannot
+        raise it: with sightings a then b, the arm was at least at min(a, b) at b's time and at
+        most at max(a, b) at a's (it runs a frame forwards).  The first pair on the frame gives
+        the first bound, each later pair the second; the arm then covered at most the model time
+        between them, in at least the time between those readings less a status period at each
+        end (a frame is sampled up to a period before it is read).  More than ``slowest_factor``
+        times the model even so — and this report may lie on no later frame (``could_be_on``: a
+        repeated path would let the arm be a lap further on; the cost is paid only here) — the
+        arm is slower than the time bound allows (kept for ``check_time_bound``).  Pauses clear
+        the sightings, as they do the pace's."""
+        t_lo, t_hi = segment.time_at_fraction(lo), segment.time_at_fraction(hi)
+        last = self._span_last.get(stream)
+        self._span_last[stream] = (index, t_lo, t_hi, now)
+        if last is None or last[0] != index:
+            self._span_from.pop(stream, None)
+            return
+        first = self._span_from.get(stream)
+        if first is None or first[0] != index:
+            self._span_from[stream] = (index, min(last[1], t_lo), now)  # at least there, at b's time
+            return
+        model_span_s = max(last[2], t_hi) - first[1]  # at most there, at a's time
+        arm_span_s = last[3] - first[2] - 2 * STATUS_PERIOD_S
+        if model_span_s <= 0 or arm_span_s <= 0:
+            return
+        slowest = arm_span_s / model_span_s
+        if slowest <= self._tolerance or (self._too_slow is not None and slowest <= self._too_slow[0]):
+            return
+        k = index - self.pending[0].index
+        if any(could_be_on(self.pending[j]) for j in range(k + 1, len(self.pending))):
+            return  # the arm may be on a later frame through the same point: no judgement
+        self._too_slow = (slowest, self.pending[k])
 
     def _reanchor(self, candidates: list[tuple[int, float, float]], now: float) -> None:
         """Re-time the pending frames from the candidate the estimate finds most plausible.
@@ -811,6 +921,25 @@ class Streamer:
         while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             self._consume_one(by_reports=True)
             self.bound_evidence = Evidence.AT_REST
+
+    def check_time_bound(self) -> None:
+        """A sign of loss, told at the end of a job: the arm was proven to run a frame slower than
+        the profile's ``speed_tolerance`` (``_check_slowness``) and slower than the factor the
+        time bound used when it first confirmed a frame (before a measured pace widened it), so
+        what time confirmed may not have run when more frames were written (dropped by a full
+        FIFO).  Said only when time confirmed a frame and was still trusted (not ``cleared``)."""
+        least = self._least_factor_confirmed
+        if self._too_slow is None or least is None or self._too_slow[0] <= least or not self._time_proves:
+            return
+        slowest, sent = self._too_slow
+        self._too_slow = None
+        self.losses.append(
+            f"the arm ran {_where(sent)} at least {slowest:.2f}x slower than the model, but the time bound allowed "
+            f"{least:g}x (the profile's [connector] speed_tolerance) when it confirmed frames: they may not have run "
+            "when more were written (dropped by a full FIFO?); run `armctl probe` again")
+        suspect = self.first_time_only_index or 0
+        if self.first_suspect_index is None or suspect < self.first_suspect_index:
+            self.first_suspect_index = suspect
 
     def last_known_done(self):
         """The tag of the last frame known finished, or None."""

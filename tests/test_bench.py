@@ -57,9 +57,13 @@ def test_ratio_bounds_are_those_of_the_issue():
     bounds = {name: s.ratio_bound for name, s in scenarios().items()}
     assert bounds["long"] == bounds["tiny"] == ARM_BOUND_RATIO == 1.01
     assert {bounds[n] for n in ("mixed", "slow", "fast", "lossy", "arrival", "pause")} == {OTHER_RATIO} == {1.03}
-    # no time target: see docs/bench.md (longfirst: the lead's stop bound idles the line)
-    assert bounds["longfirst"] is bounds["backforth"] is bounds["periodic"] is None
-    assert {s.physical_bound for s in scenarios().values()} == {None}
+    # no time target on longfirst: see docs/bench.md (the lead's stop bound idles the line)
+    assert bounds["longfirst"] is None
+    # issue 13: back and forth (and periodic) ≤ 1.02 × the physical bound, with a probed profile
+    assert bounds["backforth"] == bounds["periodic"] == 1.02
+    assert {n: s.physical_bound for n, s in scenarios().items() if s.physical_bound} == {"backforth": 1.02,
+                                                                                         "periodic": 1.02}
+    assert scenarios()["backforth"].probe and scenarios()["periodic"].probe
 
 
 def test_no_strategy_beats_the_physical_floor():

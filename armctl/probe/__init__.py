@@ -9,7 +9,8 @@ docs/probe.md explains each measurement.
 
 from __future__ import annotations
 
-SETTINGS = ("fifo_frames", "control_frames", "status_xyz_frame", "speed_factor", "kinematics_verified")
+SETTINGS = ("fifo_frames", "control_frames", "status_xyz_frame", "speed_factor", "kinematics_verified",
+            "speed_tolerance")
 
 
 # How late a status frame's timestamp may be on a real port: the link's reader wakes every 20 ms,

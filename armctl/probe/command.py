@@ -28,7 +28,7 @@ MOTION_ANNOUNCEMENT = (
 @click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=None, help="Line rate [default: 9600 or armctl.toml].")
 @click.option("--no-motion", is_flag=True, help="Never move the arm (the speed factor is then not measured).")
 @click.option("--yes", is_flag=True, help="Consent to the small moves without asking.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (the five settings and details), nothing else.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (the six settings and details), nothing else.")
 @click.option("--write", "write_path", type=click.Path(dir_okay=False), metavar="FILE",
               help="Put the values into the [connector] table of FILE (an armctl.toml), keeping the rest.")
 def probe(port, baud, no_motion, yes, as_json, write_path):

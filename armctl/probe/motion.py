@@ -39,6 +39,10 @@ SLOWEST_FACTOR = 4.0  # a move not finished by 4 × the model's time (+ a rotati
 KINEMATICS_TOLERANCE_MM = 1.0
 ARRIVED_DEG, ARRIVED_MM = 0.02, 0.15
 SAMPLE_MARGIN = 3  # samples within this many status steps of either end are left out
+# speed_tolerance's least excess over 1: what two small slow moves do not exercise (short fast
+# moves, loads).  0.05 keeps 10 ms moves confirmed by time at 91 % of the arm's rate, i.e. 1,000
+# of them back and forth never fill a 196-frame FIFO with unproven frames (docs/probe.md).
+SPEED_TOLERANCE_MARGIN = 0.05
 
 
 def _reported_xyz(probe, since_s: float):
@@ -144,11 +148,18 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
     if len(samples) < 3:
         return None
     factor = sum(t * tau for t, tau in samples) / sum(tau * tau for _, tau in samples)
+    # the start delay: the intercept of a straight-line fit t = delay + slope × τ (handling before
+    # the motion begins, which the fit through the origin folds into the factor)
+    mean_t = sum(t for t, _ in samples) / len(samples)
+    mean_tau = sum(tau for _, tau in samples) / len(samples)
+    spread = sum((tau - mean_tau) ** 2 for _, tau in samples)
+    slope_fit = sum((tau - mean_tau) * (t - mean_t) for t, tau in samples) / spread if spread > 0 else factor
+    start_delay_s = mean_t - slope_fit * mean_tau
     # one sample's factor error: the status step at the path's slowest sampled speed, and the clock
     # the fit's error bound: half a status step at the mean speed, and the clock, over the longest τ
     slope = total / segment.duration_s
     resolution = (quantum / 2 / slope + probe.timestamp_uncertainty_s) / max(tau for _, tau in samples)
-    return factor, resolution, len(samples)
+    return factor, resolution, len(samples), start_delay_s
 
 
 def _joint_progress(start_joints):
@@ -244,17 +255,36 @@ def speed_factor(probe):
     measured = [r for r in joint + linear if r is not None]
     if not measured:
         return Finding("speed_factor", default, None, "too few status samples during the moves", UNSURE)
-    factors = [f for f, _, _ in measured]
+    factors = [r[0] for r in measured]
     value = sum(factors) / len(factors)
-    precision = max(max(r for _, r, _ in measured), (max(factors) - min(factors)) / 2)
+    precision = max(max(r[1] for r in measured), (max(factors) - min(factors)) / 2)
     precision = math.ceil(round(max(precision, 0.005) * 100, 6)) / 100  # up to the next 0.01
-    details = {"joint": [round(f, 4) for f, _, _ in filter(None, joint)],
-               "linear": [round(f, 4) for f, _, _ in filter(None, linear)], "precision": precision}
+    details = {"joint": [round(r[0], 4) for r in filter(None, joint)],
+               "linear": [round(r[0], 4) for r in filter(None, linear)], "precision": precision,
+               "start_delay_s": [round(r[3], 4) for r in measured]}
     evidence = (f"joint 5 ±{JOINT_STEP_DEG:g}° at {JOINT_SPEED_DEG_S:g}°/s: {details['joint']}"
                 + (f"; tool ±{LINEAR_STEP_MM:g} mm at {LINEAR_SPEED_MM_MIN:g} mm/min: {details['linear']}" if linear else "")
-                + f" (arm time ÷ model time, fitted over {sum(n for _, _, n in measured)} status samples); ±{precision:g}"
+                + f" (arm time ÷ model time, fitted over {sum(r[2] for r in measured)} status samples); ±{precision:g}"
                 + linear_note)
-    return Finding("speed_factor", default, round(value, 3), evidence, SURE, details)
+    found = Finding("speed_factor", default, round(value, 3), evidence, SURE, details)
+    return [found, tolerance_finding(value, precision, details["start_delay_s"])]
+
+
+def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding:
+    """``speed_tolerance``: how much slower (or faster) than the written speed_factor the arm may
+    run, for the streamer's time bound and the loss checks.  It covers the factor's precision
+    (twice over), the moves' mean start delay (the time bound's slack per frame is
+    ``(t − 1) × FRAME_SLACK_S / (SLOWEST_ARM_FACTOR − 1)``, so t must give it room) and at least
+    ``SPEED_TOLERANCE_MARGIN`` for what two small moves do not exercise; rounded up to 0.01."""
+    from ..streamer import FRAME_SLACK_S, SLOWEST_ARM_FACTOR
+
+    delay_s = max(0.0, sum(start_delays_s) / len(start_delays_s))
+    excess = max(SPEED_TOLERANCE_MARGIN, 2 * precision / value, delay_s * (SLOWEST_ARM_FACTOR - 1) / FRAME_SLACK_S)
+    tolerance = min(DOCUMENTED["speed_tolerance"], math.ceil(round((1 + excess) * 100, 6)) / 100)
+    evidence = (f"speed_factor ±{precision:g} (twice over: ±{2 * precision / value:.3f} of it), mean start delay "
+                f"{delay_s * 1000:.1f} ms, at least ±{SPEED_TOLERANCE_MARGIN:g}: the time bound confirms a frame "
+                f"once an arm {tolerance:g}x slower has finished it")
+    return Finding("speed_tolerance", DOCUMENTED["speed_tolerance"], tolerance, evidence, SURE)
 
 
 def return_to_start(probe):
