@@ -323,26 +323,87 @@ def has_solution(
 ) -> bool:
     """Whether ``inverse(pose, links, near, limits)`` returns rather than raising Unreachable.
 
-    The same solutions, fitted the same way, but it stops at the first that fits instead of
-    fitting all eight to choose the nearest, and tries no wrist on an arm placement whose
-    first three joints do not fit: lint asks this of every target, and only a pose that fails
-    needs ``inverse`` again, for its message (tests/test_kinematics.py holds the two equal)."""
-    near = tuple(near)
+    The same solutions, computed by the same arithmetic and fitted the same way, but it stops
+    at the first that fits instead of fitting all eight to choose the nearest, tries no wrist
+    on an arm placement whose J1 or J2/J3 do not fit, and is written out flat: lint asks this
+    of every target (issue 13: it was two thirds of ``armctl lint``), and only a pose that
+    fails needs ``inverse`` again, for its message.  The order of the solutions cannot change
+    a yes-or-no answer, so it is free; every angle is the one ``_arm_solutions`` and
+    ``_wrist_solutions`` would give, bit for bit (tests/test_kinematics.py and the lint
+    differential tests hold the two equal)."""
+    x, y, z, b0, b1, w = pose
+    f = _flange_of(b0, b1, w)
+    d6 = links.tool_mm
+    wx, wy, wz = x - d6 * f[0], y - d6 * f[3], z - d6 * f[6]
+    a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
+    reach = math.hypot(d4, a3)
+    gamma = math.atan2(a3, d4)
+    if math.hypot(wx, wy) < 1e-9:
+        yaw = math.radians(near[0])
+    else:
+        yaw = math.atan2(wy, wx)
     near_j4 = math.radians(near[3])
-    for j1, j2, t, flange in _arm_solutions(pose, links, near):
-        if _fits((j1, j2, t - j2), near, limits, 0):  # else neither wrist flip can help
-            for wrist in _wrist_of(j1, t, flange, near_j4):
-                if _fits(wrist, near, limits, 3):
+    h1, h2, h3, h4, h5, h6 = near
+    l1, l2, l3, l4, l5, l6 = limits
+    v = wz - links.base_height_mm
+    for j1 in (yaw, yaw + math.pi):
+        c1, s1 = math.cos(j1), math.sin(j1)
+        u = wx * c1 + wy * s1 - links.shoulder_offset_mm
+        cos_d = (u * u + v * v - a2 * a2 - reach * reach) / (2 * a2 * reach)
+        if abs(cos_d) > 1 + 1e-9:
+            continue
+        if not _fits_deg(math.degrees(j1), h1, l1):
+            continue  # J1 is the same for both elbows
+        cos_d = max(-1.0, min(1.0, cos_d))
+        base = math.atan2(v, u)
+        for delta in {math.acos(cos_d), -math.acos(cos_d)}:
+            alpha = base + math.atan2(reach * math.sin(delta), a2 + reach * math.cos(delta))
+            j2 = math.pi / 2 - alpha
+            t = gamma - (alpha - delta)
+            if not (_fits_deg(math.degrees(j2), h2, l2) and _fits_deg(math.degrees(t - j2), h3, l3)):
+                continue  # neither wrist flip can help
+            # The entries of _wrist_of's matrix that _wrist_solutions reads: _mul(arm^T, flange)
+            # with arm = _arm(j1, t), each one the same sum of the same products
+            ct, st = math.cos(t), math.sin(t)
+            r0, r1, r2 = c1 * ct, s1 * ct, -st  # arm[0], arm[3], arm[6]: the first row of arm^T
+            r3, r4 = -s1, c1  # arm[1], arm[4] (arm[7] = 0.0)
+            r6, r7, r8 = c1 * st, s1 * st, ct  # arm[2], arm[5], arm[8]
+            m0 = r0 * f[0] + r1 * f[3] + r2 * f[6]
+            j5 = math.acos(max(-1.0, min(1.0, m0)))
+            if math.sin(j5) < 1e-7:
+                m4 = r3 * f[1] + r4 * f[4] + 0.0 * f[7]
+                m7 = r6 * f[1] + r7 * f[4] + r8 * f[7]
+                if m0 > 0:
+                    wrists = ((near_j4, 0.0, math.atan2(m7, m4) - near_j4),)
+                else:
+                    wrists = ((near_j4, math.pi, near_j4 - math.atan2(m7, m4)),)
+            else:
+                m1 = r0 * f[1] + r1 * f[4] + r2 * f[7]
+                m2 = r0 * f[2] + r1 * f[5] + r2 * f[8]
+                m3 = r3 * f[0] + r4 * f[3] + 0.0 * f[6]
+                m6 = r6 * f[0] + r7 * f[3] + r8 * f[6]
+                j4, j6 = math.atan2(m3, -m6), math.atan2(m1, m2)
+                wrists = ((j4, j5, j6), (j4 + math.pi, -j5, j6 + math.pi))
+            for j4, j5, j6 in wrists:
+                if (_fits_deg(math.degrees(j4), h4, l4) and _fits_deg(math.degrees(j5), h5, l5)
+                        and _fits_deg(math.degrees(j6), h6, l6)):
                     return True
     return False
 
 
-def _fits(angles_rad, near, limits, first: int) -> bool:
-    """Whether joints ``first``, ``first`` + 1, … at ``angles_rad`` fit their limits as ``inverse`` fits them."""
-    for k, angle in enumerate(angles_rad, first):
-        if _fit(wrap_deg(math.degrees(angle)), near[k], limits[k]) is None:
-            return False
-    return True
+def _fits_deg(angle: float, hint: float, limits: tuple[float, float]) -> bool:
+    """Whether ``_fit(wrap_deg(angle), hint, limits)`` is not None, ``angle`` in degrees.
+
+    The common case needs neither: an angle already in (−180, 180] is its own wrap, and one
+    inside the limits and less than half a turn from the hint is ``_fit``'s own answer (no
+    whole turn moves it: ``round`` of a ratio below one half is 0)."""
+    low, high = limits
+    if -180.0 < angle <= 180.0:
+        if low <= angle <= high and -180.0 < hint - angle < 180.0:
+            return True
+    else:
+        angle = wrap_deg(angle)
+    return _fit(angle, hint, limits) is not None
 
 
 @dataclass(frozen=True)
@@ -365,6 +426,11 @@ class Kinematics:
 
 def box_problem(robot_xyz: Sequence[float], box) -> str | None:
     """Why a robot-frame point is outside the profile's workspace box or reach radius, or None."""
+    x, y, z = robot_xyz
+    (x_low, x_high), (y_low, y_high), (z_low, z_high) = box.x_mm, box.y_mm, box.z_mm
+    if (x_low <= x <= x_high and y_low <= y <= y_high and z_low <= z <= z_high
+            and math.sqrt(x * x + y * y + z * z) <= box.reach_mm):
+        return None  # the common case, asked of every target: the tests below, without their messages
     for name, value, (low, high) in zip("XYZ", robot_xyz, (box.x_mm, box.y_mm, box.z_mm)):
         if not low <= value <= high:
             return f"robot {name} = {value:.1f} mm is outside the workspace {low:g}…{high:g} mm"

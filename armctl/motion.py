@@ -709,6 +709,9 @@ class Planner:
 
     ``feed(command)`` returns the command's segment and moves ``pose`` to its end.  An ArcStart
     is remembered for the ArcEnd that must follow it; any other command forgets it.
+    ``feed_s(command)`` is ``feed(command).duration_s`` for a caller that needs the time alone
+    (lint's E012 clock, issue 13): a LinearMove is then timed without building its segment or
+    its end pose — ``pose`` builds that pose when it is next read, as ``feed`` would have.
     """
 
     def __init__(self, model: MotionModel, start: ArmPose | None = None):
@@ -716,11 +719,72 @@ class Planner:
         self.pose = model.initial_pose() if start is None else start
         self.pending_arc: ArcStart | None = None
 
+    @property
+    def pose(self) -> ArmPose:
+        if self._line_end is not None:  # the end of the LinearMoves feed_s timed, built now
+            x, y, z, b0, b1, w, pwm_us, e0, e1 = self._line_end
+            base = self._pose
+            self._pose = ArmPose(self.model.kinematics, cartesian=(x, y, z, b0, b1, w), pwm_us=pwm_us, e0_deg=e0,
+                                 e1_deg=e1, origin_mm=base.origin_mm, hint=base.known_joints)
+            self._line_end = None
+        return self._pose
+
+    @pose.setter
+    def pose(self, value: ArmPose) -> None:
+        self._pose, self._line_end = value, None
+
     def feed(self, command: Command) -> Segment:
         segment = self.model.plan(command, self.pose, self.pending_arc)
         self.pending_arc = command if isinstance(command, ArcStart) else None
         self.pose = segment.end
         return segment
+
+    def feed_s(self, command: Command) -> float:
+        """``feed(command).duration_s``; a LinearMove costs a few float operations.
+
+        The arithmetic is ``_plan_linear``'s and ``_time_cartesian``'s for one constant-speed
+        piece, step for step, so the seconds are the same float (tests/test_motion.py holds
+        the two equal).  A chain of LinearMoves keeps the first one's start pose for its origin
+        and IK hint: a LinearMove's end carries its start's (``_end_cartesian``), and nothing
+        reads an end pose's joints here, so the hint stays the chain's first."""
+        if type(command) is not LinearMove or not command.speed_mm_min > 0:
+            return self.feed(command).duration_s
+        end = self._line_end
+        if end is None:
+            start = self._pose
+            sx, sy, sz, sb0, sb1, sw = start.cartesian
+            spwm, se0, se1 = start.pwm_us, start.e0_deg, start.e1_deg
+        else:
+            sx, sy, sz, sb0, sb1, sw, spwm, se0, se1 = end
+        model = self.model
+        speed = model.profile.speed
+        x, y, z, b0, b1, w = command.x_mm, command.y_mm, command.z_mm, command.b0_deg, command.b1_deg, command.w_deg
+        e0, e1 = command.e0_deg, command.e1_deg
+        pwm = list(spwm)
+        pwm[command.pwm_channel - 1] = command.pwm_us
+        pwm = tuple(pwm)
+        dx, dy, dz = x - sx, y - sy, z - sz
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        att_lead = max(abs(_short(b0 - sb0)), abs(_short(b1 - sb1)), abs(_short(w - sw)))
+        ext_lead = max(abs(e0 - se0), abs(e1 - se1))
+        other_s = max(att_lead / speed.attitude_deg_s, ext_lead / speed.max_joint_deg_s)
+        if length > TINY_MM:
+            v = min(command.speed_mm_min, speed.max_linear_mm_min) / 60.0
+            ramp_s = 0.0 + 2.0 * length / (v + v)  # _Ramp([(length, v, v)]).duration
+            stretch = other_s / ramp_s if other_s > ramp_s > 0 else 1.0
+            duration_s = model._overhead_s + ramp_s * (model.speed_factor * stretch)
+        else:
+            if other_s <= 0 and spwm != pwm:
+                other_s = model.profile.timing.pwm_change_s
+            if other_s > 0:
+                v = 1.0 / other_s
+                ramp_s = 0.0 + 2.0 * 1.0 / (v + v)  # _Ramp.constant(1.0, other_s).duration
+            else:
+                ramp_s = 0.0
+            duration_s = model._overhead_s + ramp_s * model.speed_factor
+        self._line_end = (x, y, z, b0, b1, w, pwm, e0, e1)
+        self.pending_arc = None
+        return duration_s
 
     def feed_all(self, commands) -> list[Segment]:
         return [self.feed(command) for command in commands]

@@ -150,12 +150,14 @@ def _reach_problem(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
     workspace box and reach radius, then a joint solution inside the limits — and if there is
     none, whether the attitude or the distance is at fault (the same point tool down)."""
     robot = arm.robot_xyz(pose)
-    problem = box_problem(robot, arm.profile.workspace)
+    profile = arm.profile
+    problem = box_problem(robot, profile.workspace)
     if problem is not None:
         return problem, _workspace_hint(arm, problem), _WORKSPACE
-    profile = arm.profile
-    near = arm.ik_hint() if arm.ik_hint() is not None else profile.poses[0]
-    target = (*robot, *pose[3:6])
+    near = arm.ik_hint()
+    if near is None:
+        near = profile.poses[0]
+    target = (*robot, pose[3], pose[4], pose[5])
     if has_solution(target, profile.links, near, profile.joint_limits_deg):
         return None  # the common case, decided without choosing the best solution
     try:

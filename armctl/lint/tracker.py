@@ -23,6 +23,7 @@ from ..protocol import (
 Pose = tuple[float, float, float, float, float, float]
 _CARTESIAN_TARGETS = (LinearMove, AccelLinearMove, ArcEnd)
 _REACH_CACHE_SIZE = 4096
+_MISSING = object()
 
 
 def cartesian_target(command) -> Pose:
@@ -72,11 +73,12 @@ class ArmTracker:
         """``compute()`` (rules.py: None, or the problem with its hint) for ``pose`` here, cached:
         loops and palettes revisit the same targets."""
         key = (pose, self.origin_mm, self.joints)
-        if key not in self._reach:
+        found = self._reach.get(key, _MISSING)
+        if found is _MISSING:
             if len(self._reach) >= _REACH_CACHE_SIZE:
                 self._reach.clear()
-            self._reach[key] = compute()
-        return self._reach[key]
+            found = self._reach[key] = compute()
+        return found
 
     # --- advancing ------------------------------------------------------------------------------
 
