@@ -406,6 +406,137 @@ def _fits_deg(angle: float, hint: float, limits: tuple[float, float]) -> bool:
     return _fit(angle, hint, limits) is not None
 
 
+# --- whole regions at once (lint) -------------------------------------------------------------
+
+_PROOF_MARGIN_DEG = 1e-6  # far above the rounding of any angle below, far below any limit's meaning
+_PROOF_MARGIN_MM = 1e-3  # distance kept from the singularities (base axis, arm stretched or folded)
+
+
+def ball_has_solution(
+    pose: Sequence[float], radius_mm: float, links: Links, near: Sequence[float],
+    limits: Sequence[tuple[float, float]],
+) -> bool:
+    """True only if ``has_solution`` is True for every pose within ``radius_mm`` of ``pose``'s
+    point with ``pose``'s attitude; False means "not proven" (the caller asks ``has_solution``).
+
+    The proof: one branch of the closed form (front or back, elbow sign, wrist flip) fits its
+    limits with room to spare at the centre, and no point of the ball can move a joint by more
+    than that room.  The wrist centre moves with the tool point (same attitude), so it stays
+    within ``radius_mm`` of the centre's.  Then, exactly: J1 = the bearing of the wrist centre
+    turns by at most asin(ρ / r) (r its distance from the base axis); in the arm's plane the
+    point (u, v) stays within ρ, so its bearing φ turns by at most asin(ρ / d) and its distance
+    d stays in [d − ρ, d + ρ]; the elbow angle δ and the shoulder's triangle angle β are
+    monotonic in d on that interval (β only where d² does not cross a2² − R², checked), so
+    their extremes are at its ends; J2 = π/2 − φ − β, J3 = γ + δ − π/2.  The forearm frame
+    Rz(J1)·Ry(J2 + J3) turns by at most θ = ΔJ1 + Δ(J2 + J3), so each column and row of the
+    wrist matrix turns by at most θ: J5 (their angle from x) by θ, J4 and J6 (their bearings
+    about x) by asin(sin θ / sin J5) while θ < J5 < π − θ.  A joint whose whole interval lies
+    inside its limits, within half a turn of the hint and away from ±180 fits for every point
+    exactly as ``_fits_deg`` decides it.  Float rounding (1e-13 degrees) is far inside the
+    margins."""
+    x, y, z, b0, b1, w = pose
+    rho = float(radius_mm)
+    f = _flange_of(b0, b1, w)
+    d6 = links.tool_mm
+    wx, wy, wz = x - d6 * f[0], y - d6 * f[3], z - d6 * f[6]
+    r = math.hypot(wx, wy)
+    if not r - rho > _PROOF_MARGIN_MM:
+        return False
+    a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
+    reach = math.hypot(d4, a3)
+    gamma = math.atan2(a3, d4)
+    v = wz - links.base_height_mm
+    dj1 = math.asin(rho / r)
+    yaw = math.atan2(wy, wx)
+    for j1, u in ((yaw, r - links.shoulder_offset_mm), (yaw + math.pi, -r - links.shoulder_offset_mm)):
+        if not _interval_fits(j1, dj1, near[0], limits[0]):
+            continue
+        d = math.hypot(u, v)
+        d_low, d_high = d - rho, d + rho
+        if not (d_low - _PROOF_MARGIN_MM > abs(a2 - reach) and d_high + _PROOF_MARGIN_MM < a2 + reach):
+            continue  # the ball may reach a stretched or folded arm
+        critical = a2 * a2 - reach * reach  # β is monotonic in d where d² does not cross this
+        if d_low * d_low <= critical <= d_high * d_high:
+            continue
+        phi = math.atan2(v, u)
+        dphi = math.asin(rho / d)
+        c1, s1 = math.cos(j1), math.sin(j1)
+        for sign in (1.0, -1.0):
+            deltas = [sign * _elbow(dist, a2, reach) for dist in (d_low, d, d_high)]
+            betas = [math.atan2(reach * math.sin(dl), a2 + reach * math.cos(dl)) for dl in deltas]
+            delta_c, beta_c = deltas[1], betas[1]
+            dbeta = max(abs(b - beta_c) for b in betas)
+            ddelta = max(abs(dl - delta_c) for dl in deltas)
+            j2 = math.pi / 2 - (phi + beta_c)
+            j3 = gamma + delta_c - math.pi / 2
+            if not (_interval_fits(j2, dphi + dbeta, near[1], limits[1])
+                    and _interval_fits(j3, ddelta, near[2], limits[2])):
+                continue
+            t = j2 + j3
+            theta = dj1 + dphi + dbeta + ddelta  # t = γ − φ − β + δ
+            ct, st = math.cos(t), math.sin(t)
+            arm_t = (c1 * ct, s1 * ct, -st, -s1, c1, 0.0, c1 * st, s1 * st, ct)
+            m = _mul(arm_t, f)
+            j5 = math.acos(max(-1.0, min(1.0, m[0])))
+            if not (theta + _PROOF_MARGIN_DEG < j5 < math.pi - theta - _PROOF_MARGIN_DEG):
+                continue  # near the wrist singularity J4 and J6 may turn without bound
+            dj46 = math.asin(min(1.0, math.sin(theta) / math.sin(j5 - theta if j5 <= math.pi / 2 else j5 + theta)))
+            j4, j6 = math.atan2(m[3], -m[6]), math.atan2(m[1], m[2])
+            for wrist in ((j4, j5, j6), (j4 + math.pi, -j5, j6 + math.pi)):
+                if (_interval_fits(wrist[0], dj46, near[3], limits[3]) and _interval_fits(wrist[1], theta, near[4], limits[4])
+                        and _interval_fits(wrist[2], dj46, near[5], limits[5])):
+                    return True
+    return False
+
+
+def _elbow(distance: float, a2: float, reach: float) -> float:
+    """The elbow angle δ ≥ 0 (radians) at which shoulder and wrist centre are ``distance`` apart."""
+    return math.acos(max(-1.0, min(1.0, (distance * distance - a2 * a2 - reach * reach) / (2 * a2 * reach))))
+
+
+def _interval_fits(angle_rad: float, deviation_rad: float, hint: float, limits: tuple[float, float]) -> bool:
+    """Whether every angle within ``deviation_rad`` of ``angle_rad`` passes ``_fits_deg``'s first
+    test (inside the limits, less than half a turn from the hint), with no wrap at ±180 between."""
+    angle = wrap_deg(math.degrees(angle_rad))
+    spread = math.degrees(deviation_rad) * (1 + 1e-9) + _PROOF_MARGIN_DEG
+    low, high = angle - spread, angle + spread
+    return (-180.0 < low and high < 180.0 and limits[0] <= low and high <= limits[1]
+            and -180.0 < hint - high and hint - low < 180.0)
+
+
+class SolvableCells:
+    """``has_solution`` for many poses of one arm, answered per grid cell where it can be (lint).
+
+    Space is cut into cubes of ``cell_mm``; the first pose that falls in a cube (with a given
+    attitude and hint) asks ``ball_has_solution`` once for the ball around the cube's centre
+    that holds the whole cube.  A proven cube answers True for every later pose in it at the
+    cost of a dictionary look-up; an unproven one (near a limit, the edge of the reach or a
+    singularity) sends each pose to ``has_solution``.  Sound, never approximate: a cube says
+    True only when every pose in it has a solution.  At most ``max_cells`` cubes are kept (the
+    table starts again when full), so memory is flat whatever the script."""
+
+    def __init__(self, links: Links, limits: Sequence[tuple[float, float]], cell_mm: float = 16.0,
+                 max_cells: int = 16384) -> None:
+        self.links, self.limits = links, tuple(tuple(pair) for pair in limits)
+        self.cell_mm, self.max_cells = float(cell_mm), max_cells
+        # a pose just outside its cube (floor's rounding) is still inside the ball
+        self._radius_mm = self.cell_mm * math.sqrt(3.0) / 2.0 * (1 + 1e-9) + 1e-6
+        self._cells: dict = {}  # (i, j, k, b0, b1, w, near) → proven
+
+    def __call__(self, pose: Sequence[float], near: Sequence[float]) -> bool:
+        """``has_solution(pose, links, near, limits)``."""
+        x, y, z, b0, b1, w = pose
+        size = self.cell_mm
+        key = (math.floor(x / size), math.floor(y / size), math.floor(z / size), b0, b1, w, tuple(near))
+        proven = self._cells.get(key)
+        if proven is None:
+            if len(self._cells) >= self.max_cells:
+                self._cells.clear()
+            centre = ((key[0] + 0.5) * size, (key[1] + 0.5) * size, (key[2] + 0.5) * size, b0, b1, w)
+            proven = self._cells[key] = ball_has_solution(centre, self._radius_mm, self.links, near, self.limits)
+        return proven or has_solution(pose, self.links, near, self.limits)
+
+
 @dataclass(frozen=True)
 class Kinematics:
     """Links, joint limits and a home pose (the default IK hint) bundled for repeated use."""

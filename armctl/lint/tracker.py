@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from typing import Optional
 
+from ..kinematics import SolvableCells
 from ..protocol import (
     AccelLinearMove, ArcEnd, ArcStart, GoToPose, JointMove, LinearMove, PauseToggle, ResetArm, RunProgram,
     SetWorktableOrigin,
@@ -57,6 +58,8 @@ class ArmTracker:
         self.last_statement = None
         self.notes: set = set()  # what a rule already said once per script, e.g. ("L301", channel)
         self._reach: dict = {}  # (pose, origin, joints) → reach problem or None
+        # has_solution(pose, near) for this profile, a proven grid cube at a time (kinematics.py)
+        self.solvable = SolvableCells(profile.links, profile.joint_limits_deg)
 
     # --- what rules ask -----------------------------------------------------------------------
 
