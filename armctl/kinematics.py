@@ -527,7 +527,8 @@ class SolvableCells:
         """``has_solution(pose, links, near, limits)``."""
         x, y, z, b0, b1, w = pose
         size = self.cell_mm
-        key = (math.floor(x / size), math.floor(y / size), math.floor(z / size), b0, b1, w, tuple(near))
+        key = (math.floor(x / size), math.floor(y / size), math.floor(z / size), b0, b1, w,
+               near if type(near) is tuple else tuple(near))
         proven = self._cells.get(key)
         if proven is None:
             if len(self._cells) >= self.max_cells:

@@ -760,12 +760,19 @@ class Planner:
         speed = model.profile.speed
         x, y, z, b0, b1, w = command.x_mm, command.y_mm, command.z_mm, command.b0_deg, command.b1_deg, command.w_deg
         e0, e1 = command.e0_deg, command.e1_deg
-        pwm = list(spwm)
-        pwm[command.pwm_channel - 1] = command.pwm_us
-        pwm = tuple(pwm)
+        channel, pwm_us = command.pwm_channel - 1, command.pwm_us
+        if spwm[channel] == pwm_us:
+            pwm = spwm  # the common case: the same values, no new tuple
+        else:
+            pwm = list(spwm)
+            pwm[channel] = pwm_us
+            pwm = tuple(pwm)
         dx, dy, dz = x - sx, y - sy, z - sz
         length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        att_lead = max(abs(_short(b0 - sb0)), abs(_short(b1 - sb1)), abs(_short(w - sw)))
+        if b0 == sb0 and b1 == sb1 and w == sw:
+            att_lead = 0.0  # _short(0.0) is 0.0: the attitude of a run of lines rarely changes
+        else:
+            att_lead = max(abs(_short(b0 - sb0)), abs(_short(b1 - sb1)), abs(_short(w - sw)))
         ext_lead = max(abs(e0 - se0), abs(e1 - se1))
         other_s = max(att_lead / speed.attitude_deg_s, ext_lead / speed.max_joint_deg_s)
         if length > TINY_MM:
