@@ -509,22 +509,25 @@ class SolvableCells:
 
     Space is cut into cubes of ``cell_mm``; the first pose that falls in a cube (with a given
     attitude and hint) asks ``ball_has_solution`` once for the ball around the cube's centre
-    that holds the whole cube.  A proven cube answers True for every later pose in it at the
-    cost of a dictionary look-up; an unproven one (near a limit, the edge of the reach or a
-    singularity) sends each pose to ``has_solution``.  Sound, never approximate: a cube says
-    True only when every pose in it has a solution.  At most ``max_cells`` cubes are kept (the
-    table starts again when full), so memory is flat whatever the script."""
+    that holds the whole cube — and, given the profile's workspace ``box``, whether the whole
+    cube lies inside the box and the reach radius (``box_problem`` is None for all of it).  A
+    proven cube answers True for every later pose in it at the cost of a dictionary look-up;
+    an unproven one (near a limit, the edge of the reach or a singularity) sends each pose to
+    ``has_solution`` (and ``box_problem``).  Sound, never approximate: a cube says True only
+    when every pose in it passes.  At most ``max_cells`` cubes are kept (the table starts
+    again when full), so memory is flat whatever the script."""
 
-    def __init__(self, links: Links, limits: Sequence[tuple[float, float]], cell_mm: float = 16.0,
+    def __init__(self, links: Links, limits: Sequence[tuple[float, float]], box=None, cell_mm: float = 16.0,
                  max_cells: int = 16384) -> None:
-        self.links, self.limits = links, tuple(tuple(pair) for pair in limits)
+        self.links, self.limits, self.box = links, tuple(tuple(pair) for pair in limits), box
         self.cell_mm, self.max_cells = float(cell_mm), max_cells
-        # a pose just outside its cube (floor's rounding) is still inside the ball
-        self._radius_mm = self.cell_mm * math.sqrt(3.0) / 2.0 * (1 + 1e-9) + 1e-6
+        # a pose just outside its cube (floor's rounding) is still inside the ball, and the box
+        self._slack_mm = 1e-6
+        self._radius_mm = self.cell_mm * math.sqrt(3.0) / 2.0 * (1 + 1e-9) + self._slack_mm
         self._cells: dict = {}  # (i, j, k, b0, b1, w, near) → proven
 
-    def __call__(self, pose: Sequence[float], near: Sequence[float]) -> bool:
-        """``has_solution(pose, links, near, limits)``."""
+    def proven(self, pose: Sequence[float], near: Sequence[float]) -> bool:
+        """True when ``pose``'s cube is proven (so ``__call__`` is True); False: not known."""
         x, y, z, b0, b1, w = pose
         size = self.cell_mm
         key = (math.floor(x / size), math.floor(y / size), math.floor(z / size), b0, b1, w,
@@ -533,9 +536,31 @@ class SolvableCells:
         if proven is None:
             if len(self._cells) >= self.max_cells:
                 self._cells.clear()
-            centre = ((key[0] + 0.5) * size, (key[1] + 0.5) * size, (key[2] + 0.5) * size, b0, b1, w)
-            proven = self._cells[key] = ball_has_solution(centre, self._radius_mm, self.links, near, self.limits)
-        return proven or has_solution(pose, self.links, near, self.limits)
+            proven = self._cells[key] = self._prove(key, near)
+        return proven
+
+    def __call__(self, pose: Sequence[float], near: Sequence[float]) -> bool:
+        """``box_problem(pose[:3], box) is None and has_solution(pose, links, near, limits)``
+        (without a box, ``has_solution`` alone)."""
+        if self.proven(pose, near):
+            return True
+        if self.box is not None and box_problem(pose[:3], self.box) is not None:
+            return False
+        return has_solution(pose, self.links, near, self.limits)
+
+    def _prove(self, key, near) -> bool:
+        i, j, k, b0, b1, w, _ = key
+        size, slack = self.cell_mm, self._slack_mm
+        if self.box is not None:
+            corners = [(n * size - slack, (n + 1) * size + slack) for n in (i, j, k)]
+            for (low, high), (box_low, box_high) in zip(corners, (self.box.x_mm, self.box.y_mm, self.box.z_mm)):
+                if not (box_low < low and high < box_high):
+                    return False
+            far = [max(abs(low), abs(high)) for low, high in corners]
+            if not math.sqrt(far[0] * far[0] + far[1] * far[1] + far[2] * far[2]) < self.box.reach_mm - slack:
+                return False
+        centre = ((i + 0.5) * size, (j + 0.5) * size, (k + 0.5) * size, b0, b1, w)
+        return ball_has_solution(centre, self._radius_mm, self.links, near, self.limits)
 
 
 @dataclass(frozen=True)

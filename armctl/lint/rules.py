@@ -136,7 +136,7 @@ def outside_workspace(statement, arm) -> Iterable[Finding]:
     pose = cartesian_target(command)
     if kind is not ArcStart and pose == arm.pose:
         return ()  # the arm is already there (a gripper- or speed-only line): one mistake, one finding
-    problem = _reach_problem(pose, arm)
+    problem = None if arm.surely_reachable(pose) else arm.reach_problem(pose, lambda: _reach_problem(pose, arm))
     if problem is not None:
         message, hint, rests_on = problem
         axis = _AXIS.match(message)
@@ -151,22 +151,8 @@ def outside_workspace(statement, arm) -> Iterable[Finding]:
 def _reach_problem(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
     """(message, hint, rests_on) for a worktable pose the arm cannot take, or None: first the
     workspace box and reach radius, then a joint solution inside the limits — and if there is
-    none, whether the attitude or the distance is at fault (the same point tool down).
-
-    A pose inside the box that a proven cube of ``arm.solvable`` holds is answered at once (the
-    common case, issue 13); any other goes through the tracker's cache of whole answers (loops
-    and palettes revisit their targets, and a pose that fails costs three IK solves)."""
-    x, y, z = arm.robot_xyz(pose)
-    profile = arm.profile
-    if box_problem((x, y, z), profile.workspace) is None:
-        near = arm.ik_hint()
-        if arm.solvable((x, y, z, pose[3], pose[4], pose[5]), profile.poses[0] if near is None else near):
-            return None
-    return arm.reach_problem(pose, lambda: _reach_problem_solved(pose, arm))
-
-
-def _reach_problem_solved(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
-    """``_reach_problem`` by the box and ``has_solution``, its finding worded."""
+    none, whether the attitude or the distance is at fault (the same point tool down).  Asked
+    only when ``arm.surely_reachable`` cannot say (issue 13), through the tracker's cache."""
     robot = arm.robot_xyz(pose)
     profile = arm.profile
     problem = box_problem(robot, profile.workspace)

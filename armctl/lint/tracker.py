@@ -58,8 +58,8 @@ class ArmTracker:
         self.last_statement = None
         self.notes: set = set()  # what a rule already said once per script, e.g. ("L301", channel)
         self._reach: dict = {}  # (pose, origin, joints) → reach problem or None
-        # has_solution(pose, near) for this profile, a proven grid cube at a time (kinematics.py)
-        self.solvable = SolvableCells(profile.links, profile.joint_limits_deg)
+        # robot-frame poses inside the workspace with a joint solution, a proven cube at a time
+        self._cells = SolvableCells(profile.links, profile.joint_limits_deg, profile.workspace)
 
     # --- what rules ask -----------------------------------------------------------------------
 
@@ -71,6 +71,15 @@ class ArmTracker:
     def ik_hint(self):
         """Joints to solve IK near: the last known joints, else None (the profile's home pose)."""
         return self.joints
+
+    def surely_reachable(self, pose) -> bool:
+        """True when the worktable ``pose`` lies in a cube proven inside the workspace box and
+        solvable near the IK hint (kinematics.SolvableCells); False: not known, ask
+        ``reach_problem``.  The common case of every target, at the cost of a look-up."""
+        ox, oy, oz = self.origin_mm
+        near = self.joints
+        return self._cells.proven((pose[0] + ox, pose[1] + oy, pose[2] + oz, pose[3], pose[4], pose[5]),
+                                  self.profile.poses[0] if near is None else near)
 
     def reach_problem(self, pose, compute):
         """``compute()`` (rules.py: None, or the problem with its hint) for ``pose`` here, cached:
