@@ -718,6 +718,7 @@ class Planner:
         self.model = model
         self.pose = model.initial_pose() if start is None else start
         self.pending_arc: ArcStart | None = None
+        self._line_constants = None  # feed_s's profile numbers, read on its first LinearMove
 
     @property
     def pose(self) -> ArmPose:
@@ -756,8 +757,14 @@ class Planner:
             spwm, se0, se1 = start.pwm_us, start.e0_deg, start.e1_deg
         else:
             sx, sy, sz, sb0, sb1, sw, spwm, se0, se1 = end
-        model = self.model
-        speed = model.profile.speed
+        constants = self._line_constants
+        if constants is None:
+            model = self.model
+            speed = model.profile.speed
+            constants = self._line_constants = (speed.attitude_deg_s, speed.max_joint_deg_s, speed.max_linear_mm_min,
+                                                model._overhead_s, model.speed_factor,
+                                                model.profile.timing.pwm_change_s)
+        attitude_deg_s, joint_deg_s, max_mm_min, overhead_s, speed_factor, pwm_change_s = constants
         x, y, z, b0, b1, w = command.x_mm, command.y_mm, command.z_mm, command.b0_deg, command.b1_deg, command.w_deg
         e0, e1 = command.e0_deg, command.e1_deg
         channel, pwm_us = command.pwm_channel - 1, command.pwm_us
@@ -767,31 +774,29 @@ class Planner:
             pwm = list(spwm)
             pwm[channel] = pwm_us
             pwm = tuple(pwm)
-        dx, dy, dz = x - sx, y - sy, z - sz
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if b0 == sb0 and b1 == sb1 and w == sw:
-            att_lead = 0.0  # _short(0.0) is 0.0: the attitude of a run of lines rarely changes
-        else:
-            att_lead = max(abs(_short(b0 - sb0)), abs(_short(b1 - sb1)), abs(_short(w - sw)))
-        ext_lead = max(abs(e0 - se0), abs(e1 - se1))
-        other_s = max(att_lead / speed.attitude_deg_s, ext_lead / speed.max_joint_deg_s)
-        if length > TINY_MM:
-            v = min(command.speed_mm_min, speed.max_linear_mm_min) / 60.0
-            ramp_s = 0.0 + 2.0 * length / (v + v)  # _Ramp([(length, v, v)]).duration
-            stretch = other_s / ramp_s if other_s > ramp_s > 0 else 1.0
-            duration_s = model._overhead_s + ramp_s * (model.speed_factor * stretch)
-        else:
-            if other_s <= 0 and spwm != pwm:
-                other_s = model.profile.timing.pwm_change_s
-            if other_s > 0:
-                v = 1.0 / other_s
-                ramp_s = 0.0 + 2.0 * 1.0 / (v + v)  # _Ramp.constant(1.0, other_s).duration
-            else:
-                ramp_s = 0.0
-            duration_s = model._overhead_s + ramp_s * model.speed_factor
         self._line_end = (x, y, z, b0, b1, w, pwm, e0, e1)
         self.pending_arc = None
-        return duration_s
+        if b0 == sb0 and b1 == sb1 and w == sw and e0 == se0 and e1 == se1:
+            other_s = 0.0  # max(0.0 / attitude_deg_s, 0.0 / joint_deg_s): a run of lines rarely turns the tool
+        else:
+            att_lead = max(abs(_short(b0 - sb0)), abs(_short(b1 - sb1)), abs(_short(w - sw)))
+            ext_lead = max(abs(e0 - se0), abs(e1 - se1))
+            other_s = max(att_lead / attitude_deg_s, ext_lead / joint_deg_s)
+        dx, dy, dz = x - sx, y - sy, z - sz
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if length > TINY_MM:
+            v = min(command.speed_mm_min, max_mm_min) / 60.0
+            ramp_s = 0.0 + 2.0 * length / (v + v)  # _Ramp([(length, v, v)]).duration
+            stretch = other_s / ramp_s if other_s > ramp_s > 0 else 1.0
+            return overhead_s + ramp_s * (speed_factor * stretch)
+        if other_s <= 0 and spwm != pwm:
+            other_s = pwm_change_s
+        if other_s > 0:
+            v = 1.0 / other_s
+            ramp_s = 0.0 + 2.0 * 1.0 / (v + v)  # _Ramp.constant(1.0, other_s).duration
+        else:
+            ramp_s = 0.0
+        return overhead_s + ramp_s * speed_factor
 
     def feed_all(self, commands) -> list[Segment]:
         return [self.feed(command) for command in commands]

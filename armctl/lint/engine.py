@@ -125,6 +125,7 @@ class _MotionClock:
         self._bound_s = MAX_JOB_MOTION_S
         model = MotionModel(profile)
         self._planner = Planner(model, model.initial_pose())
+        self._feed_s = self._planner.feed_s
         self._compilation = compilation
         self._skips_seen = 0
         self._motion_s = 0.0
@@ -137,7 +138,7 @@ class _MotionClock:
             return None
         if self._skips_seen < len(self._compilation.skipped_passes):
             self._count_skipped()
-        self._motion_s += self._planner.feed_s(statement.command)
+        self._motion_s += self._feed_s(statement.command)
         self._last = statement
         if self._motion_s <= self._bound_s:
             return None  # motion_time_overrun's own first test, without the call
