@@ -6,7 +6,10 @@ three joints place the wrist centre (a two-link problem in the arm's plane), the
 orient the tool (an X-Y-X Euler decomposition).  ``inverse`` enumerates the up to eight
 closed-form solutions (front/back, elbow up/down, wrist flip), moves each angle by whole
 turns towards the hint, drops those outside the joint limits and returns the one nearest the
-hint.  Pure functions of plain floats and tuples; no I/O, stdlib only.
+hint.  Pure functions of plain floats and tuples; no I/O, stdlib only.  For lint, which asks
+"is there a solution?" of every target, ``has_solution`` answers without choosing the best one,
+``ball_has_solution`` proves a whole ball of targets at once (interval bounds on each joint),
+and ``SolvableCells`` keeps such proofs per grid cube: sound shortcuts, never approximations.
 
 Frames and conventions (the vendor publishes none; these are armctl's, one place to change):
 

@@ -724,9 +724,9 @@ class Planner:
     def pose(self) -> ArmPose:
         if self._line_end is not None:  # the end of the LinearMoves feed_s timed, built now
             x, y, z, b0, b1, w, pwm_us, e0, e1 = self._line_end
-            base = self._pose
+            origin_mm, hint = self._line_base
             self._pose = ArmPose(self.model.kinematics, cartesian=(x, y, z, b0, b1, w), pwm_us=pwm_us, e0_deg=e0,
-                                 e1_deg=e1, origin_mm=base.origin_mm, hint=base.known_joints)
+                                 e1_deg=e1, origin_mm=origin_mm, hint=hint)
             self._line_end = None
         return self._pose
 
@@ -744,10 +744,10 @@ class Planner:
         """``feed(command).duration_s``; a LinearMove costs a few float operations.
 
         The arithmetic is ``_plan_linear``'s and ``_time_cartesian``'s for one constant-speed
-        piece, step for step, so the seconds are the same float (tests/test_motion.py holds
-        the two equal).  A chain of LinearMoves keeps the first one's start pose for its origin
-        and IK hint: a LinearMove's end carries its start's (``_end_cartesian``), and nothing
-        reads an end pose's joints here, so the hint stays the chain's first."""
+        piece, step for step, so the seconds are the same float (tests/test_lint_fastpaths.py
+        holds the two equal).  A chain of LinearMoves keeps the origin and IK hint of the pose
+        it starts from: a LinearMove's end carries its start's (``_end_cartesian``), and no one
+        can read the joints of an end pose that is not built, so the hint stays the chain's first."""
         if type(command) is not LinearMove or not command.speed_mm_min > 0:
             return self.feed(command).duration_s
         end = self._line_end
@@ -755,6 +755,7 @@ class Planner:
             start = self._pose
             sx, sy, sz, sb0, sb1, sw = start.cartesian
             spwm, se0, se1 = start.pwm_us, start.e0_deg, start.e1_deg
+            self._line_base = (start.origin_mm, start.known_joints)  # as _end_cartesian reads them now
         else:
             sx, sy, sz, sb0, sb1, sw, spwm, se0, se1 = end
         constants = self._line_constants
