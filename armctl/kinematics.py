@@ -527,19 +527,33 @@ class SolvableCells:
         # a pose just outside its cube (floor's rounding) is still inside the ball, and the box
         self._slack_mm = 1e-6
         self._radius_mm = self.cell_mm * math.sqrt(3.0) / 2.0 * (1 + 1e-9) + self._slack_mm
-        self._cells: dict = {}  # (i, j, k, b0, b1, w, near) → proven
+        # (b0, b1, w, near) → {(i, j, k) → proven}: a script keeps one attitude and hint for
+        # many lines, so the last group is found again by comparing, without hashing them
+        self._groups: dict = {}
+        self._count = 0
+        self._last = None  # (b0, b1, w, near, cells) of the last pose
 
     def proven(self, pose: Sequence[float], near: Sequence[float]) -> bool:
         """True when ``pose``'s cube is proven (so ``__call__`` is True); False: not known."""
         x, y, z, b0, b1, w = pose
+        last = self._last
+        if last is not None and last[3] is near and last[0] == b0 and last[1] == b1 and last[2] == w:
+            cells = last[4]  # ``near`` is the same tuple (immutable), so the same group
+        else:
+            near = near if type(near) is tuple else tuple(near)
+            cells = self._groups.setdefault((b0, b1, w, near), {})
+            self._last = (b0, b1, w, near, cells)
         size = self.cell_mm
-        key = (math.floor(x / size), math.floor(y / size), math.floor(z / size), b0, b1, w,
-               near if type(near) is tuple else tuple(near))
-        proven = self._cells.get(key)
+        key = (math.floor(x / size), math.floor(y / size), math.floor(z / size))
+        proven = cells.get(key)
         if proven is None:
-            if len(self._cells) >= self.max_cells:
-                self._cells.clear()
-            proven = self._cells[key] = self._prove(key, near)
+            if self._count >= self.max_cells:
+                self._groups.clear()
+                self._count = 0
+                cells = self._groups[b0, b1, w, near] = {}
+                self._last = (b0, b1, w, near, cells)
+            self._count += 1
+            proven = cells[key] = self._prove(key, (b0, b1, w), near)
         return proven
 
     def __call__(self, pose: Sequence[float], near: Sequence[float]) -> bool:
@@ -551,8 +565,9 @@ class SolvableCells:
             return False
         return has_solution(pose, self.links, near, self.limits)
 
-    def _prove(self, key, near) -> bool:
-        i, j, k, b0, b1, w, _ = key
+    def _prove(self, key, attitude, near) -> bool:
+        i, j, k = key
+        b0, b1, w = attitude
         size, slack = self.cell_mm, self._slack_mm
         if self.box is not None:
             corners = [(n * size - slack, (n + 1) * size + slack) for n in (i, j, k)]
