@@ -6,7 +6,10 @@ three joints place the wrist centre (a two-link problem in the arm's plane), the
 orient the tool (an X-Y-X Euler decomposition).  ``inverse`` enumerates the up to eight
 closed-form solutions (front/back, elbow up/down, wrist flip), moves each angle by whole
 turns towards the hint, drops those outside the joint limits and returns the one nearest the
-hint.  Pure functions of plain floats and tuples; no I/O, stdlib only.
+hint.  Pure functions of plain floats and tuples; no I/O, stdlib only.  For lint, which asks
+"is there a solution?" of every target, ``has_solution`` answers without choosing the best one,
+``ball_has_solution`` proves a whole ball of targets at once (interval bounds on each joint),
+and ``SolvableCells`` keeps such proofs per grid cube: sound shortcuts, never approximations.
 
 Frames and conventions (the vendor publishes none; these are armctl's, one place to change):
 
@@ -323,26 +326,259 @@ def has_solution(
 ) -> bool:
     """Whether ``inverse(pose, links, near, limits)`` returns rather than raising Unreachable.
 
-    The same solutions, fitted the same way, but it stops at the first that fits instead of
-    fitting all eight to choose the nearest, and tries no wrist on an arm placement whose
-    first three joints do not fit: lint asks this of every target, and only a pose that fails
-    needs ``inverse`` again, for its message (tests/test_kinematics.py holds the two equal)."""
-    near = tuple(near)
+    The same solutions, computed by the same arithmetic and fitted the same way, but it stops
+    at the first that fits instead of fitting all eight to choose the nearest, tries no wrist
+    on an arm placement whose J1 or J2/J3 do not fit, and is written out flat: lint asks this
+    of every target (issue 13: it was two thirds of ``armctl lint``), and only a pose that
+    fails needs ``inverse`` again, for its message.  The order of the solutions cannot change
+    a yes-or-no answer, so it is free; every angle is the one ``_arm_solutions`` and
+    ``_wrist_solutions`` would give, bit for bit (tests/test_kinematics.py and the lint
+    differential tests hold the two equal)."""
+    x, y, z, b0, b1, w = pose
+    f = _flange_of(b0, b1, w)
+    d6 = links.tool_mm
+    wx, wy, wz = x - d6 * f[0], y - d6 * f[3], z - d6 * f[6]
+    a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
+    reach = math.hypot(d4, a3)
+    gamma = math.atan2(a3, d4)
+    if math.hypot(wx, wy) < 1e-9:
+        yaw = math.radians(near[0])
+    else:
+        yaw = math.atan2(wy, wx)
     near_j4 = math.radians(near[3])
-    for j1, j2, t, flange in _arm_solutions(pose, links, near):
-        if _fits((j1, j2, t - j2), near, limits, 0):  # else neither wrist flip can help
-            for wrist in _wrist_of(j1, t, flange, near_j4):
-                if _fits(wrist, near, limits, 3):
+    h1, h2, h3, h4, h5, h6 = near
+    l1, l2, l3, l4, l5, l6 = limits
+    v = wz - links.base_height_mm
+    for j1 in (yaw, yaw + math.pi):
+        c1, s1 = math.cos(j1), math.sin(j1)
+        u = wx * c1 + wy * s1 - links.shoulder_offset_mm
+        cos_d = (u * u + v * v - a2 * a2 - reach * reach) / (2 * a2 * reach)
+        if abs(cos_d) > 1 + 1e-9:
+            continue
+        if not _fits_deg(math.degrees(j1), h1, l1):
+            continue  # J1 is the same for both elbows
+        cos_d = max(-1.0, min(1.0, cos_d))
+        base = math.atan2(v, u)
+        for delta in {math.acos(cos_d), -math.acos(cos_d)}:
+            alpha = base + math.atan2(reach * math.sin(delta), a2 + reach * math.cos(delta))
+            j2 = math.pi / 2 - alpha
+            t = gamma - (alpha - delta)
+            if not (_fits_deg(math.degrees(j2), h2, l2) and _fits_deg(math.degrees(t - j2), h3, l3)):
+                continue  # neither wrist flip can help
+            # The entries of _wrist_of's matrix that _wrist_solutions reads: _mul(arm^T, flange)
+            # with arm = _arm(j1, t), each one the same sum of the same products
+            ct, st = math.cos(t), math.sin(t)
+            r0, r1, r2 = c1 * ct, s1 * ct, -st  # arm[0], arm[3], arm[6]: the first row of arm^T
+            r3, r4 = -s1, c1  # arm[1], arm[4] (arm[7] = 0.0)
+            r6, r7, r8 = c1 * st, s1 * st, ct  # arm[2], arm[5], arm[8]
+            m0 = r0 * f[0] + r1 * f[3] + r2 * f[6]
+            j5 = math.acos(max(-1.0, min(1.0, m0)))
+            if math.sin(j5) < 1e-7:
+                m4 = r3 * f[1] + r4 * f[4] + 0.0 * f[7]
+                m7 = r6 * f[1] + r7 * f[4] + r8 * f[7]
+                if m0 > 0:
+                    wrists = ((near_j4, 0.0, math.atan2(m7, m4) - near_j4),)
+                else:
+                    wrists = ((near_j4, math.pi, near_j4 - math.atan2(m7, m4)),)
+            else:
+                m1 = r0 * f[1] + r1 * f[4] + r2 * f[7]
+                m2 = r0 * f[2] + r1 * f[5] + r2 * f[8]
+                m3 = r3 * f[0] + r4 * f[3] + 0.0 * f[6]
+                m6 = r6 * f[0] + r7 * f[3] + r8 * f[6]
+                j4, j6 = math.atan2(m3, -m6), math.atan2(m1, m2)
+                wrists = ((j4, j5, j6), (j4 + math.pi, -j5, j6 + math.pi))
+            for j4, j5, j6 in wrists:
+                if (_fits_deg(math.degrees(j4), h4, l4) and _fits_deg(math.degrees(j5), h5, l5)
+                        and _fits_deg(math.degrees(j6), h6, l6)):
                     return True
     return False
 
 
-def _fits(angles_rad, near, limits, first: int) -> bool:
-    """Whether joints ``first``, ``first`` + 1, … at ``angles_rad`` fit their limits as ``inverse`` fits them."""
-    for k, angle in enumerate(angles_rad, first):
-        if _fit(wrap_deg(math.degrees(angle)), near[k], limits[k]) is None:
+def _fits_deg(angle: float, hint: float, limits: tuple[float, float]) -> bool:
+    """Whether ``_fit(wrap_deg(angle), hint, limits)`` is not None, ``angle`` in degrees.
+
+    The common case needs neither: an angle already in (−180, 180] is its own wrap, and one
+    inside the limits and less than half a turn from the hint is ``_fit``'s own answer (no
+    whole turn moves it: ``round`` of a ratio below one half is 0)."""
+    low, high = limits
+    if -180.0 < angle <= 180.0:
+        if low <= angle <= high and -180.0 < hint - angle < 180.0:
+            return True
+    else:
+        angle = wrap_deg(angle)
+    return _fit(angle, hint, limits) is not None
+
+
+# --- whole regions at once (lint) -------------------------------------------------------------
+
+_PROOF_MARGIN_DEG = 1e-6  # far above the rounding of any angle below, far below any limit's meaning
+_PROOF_MARGIN_MM = 1e-3  # distance kept from the singularities (base axis, arm stretched or folded)
+
+
+def ball_has_solution(
+    pose: Sequence[float], radius_mm: float, links: Links, near: Sequence[float],
+    limits: Sequence[tuple[float, float]],
+) -> bool:
+    """True only if ``has_solution`` is True for every pose within ``radius_mm`` of ``pose``'s
+    point with ``pose``'s attitude; False means "not proven" (the caller asks ``has_solution``).
+
+    The proof: one branch of the closed form (front or back, elbow sign, wrist flip) fits its
+    limits with room to spare at the centre, and no point of the ball can move a joint by more
+    than that room.  The wrist centre moves with the tool point (same attitude), so it stays
+    within ``radius_mm`` of the centre's.  Then, exactly: J1 = the bearing of the wrist centre
+    turns by at most asin(ρ / r) (r its distance from the base axis); in the arm's plane the
+    point (u, v) stays within ρ, so its bearing φ turns by at most asin(ρ / d) and its distance
+    d stays in [d − ρ, d + ρ]; the elbow angle δ and the shoulder's triangle angle β are
+    monotonic in d on that interval (β only where d² does not cross a2² − R², checked), so
+    their extremes are at its ends; J2 = π/2 − φ − β, J3 = γ + δ − π/2.  The forearm frame
+    Rz(J1)·Ry(J2 + J3) turns by at most θ = ΔJ1 + Δ(J2 + J3), so each column and row of the
+    wrist matrix turns by at most θ: J5 (their angle from x) by θ, J4 and J6 (their bearings
+    about x) by asin(sin θ / sin J5) while θ < J5 < π − θ.  A joint whose whole interval lies
+    inside its limits, within half a turn of the hint and away from ±180 fits for every point
+    exactly as ``_fits_deg`` decides it.  Float rounding (1e-13 degrees) is far inside the
+    margins."""
+    x, y, z, b0, b1, w = pose
+    rho = float(radius_mm)
+    f = _flange_of(b0, b1, w)
+    d6 = links.tool_mm
+    wx, wy, wz = x - d6 * f[0], y - d6 * f[3], z - d6 * f[6]
+    r = math.hypot(wx, wy)
+    if not r - rho > _PROOF_MARGIN_MM:
+        return False
+    a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
+    reach = math.hypot(d4, a3)
+    gamma = math.atan2(a3, d4)
+    v = wz - links.base_height_mm
+    dj1 = math.asin(rho / r)
+    yaw = math.atan2(wy, wx)
+    for j1, u in ((yaw, r - links.shoulder_offset_mm), (yaw + math.pi, -r - links.shoulder_offset_mm)):
+        if not _interval_fits(j1, dj1, near[0], limits[0]):
+            continue
+        d = math.hypot(u, v)
+        d_low, d_high = d - rho, d + rho
+        if not (d_low - _PROOF_MARGIN_MM > abs(a2 - reach) and d_high + _PROOF_MARGIN_MM < a2 + reach):
+            continue  # the ball may reach a stretched or folded arm
+        critical = a2 * a2 - reach * reach  # β is monotonic in d where d² does not cross this
+        if d_low * d_low <= critical <= d_high * d_high:
+            continue
+        phi = math.atan2(v, u)
+        dphi = math.asin(rho / d)
+        c1, s1 = math.cos(j1), math.sin(j1)
+        for sign in (1.0, -1.0):
+            deltas = [sign * _elbow(dist, a2, reach) for dist in (d_low, d, d_high)]
+            betas = [math.atan2(reach * math.sin(dl), a2 + reach * math.cos(dl)) for dl in deltas]
+            delta_c, beta_c = deltas[1], betas[1]
+            dbeta = max(abs(b - beta_c) for b in betas)
+            ddelta = max(abs(dl - delta_c) for dl in deltas)
+            j2 = math.pi / 2 - (phi + beta_c)
+            j3 = gamma + delta_c - math.pi / 2
+            if not (_interval_fits(j2, dphi + dbeta, near[1], limits[1])
+                    and _interval_fits(j3, ddelta, near[2], limits[2])):
+                continue
+            t = j2 + j3
+            theta = dj1 + dphi + dbeta + ddelta  # t = γ − φ − β + δ
+            ct, st = math.cos(t), math.sin(t)
+            arm_t = (c1 * ct, s1 * ct, -st, -s1, c1, 0.0, c1 * st, s1 * st, ct)
+            m = _mul(arm_t, f)
+            j5 = math.acos(max(-1.0, min(1.0, m[0])))
+            if not (theta + _PROOF_MARGIN_DEG < j5 < math.pi - theta - _PROOF_MARGIN_DEG):
+                continue  # near the wrist singularity J4 and J6 may turn without bound
+            dj46 = math.asin(min(1.0, math.sin(theta) / math.sin(j5 - theta if j5 <= math.pi / 2 else j5 + theta)))
+            j4, j6 = math.atan2(m[3], -m[6]), math.atan2(m[1], m[2])
+            for wrist in ((j4, j5, j6), (j4 + math.pi, -j5, j6 + math.pi)):
+                if (_interval_fits(wrist[0], dj46, near[3], limits[3]) and _interval_fits(wrist[1], theta, near[4], limits[4])
+                        and _interval_fits(wrist[2], dj46, near[5], limits[5])):
+                    return True
+    return False
+
+
+def _elbow(distance: float, a2: float, reach: float) -> float:
+    """The elbow angle δ ≥ 0 (radians) at which shoulder and wrist centre are ``distance`` apart."""
+    return math.acos(max(-1.0, min(1.0, (distance * distance - a2 * a2 - reach * reach) / (2 * a2 * reach))))
+
+
+def _interval_fits(angle_rad: float, deviation_rad: float, hint: float, limits: tuple[float, float]) -> bool:
+    """Whether every angle within ``deviation_rad`` of ``angle_rad`` passes ``_fits_deg``'s first
+    test (inside the limits, less than half a turn from the hint), with no wrap at ±180 between."""
+    angle = wrap_deg(math.degrees(angle_rad))
+    spread = math.degrees(deviation_rad) * (1 + 1e-9) + _PROOF_MARGIN_DEG
+    low, high = angle - spread, angle + spread
+    return (-180.0 < low and high < 180.0 and limits[0] <= low and high <= limits[1]
+            and -180.0 < hint - high and hint - low < 180.0)
+
+
+class SolvableCells:
+    """``has_solution`` for many poses of one arm, answered per grid cell where it can be (lint).
+
+    Space is cut into cubes of ``cell_mm``; the first pose that falls in a cube (with a given
+    attitude and hint) asks ``ball_has_solution`` once for the ball around the cube's centre
+    that holds the whole cube — and, given the profile's workspace ``box``, whether the whole
+    cube lies inside the box and the reach radius (``box_problem`` is None for all of it).  A
+    proven cube answers True for every later pose in it at the cost of a dictionary look-up;
+    an unproven one (near a limit, the edge of the reach or a singularity) sends each pose to
+    ``has_solution`` (and ``box_problem``).  Sound, never approximate: a cube says True only
+    when every pose in it passes.  At most ``max_cells`` cubes are kept (the table starts
+    again when full), so memory is flat whatever the script."""
+
+    def __init__(self, links: Links, limits: Sequence[tuple[float, float]], box=None, cell_mm: float = 16.0,
+                 max_cells: int = 16384) -> None:
+        self.links, self.limits, self.box = links, tuple(tuple(pair) for pair in limits), box
+        self.cell_mm, self.max_cells = float(cell_mm), max_cells
+        # a pose just outside its cube (floor's rounding) is still inside the ball, and the box
+        self._slack_mm = 1e-6
+        self._radius_mm = self.cell_mm * math.sqrt(3.0) / 2.0 * (1 + 1e-9) + self._slack_mm
+        # (b0, b1, w, near) → {(i, j, k) → proven}: a script keeps one attitude and hint for
+        # many lines, so the last group is found again by comparing, without hashing them
+        self._groups: dict = {}
+        self._count = 0
+        self._last = None  # (b0, b1, w, near, cells) of the last pose
+
+    def proven(self, pose: Sequence[float], near: Sequence[float]) -> bool:
+        """True when ``pose``'s cube is proven (so ``__call__`` is True); False: not known."""
+        x, y, z, b0, b1, w = pose
+        last = self._last
+        if last is not None and last[3] is near and last[0] == b0 and last[1] == b1 and last[2] == w:
+            cells = last[4]  # ``near`` is the same tuple (immutable), so the same group
+        else:
+            near = near if type(near) is tuple else tuple(near)
+            cells = self._groups.setdefault((b0, b1, w, near), {})
+            self._last = (b0, b1, w, near, cells)
+        size = self.cell_mm
+        key = (math.floor(x / size), math.floor(y / size), math.floor(z / size))
+        proven = cells.get(key)
+        if proven is None:
+            if self._count >= self.max_cells:
+                self._groups.clear()
+                self._count = 0
+                cells = self._groups[b0, b1, w, near] = {}
+                self._last = (b0, b1, w, near, cells)
+            self._count += 1
+            proven = cells[key] = self._prove(key, (b0, b1, w), near)
+        return proven
+
+    def __call__(self, pose: Sequence[float], near: Sequence[float]) -> bool:
+        """``box_problem(pose[:3], box) is None and has_solution(pose, links, near, limits)``
+        (without a box, ``has_solution`` alone)."""
+        if self.proven(pose, near):
+            return True
+        if self.box is not None and box_problem(pose[:3], self.box) is not None:
             return False
-    return True
+        return has_solution(pose, self.links, near, self.limits)
+
+    def _prove(self, key, attitude, near) -> bool:
+        i, j, k = key
+        b0, b1, w = attitude
+        size, slack = self.cell_mm, self._slack_mm
+        if self.box is not None:
+            corners = [(n * size - slack, (n + 1) * size + slack) for n in (i, j, k)]
+            for (low, high), (box_low, box_high) in zip(corners, (self.box.x_mm, self.box.y_mm, self.box.z_mm)):
+                if not (box_low < low and high < box_high):
+                    return False
+            far = [max(abs(low), abs(high)) for low, high in corners]
+            if not math.sqrt(far[0] * far[0] + far[1] * far[1] + far[2] * far[2]) < self.box.reach_mm - slack:
+                return False
+        centre = ((i + 0.5) * size, (j + 0.5) * size, (k + 0.5) * size, b0, b1, w)
+        return ball_has_solution(centre, self._radius_mm, self.links, near, self.limits)
 
 
 @dataclass(frozen=True)
@@ -365,6 +601,11 @@ class Kinematics:
 
 def box_problem(robot_xyz: Sequence[float], box) -> str | None:
     """Why a robot-frame point is outside the profile's workspace box or reach radius, or None."""
+    x, y, z = robot_xyz
+    (x_low, x_high), (y_low, y_high), (z_low, z_high) = box.x_mm, box.y_mm, box.z_mm
+    if (x_low <= x <= x_high and y_low <= y <= y_high and z_low <= z <= z_high
+            and math.sqrt(x * x + y * y + z * z) <= box.reach_mm):
+        return None  # the common case, asked of every target: the tests below, without their messages
     for name, value, (low, high) in zip("XYZ", robot_xyz, (box.x_mm, box.y_mm, box.z_mm)):
         if not low <= value <= high:
             return f"robot {name} = {value:.1f} mm is outside the workspace {low:g}…{high:g} mm"

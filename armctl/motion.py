@@ -709,18 +709,95 @@ class Planner:
 
     ``feed(command)`` returns the command's segment and moves ``pose`` to its end.  An ArcStart
     is remembered for the ArcEnd that must follow it; any other command forgets it.
+    ``feed_s(command)`` is ``feed(command).duration_s`` for a caller that needs the time alone
+    (lint's E012 clock, issue 13): a LinearMove is then timed without building its segment or
+    its end pose — ``pose`` builds that pose when it is next read, as ``feed`` would have.
     """
 
     def __init__(self, model: MotionModel, start: ArmPose | None = None):
         self.model = model
         self.pose = model.initial_pose() if start is None else start
         self.pending_arc: ArcStart | None = None
+        self._line_constants = None  # feed_s's profile numbers, read on its first LinearMove
+
+    @property
+    def pose(self) -> ArmPose:
+        if self._line_end is not None:  # the end of the LinearMoves feed_s timed, built now
+            x, y, z, b0, b1, w, pwm_us, e0, e1 = self._line_end
+            origin_mm, hint = self._line_base
+            self._pose = ArmPose(self.model.kinematics, cartesian=(x, y, z, b0, b1, w), pwm_us=pwm_us, e0_deg=e0,
+                                 e1_deg=e1, origin_mm=origin_mm, hint=hint)
+            self._line_end = None
+        return self._pose
+
+    @pose.setter
+    def pose(self, value: ArmPose) -> None:
+        self._pose, self._line_end = value, None
 
     def feed(self, command: Command) -> Segment:
         segment = self.model.plan(command, self.pose, self.pending_arc)
         self.pending_arc = command if isinstance(command, ArcStart) else None
         self.pose = segment.end
         return segment
+
+    def feed_s(self, command: Command) -> float:
+        """``feed(command).duration_s``; a LinearMove costs a few float operations.
+
+        The arithmetic is ``_plan_linear``'s and ``_time_cartesian``'s for one constant-speed
+        piece, step for step, so the seconds are the same float (tests/test_lint_fastpaths.py
+        holds the two equal).  A chain of LinearMoves keeps the origin and IK hint of the pose
+        it starts from: a LinearMove's end carries its start's (``_end_cartesian``), and no one
+        can read the joints of an end pose that is not built, so the hint stays the chain's first."""
+        if type(command) is not LinearMove or not command.speed_mm_min > 0:
+            return self.feed(command).duration_s
+        end = self._line_end
+        if end is None:
+            start = self._pose
+            sx, sy, sz, sb0, sb1, sw = start.cartesian
+            spwm, se0, se1 = start.pwm_us, start.e0_deg, start.e1_deg
+            self._line_base = (start.origin_mm, start.known_joints)  # as _end_cartesian reads them now
+        else:
+            sx, sy, sz, sb0, sb1, sw, spwm, se0, se1 = end
+        constants = self._line_constants
+        if constants is None:
+            model = self.model
+            speed = model.profile.speed
+            constants = self._line_constants = (speed.attitude_deg_s, speed.max_joint_deg_s, speed.max_linear_mm_min,
+                                                model._overhead_s, model.speed_factor,
+                                                model.profile.timing.pwm_change_s)
+        attitude_deg_s, joint_deg_s, max_mm_min, overhead_s, speed_factor, pwm_change_s = constants
+        x, y, z, b0, b1, w = command.x_mm, command.y_mm, command.z_mm, command.b0_deg, command.b1_deg, command.w_deg
+        e0, e1 = command.e0_deg, command.e1_deg
+        channel, pwm_us = command.pwm_channel - 1, command.pwm_us
+        if spwm[channel] == pwm_us:
+            pwm = spwm  # the common case: the same values, no new tuple
+        else:
+            pwm = list(spwm)
+            pwm[channel] = pwm_us
+            pwm = tuple(pwm)
+        self._line_end = (x, y, z, b0, b1, w, pwm, e0, e1)
+        self.pending_arc = None
+        if b0 == sb0 and b1 == sb1 and w == sw and e0 == se0 and e1 == se1:
+            other_s = 0.0  # max(0.0 / attitude_deg_s, 0.0 / joint_deg_s): a run of lines rarely turns the tool
+        else:
+            att_lead = max(abs(_short(b0 - sb0)), abs(_short(b1 - sb1)), abs(_short(w - sw)))
+            ext_lead = max(abs(e0 - se0), abs(e1 - se1))
+            other_s = max(att_lead / attitude_deg_s, ext_lead / joint_deg_s)
+        dx, dy, dz = x - sx, y - sy, z - sz
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)
+        if length > TINY_MM:
+            v = min(command.speed_mm_min, max_mm_min) / 60.0
+            ramp_s = 0.0 + 2.0 * length / (v + v)  # _Ramp([(length, v, v)]).duration
+            stretch = other_s / ramp_s if other_s > ramp_s > 0 else 1.0
+            return overhead_s + ramp_s * (speed_factor * stretch)
+        if other_s <= 0 and spwm != pwm:
+            other_s = pwm_change_s
+        if other_s > 0:
+            v = 1.0 / other_s
+            ramp_s = 0.0 + 2.0 * 1.0 / (v + v)  # _Ramp.constant(1.0, other_s).duration
+        else:
+            ramp_s = 0.0
+        return overhead_s + ramp_s * speed_factor
 
     def feed_all(self, commands) -> list[Segment]:
         return [self.feed(command) for command in commands]

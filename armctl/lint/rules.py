@@ -8,7 +8,9 @@ against the arm's profile and common sense: geometry (L1xx), speeds and units (L
 (L3xx), parameters, loops and empty scripts (L4xx, fed by armctl/lint/scan.py) and the state
 the script leaves the arm in (L5xx).
 
-A statement rule is ``check(statement, arm) -> iterable of (where, message, hint[, rests_on])``,
+A statement rule is ``check(statement, arm) -> iterable of (where, message, hint[, rests_on])``
+(a generator, or — for the rules every Cartesian line meets — a function returning ``()`` when
+it finds nothing, which costs no generator per line: issue 13),
 where is a ``SourceSpan`` or a ``WordAt`` (a word's span, computed only if the finding is kept)
 and ``rests_on`` names the profile numbers the finding depends on ("section.key" or a whole
 "section"): the engine reports a finding on an error code as a warning when any of them is an
@@ -24,7 +26,7 @@ from __future__ import annotations
 
 import math
 import re
-from typing import Iterator, NamedTuple, Optional
+from typing import Iterable, Iterator, NamedTuple, Optional
 
 from ..kinematics import Unreachable, box_problem, has_solution, inverse
 from ..motion import arc_through, circle_through
@@ -126,36 +128,40 @@ _KINEMATICS = ("links", "joints")  # inverse kinematics: link lengths and joint 
 
 
 @check("L103", on=CARTESIAN_MOVES + (JointMove,))
-def outside_workspace(statement, arm) -> Iterator[Finding]:
+def outside_workspace(statement, arm) -> Iterable[Finding]:
     command = statement.command
-    if type(command) is JointMove:
-        yield from _joint_target_outside(statement, arm)
-        return
+    kind = type(command)
+    if kind is JointMove:
+        return _joint_target_outside(statement, arm)
     pose = cartesian_target(command)
-    if type(command) is not ArcStart and pose == arm.pose:
-        return  # the arm is already there (a gripper- or speed-only line): one mistake, one finding
-    problem = arm.reach_problem(pose, lambda: _reach_problem(pose, arm))
+    if kind is not ArcStart and pose == arm.pose:
+        return ()  # the arm is already there (a gripper- or speed-only line): one mistake, one finding
+    problem = None if arm.surely_reachable(pose) else arm.reach_problem(pose, lambda: _reach_problem(pose, arm))
     if problem is not None:
         message, hint, rests_on = problem
         axis = _AXIS.match(message)
         span = _at(statement, axis.group(1)) if axis else statement.span
-        what = "the G300 point" if type(command) is ArcStart else "target"
-        yield span, f"{what} {_xyz(pose)}: {message}", hint, rests_on
-    elif type(command) is ArcEnd:
-        yield from _arc_outside(statement, arm)
+        what = "the G300 point" if kind is ArcStart else "target"
+        return [(span, f"{what} {_xyz(pose)}: {message}", hint, rests_on)]
+    if kind is ArcEnd:
+        return _arc_outside(statement, arm)
+    return ()
 
 
 def _reach_problem(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
     """(message, hint, rests_on) for a worktable pose the arm cannot take, or None: first the
     workspace box and reach radius, then a joint solution inside the limits — and if there is
-    none, whether the attitude or the distance is at fault (the same point tool down)."""
+    none, whether the attitude or the distance is at fault (the same point tool down).  Asked
+    only when ``arm.surely_reachable`` cannot say (issue 13), through the tracker's cache."""
     robot = arm.robot_xyz(pose)
-    problem = box_problem(robot, arm.profile.workspace)
+    profile = arm.profile
+    problem = box_problem(robot, profile.workspace)
     if problem is not None:
         return problem, _workspace_hint(arm, problem), _WORKSPACE
-    profile = arm.profile
-    near = arm.ik_hint() if arm.ik_hint() is not None else profile.poses[0]
-    target = (*robot, *pose[3:6])
+    near = arm.ik_hint()
+    if near is None:
+        near = profile.poses[0]
+    target = (*robot, pose[3], pose[4], pose[5])
     if has_solution(target, profile.links, near, profile.joint_limits_deg):
         return None  # the common case, decided without choosing the best solution
     try:
@@ -248,7 +254,14 @@ def _is_unit_slip(statement, arm) -> bool:
 
 
 @check("L201", on=CARTESIAN_MOVES + (JointMove,))
-def speed_above_max(statement, arm) -> Iterator[Finding]:
+def speed_above_max(statement, arm) -> Iterable[Finding]:
+    words = statement.words
+    if "F" not in words and "Q" not in words:
+        return ()  # most lines: the speed is modal
+    return _speed_above_max(statement, arm)
+
+
+def _speed_above_max(statement, arm) -> Iterator[Finding]:
     limit = speed_limit(type(statement.command), arm.profile.speed)
     if type(statement.command) is JointMove:
         value = _sent(statement, "F")
@@ -273,11 +286,14 @@ def joint_speed_unit(statement, arm) -> Iterator[Finding]:
 
 
 @check("L203", on=CARTESIAN_MOVES)
-def cartesian_speed_unit(statement, arm) -> Iterator[Finding]:
+def cartesian_speed_unit(statement, arm) -> Iterable[Finding]:
+    if "F" not in statement.words:
+        return ()
     value = _sent(statement, "F")
     if value is not None and 0 < value < SLOW_CARTESIAN_MM_MIN:
-        yield (_at(statement, "F"), f"F{value:g} means {value:g} mm/min ({value / 60:.2g} mm/s): it reads like deg/s",
-               f"Cartesian speeds are mm/min: {value:g} mm/s is F{value * 60:g}")
+        return [(_at(statement, "F"), f"F{value:g} means {value:g} mm/min ({value / 60:.2g} mm/s): it reads like deg/s",
+                 f"Cartesian speeds are mm/min: {value:g} mm/s is F{value * 60:g}")]
+    return ()
 
 
 @check("L204", on=[AccelLinearMove])
@@ -292,11 +308,15 @@ def accel_above_max(statement, arm) -> Iterator[Finding]:
 
 
 @check("L301", on=[LinearMove, JointMove, ArcStart, ArcEnd])
-def pwm_channel_unwired(statement, arm) -> Iterator[Finding]:
+def pwm_channel_unwired(statement, arm) -> Iterable[Finding]:
     channel = pwm_channel_of(statement.command)
+    if channel in arm.profile.pwm.channels:
+        return ()
+    return _pwm_channel_unwired(statement, arm, channel)
+
+
+def _pwm_channel_unwired(statement, arm, channel) -> Iterator[Finding]:
     wired = arm.profile.pwm.channels
-    if channel in wired:
-        return
     key = ("L301", channel)
     if "T" not in statement.words and key in arm.notes:
         return  # reported once per channel unless a T word selects it again
@@ -307,13 +327,16 @@ def pwm_channel_unwired(statement, arm) -> Iterator[Finding]:
 
 
 @check("L302", on=[LinearMove, JointMove, ArcStart, ArcEnd])
-def pwm_outside_range(statement, arm) -> Iterator[Finding]:
+def pwm_outside_range(statement, arm) -> Iterable[Finding]:
+    if "S" not in statement.words:
+        return ()
     value = _sent(statement, "S")
     low, high = arm.profile.pwm.range_us
     if value is not None and not low <= value <= high:
         pwm = arm.profile.pwm
-        yield (_at(statement, "S"), f"S{value:g} µs is outside the profile's PWM range {low:g}…{high:g} µs",
-               f"gripper open is S{pwm.gripper_open_us:g}, closed S{pwm.gripper_close_us:g}", ("pwm.range_us",))
+        return [(_at(statement, "S"), f"S{value:g} µs is outside the profile's PWM range {low:g}…{high:g} µs",
+                 f"gripper open is S{pwm.gripper_open_us:g}, closed S{pwm.gripper_close_us:g}", ("pwm.range_us",))]
+    return ()
 
 
 # --- L4xx parameters, loops, empty scripts: found by armctl/lint/scan.py and the engine ---------

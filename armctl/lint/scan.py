@@ -123,14 +123,18 @@ class LineScanner:
                 self._block(number, text, block)
 
     def _parameters_in(self, number: int, text: str, code: str) -> None:
-        assignment = _ASSIGNMENT.match(code)
-        for match in _PARAMETER.finditer(code):
-            name = match.group(1).lower()
-            if assignment is not None and match.start() == assignment.start(1) - 2:
-                if name not in self._defined:
-                    self._defined[name] = SourceSpan(self.file, number, match.start() + 1, match.end() + 1, text)
-            else:
-                self._used.add(name)
+        names = _PARAMETER.findall(code)
+        if not names:
+            return
+        # An assignment's target is the line's first parameter (the pattern anchors at its start);
+        # every other one is read.  Its columns are looked up only the first time it is assigned.
+        if "=" in code and _ASSIGNMENT.match(code) is not None:
+            target = names[0].lower()
+            if target not in self._defined:
+                match = _PARAMETER.search(code)
+                self._defined[target] = SourceSpan(self.file, number, match.start() + 1, match.end() + 1, text)
+            del names[0]
+        self._used.update(name.lower() for name in names)
 
     def _block(self, number: int, text: str, block: re.Match) -> None:
         if block.group(1).lower() == "endrepeat":

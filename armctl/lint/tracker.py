@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from typing import Optional
 
+from ..kinematics import SolvableCells
 from ..protocol import (
     AccelLinearMove, ArcEnd, ArcStart, GoToPose, JointMove, LinearMove, PauseToggle, ResetArm, RunProgram,
     SetWorktableOrigin,
@@ -23,6 +24,7 @@ from ..protocol import (
 Pose = tuple[float, float, float, float, float, float]
 _CARTESIAN_TARGETS = (LinearMove, AccelLinearMove, ArcEnd)
 _REACH_CACHE_SIZE = 4096
+_MISSING = object()
 
 
 def cartesian_target(command) -> Pose:
@@ -56,6 +58,8 @@ class ArmTracker:
         self.last_statement = None
         self.notes: set = set()  # what a rule already said once per script, e.g. ("L301", channel)
         self._reach: dict = {}  # (pose, origin, joints) → reach problem or None
+        # robot-frame poses inside the workspace with a joint solution, a proven cube at a time
+        self._cells = SolvableCells(profile.links, profile.joint_limits_deg, profile.workspace)
 
     # --- what rules ask -----------------------------------------------------------------------
 
@@ -68,15 +72,25 @@ class ArmTracker:
         """Joints to solve IK near: the last known joints, else None (the profile's home pose)."""
         return self.joints
 
+    def surely_reachable(self, pose) -> bool:
+        """True when the worktable ``pose`` lies in a cube proven inside the workspace box and
+        solvable near the IK hint (kinematics.SolvableCells); False: not known, ask
+        ``reach_problem``.  The common case of every target, at the cost of a look-up."""
+        ox, oy, oz = self.origin_mm
+        near = self.joints
+        return self._cells.proven((pose[0] + ox, pose[1] + oy, pose[2] + oz, pose[3], pose[4], pose[5]),
+                                  self.profile.poses[0] if near is None else near)
+
     def reach_problem(self, pose, compute):
         """``compute()`` (rules.py: None, or the problem with its hint) for ``pose`` here, cached:
         loops and palettes revisit the same targets."""
         key = (pose, self.origin_mm, self.joints)
-        if key not in self._reach:
+        found = self._reach.get(key, _MISSING)
+        if found is _MISSING:
             if len(self._reach) >= _REACH_CACHE_SIZE:
                 self._reach.clear()
-            self._reach[key] = compute()
-        return self._reach[key]
+            found = self._reach[key] = compute()
+        return found
 
     # --- advancing ------------------------------------------------------------------------------
 
