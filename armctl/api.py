@@ -314,7 +314,7 @@ class _JobControl:
     def request_stop(self, why: str | None = None) -> None:
         """The Ctrl-C path (``jobflow.drive`` sends the abort sequence); ``why`` goes into the
         result's messages.  Asked again while stopping: stop waiting for the arm (a second Ctrl-C)."""
-        if why is not None:
+        if why is not None and why not in self.runner.view.messages:  # two SIGTERMs: one note
             self.runner.view.messages.append(why)
         first = not self.stop_asked and not self.runner.stop_requested
         self.stop_asked = True
@@ -774,7 +774,11 @@ class Arm:
         arrival = self._profile.connector.control_on_arrival
         state = read_arm(link, self.status_timeout_s, spec.log, note=observer.note, control_on_arrival=arrival)
         if spec.resume is not None:
-            state, from_line = resume_start(link, spec.resume, self.status_timeout_s, self.lead_s)
+            started = resume_start(link, spec.resume, self.status_timeout_s, self.lead_s,
+                                   stopped=lambda: stops != self._stops)
+            if started is None:  # stop() (Ctrl-C) while the arm ran out its queue: no frame goes
+                return RunResult.nothing_sent("interrupted")
+            state, from_line = started
             if from_line is None:
                 return RunResult.nothing_sent("finished", message="nothing to resume: every line of the job is proven executed")
             error = from_line_errors(script, from_line)

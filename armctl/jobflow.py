@@ -140,14 +140,17 @@ def _wait_still(link, timeout_s: float) -> None:
                         "nothing else was sent") from None
 
 
-def wait_for_rest(link, timeout_s: float):
+def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = None):
     """The arm's state once its position and joints stayed the same for ``job.REST_CHECK_S`` (the
-    engine's own test of rest); ``JobFailed`` after ``timeout_s``."""
+    engine's own test of rest); ``JobFailed`` after ``timeout_s``; None as soon as ``stopped()``
+    says a stop was asked (Ctrl-C while a resume waits: nothing was sent, nothing is owed)."""
     from .job import REST_CHECK_S
 
     deadline = link.clock() + timeout_s
     reading, since = None, link.clock()
     while True:
+        if stopped is not None and stopped():
+            return None
         state = link.snapshot()[0]
         now = link.clock()
         if (state.position_mm, tuple(state.joints_deg)) != reading:
@@ -303,13 +306,16 @@ def read_resume_point(log, script, from_line: int = 1):
         raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
 
 
-def resume_start(link, point, timeout_s: float, lead_s: float):
+def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable[[], bool] | None = None):
     """Wait for the arm to come to rest (it runs out what was queued when the host died), then
     the line its report proves: (the state to start from, the line), or (state, None) when
-    every line ran; ``joblog.NotProven`` when the report proves neither."""
+    every line ran; ``joblog.NotProven`` when the report proves neither; None when ``stopped()``
+    came first (see ``wait_for_rest``)."""
     from .job import SETTLE_SLACK_S
 
-    state = wait_for_rest(link, timeout_s + 2 * max(point.lead_s, lead_s) + SETTLE_SLACK_S)
+    state = wait_for_rest(link, timeout_s + 2 * max(point.lead_s, lead_s) + SETTLE_SLACK_S, stopped)
+    if state is None:
+        return None
     return state, point.line_for(state.position_mm, tuple(state.joints_deg))
 
 

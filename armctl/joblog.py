@@ -61,10 +61,15 @@ class ResumePoint:
     done_line: int | None = None
     done_resume: int | None = None
     target: dict | None = None
+    # Job frames (``tx`` records with a line) the log shows written after its last ``progress``
+    # record: the host died between a write and its journal entry, so what they were is unknown.
+    unjournaled_frames: int = 0
 
     def line_for(self, position_mm, joints_deg) -> int | None:
         """The line to continue at, given where the arm reports it is at rest now; None when
         every line already ran; ``NotProven`` when the report proves neither."""
+        if self.unjournaled_frames:
+            raise NotProven(self)  # neither the line to go on from nor the target to check is known
         if self.sent_line is None:
             return self.from_line  # nothing was written
         if self.at_target(position_mm, joints_deg):
@@ -88,6 +93,12 @@ class NotProven(ArmctlError):
     def __init__(self, point: ResumePoint) -> None:
         self.point = point
         done = point.done_line if point.done_line is not None else "none"
+        if point.unjournaled_frames:
+            super().__init__(
+                f"the log shows {point.unjournaled_frames} frame(s) written after its last progress record (the host "
+                f"stopped between the write and its record): armctl cannot prove which lines ran; nothing was sent "
+                f"(check the arm and continue by hand with --from-line)")
+            return
         super().__init__(
             f"the log's last line sent is {point.sent_line} and the last line known executed {done}, but the arm is not "
             f"at rest at the last target written: armctl cannot prove which lines in between ran; nothing was sent "
@@ -96,7 +107,7 @@ class NotProven(ArmctlError):
 
 def read_resume_log(lines: Iterable[str], name: str, data: bytes) -> ResumePoint:
     """The resume point recorded in a ``--log`` for the script ``name`` whose snapshot is ``data``."""
-    header, last = None, None
+    header, last, unjournaled = None, None, 0
     for number, line in enumerate(lines, 1):
         if not line.strip():
             continue
@@ -111,7 +122,9 @@ def read_resume_log(lines: Iterable[str], name: str, data: bytes) -> ResumePoint
         if record.get("dir") == "job" and header is None:
             header = record
         elif record.get("dir") == "progress":
-            last = record
+            last, unjournaled = record, 0
+        elif record.get("dir") == "tx" and record.get("line") is not None:
+            unjournaled += 1  # a job frame; its progress record follows it (Journal.update) unless the host died
     if header is None:
         raise ResumeRefused("it has no job record (written by `armctl run --log` since --resume exists)")
     if header.get("sha256") != script_digest(data):
@@ -120,9 +133,9 @@ def read_resume_log(lines: Iterable[str], name: str, data: bytes) -> ResumePoint
         raise ResumeRefused(f"it records {same} with other contents (sha256 {str(header.get('sha256'))[:12]}…, "
                             f"{name} is {script_digest(data)[:12]}…): the script was edited or is another one")
     if last is None:
-        return ResumePoint(header.get("from_line", 1), header.get("lead_s", 0.0))
+        return ResumePoint(header.get("from_line", 1), header.get("lead_s", 0.0), unjournaled_frames=unjournaled)
     return ResumePoint(header.get("from_line", 1), header.get("lead_s", 0.0), last.get("sent_line"), last.get("sent_resume"),
-                       last.get("done_line"), last.get("done_resume"), last.get("target"))
+                       last.get("done_line"), last.get("done_resume"), last.get("target"), unjournaled)
 
 
 class Journal:

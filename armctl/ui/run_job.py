@@ -141,8 +141,14 @@ def _config_baud() -> int:
 
 
 def _open_log(path: str):
-    """The --log file, line-buffered: a write failure (disk full) shows at the line that failed."""
-    return open(path, "w", encoding="utf-8", buffering=1)
+    """The --log file, line-buffered: a write failure (disk full) shows at the line that failed.
+    One that cannot be opened is a usage error (exit 2, and with --json its summary object)."""
+    try:
+        return open(path, "w", encoding="utf-8", buffering=1)
+    except OSError as error:
+        from ..cli import UsageFailure
+
+        raise UsageFailure(f"cannot write --log {path}: {error.strerror or error}") from None
 
 
 @contextmanager
@@ -209,8 +215,10 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     # read before --log (which may be the same file) is opened for writing, and before the port
     resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
     watch = _RunObserver(options, script, MotionModel(profile), events)
-    with Arm.open(options.port, options.baud, profile, lead_s=options.lead_s, status_timeout_s=options.timeout_s,
-                  connect=connect) as arm, (_log_file(options.log_path) if options.log_path else nullcontext()) as log:
+    # the log before the port: one that cannot be written refuses the job before the arm is touched
+    with (_log_file(options.log_path) if options.log_path else nullcontext()) as log, \
+            Arm.open(options.port, options.baud, profile, lead_s=options.lead_s, status_timeout_s=options.timeout_s,
+                     connect=connect) as arm:
         with _stop_signals(arm, watch), (_keys(arm) if watch.keys else nullcontext()):
             try:
                 result = arm.run(script, from_line=options.from_line, observer=watch, log=log, abort=options.abort,
