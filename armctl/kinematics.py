@@ -219,8 +219,10 @@ def _fitted(angle: float, hint: float, limits: tuple[float, float] | None) -> fl
     half a turn from the hint is ``_fit``'s own answer: ``round`` of a ratio below one half is
     0, so ``_fit`` returns ``angle + 0.0`` (the ``+ 0.0`` keeps its sign of zero)."""
     if -180.0 < angle <= 180.0:
-        if limits is not None and limits[0] <= angle <= limits[1] and -180.0 < hint - angle < 180.0:
-            return angle + 0.0
+        if limits is not None:
+            low, high = limits
+            if low <= angle <= high and -180.0 < hint - angle < 180.0:
+                return angle + 0.0
     else:
         angle = wrap_deg(angle)
     return _fit(angle, hint, limits)
@@ -258,7 +260,7 @@ def _solve(pose, links, near, limits, mode):
     h1, h2, h3, h4, h5, h6 = near
     l1, l2, l3, l4, l5, l6 = limits
     near_j4 = math.radians(h4)
-    every, fitting = mode is _EVERY, mode is not _EVERY
+    every, fitting, nearest = mode is _EVERY, mode is not _EVERY, mode is _NEAREST  # _FIRST keeps no costs
     found = [] if every else None
     best, best_cost, worst, reachable = None, math.inf, None, False
     v = wz - links.base_height_mm
@@ -276,11 +278,12 @@ def _solve(pose, links, near, limits, mode):
                 if worst is None:
                     worst = (0, wrap_deg(deg1))
                 continue  # J1 is the same for both elbows
-            cost1 = (q1 - h1) ** 2
+            if nearest:
+                cost1 = (q1 - h1) ** 2
         cos_d = max(-1.0, min(1.0, cos_d))
         base = math.atan2(v, u)
         for delta in {math.acos(cos_d), -math.acos(cos_d)}:
-            if fitting and not cost1 < best_cost:
+            if nearest and not cost1 < best_cost:
                 continue
             alpha = base + math.atan2(reach * math.sin(delta), a2 + reach * math.cos(delta))
             j2 = math.pi / 2 - alpha
@@ -292,17 +295,19 @@ def _solve(pose, links, near, limits, mode):
                     if worst is None:
                         worst = (1, wrap_deg(deg2))
                     continue
-                cost2 = cost1 + (q2 - h2) ** 2
-                if not cost2 < best_cost:
-                    continue
+                if nearest:
+                    cost2 = cost1 + (q2 - h2) ** 2
+                    if not cost2 < best_cost:
+                        continue
                 q3 = _fitted(deg3, h3, l3)
                 if q3 is None:
                     if worst is None:
                         worst = (2, wrap_deg(deg3))
                     continue  # neither wrist flip can help
-                arm_cost = cost2 + (q3 - h3) ** 2
-                if not arm_cost < best_cost:
-                    continue
+                if nearest:
+                    arm_cost = cost2 + (q3 - h3) ** 2
+                    if not arm_cost < best_cost:
+                        continue
             # The wrist: Rx(J4)·Ry(J5)·Rx(J6) = arm^T · flange, only the entries it reads
             ct, st = math.cos(t), math.sin(t)
             r0, r1, r2 = c1 * ct, s1 * ct, -st  # arm^T's rows: arm[0], arm[3], arm[6]
@@ -334,28 +339,29 @@ def _solve(pose, links, near, limits, mode):
                     if worst is None:
                         worst = (3, wrap_deg(deg4))
                     continue
-                cost = arm_cost + (q4 - h4) ** 2
-                if not cost < best_cost:
-                    continue
+                if nearest:
+                    cost = arm_cost + (q4 - h4) ** 2
+                    if not cost < best_cost:
+                        continue
                 q5 = _fitted(deg5, h5, l5)
                 if q5 is None:
                     if worst is None:
                         worst = (4, wrap_deg(deg5))
                     continue
-                cost += (q5 - h5) ** 2
-                if not cost < best_cost:
-                    continue
+                if nearest:
+                    cost += (q5 - h5) ** 2
+                    if not cost < best_cost:
+                        continue
                 q6 = _fitted(deg6, h6, l6)
                 if q6 is None:
                     if worst is None:
                         worst = (5, wrap_deg(deg6))
                     continue
+                if not nearest:
+                    return (q1, q2, q3, q4, q5, q6), worst, True  # _FIRST: this one fits
                 cost += (q6 - h6) ** 2
-                if not cost < best_cost:
-                    continue
-                best, best_cost = (q1, q2, q3, q4, q5, q6), cost
-                if mode is _FIRST:
-                    return best, worst, True
+                if cost < best_cost:
+                    best, best_cost = (q1, q2, q3, q4, q5, q6), cost
     return (found if every else best), worst, reachable
 
 
