@@ -12,6 +12,9 @@ status bytes come from these joints), the same Unreachable message.
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 from hypothesis import example, given, settings
@@ -113,3 +116,15 @@ def test_the_examples_reach_every_branch():
 def test_fitted_is_fit_of_the_wrapped_angle(angle, hint, limits):
     """The solver's fast path for one joint is ``_fit`` of the wrapped angle, sign of zero included."""
     assert repr(_fitted(angle, hint, limits)) == repr(_fit(wrap_deg(angle), hint, limits))
+
+
+def test_the_ik_benchmark_runs_as_the_readme_shows_it():
+    """benchmarks/ik_speed.py (the README's IK figures) in a fresh process, one pass."""
+    root = Path(__file__).resolve().parents[1]
+    assert "benchmarks/ik_speed.py" in (root / "README.md").read_text(encoding="utf-8")
+    done = subprocess.run([sys.executable, str(root / "benchmarks" / "ik_speed.py"), "--repeats", "1"],
+                          capture_output=True, text=True, timeout=60, cwd=root)
+    assert done.returncode == 0, done.stderr
+    names = [line.split("  ")[0] for line in done.stdout.splitlines()]
+    assert names == ["inverse, path", "inverse, mixed", "has_solution, path", "has_solution, mixed"], done.stdout
+    assert all("calls/s" in line for line in done.stdout.splitlines())
