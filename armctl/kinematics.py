@@ -240,8 +240,9 @@ def _solve(pose, links, near, limits, mode):
                 (``has_solution``: the order cannot change a yes-or-no answer).
       _NEAREST  answer = the fitted solution nearest ``near`` (sum of squares in joint order;
                 the first of equals), or None (``inverse``).
-    Every solution is costed joint by joint and dropped as soon as its cost reaches the best's
-    (every term is >= 0), and the arm's three joints are fitted once for both wrist flips: an
+    _NEAREST costs each solution joint by joint and drops it as soon as its cost reaches the
+    best's (every term is >= 0; _FIRST keeps no costs).  The arm's three joints are fitted once
+    for both wrist flips: an
     arm placement whose J1, J2 or J3 do not fit tries no wrist, and J1 is the same for both
     elbows.  Flat for speed; the arithmetic is the enumeration's, bit for bit: each wrist
     matrix entry is the sum ``_mul(arm^T, flange)`` forms, with arm = ``_arm(j1, t)``
