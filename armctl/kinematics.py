@@ -242,9 +242,8 @@ def _solve(pose, links, near, limits, mode):
                 the first of equals), or None (``inverse``).
     _NEAREST costs each solution joint by joint and drops it as soon as its cost reaches the
     best's (every term is >= 0; _FIRST keeps no costs).  The arm's three joints are fitted once
-    for both wrist flips: an
-    arm placement whose J1, J2 or J3 do not fit tries no wrist, and J1 is the same for both
-    elbows.  Flat for speed; the arithmetic is the enumeration's, bit for bit: each wrist
+    for both wrist flips: an arm placement whose J1, J2 or J3 do not fit tries no wrist, and J1
+    is the same for both elbows.  Flat for speed; the arithmetic is the enumeration's, bit for bit: each wrist
     matrix entry is the sum ``_mul(arm^T, flange)`` forms, with arm = ``_arm(j1, t)``
     (tests/test_ik_flat.py holds all three modes to the enumeration, tests/ik_reference.py)."""
     x, y, z, b0, b1, w = pose
