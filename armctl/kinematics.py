@@ -41,7 +41,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import lru_cache
-from typing import Iterator, NamedTuple, Sequence
+from typing import NamedTuple, Sequence
 
 from .errors import ArmctlError
 
@@ -169,77 +169,32 @@ def forward(joints_deg: Sequence[float], links: Links) -> CartesianPose:
 
 
 # --- inverse ----------------------------------------------------------------------------------
+#
+# One solver, ``_solve``, written out flat (no generators, no matrix tuples): ``solutions``,
+# ``inverse`` (the simulator asks it of every joints status frame, issue 11) and
+# ``has_solution`` (lint asks it of every target, issue 13) are three ways of walking its
+# solutions, so the IK math exists once.
+
+_EVERY, _FIRST, _NEAREST = "every", "first", "nearest"  # what ``_solve`` does with each solution
+_NO_LIMITS = (None,) * JOINT_COUNT
+_RAD_TO_DEG = 180.0 / math.pi  # x * this is math.degrees(x) bit for bit (CPython's own constant)
 
 
 def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None = None) -> list[tuple[float, ...]]:
     """Every closed-form solution (deg, each angle in (−180, 180]) for a robot-frame pose.
 
-    At a singularity the free angle is taken from ``near`` (J1 when the wrist centre is on the
-    base axis, J4 when J5 = 0).  An empty list means the pose is out of reach.
+    In a fixed order: J1 towards the wrist centre then away from it, each with both elbows,
+    each with both wrist flips.  At a singularity the free angle is taken from ``near`` (J1
+    when the wrist centre is on the base axis, J4 when J5 = 0).  An empty list means the pose
+    is out of reach.
     """
-    return list(_solutions(pose, links, near))
+    return _solve(pose, links, near or (0.0,) * JOINT_COUNT, _NO_LIMITS, _EVERY)[0]
 
 
 @lru_cache(maxsize=256)
 def _flange_of(b0_deg: float, b1_deg: float, w_deg: float):
     """The flange rotation for a tool attitude: scripts keep one attitude for many moves."""
     return _flange_from_tool(_rpy_matrix(math.radians(b0_deg), math.radians(b1_deg), math.radians(w_deg)))
-
-
-def _solutions(pose, links, near) -> Iterator[tuple[float, ...]]:
-    """``solutions``, one at a time, in the same order (so a caller may stop at the first that fits)."""
-    near = near or (0.0,) * JOINT_COUNT
-    near_j4 = math.radians(near[3])
-    for j1, j2, t, flange in _arm_solutions(pose, links, near):
-        for j4, j5, j6 in _wrist_of(j1, t, flange, near_j4):
-            yield tuple(wrap_deg(math.degrees(a)) for a in (j1, j2, t - j2, j4, j5, j6))
-
-
-def _arm_solutions(pose, links, near) -> Iterator[tuple[float, float, float, tuple]]:
-    """(J1, J2, J2 + J3 in radians, the flange rotation) for each way the first three joints
-    place the wrist centre of ``pose``: front/back, elbow up/down."""
-    x, y, z, b0, b1, w = pose
-    flange = _flange_of(b0, b1, w)
-    d6 = links.tool_mm
-    wx, wy, wz = x - d6 * flange[0], y - d6 * flange[3], z - d6 * flange[6]
-    a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
-    reach = math.hypot(d4, a3)
-    gamma = math.atan2(a3, d4)
-    if math.hypot(wx, wy) < 1e-9:
-        yaws = [math.radians(near[0])]
-        yaws.append(yaws[0] + math.pi)
-    else:
-        yaws = [math.atan2(wy, wx)]
-        yaws.append(yaws[0] + math.pi)
-    for j1 in yaws:
-        u = wx * math.cos(j1) + wy * math.sin(j1) - links.shoulder_offset_mm
-        v = wz - links.base_height_mm
-        cos_d = (u * u + v * v - a2 * a2 - reach * reach) / (2 * a2 * reach)
-        if abs(cos_d) > 1 + 1e-9:
-            continue
-        cos_d = max(-1.0, min(1.0, cos_d))
-        for delta in {math.acos(cos_d), -math.acos(cos_d)}:
-            alpha = math.atan2(v, u) + math.atan2(reach * math.sin(delta), a2 + reach * math.cos(delta))
-            j2 = math.pi / 2 - alpha
-            yield j1, j2, gamma - (alpha - delta), flange
-
-
-def _wrist_of(j1, t, flange, near_j4):
-    """The wrist's (J4, J5, J6) radians for an arm at J1 = ``j1``, J2 + J3 = ``t``."""
-    arm = _arm(j1, t)
-    wrist = _mul((arm[0], arm[3], arm[6], arm[1], arm[4], arm[7], arm[2], arm[5], arm[8]), flange)
-    return _wrist_solutions(wrist, near_j4)
-
-
-def _wrist_solutions(m, near_j4):
-    """(j4, j5, j6) with Rx(j4)·Ry(j5)·Rx(j6) = m: the two wrist flips, or one at J5 = 0/180."""
-    j5 = math.acos(max(-1.0, min(1.0, m[0])))
-    if math.sin(j5) < 1e-7:
-        if m[0] > 0:  # J5 = 0: only J4 + J6 is fixed
-            return [(near_j4, 0.0, math.atan2(m[7], m[4]) - near_j4)]
-        return [(near_j4, math.pi, near_j4 - math.atan2(m[7], m[4]))]  # J5 = 180: J4 − J6 fixed
-    j4, j6 = math.atan2(m[3], -m[6]), math.atan2(m[1], m[2])
-    return [(j4, j5, j6), (j4 + math.pi, -j5, j6 + math.pi)]
 
 
 def _fit(angle: float, hint: float, limits: tuple[float, float] | None) -> float | None:
@@ -257,6 +212,159 @@ def _fit(angle: float, hint: float, limits: tuple[float, float] | None) -> float
     return None
 
 
+def _fitted(angle: float, hint: float, limits: tuple[float, float] | None) -> float | None:
+    """``_fit(wrap_deg(angle), hint, limits)``, ``angle`` in degrees, sooner in the common case.
+
+    An angle already in (−180, 180] is its own wrap, and one inside the limits and less than
+    half a turn from the hint is ``_fit``'s own answer: ``round`` of a ratio below one half is
+    0, so ``_fit`` returns ``angle + 0.0`` (the ``+ 0.0`` keeps its sign of zero)."""
+    if -180.0 < angle <= 180.0:
+        if limits is not None:
+            low, high = limits
+            if low <= angle <= high and -180.0 < hint - angle < 180.0:
+                return angle + 0.0
+    else:
+        angle = wrap_deg(angle)
+    return _fit(angle, hint, limits)
+
+
+def _solve(pose, links, near, limits, mode):
+    """The closed-form solutions of ``pose`` (front/back, elbow up/down, wrist flip), walked
+    in ``solutions``' order and, unless ``mode`` is _EVERY, fitted joint by joint by
+    ``_fitted`` (whole turns towards ``near``, inside ``limits``: six pairs or six Nones).
+
+    Returns (answer, worst, reachable): reachable says whether any arm placement exists;
+    worst = (k, angle) is the first joint found outside its limits (None if none).
+      _EVERY    answer = the list of every solution, unfitted (``solutions``); limits unused.
+      _FIRST    answer = the first solution that fits (None if none): it stops there
+                (``has_solution``: the order cannot change a yes-or-no answer).
+      _NEAREST  answer = the fitted solution nearest ``near`` (sum of squares in joint order;
+                the first of equals), or None (``inverse``).
+    _NEAREST costs each solution joint by joint and drops it as soon as its cost reaches the
+    best's (every term is >= 0; _FIRST keeps no costs).  The arm's three joints are fitted once
+    for both wrist flips: an arm placement whose J1, J2 or J3 do not fit tries no wrist, and J1
+    is the same for both elbows.  Flat for speed; the arithmetic is the enumeration's, bit for bit: each wrist
+    matrix entry is the sum ``_mul(arm^T, flange)`` forms, with arm = ``_arm(j1, t)``
+    (tests/test_ik_flat.py holds all three modes to the enumeration, tests/ik_reference.py)."""
+    x, y, z, b0, b1, w = pose
+    f0, f1, f2, f3, f4, f5, f6, f7, f8 = _flange_of(b0, b1, w)
+    d6 = links.tool_mm
+    wx, wy, wz = x - d6 * f0, y - d6 * f3, z - d6 * f6
+    a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
+    reach = math.hypot(d4, a3)
+    gamma = math.atan2(a3, d4)
+    if math.hypot(wx, wy) < 1e-9:
+        yaw = math.radians(near[0])  # on the base axis J1 is free: the hint's
+    else:
+        yaw = math.atan2(wy, wx)
+    h1, h2, h3, h4, h5, h6 = near
+    l1, l2, l3, l4, l5, l6 = limits
+    near_j4 = math.radians(h4)
+    every, fitting, nearest = mode is _EVERY, mode is not _EVERY, mode is _NEAREST  # _FIRST keeps no costs
+    found = [] if every else None
+    best, best_cost, worst, reachable = None, math.inf, None, False
+    v = wz - links.base_height_mm
+    for j1 in (yaw, yaw + math.pi):
+        c1, s1 = math.cos(j1), math.sin(j1)
+        u = wx * c1 + wy * s1 - links.shoulder_offset_mm
+        cos_d = (u * u + v * v - a2 * a2 - reach * reach) / (2 * a2 * reach)
+        if abs(cos_d) > 1 + 1e-9:
+            continue  # out of reach this way round
+        reachable = True
+        deg1 = j1 * _RAD_TO_DEG
+        if fitting:
+            q1 = _fitted(deg1, h1, l1)
+            if q1 is None:
+                if worst is None:
+                    worst = (0, wrap_deg(deg1))
+                continue  # J1 is the same for both elbows
+            if nearest:
+                cost1 = (q1 - h1) ** 2
+        cos_d = max(-1.0, min(1.0, cos_d))
+        base = math.atan2(v, u)
+        for delta in {math.acos(cos_d), -math.acos(cos_d)}:
+            if nearest and not cost1 < best_cost:
+                continue
+            alpha = base + math.atan2(reach * math.sin(delta), a2 + reach * math.cos(delta))
+            j2 = math.pi / 2 - alpha
+            t = gamma - (alpha - delta)  # J2 + J3
+            deg2, deg3 = j2 * _RAD_TO_DEG, (t - j2) * _RAD_TO_DEG
+            if fitting:
+                q2 = _fitted(deg2, h2, l2)
+                if q2 is None:
+                    if worst is None:
+                        worst = (1, wrap_deg(deg2))
+                    continue
+                if nearest:
+                    cost2 = cost1 + (q2 - h2) ** 2
+                    if not cost2 < best_cost:
+                        continue
+                q3 = _fitted(deg3, h3, l3)
+                if q3 is None:
+                    if worst is None:
+                        worst = (2, wrap_deg(deg3))
+                    continue  # neither wrist flip can help
+                if nearest:
+                    arm_cost = cost2 + (q3 - h3) ** 2
+                    if not arm_cost < best_cost:
+                        continue
+            # The wrist: Rx(J4)·Ry(J5)·Rx(J6) = arm^T · flange, only the entries it reads
+            ct, st = math.cos(t), math.sin(t)
+            r0, r1, r2 = c1 * ct, s1 * ct, -st  # arm^T's rows: arm[0], arm[3], arm[6]
+            r3, r4 = -s1, c1  # arm[1], arm[4] (arm[7] = 0.0, kept in the sums for their sign of zero)
+            r6, r7, r8 = c1 * st, s1 * st, ct  # arm[2], arm[5], arm[8]
+            m0 = r0 * f0 + r1 * f3 + r2 * f6
+            j5 = math.acos(max(-1.0, min(1.0, m0)))
+            if math.sin(j5) < 1e-7:  # J5 = 0 or 180: only J4 ± J6 is fixed, J4 is the hint's
+                m4 = r3 * f1 + r4 * f4 + 0.0 * f7
+                m7 = r6 * f1 + r7 * f4 + r8 * f7
+                if m0 > 0:
+                    wrists = ((near_j4, 0.0, math.atan2(m7, m4) - near_j4),)
+                else:
+                    wrists = ((near_j4, math.pi, near_j4 - math.atan2(m7, m4)),)
+            else:
+                m1 = r0 * f1 + r1 * f4 + r2 * f7
+                m2 = r0 * f2 + r1 * f5 + r2 * f8
+                m3 = r3 * f0 + r4 * f3 + 0.0 * f6
+                m6 = r6 * f0 + r7 * f3 + r8 * f6
+                j4, j6 = math.atan2(m3, -m6), math.atan2(m1, m2)
+                wrists = ((j4, j5, j6), (j4 + math.pi, -j5, j6 + math.pi))
+            for j4, j5, j6 in wrists:
+                deg4, deg5, deg6 = j4 * _RAD_TO_DEG, j5 * _RAD_TO_DEG, j6 * _RAD_TO_DEG
+                if every:
+                    found.append(tuple(wrap_deg(a) for a in (deg1, deg2, deg3, deg4, deg5, deg6)))
+                    continue
+                q4 = _fitted(deg4, h4, l4)
+                if q4 is None:
+                    if worst is None:
+                        worst = (3, wrap_deg(deg4))
+                    continue
+                if nearest:
+                    cost = arm_cost + (q4 - h4) ** 2
+                    if not cost < best_cost:
+                        continue
+                q5 = _fitted(deg5, h5, l5)
+                if q5 is None:
+                    if worst is None:
+                        worst = (4, wrap_deg(deg5))
+                    continue
+                if nearest:
+                    cost += (q5 - h5) ** 2
+                    if not cost < best_cost:
+                        continue
+                q6 = _fitted(deg6, h6, l6)
+                if q6 is None:
+                    if worst is None:
+                        worst = (5, wrap_deg(deg6))
+                    continue
+                if not nearest:
+                    return (q1, q2, q3, q4, q5, q6), worst, True  # _FIRST: this one fits
+                cost += (q6 - h6) ** 2
+                if cost < best_cost:
+                    best, best_cost = (q1, q2, q3, q4, q5, q6), cost
+    return (found if every else best), worst, reachable
+
+
 def inverse(
     pose: Sequence[float],
     links: Links,
@@ -269,29 +377,7 @@ def inverse(
     Unreachable naming the reason.
     """
     near = tuple(near) if near is not None else (0.0,) * JOINT_COUNT
-    # The solutions of ``solutions``, in its order, fitted joint by joint as ``_fit`` fits them
-    # and costed as the sum of squares in joint order; but the first three joints of an arm
-    # placement are fitted once for both wrist flips, and a solution is dropped as soon as its
-    # cost so far reaches the best's (every term is >= 0; ``worst`` only matters while there
-    # is no best): the simulator asks this of every joints status frame, 40,000 in 20 minutes
-    # (tests/test_kinematics.py holds it equal to the plain enumeration).
-    lim = (None,) * JOINT_COUNT if limits is None else limits
-    near_j4 = math.radians(near[3])
-    best, best_cost, worst, reachable = None, math.inf, None, False
-    for j1, j2, t, flange in _arm_solutions(pose, links, near):
-        reachable = True
-        arm_fitted, arm_cost = _fitted_cost((j1, j2, t - j2), near, lim, 0, 0, best_cost)
-        if arm_fitted is None:
-            if worst is None:
-                worst = arm_cost
-            continue
-        for wrist in _wrist_of(j1, t, flange, near_j4):
-            wrist_fitted, cost = _fitted_cost(wrist, near, lim, 3, arm_cost, best_cost)
-            if wrist_fitted is None:
-                if worst is None:
-                    worst = cost
-                continue
-            best, best_cost = arm_fitted + wrist_fitted, cost
+    best, worst, reachable = _solve(pose, links, near, _NO_LIMITS if limits is None else limits, _NEAREST)
     if not reachable:
         raise Unreachable(f"pose X{pose[0]:.1f} Y{pose[1]:.1f} Z{pose[2]:.1f} is out of the arm's reach")
     if best is None:
@@ -304,109 +390,14 @@ def inverse(
     return best
 
 
-def _fitted_cost(angles_rad, near, limits, first: int, cost, bound):
-    """(the angles in degrees as ``inverse`` fits them, ``cost`` + their squared distance to
-    ``near``) for joints ``first``, ``first`` + 1, …; (None, (k, angle)) for the first that
-    does not fit its limits; (None, None) as soon as the cost reaches ``bound``."""
-    fitted = []
-    for k, angle in enumerate(angles_rad, first):
-        angle = wrap_deg(math.degrees(angle))
-        value = _fit(angle, near[k], limits[k])
-        if value is None:
-            return None, (k, angle)
-        cost += (value - near[k]) ** 2
-        if not cost < bound:  # the very test inverse keeps a solution by
-            return None, None
-        fitted.append(value)
-    return tuple(fitted), cost
-
-
 def has_solution(
     pose: Sequence[float], links: Links, near: Sequence[float], limits: Sequence[tuple[float, float]],
 ) -> bool:
     """Whether ``inverse(pose, links, near, limits)`` returns rather than raising Unreachable.
 
-    The same solutions, computed by the same arithmetic and fitted the same way, but it stops
-    at the first that fits instead of fitting all eight to choose the nearest, tries no wrist
-    on an arm placement whose J1 or J2/J3 do not fit, and is written out flat: lint asks this
-    of every target (issue 13: it was two thirds of ``armctl lint``), and only a pose that
-    fails needs ``inverse`` again, for its message.  The order of the solutions cannot change
-    a yes-or-no answer, so it is free; every angle is the one ``_arm_solutions`` and
-    ``_wrist_solutions`` would give, bit for bit (tests/test_kinematics.py and the lint
-    differential tests hold the two equal)."""
-    x, y, z, b0, b1, w = pose
-    f = _flange_of(b0, b1, w)
-    d6 = links.tool_mm
-    wx, wy, wz = x - d6 * f[0], y - d6 * f[3], z - d6 * f[6]
-    a2, a3, d4 = links.upper_arm_mm, links.elbow_offset_mm, links.forearm_mm
-    reach = math.hypot(d4, a3)
-    gamma = math.atan2(a3, d4)
-    if math.hypot(wx, wy) < 1e-9:
-        yaw = math.radians(near[0])
-    else:
-        yaw = math.atan2(wy, wx)
-    near_j4 = math.radians(near[3])
-    h1, h2, h3, h4, h5, h6 = near
-    l1, l2, l3, l4, l5, l6 = limits
-    v = wz - links.base_height_mm
-    for j1 in (yaw, yaw + math.pi):
-        c1, s1 = math.cos(j1), math.sin(j1)
-        u = wx * c1 + wy * s1 - links.shoulder_offset_mm
-        cos_d = (u * u + v * v - a2 * a2 - reach * reach) / (2 * a2 * reach)
-        if abs(cos_d) > 1 + 1e-9:
-            continue
-        if not _fits_deg(math.degrees(j1), h1, l1):
-            continue  # J1 is the same for both elbows
-        cos_d = max(-1.0, min(1.0, cos_d))
-        base = math.atan2(v, u)
-        for delta in {math.acos(cos_d), -math.acos(cos_d)}:
-            alpha = base + math.atan2(reach * math.sin(delta), a2 + reach * math.cos(delta))
-            j2 = math.pi / 2 - alpha
-            t = gamma - (alpha - delta)
-            if not (_fits_deg(math.degrees(j2), h2, l2) and _fits_deg(math.degrees(t - j2), h3, l3)):
-                continue  # neither wrist flip can help
-            # The entries of _wrist_of's matrix that _wrist_solutions reads: _mul(arm^T, flange)
-            # with arm = _arm(j1, t), each one the same sum of the same products
-            ct, st = math.cos(t), math.sin(t)
-            r0, r1, r2 = c1 * ct, s1 * ct, -st  # arm[0], arm[3], arm[6]: the first row of arm^T
-            r3, r4 = -s1, c1  # arm[1], arm[4] (arm[7] = 0.0)
-            r6, r7, r8 = c1 * st, s1 * st, ct  # arm[2], arm[5], arm[8]
-            m0 = r0 * f[0] + r1 * f[3] + r2 * f[6]
-            j5 = math.acos(max(-1.0, min(1.0, m0)))
-            if math.sin(j5) < 1e-7:
-                m4 = r3 * f[1] + r4 * f[4] + 0.0 * f[7]
-                m7 = r6 * f[1] + r7 * f[4] + r8 * f[7]
-                if m0 > 0:
-                    wrists = ((near_j4, 0.0, math.atan2(m7, m4) - near_j4),)
-                else:
-                    wrists = ((near_j4, math.pi, near_j4 - math.atan2(m7, m4)),)
-            else:
-                m1 = r0 * f[1] + r1 * f[4] + r2 * f[7]
-                m2 = r0 * f[2] + r1 * f[5] + r2 * f[8]
-                m3 = r3 * f[0] + r4 * f[3] + 0.0 * f[6]
-                m6 = r6 * f[0] + r7 * f[3] + r8 * f[6]
-                j4, j6 = math.atan2(m3, -m6), math.atan2(m1, m2)
-                wrists = ((j4, j5, j6), (j4 + math.pi, -j5, j6 + math.pi))
-            for j4, j5, j6 in wrists:
-                if (_fits_deg(math.degrees(j4), h4, l4) and _fits_deg(math.degrees(j5), h5, l5)
-                        and _fits_deg(math.degrees(j6), h6, l6)):
-                    return True
-    return False
-
-
-def _fits_deg(angle: float, hint: float, limits: tuple[float, float]) -> bool:
-    """Whether ``_fit(wrap_deg(angle), hint, limits)`` is not None, ``angle`` in degrees.
-
-    The common case needs neither: an angle already in (−180, 180] is its own wrap, and one
-    inside the limits and less than half a turn from the hint is ``_fit``'s own answer (no
-    whole turn moves it: ``round`` of a ratio below one half is 0)."""
-    low, high = limits
-    if -180.0 < angle <= 180.0:
-        if low <= angle <= high and -180.0 < hint - angle < 180.0:
-            return True
-    else:
-        angle = wrap_deg(angle)
-    return _fit(angle, hint, limits) is not None
+    The same solver, stopped at the first solution that fits: lint asks this of every target
+    (issue 13), and only a pose that fails needs ``inverse`` again, for its message."""
+    return _solve(pose, links, near, limits, _FIRST)[0] is not None
 
 
 # --- whole regions at once (lint) -------------------------------------------------------------
@@ -435,7 +426,7 @@ def ball_has_solution(
     wrist matrix turns by at most θ: J5 (their angle from x) by θ, J4 and J6 (their bearings
     about x) by asin(sin θ / sin J5) while θ < J5 < π − θ.  A joint whose whole interval lies
     inside its limits, within half a turn of the hint and away from ±180 fits for every point
-    exactly as ``_fits_deg`` decides it.  Float rounding (1e-13 degrees) is far inside the
+    exactly as ``_fitted`` decides it.  Float rounding (1e-13 degrees) is far inside the
     margins."""
     x, y, z, b0, b1, w = pose
     rho = float(radius_mm)
@@ -498,7 +489,7 @@ def _elbow(distance: float, a2: float, reach: float) -> float:
 
 
 def _interval_fits(angle_rad: float, deviation_rad: float, hint: float, limits: tuple[float, float]) -> bool:
-    """Whether every angle within ``deviation_rad`` of ``angle_rad`` passes ``_fits_deg``'s first
+    """Whether every angle within ``deviation_rad`` of ``angle_rad`` passes ``_fitted``'s first
     test (inside the limits, less than half a turn from the hint), with no wrap at ±180 between."""
     angle = wrap_deg(math.degrees(angle_rad))
     spread = math.degrees(deviation_rad) * (1 + 1e-9) + _PROOF_MARGIN_DEG
