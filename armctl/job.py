@@ -19,9 +19,10 @@ Rules:
   the same ``receive_status / next_write_time / wrote``) says when the next frame may go.  The
   streamer also watches every write and frame when another strategy paces, so what is known
   executed, the resume line and the end of the job are judged the same way for every strategy.
-- Finished means: at rest (the position, joints and PWM unchanged for ``REST_CHECK_S``, no SD
-  program advancing, the estimate over), at the last frame's target, not paused in two
-  agreeing reports, and the frames after the last motion (which leave no trace) finished even
+- Finished means: at rest (the position, joints and PWM unchanged for ``REST_CHECK_S``, each
+  kind re-read in that time: a lost report is no reading, ``_rest_s``; no SD program
+  advancing, the estimate over), at the last frame's target, not paused in two agreeing
+  reports, and the frames after the last motion (which leave no trace) finished even
   for an arm ``slowest_factor`` times slower than the model, counted from that motion's end.  The deadline is the queued motion × the slowest arm factor + a slack; an
   arm still visibly working past it is waited for (up to ``max(OVERRUN_MIN_S, the job)``) and
   the summary says so; anything else ends "no confirmation" with the likeliest reason.
@@ -234,6 +235,10 @@ class Job:
         # (position and joints as last reported, since when): the arm is at rest when none of
         # them changed for REST_CHECK_S — a wrist turning in place changes only joints.
         self._rest: tuple | None = None
+        # kind → when it was last read: a reading lost or corrupted is no reading, so a value counts
+        # as unchanged only up to its latest report (a wrist turning while the joints 4-6 reports
+        # are lost looks at rest to the other kinds; ``_rest_s``)
+        self._read_at: dict[int, float] = {}
         self._motion: tuple | None = None  # the same for position and joints alone (no PWM)
         self._moved_from: tuple | None = None  # the readings when they last changed by more than jitter
         self._run_position: float | None = None  # the SD program's run position last reported
@@ -286,6 +291,7 @@ class Job:
                 view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
             reported = self._reported
             reported[kind] = values
+            self._read_at[kind] = now
             rest = (reported.get(0), reported.get(1), reported.get(2), reported.get(4))
             if self._rest is None or self._rest[0] != rest:
                 self._rest = (rest, now)
@@ -537,7 +543,7 @@ class Job:
         outcome = Outcome.FAILED if self.failure else Outcome.INTERRUPTED
         if now >= self._deadline_s:
             return self._finish(outcome, now)
-        still = self._rest is not None and now - self._rest[1] >= REST_CHECK_S
+        still = self._rest_s() >= REST_CHECK_S
         if still and (self.arm_paused or self.arm_at_rest(now)):
             if self._at_last_target():
                 self._confirm_all_done()
@@ -599,7 +605,16 @@ class Job:
             return False
         if self._active_s is not None and now - self._active_s < REST_CHECK_S:
             return False  # an SD program still advancing, even with the arm standing still
-        return self._rest is not None and now - self._rest[1] >= REST_CHECK_S
+        return self._rest_s() >= REST_CHECK_S
+
+    def _rest_s(self) -> float:
+        """How long every reading is known unchanged: from the last change seen to the oldest of
+        the latest reports of each kind (position, joints 1-3, joints 4-6, pause and PWM) — not to
+        now: a kind whose reports were lost since says nothing about that time (0 until each kind
+        was read once)."""
+        if self._rest is None or len(self._read_at) < len(_REST_VALUES):
+            return 0.0
+        return min(self._read_at.values()) - self._rest[1]
 
     @property
     def arm_paused(self) -> bool | None:

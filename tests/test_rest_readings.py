@@ -1,0 +1,72 @@
+"""The job engine's "at rest" rule reads only what the arm reported: a kind whose reports were
+lost (or corrupted) since the readings last changed says nothing about that time, so the arm is
+at rest only when every kind was re-read, unchanged, ``REST_CHECK_S`` after the last change.
+
+Found by Hypothesis (tests/test_streamer_sim.py): a wrist turning in place changes only joints
+4-6; with their reports lost for 0.9 s, position, joints 1-3 and PWM stood still, the estimate
+was over (the arm 1.3x slower than the model), and "at rest at the last target" confirmed a
+frame the arm was still running."""
+
+from armctl.job import REST_CHECK_S, Finished, Job, Outcome, RunView, Write
+from armctl.motion import MotionModel
+from armctl.profile import load_profile
+from armctl.protocol import JointsHighStatus, JointsLowStatus, PauseStatus, PositionStatus
+from armctl.script import InitialState, compile_text
+from armctl.streamer import Streamer
+
+MODEL = MotionModel(load_profile())
+START = MODEL.initial_pose()
+
+
+def turn_wrist_job() -> Job:
+    """One frame that turns the wrist in place (W 0 → 90): only joints 4-6 show it."""
+    initial = InitialState(pose=tuple(START.cartesian), joints_deg=tuple(START.joints), pwm_us={1: START.pwm_us[0]})
+    x, y, z = START.xyz
+    statements = list(compile_text(f"G1 X{x:.1f} Y{y:.1f} Z{z:.1f} A180 B0 C90 F3000\n", initial=initial))
+    streamer = Streamer(MODEL, START)
+    view = RunView(total_frames=len(statements), estimated_job_s=2.0, lead_s=streamer.lead_s,
+                   capacity=streamer.limit_frames)
+    job = Job(streamer, statements, view)
+    assert isinstance(job.next_action(0.0), Write)
+    job.wrote(0.0)
+    return job
+
+
+def report(job: Job, now: float, joints_high=None) -> None:
+    """A rotation of status frames at ``now``; joints 4-6 only when given (else lost)."""
+    x, y, z = (round(v, 1) for v in START.xyz)
+    frames = [PositionStatus(x, y, z), JointsLowStatus(*(round(v, 2) for v in START.joints[:3])), PauseStatus(0, 1500)]
+    if joints_high is not None:
+        frames.append(JointsHighStatus(*joints_high))
+    for frame in frames:
+        job.receive_status(frame, now)
+
+
+def test_a_kind_not_reported_since_the_last_change_is_no_rest():
+    job = turn_wrist_job()
+    sent = job.streamer.pending[0]
+    turn_s = sent.segment.duration_s
+    before = tuple(round(v, 2) for v in sent.segment.start.joints[3:])
+    after = tuple(round(v, 2) for v in sent.segment.end.joints[3:])
+    assert before != after and turn_s > 0.5  # the frame moves joints 4-6 only, for a while
+    report(job, 0.1, joints_high=before)  # every kind read once, before the turn shows
+    now = 0.1
+    # The arm turns for 1.5 × the model's time; joints 4-6 reports are all lost meanwhile.  The
+    # other kinds stand still well past the estimate and REST_CHECK_S: that is not rest.
+    while now < 1.5 * turn_s:
+        now += 0.03
+        report(job, now)
+        assert not job.arm_at_rest(now)
+        assert not isinstance(job.next_action(now), Finished)
+    assert job.streamer.consumed_lower_bound == 0
+    # Joints 4-6 read again, at the end of the turn: the readings changed there; once every kind
+    # was re-read REST_CHECK_S later, unchanged, the arm is at rest at its last target.
+    report(job, now + 0.03, joints_high=after)
+    changed_s = now = now + 0.03
+    while now < changed_s + REST_CHECK_S:
+        now += 0.03
+        report(job, now, joints_high=after if now >= changed_s + REST_CHECK_S else None)
+        assert now >= changed_s + REST_CHECK_S or not job.arm_at_rest(now)
+    assert job.arm_at_rest(now)
+    assert job.next_action(now) == Finished(Outcome.FINISHED)
+    assert job.streamer.all_consumed
