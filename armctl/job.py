@@ -25,7 +25,8 @@ Rules:
   reports, and the frames after the last motion (which leave no trace) finished even
   for an arm ``slowest_factor`` times slower than the model, counted from that motion's end.  The deadline is the queued motion × the slowest arm factor + a slack; an
   arm still visibly working past it is waited for (up to ``max(OVERRUN_MIN_S, the job)``) and
-  the summary says so; anything else ends "no confirmation" with the likeliest reason.
+  the summary says so, and so is one still but not re-read in every kind yet (a slack after its
+  last change); anything else ends "no confirmation" with the likeliest reason.
 - Stopping (``request_stop``: Ctrl-C, a failure the host met): nothing more of the job is
   written; the abort sequence goes instead — minus a pause toggle to an arm that reports it
   is paused, which would resume it — then the engine waits for the arm to come to rest and
@@ -467,14 +468,16 @@ class Job:
             # stops, there is time to confirm it is where the job ends.
             active = self._active_s is not None and now - self._active_s < REST_CHECK_S
             self._overran = self._overran or active
-            settling = self._overran and now - self._active_s < REST_CHECK_S + SETTLE_SLACK_S
-            limit_s = self._deadline_s + self._overrun_limit_s()
-            if not settling or now >= limit_s:
+            settle_until = [self._active_s + REST_CHECK_S + SETTLE_SLACK_S] if self._overran else []
+            if self._rest is not None and now - self._rest[1] >= REST_CHECK_S > self._rest_s():
+                # Still for long enough, but some kind not re-read since (its reports lost): the
+                # next reports may yet prove the rest — waited for as for an arm that just stopped.
+                settle_until.append(self._rest[1] + REST_CHECK_S + SETTLE_SLACK_S)
+            limit_s = min(self._deadline_s + self._overrun_limit_s(), max(settle_until, default=now))
+            if now >= limit_s:
                 view.messages.append(self._why_not_finished())
                 lost = bool(self.streamer.losses)
                 return self._finish(Outcome.FRAMES_LOST if lost else Outcome.NO_CONFIRMATION, now)
-            if self._active_s is not None:
-                limit_s = min(limit_s, self._active_s + REST_CHECK_S + SETTLE_SLACK_S)
         return Wait(self._next_change_s(now, limit_s))
 
     def _trailing_frames_surely_done(self, now: float) -> bool:
