@@ -110,6 +110,14 @@ _RUN_POSITION_KIND = RunPositionStatus.KIND
 RECENT_FRAMES = 64  # frames written kept for the end of the job (the trailing frames that move nothing)
 
 
+def known_still_s(changed_s: float, read_s: Iterable[float]) -> float:
+    """How long readings are known unchanged: from their last change seen (``changed_s``) to the
+    oldest of each kind's latest report (``read_s``) — not to now: a kind whose reports were lost
+    or corrupted since says nothing about that time (a wrist turning while the joints 4-6 reports
+    are lost looks still to every other kind).  The one test of rest (``Job``, ``wait_for_rest``)."""
+    return min(read_s) - changed_s
+
+
 class Outcome(StrEnum):
     """How a job ended (a str, so the summary and the view print and compare it as text)."""
 
@@ -236,10 +244,7 @@ class Job:
         # (position and joints as last reported, since when): the arm is at rest when none of
         # them changed for REST_CHECK_S — a wrist turning in place changes only joints.
         self._rest: tuple | None = None
-        # kind → when it was last read: a reading lost or corrupted is no reading, so a value counts
-        # as unchanged only up to its latest report (a wrist turning while the joints 4-6 reports
-        # are lost looks at rest to the other kinds; ``_rest_s``)
-        self._read_at: dict[int, float] = {}
+        self._read_at: dict[int, float] = {}  # kind → when it was last read (``known_still_s``)
         self._motion: tuple | None = None  # the same for position and joints alone (no PWM)
         self._moved_from: tuple | None = None  # the readings when they last changed by more than jitter
         self._run_position: float | None = None  # the SD program's run position last reported
@@ -611,13 +616,11 @@ class Job:
         return self._rest_s() >= REST_CHECK_S
 
     def _rest_s(self) -> float:
-        """How long every reading is known unchanged: from the last change seen to the oldest of
-        the latest reports of each kind (position, joints 1-3, joints 4-6, pause and PWM) — not to
-        now: a kind whose reports were lost since says nothing about that time (0 until each kind
-        was read once)."""
+        """How long the readings of every kind (position, joints 1-3, joints 4-6, pause and PWM)
+        are known unchanged (``known_still_s``; 0 until each kind was read once)."""
         if self._rest is None or len(self._read_at) < len(_REST_VALUES):
             return 0.0
-        return min(self._read_at.values()) - self._rest[1]
+        return known_still_s(self._rest[1], self._read_at.values())
 
     @property
     def arm_paused(self) -> bool | None:

@@ -7,7 +7,11 @@ Found by Hypothesis (tests/test_streamer_sim.py): a wrist turning in place chang
 was over (the arm 1.3x slower than the model), and "at rest at the last target" confirmed a
 frame the arm was still running."""
 
+import copy
+
+from armctl.armstate import ArmState
 from armctl.job import REST_CHECK_S, Finished, Job, Outcome, RunView, Write
+from armctl.jobflow import wait_for_rest
 from armctl.motion import MotionModel
 from armctl.profile import load_profile
 from armctl.protocol import JointsHighStatus, JointsLowStatus, PauseStatus, PositionStatus
@@ -96,3 +100,43 @@ def test_past_the_deadline_a_still_arm_is_waited_for_until_every_kind_is_read_ag
     now += 0.03
     report(job, now, joints_high=after)
     assert job.next_action(now) == Finished(Outcome.FINISHED)
+
+
+class ScriptedLink:
+    """Enough of a Link for ``wait_for_rest``: a clock that moves 50 ms per wait, and an
+    ArmState fed by ``frames(now)`` (the status frames read by then)."""
+
+    def __init__(self, frames) -> None:
+        self.now, self.frames, self.state = 0.0, frames, ArmState()
+
+    def clock(self) -> float:
+        return self.now
+
+    def snapshot(self):
+        return copy.deepcopy(self.state), 0, 0, 0
+
+    def wait_until(self, predicate, timeout_s: float) -> bool:
+        self.now += timeout_s
+        for frame in self.frames(self.now):
+            self.state.update(frame, self.now)
+        return False
+
+
+def test_waiting_for_rest_before_a_resume_needs_every_kind_read_again():
+    # The wrist turns until 2 s; its joints 4-6 reports are lost from 0.5 s to 2.5 s.  The
+    # position and joints 1-3 stand still all along: the arm is at rest only once joints 4-6
+    # are read again (at the end of the turn), and REST_CHECK_S later, unchanged.
+    x, y, z = (round(v, 1) for v in START.xyz)
+    low = tuple(round(v, 2) for v in START.joints[:3])
+
+    def frames(now: float):
+        high = (0.0, 90.0, round(min(now, 2.0) * 45.0, 2))
+        yield PositionStatus(x, y, z)
+        yield JointsLowStatus(*low)
+        if not 0.5 <= now < 2.5:
+            yield JointsHighStatus(*high)
+
+    link = ScriptedLink(frames)
+    state = wait_for_rest(link, timeout_s=10.0)
+    assert state.joints_deg[5] == 90.0  # the end of the turn, not the stale reading from 0.45 s
+    assert link.now >= 2.5 + REST_CHECK_S
