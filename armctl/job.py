@@ -26,7 +26,8 @@ Rules:
   for an arm ``slowest_factor`` times slower than the model, counted from that motion's end.  The deadline is the queued motion × the slowest arm factor + a slack; an
   arm still visibly working past it is waited for (up to ``max(OVERRUN_MIN_S, the job)``) and
   the summary says so, and so is one still but not re-read in every kind yet (a slack after its
-  last change); anything else ends "no confirmation" with the likeliest reason.
+  last change) or with frames rest cannot prove still pending (a slack after their time bound);
+  anything else ends "no confirmation" with the likeliest reason.
 - Stopping (``request_stop``: Ctrl-C, a failure the host met): nothing more of the job is
   written; the abort sequence goes instead — minus a pause toggle to an arm that reports it
   is paused, which would resume it — then the engine waits for the arm to come to rest and
@@ -63,7 +64,7 @@ from typing import Iterable, Iterator
 from .job_control import JobControl, agreed_pause, control_frames_of  # noqa: F401  (agreed_pause: the pause rule, re-exported)
 from .streamer import LOSS_SLACK_S, ROTATION_S
 from .protocol import (
-    CONTROL_COMMANDS, ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
+    CONTROL_COMMANDS, ArcEnd, ArcStart, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
     RunPositionStatus, StatusFrame,
 )
 from .streamer import ARRIVAL_SLACK_S
@@ -478,6 +479,9 @@ class Job:
                 # Still for long enough, but some kind not re-read since (its reports lost): the
                 # next reports may yet prove the rest — waited for as for an arm that just stopped.
                 settle_until.append(self._rest[1] + REST_CHECK_S + SETTLE_SLACK_S)
+            resting = self._resting_before_last_move()
+            if resting:  # frames rest cannot prove: their time bound (widened by a slow pace) decides
+                settle_until.append(max(sent.certain_end_s for sent in resting) + SETTLE_SLACK_S)
             limit_s = min(self._deadline_s + self._overrun_limit_s(), max(settle_until, default=now))
             if now >= limit_s:
                 view.messages.append(self._why_not_finished())
@@ -490,8 +494,25 @@ class Job:
         arm at rest at the last target says nothing about them, and an arm slower than the model
         would still be in them when the estimate runs out.  They count as done once even an arm
         ``slowest_factor`` times slower has finished them, begun no earlier than the last change
-        of the readings seen (the motion before them ended by then) and their own arrival."""
-        return now >= self._trailing_done_s()
+        of the readings seen (the motion before them ended by then) and their own arrival.  And
+        the arm rests as well in such a frame before the last motion, at the same readings when
+        that motion comes back to them (a wrist turning in place, a way back to the same point):
+        at rest there proves nothing, so each is done only once the streamer's lower bound has
+        passed it (the arm seen on a later frame's path, or its time bound)."""
+        return now >= self._trailing_done_s() and not self._resting_before_last_move()
+
+    def _resting_before_last_move(self) -> list:
+        """The frames still pending before the last motion that move nothing (``_moves_arm``)."""
+        last = self._last_move
+        if last is None:
+            return []
+        resting = []
+        for sent in self.streamer.pending:
+            if sent.index >= last.index:
+                break
+            if not _moves_arm(sent.segment) and not isinstance(sent.command, ArcStart):  # a G300 runs with its G301
+                resting.append(sent)
+        return resting
 
     def _trailing_done_s(self) -> float:
         motion_end_s = self._motion[1] if self._motion is not None else 0.0

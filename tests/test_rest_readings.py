@@ -140,3 +140,41 @@ def test_waiting_for_rest_before_a_resume_needs_every_kind_read_again():
     state = wait_for_rest(link, timeout_s=10.0)
     assert state.joints_deg[5] == 90.0  # the end of the turn, not the stale reading from 0.45 s
     assert link.now >= 2.5 + REST_CHECK_S
+
+
+def test_at_rest_in_a_delay_before_a_wrist_turn_is_not_the_end():
+    # A delay, then a short wrist turn in place: the arm rests in the delay at the X/Y/Z of the
+    # last target, every kind read afresh (one kind every 30 ms).  On an arm slower than the
+    # model the estimate, re-anchored on each position report, runs out within a rotation
+    # (Hypothesis: a PWM-only move, a delay, then a turn, 1.6x); the delay is done only once the
+    # streamer's lower bound passes it (its time bound here), and the end waits for the turn.
+    initial = InitialState(pose=tuple(START.cartesian), joints_deg=tuple(START.joints), pwm_us={1: START.pwm_us[0]})
+    x, y, z = START.xyz
+    statements = list(compile_text(f"G4 P3000\nG1 X{x:.1f} Y{y:.1f} Z{z:.1f} A180 B0 C5 F3000\n", initial=initial))
+    streamer = Streamer(MODEL, START)
+    job = Job(streamer, statements, RunView(total_frames=2, estimated_job_s=3.0, lead_s=streamer.lead_s,
+                                            capacity=streamer.limit_frames))
+    now = 0.0
+    while len(streamer.pending) < 2:
+        assert isinstance(job.next_action(now), Write)
+        job.wrote(now)
+        now += 0.06
+    delay, turn = streamer.pending
+    before = tuple(round(v, 2) for v in turn.segment.start.joints[3:])
+    after = tuple(round(v, 2) for v in turn.segment.end.joints[3:])
+    assert before != after and turn.segment.duration_s < 0.1  # shorter than a round of reports
+    delay_ends_s = 2.0 * delay.segment.duration_s  # the arm twice slower than the model
+    turn_ends_s = delay_ends_s + 2.0 * turn.segment.duration_s
+    xyz = tuple(round(v, 1) for v in START.xyz)
+    low = tuple(round(v, 2) for v in START.joints[:3])
+    finished_at, step = None, 0
+    while finished_at is None and now < turn_ends_s + 5.0:
+        now, step = now + 0.03, step + 1
+        share = min(max((now - delay_ends_s) / (turn_ends_s - delay_ends_s), 0.0), 1.0)
+        high = tuple(round(a + (b - a) * share, 2) for a, b in zip(before, after))
+        job.receive_status((PositionStatus(*xyz), JointsLowStatus(*low), JointsHighStatus(*high),
+                            PauseStatus(0, 1500))[step % 4], now)
+        if isinstance(job.next_action(now), Finished):
+            finished_at = now
+    assert finished_at is not None and finished_at >= turn_ends_s + REST_CHECK_S
+    assert job.outcome == Outcome.FINISHED and streamer.all_consumed
