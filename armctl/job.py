@@ -502,16 +502,24 @@ class Job:
         return now >= self._trailing_done_s() and not self._resting_before_last_move()
 
     def _resting_before_last_move(self) -> list:
-        """The frames still pending before the last motion that move nothing (``_moves_arm``)."""
+        """The frames still pending before the last motion that move nothing (``_moves_arm``), in
+        runs between moves that could hold the arm still for ``REST_CHECK_S``: even an arm
+        ``slowest_factor`` times slower, fed each frame at the line's pace, leaves a shorter run
+        (a G54, an M code) before the rest check could see it still."""
         last = self._last_move
         if last is None:
             return []
-        resting = []
-        for sent in self.streamer.pending:
-            if sent.index >= last.index:
-                break
-            if not _moves_arm(sent.segment) and not isinstance(sent.command, ArcStart):  # a G300 runs with its G301
-                resting.append(sent)
+        streamer, resting, run, hold_s = self.streamer, [], [], ARRIVAL_SLACK_S
+        for sent in streamer.pending:
+            if sent.index >= last.index or _moves_arm(sent.segment) or isinstance(sent.command, ArcStart):
+                if hold_s >= REST_CHECK_S:  # (a G300 runs with its G301: no rest in it)
+                    resting += run
+                run, hold_s = [], ARRIVAL_SLACK_S
+                if sent.index >= last.index:
+                    break
+                continue
+            run.append(sent)
+            hold_s += sent.segment.duration_s * streamer.slowest_factor + streamer.frame_slack_s + streamer.frame_s
         return resting
 
     def _trailing_done_s(self) -> float:
