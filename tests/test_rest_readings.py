@@ -178,3 +178,29 @@ def test_at_rest_in_a_delay_before_a_wrist_turn_is_not_the_end():
             finished_at = now
     assert finished_at is not None and finished_at >= turn_ends_s + REST_CHECK_S
     assert job.outcome == Outcome.FINISHED and streamer.all_consumed
+
+
+def written_job(text: str) -> Job:
+    initial = InitialState(pose=tuple(START.cartesian), joints_deg=tuple(START.joints), pwm_us={1: START.pwm_us[0]})
+    statements = list(compile_text(text, initial=initial))
+    streamer = Streamer(MODEL, START)
+    job = Job(streamer, statements, RunView(total_frames=len(statements), estimated_job_s=3.0, lead_s=streamer.lead_s,
+                                            capacity=streamer.limit_frames))
+    now = 0.0
+    while streamer.sent < len(statements):
+        assert isinstance(job.next_action(now), Write)
+        job.wrote(now)
+        now += 0.06
+    return job
+
+
+def test_only_runs_long_enough_to_look_at_rest_wait_for_their_time_bound():
+    x, y, z = START.xyz
+    turn = f"G1 X{x:.1f} Y{y:.1f} Z{z:.1f} A180 B0 C45 F3000\n"
+    # a G54 (no motion time) cannot hold even a slow arm still for REST_CHECK_S: rest decides
+    assert written_job("G54 X0 Y0 Z0\n" + turn)._resting_before_last_move() == []
+    # 0.3 s of delays can, on an arm twice slower (0.6 s, with its per-frame slack): the time bound decides
+    job = written_job("G4 P150\nG4 P150\n" + turn)
+    assert [sent.index for sent in job._resting_before_last_move()] == [0, 1]
+    # frames after the last motion are the trailing rule's, not these
+    assert written_job(turn + "G4 P3000\n")._resting_before_last_move() == []
