@@ -19,12 +19,15 @@ Rules:
   the same ``receive_status / next_write_time / wrote``) says when the next frame may go.  The
   streamer also watches every write and frame when another strategy paces, so what is known
   executed, the resume line and the end of the job are judged the same way for every strategy.
-- Finished means: at rest (the position, joints and PWM unchanged for ``REST_CHECK_S``, no SD
-  program advancing, the estimate over), at the last frame's target, not paused in two
-  agreeing reports, and the frames after the last motion (which leave no trace) finished even
+- Finished means: at rest (the position, joints and PWM unchanged for ``REST_CHECK_S``, each
+  kind re-read in that time: a lost report is no reading, ``_rest_s``; no SD program
+  advancing, the estimate over), at the last frame's target, not paused in two agreeing
+  reports, and the frames after the last motion (which leave no trace) finished even
   for an arm ``slowest_factor`` times slower than the model, counted from that motion's end.  The deadline is the queued motion × the slowest arm factor + a slack; an
   arm still visibly working past it is waited for (up to ``max(OVERRUN_MIN_S, the job)``) and
-  the summary says so; anything else ends "no confirmation" with the likeliest reason.
+  the summary says so, and so is one still but not re-read in every kind yet (a slack after its
+  last change) or with frames rest cannot prove still pending (a slack after their time bound);
+  anything else ends "no confirmation" with the likeliest reason.
 - Stopping (``request_stop``: Ctrl-C, a failure the host met): nothing more of the job is
   written; the abort sequence goes instead — minus a pause toggle to an arm that reports it
   is paused, which would resume it — then the engine waits for the arm to come to rest and
@@ -61,7 +64,7 @@ from typing import Iterable, Iterator
 from .job_control import JobControl, agreed_pause, control_frames_of  # noqa: F401  (agreed_pause: the pause rule, re-exported)
 from .streamer import LOSS_SLACK_S, ROTATION_S
 from .protocol import (
-    CONTROL_COMMANDS, ArcEnd, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
+    CONTROL_COMMANDS, ArcEnd, ArcStart, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
     RunPositionStatus, StatusFrame,
 )
 from .streamer import ARRIVAL_SLACK_S
@@ -106,6 +109,14 @@ _REST_VALUES = {cls.KIND: attrgetter(*(f.name for f in fields(cls)))
                 for cls in (PositionStatus, JointsLowStatus, JointsHighStatus, PauseStatus)}
 _RUN_POSITION_KIND = RunPositionStatus.KIND
 RECENT_FRAMES = 64  # frames written kept for the end of the job (the trailing frames that move nothing)
+
+
+def known_still_s(changed_s: float, read_s: Iterable[float]) -> float:
+    """How long readings are known unchanged: from their last change seen (``changed_s``) to the
+    oldest of each kind's latest report (``read_s``) — not to now: a kind whose reports were lost
+    or corrupted since says nothing about that time (a wrist turning while the joints 4-6 reports
+    are lost looks still to every other kind).  The one test of rest (``Job``, ``wait_for_rest``)."""
+    return min(read_s) - changed_s
 
 
 class Outcome(StrEnum):
@@ -234,6 +245,7 @@ class Job:
         # (position and joints as last reported, since when): the arm is at rest when none of
         # them changed for REST_CHECK_S — a wrist turning in place changes only joints.
         self._rest: tuple | None = None
+        self._read_at: dict[int, float] = {}  # kind → when it was last read (``known_still_s``)
         self._motion: tuple | None = None  # the same for position and joints alone (no PWM)
         self._moved_from: tuple | None = None  # the readings when they last changed by more than jitter
         self._run_position: float | None = None  # the SD program's run position last reported
@@ -286,6 +298,7 @@ class Job:
                 view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
             reported = self._reported
             reported[kind] = values
+            self._read_at[kind] = now
             rest = (reported.get(0), reported.get(1), reported.get(2), reported.get(4))
             if self._rest is None or self._rest[0] != rest:
                 self._rest = (rest, now)
@@ -461,14 +474,19 @@ class Job:
             # stops, there is time to confirm it is where the job ends.
             active = self._active_s is not None and now - self._active_s < REST_CHECK_S
             self._overran = self._overran or active
-            settling = self._overran and now - self._active_s < REST_CHECK_S + SETTLE_SLACK_S
-            limit_s = self._deadline_s + self._overrun_limit_s()
-            if not settling or now >= limit_s:
+            settle_until = [self._active_s + REST_CHECK_S + SETTLE_SLACK_S] if self._overran else []
+            if self._rest is not None and now - self._rest[1] >= REST_CHECK_S > self._rest_s():
+                # Still for long enough, but some kind not re-read since (its reports lost): the
+                # next reports may yet prove the rest — waited for as for an arm that just stopped.
+                settle_until.append(self._rest[1] + REST_CHECK_S + SETTLE_SLACK_S)
+            resting = self._resting_before_last_move()
+            if resting:  # frames rest cannot prove: their time bound (widened by a slow pace) decides
+                settle_until.append(max(sent.certain_end_s for sent in resting) + SETTLE_SLACK_S)
+            limit_s = min(self._deadline_s + self._overrun_limit_s(), max(settle_until, default=now))
+            if now >= limit_s:
                 view.messages.append(self._why_not_finished())
                 lost = bool(self.streamer.losses)
                 return self._finish(Outcome.FRAMES_LOST if lost else Outcome.NO_CONFIRMATION, now)
-            if self._active_s is not None:
-                limit_s = min(limit_s, self._active_s + REST_CHECK_S + SETTLE_SLACK_S)
         return Wait(self._next_change_s(now, limit_s))
 
     def _trailing_frames_surely_done(self, now: float) -> bool:
@@ -476,8 +494,33 @@ class Job:
         arm at rest at the last target says nothing about them, and an arm slower than the model
         would still be in them when the estimate runs out.  They count as done once even an arm
         ``slowest_factor`` times slower has finished them, begun no earlier than the last change
-        of the readings seen (the motion before them ended by then) and their own arrival."""
-        return now >= self._trailing_done_s()
+        of the readings seen (the motion before them ended by then) and their own arrival.  And
+        the arm rests as well in such a frame before the last motion, at the same readings when
+        that motion comes back to them (a wrist turning in place, a way back to the same point):
+        at rest there proves nothing, so each is done only once the streamer's lower bound has
+        passed it (the arm seen on a later frame's path, or its time bound)."""
+        return now >= self._trailing_done_s() and not self._resting_before_last_move()
+
+    def _resting_before_last_move(self) -> list:
+        """The frames still pending before the last motion that move nothing (``_moves_arm``), in
+        runs between moves that could hold the arm still for ``REST_CHECK_S``: even an arm
+        ``slowest_factor`` times slower, fed each frame at the line's pace, leaves a shorter run
+        (a G54, an M code) before the rest check could see it still."""
+        last = self._last_move
+        if last is None:
+            return []
+        streamer, resting, run, hold_s = self.streamer, [], [], ARRIVAL_SLACK_S
+        for sent in streamer.pending:
+            if sent.index >= last.index or _moves_arm(sent.segment) or isinstance(sent.command, ArcStart):
+                if hold_s >= REST_CHECK_S:  # (a G300 runs with its G301: no rest in it)
+                    resting += run
+                run, hold_s = [], ARRIVAL_SLACK_S
+                if sent.index >= last.index:
+                    break
+                continue
+            run.append(sent)
+            hold_s += sent.segment.duration_s * streamer.slowest_factor + streamer.frame_slack_s + streamer.frame_s
+        return resting
 
     def _trailing_done_s(self) -> float:
         motion_end_s = self._motion[1] if self._motion is not None else 0.0
@@ -537,7 +580,7 @@ class Job:
         outcome = Outcome.FAILED if self.failure else Outcome.INTERRUPTED
         if now >= self._deadline_s:
             return self._finish(outcome, now)
-        still = self._rest is not None and now - self._rest[1] >= REST_CHECK_S
+        still = self._rest_s() >= REST_CHECK_S
         if still and (self.arm_paused or self.arm_at_rest(now)):
             if self._at_last_target():
                 self._confirm_all_done()
@@ -599,7 +642,14 @@ class Job:
             return False
         if self._active_s is not None and now - self._active_s < REST_CHECK_S:
             return False  # an SD program still advancing, even with the arm standing still
-        return self._rest is not None and now - self._rest[1] >= REST_CHECK_S
+        return self._rest_s() >= REST_CHECK_S
+
+    def _rest_s(self) -> float:
+        """How long the readings of every kind (position, joints 1-3, joints 4-6, pause and PWM)
+        are known unchanged (``known_still_s``; 0 until each kind was read once)."""
+        if self._rest is None or len(self._read_at) < len(_REST_VALUES):
+            return 0.0
+        return known_still_s(self._rest[1], self._read_at.values())
 
     @property
     def arm_paused(self) -> bool | None:

@@ -141,11 +141,14 @@ def _wait_still(link, timeout_s: float) -> None:
 
 
 def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = None):
-    """The arm's state once its position and joints stayed the same for ``job.REST_CHECK_S`` (the
-    engine's own test of rest); ``JobFailed`` after ``timeout_s``; None as soon as ``stopped()``
-    says a stop was asked (Ctrl-C while a resume waits: nothing was sent, nothing is owed)."""
-    from .job import REST_CHECK_S
+    """The arm's state once its position and joints stayed the same for ``job.REST_CHECK_S``, each
+    kind re-read in that time (the engine's own test of rest, ``job.known_still_s``); ``JobFailed``
+    after ``timeout_s``; None as soon as ``stopped()`` says a stop was asked (Ctrl-C while a
+    resume waits: nothing was sent, nothing is owed)."""
+    from .job import REST_CHECK_S, known_still_s
+    from .protocol import JointsHighStatus, JointsLowStatus, PositionStatus
 
+    kinds = (PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND)
     deadline = link.clock() + timeout_s
     reading, since = None, link.clock()
     while True:
@@ -153,9 +156,10 @@ def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = N
             return None
         state = link.snapshot()[0]
         now = link.clock()
+        read_s = [state.last_seen.get(kind, float("-inf")) for kind in kinds]  # -inf: never read
         if (state.position_mm, tuple(state.joints_deg)) != reading:
             reading, since = (state.position_mm, tuple(state.joints_deg)), now
-        elif now - since >= REST_CHECK_S:
+        elif known_still_s(since, read_s) >= REST_CHECK_S:
             return state
         if now >= deadline:
             raise JobFailed(f"the arm did not come to rest within {timeout_s:g} s; nothing was sent")

@@ -916,7 +916,9 @@ class Streamer:
 
     def confirm_all_done(self) -> None:
         """The caller saw the arm at rest at the last frame's target: every frame written has
-        run — except a trailing G300, which the arm holds until its G301 comes."""
+        run — except a trailing G300, which the arm holds until its G301 comes.  Sound only on
+        the caller's proof (armctl/job.py): every status kind re-read unchanged, and no frame
+        that moves nothing (where the arm rests too) left before the last motion unproven."""
         pending = self.pending
         while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             self._consume_one(by_reports=True)

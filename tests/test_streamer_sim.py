@@ -5,7 +5,7 @@ checked at every status frame, for every benchmark scenario and for random short
 from functools import lru_cache
 
 import pytest
-from hypothesis import HealthCheck, given, settings
+from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from armctl.bench.harness import job_frames_finished, run_job
@@ -190,6 +190,15 @@ def build_job(ops, with_pose_frames: bool):
     seed=st.integers(0, 1000),
     lead_s=st.sampled_from([0.3, 2.0]),
 )
+# A wrist turning in place (frame 6) while every joints 4-6 report is lost: position, joints 1-3
+# and PWM stood still, and "at rest" was taken from the stale joints (tests/test_rest_readings.py).
+@example(ops=[('pwm', 1000.0), ('pwm', 1000.0), ('pwm', 1000.0), ('line', 2, 600.0), ('turn', 90.0), ('pwm', 1000.0),
+              ('line', 2, 600.0), ('pwm', 1000.0), ('turn', 0.0), ('delay', 0.0)],
+         speed_factor=1.3, damage=0.25, on_arrival=False, seed=479, lead_s=0.3)
+# At rest in the delays before a wrist turn in place (X/Y/Z already the last target's), the estimate
+# over on an arm 1.3x slower: rest proves nothing about a frame that moves nothing before the last move.
+@example(ops=[('line', 1, 600.0), ('pwm', 1000.0), ('pwm', 2000.0), ('delay', 300.0), ('delay', 300.0), ('turn', 45.0)],
+         speed_factor=1.3, damage=0.0, on_arrival=False, seed=0, lead_s=2.0)
 def test_random_short_jobs_never_drop_and_never_overstate(ops, speed_factor, damage, on_arrival, seed, lead_s):
     # Under the H5 alternative a fixed-pose frame interrupts the move in progress: the host's
     # model of the job is then wrong by design, so such frames are left out there.
