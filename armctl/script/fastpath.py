@@ -115,28 +115,32 @@ def _tokens(text: str, position: int) -> list:
     prefix, 'w' a literal word (text: (letter, number)), 'n' a number, '#' a parameter, the
     sign itself for - + * / [ ] =, and a last 'e' (end of line)."""
     items = []
+    append = items.append
     position += 1  # columns are 1-based, like Lark's
+    # the groups are alternatives: one of letter, token and other is set, or none (the end);
+    # the commonest (token) is tested first
     for spaces, letter, number, token, other in _TOKENS.findall(text, position - 1):
-        position += len(spaces)
-        if letter:
-            end = position + len(letter) + len(number)
-            items.append(("w", (letter, number), position, end) if number else ("p", letter, position, end))
-        elif other:
-            raise _Decline
-        elif not token:
-            items.append(("e", "", position, position))
-            return items
-        else:
+        if spaces:
+            position += len(spaces)
+        if token:
             end = position + len(token)
             first = token[0]
             if first == "#":
-                items.append(("#", token, position, end))
+                append(("#", token, position, end))
+            elif first in "-+*/[]=":
+                append((first, token, position, end))
             elif first in "(;":
                 pass  # a comment: Lark ignores it
-            elif first in "-+*/[]=":
-                items.append((first, token, position, end))
             else:
-                items.append(("n", token, position, end))
+                append(("n", token, position, end))
+        elif letter:
+            end = position + len(letter) + len(number)
+            append(("w", (letter, number), position, end) if number else ("p", letter, position, end))
+        elif other:
+            raise _Decline
+        else:
+            append(("e", "", position, position))
+            return items
         position = end
     raise _Decline  # pragma: no cover - the pattern always ends with the end of the line
 
