@@ -90,7 +90,7 @@ def _bookkeeping(scanner):
 @settings(max_examples=400, deadline=None)
 @given(st.lists(PARAMETER_LINES, max_size=8), st.sampled_from(["\n", "\r\n", ""]))
 def test_ascii_parameter_path_agrees_with_the_general_one(texts, ending):
-    """``LineScanner.watch`` (``_parameters_ascii`` on ASCII lines) notes the same assignments,
+    """``LineScanner.watch`` (its inline path on ASCII lines) notes the same assignments,
     at the same columns, and the same reads as ``_parameters_in`` on every line's code."""
     from armctl.lint.scan import LineScanner
 

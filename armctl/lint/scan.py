@@ -87,16 +87,36 @@ class LineScanner:
 
     def watch(self, lines: Iterable[str]) -> Iterator[str]:
         number = self.lines
+        defined, note_read = self._defined, self._used.update
         for raw in lines:
             number += 1
             self.lines = number
             if number == 1:
                 self.first_line = raw.rstrip("\r\n")
-            if not raw.isascii() or "\x00" in raw or len(raw) > MAX_LINE_LENGTH:
+            text_ok = raw.isascii()
+            if not text_ok or "\x00" in raw or len(raw) > MAX_LINE_LENGTH:
                 self._not_text(number, raw.rstrip("\r\n"))
             if "#" in raw:
-                if raw.isascii():
-                    self._parameters_ascii(number, raw)
+                if text_ok:
+                    # _parameters_in for an ASCII line (nearly every line), inline (issue 13: this
+                    # bookkeeping was ~5 µs of lint's own ~14 µs a line of expressions): one
+                    # regular expression over the lower-cased line steps over comments as
+                    # code_text blanks them, without building the blanked copy; the names come
+                    # out lower case, "" for each comment.  Lower-casing keeps every column of an
+                    # ASCII line, so the names and their order are those _parameters_in finds
+                    # (tests/test_lint_scan.py holds the two together).
+                    found = _PARAMETER_OR_COMMENT.findall(raw.lower())
+                    # an assignment's target is the first parameter of the line's code; a match on
+                    # the raw line holds no comment (the pattern has no "(" or ";"): it is one on its code
+                    if "=" in raw and (_ASSIGNMENT.match(raw) is not None
+                                       or ("(" in raw and _ASSIGNMENT.match(code_text(raw)) is not None)):
+                        first = 0  # the target: the first name (only comments, "", can come before it)
+                        while not found[first]:
+                            first += 1
+                        if found[first] not in defined:
+                            self._define(number, raw.rstrip("\r\n"), found[first])
+                        found = found[first + 1:]
+                    note_read(found)  # "" (a comment) is never a name: unused_parameters asks for names only
                 else:
                     text = raw.rstrip("\r\n")
                     self._parameters_in(number, text, code_text(text))
@@ -131,28 +151,10 @@ class LineScanner:
             if block is not None:
                 self._block(number, text, block)
 
-    def _parameters_ascii(self, number: int, raw: str) -> None:
-        """``_parameters_in`` for an ASCII line (nearly every line), in one regular expression
-        over the lower-cased line that steps over comments as ``code_text`` blanks them,
-        without building the blanked copy: the names come out lower case, ``""`` for each
-        comment (issue 13: this bookkeeping was ~5 µs of lint's own ~14 µs a line of
-        expressions).  Lower-casing
-        keeps every column of an ASCII line, so the names and their order are those
-        ``_parameters_in`` finds (tests/test_lint_scan.py holds the two together)."""
-        found = _PARAMETER_OR_COMMENT.findall(raw.lower())
-        # an assignment's target is the first parameter of the line's code; a match on the raw
-        # line holds no comment (the pattern has no "(" or ";"), so it is a match on its code
-        if "=" in raw and (_ASSIGNMENT.match(raw) is not None
-                           or ("(" in raw and _ASSIGNMENT.match(code_text(raw)) is not None)):
-            first = 0  # the target: the first name (only comments, "", can come before it)
-            while not found[first]:
-                first += 1
-            if found[first] not in self._defined:
-                text = raw.rstrip("\r\n")
-                match = _PARAMETER.search(code_text(text))
-                self._defined[found[first]] = SourceSpan(self.file, number, match.start() + 1, match.end() + 1, text)
-            found = found[first + 1:]
-        self._used.update(found)  # "" (a comment) is never a name: unused_parameters asks for names only
+    def _define(self, number: int, text: str, name: str) -> None:
+        """The first assignment of ``name`` (lower case): the line's first parameter."""
+        match = _PARAMETER.search(code_text(text))
+        self._defined[name] = SourceSpan(self.file, number, match.start() + 1, match.end() + 1, text)
 
     def _parameters_in(self, number: int, text: str, code: str) -> None:
         names = _PARAMETER.findall(code)
