@@ -159,6 +159,12 @@ def _operand(tokens: list, at: int, nesting: int) -> tuple:
         return (Parameter(text[2:-1].lower(), column, end), column, end, 0), at + 1
     if kind == "n":
         return (float(text), column, end, 0), at + 1
+    if kind == "[" and nesting < _MAX_NESTING:  # the general case below without signs
+        inner, at = _sum(tokens, at + 1, nesting + 1)
+        closing = tokens[at]
+        if closing[0] != "]":
+            raise _Decline
+        return (inner[0], column, closing[3], inner[3]), at + 1
     signs = []
     while kind == "-" or kind == "+":
         signs.append(tokens[at])
