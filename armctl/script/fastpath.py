@@ -97,11 +97,14 @@ _HEAD = re.compile(rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+(?:([GgMm][0-9]++)|(#<[A-Za-
 # The tokens after it, as grammars/armctl.lark spells its terminals, each after what Lark
 # ignores (spaces, ( … ) and ; comments); what a token is follows from its first character,
 # so these context-free tokens are the ones Lark's contextual lexer finds wherever the parser
-# below accepts them.  The word prefix comes first: it is Lark's WORD_PREFIX.2, which
+# below accepts them.  In a word the prefix comes first: it is Lark's WORD_PREFIX.2, which
 # outranks WORD (the "J1" of "J1=#<a>").  Anything else is one "other" character: ask Lark.
+# No token starts with a letter, nor two tokens with one character, so the order of the
+# alternatives changes no match: the tokens are tried first, commonest first (issue 13: this
+# pattern is most of the expression fast path's time).
 _TOKENS = re.compile(
-    rf"([ \t]*+)(?:({_LETTER})(?:({_NUMBER})|(?=[+-]?[#\[]))"
-    r"|([0-9]++\.?+[0-9]*+|\.[0-9]++|#<[A-Za-z_][A-Za-z0-9_]*+>|[-+*/\[\]=]|\([^)\n]*+\)|;[^\n]*+|\Z)|(.))"
+    r"([ \t]*+)(?:(#<[A-Za-z_][A-Za-z0-9_]*+>|[-+*/\[\]=]|[0-9]++\.?+[0-9]*+|\.[0-9]++|\([^)\n]*+\)|;[^\n]*+|\Z)"
+    rf"|({_LETTER})(?:({_NUMBER})|(?=[+-]?[#\[]))|(.))"
 )
 _MAX_NESTING = 50  # brackets deep; deeper (legal or not) goes to Lark
 
@@ -119,7 +122,7 @@ def _tokens(text: str, position: int) -> list:
     position += 1  # columns are 1-based, like Lark's
     # the groups are alternatives: one of letter, token and other is set, or none (the end);
     # the commonest (token) is tested first
-    for spaces, letter, number, token, other in _TOKENS.findall(text, position - 1):
+    for spaces, token, letter, number, other in _TOKENS.findall(text, position - 1):
         if spaces:
             position += len(spaces)
         if token:
