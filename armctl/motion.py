@@ -186,6 +186,22 @@ class ArmPose:
 # --- speed profiles -------------------------------------------------------------------------------
 
 
+def _piece_s(distance: float, v_from: float, v_to: float) -> float:
+    """Seconds to cover ``distance`` at constant acceleration from ``v_from`` to ``v_to``."""
+    return 2.0 * distance / (v_from + v_to)
+
+
+def _stretch(path_s: float, other_s: float) -> float:
+    """The factor a path's seconds are stretched by so that the attitude and the E axes, which
+    need ``other_s``, finish with it."""
+    return other_s / path_s if other_s > path_s > 0 else 1.0
+
+
+def _mm_s(speed_mm_min: float, limit_mm_min: float) -> float:
+    """A Cartesian speed in mm/s, clamped to the profile's maximum."""
+    return min(speed_mm_min, limit_mm_min) / 60.0
+
+
 class _Ramp:
     """Distance along a path as a function of time: pieces of constant acceleration."""
 
@@ -197,7 +213,7 @@ class _Ramp:
         out = []
         for distance, v_from, v_to in pieces:
             if distance > 0:
-                dt = 2.0 * distance / (v_from + v_to)
+                dt = _piece_s(distance, v_from, v_to)
                 out.append((t, s, v_from, (v_to - v_from) / dt))
                 t += dt
                 s += distance
@@ -609,19 +625,31 @@ class MotionModel:
         limit = self.profile.speed.max_linear_mm_min
         if speed_mm_min > limit:
             segment.note = f"speed {speed_mm_min:g} mm/min clamped to the profile's {limit:g} mm/min"
-            speed_mm_min = limit
-        return speed_mm_min / 60.0
+        return _mm_s(speed_mm_min, limit)
 
     def _time_cartesian(self, segment: _CartesianSegment, pieces) -> Segment:
-        speed = self.profile.speed
-        other_s = max(segment.att_lead_deg / speed.attitude_deg_s, segment.ext_lead_deg / speed.max_joint_deg_s)
+        """How every Cartesian move is timed (``Planner.feed_s`` times a LinearMove with the
+        same functions, without its segment): the path's ramp, stretched (``_stretch``) when the
+        attitude or the E axes need longer; without a path, the time they need, or the PWM
+        change's (``_still_ramp``)."""
+        other_s = self._other_s(segment.att_lead_deg, segment.ext_lead_deg)
         if segment.length:
             ramp = _Ramp(pieces)
-            stretch = other_s / ramp.duration if other_s > ramp.duration > 0 else 1.0
-            return segment._set_timing(ramp, self.speed_factor * stretch, self._overhead_s)
-        if other_s <= 0 and segment.start.pwm_us != segment.end.pwm_us:
+            return segment._set_timing(ramp, self.speed_factor * _stretch(ramp.duration, other_s), self._overhead_s)
+        return segment._set_timing(self._still_ramp(other_s, segment.start.pwm_us != segment.end.pwm_us),
+                                   self.speed_factor, self._overhead_s)
+
+    def _other_s(self, att_lead_deg: float, ext_lead_deg: float) -> float:
+        """Seconds the attitude and the E axes need to turn through their leads (degrees)."""
+        speed = self.profile.speed
+        return max(att_lead_deg / speed.attitude_deg_s, ext_lead_deg / speed.max_joint_deg_s)
+
+    def _still_ramp(self, other_s: float, pwm_changed: bool) -> _Ramp:
+        """The ramp of a Cartesian move without a path: as long as its attitude and E axes
+        need (``other_s``), or as a PWM change if only that changes; one unit long."""
+        if other_s <= 0 and pwm_changed:
             other_s = self.profile.timing.pwm_change_s
-        return segment._set_timing(_Ramp.constant(1.0, other_s), self.speed_factor, self._overhead_s)
+        return _Ramp.constant(1.0, other_s)
 
     def _end_cartesian(self, command, start: ArmPose, pwm_us=None) -> ArmPose:
         return ArmPose(
@@ -743,11 +771,13 @@ class Planner:
     def feed_s(self, command: Command) -> float:
         """``feed(command).duration_s``; a LinearMove costs a few float operations.
 
-        The arithmetic is ``_plan_linear``'s and ``_time_cartesian``'s for one constant-speed
-        piece, step for step, so the seconds are the same float (tests/test_lint_fastpaths.py
-        holds the two equal).  A chain of LinearMoves keeps the origin and IK hint of the pose
-        it starts from: a LinearMove's end carries its start's (``_end_cartesian``), and no one
-        can read the joints of an end pose that is not built, so the hint stays the chain's first."""
+        The move is timed with ``_time_cartesian``'s functions (``_other_s``, ``_stretch``,
+        ``_still_ramp``) from its length, speed (``_mm_s``) and one constant-speed piece
+        (``_piece_s``, as ``_Ramp`` times it): one rule, so the seconds are the same float
+        (tests/test_lint_fastpaths.py holds the two equal).  A chain of LinearMoves keeps the
+        origin and IK hint of the pose it starts from: a LinearMove's end carries its start's
+        (``_end_cartesian``), and no one can read the joints of an end pose that is not built,
+        so the hint stays the chain's first."""
         if type(command) is not LinearMove or not command.speed_mm_min > 0:
             return self.feed(command).duration_s
         end = self._line_end
@@ -761,11 +791,9 @@ class Planner:
         constants = self._line_constants
         if constants is None:
             model = self.model
-            speed = model.profile.speed
-            constants = self._line_constants = (speed.attitude_deg_s, speed.max_joint_deg_s, speed.max_linear_mm_min,
-                                                model._overhead_s, model.speed_factor,
-                                                model.profile.timing.pwm_change_s)
-        attitude_deg_s, joint_deg_s, max_mm_min, overhead_s, speed_factor, pwm_change_s = constants
+            constants = self._line_constants = (model.profile.speed.max_linear_mm_min, model._overhead_s,
+                                                model.speed_factor)
+        max_mm_min, overhead_s, speed_factor = constants
         x, y, z, b0, b1, w = command.x_mm, command.y_mm, command.z_mm, command.b0_deg, command.b1_deg, command.w_deg
         e0, e1 = command.e0_deg, command.e1_deg
         channel, pwm_us = command.pwm_channel - 1, command.pwm_us
@@ -778,26 +806,16 @@ class Planner:
         self._line_end = (x, y, z, b0, b1, w, pwm, e0, e1)
         self.pending_arc = None
         if b0 == sb0 and b1 == sb1 and w == sw and e0 == se0 and e1 == se1:
-            other_s = 0.0  # max(0.0 / attitude_deg_s, 0.0 / joint_deg_s): a run of lines rarely turns the tool
-        else:
-            att_lead = max(abs(_short(b0 - sb0)), abs(_short(b1 - sb1)), abs(_short(w - sw)))
-            ext_lead = max(abs(e0 - se0), abs(e1 - se1))
-            other_s = max(att_lead / attitude_deg_s, ext_lead / joint_deg_s)
+            other_s = 0.0  # no lead turns in no time: a run of lines rarely turns the tool
+        else:  # the leads as _CartesianSegment measures them
+            other_s = self.model._other_s(max(abs(_short(b0 - sb0)), abs(_short(b1 - sb1)), abs(_short(w - sw))),
+                                          max(abs(e0 - se0), abs(e1 - se1)))
         dx, dy, dz = x - sx, y - sy, z - sz
-        length = math.sqrt(dx * dx + dy * dy + dz * dz)
-        if length > TINY_MM:
-            v = min(command.speed_mm_min, max_mm_min) / 60.0
-            ramp_s = 0.0 + 2.0 * length / (v + v)  # _Ramp([(length, v, v)]).duration
-            stretch = other_s / ramp_s if other_s > ramp_s > 0 else 1.0
-            return overhead_s + ramp_s * (speed_factor * stretch)
-        if other_s <= 0 and spwm != pwm:
-            other_s = pwm_change_s
-        if other_s > 0:
-            v = 1.0 / other_s
-            ramp_s = 0.0 + 2.0 * 1.0 / (v + v)  # _Ramp.constant(1.0, other_s).duration
-        else:
-            ramp_s = 0.0
-        return overhead_s + ramp_s * speed_factor
+        length = math.sqrt(dx * dx + dy * dy + dz * dz)  # _LineSegment's _norm
+        if length > TINY_MM:  # _time_cartesian's path: one constant-speed piece, its _Ramp's duration
+            path_s = _piece_s(length, v := _mm_s(command.speed_mm_min, max_mm_min), v)
+            return overhead_s + path_s * (speed_factor * _stretch(path_s, other_s))  # as Segment._set_timing
+        return overhead_s + self.model._still_ramp(other_s, spwm != pwm).duration * speed_factor
 
     def feed_all(self, commands) -> list[Segment]:
         return [self.feed(command) for command in commands]

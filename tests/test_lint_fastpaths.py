@@ -293,3 +293,28 @@ def test_a_long_job_crosses_the_motion_bound_at_the_same_statement(monkeypatch):
     slow = _slow_lint(monkeypatch, iter(lines), "long.txt", PROFILE)
     assert [d.code for d in fast.diagnostics if d.code == "E012"] == ["E012"]
     assert _found(fast) == _found(slow)
+
+
+def _expression_script(seed: int, steps: int) -> list[str]:
+    """``_walk_script``'s walk written with parameters and expressions (as benchmarks/cli_speed.py's
+    expression rows): each G1 target assigned to #<x> #<y> #<z>, then reached through brackets."""
+    lines = ["#<x> = 250", "#<y> = 0", "#<z> = 150", "#<Spare> = 1"]
+    for line in _walk_script(seed, steps):
+        if line.startswith("G1 X") and " Z" in line:
+            words = dict((word[0], word[1:]) for word in line.split()[1:])
+            lines += [f"#<x> = [{words['X']} - 0.5]", f"#<y> = {words['Y']}", f"#<Z> = [{words['Z']} + 0]",
+                      f"G1 X[#<x> + 0.5] Y#<y> Z[#<z> * 1]" + "".join(f" {k}{v}" for k, v in words.items() if k not in "XYZ")
+                      + f" (step {len(lines)})"]
+        else:
+            lines.append(line)
+    return lines
+
+
+@pytest.mark.parametrize("seed", range(2))
+def test_fast_lint_is_slow_lint_on_expression_walks(monkeypatch, seed):
+    lines = _expression_script(seed, 300)
+    fast = lint_lines(iter(lines), "expr.txt", PROFILE, max_diagnostics=1_000_000)
+    slow = _slow_lint(monkeypatch, iter(lines), "expr.txt", PROFILE, max_diagnostics=1_000_000)
+    assert _found(fast) == _found(slow)
+    codes = {d.code for d in fast.diagnostics}
+    assert "L103" in codes and "L401" in codes  # the walk leaves the reach; #<Spare> is never read

@@ -72,3 +72,45 @@ def test_lines_full_of_semicolons_and_brackets_lint_quickly_in_a_fresh_process(t
     result = subprocess.run([sys.executable, "-m", "armctl", "lint", str(path)], capture_output=True, text=True,
                             timeout=15)
     assert result.returncode == 0 and "Found 100 warnings" in result.stdout
+
+
+# --- L401's parameter bookkeeping: the ASCII fast path against the general one ------------------
+
+PARAMETER_FRAGMENTS = st.sampled_from(["#<a>", "#<A>", "#<b_1>", "#<_x>", "#<", ">", "#", "=", " = ", "N10 ", "n7",
+                                       "[", "]", "+", "1.5", "(", ")", ";", " ", "\t", "G1 X", "O1 repeat", "\u212a"])
+PARAMETER_LINES = st.lists(st.one_of(PARAMETER_FRAGMENTS, st.text(st.characters(blacklist_characters="\n"), max_size=2)),
+                           max_size=12).map("".join)
+
+
+def _bookkeeping(scanner):
+    return ({name: (span.line, span.column, span.end_column, span.text) for name, span in scanner._defined.items()},
+            scanner._used - {""})
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.lists(PARAMETER_LINES, max_size=8), st.sampled_from(["\n", "\r\n", ""]))
+def test_ascii_parameter_path_agrees_with_the_general_one(texts, ending):
+    """``LineScanner.watch`` (its inline path on ASCII lines) notes the same assignments,
+    at the same columns, and the same reads as ``_parameters_in`` on every line's code."""
+    from armctl.lint.scan import LineScanner
+
+    fast = LineScanner("f.txt", lambda: {}, lambda *finding: None)
+    assert list(fast.watch(text + ending for text in texts)) == [text + ending for text in texts]
+    general = LineScanner("f.txt", lambda: {}, lambda *finding: None)
+    for number, text in enumerate(texts, 1):
+        text = (text + ending).rstrip("\r\n")  # as the scanner always had it
+        general._parameters_in(number, text, code_text(text))
+    assert _bookkeeping(fast) == _bookkeeping(general)
+    assert list(fast.unused_parameters()) == list(general.unused_parameters())
+
+
+def test_ascii_parameter_path_known_lines():
+    from armctl.lint.scan import LineScanner
+
+    scanner = LineScanner("f.txt", lambda: {}, lambda *finding: None)
+    lines = ["#<Spare> = 1 (#<inside>)\n", "N5 (why) #<B> = [#<c> + 1] ; #<after>\n", "#<b> = [#<b> + 1]\n",
+             "G1 X#<C> (#<d>\n"]
+    list(scanner.watch(lines))
+    assert _bookkeeping(scanner) == ({"spare": (1, 1, 9, "#<Spare> = 1 (#<inside>)"),
+                                      "b": (2, 10, 14, "N5 (why) #<B> = [#<c> + 1] ; #<after>")},
+                                     {"c", "b", "d"})

@@ -126,7 +126,7 @@ class _MotionClock:
         model = MotionModel(profile)
         self._planner = Planner(model, model.initial_pose())
         self._feed_s = self._planner.feed_s
-        self._compilation = compilation
+        self._skipped = compilation.skipped_passes  # the compiler appends to this very list
         self._skips_seen = 0
         self._motion_s = 0.0
         self._last = None
@@ -136,11 +136,11 @@ class _MotionClock:
         """Count ``statement`` (and the passes skipped before it); E012 once the sum passes the bound."""
         if self._reported:
             return None
-        if self._skips_seen < len(self._compilation.skipped_passes):
+        if self._skips_seen < len(self._skipped):
             self._count_skipped()
-        self._motion_s += self._feed_s(statement.command)
+        self._motion_s = motion_s = self._motion_s + self._feed_s(statement.command)
         self._last = statement
-        if self._motion_s <= self._bound_s:
+        if motion_s <= self._bound_s:
             return None  # motion_time_overrun's own first test, without the call
         return self._judge(statement)
 
@@ -152,7 +152,7 @@ class _MotionClock:
         return self._judge(self._last)
 
     def _count_skipped(self) -> None:
-        skipped = self._compilation.skipped_passes
+        skipped = self._skipped
         while self._skips_seen < len(skipped):
             commands, passes = skipped[self._skips_seen]
             self._skips_seen += 1
@@ -188,12 +188,13 @@ def lint_lines(lines: Iterable[str], file: str, profile, selection: Optional[Sel
     compilation = compile_lines(scanner.watch(lines), file, initial, max_diagnostics=max_diagnostics, skip_repeats=True)
     arm = ArmTracker(profile)
     clock = _MotionClock(profile, compilation)
+    checks_of, apply, feed = checks.get, arm.apply, clock.feed  # once, not once a statement
     for statement in compilation:
-        for code, check in checks.get(type(statement.command), ()):
+        for code, check in checks_of(type(statement.command), ()):
             for span, message, hint, *rests_on in check(statement, arm):
                 collector.add(code, span, message, hint, statement.loop, *rests_on)
-        arm.apply(statement)
-        overrun = clock.feed(statement)
+        apply(statement)
+        overrun = feed(statement)
         if overrun is not None:
             collector.add_diagnostic(overrun)
     overrun = clock.finish()

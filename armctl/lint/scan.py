@@ -26,6 +26,9 @@ from typing import Callable, Iterable, Iterator, Mapping, Optional
 from ..script import MAX_LINE_LENGTH, InitialState, SourceSpan, compile_lines
 
 _PARAMETER = re.compile(r"#<([A-Za-z_][A-Za-z0-9_]*)>")
+# a parameter (group 1, in a lower-cased ASCII line) or what code_text blanks: a "(…)" comment
+# up to the first ")", or the rest of the line from a ";" (group 1 empty for those)
+_PARAMETER_OR_COMMENT = re.compile(r"\([^)]*\)|;.*|#<([a-z_][a-z0-9_]*)>", re.S)
 _ASSIGNMENT = re.compile(r"\s*(?:[Nn][0-9]+\s*)?#<([A-Za-z_][A-Za-z0-9_]*)>\s*=")
 _BLOCK = re.compile(r"\s*(?:[Nn][0-9]+\s*)?[Oo](?:<[A-Za-z0-9_]+>|[0-9]+)\s*(repeat|endrepeat)\b\s*(.*?)\s*$", re.I)
 # Searched from just after the line's first ";" only: every later ";" finds the same first match,
@@ -83,14 +86,42 @@ class LineScanner:
         self.not_text: list[Finding] = []  # E011 candidates (comments the compiler skips), bounded
 
     def watch(self, lines: Iterable[str]) -> Iterator[str]:
+        number = self.lines
+        defined, note_read = self._defined, self._used.update
         for raw in lines:
-            self.lines += 1
-            if self.lines == 1:
+            number += 1
+            self.lines = number
+            if number == 1:
                 self.first_line = raw.rstrip("\r\n")
-            if not raw.isascii() or "\x00" in raw or len(raw) > MAX_LINE_LENGTH:
-                self._not_text(self.lines, raw.rstrip("\r\n"))
-            if "#" in raw or "o" in raw or "O" in raw:
-                self._look(self.lines, raw.rstrip("\r\n"))
+            text_ok = raw.isascii()
+            if not text_ok or "\x00" in raw or len(raw) > MAX_LINE_LENGTH:
+                self._not_text(number, raw.rstrip("\r\n"))
+            if "#" in raw:
+                if text_ok:
+                    # _parameters_in for an ASCII line (nearly every line), inline (issue 13: this
+                    # bookkeeping was ~5 µs of lint's own ~14 µs a line of expressions): one
+                    # regular expression over the lower-cased line steps over comments as
+                    # code_text blanks them, without building the blanked copy; the names come
+                    # out lower case, "" for each comment.  Lower-casing keeps every column of an
+                    # ASCII line, so the names and their order are those _parameters_in finds
+                    # (tests/test_lint_scan.py holds the two together).
+                    found = _PARAMETER_OR_COMMENT.findall(raw.lower())
+                    # an assignment's target is the first parameter of the line's code; a match on
+                    # the raw line holds no comment (the pattern has no "(" or ";"): it is one on its code
+                    if "=" in raw and (_ASSIGNMENT.match(raw) is not None
+                                       or ("(" in raw and _ASSIGNMENT.match(code_text(raw)) is not None)):
+                        first = 0  # the target: the first name (only comments, "", can come before it)
+                        while not found[first]:
+                            first += 1
+                        if found[first] not in defined:
+                            self._define(number, raw.rstrip("\r\n"), found[first])
+                        found = found[first + 1:]
+                    note_read(found)  # "" (a comment) is never a name: unused_parameters asks for names only
+                else:
+                    text = raw.rstrip("\r\n")
+                    self._parameters_in(number, text, code_text(text))
+            if "o" in raw or "O" in raw:
+                self._look(number, raw.rstrip("\r\n"))
             yield raw
 
     def _not_text(self, number: int, text: str) -> None:
@@ -115,12 +146,15 @@ class LineScanner:
 
     def _look(self, number: int, text: str) -> None:
         code = code_text(text)
-        if "#" in code:
-            self._parameters_in(number, text, code)
         if "o" in code or "O" in code:
             block = _BLOCK.match(code)
             if block is not None:
                 self._block(number, text, block)
+
+    def _define(self, number: int, text: str, name: str) -> None:
+        """The first assignment of ``name`` (lower case): the line's first parameter."""
+        match = _PARAMETER.search(code_text(text))
+        self._defined[name] = SourceSpan(self.file, number, match.start() + 1, match.end() + 1, text)
 
     def _parameters_in(self, number: int, text: str, code: str) -> None:
         names = _PARAMETER.findall(code)

@@ -24,6 +24,7 @@ from ..protocol import (
 Pose = tuple[float, float, float, float, float, float]
 _CARTESIAN_TARGETS = (LinearMove, AccelLinearMove, ArcEnd)
 _REACH_CACHE_SIZE = 4096
+_COARSE_CELL_MM = 32.0  # twice kinematics.SolvableCells' default 16 mm
 _MISSING = object()
 
 
@@ -58,7 +59,11 @@ class ArmTracker:
         self.last_statement = None
         self.notes: set = set()  # what a rule already said once per script, e.g. ("L301", channel)
         self._reach: dict = {}  # (pose, origin, joints) → reach problem or None
-        # robot-frame poses inside the workspace with a joint solution, a proven cube at a time
+        # robot-frame poses inside the workspace with a joint solution, a proven cube at a time:
+        # first a 32 mm cube (one proof stands for eight of 16 mm, issue 13: a walk through
+        # fresh space spent ~1.6 µs a line on proofs), then, near a limit where the large one
+        # fails, the 16 mm cube; each is sound on its own (tests/test_lint_fastpaths.py)
+        self._coarse_cells = SolvableCells(profile.links, profile.joint_limits_deg, profile.workspace, _COARSE_CELL_MM)
         self._cells = SolvableCells(profile.links, profile.joint_limits_deg, profile.workspace)
 
     # --- what rules ask -----------------------------------------------------------------------
@@ -78,8 +83,9 @@ class ArmTracker:
         ``reach_problem``.  The common case of every target, at the cost of a look-up."""
         ox, oy, oz = self.origin_mm
         near = self.joints
-        return self._cells.proven((pose[0] + ox, pose[1] + oy, pose[2] + oz, pose[3], pose[4], pose[5]),
-                                  self.profile.poses[0] if near is None else near)
+        robot = (pose[0] + ox, pose[1] + oy, pose[2] + oz, pose[3], pose[4], pose[5])
+        near = self.profile.poses[0] if near is None else near
+        return self._coarse_cells.proven(robot, near) or self._cells.proven(robot, near)
 
     def reach_problem(self, pose, compute):
         """``compute()`` (rules.py: None, or the problem with its hint) for ``pose`` here, cached:
@@ -95,6 +101,23 @@ class ArmTracker:
     # --- advancing ------------------------------------------------------------------------------
 
     def apply(self, statement) -> None:
+        command = statement.command
+        if type(command) is not LinearMove:
+            self.apply_any(statement)
+            return
+        # most statements (issue 13): what apply_any does for a LinearMove, without its tests
+        # (tests/test_lint_tracker_fastpath.py holds the two equal)
+        self.statements += 1
+        self.last_statement = statement
+        channel = command.pwm_channel  # pwm_channel_of(command)
+        self.pwm_us[channel] = command.pwm_us
+        if "S" in statement.words:
+            self.pwm_statement[channel] = statement
+        self.arc_start = self.arc_from = self.joints = None
+        self.pose = (command.x_mm, command.y_mm, command.z_mm, command.b0_deg, command.b1_deg, command.w_deg)
+
+    def apply_any(self, statement) -> None:
+        """``apply`` for a statement of any kind."""
         command = statement.command
         kind = type(command)
         self.statements += 1

@@ -6,8 +6,9 @@ diagnostics.  Moves take one of three paths, each starting from the same untouch
 
   1. ``_plain_move`` — the hot path: a line the regex fast path scanned, in absolute mode,
      with every value known (``resolve_planned``: one plan per line shape, compiled once); no node is built.
-  2. ``_move`` — a node without word columns (a fast-path line in a repeat body, or G91):
-     the general ``resolve``; the first sign of trouble re-parses the line with Lark.
+  2. ``_move`` — any other node (a fast-path line in a repeat body, or G91; a line with
+     expression words): the general ``resolve``; at the first sign of trouble the line takes
+     path 3 (re-parsed with Lark if it has no word columns).
   3. ``_move_with_diagnostics`` — a Lark node with columns: report everything wrong with the
      line, commit what it did set, poison what it failed to set.
 
@@ -150,12 +151,17 @@ class StatementExecution:
         statement and whose command builds.  Anything else takes ``_move_with_diagnostics``,
         which starts again from the same, untouched state.  Arcs and failures return None
         (a completed arc pair goes to ``self._out``)."""
-        if node.spans is None:
-            words = node.words
-            written = dict(words)
-            if len(written) == len(words) and written.keys() <= spec.letter_set:
-                state = self.state
-                resolution = resolve(spec, written, state)
+        words = node.words
+        written = dict(words)
+        if len(written) == len(words) and written.keys() <= spec.letter_set:
+            if node.spans is not None:  # expression words: their values now, or the path that reports why not
+                parameters = self.state.parameters
+                try:
+                    written = {letter: evaluate(value, parameters) for letter, value in words}
+                except (ExpressionError, Unavailable):
+                    written = None
+            if written is not None:
+                resolution = resolve(spec, written, self.state)
                 if resolution.ok:
                     try:
                         command = spec.make(*resolution.arguments)
@@ -164,6 +170,7 @@ class StatementExecution:
                     if command is not None:
                         return self._moved(spec, command, resolution.updates, number, text, node.column,
                                            node.end_column, written, loop)
+        if node.spans is None:
             node = parse_line(text)
         return self._move_with_diagnostics(number, text, node, spec, loop)
 

@@ -97,11 +97,14 @@ _HEAD = re.compile(rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+(?:([GgMm][0-9]++)|(#<[A-Za-
 # The tokens after it, as grammars/armctl.lark spells its terminals, each after what Lark
 # ignores (spaces, ( … ) and ; comments); what a token is follows from its first character,
 # so these context-free tokens are the ones Lark's contextual lexer finds wherever the parser
-# below accepts them.  The word prefix comes first: it is Lark's WORD_PREFIX.2, which
+# below accepts them.  In a word the prefix comes first: it is Lark's WORD_PREFIX.2, which
 # outranks WORD (the "J1" of "J1=#<a>").  Anything else is one "other" character: ask Lark.
+# No token starts with a letter, nor two tokens with one character, so the order of the
+# alternatives changes no match: the tokens are tried first, commonest first (issue 13: this
+# pattern is most of the expression fast path's time).
 _TOKENS = re.compile(
-    rf"([ \t]*+)(?:({_LETTER})(?:({_NUMBER})|(?=[+-]?[#\[]))"
-    r"|([0-9]++\.?+[0-9]*+|\.[0-9]++|#<[A-Za-z_][A-Za-z0-9_]*+>|[-+*/\[\]=]|\([^)\n]*+\)|;[^\n]*+|\Z)|(.))"
+    r"([ \t]*+)(?:(#<[A-Za-z_][A-Za-z0-9_]*+>|[-+*/\[\]=]|[0-9]++\.?+[0-9]*+|\.[0-9]++|\([^)\n]*+\)|;[^\n]*+|\Z)"
+    rf"|({_LETTER})(?:({_NUMBER})|(?=[+-]?[#\[]))|(.))"
 )
 _MAX_NESTING = 50  # brackets deep; deeper (legal or not) goes to Lark
 
@@ -115,28 +118,32 @@ def _tokens(text: str, position: int) -> list:
     prefix, 'w' a literal word (text: (letter, number)), 'n' a number, '#' a parameter, the
     sign itself for - + * / [ ] =, and a last 'e' (end of line)."""
     items = []
+    append = items.append
     position += 1  # columns are 1-based, like Lark's
-    for spaces, letter, number, token, other in _TOKENS.findall(text, position - 1):
-        position += len(spaces)
-        if letter:
-            end = position + len(letter) + len(number)
-            items.append(("w", (letter, number), position, end) if number else ("p", letter, position, end))
-        elif other:
-            raise _Decline
-        elif not token:
-            items.append(("e", "", position, position))
-            return items
-        else:
+    # the groups are alternatives: one of letter, token and other is set, or none (the end);
+    # the commonest (token) is tested first
+    for spaces, token, letter, number, other in _TOKENS.findall(text, position - 1):
+        if spaces:
+            position += len(spaces)
+        if token:
             end = position + len(token)
             first = token[0]
             if first == "#":
-                items.append(("#", token, position, end))
+                append(("#", token, position, end))
+            elif first in "-+*/[]=":
+                append((first, token, position, end))
             elif first in "(;":
                 pass  # a comment: Lark ignores it
-            elif first in "-+*/[]=":
-                items.append((first, token, position, end))
             else:
-                items.append(("n", token, position, end))
+                append(("n", token, position, end))
+        elif letter:
+            end = position + len(letter) + len(number)
+            append(("w", (letter, number), position, end) if number else ("p", letter, position, end))
+        elif other:
+            raise _Decline
+        else:
+            append(("e", "", position, position))
+            return items
         position = end
     raise _Decline  # pragma: no cover - the pattern always ends with the end of the line
 
@@ -155,6 +162,12 @@ def _operand(tokens: list, at: int, nesting: int) -> tuple:
         return (Parameter(text[2:-1].lower(), column, end), column, end, 0), at + 1
     if kind == "n":
         return (float(text), column, end, 0), at + 1
+    if kind == "[" and nesting < _MAX_NESTING:  # the general case below without signs
+        inner, at = _sum(tokens, at + 1, nesting + 1)
+        closing = tokens[at]
+        if closing[0] != "]":
+            raise _Decline
+        return (inner[0], column, closing[3], inner[3]), at + 1
     signs = []
     while kind == "-" or kind == "+":
         signs.append(tokens[at])
