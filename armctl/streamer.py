@@ -236,6 +236,11 @@ class SentFrame:
     chain_end_s: float = 0.0  # the time bound as a chain of frames (a G300's certain end is its G301's)
     group_index: int = -1  # the first frame of its group: an arc's G301 finishes with its G300
     xyz_tolerance_mm: float = POSITION_TOLERANCE_MM  # how near its path an X/Y/Z must be to match
+    # False for a Cartesian move that starts where only the profile's unverified kinematics put an
+    # earlier frame of the job (a joint move's end): the arm's path is not the planned one, and near
+    # its end it may pass within tolerance of the next frame's path, so no sighting counts on it or
+    # past it (the time bound, with ``_unknown_start_s``'s allowance, confirms it).
+    path_known: bool = True
     motion_before_s: float = 0.0  # the model's motion time of every frame written before it
 
 
@@ -444,7 +449,10 @@ class Streamer:
         self.pending.append(frame)
         if segment.kind in ("line", "arc"):
             self._cartesian.append(frame.index)
-        if not self.kinematics_verified and (segment.kind == "joint" or segment.end.xyz_derived):
+        if (not self.kinematics_verified and segment.kind in ("line", "arc") and segment.start.xyz_derived
+                and self.sent > 0):
+            frame.path_known = False
+        if not self.kinematics_verified and (segment.kind == "joint" or segment.end.xyz_derived or not frame.path_known):
             self._blind.append(frame.index)
         self.sent += 1
         return frame
@@ -563,8 +571,8 @@ class Streamer:
 
         def match(sent: SentFrame):
             segment = sent.segment
-            if not verified and (segment.kind == "joint" or segment.end.xyz_derived):
-                return None  # its X/Y/Z exist only through the profile's unverified FK
+            if not verified and (segment.kind == "joint" or segment.end.xyz_derived or not sent.path_known):
+                return None  # its X/Y/Z (or its path's start) exist only through the profile's unverified FK
             distance, fraction = distance_to_path(segment, _in_frame(xyz, segment.start.origin_mm) if robot else xyz)
             if distance > sent.xyz_tolerance_mm:
                 return None
@@ -585,7 +593,8 @@ class Streamer:
             return
         def could_be_on(sent: SentFrame) -> bool:  # for the loss check: a frame this report may lie on
             segment = sent.segment
-            return (not verified and (segment.kind == "joint" or segment.end.xyz_derived)) or match(sent) is not None
+            return (not verified and (segment.kind == "joint" or segment.end.xyz_derived or not sent.path_known)) \
+                or match(sent) is not None
 
         earliest, candidates = self._scan(match, end, now)
         if earliest is None and end < len(self.pending):
