@@ -238,8 +238,9 @@ class SentFrame:
     xyz_tolerance_mm: float = POSITION_TOLERANCE_MM  # how near its path an X/Y/Z must be to match
     # False for a Cartesian move that starts where only the profile's unverified kinematics put an
     # earlier frame of the job (a joint move's end): the arm's path is not the planned one, and near
-    # its end it may pass within tolerance of the next frame's path, so no sighting counts on it or
-    # past it (the time bound, with ``_unknown_start_s``'s allowance, confirms it).
+    # its end it may pass within tolerance of the next frame's path, so a sighting may count on it
+    # (the earliest claim) but never past it; the time bound, with ``_unknown_start_s``'s
+    # allowance, confirms it.
     path_known: bool = True
     motion_before_s: float = 0.0  # the model's motion time of every frame written before it
 
@@ -571,8 +572,8 @@ class Streamer:
 
         def match(sent: SentFrame):
             segment = sent.segment
-            if not verified and (segment.kind == "joint" or segment.end.xyz_derived or not sent.path_known):
-                return None  # its X/Y/Z (or its path's start) exist only through the profile's unverified FK
+            if not verified and (segment.kind == "joint" or segment.end.xyz_derived):
+                return None  # its X/Y/Z exist only through the profile's unverified FK
             distance, fraction = distance_to_path(segment, _in_frame(xyz, segment.start.origin_mm) if robot else xyz)
             if distance > sent.xyz_tolerance_mm:
                 return None
@@ -589,6 +590,8 @@ class Streamer:
         while blind and blind[0] < first:
             blind.popleft()  # consumed
         end = blind[0] - first if blind else len(self.pending)
+        if blind and not self.pending[end].path_known:
+            end += 1  # a line from an unverified joint end: a sighting may count on it, never past it
         if blind and end == 0:
             return
         def could_be_on(sent: SentFrame) -> bool:  # for the loss check: a frame this report may lie on
