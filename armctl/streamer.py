@@ -450,10 +450,9 @@ class Streamer:
         self.pending.append(frame)
         if segment.kind in ("line", "arc"):
             self._cartesian.append(frame.index)
-        if (not self.kinematics_verified and segment.kind in ("line", "arc") and segment.start.xyz_derived
-                and self.sent > 0):
+        if self._start_unknown(segment) and self.sent > 0:
             frame.path_known = False
-        if not self.kinematics_verified and (segment.kind == "joint" or segment.end.xyz_derived or not frame.path_known):
+        if self._xyz_unknown(segment) or not frame.path_known:
             self._blind.append(frame.index)
         self.sent += 1
         return frame
@@ -545,12 +544,22 @@ class Streamer:
                 sent.certain_end_s = chain  # a G300 not followed by its G301: skipped
         self._certain_tail_s = chain
 
+    def _xyz_unknown(self, segment: Segment) -> bool:
+        """Whether the segment's X/Y/Z exist only through the profile's unverified kinematics (a
+        joint move, or a still frame whose pose was derived): no sighting can judge it."""
+        return not self.kinematics_verified and (segment.kind == "joint" or segment.end.xyz_derived)
+
+    def _start_unknown(self, segment: Segment) -> bool:
+        """Whether a Cartesian segment starts where only the profile's unverified kinematics say
+        (a joint move's end): its real path is not the planned one."""
+        return not self.kinematics_verified and segment.kind in ("line", "arc") and segment.start.xyz_derived
+
     def _unknown_start_s(self, segment: Segment) -> float:
         """The time bound's allowance for a Cartesian move that starts where only the profile's
         kinematics say (the end of a joint move): with kinematics not verified on this arm, its
         true start may lie ``UNVERIFIED_FK_SHARE`` of the reach away, so the move may be that much
         longer than planned — covered at its own feed (half of it for a move that ramps from rest)."""
-        if self.kinematics_verified or segment.kind not in ("line", "arc") or not segment.start.xyz_derived:
+        if not self._start_unknown(segment):
             return 0.0
         command = segment.command
         speed_mm_min = getattr(command, "speed_mm_min", None) or getattr(command, "speed1_mm_min", 0.0) / 2
@@ -568,11 +577,11 @@ class Streamer:
             self.confirmed_by_time += 1
 
     def _observe(self, xyz, now: float) -> None:
-        verified, robot = self.kinematics_verified, self.reports_robot_xyz
+        robot, xyz_unknown = self.reports_robot_xyz, self._xyz_unknown
 
         def match(sent: SentFrame):
             segment = sent.segment
-            if not verified and (segment.kind == "joint" or segment.end.xyz_derived):
+            if xyz_unknown(segment):
                 return None  # its X/Y/Z exist only through the profile's unverified FK
             distance, fraction = distance_to_path(segment, _in_frame(xyz, segment.start.origin_mm) if robot else xyz)
             if distance > sent.xyz_tolerance_mm:
@@ -596,8 +605,7 @@ class Streamer:
             return
         def could_be_on(sent: SentFrame) -> bool:  # for the loss check: a frame this report may lie on
             segment = sent.segment
-            return (not verified and (segment.kind == "joint" or segment.end.xyz_derived or not sent.path_known)) \
-                or match(sent) is not None
+            return xyz_unknown(segment) or not sent.path_known or match(sent) is not None
 
         earliest, candidates = self._scan(match, end, now)
         if earliest is None and end < len(self.pending):
@@ -623,7 +631,7 @@ class Streamer:
             segment = sent.segment
             if segment.kind not in ("line", "arc") or segment.length <= 4 * sent.xyz_tolerance_mm:
                 continue
-            if segment.start.xyz_derived and not self.kinematics_verified:
+            if self._start_unknown(segment):
                 continue  # its path starts where only the profile's kinematics say
             found = match(sent)
             if found is None or found[0] <= 0.0 or found[1] >= 1.0:
