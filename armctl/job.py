@@ -267,12 +267,14 @@ class Job:
     def receive_status(self, frame: StatusFrame, now: float) -> bool:
         """Take one status frame read at ``now``.  True when it may change what ``next_action``
         answers; False when it cannot: while streaming, a kind the engine only counts (worktable,
-        wrist, SD file length and status), a pause report that changes no control state, or an
+        wrist, SD file length and status), a pause report that changes no control state, a
+        position or joints report that moved neither the lower bound nor the streamer's plan
+        (``Streamer.plan_changes``: on the same frame's path where the estimate has the arm), or an
         SD run position that did not move, with nothing newly known consumed and no pause asked
         or in force — a virtual-time host reads on past it without asking (``Wait``'s promise:
         nothing changes between status frames but at its time)."""
         streamer = self.streamer
-        consumed = streamer.consumed_lower_bound
+        consumed, plan = streamer.consumed_lower_bound, streamer.plan_changes
         streamer.receive_status(frame, now)
         # Past streaming every frame is news: the end-of-job checks compare times their own way
         # (``now - since >= REST_CHECK_S``), which may hold a rounding error before the time the
@@ -292,8 +294,9 @@ class Job:
                 version = self.control.version
                 self.control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
                 news = news or self.control.version != version
-            else:
-                news = True  # position and joints: the streamer's evidence and estimate
+            else:  # position and joints while streaming: news only through the streamer's
+                # evidence (the bound, below) or its plan (the estimate's end times, the pace)
+                news = news or streamer.plan_changes != plan
             if kind == 0:
                 view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
             reported = self._reported
