@@ -279,7 +279,13 @@ class Job:
         # Past streaming every frame is news: the end-of-job checks compare times their own way
         # (``now - since >= REST_CHECK_S``), which may hold a rounding error before the time the
         # Wait named; a frame read then must find them as it always did.
-        news = self.control.busy or self.phase is not _Phase.STREAMING
+        # Draining, one answer holds until the estimate runs out or the deadline (``_draining``:
+        # no rest before the estimated finish, nothing else before the deadline): a frame read
+        # before both that moved neither the estimate nor the bound may change only the time of
+        # a Wait, never to before either (the host is woken by then, or by a later frame).
+        news = self.control.busy or (self.phase is not _Phase.STREAMING and not (
+            self.phase is _Phase.DRAINING and streamer.plan_changes == plan and now < self._deadline_s
+            and now < (streamer.estimated_finish_s() or now)))
         if self.pacing is not streamer:
             self.pacing.receive_status(frame, now)
             news = True  # another strategy may act on any frame
