@@ -37,6 +37,11 @@ READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
 VIRTUAL_MIN_STEP_S = 1e-6
 VIRTUAL_READ_CHUNK = 1 << 16  # more than any burst between two waits
+# A virtual wait reads the simulator's quiet stretches as runs of status frames computed ahead
+# (``Serial.virtual_status_run``), from this many frames, doubling while none is news (a frame
+# computed past the news is work thrown away, so runs start short), up to the most.
+VIRTUAL_RUN_FRAMES_MIN = 4
+VIRTUAL_RUN_FRAMES_MAX = 256
 
 
 @dataclass(frozen=True)
@@ -291,11 +296,45 @@ class Link:
                     self._changed.wait(READ_TIMEOUT_S)
             return
         end_s = max(until_s, clock.now_s + VIRTUAL_MIN_STEP_S) if until_s is not None else None
-        step, take = self.port.step_virtual, self._take
+        port = self.port
+        step, take = port.step_virtual, self._take
+        status_run = getattr(port, "virtual_status_run", None) if news_only else None
+        run_frames = VIRTUAL_RUN_FRAMES_MIN
         while True:  # burst after burst until one holds news for on_status, or end_s
+            if status_run is not None:
+                run = status_run(end_s, VIRTUAL_MIN_STEP_S, run_frames)
+                if run:
+                    read, done = self._take_run(run)
+                    port.commit_status_run(run, read)
+                    if done or (end_s is not None and clock.now_s >= end_s):
+                        return
+                    run_frames = min(2 * run_frames, VIRTUAL_RUN_FRAMES_MAX)  # quiet: look further ahead
+                    continue
             data = step(end_s, VIRTUAL_MIN_STEP_S, VIRTUAL_READ_CHUNK)
             if (data and take(data, news_only)) or (end_s is not None and clock.now_s >= end_s):
                 return
+
+    def _take_run(self, run: list) -> tuple[int, bool]:
+        """A run of status frames computed ahead by the simulator (``virtual_status_run``: one
+        frame per step, each with the clock time it is read at), read as ``wait`` reads them one
+        burst at a time — the clock at each frame's time, the state, ``on_status`` — decoded in
+        one pass; stops after the first frame that is news to ``on_status`` (a run never goes
+        past the wait's end).  Returns (frames read, whether a frame was news)."""
+        frames = self.reader.decode_run([item[1] for item in run])
+        if frames is None:  # cannot happen on a clean line; read them the ordinary way
+            return 0, False
+        clock, reader, on_status, update = self.clock, self.reader, self.on_status, self.state.update
+        read = 0
+        with self._changed:
+            for (at_s, data, _, _), frame in zip(run, frames):
+                clock.advance_to(at_s)
+                read += 1
+                reader.frames += 1
+                self.bytes_received += len(data)
+                update(frame, at_s)
+                if on_status is None or on_status(frame, at_s) is not False:
+                    return read, True
+        return read, False
 
     def _set_error(self, error: PortError) -> None:
         with self._changed:

@@ -21,6 +21,7 @@ time is taken to happen at the current time.  No time, threading or serial impor
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections import deque
 from dataclasses import dataclass
 
@@ -165,6 +166,75 @@ class SimulatedArm:
     def host_line_free_s(self) -> float:
         """When the last host byte written so far will have landed."""
         return self.host_line.free_at_s
+
+    # --- a run of status frames, computed ahead (clock=virtual) --------------------------------
+
+    def status_run(self, clock_s: float, end_s: float | None, min_step_s: float, max_frames: int,
+                   clock_start_s: float, time_scale: float) -> list[tuple[float, bytes, float, float]]:
+        """What up to ``max_frames`` successive virtual-time steps would read, computed without
+        changing anything: [(clock time, status frame, wire free, model time)], for as long as a
+        step is a quiet one — the line back to the host clear, no status fault, no executor
+        event and no landing due, exactly one whole status frame arriving in the step — and
+        ends by ``end_s``.  ``commit_status_run`` then makes the first n of them so.
+
+        A step is ``protocol_sim.Serial.step_virtual``'s: the clock (``clock_s``; model time =
+        (clock − ``clock_start_s``) × ``time_scale``) moves to when the next status frame has
+        reached the host (``next_output_time``), at least ``min_step_s`` on, and the model
+        advances there (``_run_until``: the frame is built at its due time and sent).  The same
+        arithmetic, operation by operation, so the same frames at the same times to the last
+        bit; only the per-step machinery (candidate lists, the wire's runs, the lock, the
+        decode of each burst apart) is gone: a run between two events costs one pose and one
+        frame per status.  The caller stops reading at a frame that is news to it, and only
+        the frames it read are committed: a frame computed and not read changes nothing (the
+        status encoder's reuse of bytes is keyed by value)."""
+        run: list[tuple[float, bytes, float, float]] = []
+        arm_line = self.arm_line
+        if arm_line._runs or self.faults.active:
+            return run
+        landings, executor, schedule = self._landings, self.executor, self.schedule
+        quiet_until_s = executor.next_event_s()
+        if landings and (quiet_until_s is None or landings[0][0] < quiet_until_s):
+            quiet_until_s = landings[0][0]
+        first_s, period_s, rotation, count = schedule.first_s, schedule.period_s, schedule.rotation, schedule.count
+        byte_s, free_s, model_s = arm_line.byte_s, arm_line.free_at_s, self.now_s
+        burst_s, executor_s = STATUS_SIZE * byte_s, executor.now_s
+        encode = self._status.encode
+        while len(run) < max_frames:
+            status_s = first_s + count * period_s  # StatusSchedule.next_s
+            output_s = max(status_s, free_s) + burst_s  # next_output_time (nothing in flight)
+            step_to = clock_s + max(max(0.0, (output_s - (clock_s - clock_start_s) * time_scale) / time_scale), min_step_s)
+            if end_s is not None and end_s < step_to:
+                break
+            limit_s = max((step_to - clock_start_s) * time_scale, model_s)  # _run_until's limit
+            due_by_s = limit_s + TIME_EPSILON_S
+            if (quiet_until_s is not None and quiet_until_s <= due_by_s) or status_s > due_by_s \
+                    or first_s + (count + 1) * period_s <= due_by_s:
+                break  # an event in this step, or not exactly one status frame: the full loop
+            next_executor_s = max(executor_s, limit_s)  # Executor.run_until: no event to run
+            next_model_s = max(limit_s, next_executor_s)
+            start_s = max(status_s, free_s)  # Wire.send
+            if int(math.floor((next_model_s - start_s + TIME_EPSILON_S) / byte_s)) < STATUS_SIZE:
+                break  # not all of it arrived (Wire.take)
+            frame = encode(rotation[count % len(rotation)], executor, status_s)
+            free_s = start_s + len(frame) * byte_s
+            executor_s, model_s, clock_s = next_executor_s, next_model_s, step_to
+            count += 1
+            run.append((step_to, frame, free_s, model_s))
+        return run
+
+    def commit_status_run(self, run: list[tuple[float, bytes, float, float]], frames: int) -> None:
+        """Make the first ``frames`` steps of ``run`` (``status_run``, nothing changed since) so:
+        their status frames built, sent and read, the model at the last one's time."""
+        if frames <= 0:
+            return
+        _, _, free_s, model_s = run[frames - 1]
+        self.schedule.count += frames
+        self.status_frames_built += frames
+        self.arm_line.free_at_s = free_s
+        self.arm_line.bytes_sent += STATUS_SIZE * frames
+        executor = self.executor
+        executor.now_s = max(executor.now_s, model_s)
+        self.now_s = model_s
 
     # --- the event loop ------------------------------------------------------------------------
 
