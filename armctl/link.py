@@ -29,7 +29,7 @@ from .armstate import ArmState
 from .clock import Clock, as_clock, port_clock
 from .errors import ConfigError, PortError
 from .profile import CONFIG_NAME, check_config_value
-from .protocol import DEFAULT_BAUD, StatusFrame, StatusReader
+from .protocol import DEFAULT_BAUD, STATUS_SIZE, StatusFrame, StatusReader
 
 SIMULATOR_URL = "sim://"
 PORT_ENV = "ARMCTL_PORT"
@@ -37,11 +37,11 @@ READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
 VIRTUAL_MIN_STEP_S = 1e-6
 VIRTUAL_READ_CHUNK = 1 << 16  # more than any burst between two waits
-# A virtual wait reads the simulator's quiet stretches as runs of status frames computed ahead
-# (``Serial.virtual_status_run``), from this many frames, doubling while none is news (a frame
-# computed past the news is work thrown away, so runs start short), up to the most.
-VIRTUAL_RUN_FRAMES_MIN = 4
-VIRTUAL_RUN_FRAMES_MAX = 256
+# A virtual wait reads the simulator's quiet stretches as runs of steps timed ahead
+# (``Serial.virtual_status_run``), from this many, doubling while no frame is news (the timing
+# past the news is thrown away: cheap, but not free), up to the most.
+VIRTUAL_RUN_FRAMES_MIN = 8
+VIRTUAL_RUN_FRAMES_MAX = 512
 
 
 @dataclass(frozen=True)
@@ -315,22 +315,24 @@ class Link:
                 return
 
     def _take_run(self, run: list) -> tuple[int, bool]:
-        """A run of status frames computed ahead by the simulator (``virtual_status_run``: one
-        frame per step, each with the clock time it is read at), read as ``wait`` reads them one
-        burst at a time — the clock at each frame's time, the state, ``on_status`` — decoded in
-        one pass; stops after the first frame that is news to ``on_status`` (a run never goes
-        past the wait's end).  Returns (frames read, whether a frame was news)."""
-        frames = self.reader.decode_run([item[1] for item in run])
-        if frames is None:  # cannot happen on a clean line; read them the ordinary way
-            return 0, False
+        """A run of quiet steps computed ahead by the simulator (``virtual_status_run``: one
+        status frame each, with the clock time it is read at), read as ``wait`` reads them one
+        burst at a time — the clock at the frame's time, the frame built (``status_frame``) and
+        decoded (``StatusReader.decode_frame``), the state, ``on_status`` — stopping after the
+        first frame that is news to ``on_status`` (a run never goes past the wait's end).
+        Returns (frames read, whether one was news)."""
         clock, reader, on_status, update = self.clock, self.reader, self.on_status, self.state.update
+        build, decode = self.port.status_frame, reader.decode_frame
         read = 0
         with self._changed:
-            for (at_s, data, _, _), frame in zip(run, frames):
+            for at_s, kind, due_s, _, _ in run:
+                frame = decode(build(kind, due_s))
+                if frame is None:  # cannot happen on a clean line: the ordinary way reads it
+                    break
                 clock.advance_to(at_s)
                 read += 1
                 reader.frames += 1
-                self.bytes_received += len(data)
+                self.bytes_received += STATUS_SIZE
                 update(frame, at_s)
                 if on_status is None or on_status(frame, at_s) is not False:
                     return read, True

@@ -170,24 +170,23 @@ class SimulatedArm:
     # --- a run of status frames, computed ahead (clock=virtual) --------------------------------
 
     def status_run(self, clock_s: float, end_s: float | None, min_step_s: float, max_frames: int,
-                   clock_start_s: float, time_scale: float) -> list[tuple[float, bytes, float, float]]:
-        """What up to ``max_frames`` successive virtual-time steps would read, computed without
-        changing anything: [(clock time, status frame, wire free, model time)], for as long as a
-        step is a quiet one — the line back to the host clear, no status fault, no executor
-        event and no landing due, exactly one whole status frame arriving in the step — and
-        ends by ``end_s``.  ``commit_status_run`` then makes the first n of them so.
+                   clock_start_s: float, time_scale: float) -> list[tuple[float, int, float, float, float]]:
+        """The timing of up to ``max_frames`` successive virtual-time steps, computed without
+        changing anything: [(clock time, status kind, its due time, wire free, model time)],
+        for as long as a step is a quiet one — the line back to the host clear, no status fault,
+        no executor event and no landing due, exactly one whole status frame arriving in the
+        step — and ends by ``end_s``.  ``status_frame`` builds a step's frame (the executor's
+        state cannot change in a quiet stretch); ``commit_status_run`` makes the first n steps so.
 
         A step is ``protocol_sim.Serial.step_virtual``'s: the clock (``clock_s``; model time =
         (clock − ``clock_start_s``) × ``time_scale``) moves to when the next status frame has
         reached the host (``next_output_time``), at least ``min_step_s`` on, and the model
         advances there (``_run_until``: the frame is built at its due time and sent).  The same
         arithmetic, operation by operation, so the same frames at the same times to the last
-        bit; only the per-step machinery (candidate lists, the wire's runs, the lock, the
-        decode of each burst apart) is gone: a run between two events costs one pose and one
-        frame per status.  The caller stops reading at a frame that is news to it, and only
-        the frames it read are committed: a frame computed and not read changes nothing (the
-        status encoder's reuse of bytes is keyed by value)."""
-        run: list[tuple[float, bytes, float, float]] = []
+        bit; only the per-step machinery (candidate lists, the wire's runs, the lock, a burst
+        decoded apart) is gone.  The caller stops reading at a frame that is news to it: the
+        timing past it is cheap arithmetic thrown away, and no frame is built that is not read."""
+        run: list[tuple[float, int, float, float, float]] = []
         arm_line = self.arm_line
         if arm_line._runs or self.faults.active:
             return run
@@ -197,8 +196,7 @@ class SimulatedArm:
             quiet_until_s = landings[0][0]
         first_s, period_s, rotation, count = schedule.first_s, schedule.period_s, schedule.rotation, schedule.count
         byte_s, free_s, model_s = arm_line.byte_s, arm_line.free_at_s, self.now_s
-        burst_s, executor_s = STATUS_SIZE * byte_s, executor.now_s
-        encode = self._status.encode
+        burst_s, executor_s, kinds = STATUS_SIZE * byte_s, executor.now_s, len(rotation)
         while len(run) < max_frames:
             status_s = first_s + count * period_s  # StatusSchedule.next_s
             output_s = max(status_s, free_s) + burst_s  # next_output_time (nothing in flight)
@@ -215,19 +213,22 @@ class SimulatedArm:
             start_s = max(status_s, free_s)  # Wire.send
             if int(math.floor((next_model_s - start_s + TIME_EPSILON_S) / byte_s)) < STATUS_SIZE:
                 break  # not all of it arrived (Wire.take)
-            frame = encode(rotation[count % len(rotation)], executor, status_s)
-            free_s = start_s + len(frame) * byte_s
+            free_s = start_s + STATUS_SIZE * byte_s  # (every status frame is STATUS_SIZE bytes)
             executor_s, model_s, clock_s = next_executor_s, next_model_s, step_to
+            run.append((step_to, rotation[count % kinds], status_s, free_s, model_s))
             count += 1
-            run.append((step_to, frame, free_s, model_s))
         return run
 
-    def commit_status_run(self, run: list[tuple[float, bytes, float, float]], frames: int) -> None:
+    def status_frame(self, kind: int, at_s: float) -> bytes:
+        """The status frame of ``kind`` built at ``at_s`` (a step of a ``status_run``)."""
+        return self._status.encode(kind, self.executor, at_s)
+
+    def commit_status_run(self, run: list[tuple[float, int, float, float, float]], frames: int) -> None:
         """Make the first ``frames`` steps of ``run`` (``status_run``, nothing changed since) so:
         their status frames built, sent and read, the model at the last one's time."""
         if frames <= 0:
             return
-        _, _, free_s, model_s = run[frames - 1]
+        free_s, model_s = run[frames - 1][3:]
         self.schedule.count += frames
         self.status_frames_built += frames
         self.arm_line.free_at_s = free_s
