@@ -306,17 +306,19 @@ class Job:
             if kind == 0:
                 view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
             reported = self._reported
+            changed = reported.get(kind) != values  # else so are the readings: _rest and _motion hold them
             reported[kind] = values
             self._read_at[kind] = now
-            rest = (reported.get(0), reported.get(1), reported.get(2), reported.get(4))
-            if self._rest is None or self._rest[0] != rest:
-                self._rest = (rest, now)
-            motion = rest[:3]
-            if self._motion is None or self._motion[0] != motion:
-                self._motion = (motion, now)
-                if self._moved_from is None or _moved_clearly(self._moved_from, motion):
-                    self._moved_from = motion
-                    self._active_s = now
+            if changed or self._rest is None:
+                rest = (reported.get(0), reported.get(1), reported.get(2), reported.get(4))
+                if self._rest is None or self._rest[0] != rest:
+                    self._rest = (rest, now)
+                motion = rest[:3]
+                if self._motion is None or self._motion[0] != motion:
+                    self._motion = (motion, now)
+                    if self._moved_from is None or _moved_clearly(self._moved_from, motion):
+                        self._moved_from = motion
+                        self._active_s = now
         elif kind == _RUN_POSITION_KIND:
             if self._run_position is not None and frame.value != self._run_position:
                 self._active_s = now  # an SD program advancing, even with the arm standing still
