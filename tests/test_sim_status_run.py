@@ -127,3 +127,35 @@ def test_cartesian_at_is_sample(fraction):
             assert sampled.ik_hint == segment.end.ik_hint and sampled.pwm_us == segment.end.pwm_us
         checked += 1
     assert checked >= 3  # two lines and the arc
+
+
+def _link_reads(raise_at: int | None, until_s: float) -> list[tuple[int, float]]:
+    """What a virtual link's news-only waits read up to ``until_s`` when ``on_status`` raises
+    (a Ctrl-C) at frame ``raise_at`` — in the middle of a run — and the waits go on after it."""
+    from armctl.link import Link
+
+    seen: list[tuple[int, float]] = []
+
+    def on_status(frame, now):
+        seen.append((frame.KIND, now))
+        if len(seen) == raise_at:
+            raise KeyboardInterrupt
+        return False
+
+    with Link.open("sim://?clock=virtual", on_status=on_status) as link:
+        while link.clock.now() < until_s:
+            try:
+                link.wait(until_s, news_only=True)
+            except KeyboardInterrupt:
+                pass
+        assert link.reader.frames == len(seen) and link.bytes_received == 9 * len(seen)
+        built = link.port.model.status_frames_built  # every frame built was read once, but one in flight
+        assert built - len(seen) == (1 if link.port.model.arm_line.next_arrival_s() is not None else 0)
+    return seen
+
+
+def test_a_run_cut_short_by_an_exception_reads_no_frame_twice():
+    whole = _link_reads(None, 3.0)
+    assert len(whole) == 100  # one per 30 ms
+    for raise_at in (1, 37, 99):
+        assert _link_reads(raise_at, 3.0) == whole
