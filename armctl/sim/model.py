@@ -11,6 +11,12 @@ one status frame per 30 ms of arm time.  Its records of what happened (frames re
 keep the most recent ``connector.HISTORY_FRAMES`` entries (or up to twice that) plus counters, so memory stays flat
 however long a virtual run is.
 
+A virtual-time host that reads on past frames that are no news to it (armctl/link.py) asks for
+the quiet stretches between events as runs (``status_run``): the timing of each step it would
+take, one status frame each, computed ahead without changing anything; it builds a step's frame
+only when it reads it (``status_frame``) and commits the steps it read (``commit_status_run``),
+so a 20-minute job costs its status frames and little else (benchmarks/virtual_run.py).
+
 At one instant, events run in this order: segment ends (freeing slots), then frames landing,
 then the status frame (so it reports the state after both).
 
