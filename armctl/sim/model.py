@@ -27,7 +27,6 @@ time is taken to happen at the current time.  No time, threading or serial impor
 from __future__ import annotations
 
 import dataclasses
-import math
 from collections import deque
 from dataclasses import dataclass
 
@@ -217,8 +216,8 @@ class SimulatedArm:
             next_executor_s = max(executor_s, limit_s)  # Executor.run_until: no event to run
             next_model_s = max(limit_s, next_executor_s)
             start_s = max(status_s, free_s)  # Wire.send
-            if int(math.floor((next_model_s - start_s + TIME_EPSILON_S) / byte_s)) < STATUS_SIZE:
-                break  # not all of it arrived (Wire.take)
+            if (next_model_s - start_s + TIME_EPSILON_S) / byte_s < STATUS_SIZE:
+                break  # not all of it arrived (Wire.take: its floor below STATUS_SIZE, i.e. this)
             free_s = start_s + STATUS_SIZE * byte_s  # (every status frame is STATUS_SIZE bytes)
             executor_s, model_s, clock_s = next_executor_s, next_model_s, step_to
             run.append((step_to, rotation[count % kinds], status_s, free_s, model_s))
