@@ -111,7 +111,10 @@ class ArmState:
         else:
             return False
         a = before if type(before) is tuple else _values(before)
-        return max(abs(p - q) for p, q in zip(a, _values(after))) > limit
+        for p, q in zip(a, _values(after)):  # a plain loop: every position and joints frame
+            if abs(p - q) > limit:
+                return True
+        return False
 
     def _current(self, kind: int) -> tuple | None:
         """The values the state holds for a kind judged for jumps (as ``_values`` of its frame)."""

@@ -267,17 +267,25 @@ class Job:
     def receive_status(self, frame: StatusFrame, now: float) -> bool:
         """Take one status frame read at ``now``.  True when it may change what ``next_action``
         answers; False when it cannot: while streaming, a kind the engine only counts (worktable,
-        wrist, SD file length and status), a pause report that changes no control state, or an
+        wrist, SD file length and status), a pause report that changes no control state, a
+        position or joints report that moved neither the lower bound nor the streamer's plan
+        (``Streamer.plan_changes``: on the same frame's path where the estimate has the arm), or an
         SD run position that did not move, with nothing newly known consumed and no pause asked
         or in force — a virtual-time host reads on past it without asking (``Wait``'s promise:
         nothing changes between status frames but at its time)."""
         streamer = self.streamer
-        consumed = streamer.consumed_lower_bound
+        consumed, plan = streamer.consumed_lower_bound, streamer.plan_changes
         streamer.receive_status(frame, now)
         # Past streaming every frame is news: the end-of-job checks compare times their own way
         # (``now - since >= REST_CHECK_S``), which may hold a rounding error before the time the
         # Wait named; a frame read then must find them as it always did.
-        news = self.control.busy or self.phase is not _Phase.STREAMING
+        # Draining, one answer holds until the estimate runs out or the deadline (``_draining``:
+        # no rest before the estimated finish, nothing else before the deadline): a frame read
+        # before both that moved neither the estimate nor the bound may change only the time of
+        # a Wait, never to before either (the host is woken by then, or by a later frame).
+        news = self.control.busy or (self.phase is not _Phase.STREAMING and not (
+            self.phase is _Phase.DRAINING and streamer.plan_changes == plan and now < self._deadline_s
+            and now < (streamer.estimated_finish_s() or now)))
         if self.pacing is not streamer:
             self.pacing.receive_status(frame, now)
             news = True  # another strategy may act on any frame
@@ -292,22 +300,25 @@ class Job:
                 version = self.control.version
                 self.control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
                 news = news or self.control.version != version
-            else:
-                news = True  # position and joints: the streamer's evidence and estimate
+            else:  # position and joints while streaming: news only through the streamer's
+                # evidence (the bound, below) or its plan (the estimate's end times, the pace)
+                news = news or streamer.plan_changes != plan
             if kind == 0:
                 view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
             reported = self._reported
+            changed = reported.get(kind) != values  # else so are the readings: _rest and _motion hold them
             reported[kind] = values
             self._read_at[kind] = now
-            rest = (reported.get(0), reported.get(1), reported.get(2), reported.get(4))
-            if self._rest is None or self._rest[0] != rest:
-                self._rest = (rest, now)
-            motion = rest[:3]
-            if self._motion is None or self._motion[0] != motion:
-                self._motion = (motion, now)
-                if self._moved_from is None or _moved_clearly(self._moved_from, motion):
-                    self._moved_from = motion
-                    self._active_s = now
+            if changed or self._rest is None:
+                rest = (reported.get(0), reported.get(1), reported.get(2), reported.get(4))
+                if self._rest is None or self._rest[0] != rest:
+                    self._rest = (rest, now)
+                motion = rest[:3]
+                if self._motion is None or self._motion[0] != motion:
+                    self._motion = (motion, now)
+                    if self._moved_from is None or _moved_clearly(self._moved_from, motion):
+                        self._moved_from = motion
+                        self._active_s = now
         elif kind == _RUN_POSITION_KIND:
             if self._run_position is not None and frame.value != self._run_position:
                 self._active_s = now  # an SD program advancing, even with the arm standing still

@@ -12,7 +12,11 @@ for ``sim://?speed=N`` — or virtual).  A ``sim://?clock=virtual`` port has no 
 clock moves only when a caller waits (``wait``, ``wait_until``, ``idle``), which jumps to the
 next status burst and reads it at the model time it lands (``Serial.step_virtual``: the
 simulator driven directly, no wall-clock machinery); a caller whose ``on_status`` says which
-frames are news (the job runner) is woken only by those.  Callers that wait through the link
+frames are news (the job runner) is woken only by those, and the simulator's quiet stretches
+(nothing happens in it but status frames) are then read as runs of steps timed ahead
+(``Serial.virtual_status_run``), each frame built and decoded only when read and the run
+committed as far as it was read: the same frames at the same model times, without the
+per-burst machinery.  Callers that wait through the link
 work unchanged on either kind of port.
 """
 
@@ -29,7 +33,7 @@ from .armstate import ArmState
 from .clock import Clock, as_clock, port_clock
 from .errors import ConfigError, PortError
 from .profile import CONFIG_NAME, check_config_value
-from .protocol import DEFAULT_BAUD, StatusFrame, StatusReader
+from .protocol import DEFAULT_BAUD, STATUS_SIZE, StatusFrame, StatusReader
 
 SIMULATOR_URL = "sim://"
 PORT_ENV = "ARMCTL_PORT"
@@ -37,6 +41,11 @@ READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
 VIRTUAL_MIN_STEP_S = 1e-6
 VIRTUAL_READ_CHUNK = 1 << 16  # more than any burst between two waits
+# A virtual wait reads the simulator's quiet stretches as runs of steps timed ahead
+# (``Serial.virtual_status_run``), from this many, doubling while no frame is news (the timing
+# past the news is thrown away: cheap, but not free), up to the most.
+VIRTUAL_RUN_FRAMES_MIN = 8
+VIRTUAL_RUN_FRAMES_MAX = 512
 
 
 @dataclass(frozen=True)
@@ -291,11 +300,52 @@ class Link:
                     self._changed.wait(READ_TIMEOUT_S)
             return
         end_s = max(until_s, clock.now_s + VIRTUAL_MIN_STEP_S) if until_s is not None else None
-        step, take = self.port.step_virtual, self._take
+        port = self.port
+        step, take = port.step_virtual, self._take
+        status_run = getattr(port, "virtual_status_run", None) if news_only else None
+        run_frames = VIRTUAL_RUN_FRAMES_MIN
         while True:  # burst after burst until one holds news for on_status, or end_s
+            if status_run is not None:
+                run = status_run(end_s, VIRTUAL_MIN_STEP_S, run_frames)
+                if run:
+                    read, news = self._take_run(run)
+                    if news or (end_s is not None and clock.now_s >= end_s):
+                        return
+                    if read == len(run):
+                        run_frames = min(2 * run_frames, VIRTUAL_RUN_FRAMES_MAX)  # quiet: look further ahead
+                        continue
+                    # a frame the run could not decode (never on a clean line): the ordinary way reads it
             data = step(end_s, VIRTUAL_MIN_STEP_S, VIRTUAL_READ_CHUNK)
             if (data and take(data, news_only)) or (end_s is not None and clock.now_s >= end_s):
                 return
+
+    def _take_run(self, run: list) -> tuple[int, bool]:
+        """A run of quiet steps computed ahead by the simulator (``virtual_status_run``: one
+        status frame each, with the clock time it is read at), read as ``wait`` reads them one
+        burst at a time — the clock at the frame's time, the frame built (``status_frame``) and
+        decoded (``StatusReader.decode_frame``), the state, ``on_status`` — stopping after the
+        first frame that is news to ``on_status`` (a run never goes past the wait's end).  The
+        frames read are committed to the simulator whatever happens (``on_status`` may raise:
+        Ctrl-C), so none is read twice.  Returns (frames read, whether the last was news)."""
+        port, clock, reader, on_status, update = self.port, self.clock, self.reader, self.on_status, self.state.update
+        build, decode = port.status_frame, reader.decode_frame
+        read = 0
+        try:
+            with self._changed:
+                for at_s, kind, due_s, _, _ in run:
+                    frame = decode(build(kind, due_s))
+                    if frame is None:  # cannot happen on a clean line: the ordinary way reads it
+                        break
+                    clock.advance_to(at_s)
+                    read += 1
+                    reader.frames += 1
+                    self.bytes_received += STATUS_SIZE
+                    update(frame, at_s)
+                    if on_status is None or on_status(frame, at_s) is not False:
+                        return read, True
+            return read, False
+        finally:
+            port.commit_status_run(run, read)
 
     def _set_error(self, error: PortError) -> None:
         with self._changed:

@@ -132,6 +132,11 @@ class ArmPose:
         return self._joints
 
     @property
+    def ik_hint(self) -> tuple[float, ...]:
+        """The joints the IK of this pose starts near (those of a pose sampled on a path)."""
+        return self._hint
+
+    @property
     def known_joints(self) -> tuple[float, ...]:
         """The joints if known, else the hint they will be computed near (no IK)."""
         return self._joints if self._joints is not None else self._hint
@@ -434,6 +439,20 @@ class _CartesianSegment(Segment):
         self._de = (end.e0_deg - start.e0_deg, end.e1_deg - start.e1_deg)
         self.att_lead_deg = max(abs(d) for d in self._datt)
         self.ext_lead_deg = max(abs(d) for d in self._de)
+
+    def cartesian_at(self, t_s: float) -> tuple[float, float, float, float, float, float] | None:
+        """``sample(t_s).cartesian`` as a plain tuple, the same floats, where the arm is between
+        the ends of the path (None at either end: ``sample`` gives ``start`` or ``end``, whose
+        other half is cached).  For the simulator's status frames (one per 30 ms of a
+        20-minute job): the pose's values without the pose, the ArmPose and CartesianPose objects
+        that ``sample`` builds for them.  Its PWM, origin and IK hint are ``end``'s."""
+        if t_s >= self.duration_s or t_s <= self._wait:
+            return None
+        ramp = self._ramp
+        f = ramp.distance_at((t_s - self._wait) / self._scale) / ramp.length if ramp.length else 0.0
+        x, y, z = self._point(f)
+        a, da = self._att0, self._datt
+        return (x, y, z, a[0] + da[0] * f, a[1] + da[1] * f, a[2] + da[2] * f)
 
     def _pose_at(self, f):
         x, y, z = self._point(f)

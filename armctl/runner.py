@@ -124,7 +124,11 @@ class JobRunner:
                 requests.get_nowait()(self.job)
             self._receive(frame, at_s)
             return True  # the engine's answer after a request is news
-        return self._receive(frame, at_s) or self.stop_requested or not requests.empty()
+        if self.log is None and not _logger.isEnabledFor(logging.INFO):  # _receive with nothing to tell
+            news = self.job.receive_status(frame, at_s) is not False
+        else:
+            news = self._receive(frame, at_s)
+        return news or self.stop_requested or not requests.empty()
 
     def control(self, request: Callable[[Job], object]) -> None:
         """Queue ``request(job)`` (e.g. ``Job.pause``) from any thread — the run panel's keys;

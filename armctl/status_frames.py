@@ -304,6 +304,12 @@ def decode_status(frame: bytes) -> StatusFrame:
     return STATUS_KINDS[frame[7]]._from_data(frame[1:7])
 
 
+# decode_frame keeps the frames of the kinds that repeat unchanged for long (worktable origin,
+# pause and PWM, SD file length, status and run position), at most this many.
+_REPEATING_KINDS = frozenset((3, 4, 100, 102, 103))
+_SEEN_FRAMES = 64
+
+
 class StatusReader:
     """Finds status frames in a byte stream fed in arbitrary chunks.
 
@@ -317,6 +323,7 @@ class StatusReader:
         self._buffer = bytearray()
         self.frames = 0
         self.skipped_bytes = 0
+        self._seen: dict[bytes, StatusFrame] = {}  # decode_frame: bytes → frame, the repeating kinds
 
     @property
     def pending(self) -> int:
@@ -356,6 +363,32 @@ class StatusReader:
         del buffer[:start]
         self.frames += len(found)
         return found
+
+    def decode_frame(self, data: bytes) -> StatusFrame | None:
+        """The frame of a burst that is one whole status frame and nothing else (the simulator's
+        quiet stretches, ``Link._take_run``): what ``feed`` finds in it, without counting it
+        (the caller counts what it reads), or None if it is not one valid frame.  Bytes seen
+        before give the same (immutable) frame again for the kinds that repeat for minutes
+        (worktable, pause and PWM, SD program): no decode at all for half the frames."""
+        if self._buffer:
+            return None  # bytes held from before come first: feed's job
+        frame = self._seen.get(data)
+        if frame is not None:
+            return frame
+        if len(data) != STATUS_SIZE or data[0] != STATUS_HEAD or data[8] != STATUS_TAIL:
+            return None
+        frame_class = STATUS_KINDS.get(data[7])
+        if frame_class is None:
+            return None
+        try:
+            frame = frame_class._from_data(data[1:7])
+        except (FrameError, FieldError):
+            return None
+        if frame_class.KIND in _REPEATING_KINDS:
+            if len(self._seen) >= _SEEN_FRAMES:
+                self._seen.clear()
+            self._seen[data] = frame
+        return frame
 
     @staticmethod
     def _aligned(data: bytes) -> list[StatusFrame] | None:

@@ -308,6 +308,10 @@ class Streamer:
         self.next_frame_motion_s = 0.0  # the motion of the frame next_write_time was asked about
         self.bound_evidence: Evidence | None = None  # what last advanced consumed_lower_bound
         self.pace = 1.0  # the arm's seconds ÷ the model's, measured (see the module docstring)
+        # Bumped whenever an observation changes what ``next_write_time`` reads besides the
+        # lower bound (the estimate's end times, the pace): a status frame that moved neither
+        # cannot change when the next frame may go (``Job.receive_status``'s news).
+        self.plan_changes = 0
         self._pace_samples: deque[float] = deque(maxlen=PACE_SAMPLES)
         self._pace_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, model s, now)
         # What proves each frame consumed (the summary's honesty): the arm's reports (a position
@@ -826,7 +830,9 @@ class Streamer:
             return
         self._pace_samples.append((now - last[2]) / (model_s - last[1]))
         self._pace_from[stream] = (index, model_s, now)
-        self.pace = min(PACE_MAX, max(1.0, *self._pace_samples))
+        pace, self.pace = self.pace, min(PACE_MAX, max(1.0, *self._pace_samples))
+        if self.pace != pace:
+            self.plan_changes += 1
         # An arm measured slower than its profile's speed_factor: the time bound allows that much
         # more from here on (only ever more careful; whatever it confirmed before is judged by
         # ``_check_slowness``).
@@ -909,6 +915,7 @@ class Streamer:
         if best is None or best[0] == 0.0:
             return
         _, k, lo, hi = best
+        self.plan_changes += 1
         sent = self.pending[k]
         t_lo, t_hi = _time_window(sent.segment, lo, hi)
         start = sent.est_end_s - sent.segment.duration_s

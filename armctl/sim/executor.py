@@ -153,6 +153,19 @@ class Executor:
             return self.pose.replace(joints=self.joystick.joints_at(now_s))
         return self.pose
 
+    def cartesian_at(self, now_s: float):
+        """(``pose_at(now_s).cartesian`` as a plain tuple, the segment's ``end`` pose) while a
+        line or an arc runs and the arm is between its ends; else None (ask ``pose_at``).  The
+        status encoder's way to the same floats without the pose objects (``Segment.cartesian_at``)."""
+        running = self._running
+        if running is None:
+            return None
+        cartesian_at = getattr(running.segment, "cartesian_at", None)
+        if cartesian_at is None:
+            return None
+        values = cartesian_at(running.local_s(now_s))
+        return None if values is None else (values, running.segment.end)
+
     def snapshot(self, now_s: float) -> "LiveSnapshot":
         """What a status frame built at ``now_s`` reports (computed only as far as it is read)."""
         return LiveSnapshot(self, now_s)

@@ -11,6 +11,12 @@ one status frame per 30 ms of arm time.  Its records of what happened (frames re
 keep the most recent ``connector.HISTORY_FRAMES`` entries (or up to twice that) plus counters, so memory stays flat
 however long a virtual run is.
 
+A virtual-time host that reads on past frames that are no news to it (armctl/link.py) asks for
+the quiet stretches between events as runs (``status_run``): the timing of each step it would
+take, one status frame each, computed ahead without changing anything; it builds a step's frame
+only when it reads it (``status_frame``) and commits the steps it read (``commit_status_run``),
+so a 20-minute job costs its status frames and little else (benchmarks/virtual_run.py).
+
 At one instant, events run in this order: segment ends (freeing slots), then frames landing,
 then the status frame (so it reports the state after both).
 
@@ -165,6 +171,76 @@ class SimulatedArm:
     def host_line_free_s(self) -> float:
         """When the last host byte written so far will have landed."""
         return self.host_line.free_at_s
+
+    # --- a run of status frames, computed ahead (clock=virtual) --------------------------------
+
+    def status_run(self, clock_s: float, end_s: float | None, min_step_s: float, max_frames: int,
+                   clock_start_s: float, time_scale: float) -> list[tuple[float, int, float, float, float]]:
+        """The timing of up to ``max_frames`` successive virtual-time steps, computed without
+        changing anything: [(clock time, status kind, its due time, wire free, model time)],
+        for as long as a step is a quiet one — the line back to the host clear, no status fault,
+        no executor event and no landing due, exactly one whole status frame arriving in the
+        step — and ends by ``end_s``.  ``status_frame`` builds a step's frame (the executor's
+        state cannot change in a quiet stretch); ``commit_status_run`` makes the first n steps so.
+
+        A step is ``protocol_sim.Serial.step_virtual``'s: the clock (``clock_s``; model time =
+        (clock − ``clock_start_s``) × ``time_scale``) moves to when the next status frame has
+        reached the host (``next_output_time``), at least ``min_step_s`` on, and the model
+        advances there (``_run_until``: the frame is built at its due time and sent).  The same
+        arithmetic, operation by operation, so the same frames at the same times to the last
+        bit; only the per-step machinery (candidate lists, the wire's runs, the lock, a burst
+        decoded apart) is gone.  The caller stops reading at a frame that is news to it: the
+        timing past it is cheap arithmetic thrown away, and no frame is built that is not read."""
+        run: list[tuple[float, int, float, float, float]] = []
+        arm_line = self.arm_line
+        if arm_line._runs or self.faults.active:
+            return run
+        landings, executor, schedule = self._landings, self.executor, self.schedule
+        quiet_until_s = executor.next_event_s()
+        if landings and (quiet_until_s is None or landings[0][0] < quiet_until_s):
+            quiet_until_s = landings[0][0]
+        first_s, period_s, rotation, count = schedule.first_s, schedule.period_s, schedule.rotation, schedule.count
+        byte_s, free_s, model_s = arm_line.byte_s, arm_line.free_at_s, self.now_s
+        burst_s, executor_s, kinds = STATUS_SIZE * byte_s, executor.now_s, len(rotation)
+        while len(run) < max_frames:
+            status_s = first_s + count * period_s  # StatusSchedule.next_s
+            output_s = max(status_s, free_s) + burst_s  # next_output_time (nothing in flight)
+            step_to = clock_s + max(max(0.0, (output_s - (clock_s - clock_start_s) * time_scale) / time_scale), min_step_s)
+            if end_s is not None and end_s < step_to:
+                break
+            limit_s = max((step_to - clock_start_s) * time_scale, model_s)  # _run_until's limit
+            due_by_s = limit_s + TIME_EPSILON_S
+            if (quiet_until_s is not None and quiet_until_s <= due_by_s) or status_s > due_by_s \
+                    or first_s + (count + 1) * period_s <= due_by_s:
+                break  # an event in this step, or not exactly one status frame: the full loop
+            next_executor_s = max(executor_s, limit_s)  # Executor.run_until: no event to run
+            next_model_s = max(limit_s, next_executor_s)
+            start_s = max(status_s, free_s)  # Wire.send
+            if (next_model_s - start_s + TIME_EPSILON_S) / byte_s < STATUS_SIZE:
+                break  # not all of it arrived (Wire.take: its floor below STATUS_SIZE, i.e. this)
+            free_s = start_s + STATUS_SIZE * byte_s  # (every status frame is STATUS_SIZE bytes)
+            executor_s, model_s, clock_s = next_executor_s, next_model_s, step_to
+            run.append((step_to, rotation[count % kinds], status_s, free_s, model_s))
+            count += 1
+        return run
+
+    def status_frame(self, kind: int, at_s: float) -> bytes:
+        """The status frame of ``kind`` built at ``at_s`` (a step of a ``status_run``)."""
+        return self._status.encode(kind, self.executor, at_s)
+
+    def commit_status_run(self, run: list[tuple[float, int, float, float, float]], frames: int) -> None:
+        """Make the first ``frames`` steps of ``run`` (``status_run``, nothing changed since) so:
+        their status frames built, sent and read, the model at the last one's time."""
+        if frames <= 0:
+            return
+        free_s, model_s = run[frames - 1][3:]
+        self.schedule.count += frames
+        self.status_frames_built += frames
+        self.arm_line.free_at_s = free_s
+        self.arm_line.bytes_sent += STATUS_SIZE * frames
+        executor = self.executor
+        executor.now_s = max(executor.now_s, model_s)
+        self.now_s = model_s
 
     # --- the event loop ------------------------------------------------------------------------
 

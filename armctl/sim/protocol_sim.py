@@ -324,6 +324,32 @@ class Serial(SerialBase):
                 del received[:size]
         return data
 
+    def virtual_status_run(self, end_s: float | None, min_step_s: float, max_frames: int) -> list:
+        """``clock=virtual`` only: the timing of up to ``max_frames`` calls of ``step_virtual``
+        that would each read one whole status frame and nothing else happens, computed ahead and
+        changing nothing (``SimulatedArm.status_run``: [(clock time, kind, due time, …)]; empty
+        when the next step is not such a quiet one).  The caller reads them in order — the
+        clock at each one's time, its frame from ``status_frame`` — and then commits those it
+        read (``commit_status_run``) before anything else touches the port."""
+        arm = self._check_open()
+        if self._received:
+            return []
+        with arm.lock:
+            return self.model.status_run(self.virtual_clock.now_s, end_s, min_step_s, max_frames,
+                                         arm.clock_start_s, arm.time_scale)
+
+    def status_frame(self, kind: int, at_s: float) -> bytes:
+        """The status frame of one step of a ``virtual_status_run``."""
+        return self.model.status_frame(kind, at_s)
+
+    def commit_status_run(self, run: list, frames: int) -> None:
+        """The first ``frames`` of ``run`` were read: the model and the clock move to the last one."""
+        if frames <= 0:
+            return
+        with self._check_open().lock:
+            self.model.commit_status_run(run, frames)
+            self.virtual_clock.advance_to(run[frames - 1][0])
+
     def cancel_read(self) -> None:
         self._wake.set()
 

@@ -33,6 +33,11 @@ class RealtimeArm:
         self._start_wall_s = clock() - model.now_s / self.time_scale
         self.lock = threading.RLock()
 
+    @property
+    def clock_start_s(self) -> float:
+        """The clock's reading at model time 0 (model time = (clock − this) × ``time_scale``)."""
+        return self._start_wall_s
+
     def model_now_s(self) -> float:
         return (self._clock() - self._start_wall_s) * self.time_scale
 

@@ -14,6 +14,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
+from ..kinematics import Unreachable
 from ..protocol import (
     DEG_SCALE,
     MM_SCALE,
@@ -126,6 +127,10 @@ class StatusEncoder:
         self._built: dict[int, tuple] = {}  # kind → (the value, its bytes) for the seldom-changing kinds
 
     def encode(self, kind: int, executor, at_s: float) -> bytes:
+        if kind in _POSE_KINDS:
+            on_path = executor.cartesian_at(at_s)
+            if on_path is not None:  # a line or an arc between its ends: the values, no pose objects
+                return self._on_path(kind, executor, *on_path)
         if kind == 0:
             pose = executor.pose_at(at_s)
             c, po = pose.cartesian, pose.origin_mm
@@ -159,6 +164,30 @@ class StatusEncoder:
         key = value.hex() if type(value) is float else value
         return self._reuse(kind, key, lambda _key: build_status(kind, _ProgramValue(value)).encode())
 
+    def _on_path(self, kind: int, executor, cartesian, end) -> bytes:
+        """``encode`` of a pose kind from the values of the pose ``Segment.sample`` would build
+        (worktable ``cartesian``; its origin, PWM and IK hint are the segment ``end``'s): the
+        same sums as ``ArmPose.robot_cartesian`` and the same IK call and fallbacks as
+        ``ArmPose.joints``, so the same floats."""
+        if kind == 4:
+            pwm_us = int(round(max(-32768, min(_WORD_MAX, end.pwm_us[0]))))
+            return self._reuse(4, (executor.paused, pwm_us), lambda key: PauseStatus(
+                PAUSED_STATE_BYTE if key[0] else 0, key[1]).encode())
+        x, y, z, b0, b1, w = cartesian
+        po = end.origin_mm
+        x, y, z = x + po[0], y + po[1], z + po[2]  # robot_cartesian's sums
+        if kind == 0:
+            if not executor.reports_robot_xyz:
+                ox, oy, oz = executor.origin_mm
+                x, y, z = x - ox, y - oy, z - oz
+            return self._words(0, (x, y, z))
+        joints = _joints_of((x, y, z, b0, b1, w), end.kinematics, end.ik_hint)
+        if kind == 1:
+            return self._words(1, joints[0:3])
+        if kind == 2:
+            return self._words(2, joints[3:6])
+        return self._words(5, joints[3:5])
+
     def _words(self, kind: int, values) -> bytes:
         codec, scale = self._structs[kind]
         limit = _WORD_MAX / scale  # _clamp's limit, then _raw_word's float × scale, rounded
@@ -172,6 +201,21 @@ class StatusEncoder:
         data = build(key)
         self._built[kind] = (key, data)
         return data
+
+
+# The kinds that sample the arm's pose: position, joints, wrist, PWM.
+_POSE_KINDS = frozenset((0, 1, 2, 4, 5))
+
+
+def _joints_of(robot, kinematics, hint) -> tuple[float, ...]:
+    """``ArmPose.joints`` of a Cartesian pose at ``robot`` (robot frame) with IK ``hint``."""
+    try:
+        return kinematics.inverse(robot, hint)
+    except Unreachable:
+        try:
+            return kinematics.inverse(robot, hint, respect_limits=False)
+        except Unreachable:
+            return hint
 
 
 class _ProgramValue:
