@@ -13,8 +13,9 @@ code line whose words may be ``#<name>``, ``[expression]`` or a signed one, and 
 value`` — by recursive descent over one tokenizer regex, and builds Lark's node exactly, word
 columns and expression columns included (Lark costs ~250 µs a line, this ~20).  In front of
 it, the commonest of those — words whose value is a literal, a ``#<name>`` or ``[a op b]`` of
-two such operands — are read a word at a time with one match each (``_simple_line``, ~8 µs a
-line), anything else falls through to the general reader.  The same rules hold: anything else (keywords, blocks, deep nesting, every syntax error) returns
+two such operands — are read a word at a time with one match each (``_simple_line``: ~7 µs a
+line of benchmarks/cli_speed.py's expression script, the general reader ~13); anything else
+falls through to the general reader.  The same rules hold: anything else (keywords, blocks, deep nesting, every syntax error) returns
 ``None`` and goes to Lark, and the differential test holds it to Lark too.
 
 Anything else — keywords, blocks, odd characters, and every line with a syntax error —
@@ -102,7 +103,7 @@ def parse_fast(text: str) -> Node | None:
 # after the last word the end pattern does not match, and goes to the general reader below,
 # which handles it or declines.  (One pattern for the whole line, word slots nested as in
 # _CODE_LINE, matched no faster and took 8 ms to compile at start-up.)  Issue 13: this is
-# about three times as fast as the general reader on these lines.
+# about 1.8 times as fast as the general reader on these lines.
 _PARAMETER = r"#<[A-Za-z_][A-Za-z0-9_]*+>"
 _UNSIGNED = r"(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)"
 # an operand: a number with at most one minus written against it (folded into the number, at
