@@ -13,9 +13,11 @@ code line whose words may be ``#<name>``, ``[expression]`` or a signed one, and 
 value`` — by recursive descent over one tokenizer regex, and builds Lark's node exactly, word
 columns and expression columns included (Lark costs ~250 µs a line, this ~20).  In front of
 it, the commonest of those — words whose value is a literal, a ``#<name>`` or ``[a op b]`` of
-two such operands — are read a word at a time with one match each (``_simple_line``: ~7 µs a
-line of benchmarks/cli_speed.py's expression script, the general reader ~13); anything else
-falls through to the general reader.  The same rules hold: anything else (keywords, blocks, deep nesting, every syntax error) returns
+two such operands — are read a word at a time with one match each (``_simple_line``: ~5 µs a
+line of benchmarks/cli_speed.py's expression script, the general reader ~13, measured one
+after the other); anything else falls through to the general reader.  The nodes of its
+expression words are kept by (text, column) and shared by the lines that repeat them (nodes
+are immutable; at most MAX_WORD_VALUES): fewer objects built is ~0.15 s of a 50k-line compile.  The same rules hold: anything else (keywords, blocks, deep nesting, every syntax error) returns
 ``None`` and goes to Lark, and the differential test holds it to Lark too.
 
 Anything else — keywords, blocks, odd characters, and every line with a syntax error —
@@ -123,6 +125,13 @@ _SIMPLE_ASSIGNMENT = re.compile(
 )
 
 
+# The nodes of expression words already read, by (text, column): a script repeats the same
+# words line after line (``G1 X[#<x> + 0.5] Y#<y>`` after each step's assignments), and a node
+# is immutable, so one serves every line that writes it there.  At most MAX_WORD_VALUES.
+MAX_WORD_VALUES = 4096
+_WORD_VALUES: dict = {}
+
+
 def _simple_value(groups: tuple, span, at: int):
     """The node of a matched _SIMPLE_VALUE whose groups start at ``groups[at]`` (group ``at + 1``
     of the match whose ``span`` method is given), with the columns Lark gives."""
@@ -156,8 +165,17 @@ def _simple_line(text: str):
         while (match := word_match(text, position)) is not None:
             groups = match.groups()
             number = groups[1]
-            words.append((LETTERS[groups[0]], float(number) if number is not None else _simple_value(groups, match.span, 2)))
             position = match.end()
+            if number is not None:
+                value = float(number)
+            else:  # a node is fixed by its text and where it starts (the letter's end)
+                key = (groups[2] or groups[3], match.end(1))
+                value = _WORD_VALUES.get(key)
+                if value is None:
+                    if len(_WORD_VALUES) >= MAX_WORD_VALUES:
+                        _WORD_VALUES.clear()
+                    value = _WORD_VALUES[key] = _simple_value(groups, match.span, 2)
+            words.append((LETTERS[groups[0]], value))
             spans.append((match.start(1) + 1, position + 1))
         if _SIMPLE_END.match(text, position) is None:
             return None
