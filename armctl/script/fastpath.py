@@ -193,7 +193,9 @@ def _simple_line(text: str):
 # --- expression lines: the general reader ------------------------------------------------------
 
 # The line's head: an optional line number, then a G/M code or the #<name> of an assignment.
-_HEAD = re.compile(rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+(?:([GgMm][0-9]++)|(#<[A-Za-z_][A-Za-z0-9_]*+>))")
+# (The general reader's two patterns are compiled on first use, through re's cache: most
+# scripts never need them, and compiling them cost every start-up 0.6 ms.)
+_HEAD = rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+(?:([GgMm][0-9]++)|(#<[A-Za-z_][A-Za-z0-9_]*+>))"
 # The tokens after it, as grammars/armctl.lark spells its terminals, each after what Lark
 # ignores (spaces, ( … ) and ; comments); what a token is follows from its first character,
 # so these context-free tokens are the ones Lark's contextual lexer finds wherever the parser
@@ -202,7 +204,7 @@ _HEAD = re.compile(rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+(?:([GgMm][0-9]++)|(#<[A-Za-
 # No token starts with a letter, nor two tokens with one character, so the order of the
 # alternatives changes no match: the tokens are tried first, commonest first (issue 13: this
 # pattern is most of the expression fast path's time).
-_TOKENS = re.compile(
+_TOKENS = (
     r"([ \t]*+)(?:(#<[A-Za-z_][A-Za-z0-9_]*+>|[-+*/\[\]=]|[0-9]++\.?+[0-9]*+|\.[0-9]++|\([^)\n]*+\)|;[^\n]*+|\Z)"
     rf"|({_LETTER})(?:({_NUMBER})|(?=[+-]?[#\[]))|(.))"
 )
@@ -222,7 +224,7 @@ def _tokens(text: str, position: int) -> list:
     position += 1  # columns are 1-based, like Lark's
     # the groups are alternatives: one of letter, token and other is set, or none (the end);
     # the commonest (token) is tested first
-    for spaces, token, letter, number, other in _TOKENS.findall(text, position - 1):
+    for spaces, token, letter, number, other in re.compile(_TOKENS).findall(text, position - 1):
         if spaces:
             position += len(spaces)
         if token:
@@ -334,7 +336,7 @@ def parse_expression_line(text: str) -> Node | None:
     node = _simple_line(text)
     if node is not None:
         return node
-    head = _HEAD.match(text)
+    head = re.match(_HEAD, text)
     if head is None:
         return None
     try:
