@@ -11,7 +11,7 @@ compiler re-parses a line with Lark whenever it has something to report.
 A second, slower fast path (``parse_expression_line``) reads the next commonest shapes — a
 code line whose words may be ``#<name>``, ``[expression]`` or a signed one, and ``#<name> =
 value`` — by recursive descent over one tokenizer regex, and builds Lark's node exactly, word
-columns and expression columns included (Lark costs ~250 µs a line, this ~20).  In front of
+columns and expression columns included (Lark costs ~100 µs a line of the benchmark script here, this ~13).  In front of
 it, the commonest of those — words whose value is a literal, a ``#<name>`` or ``[a op b]`` of
 two such operands — are read a word at a time with one match each (``_simple_line``: ~5 µs a
 line of benchmarks/cli_speed.py's expression script, the general reader ~13, measured one
