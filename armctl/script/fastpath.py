@@ -11,14 +11,16 @@ compiler re-parses a line with Lark whenever it has something to report.
 A second, slower fast path (``parse_expression_line``) reads the next commonest shapes — a
 code line whose words may be ``#<name>``, ``[expression]`` or a signed one, and ``#<name> =
 value`` — by recursive descent over one tokenizer regex, and builds Lark's node exactly, word
-columns and expression columns included (Lark costs ~100 µs a line of the benchmark script here, this ~13).  In front of
-it, the commonest of those — words whose value is a literal, a ``#<name>`` or ``[a op b]`` of
-two such operands — are read a word at a time with one match each (``_simple_line``: ~5 µs a
-line of benchmarks/cli_speed.py's expression script, the general reader ~13, measured one
-after the other); anything else falls through to the general reader.  The nodes of its
-expression words are kept by (text, column) and shared by the lines that repeat them (nodes
-are immutable; at most MAX_WORD_VALUES): fewer objects built is ~0.15 s of a 50k-line compile.  The same rules hold: anything else (keywords, blocks, deep nesting, every syntax error) returns
-``None`` and goes to Lark, and the differential test holds it to Lark too.
+columns and expression columns included (Lark costs ~100 µs a line of the benchmark script
+here, this ~13). In front of it, the commonest of those — words whose value is a literal, a
+``#<name>`` or ``[a op b]`` of two such operands — are read a word at a time with one match
+each (``_simple_line``: ~5 µs a line of benchmarks/cli_speed.py's expression script, the
+general reader ~13, measured one after the other); anything else falls through to the general
+reader. The nodes of its expression words are kept by (text, column) and shared by the lines
+that repeat them (nodes are immutable; at most MAX_WORD_VALUES): fewer objects built is ~0.15
+s of a 50k-line compile. The same rules hold: anything else (keywords, blocks, deep nesting,
+every syntax error) returns ``None`` and goes to Lark, and the differential test holds it to
+Lark too.
 
 Anything else — keywords, blocks, odd characters, and every line with a syntax error —
 returns ``None`` and goes to Lark.  So neither fast path ever rejects a line, and a
