@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from armctl.errors import FieldError
 from armctl.script import InitialState, compile_lines
-from armctl.script.fastpath import parse_expression_line, parse_fast
+from armctl.script.fastpath import _simple_line, parse_expression_line, parse_fast
 from armctl.script.grammar import parse_line
 from armctl.script.modal import POISONED, ModalState
 from armctl.script.nodes import EMPTY
@@ -227,3 +227,82 @@ def test_expression_fast_path_reads_the_common_shapes():
         assert parse_expression_line(line) is not None, line
     for line in ("RESET", "O<r> repeat [2]", "#<a> = 1 + 2", "G1 X[1", "G1 X[" + "1+" * 120 + "1]"):
         assert parse_expression_line(line) is None, line
+
+
+# --- the common expression shapes (fastpath._simple_line), read a word at a time ---------------
+
+SIMPLE_SPACES = ["", "", " ", "  ", "\t"]
+SIMPLE_ATOMS = ["#<a>", "#<X_1>", "5.", "0", "12.5", ".5", "-3", "-.5", "-0"]
+
+
+@st.composite
+def simple_lines(draw, bad: bool):
+    """Lines of the shapes _simple_line reads (literal, #<name> or [atom op atom] words, and
+    ``#<name> = value``), and with ``bad`` near misses: a sign or comment where it declines,
+    a second operator, a broken token, something left at the end."""
+    def pick(good, wrong):
+        return st.one_of(st.sampled_from(good), st.sampled_from(good), st.sampled_from(wrong)) if bad else \
+            st.sampled_from(good)
+
+    space = pick(SIMPLE_SPACES, ["(c)", " ; c", "é", "\x00"])
+    # legal operands the reader leaves to the general one (other signs, nesting) drawn as often
+    # as its own, so that a reader taking one of them wrongly is caught
+    declined = ["--1", "+1", "+.5", "- 1", "-#<a>", "+#<a>", "[1]", "[#<a> + 1]"]
+    atom = st.one_of(st.sampled_from(SIMPLE_ATOMS), st.sampled_from(declined if bad else SIMPLE_ATOMS),
+                     pick(SIMPLE_ATOMS, ["#<1a>", "1.2.3", "1e5", "", "-", "1 2"]))
+    operator = pick(list("+-*/"), ["", "++", "+ 1 +", "=", "%"])
+
+    def value():
+        kind = draw(st.integers(0, 2))
+        if kind == 0:
+            return draw(pick(["#<a>", "#<B>", "#<_c9>"], ["-#<a>", "+#<a>", "#<a", "[#<a>]"]))
+        if kind == 1:
+            return draw(st.from_regex(r"\A-?([0-9]{1,4}(\.[0-9]{0,3})?|\.[0-9]{1,3})\Z"))
+        return ("[" + draw(space) + draw(atom) + draw(space) + draw(operator) + draw(space) + draw(atom)
+                + draw(space) + draw(pick(["]"], ["", "]]", ")"])))
+
+    head = draw(pick(["G1", "g1", "G01", "M3", "N5 G1", "n5G1", " G1", "G1 (c)", "#<a>", "#<A_1>", "N2 #<b>",
+                      "\t#<x>"], ["(c) G1", "G", "#<a", "RESET", "#<a> =", "O<r> repeat"]))
+    parts = [head]
+    if head.lstrip().startswith(("#", "N2 #")):
+        parts += [draw(pick(SIMPLE_SPACES + [" (c) "], [";"])), draw(pick(["="], ["", "=="])), draw(space), value()]
+    else:
+        for _ in range(draw(st.integers(0, 7))):
+            parts.append(draw(pick(["", " ", "  ", " (c) ", "\t"], ["(", ")"])))
+            letter = draw(pick(list("XYZABCSFxK") + ["J1=", "j6=", "J2"], ["J7=", "JX", "1", "#"]))
+            parts.append(letter + (draw(st.from_regex(r"\A[+-]?([0-9]{1,4}(\.[0-9]{0,3})?|\.[0-9]{1,3})\Z"))
+                                   if draw(st.integers(0, 3)) == 0 else value()))
+    parts.append(draw(pick(["", " ; end", " (tail)", "(a)(b) ;c", "  "], [" ]", "[", " X", " (", "=1"])))
+    return "".join(parts)
+
+
+@settings(max_examples=300, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.one_of(simple_lines(bad=False), simple_lines(bad=True)))
+@example("G1 X[#<x> + 0.5] Y#<y> Z[#<z> - 0.5] (step 6)")
+@example("#<y> = [#<y> + -14.63]")
+@example("#<a> = -0 ; c")
+@example("N5 G1 J1=[-1*#<a>]X1 j6=#<B>")
+@example("G1 X[5 -- 3]")
+@example("G1 X[#<a> -5]")
+@example("G1 X[+1 * 2] Y[#<a> - +.5]")
+@example("G1" + " X[#<a> + 1]" * 20)
+def test_common_shape_reader_answers_only_what_lark_answers_the_same_way(line):
+    """The word-at-a-time reader in front of the general one: whenever it answers, the node is
+    Lark's, every column included; whatever it declines, the general reader still may read."""
+    fast = _simple_line(line)
+    if fast is not None:
+        slow = lark(line)
+        assert slow == fast
+        assert repr(slow) == repr(fast)
+        assert slow.spans == fast.spans if hasattr(slow, "spans") else slow.value_span == fast.value_span
+
+
+def test_common_shape_reader_reads_the_benchmark_shapes():
+    """It answers for the lines it exists for (benchmarks/cli_speed.py's), and declines the
+    shapes it leaves to the general reader."""
+    for line in ("#<x> = 220", "#<y> = [#<y> + -14.63]", "G1 X#<x> Y#<y> Z#<z> A180 B0 C0 F6000 S1000",
+                 "G1 X[#<x> + 0.5] Y#<y> Z[#<z> - 0.5] (step 6)", "G1 X[200 + 20] Y0 Z#<z> A180 B0 C0 F3000 S1000"):
+        assert _simple_line(line) is not None, line
+    for line in ("G1 X[1 + 2 + 3]", "G1 X-#<a>", "G1 X[(c)1 + 2]", "#<a> = +1", "G1 X[[1] + 2]", "G1 X[#<a>]"):
+        assert _simple_line(line) is None, line
+        assert parse_expression_line(line) == lark(line), line  # the general reader still answers

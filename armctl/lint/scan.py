@@ -30,7 +30,9 @@ _PARAMETER = re.compile(r"#<([A-Za-z_][A-Za-z0-9_]*)>")
 # up to the first ")", or the rest of the line from a ";" (group 1 empty for those)
 _PARAMETER_OR_COMMENT = re.compile(r"\([^)]*\)|;.*|#<([a-z_][a-z0-9_]*)>", re.S)
 _ASSIGNMENT = re.compile(r"\s*(?:[Nn][0-9]+\s*)?#<([A-Za-z_][A-Za-z0-9_]*)>\s*=")
-_BLOCK = re.compile(r"\s*(?:[Nn][0-9]+\s*)?[Oo](?:<[A-Za-z0-9_]+>|[0-9]+)\s*(repeat|endrepeat)\b\s*(.*?)\s*$", re.I)
+# compiled on first use (re's cache): only a line with an O needs it, and compiling it cost
+# every start-up 0.5 ms
+_BLOCK = r"\s*(?:[Nn][0-9]+\s*)?[Oo](?:<[A-Za-z0-9_]+>|[0-9]+)\s*(repeat|endrepeat)\b\s*(.*?)\s*$"
 # Searched from just after the line's first ";" only: every later ";" finds the same first match,
 # and trying the pattern at each of them (``;.*?armctl…``) was quadratic in the number of ";".
 _IGNORE = re.compile(r"\barmctl:\s*ignore\b(?:\[([^\]]*)\])?", re.I)
@@ -147,7 +149,7 @@ class LineScanner:
     def _look(self, number: int, text: str) -> None:
         code = code_text(text)
         if "o" in code or "O" in code:
-            block = _BLOCK.match(code)
+            block = re.match(_BLOCK, code, re.I)
             if block is not None:
                 self._block(number, text, block)
 

@@ -7,8 +7,9 @@ diagnostics.  Moves take one of three paths, each starting from the same untouch
   1. ``_plain_move`` — the hot path: a line the regex fast path scanned, in absolute mode,
      with every value known (``resolve_planned``: one plan per line shape, compiled once); no node is built.
   2. ``_move`` — any other node (a fast-path line in a repeat body, or G91; a line with
-     expression words): the general ``resolve``; at the first sign of trouble the line takes
-     path 3 (re-parsed with Lark if it has no word columns).
+     expression words): in absolute mode a line with expression words evaluates them and
+     runs its shape's plan as path 1 does; else the general ``resolve``; at the first sign of
+     trouble the line takes path 3 (re-parsed with Lark if it has no word columns).
   3. ``_move_with_diagnostics`` — a Lark node with columns: report everything wrong with the
      line, commit what it did set, poison what it failed to set.
 
@@ -58,6 +59,8 @@ _KEYWORDS = {  # names → (command, what the number is or None, families it lea
 # MAX_PLANS shapes are kept, so memory stays flat whatever a script writes.
 MAX_PLANS = 4096
 _PLANS: dict = {}
+# Plans for moves with expression words, by (G number, canonical letters): see ``_move``.
+_EXPRESSION_PLANS: dict = {}
 
 
 def _plan(shape: tuple) -> Optional[PlainPlan]:
@@ -147,11 +150,35 @@ class StatementExecution:
     def _move(self, number: int, text: str, node: CodeLine, spec: MoveSpec, loop: tuple) -> Optional[Statement]:
         """Execute a move (or G4/G54); return its statement if it is to be yielded alone.
 
-        The first half is the hot path: a fast-path line whose words all belong to the
-        statement and whose command builds.  Anything else takes ``_move_with_diagnostics``,
+        The first half is the hot path: in absolute mode, a line with expression words whose
+        values evaluate runs its shape's plan (as ``_plain_move``); else a line whose words all
+        belong to the statement and whose command builds.  Anything else takes ``_move_with_diagnostics``,
         which starts again from the same, untouched state.  Arcs and failures return None
         (a completed arc pair goes to ``self._out``)."""
         words = node.words
+        state = self.state
+        if node.spans is not None and not state.relative:
+            # expression words in absolute mode (issue 13): their values now, then the line
+            # shape's plan as _plain_move runs it (resolve() and the constructor as straight-line
+            # code); any doubt takes the path below.  tests/test_script_expression_moves.py holds
+            # this to the reporting path, tests/test_script_fastpath.py the plans to resolve()
+            shape = (node.number, tuple([letter for letter, _ in words]))
+            plan = _EXPRESSION_PLANS.get(shape, NOT_PLAIN)
+            if plan is NOT_PLAIN:
+                plan = plain_plan(spec, shape[1])
+                if len(_EXPRESSION_PLANS) < MAX_PLANS:
+                    _EXPRESSION_PLANS[shape] = plan
+            if plan is not None:
+                parameters, flat = state.parameters, []
+                try:
+                    for letter, value in words:
+                        flat += (letter, value if value.__class__ is float else value.evaluate(parameters))
+                    plain = plan.run(flat, state.values)
+                except (ExpressionError, Unavailable, FieldError):
+                    plain = None
+                if plain is not None:
+                    return self._moved(spec, plain[0], plain[1], number, text, node.column, node.end_column, plain[2],
+                                       loop)
         written = dict(words)
         if len(written) == len(words) and written.keys() <= spec.letter_set:
             if node.spans is not None:  # expression words: their values now, or the path that reports why not

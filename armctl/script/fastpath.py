@@ -11,9 +11,16 @@ compiler re-parses a line with Lark whenever it has something to report.
 A second, slower fast path (``parse_expression_line``) reads the next commonest shapes — a
 code line whose words may be ``#<name>``, ``[expression]`` or a signed one, and ``#<name> =
 value`` — by recursive descent over one tokenizer regex, and builds Lark's node exactly, word
-columns and expression columns included (Lark costs ~250 µs a line, this ~20).  The same
-rules hold: anything else (keywords, blocks, deep nesting, every syntax error) returns
-``None`` and goes to Lark, and the differential test holds it to Lark too.
+columns and expression columns included (Lark costs ~100 µs a line of the benchmark script
+here, this ~13). In front of it, the commonest of those — words whose value is a literal, a
+``#<name>`` or ``[a op b]`` of two such operands — are read a word at a time with one match
+each (``_simple_line``: ~5 µs a line of benchmarks/cli_speed.py's expression script, the
+general reader ~13, measured one after the other); anything else falls through to the general
+reader. The nodes of its expression words are kept by (text, column) and shared by the lines
+that repeat them (nodes are immutable; at most MAX_WORD_VALUES): fewer objects built is ~0.15
+s of a 50k-line compile. The same rules hold: anything else (keywords, blocks, deep nesting,
+every syntax error) returns ``None`` and goes to Lark, and the differential test holds it to
+Lark too.
 
 Anything else — keywords, blocks, odd characters, and every line with a syntax error —
 returns ``None`` and goes to Lark.  So neither fast path ever rejects a line, and a
@@ -90,10 +97,107 @@ def parse_fast(text: str) -> Node | None:
     return node_from_scan(scanned)
 
 
-# --- expression lines ----------------------------------------------------------------------------
+# --- expression lines: the common shapes, one match a line --------------------------------------
+
+# Most expression lines are made of words whose value is a literal, a #<name>, or one operation
+# on two of those in brackets (``X[#<x> + 0.5]``, ``#<x> = [#<x> + -1.5]``).  Those lines are
+# read a word at a time, one match a word (spaces only inside the brackets), and every column
+# comes from the match's group positions: no token list, no recursive descent.  Any other line
+# — a comment or a sign inside brackets, nesting, two operators, ``X-#<a>`` — leaves something
+# after the last word the end pattern does not match, and goes to the general reader below,
+# which handles it or declines.  (One pattern for the whole line, word slots nested as in
+# _CODE_LINE, matched no faster and took 8 ms to compile at start-up.)  Issue 13: this is
+# about 1.8 times as fast as the general reader on these lines.
+_PARAMETER = r"#<[A-Za-z_][A-Za-z0-9_]*+>"
+_UNSIGNED = r"(?:[0-9]++(?:\.[0-9]*+)?+|\.[0-9]++)"
+# an operand: a number with at most one minus written against it (folded into the number, at
+# the minus's column, as the grammar's negate of a number is), or a parameter
+_ATOM = rf"(?:(-?+{_UNSIGNED})|({_PARAMETER}))"
+_SPACES = r"[ \t]*+"
+# a value, 7 groups: a parameter, or [atom op atom] (the whole bracket, then each part)
+_SIMPLE_VALUE = rf"(?:({_PARAMETER})|(\[{_SPACES}{_ATOM}{_SPACES}([-+*/]){_SPACES}{_ATOM}{_SPACES}\]))"
+_SIMPLE_CODE = re.compile(rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+([GgMm][0-9]++)")
+# a word, 9 groups: the letter, a literal number, then _SIMPLE_VALUE's 7
+_SIMPLE_WORD = re.compile(rf"{_GAP}({_LETTER})(?:({_NUMBER})|{_SIMPLE_VALUE})")
+_SIMPLE_END = re.compile(rf"{_GAP}{_COMMENT}\Z")
+# #<name> = value (group 2, its columns): a signed literal (the minus folded in, as above), or
+# a _SIMPLE_VALUE
+_SIMPLE_ASSIGNMENT = re.compile(
+    rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+({_PARAMETER}){_GAP}={_GAP}((-?+{_UNSIGNED})|{_SIMPLE_VALUE}){_GAP}{_COMMENT}\Z"
+)
+
+
+# The nodes of expression words already read, by (text, column): a script repeats the same
+# words line after line (``G1 X[#<x> + 0.5] Y#<y>`` after each step's assignments), and a node
+# is immutable, so one serves every line that writes it there.  At most MAX_WORD_VALUES.
+MAX_WORD_VALUES = 4096
+_WORD_VALUES: dict = {}
+
+
+def _simple_value(groups: tuple, span, at: int):
+    """The node of a matched _SIMPLE_VALUE whose groups start at ``groups[at]`` (group ``at + 1``
+    of the match whose ``span`` method is given), with the columns Lark gives."""
+    name = groups[at]
+    if name is not None:
+        start, end = span(at + 1)
+        return Parameter(name[2:-1].lower(), start + 1, end + 1)
+    number = groups[at + 2]
+    if number is not None:
+        left, column = float(number), span(at + 3)[0] + 1
+    else:
+        start, end = span(at + 4)
+        column = start + 1
+        left = Parameter(groups[at + 3][2:-1].lower(), column, end + 1)
+    number = groups[at + 5]
+    if number is not None:
+        right, end = float(number), span(at + 6)[1]
+    else:
+        start, end = span(at + 7)
+        right = Parameter(groups[at + 6][2:-1].lower(), start + 1, end + 1)
+    return Binary(groups[at + 4], left, right, column, end + 1)
+
+
+def _simple_line(text: str):
+    """The node for a line of the common expression shapes (see above), else None."""
+    match = _SIMPLE_CODE.match(text)
+    if match is not None:
+        code, column, end_column = match.group(1), match.start(1) + 1, match.end(1) + 1
+        words, spans = [], []
+        word_match, position = _SIMPLE_WORD.match, match.end()
+        while (match := word_match(text, position)) is not None:
+            groups = match.groups()
+            number = groups[1]
+            position = match.end()
+            if number is not None:
+                value = float(number)
+            else:  # a node is fixed by its text and where it starts (the letter's end)
+                key = (groups[2] or groups[3], match.end(1))
+                value = _WORD_VALUES.get(key)
+                if value is None:
+                    if len(_WORD_VALUES) >= MAX_WORD_VALUES:
+                        _WORD_VALUES.clear()
+                    value = _WORD_VALUES[key] = _simple_value(groups, match.span, 2)
+            words.append((LETTERS[groups[0]], value))
+            spans.append((match.start(1) + 1, position + 1))
+        if _SIMPLE_END.match(text, position) is None:
+            return None
+        return CodeLine(code[0].upper(), code_number(code[1:]), tuple(words), column, end_column, tuple(spans))
+    match = _SIMPLE_ASSIGNMENT.match(text)
+    if match is None:
+        return None
+    groups = match.groups()
+    start, end = match.span(2)
+    number = groups[2]
+    value = float(number) if number is not None else _simple_value(groups, match.span, 3)
+    return Assignment(groups[0][2:-1].lower(), value, match.start(1) + 1, end + 1, (start + 1, end + 1))
+
+
+# --- expression lines: the general reader ------------------------------------------------------
 
 # The line's head: an optional line number, then a G/M code or the #<name> of an assignment.
-_HEAD = re.compile(rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+(?:([GgMm][0-9]++)|(#<[A-Za-z_][A-Za-z0-9_]*+>))")
+# (The general reader's two patterns are compiled on first use, through re's cache: most
+# scripts never need them, and compiling them cost every start-up 0.6 ms.)
+_HEAD = rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+(?:([GgMm][0-9]++)|(#<[A-Za-z_][A-Za-z0-9_]*+>))"
 # The tokens after it, as grammars/armctl.lark spells its terminals, each after what Lark
 # ignores (spaces, ( … ) and ; comments); what a token is follows from its first character,
 # so these context-free tokens are the ones Lark's contextual lexer finds wherever the parser
@@ -102,7 +206,7 @@ _HEAD = re.compile(rf"[ \t]*+(?:[Nn][0-9]++{_GAP})?+(?:([GgMm][0-9]++)|(#<[A-Za-
 # No token starts with a letter, nor two tokens with one character, so the order of the
 # alternatives changes no match: the tokens are tried first, commonest first (issue 13: this
 # pattern is most of the expression fast path's time).
-_TOKENS = re.compile(
+_TOKENS = (
     r"([ \t]*+)(?:(#<[A-Za-z_][A-Za-z0-9_]*+>|[-+*/\[\]=]|[0-9]++\.?+[0-9]*+|\.[0-9]++|\([^)\n]*+\)|;[^\n]*+|\Z)"
     rf"|({_LETTER})(?:({_NUMBER})|(?=[+-]?[#\[]))|(.))"
 )
@@ -122,7 +226,7 @@ def _tokens(text: str, position: int) -> list:
     position += 1  # columns are 1-based, like Lark's
     # the groups are alternatives: one of letter, token and other is set, or none (the end);
     # the commonest (token) is tested first
-    for spaces, token, letter, number, other in _TOKENS.findall(text, position - 1):
+    for spaces, token, letter, number, other in re.compile(_TOKENS).findall(text, position - 1):
         if spaces:
             position += len(spaces)
         if token:
@@ -231,7 +335,10 @@ def _sum(tokens: list, at: int, nesting: int) -> tuple:
 def parse_expression_line(text: str) -> Node | None:
     """The node Lark builds for a code line with expression words or an assignment, columns
     included; None for any other line or any doubt (then ask Lark)."""
-    head = _HEAD.match(text)
+    node = _simple_line(text)
+    if node is not None:
+        return node
+    head = re.match(_HEAD, text)
     if head is None:
         return None
     try:
