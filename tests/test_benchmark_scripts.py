@@ -54,3 +54,28 @@ def test_virtual_run_baseline_replays_frames_on_the_simulator():
     spec.loader.exec_module(module)
     wall_s, cpu_s = module.baseline([(0.0, Delay(500).encode())], 1.0)
     assert wall_s > 0 and cpu_s >= 0
+
+
+def _load(script: str):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(script.removesuffix(".py"), ROOT / "benchmarks" / script)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_streamer_cost_builds_its_streamers_and_times_a_batch():
+    # benchmarks/streamer_cost.py (issue 13's flat-cost row) called a private streamer method
+    # whose signature had changed, and ended in a TypeError unnoticed: its code runs here.
+    module = _load("streamer_cost.py")
+    streamer, frames, now = module.loaded_streamer(9)
+    assert len(streamer.pending) == 9
+    assert module.batch_seconds(streamer, frames, now) > 0
+    assert len(streamer.pending) == 9  # the probe consumes nothing, as main() asserts for 185
+
+
+def test_ik_speed_workloads_run():
+    module = _load("ik_speed.py")
+    for name, work in module.workloads():
+        work()
