@@ -48,7 +48,7 @@ from __future__ import annotations
 import math
 from typing import NamedTuple, Sequence
 
-from .kinematics import CartesianPose, Kinematics, Unreachable
+from .kinematics import CartesianPose, Kinematics
 from .protocol import (
     AccelLinearMove, ArcEnd, ArcStart, Command, Delay, GoToPose, JointMove, LinearMove, SetWorktableOrigin,
     MOTION_COMMANDS,
@@ -121,14 +121,7 @@ class ArmPose:
     def joints(self) -> tuple[float, ...]:
         """J1…J6 in degrees."""
         if self._joints is None:
-            robot = self.robot_cartesian
-            try:
-                self._joints = self.kinematics.inverse(robot, self._hint)
-            except Unreachable:
-                try:
-                    self._joints = self.kinematics.inverse(robot, self._hint, respect_limits=False)
-                except Unreachable:
-                    self._joints = self._hint
+            self._joints = self.kinematics.joints_of(self.robot_cartesian, self._hint)
         return self._joints
 
     @property

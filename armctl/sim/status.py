@@ -14,7 +14,6 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
-from ..kinematics import Unreachable
 from ..protocol import (
     DEG_SCALE,
     MM_SCALE,
@@ -123,7 +122,8 @@ class StatusEncoder:
     same clamping and rounding, value by value (tests/test_sim_status_encoder.py holds them equal)."""
 
     def __init__(self) -> None:
-        self._structs = {kind: (_word_struct(cls), cls.SCALE) for kind, (cls, _) in _WORD_KINDS.items()}
+        # kind → (its Struct, its scale, _clamp's limit)
+        self._structs = {kind: (_word_struct(cls), cls.SCALE, _WORD_MAX / cls.SCALE) for kind, (cls, _) in _WORD_KINDS.items()}
         self._built: dict[int, tuple] = {}  # kind → (the value, its bytes) for the seldom-changing kinds
 
     def encode(self, kind: int, executor, at_s: float) -> bytes:
@@ -138,15 +138,18 @@ class StatusEncoder:
             if not executor.reports_robot_xyz:
                 ox, oy, oz = executor.origin_mm
                 x, y, z = x - ox, y - oy, z - oz
-            return self._words(0, (x, y, z))
+            return self._words3(0, x, y, z)
         if kind == 1:
-            return self._words(1, executor.pose_at(at_s).joints[0:3])
+            joints = executor.pose_at(at_s).joints
+            return self._words3(1, joints[0], joints[1], joints[2])
         if kind == 2:
-            return self._words(2, executor.pose_at(at_s).joints[3:6])
+            joints = executor.pose_at(at_s).joints
+            return self._words3(2, joints[3], joints[4], joints[5])
         if kind == 5:
-            return self._words(5, executor.pose_at(at_s).joints[3:5])
+            joints = executor.pose_at(at_s).joints
+            return self._words2(5, joints[3], joints[4])
         if kind == 3:
-            return self._reuse(3, executor.origin_mm, lambda origin: self._words(3, origin))
+            return self._reuse(3, executor.origin_mm, lambda origin: self._words3(3, *origin))
         if kind == 4:
             pwm_us = int(round(max(-32768, min(_WORD_MAX, executor.pose_at(at_s).pwm_us[0]))))
             return self._reuse(4, (executor.paused, pwm_us), lambda key: PauseStatus(
@@ -167,8 +170,8 @@ class StatusEncoder:
     def _on_path(self, kind: int, executor, cartesian, end) -> bytes:
         """``encode`` of a pose kind from the values of the pose ``Segment.sample`` would build
         (worktable ``cartesian``; its origin, PWM and IK hint are the segment ``end``'s): the
-        same sums as ``ArmPose.robot_cartesian`` and the same IK call and fallbacks as
-        ``ArmPose.joints``, so the same floats."""
+        same sums as ``ArmPose.robot_cartesian`` and the IK of ``ArmPose.joints``
+        (``Kinematics.joints_of``), so the same floats."""
         if kind == 4:
             pwm_us = int(round(max(-32768, min(_WORD_MAX, end.pwm_us[0]))))
             return self._reuse(4, (executor.paused, pwm_us), lambda key: PauseStatus(
@@ -180,19 +183,35 @@ class StatusEncoder:
             if not executor.reports_robot_xyz:
                 ox, oy, oz = executor.origin_mm
                 x, y, z = x - ox, y - oy, z - oz
-            return self._words(0, (x, y, z))
-        joints = _joints_of((x, y, z, b0, b1, w), end.kinematics, end.ik_hint)
+            return self._words3(0, x, y, z)
+        joints = end.kinematics.joints_of((x, y, z, b0, b1, w), end.ik_hint)
         if kind == 1:
-            return self._words(1, joints[0:3])
+            return self._words3(1, joints[0], joints[1], joints[2])
         if kind == 2:
-            return self._words(2, joints[3:6])
-        return self._words(5, joints[3:5])
+            return self._words3(2, joints[3], joints[4], joints[5])
+        return self._words2(5, joints[3], joints[4])
 
-    def _words(self, kind: int, values) -> bytes:
-        codec, scale = self._structs[kind]
-        limit = _WORD_MAX / scale  # _clamp's limit, then _raw_word's float × scale, rounded
-        raws = [round(float(max(-limit, min(limit, v))) * scale) for v in values]
-        return codec.pack(STATUS_HEAD, *raws, kind, STATUS_TAIL)
+    # A word: _clamp's ``max(-limit, min(limit, v))`` written out (``min`` keeps ``limit`` unless
+    # v < limit, NaN included; ``max`` keeps ``-limit`` unless v > -limit), then _raw_word's
+    # float × scale, rounded — the same ints without two builtin calls and a list per word.
+
+    def _words3(self, kind: int, a, b, c) -> bytes:
+        codec, scale, limit = self._structs[kind]
+        low = -limit
+        a = a if a < limit else limit
+        b = b if b < limit else limit
+        c = c if c < limit else limit
+        return codec.pack(STATUS_HEAD, round(float(a if a > low else low) * scale),
+                          round(float(b if b > low else low) * scale), round(float(c if c > low else low) * scale),
+                          kind, STATUS_TAIL)
+
+    def _words2(self, kind: int, a, b) -> bytes:
+        codec, scale, limit = self._structs[kind]
+        low = -limit
+        a = a if a < limit else limit
+        b = b if b < limit else limit
+        return codec.pack(STATUS_HEAD, round(float(a if a > low else low) * scale),
+                          round(float(b if b > low else low) * scale), kind, STATUS_TAIL)
 
     def _reuse(self, kind: int, key, build) -> bytes:
         built = self._built.get(kind)
@@ -205,17 +224,6 @@ class StatusEncoder:
 
 # The kinds that sample the arm's pose: position, joints, wrist, PWM.
 _POSE_KINDS = frozenset((0, 1, 2, 4, 5))
-
-
-def _joints_of(robot, kinematics, hint) -> tuple[float, ...]:
-    """``ArmPose.joints`` of a Cartesian pose at ``robot`` (robot frame) with IK ``hint``."""
-    try:
-        return kinematics.inverse(robot, hint)
-    except Unreachable:
-        try:
-            return kinematics.inverse(robot, hint, respect_limits=False)
-        except Unreachable:
-            return hint
 
 
 class _ProgramValue:
