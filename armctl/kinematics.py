@@ -40,7 +40,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from typing import NamedTuple, Sequence
 
 from .errors import ArmctlError
@@ -188,7 +188,7 @@ def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None 
     when the wrist centre is on the base axis, J4 when J5 = 0).  An empty list means the pose
     is out of reach.
     """
-    return _solve(pose, links, near or (0.0,) * JOINT_COUNT, _NO_LIMITS, _EVERY)[0]
+    return _solve(pose, _prepared(links, _NO_LIMITS), near or (0.0,) * JOINT_COUNT, _EVERY)[0]
 
 
 @lru_cache(maxsize=256)
@@ -282,10 +282,11 @@ def _prepared(links, limits):
     return entry
 
 
-def _solve(pose, links, near, limits, mode):
+def _solve(pose, prepared, near, mode):
     """The closed-form solutions of ``pose`` (front/back, elbow up/down, wrist flip), walked
     in ``solutions``' order and, unless ``mode`` is _EVERY, fitted joint by joint by
-    ``_fitted`` (whole turns towards ``near``, inside ``limits``: six pairs or six Nones).
+    ``_fitted`` (whole turns towards ``near``, inside the limits ``prepared`` was made for by
+    ``_prepared``: six pairs or six Nones).
 
     Returns (answer, worst, reachable): reachable says whether any arm placement exists;
     worst = (k, angle) is the first joint found outside its limits (None if none).
@@ -310,8 +311,8 @@ def _solve(pose, links, near, limits, mode):
     tests/ik_reference.py)."""
     x, y, z, b0, b1, w = pose
     f0, f1, f2, f3, f4, f5, f6, f7, f8 = _flange_of(b0, b1, w)
-    (_, _, d6, a2, reach, gamma, base_height, shoulder, a2a2, reach2, twice_a2_reach,
-     lo1, hi1, lo2, hi2, lo3, hi3, lo4, hi4, lo5, hi5, lo6, hi6) = _prepared(links, limits)
+    (_, limits, d6, a2, reach, gamma, base_height, shoulder, a2a2, reach2, twice_a2_reach,
+     lo1, hi1, lo2, hi2, lo3, hi3, lo4, hi4, lo5, hi5, lo6, hi6) = prepared
     wx, wy, wz = x - d6 * f0, y - d6 * f3, z - d6 * f6
     if math.hypot(wx, wy) < 1e-9:
         yaw = math.radians(near[0])  # on the base axis J1 is free: the hint's
@@ -319,7 +320,6 @@ def _solve(pose, links, near, limits, mode):
         yaw = math.atan2(wy, wx)
     h1, h2, h3, h4, h5, h6 = near
     l1, l2, l3, l4, l5, l6 = limits
-    near_j4 = math.radians(h4)
     every, fitting, nearest = mode is _EVERY, mode is not _EVERY, mode is _NEAREST  # _FIRST keeps no costs
     found = [] if every else None
     best, best_cost, worst, reachable = None, math.inf, None, False
@@ -393,6 +393,7 @@ def _solve(pose, links, near, limits, mode):
             m0 = r0 * f0 + r1 * f3 + r2 * f6
             j5 = math.acos(max(-1.0, min(1.0, m0)))
             if math.sin(j5) < 1e-7:  # J5 = 0 or 180: only J4 ± J6 is fixed, J4 is the hint's
+                near_j4 = math.radians(h4)
                 m4 = r3 * f1 + r4 * f4 + 0.0 * f7
                 m7 = r6 * f1 + r7 * f4 + r8 * f7
                 if m0 > 0:
@@ -466,7 +467,7 @@ def inverse(
     Unreachable naming the reason.
     """
     near = tuple(near) if near is not None else (0.0,) * JOINT_COUNT
-    best, worst, reachable = _solve(pose, links, near, _NO_LIMITS if limits is None else limits, _NEAREST)
+    best, worst, reachable = _solve(pose, _prepared(links, _NO_LIMITS if limits is None else limits), near, _NEAREST)
     if not reachable:
         raise Unreachable(f"pose X{pose[0]:.1f} Y{pose[1]:.1f} Z{pose[2]:.1f} is out of the arm's reach")
     if best is None:
@@ -486,7 +487,7 @@ def has_solution(
 
     The same solver, stopped at the first solution that fits: lint asks this of every target
     (issue 13), and only a pose that fails needs ``inverse`` again, for its message."""
-    return _solve(pose, links, near, limits, _FIRST)[0] is not None
+    return _solve(pose, _prepared(links, limits), near, _FIRST)[0] is not None
 
 
 # --- whole regions at once (lint) -------------------------------------------------------------
@@ -675,16 +676,24 @@ class Kinematics:
     def inverse(self, pose: Sequence[float], near: Sequence[float] | None = None, respect_limits: bool = True):
         return inverse(pose, self.links, self.home if near is None else near, self.limits if respect_limits else None)
 
+    @cached_property
+    def _within_limits(self):
+        """The solver's constants (``_prepared``) with the limits, kept by the object."""
+        return _prepared(self.links, _NO_LIMITS if self.limits is None else self.limits)
+
+    @cached_property
+    def _without_limits(self):
+        return _prepared(self.links, _NO_LIMITS)
+
     def joints_of(self, pose: Sequence[float], hint: tuple[float, ...]) -> tuple[float, ...]:
         """The joints a robot-frame ``pose`` is taken to have (``motion.ArmPose.joints``, and so
         every joints status frame of the simulator): ``inverse`` near ``hint`` inside the limits,
         else ignoring them, else ``hint`` itself for a pose out of reach.  The solver straight,
         without ``inverse``'s messages (nothing is raised: the simulator asks this ~13,000 times
         in a 20-minute virtual job)."""
-        links = self.links
-        best = _solve(pose, links, hint, _NO_LIMITS if self.limits is None else self.limits, _NEAREST)[0]
+        best = _solve(pose, self._within_limits, hint, _NEAREST)[0]
         if best is None:
-            best = _solve(pose, links, hint, _NO_LIMITS, _NEAREST)[0]
+            best = _solve(pose, self._without_limits, hint, _NEAREST)[0]
             if best is None:
                 return hint
         return best
