@@ -178,6 +178,9 @@ def forward(joints_deg: Sequence[float], links: Links) -> CartesianPose:
 _EVERY, _FIRST, _NEAREST = "every", "first", "nearest"  # what ``_solve`` does with each solution
 _NO_LIMITS = (None,) * JOINT_COUNT
 _RAD_TO_DEG = 180.0 / math.pi  # x * this is math.degrees(x) bit for bit (CPython's own constant)
+# the solver's functions and constants as module globals (one look-up each, not two)
+_cos, _sin, _atan2, _acos, _hypot, _radians = math.cos, math.sin, math.atan2, math.acos, math.hypot, math.radians
+_PI, _HALF_PI, _INF = math.pi, math.pi / 2, math.inf
 
 
 def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None = None) -> list[tuple[float, ...]]:
@@ -314,18 +317,18 @@ def _solve(pose, prepared, near, mode):
     (_, limits, d6, a2, reach, gamma, base_height, shoulder, a2a2, reach2, twice_a2_reach,
      lo1, hi1, lo2, hi2, lo3, hi3, lo4, hi4, lo5, hi5, lo6, hi6) = prepared
     wx, wy, wz = x - d6 * f0, y - d6 * f3, z - d6 * f6
-    if math.hypot(wx, wy) < 1e-9:
-        yaw = math.radians(near[0])  # on the base axis J1 is free: the hint's
+    if _hypot(wx, wy) < 1e-9:
+        yaw = _radians(near[0])  # on the base axis J1 is free: the hint's
     else:
-        yaw = math.atan2(wy, wx)
+        yaw = _atan2(wy, wx)
     h1, h2, h3, h4, h5, h6 = near
     l1, l2, l3, l4, l5, l6 = limits
     every, fitting, nearest = mode is _EVERY, mode is not _EVERY, mode is _NEAREST  # _FIRST keeps no costs
     found = [] if every else None
-    best, best_cost, worst, reachable = None, math.inf, None, False
+    best, best_cost, worst, reachable = None, _INF, None, False
     cost1 = cost2 = arm_cost = cost = 0.0  # _FIRST keeps them so (its bound stays inf)
     v = wz - base_height
-    for j1 in (yaw, yaw + math.pi):
+    for j1 in (yaw, yaw + _PI):
         deg1 = j1 * _RAD_TO_DEG
         if fitting:
             a = deg1
@@ -338,7 +341,7 @@ def _solve(pose, prepared, near, mode):
                     cost1 = (q1 - h1) ** 2
                 if best is not None and (q1 is None or not cost1 < best_cost):
                     continue  # this side cannot beat the best: worst and reachable are moot now
-        c1, s1 = math.cos(j1), math.sin(j1)
+        c1, s1 = _cos(j1), _sin(j1)
         u = wx * c1 + wy * s1 - shoulder
         cos_d = (u * u + v * v - a2a2 - reach2) / twice_a2_reach
         if abs(cos_d) > 1 + 1e-9:
@@ -348,14 +351,15 @@ def _solve(pose, prepared, near, mode):
             if worst is None:
                 worst = (0, wrap_deg(deg1))
             continue  # J1 is the same for both elbows
-        cos_d = max(-1.0, min(1.0, cos_d))
-        base = math.atan2(v, u)
-        elbow = math.acos(cos_d)
+        cos_d = cos_d if cos_d < 1.0 else 1.0  # max(-1.0, min(1.0, cos_d)), NaN to 1.0 as they do, without the calls
+        cos_d = cos_d if cos_d > -1.0 else -1.0
+        base = _atan2(v, u)
+        elbow = _acos(cos_d)
         for delta in {elbow, -elbow}:
             if nearest and not cost1 < best_cost:
                 continue
-            alpha = base + math.atan2(reach * math.sin(delta), a2 + reach * math.cos(delta))
-            j2 = math.pi / 2 - alpha
+            alpha = base + _atan2(reach * _sin(delta), a2 + reach * _cos(delta))
+            j2 = _HALF_PI - alpha
             t = gamma - (alpha - delta)  # J2 + J3
             deg2, deg3 = j2 * _RAD_TO_DEG, (t - j2) * _RAD_TO_DEG
             if fitting:
@@ -386,27 +390,27 @@ def _solve(pose, prepared, near, mode):
                     if not arm_cost < best_cost:
                         continue
             # The wrist: Rx(J4)·Ry(J5)·Rx(J6) = arm^T · flange, only the entries it reads
-            ct, st = math.cos(t), math.sin(t)
+            ct, st = _cos(t), _sin(t)
             r0, r1, r2 = c1 * ct, s1 * ct, -st  # arm^T's rows: arm[0], arm[3], arm[6]
             r3, r4 = -s1, c1  # arm[1], arm[4] (arm[7] = 0.0, kept in the sums for their sign of zero)
             r6, r7, r8 = c1 * st, s1 * st, ct  # arm[2], arm[5], arm[8]
             m0 = r0 * f0 + r1 * f3 + r2 * f6
-            j5 = math.acos(max(-1.0, min(1.0, m0)))
-            if math.sin(j5) < 1e-7:  # J5 = 0 or 180: only J4 ± J6 is fixed, J4 is the hint's
-                near_j4 = math.radians(h4)
+            j5 = _acos((m0 if m0 > -1.0 else -1.0) if m0 < 1.0 else 1.0)  # max(-1.0, min(1.0, m0))
+            if _sin(j5) < 1e-7:  # J5 = 0 or 180: only J4 ± J6 is fixed, J4 is the hint's
+                near_j4 = _radians(h4)
                 m4 = r3 * f1 + r4 * f4 + 0.0 * f7
                 m7 = r6 * f1 + r7 * f4 + r8 * f7
                 if m0 > 0:
-                    wrists = ((near_j4, 0.0, math.atan2(m7, m4) - near_j4),)
+                    wrists = ((near_j4, 0.0, _atan2(m7, m4) - near_j4),)
                 else:
-                    wrists = ((near_j4, math.pi, near_j4 - math.atan2(m7, m4)),)
+                    wrists = ((near_j4, _PI, near_j4 - _atan2(m7, m4)),)
             else:
                 m1 = r0 * f1 + r1 * f4 + r2 * f7
                 m2 = r0 * f2 + r1 * f5 + r2 * f8
                 m3 = r3 * f0 + r4 * f3 + 0.0 * f6
                 m6 = r6 * f0 + r7 * f3 + r8 * f6
-                j4, j6 = math.atan2(m3, -m6), math.atan2(m1, m2)
-                wrists = ((j4, j5, j6), (j4 + math.pi, -j5, j6 + math.pi))
+                j4, j6 = _atan2(m3, -m6), _atan2(m1, m2)
+                wrists = ((j4, j5, j6), (j4 + _PI, -j5, j6 + _PI))
             for j4, j5, j6 in wrists:
                 deg4, deg5, deg6 = j4 * _RAD_TO_DEG, j5 * _RAD_TO_DEG, j6 * _RAD_TO_DEG
                 if every:
