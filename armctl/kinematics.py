@@ -211,15 +211,10 @@ def _fit(angle: float, hint: float, limits: tuple[float, float] | None) -> float
     low, high = limits
     if low <= base <= high:
         return base
-    low_reach, high_reach = low - 1e-6, high + 1e-6  # the candidates base, other, 2·base − other
-    if low_reach <= base <= high_reach:
-        return min(max(base, low), high)
     other = base - 360.0 if base > hint else base + 360.0
-    if low_reach <= other <= high_reach:
-        return min(max(other, low), high)
-    other = 2 * base - other
-    if low_reach <= other <= high_reach:
-        return min(max(other, low), high)
+    for candidate in (base, other, 2 * base - other):
+        if low - 1e-6 <= candidate <= high + 1e-6:
+            return min(max(candidate, low), high)
     return None
 
 

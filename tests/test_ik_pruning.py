@@ -75,3 +75,33 @@ def test_inverse_along_a_path_is_the_enumeration(x, y, z, attitude, hint):
         except Unreachable as error:
             found = str(error)
         assert found == expected, (pose, hint, limits)
+
+
+def _joints_by_inverse(kinematics, pose, hint):
+    """ArmPose.joints' rule as it was written before ``Kinematics.joints_of``: ``inverse``
+    inside the limits, else without them, else the hint."""
+    try:
+        return kinematics.inverse(pose, hint)
+    except Unreachable:
+        try:
+            return kinematics.inverse(pose, hint, respect_limits=False)
+        except Unreachable:
+            return hint
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.floats(-450, 450), st.floats(-450, 450), st.floats(-100, 600),
+       st.tuples(st.floats(-180, 180), st.floats(-180, 180), st.floats(-180, 180)),
+       st.one_of(st.just(_HOME), st.tuples(*(st.floats(-200, 200) for _ in range(6)))),
+       st.sampled_from([_LIMITS, None, ((-10, 10),) * 6]))
+@example(250.0, 0.0, 150.0, (180.0, 0.0, 0.0), _HOME, _LIMITS)  # inside the limits
+@example(250.0, 0.0, 150.0, (180.0, 0.0, 0.0), _HOME, ((-10, 10),) * 6)  # reachable only outside them
+@example(900.0, 0.0, 150.0, (180.0, 0.0, 0.0), _HOME, _LIMITS)  # out of reach: the hint itself
+def test_joints_of_is_inverse_with_its_fallbacks(x, y, z, attitude, hint, limits):
+    """``Kinematics.joints_of`` (ArmPose.joints, every joints status frame) is the same floats as
+    ``inverse`` with the fallbacks it replaced, and the very hint object when nothing reaches."""
+    kinematics = Kinematics(_PROFILE.links, limits, _HOME)
+    pose = (x, y, z, *attitude)
+    found, expected = kinematics.joints_of(pose, hint), _joints_by_inverse(kinematics, pose, hint)
+    assert repr(found) == repr(expected)
+    assert (found is hint) == (expected is hint)
