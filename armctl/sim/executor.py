@@ -84,6 +84,10 @@ class _Running:
     entries: list  # their Execution records
     origin_s: float  # segment time 0 on the model's clock
     frozen_at_s: float | None = None  # segment time where a pause froze it (arrival mode)
+    cartesian_at: object = None  # the segment's cartesian_at (None for a segment without one)
+
+    def __post_init__(self) -> None:
+        self.cartesian_at = getattr(self.segment, "cartesian_at", None)  # looked up once, read every status frame
 
     def local_s(self, now_s: float) -> float:
         return self.frozen_at_s if self.frozen_at_s is not None else now_s - self.origin_s
@@ -158,12 +162,9 @@ class Executor:
         line or an arc runs and the arm is between its ends; else None (ask ``pose_at``).  The
         status encoder's way to the same floats without the pose objects (``Segment.cartesian_at``)."""
         running = self._running
-        if running is None:
+        if running is None or running.cartesian_at is None:
             return None
-        cartesian_at = getattr(running.segment, "cartesian_at", None)
-        if cartesian_at is None:
-            return None
-        values = cartesian_at(running.local_s(now_s))
+        values = running.cartesian_at(running.local_s(now_s))
         return None if values is None else (values, running.segment.end)
 
     def snapshot(self, now_s: float) -> "LiveSnapshot":

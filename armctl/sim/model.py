@@ -27,6 +27,7 @@ time is taken to happen at the current time.  No time, threading or serial impor
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections import deque
 from dataclasses import dataclass
 
@@ -202,26 +203,36 @@ class SimulatedArm:
         first_s, period_s, rotation, count = schedule.first_s, schedule.period_s, schedule.rotation, schedule.count
         byte_s, free_s, model_s = arm_line.byte_s, arm_line.free_at_s, self.now_s
         burst_s, executor_s, kinds = STATUS_SIZE * byte_s, executor.now_s, len(rotation)
-        while len(run) < max_frames:
-            status_s = first_s + count * period_s  # StatusSchedule.next_s
-            output_s = max(status_s, free_s) + burst_s  # next_output_time (nothing in flight)
-            step_to = clock_s + max(max(0.0, (output_s - (clock_s - clock_start_s) * time_scale) / time_scale), min_step_s)
-            if end_s is not None and end_s < step_to:
+        # max(a, b) written ``b if b > a else a`` (what max returns, without a call), the next
+        # frame's due time computed once for both steps, no end or event as +inf
+        end_s = math.inf if end_s is None else end_s
+        quiet_until_s = math.inf if quiet_until_s is None else quiet_until_s
+        status_s, stop = first_s + count * period_s, count + max_frames  # StatusSchedule.next_s
+        while count < stop:
+            start_s = free_s if free_s > status_s else status_s  # Wire.send's start
+            wait_s = (start_s + burst_s - (clock_s - clock_start_s) * time_scale) / time_scale  # next_output_time
+            if not wait_s > 0.0:
+                wait_s = 0.0
+            step_to = clock_s + (min_step_s if min_step_s > wait_s else wait_s)
+            if end_s < step_to:
                 break
-            limit_s = max((step_to - clock_start_s) * time_scale, model_s)  # _run_until's limit
+            limit_s = (step_to - clock_start_s) * time_scale  # _run_until's limit
+            if model_s > limit_s:
+                limit_s = model_s
             due_by_s = limit_s + TIME_EPSILON_S
-            if (quiet_until_s is not None and quiet_until_s <= due_by_s) or status_s > due_by_s \
-                    or first_s + (count + 1) * period_s <= due_by_s:
+            next_status_s = first_s + (count + 1) * period_s
+            if quiet_until_s <= due_by_s or status_s > due_by_s or next_status_s <= due_by_s:
                 break  # an event in this step, or not exactly one status frame: the full loop
-            next_executor_s = max(executor_s, limit_s)  # Executor.run_until: no event to run
-            next_model_s = max(limit_s, next_executor_s)
-            start_s = max(status_s, free_s)  # Wire.send
+            if limit_s > executor_s:  # Executor.run_until: no event to run
+                executor_s = limit_s
+            next_model_s = executor_s if executor_s > limit_s else limit_s
             if (next_model_s - start_s + TIME_EPSILON_S) / byte_s < STATUS_SIZE:
                 break  # not all of it arrived (Wire.take: its floor below STATUS_SIZE, i.e. this)
-            free_s = start_s + STATUS_SIZE * byte_s  # (every status frame is STATUS_SIZE bytes)
-            executor_s, model_s, clock_s = next_executor_s, next_model_s, step_to
+            free_s = start_s + burst_s  # (every status frame is STATUS_SIZE bytes)
+            model_s, clock_s = next_model_s, step_to
             run.append((step_to, rotation[count % kinds], status_s, free_s, model_s))
             count += 1
+            status_s = next_status_s
         return run
 
     def status_frame(self, kind: int, at_s: float) -> bytes:

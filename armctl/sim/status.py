@@ -14,7 +14,6 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
-from ..kinematics import Unreachable
 from ..protocol import (
     DEG_SCALE,
     MM_SCALE,
@@ -123,76 +122,106 @@ class StatusEncoder:
     same clamping and rounding, value by value (tests/test_sim_status_encoder.py holds them equal)."""
 
     def __init__(self) -> None:
-        self._structs = {kind: (_word_struct(cls), cls.SCALE) for kind, (cls, _) in _WORD_KINDS.items()}
+        # kind → (its Struct, its scale, _clamp's limit)
+        self._structs = {kind: (_word_struct(cls), cls.SCALE, _WORD_MAX / cls.SCALE) for kind, (cls, _) in _WORD_KINDS.items()}
         self._built: dict[int, tuple] = {}  # kind → (the value, its bytes) for the seldom-changing kinds
+        self._by_kind = {0: self._position, 1: self._joints_low, 2: self._joints_high, 3: self._worktable,
+                         4: self._pause, 5: self._wrist, 100: self._file_length, 102: self._file_status,
+                         103: self._run_position}
 
     def encode(self, kind: int, executor, at_s: float) -> bytes:
-        if kind in _POSE_KINDS:
-            on_path = executor.cartesian_at(at_s)
-            if on_path is not None:  # a line or an arc between its ends: the values, no pose objects
-                return self._on_path(kind, executor, *on_path)
-        if kind == 0:
-            pose = executor.pose_at(at_s)
-            c, po = pose.cartesian, pose.origin_mm
-            x, y, z = c[0] + po[0], c[1] + po[1], c[2] + po[2]  # robot_cartesian's sums
-            if not executor.reports_robot_xyz:
-                ox, oy, oz = executor.origin_mm
-                x, y, z = x - ox, y - oy, z - oz
-            return self._words(0, (x, y, z))
-        if kind == 1:
-            return self._words(1, executor.pose_at(at_s).joints[0:3])
-        if kind == 2:
-            return self._words(2, executor.pose_at(at_s).joints[3:6])
-        if kind == 5:
-            return self._words(5, executor.pose_at(at_s).joints[3:5])
-        if kind == 3:
-            return self._reuse(3, executor.origin_mm, lambda origin: self._words(3, origin))
-        if kind == 4:
-            pwm_us = int(round(max(-32768, min(_WORD_MAX, executor.pose_at(at_s).pwm_us[0]))))
-            return self._reuse(4, (executor.paused, pwm_us), lambda key: PauseStatus(
-                PAUSED_STATE_BYTE if key[0] else 0, key[1]).encode())
-        program = executor.program
-        if kind == 100:
-            value = program.length
-        elif kind == 102:
-            value = program.status_at(at_s)
-        elif kind == 103:
-            value = program.position_at(at_s)
-        else:
+        encode = self._by_kind.get(kind)
+        if encode is None:
             raise ValueError(f"no status kind {kind}")
+        return encode(executor, at_s)
+
+    # One method a kind (``_by_kind``).  A pose kind takes the values of the pose from
+    # ``executor.cartesian_at`` while a line or an arc runs between its ends (the pose
+    # ``Segment.sample`` would build: worktable Cartesian values, its origin, PWM and IK hint the
+    # segment ``end``'s; no pose objects), else from ``executor.pose_at`` — the same sums as
+    # ``ArmPose.robot_cartesian`` and the IK of ``ArmPose.joints`` (``Kinematics.joints_of``),
+    # so the same floats either way.
+
+    def _position(self, executor, at_s: float) -> bytes:
+        on_path = executor.cartesian_at(at_s)
+        if on_path is not None:
+            cartesian, end = on_path
+            po = end.origin_mm
+        else:
+            pose = executor.pose_at(at_s)
+            cartesian, po = pose.cartesian, pose.origin_mm
+        x, y, z = cartesian[0] + po[0], cartesian[1] + po[1], cartesian[2] + po[2]  # robot_cartesian's sums
+        if not executor.reports_robot_xyz:
+            ox, oy, oz = executor.origin_mm
+            x, y, z = x - ox, y - oy, z - oz
+        return self._words3(0, x, y, z)
+
+    @staticmethod
+    def _joints(executor, at_s: float) -> tuple[float, ...]:
+        on_path = executor.cartesian_at(at_s)
+        if on_path is None:
+            return executor.pose_at(at_s).joints
+        (x, y, z, b0, b1, w), end = on_path
+        po = end.origin_mm
+        return end.kinematics.joints_of((x + po[0], y + po[1], z + po[2], b0, b1, w), end.ik_hint)
+
+    def _joints_low(self, executor, at_s: float) -> bytes:
+        joints = self._joints(executor, at_s)
+        return self._words3(1, joints[0], joints[1], joints[2])
+
+    def _joints_high(self, executor, at_s: float) -> bytes:
+        joints = self._joints(executor, at_s)
+        return self._words3(2, joints[3], joints[4], joints[5])
+
+    def _wrist(self, executor, at_s: float) -> bytes:
+        joints = self._joints(executor, at_s)
+        return self._words2(5, joints[3], joints[4])
+
+    def _worktable(self, executor, at_s: float) -> bytes:
+        return self._reuse(3, executor.origin_mm, lambda origin: self._words3(3, *origin))
+
+    def _pause(self, executor, at_s: float) -> bytes:
+        on_path = executor.cartesian_at(at_s)
+        pwm_us = (executor.pose_at(at_s) if on_path is None else on_path[1]).pwm_us[0]
+        pwm_us = int(round(max(-32768, min(_WORD_MAX, pwm_us))))
+        return self._reuse(4, (executor.paused, pwm_us), lambda key: PauseStatus(
+            PAUSED_STATE_BYTE if key[0] else 0, key[1]).encode())
+
+    def _program(self, kind: int, value) -> bytes:
         # a float's hex tells -0.0 from 0.0 (equal, but packed differently)
         key = value.hex() if type(value) is float else value
         return self._reuse(kind, key, lambda _key: build_status(kind, _ProgramValue(value)).encode())
 
-    def _on_path(self, kind: int, executor, cartesian, end) -> bytes:
-        """``encode`` of a pose kind from the values of the pose ``Segment.sample`` would build
-        (worktable ``cartesian``; its origin, PWM and IK hint are the segment ``end``'s): the
-        same sums as ``ArmPose.robot_cartesian`` and the same IK call and fallbacks as
-        ``ArmPose.joints``, so the same floats."""
-        if kind == 4:
-            pwm_us = int(round(max(-32768, min(_WORD_MAX, end.pwm_us[0]))))
-            return self._reuse(4, (executor.paused, pwm_us), lambda key: PauseStatus(
-                PAUSED_STATE_BYTE if key[0] else 0, key[1]).encode())
-        x, y, z, b0, b1, w = cartesian
-        po = end.origin_mm
-        x, y, z = x + po[0], y + po[1], z + po[2]  # robot_cartesian's sums
-        if kind == 0:
-            if not executor.reports_robot_xyz:
-                ox, oy, oz = executor.origin_mm
-                x, y, z = x - ox, y - oy, z - oz
-            return self._words(0, (x, y, z))
-        joints = _joints_of((x, y, z, b0, b1, w), end.kinematics, end.ik_hint)
-        if kind == 1:
-            return self._words(1, joints[0:3])
-        if kind == 2:
-            return self._words(2, joints[3:6])
-        return self._words(5, joints[3:5])
+    def _file_length(self, executor, at_s: float) -> bytes:
+        return self._program(100, executor.program.length)
 
-    def _words(self, kind: int, values) -> bytes:
-        codec, scale = self._structs[kind]
-        limit = _WORD_MAX / scale  # _clamp's limit, then _raw_word's float × scale, rounded
-        raws = [round(float(max(-limit, min(limit, v))) * scale) for v in values]
-        return codec.pack(STATUS_HEAD, *raws, kind, STATUS_TAIL)
+    def _file_status(self, executor, at_s: float) -> bytes:
+        return self._program(102, executor.program.status_at(at_s))
+
+    def _run_position(self, executor, at_s: float) -> bytes:
+        return self._program(103, executor.program.position_at(at_s))
+
+    # A word: _clamp's ``max(-limit, min(limit, v))`` written out (``min`` keeps ``limit`` unless
+    # v < limit, NaN included; ``max`` keeps ``-limit`` unless v > -limit), then _raw_word's
+    # float × scale, rounded — the same ints without two builtin calls and a list per word.
+
+    def _words3(self, kind: int, a, b, c) -> bytes:
+        codec, scale, limit = self._structs[kind]
+        low = -limit
+        a = a if a < limit else limit
+        b = b if b < limit else limit
+        c = c if c < limit else limit
+        return codec.pack(STATUS_HEAD, round(float(a if a > low else low) * scale),
+                          round(float(b if b > low else low) * scale), round(float(c if c > low else low) * scale),
+                          kind, STATUS_TAIL)
+
+    def _words2(self, kind: int, a, b) -> bytes:
+        codec, scale, limit = self._structs[kind]
+        low = -limit
+        a = a if a < limit else limit
+        b = b if b < limit else limit
+        return codec.pack(STATUS_HEAD, round(float(a if a > low else low) * scale),
+                          round(float(b if b > low else low) * scale), kind, STATUS_TAIL)
 
     def _reuse(self, kind: int, key, build) -> bytes:
         built = self._built.get(kind)
@@ -201,21 +230,6 @@ class StatusEncoder:
         data = build(key)
         self._built[kind] = (key, data)
         return data
-
-
-# The kinds that sample the arm's pose: position, joints, wrist, PWM.
-_POSE_KINDS = frozenset((0, 1, 2, 4, 5))
-
-
-def _joints_of(robot, kinematics, hint) -> tuple[float, ...]:
-    """``ArmPose.joints`` of a Cartesian pose at ``robot`` (robot frame) with IK ``hint``."""
-    try:
-        return kinematics.inverse(robot, hint)
-    except Unreachable:
-        try:
-            return kinematics.inverse(robot, hint, respect_limits=False)
-        except Unreachable:
-            return hint
 
 
 class _ProgramValue:
