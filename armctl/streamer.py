@@ -616,11 +616,11 @@ class Streamer:
             segment = sent.segment
             return xyz_unknown(segment) or not sent.path_known or match(sent) is not None
 
-        earliest, candidates = self._scan(match, end, now)
+        earliest, candidates, settled = self._search(match, end, now)
         if earliest is None and end < len(self.pending):
             return  # the arm may be on the frame that cannot be judged: no evidence
         self._check_reversal(xyz if earliest is None and not blind else None, match)
-        self._use("position", earliest, candidates, now, could_be_on)
+        self._use("position", earliest, candidates, now, could_be_on, settled)
 
     def _check_reversal(self, xyz, match) -> None:
         """A sign of loss: the arm reported, twice in a row, on the inside of the path of a frame
@@ -676,13 +676,19 @@ class Streamer:
         def could_be_on(sent: SentFrame) -> bool:  # for the loss check: joints cannot judge a Cartesian frame
             return sent.segment.kind not in ("joint", "still") or match(sent) is not None
 
-        earliest, candidates = self._scan(match, end, now)
+        earliest, candidates, settled = self._search(match, end, now)
         if earliest is None and end < len(self.pending):
             return  # the arm may be on the Cartesian segment after these: no evidence
-        self._use(f"joints{offset}", earliest, candidates, now, could_be_on)
+        self._use(f"joints{offset}", earliest, candidates, now, could_be_on, settled)
 
     def _scan(self, match, end: int, now: float):
-        """Match one observation against the pending frames before ``end``: (earliest, candidates).
+        """``_search``'s (earliest, candidates)."""
+        return self._search(match, end, now)[:2]
+
+    def _search(self, match, end: int, now: float):
+        """Match one observation against the pending frames before ``end``: (earliest, candidates,
+        settled) — settled when the earliest candidate is the one where the estimate has the arm
+        (nothing to re-anchor: ``_use``).
 
         Flat cost: the search covers the oldest ``SCAN_WINDOW_FRAMES`` pending frames (where the
         lower bound's evidence is) and as many around the frame the estimate has in progress
@@ -701,7 +707,7 @@ class Streamer:
                 if _estimate_off_s(sent, *found, now, self._time_at) == 0.0:
                     # The usual case: the earliest candidate is where the estimate has the arm,
                     # so no later candidate can change the bound or the estimate.
-                    return sent.index, candidates
+                    return sent.index, candidates, True
                 break
         else:
             k = head
@@ -715,33 +721,39 @@ class Streamer:
 
         search(k + 1, head)
         if head == end:
-            return (candidates[0][0] if candidates else None), candidates
+            return (candidates[0][0] if candidates else None), candidates, False
         in_head = bool(candidates)
         centre = bisect_right(pending, now, key=_est_end)  # the frame the estimate has in progress
         lo = max(head, centre - SCAN_WINDOW_FRAMES // 2)
         hi = min(end, max(lo, centre + SCAN_WINDOW_FRAMES // 2))
         search(lo, hi)
         if in_head or (candidates and lo == head):
-            return candidates[0][0], candidates
+            return candidates[0][0], candidates, False
         if candidates:
             # Nothing among the oldest frames: the arm is at least at the first frame not searched.
-            return pending[head].index, candidates
+            return pending[head].index, candidates, False
         search(head, lo)  # neither window matched (the estimate is far off, or this is noise)
         search(hi, end)
-        return (candidates[0][0] if candidates else None), candidates
+        return (candidates[0][0] if candidates else None), candidates, False
 
     def _use(self, stream: str, earliest: int | None, candidates: list[tuple[int, float, float]],
-             now: float, could_be_on=None) -> None:
+             now: float, could_be_on=None, settled: bool = False) -> None:
         """Move the lower bound and the estimate on one observation's candidate segments.
 
         ``earliest`` is where the arm is at least; the bound moves there only when the previous
         observation of the same stream agrees, so one corrupted frame cannot.  ``could_be_on``
-        (a frame → whether this report may have been taken on it) serves the loss check.
+        (a frame → whether this report may have been taken on it) serves the loss check;
+        ``settled`` (``_scan``): the estimate already has the arm where the earliest candidate
+        does — nothing below moves it, so re-anchoring would find nothing to do.
         """
         previous = self._last_candidate.get(stream)
         previous_fraction = self._last_fraction.get(stream)
         self._last_candidate[stream] = earliest
-        fraction = next((lo for index, lo, _ in candidates if index == earliest), None)
+        fraction = None
+        for index, lo, _ in candidates:
+            if index == earliest:
+                fraction = lo
+                break
         self._last_fraction[stream] = fraction
         if earliest is None:
             return
@@ -759,7 +771,8 @@ class Streamer:
             self._restart_time_bound(agreed, now, max(0.0, min(previous_fraction, fraction)) if both else 0.0)
             if agreed == earliest:
                 self._measure_pace(stream, earliest, candidates, now, could_be_on)
-        self._reanchor(candidates, now)
+        if not settled:
+            self._reanchor(candidates, now)
 
     def _check_gap(self, stream: str, index: int, now: float, could_be_on) -> bool:
         """A sign of loss: the arm, seen by this stream at ``now`` at least at frame ``index``,
@@ -816,7 +829,11 @@ class Streamer:
         the arm ran between them, neither waiting for the line nor between frames)."""
         if not self.pending or index < self.pending[0].index:
             return
-        found = next(((lo, hi) for k, lo, hi in candidates if k == index), None)
+        found = None
+        for k, lo, hi in candidates:
+            if k == index:
+                found = (lo, hi)
+                break
         segment = self.pending[index - self.pending[0].index].segment
         if found is None or segment.length <= 0 and segment.kind != "joint":
             self._pace_from.pop(stream, None)
