@@ -478,8 +478,9 @@ class Streamer:
             self._observe_joint_half(3, (frame.j4_deg, frame.j5_deg, frame.j6_deg), now)
         elif kind == _PAUSE_KIND:
             self._note_pause_state(frame.paused, now)
-        if self.pending and self._running_seen_s is not None:  # _advance_by_time's first test, inline
-            self._advance_by_time()
+        pending, running_s = self.pending, self._running_seen_s
+        if pending and running_s is not None and pending[0].certain_end_s <= running_s:
+            self._advance_by_time()  # (its first tests inline: every status frame)
 
     def _note_pause_state(self, paused: bool, now: float) -> None:
         if paused:
