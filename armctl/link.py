@@ -329,21 +329,24 @@ class Link:
         Ctrl-C), so none is read twice.  Returns (frames read, whether the last was news)."""
         port, clock, reader, on_status, update = self.port, self.clock, self.reader, self.on_status, self.state.update
         build, decode = port.status_frame, reader.decode_frame
+        advance = clock.advance_to
         read = 0
         try:
             with self._changed:
-                for at_s, kind, due_s, _, _ in run:
-                    frame = decode(build(kind, due_s))
-                    if frame is None:  # cannot happen on a clean line: the ordinary way reads it
-                        break
-                    clock.advance_to(at_s)
-                    read += 1
-                    reader.frames += 1
-                    self.bytes_received += STATUS_SIZE
-                    update(frame, at_s)
-                    if on_status is None or on_status(frame, at_s) is not False:
-                        return read, True
-            return read, False
+                try:
+                    for at_s, kind, due_s, _, _ in run:
+                        frame = decode(build(kind, due_s))
+                        if frame is None:  # cannot happen on a clean line: the ordinary way reads it
+                            break
+                        advance(at_s)
+                        read += 1
+                        update(frame, at_s)
+                        if on_status is None or on_status(frame, at_s) is not False:
+                            return read, True
+                    return read, False
+                finally:  # the counts for the whole run at once, before the lock is let go
+                    reader.frames += read
+                    self.bytes_received += read * STATUS_SIZE
         finally:
             port.commit_status_run(run, read)
 
