@@ -16,7 +16,10 @@ frames are news (the job runner) is woken only by those, and the simulator's qui
 (nothing happens in it but status frames) are then read as runs of steps timed ahead
 (``Serial.virtual_status_run``), each frame built and decoded only when read and the run
 committed as far as it was read: the same frames at the same model times, without the
-per-burst machinery.  Callers that wait through the link
+per-burst machinery.  The steps of a run past the frame that was news stay the simulator's
+next steps while nothing else touches the port (the run's arithmetic from the committed state
+is the same from any step on): the next news-only wait that starts where that frame was read
+reads them (cut at its own end) instead of timing them again, and a write forgets them.  Callers that wait through the link
 work unchanged on either kind of port.
 """
 
@@ -42,9 +45,11 @@ READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
 VIRTUAL_MIN_STEP_S = 1e-6
 VIRTUAL_READ_CHUNK = 1 << 16  # more than any burst between two waits
 # A virtual wait reads the simulator's quiet stretches as runs of steps timed ahead
-# (``Serial.virtual_status_run``), from this many, doubling while no frame is news (the timing
-# past the news is thrown away: cheap, but not free), up to the most.
-VIRTUAL_RUN_FRAMES_MIN = 8
+# (``Serial.virtual_status_run``), from this many, doubling while no frame is news, up to the
+# most.  The steps past the news are kept for the next wait (``Link._run_tail``) and thrown
+# away only when something else touches the port (a write): 32 measured best of 8…512 for the
+# 20-minute job of benchmarks/virtual_run.py (8 was best before the steps were kept).
+VIRTUAL_RUN_FRAMES_MIN = 32
 VIRTUAL_RUN_FRAMES_MAX = 512
 
 
@@ -216,6 +221,10 @@ class Link:
         self.state = state or ArmState()
         self.on_status = on_status
         self.bytes_received = 0
+        # The unread steps of the last status run (the run, the first unread, the clock time of
+        # the last read): still the simulator's next steps while nothing else touched the port
+        # and the clock is where that run left it (``wait``; ``write`` forgets them)
+        self._run_tail: tuple[list, int, float] | None = None
         self.error: PortError | None = None
         self._changed = threading.Condition()
         self._stop = threading.Event()
@@ -304,9 +313,14 @@ class Link:
         step, take = port.step_virtual, self._take
         status_run = getattr(port, "virtual_status_run", None) if news_only else None
         run_frames = VIRTUAL_RUN_FRAMES_MIN
+        tail, self._run_tail = self._run_tail, None
         while True:  # burst after burst until one holds news for on_status, or end_s
             if status_run is not None:
-                run = status_run(end_s, VIRTUAL_MIN_STEP_S, run_frames)
+                if tail is not None and tail[2] == clock.now_s:
+                    run = _steps_by(tail[0], tail[1], end_s)
+                else:
+                    run = status_run(end_s, VIRTUAL_MIN_STEP_S, run_frames)
+                tail = None
                 if run:
                     read, news = self._take_run(run)
                     if news or (end_s is not None and clock.now_s >= end_s):
@@ -342,6 +356,8 @@ class Link:
                         read += 1
                         update(frame, at_s)
                         if on_status is None or on_status(frame, at_s) is not False:
+                            if read < len(run):
+                                self._run_tail = (run, read, at_s)
                             return read, True
                     return read, False
                 finally:  # the counts for the whole run at once, before the lock is let go
@@ -356,6 +372,7 @@ class Link:
             self._changed.notify_all()
 
     def write(self, frame: bytes) -> None:
+        self._run_tail = None  # the simulator's next steps change
         if self.error is not None:
             raise self.error
         try:
@@ -386,3 +403,14 @@ class Link:
                     return False
                 self._changed.wait(min(remaining, 0.05))
             return True
+
+
+def _steps_by(run: list, start: int, end_s: float | None) -> list:
+    """The steps of ``run`` from ``start`` on that end by ``end_s`` (their clock times grow)."""
+    stop = len(run)
+    if end_s is not None:
+        for k in range(start, stop):
+            if run[k][0] > end_s:
+                stop = k
+                break
+    return run[start:stop]
