@@ -99,6 +99,28 @@ class ArmState:
         self.last_seen[kind] = now
         return True
 
+    def update_many(self, frames: list) -> None:
+        """``update`` for each (frame, read time) of ``frames``, in order: the same state.  The
+        kinds taken as read (not judged for jumps) are merged by their last frame alone — each
+        sets only its own values and time, which a later frame of its kind overwrites — and the
+        judged kinds frame by frame (a jump is judged against the frame before).  ``Link``
+        merges the frames of its virtual runs so, when the state is read (``Link.state``)."""
+        latest = {}
+        update = self.update
+        judged = 0
+        for frame, now in frames:
+            kind = frame.KIND
+            if kind in _JUDGED_KINDS:
+                update(frame, now)
+                judged += 1
+            else:
+                latest[kind] = frame, now
+        self.frames += len(frames) - judged
+        last_seen = self.last_seen
+        for kind, (frame, now) in latest.items():  # never held: only the judged kinds are
+            _APPLY[kind](self, frame)
+            last_seen[kind] = now
+
     def _jump_between(self, before: StatusFrame | tuple, after: StatusFrame, elapsed_s: float) -> bool:
         kind = after.KIND
         if kind == _POSITION_KIND:

@@ -50,6 +50,7 @@ VIRTUAL_READ_CHUNK = 1 << 16  # more than any burst between two waits
 # away only when something else touches the port (a write): 32 measured best of 8…512 for the
 # 20-minute job of benchmarks/virtual_run.py (8 was best before the steps were kept).
 VIRTUAL_RUN_FRAMES_MIN = 32
+UNMERGED_FRAMES_MAX = 4096  # frames of virtual runs held before they are merged into the state
 VIRTUAL_RUN_FRAMES_MAX = 512
 
 
@@ -218,7 +219,11 @@ class Link:
         virtual = getattr(port, "virtual_clock", None)
         self.clock: Clock = virtual or (port_clock(port, url) if clock is None else as_clock(clock))
         self.reader = StatusReader()
-        self.state = state or ArmState()
+        self._state = state or ArmState()
+        # Frames read by virtual runs, merged into the state when it is read (``state``): nothing
+        # reads it while a job runs, and the kinds taken as read then cost one merge, not one a
+        # frame (``ArmState.update_many``); at most ``UNMERGED_FRAMES_MAX`` held (a long job).
+        self._unmerged: list = []
         self.on_status = on_status
         self.bytes_received = 0
         # The unread steps of the last status run (the run, the first unread, the clock time of
@@ -239,6 +244,24 @@ class Link:
     def start(self) -> None:
         if not self.clock.virtual:
             self._thread.start()
+
+    @property
+    def state(self) -> ArmState:
+        """What the arm last told us (the frames of virtual runs merged first)."""
+        if self._unmerged:
+            self._merge()
+        return self._state
+
+    @state.setter
+    def state(self, state: ArmState) -> None:
+        with self._changed:
+            self._unmerged.clear()
+            self._state = state
+
+    def _merge(self) -> None:
+        with self._changed:
+            self._state.update_many(self._unmerged)
+            self._unmerged.clear()  # (in place: a run in progress keeps appending to it)
 
     @property
     def is_virtual(self) -> bool:
@@ -341,7 +364,7 @@ class Link:
         first frame that is news to ``on_status`` (a run never goes past the wait's end).  The
         frames read are committed to the simulator whatever happens (``on_status`` may raise:
         Ctrl-C), so none is read twice.  Returns (frames read, whether the last was news)."""
-        port, clock, reader, on_status, update = self.port, self.clock, self.reader, self.on_status, self.state.update
+        port, clock, reader, on_status, unmerged = self.port, self.clock, self.reader, self.on_status, self._unmerged
         build, decode = port.status_frame, reader.decode_frame
         advance = clock.advance_to
         read = 0
@@ -354,7 +377,7 @@ class Link:
                             break
                         advance(at_s)
                         read += 1
-                        update(frame, at_s)
+                        unmerged.append((frame, at_s))  # merged into the state when it is read
                         if on_status is None or on_status(frame, at_s) is not False:
                             if read < len(run):
                                 self._run_tail = (run, read, at_s)
@@ -363,6 +386,8 @@ class Link:
                 finally:  # the counts for the whole run at once, before the lock is let go
                     reader.frames += read
                     self.bytes_received += read * STATUS_SIZE
+                    if len(unmerged) >= UNMERGED_FRAMES_MAX:
+                        self._merge()
         finally:
             port.commit_status_run(run, read)
 
