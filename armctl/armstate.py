@@ -83,38 +83,60 @@ class ArmState:
         """Merge one status frame read at ``now``; False when it was held back as suspect."""
         self.frames += 1
         kind = frame.KIND
-        if kind in _JUDGED_KINDS and self._is_jump(frame, now):  # only these can jump (_jump_between)
-            held = self._held.get(kind)
-            if held is None or self._jump_between(held[0], frame, now - held[1]):
-                self._held[kind] = (frame, now)
-                self.suspect_frames += 1
-                return False
+        if kind in _JUDGED_KINDS:  # only these can jump (_jump_between)
+            seen = self.last_seen.get(kind)
+            if seen is not None:
+                previous = self._current(kind)
+                if previous is not None and self._jump_between(previous, frame, now - seen):
+                    held = self._held.get(kind)
+                    if held is None or self._jump_between(held[0], frame, now - held[1]):
+                        self._held[kind] = (frame, now)
+                        self.suspect_frames += 1
+                        return False
         if self._held:
             self._held.pop(kind, None)
         _APPLY[kind](self, frame)
         self.last_seen[kind] = now
         return True
 
-    def _is_jump(self, frame: StatusFrame, now: float) -> bool:
-        seen = self.last_seen.get(frame.KIND)
-        if seen is None:
-            return False
-        previous = self._current(frame.KIND)
-        return previous is not None and self._jump_between(previous, frame, now - seen)
+    def update_many(self, frames: list) -> None:
+        """``update`` for each (frame, read time) of ``frames``, in order: the same state.  The
+        kinds taken as read (not judged for jumps) are merged by their last frame alone — each
+        sets only its own values and time, which a later frame of its kind overwrites — and the
+        judged kinds frame by frame (a jump is judged against the frame before).  ``Link``
+        merges the frames of its virtual runs so, when the state is read (``Link.state``)."""
+        latest = {}
+        update = self.update
+        judged = 0
+        for frame, now in frames:
+            kind = frame.KIND
+            if kind in _JUDGED_KINDS:
+                update(frame, now)
+                judged += 1
+            else:
+                latest[kind] = frame, now
+        self.frames += len(frames) - judged
+        last_seen = self.last_seen
+        for kind, (frame, now) in latest.items():  # never held: only the judged kinds are
+            _APPLY[kind](self, frame)
+            last_seen[kind] = now
 
     def _jump_between(self, before: StatusFrame | tuple, after: StatusFrame, elapsed_s: float) -> bool:
-        elapsed_s = max(elapsed_s, 0.0)
-        if isinstance(after, (PositionStatus,)) and self.max_speed_mm_s is not None:
-            limit = self.max_speed_mm_s * elapsed_s + _JUMP_SLACK_MM
-        elif isinstance(after, (JointsLowStatus, JointsHighStatus)) and self.max_joint_speed_deg_s is not None:
-            limit = self.max_joint_speed_deg_s * elapsed_s + _JUMP_SLACK_DEG
+        kind = after.KIND
+        if kind == _POSITION_KIND:
+            if self.max_speed_mm_s is None:
+                return False
+            limit = self.max_speed_mm_s * max(elapsed_s, 0.0) + _JUMP_SLACK_MM
+        elif kind in _JUDGED_KINDS and self.max_joint_speed_deg_s is not None:
+            limit = self.max_joint_speed_deg_s * max(elapsed_s, 0.0) + _JUMP_SLACK_DEG
         else:
             return False
-        a = before if type(before) is tuple else _values(before)
-        for p, q in zip(a, _values(after)):  # a plain loop: every position and joints frame
-            if abs(p - q) > limit:
-                return True
-        return False
+        values = _VALUE_GETTERS[kind]
+        a = before if type(before) is tuple else values(before)
+        p, q, r = a
+        x, y, z = values(after)
+        # unrolled: every position and joints frame
+        return abs(p - x) > limit or abs(q - y) > limit or abs(r - z) > limit
 
     def _current(self, kind: int) -> tuple | None:
         """The values the state holds for a kind judged for jumps (as ``_values`` of its frame)."""
@@ -196,9 +218,10 @@ _VALUE_NAMES = {
 }
 
 
-_VALUE_GETTERS = {frame_class: attrgetter(*names) for frame_class, names in _VALUE_NAMES.items()}
+_VALUE_GETTERS = {frame_class.KIND: attrgetter(*names) for frame_class, names in _VALUE_NAMES.items()}
+_POSITION_KIND = PositionStatus.KIND
 
 
 def _values(frame: StatusFrame) -> tuple:
     """The three readings of a position or joints frame, in order (read directly: every frame)."""
-    return _VALUE_GETTERS[type(frame)](frame)
+    return _VALUE_GETTERS[frame.KIND](frame)

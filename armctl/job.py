@@ -289,41 +289,46 @@ class Job:
         if self.pacing is not streamer:
             self.pacing.receive_status(frame, now)
             news = True  # another strategy may act on any frame
-        view = self.view
-        view.status_frames += 1
+        self.view.status_frames += 1
         kind = frame.KIND
         values_of = _REST_VALUES.get(kind)
-        if values_of is not None:
-            values = values_of(frame)
-            if kind == 4:  # news while streaming only through the control state (or the bound)
-                self._pause_reports.append(frame.paused)
-                version = self.control.version
-                self.control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
-                news = news or self.control.version != version
-            else:  # position and joints while streaming: news only through the streamer's
-                # evidence (the bound, below) or its plan (the estimate's end times, the pace)
-                news = news or streamer.plan_changes != plan
+        if values_of is None:
+            if kind == _RUN_POSITION_KIND:
+                if self._run_position is not None and frame.value != self._run_position:
+                    self._active_s = now  # an SD program advancing, even with the arm standing still
+                    news = True
+                self._run_position = frame.value
+            return news or streamer.consumed_lower_bound != consumed
+        values = values_of(frame)
+        if kind == 4:  # news while streaming only through the control state (or the bound)
+            self._pause_reports.append(frame.paused)
+            control = self.control
+            version = control.version
+            control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
+            news = news or control.version != version
+        else:  # position and joints while streaming: news only through the streamer's
+            # evidence (the bound, below) or its plan (the estimate's end times, the pace)
+            news = news or streamer.plan_changes != plan
             if kind == 0:
-                view.position_mm = values = self.streamer.worktable_xyz(values)  # status_xyz_frame
-            reported = self._reported
-            changed = reported.get(kind) != values  # else so are the readings: _rest and _motion hold them
-            reported[kind] = values
-            self._read_at[kind] = now
-            if changed or self._rest is None:
-                rest = (reported.get(0), reported.get(1), reported.get(2), reported.get(4))
-                if self._rest is None or self._rest[0] != rest:
-                    self._rest = (rest, now)
-                motion = rest[:3]
-                if self._motion is None or self._motion[0] != motion:
-                    self._motion = (motion, now)
-                    if self._moved_from is None or _moved_clearly(self._moved_from, motion):
-                        self._moved_from = motion
-                        self._active_s = now
-        elif kind == _RUN_POSITION_KIND:
-            if self._run_position is not None and frame.value != self._run_position:
-                self._active_s = now  # an SD program advancing, even with the arm standing still
-                news = True
-            self._run_position = frame.value
+                self.view.position_mm = values = streamer.worktable_xyz(values)  # status_xyz_frame
+        reported = self._reported
+        changed = reported.get(kind) != values  # else so are the readings: _rest and _motion hold them
+        reported[kind] = values
+        self._read_at[kind] = now
+        if changed or self._rest is None:
+            # One kind's values changed (or these are the first readings): the readings differ
+            # from the last ``_rest`` (it always holds the readings before this frame), and so
+            # does the motion unless only the pause and PWM changed.
+            self._rest = ((reported.get(0), reported.get(1), reported.get(2), reported.get(4)), now)
+            if kind != 4 or self._motion is None:
+                motion = self._rest[0][:3]
+                self._motion = (motion, now)
+                moved_from = self._moved_from
+                # Every other kind's readings are within jitter of ``_moved_from`` (checked when
+                # they changed, or equal since it was taken): only this kind's can have moved.
+                if moved_from is None or (kind != 4 and _slot_moved(kind, moved_from[kind], values)):
+                    self._moved_from = motion
+                    self._active_s = now
         return news or streamer.consumed_lower_bound != consumed
 
     def wrote(self, now: float) -> None:
@@ -768,14 +773,15 @@ def _moves_arm(segment) -> bool:
 
 def _moved_clearly(before: tuple, after: tuple) -> bool:
     """Position (kind 0) or joints (kinds 1, 2) changed by more than a reading's jitter."""
-    limit = TARGET_MM  # position first, then the joint halves (plain loops: every status frame)
-    for old, new in zip(before, after):
-        if old is None or new is None:
-            if old is not new:
-                return True
-        else:
-            for a, b in zip(old, new):
-                if abs(a - b) > limit:
-                    return True
-        limit = TARGET_DEG
+    return any(_slot_moved(kind, old, new) for kind, (old, new) in enumerate(zip(before, after)))
+
+
+def _slot_moved(kind: int, old: tuple | None, new: tuple | None) -> bool:
+    """One kind's readings (0 position, 1 and 2 the joint halves) changed by more than jitter."""
+    if old is None or new is None:
+        return old is not new
+    limit = TARGET_MM if kind == 0 else TARGET_DEG  # a plain loop: every moving status frame
+    for a, b in zip(old, new):
+        if abs(a - b) > limit:
+            return True
     return False

@@ -88,6 +88,9 @@ class JobControl:
         self.state = PauseState.RUNNING
         self.arm_paused: bool | None = None  # the engine's twice-agreeing reading
         self._toggles_due = 0
+        # A toggle is due or a pause is asked or in force: the engine has something to do here
+        # (a plain attribute, kept by ``_note_busy`` at each change: read for every status frame).
+        self.busy = False
         self._scaled: tuple | None = None  # (statement, percent, command): planned once, written the same
         self.version = 0  # grows whenever anything a view shows changes (the engine copies it then)
 
@@ -103,6 +106,7 @@ class JobControl:
         self.state = PauseState.PAUSING
         self._toggles_due += 1
         self.version += 1
+        self._note_busy()
         return True
 
     def resume(self) -> bool:
@@ -112,6 +116,7 @@ class JobControl:
         self.state = PauseState.RESUMING
         self._toggles_due += 1
         self.version += 1
+        self._note_busy()
         return True
 
     def toggle(self) -> bool:
@@ -139,6 +144,7 @@ class JobControl:
         elif self.state is PauseState.RESUMING and arm_paused is False and not self._toggles_due:
             self.state = PauseState.RUNNING
             self.version += 1
+            self._note_busy()
 
     def take_toggle(self) -> bool:
         """Whether a pause toggle is to be written now; the engine writes it (wire permitting)."""
@@ -146,12 +152,12 @@ class JobControl:
             return False
         self._toggles_due -= 1
         self.version += 1
+        self._note_busy()
         return True
 
-    @property
-    def busy(self) -> bool:
-        """A toggle is due or a pause is asked or in force: the engine has something to do here."""
-        return self._toggles_due > 0 or self.state is not PauseState.RUNNING
+    def _note_busy(self) -> None:
+        """``busy`` after a change of the pause state or of the toggles due."""
+        self.busy = self._toggles_due > 0 or self.state is not PauseState.RUNNING
 
     @property
     def toggle_due(self) -> bool:

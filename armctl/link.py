@@ -14,10 +14,15 @@ next status burst and reads it at the model time it lands (``Serial.step_virtual
 simulator driven directly, no wall-clock machinery); a caller whose ``on_status`` says which
 frames are news (the job runner) is woken only by those, and the simulator's quiet stretches
 (nothing happens in it but status frames) are then read as runs of steps timed ahead
-(``Serial.virtual_status_run``), each frame built and decoded only when read and the run
-committed as far as it was read: the same frames at the same model times, without the
-per-burst machinery.  Callers that wait through the link
-work unchanged on either kind of port.
+(``Serial.virtual_status_run``), their frames built and decoded a batch at a time and the
+run committed as far as it was read: the same frames at the same model times, without the
+per-burst machinery.  The steps of a run past the frame that was news, and the frames built
+for them, stay the simulator's next while nothing else touches the port (the run's arithmetic
+from the committed state is the same from any step on; a quiet stretch changes nothing a
+frame is built from): the next news-only wait that starts where that frame was read reads
+them (cut at its own end) instead of timing and building them again, and a write forgets
+them — at most a batch of frames built for nothing a write.  Callers that wait through the
+link work unchanged on either kind of port.
 """
 
 from __future__ import annotations
@@ -42,10 +47,17 @@ READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
 VIRTUAL_MIN_STEP_S = 1e-6
 VIRTUAL_READ_CHUNK = 1 << 16  # more than any burst between two waits
 # A virtual wait reads the simulator's quiet stretches as runs of steps timed ahead
-# (``Serial.virtual_status_run``), from this many, doubling while no frame is news (the timing
-# past the news is thrown away: cheap, but not free), up to the most.
-VIRTUAL_RUN_FRAMES_MIN = 8
+# (``Serial.virtual_status_run``), from this many, doubling while no frame is news, up to the
+# most.  The steps past the news are kept for the next wait (``Link._run_tail``) and thrown
+# away only when something else touches the port (a write): 32 measured best of 8…512 for the
+# 20-minute job of benchmarks/virtual_run.py (8 was best before the steps were kept).
+VIRTUAL_RUN_FRAMES_MIN = 32
 VIRTUAL_RUN_FRAMES_MAX = 512
+# The frames of a run are built and decoded this many at a time, ahead of reading them: the
+# simulator's code and the engine's each run in a batch (the 20-minute job: 0.82 -> 0.75 s of
+# CPU), and a write wastes at most this many builds (the tail it forgets).
+VIRTUAL_BUILD_FRAMES = 64
+UNMERGED_FRAMES_MAX = 4096  # frames of virtual runs held before they are merged into the state
 
 
 @dataclass(frozen=True)
@@ -213,9 +225,18 @@ class Link:
         virtual = getattr(port, "virtual_clock", None)
         self.clock: Clock = virtual or (port_clock(port, url) if clock is None else as_clock(clock))
         self.reader = StatusReader()
-        self.state = state or ArmState()
+        self._state = state or ArmState()
+        # Frames read by virtual runs, merged into the state when it is read (``state``): nothing
+        # reads it while a job runs, and the kinds taken as read then cost one merge, not one a
+        # frame (``ArmState.update_many``); at most ``UNMERGED_FRAMES_MAX`` held (a long job).
+        self._unmerged: list = []
         self.on_status = on_status
         self.bytes_received = 0
+        # The unread steps of the last status run (the run, the first unread, the clock time of
+        # the last read, the frames built for it so far): still the simulator's next steps while
+        # nothing else touched the port and the clock is where that run left it (``wait``;
+        # ``write`` forgets them)
+        self._run_tail: tuple[list, int, float] | None = None
         self.error: PortError | None = None
         self._changed = threading.Condition()
         self._stop = threading.Event()
@@ -230,6 +251,24 @@ class Link:
     def start(self) -> None:
         if not self.clock.virtual:
             self._thread.start()
+
+    @property
+    def state(self) -> ArmState:
+        """What the arm last told us (the frames of virtual runs merged first)."""
+        if self._unmerged:
+            self._merge()
+        return self._state
+
+    @state.setter
+    def state(self, state: ArmState) -> None:
+        with self._changed:
+            self._unmerged.clear()
+            self._state = state
+
+    def _merge(self) -> None:
+        with self._changed:
+            self._state.update_many(self._unmerged)
+            self._unmerged.clear()  # (in place: a run in progress keeps appending to it)
 
     @property
     def is_virtual(self) -> bool:
@@ -304,11 +343,18 @@ class Link:
         step, take = port.step_virtual, self._take
         status_run = getattr(port, "virtual_status_run", None) if news_only else None
         run_frames = VIRTUAL_RUN_FRAMES_MIN
+        tail, self._run_tail = self._run_tail, None
         while True:  # burst after burst until one holds news for on_status, or end_s
             if status_run is not None:
-                run = status_run(end_s, VIRTUAL_MIN_STEP_S, run_frames)
+                built = None
+                if tail is not None and tail[2] == clock.now_s:
+                    run = _steps_by(tail[0], tail[1], end_s)
+                    built = tail[3][tail[1]:tail[1] + len(run)]
+                else:
+                    run = status_run(end_s, VIRTUAL_MIN_STEP_S, run_frames)
+                tail = None
                 if run:
-                    read, news = self._take_run(run)
+                    read, news = self._take_run(run, built)
                     if news or (end_s is not None and clock.now_s >= end_s):
                         return
                     if read == len(run):
@@ -319,31 +365,42 @@ class Link:
             if (data and take(data, news_only)) or (end_s is not None and clock.now_s >= end_s):
                 return
 
-    def _take_run(self, run: list) -> tuple[int, bool]:
+    def _take_run(self, run: list, built: list | None = None) -> tuple[int, bool]:
         """A run of quiet steps computed ahead by the simulator (``virtual_status_run``: one
         status frame each, with the clock time it is read at), read as ``wait`` reads them one
-        burst at a time — the clock at the frame's time, the frame built (``status_frame``) and
-        decoded (``StatusReader.decode_frame``), the state, ``on_status`` — stopping after the
+        burst at a time — the clock at the frame's time, the frame (built by ``status_frame``
+        and decoded by ``StatusReader.decode_frame``, ``VIRTUAL_BUILD_FRAMES`` at a time; the
+        first ones may be ``built`` already), the state, ``on_status`` — stopping after the
         first frame that is news to ``on_status`` (a run never goes past the wait's end).  The
         frames read are committed to the simulator whatever happens (``on_status`` may raise:
         Ctrl-C), so none is read twice.  Returns (frames read, whether the last was news)."""
-        port, clock, reader, on_status, update = self.port, self.clock, self.reader, self.on_status, self.state.update
+        port, clock, reader, on_status, unmerged = self.port, self.clock, self.reader, self.on_status, self._unmerged
         build, decode = port.status_frame, reader.decode_frame
+        advance = clock.advance_to
         read = 0
         try:
             with self._changed:
-                for at_s, kind, due_s, _, _ in run:
-                    frame = decode(build(kind, due_s))
-                    if frame is None:  # cannot happen on a clean line: the ordinary way reads it
-                        break
-                    clock.advance_to(at_s)
-                    read += 1
-                    reader.frames += 1
-                    self.bytes_received += STATUS_SIZE
-                    update(frame, at_s)
-                    if on_status is None or on_status(frame, at_s) is not False:
-                        return read, True
-            return read, False
+                try:
+                    built = [] if built is None else built
+                    for at_s, _, _, _, _ in run:
+                        if read == len(built):  # the next frames built and decoded a batch at a time
+                            built += [decode(build(kind, due_s)) for _, kind, due_s, _, _ in run[read:read + VIRTUAL_BUILD_FRAMES]]
+                        frame = built[read]
+                        if frame is None:  # cannot happen on a clean line: the ordinary way reads it
+                            break
+                        advance(at_s)
+                        read += 1
+                        unmerged.append((frame, at_s))  # merged into the state when it is read
+                        if on_status is None or on_status(frame, at_s) is not False:
+                            if read < len(run):
+                                self._run_tail = (run, read, at_s, built)
+                            return read, True
+                    return read, False
+                finally:  # the counts for the whole run at once, before the lock is let go
+                    reader.frames += read
+                    self.bytes_received += read * STATUS_SIZE
+                    if len(unmerged) >= UNMERGED_FRAMES_MAX:
+                        self._merge()
         finally:
             port.commit_status_run(run, read)
 
@@ -353,6 +410,7 @@ class Link:
             self._changed.notify_all()
 
     def write(self, frame: bytes) -> None:
+        self._run_tail = None  # the simulator's next steps change
         if self.error is not None:
             raise self.error
         try:
@@ -383,3 +441,14 @@ class Link:
                     return False
                 self._changed.wait(min(remaining, 0.05))
             return True
+
+
+def _steps_by(run: list, start: int, end_s: float | None) -> list:
+    """The steps of ``run`` from ``start`` on that end by ``end_s`` (their clock times grow)."""
+    stop = len(run)
+    if end_s is not None:
+        for k in range(start, stop):
+            if run[k][0] > end_s:
+                stop = k
+                break
+    return run[start:stop]

@@ -87,6 +87,10 @@ class JobRunner:
         self._wire_frames = 0  # frames in a row that waited for the wire alone (WIRE_STORY_FRAMES)
         self._wire_counted_at = -1  # frames_sent when a wire wait was last counted (once a frame)
         self._told_evidence: Evidence | None = None  # the last evidence logged
+        # Nothing to tell for a frame (no --log, -v's logger quiet): read at each wait, so a
+        # virtual-time frame costs no logging call (``on_status``)
+        self._quiet = False
+        self._job_receive = self.job.receive_status
 
     @property
     def failure(self) -> str | None:
@@ -124,8 +128,8 @@ class JobRunner:
                 requests.get_nowait()(self.job)
             self._receive(frame, at_s)
             return True  # the engine's answer after a request is news
-        if self.log is None and not _logger.isEnabledFor(logging.INFO):  # _receive with nothing to tell
-            news = self.job.receive_status(frame, at_s) is not False
+        if self._quiet:  # _receive with nothing to tell (the log level as it was when the wait began)
+            news = self._job_receive(frame, at_s) is not False
         else:
             news = self._receive(frame, at_s)
         return news or self.stop_requested or not requests.empty()
@@ -200,6 +204,7 @@ class JobRunner:
                 until_s = action.until_s
                 if not self._virtual:  # a wall clock: wake at least every POLL_S (Ctrl-C, the panel)
                     until_s = now + POLL_S if until_s is None else min(until_s, now + POLL_S)
+                self._quiet = self.log is None and not _logger.isEnabledFor(logging.INFO)
                 link.wait(None if until_s is None else until_s + self._origin_s, news_only=True)
             else:
                 self._explain_bound(now)  # the arm at rest at the last target

@@ -305,8 +305,9 @@ def decode_status(frame: bytes) -> StatusFrame:
 
 
 # decode_frame keeps the frames of the kinds that repeat unchanged for long (worktable origin,
-# pause and PWM, SD file length, status and run position), at most this many.
-_REPEATING_KINDS = frozenset((3, 4, 100, 102, 103))
+# pause and PWM, SD file length, status and run position, and the wrist while it holds: two
+# thirds of its frames in a job of straight moves), at most this many.
+_REPEATING_KINDS = frozenset((3, 4, 5, 100, 102, 103))
 _SEEN_FRAMES = 64
 
 

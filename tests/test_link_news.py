@@ -4,7 +4,7 @@ limit); without ``news_only`` every frame ends the wait, whatever ``on_status`` 
 
 from __future__ import annotations
 
-from armctl.link import Link
+from armctl.link import VIRTUAL_BUILD_FRAMES, Link
 from armctl.protocol import STATUS_PERIOD_S
 
 URL = "sim://?clock=virtual"
@@ -42,3 +42,66 @@ def test_without_news_only_every_frame_ends_the_wait():
     with link:
         link.wait(None)
         assert len(seen) == 1
+
+
+def _news_every(count):
+    """A link whose ``on_status`` answers news for every ``count``-th frame, and what it read."""
+    seen = []
+
+    def on_status(frame, now):
+        seen.append((now, frame.encode()))
+        return len(seen) % count == 0
+
+    return Link.open(URL, on_status=on_status), seen
+
+
+def test_the_steps_of_a_run_past_the_news_are_read_by_the_next_wait_as_a_new_run_would_time_them(monkeypatch):
+    """The link keeps a status run's steps past the frame that was news, and the frames built for
+    them, for the next wait (``Link._run_tail``): the same frames at the same times as timing
+    each wait's run afresh, with fewer runs timed and no frame built twice; a wait's own end
+    cuts them, and a write forgets them."""
+    from armctl.protocol import PauseToggle
+
+    def read(keep_tails: bool):
+        link, seen = _news_every(7)
+        runs = []
+        status_run = link.port.virtual_status_run
+
+        def timed(*args):
+            runs.append(args)
+            return status_run(*args)
+
+        link.port.virtual_status_run = timed
+        status_frame, built = link.port.status_frame, []
+
+        def building(*args):
+            built.append(args)
+            return status_frame(*args)
+
+        link.port.status_frame = building
+        if not keep_tails:
+            take_run = link._take_run
+
+            def forgetting(run, built=None):
+                result = take_run(run, built)
+                link._run_tail = None
+                return result
+
+            link._take_run = forgetting
+        with link:
+            for k in range(60):
+                if k == 30:
+                    link.write(PauseToggle().encode())
+                    link.write(PauseToggle().encode())
+                until_s = link.clock.now() + 0.2 if k % 3 == 0 else None  # some waits end by their time
+                link.wait(until_s, news_only=True)
+            return seen, len(runs), link.clock.now(), len(built)
+
+    kept, kept_runs, kept_end_s, kept_built = read(True)
+    fresh, fresh_runs, fresh_end_s, _ = read(False)
+    assert len(kept) > 250
+    assert kept == fresh and kept_end_s == fresh_end_s
+    assert kept_runs < fresh_runs  # the tails were read, not timed again
+    # nor built again: a frame built and not read is one of a batch forgotten by a write, by a
+    # wait that ended at its time (20 of them) or by the end
+    assert len(kept) <= kept_built <= len(kept) + (1 + 20 + 1) * VIRTUAL_BUILD_FRAMES

@@ -1,0 +1,28 @@
+"""A counterexample Hypothesis found on main (58fb5c8) for the random-jobs property of
+tests/test_connector_settings.py, kept as an explicit case: the lower bound of frames consumed
+passed what the simulated arm had really finished (7 claimed, 5 finished, from t = 76.8 s).  The
+arc after a joint move (its start known only through the profile's unverified kinematics; the
+arm's links 5 % longer) was confirmed by a time bound that allowed 10 % of the reach at its feed,
+while the circle through the true start, the G300 point and the end was far longer; the bound now
+rests on ``motion.arc_length_bound_mm`` (tests/test_arc_length_bound.py)."""
+
+from __future__ import annotations
+
+import pytest
+
+from tests.test_connector_settings import (
+    test_random_jobs_on_any_arm_the_profile_describes_never_drop_never_overstate_never_cry_loss as random_jobs,
+)
+
+FOUND = dict(
+    ops=[("line", 4, 6000.0), ("pwm", 1000.0), ("line", 0, 600.0), ("joint", 5, 30.0, 0), ("arc", 0, 5),
+         ("pwm", 2000.0), ("joint", 2, 30.0, 2), ("delay", 0.0), ("delay", 0.0), ("mcode", 107),
+         ("joint", 3, 90.0, 6), ("joint", 4, 90.0, 0), ("pwm", 2000.0), ("arc", 0, 5)],
+    fifo=200, control="queued", frame="worktable", speed_factor=2.0, link_scale=1.05,
+    origin=(10.0, -20.0, 5.0), damage=0.0, seed=47,
+)
+
+
+@pytest.mark.timeout(60)
+def test_the_found_job_is_never_overstated():
+    random_jobs.hypothesis.inner_test(**FOUND)
