@@ -319,27 +319,6 @@ def circle_through(p0, p1, p2, tol_mm: float = 1e-6):
     return center, _norm(_sub(p0, center)), (normal[0] / n, normal[1] / n, normal[2] / n)
 
 
-def arc_length_bound_mm(start, via, end, start_error_mm: float) -> float:
-    """The longest the arc from a start within ``start_error_mm`` of ``start``, through ``via``, to
-    ``end`` can be (inf when no bound exists).  Through three points the arc that holds ``via`` is
-    |start−end|·(π−α)/sin α long, α the angle at ``via`` between the start and the end (the inscribed
-    angle on the chord start–end): it grows without bound as α falls to 0 (the via beyond both ends
-    of a straight line: the long way round a huge circle) and is the chord itself at α = π (the
-    three in line, the via between: the arm's straight line).  A start moved by r changes the
-    chord by at most r and turns its direction seen from ``via`` by at most asin(r / |start−via|)."""
-    to_start, to_end = _sub(start, via), _sub(end, via)
-    near_mm, far_mm = _norm(to_start), _norm(to_end)
-    if near_mm <= start_error_mm or far_mm == 0.0:
-        return math.inf
-    cos_alpha = max(-1.0, min(1.0, _dot(to_start, to_end) / (near_mm * far_mm)))
-    alpha = math.acos(cos_alpha) - math.asin(start_error_mm / near_mm)
-    if alpha <= 1e-9:
-        return math.inf
-    chord_mm = _norm(_sub(start, end)) + start_error_mm
-    ratio = (math.pi - alpha) / math.sin(alpha) if alpha < math.pi - 1e-6 else 1.0  # 1 + (π−α)²/6 there
-    return chord_mm * max(1.0, ratio)  # an arc is never shorter than its chord
-
-
 def arc_through(p0, p1, p2, tol_mm: float = 1e-6) -> Arc | None:
     """The arc from ``p0`` through ``p1`` to ``p2``, or None (see circle_through)."""
     circle = circle_through(p0, p1, p2, tol_mm)

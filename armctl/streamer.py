@@ -122,7 +122,7 @@ from collections import deque
 from dataclasses import dataclass
 from enum import StrEnum
 
-from .motion import ArmPose, MotionModel, Planner, Segment, arc_length_bound_mm, distance_to_path
+from .motion import ArmPose, MotionModel, Planner, Segment, distance_to_path
 from .protocol import (
     CONTROL_COMMANDS,
     ArcEnd,
@@ -242,7 +242,6 @@ class SentFrame:
     # (the earliest claim) but never past it; the time bound, with ``_unknown_start_s``'s
     # allowance, confirms it.
     path_known: bool = True
-    unknown_start_s: float = 0.0  # the time bound's allowance for a start only unverified kinematics know
     motion_before_s: float = 0.0  # the model's motion time of every frame written before it
 
 
@@ -426,7 +425,6 @@ class Streamer:
         segment = self._plan(command)
         self._peeked = None
         planner = self.planner
-        allowance_s = self._unknown_start_s(segment, planner.pending_arc)
         planner.pending_arc = command if isinstance(command, ArcStart) else None
         planner.pose = segment.end
         start_s = max(now, self.wire_free_s)
@@ -435,13 +433,12 @@ class Streamer:
         previous = self.pending[-1] if self.pending else None
         est_start = max(wire_end, previous.est_end_s if previous else wire_end)
         certain_start = max(wire_end + ARRIVAL_SLACK_S, self._certain_tail_s)
-        self._certain_tail_s = (certain_start + (segment.duration_s + allowance_s) * self.slowest_factor
+        self._certain_tail_s = (certain_start + (segment.duration_s + self._unknown_start_s(segment)) * self.slowest_factor
                                 + self.frame_slack_s)
         frame = SentFrame(
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
             chain_end_s=self._certain_tail_s, group_index=self.sent, motion_before_s=self.motion_sent_s,
-            unknown_start_s=allowance_s,
         )
         self.motion_sent_s += segment.duration_s
         self._recent_sent.append(frame)
@@ -542,10 +539,10 @@ class Streamer:
             sent = self.pending[k]
             if chain is None:  # the rest of it, from the least fraction the evidence allows
                 left_s = sent.segment.duration_s - _time_window(sent.segment, fraction, 1.0, self._time_at)[0]
-                chain = now + (left_s + sent.unknown_start_s) * self.slowest_factor + self.frame_slack_s
+                chain = now + (left_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + self.frame_slack_s
             else:
                 start = max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
-                chain = start + (sent.segment.duration_s + sent.unknown_start_s) * self.slowest_factor + self.frame_slack_s
+                chain = start + (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + self.frame_slack_s
             if chain >= sent.chain_end_s:
                 return  # no tighter than before, and neither are the frames after it
             sent.chain_end_s = chain
@@ -567,27 +564,16 @@ class Streamer:
         (a joint move's end): its real path is not the planned one."""
         return not self.kinematics_verified and segment.kind in ("line", "arc") and segment.start.xyz_derived
 
-    def _unknown_start_s(self, segment: Segment, arc_start: ArcStart | None = None) -> float:
+    def _unknown_start_s(self, segment: Segment) -> float:
         """The time bound's allowance for a Cartesian move that starts where only the profile's
         kinematics say (the end of a joint move): with kinematics not verified on this arm, its
-        true start may lie ``UNVERIFIED_FK_SHARE`` of the reach away.  A line is then at most that
-        much longer than planned; an arc (the circle through the true start, its G300's point and
-        its end) at most ``arc_length_bound_mm`` long, which is unbounded when the start may fall
-        in line with the other two the wrong way round: then time alone never confirms it.  The
-        extra path is covered at the slower of its feeds (half of it, for ramps from rest), the
-        feeds held to the profile's limit, in the arm's model seconds (the profile's speed_factor)."""
+        true start may lie ``UNVERIFIED_FK_SHARE`` of the reach away, so the move may be that much
+        longer than planned — covered at its own feed (half of it for a move that ramps from rest)."""
         if not self._start_unknown(segment):
             return 0.0
-        command, model = segment.command, self.planner.model
-        extra_mm = self._unknown_start_mm
+        command = segment.command
         speed_mm_min = getattr(command, "speed_mm_min", None) or getattr(command, "speed1_mm_min", 0.0) / 2
-        if isinstance(command, ArcEnd) and arc_start is not None:
-            via = (arc_start.x_mm, arc_start.y_mm, arc_start.z_mm)
-            longest_mm = arc_length_bound_mm(segment.start.xyz, via, segment.end.xyz, self._unknown_start_mm)
-            extra_mm = max(longest_mm - segment.length, self._unknown_start_mm)
-            speed_mm_min = min(speed_mm_min, arc_start.speed_mm_min or speed_mm_min) / 2
-        speed_mm_min = min(speed_mm_min, model.profile.speed.max_linear_mm_min)
-        return extra_mm / max(speed_mm_min / 60.0, 1e-3) * model.speed_factor
+        return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3)
 
     def _consume_one(self, by_reports: bool) -> None:
         self._last_done_tag = self.pending.popleft().tag
@@ -885,7 +871,7 @@ class Streamer:
         self.slowest_factor = factor
         added_s = 0.0
         for sent in self.pending:
-            added_s += (sent.segment.duration_s + sent.unknown_start_s) * extra
+            added_s += (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * extra
             sent.chain_end_s += added_s
             sent.certain_end_s += added_s  # inf (a G300 waiting for its G301) stays inf
         self._certain_tail_s += added_s
