@@ -568,12 +568,16 @@ class Streamer:
         """The time bound's allowance for a Cartesian move that starts where only the profile's
         kinematics say (the end of a joint move): with kinematics not verified on this arm, its
         true start may lie ``UNVERIFIED_FK_SHARE`` of the reach away, so the move may be that much
-        longer than planned — covered at its own feed (half of it for a move that ramps from rest)."""
+        longer than planned — covered at its own feed (half of it for a move that ramps from rest),
+        held to the profile's speed limit as the plan holds it, in the model's seconds (its
+        speed_factor: the durations it is added to are).  For a line that bounds it (a start r
+        away makes it at most r longer); for an arc it does not (tests/test_streamer_found_overstatement.py)."""
         if not self._start_unknown(segment):
             return 0.0
-        command = segment.command
+        command, model = segment.command, self.planner.model
         speed_mm_min = getattr(command, "speed_mm_min", None) or getattr(command, "speed1_mm_min", 0.0) / 2
-        return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3)
+        speed_mm_min = min(speed_mm_min, model.profile.speed.max_linear_mm_min)
+        return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3) * model.speed_factor
 
     def _consume_one(self, by_reports: bool) -> None:
         self._last_done_tag = self.pending.popleft().tag
