@@ -8,9 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from tests.test_connector_settings import (
-    test_random_jobs_on_any_arm_the_profile_describes_never_drop_never_overstate_never_cry_loss as random_jobs,
-)
+from tests.test_connector_settings import check_random_job
 
 FOUND = dict(
     ops=[("line", 4, 6000.0), ("pwm", 1000.0), ("line", 0, 600.0), ("joint", 5, 30.0, 0), ("arc", 0, 5),
@@ -24,4 +22,4 @@ FOUND = dict(
 @pytest.mark.timeout(60)
 @pytest.mark.xfail(strict=True, raises=AssertionError, reason="the lower bound passes the arm's truth on this job (found by Hypothesis)")
 def test_the_found_job_is_never_overstated():
-    random_jobs.hypothesis.inner_test(**FOUND)
+    check_random_job(**FOUND)
