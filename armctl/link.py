@@ -236,7 +236,7 @@ class Link:
         # the last read, the frames built for it so far): still the simulator's next steps while
         # nothing else touched the port and the clock is where that run left it (``wait``;
         # ``write`` forgets them)
-        self._run_tail: tuple[list, int, float] | None = None
+        self._run_tail: tuple[list, int, float, list] | None = None
         self.error: PortError | None = None
         self._changed = threading.Condition()
         self._stop = threading.Event()

@@ -242,6 +242,7 @@ class SentFrame:
     # (the earliest claim) but never past it; the time bound, with ``_unknown_start_s``'s
     # allowance, confirms it.
     path_known: bool = True
+    unknown_start_s: float = 0.0  # ``Streamer._unknown_start_s`` of its segment, reckoned once at write
     motion_before_s: float = 0.0  # the model's motion time of every frame written before it
 
 
@@ -433,12 +434,14 @@ class Streamer:
         previous = self.pending[-1] if self.pending else None
         est_start = max(wire_end, previous.est_end_s if previous else wire_end)
         certain_start = max(wire_end + ARRIVAL_SLACK_S, self._certain_tail_s)
-        self._certain_tail_s = (certain_start + (segment.duration_s + self._unknown_start_s(segment)) * self.slowest_factor
+        allowance_s = self._unknown_start_s(segment)
+        self._certain_tail_s = (certain_start + (segment.duration_s + allowance_s) * self.slowest_factor
                                 + self.frame_slack_s)
         frame = SentFrame(
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
             chain_end_s=self._certain_tail_s, group_index=self.sent, motion_before_s=self.motion_sent_s,
+            unknown_start_s=allowance_s,
         )
         self.motion_sent_s += segment.duration_s
         self._recent_sent.append(frame)
@@ -539,10 +542,10 @@ class Streamer:
             sent = self.pending[k]
             if chain is None:  # the rest of it, from the least fraction the evidence allows
                 left_s = sent.segment.duration_s - _time_window(sent.segment, fraction, 1.0, self._time_at)[0]
-                chain = now + (left_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + self.frame_slack_s
+                chain = now + (left_s + sent.unknown_start_s) * self.slowest_factor + self.frame_slack_s
             else:
                 start = max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
-                chain = start + (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * self.slowest_factor + self.frame_slack_s
+                chain = start + (sent.segment.duration_s + sent.unknown_start_s) * self.slowest_factor + self.frame_slack_s
             if chain >= sent.chain_end_s:
                 return  # no tighter than before, and neither are the frames after it
             sent.chain_end_s = chain
@@ -875,7 +878,7 @@ class Streamer:
         self.slowest_factor = factor
         added_s = 0.0
         for sent in self.pending:
-            added_s += (sent.segment.duration_s + self._unknown_start_s(sent.segment)) * extra
+            added_s += (sent.segment.duration_s + sent.unknown_start_s) * extra
             sent.chain_end_s += added_s
             sent.certain_end_s += added_s  # inf (a G300 waiting for its G301) stays inf
         self._certain_tail_s += added_s

@@ -16,6 +16,15 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
 
+def _load(script: str):
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(script.removesuffix(".py"), ROOT / "benchmarks" / script)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
 def without_gcodeparser(script: str) -> str:
     """Runs ``script`` as __main__ with gcodeparser hidden, as on an install without the extra."""
     path = ROOT / "benchmarks" / script
@@ -45,24 +54,10 @@ def test_readme_installs_the_bench_extra_before_the_benchmark():
 def test_virtual_run_baseline_replays_frames_on_the_simulator():
     # issue 11's row (benchmarks/virtual_run.py) broke silently when parse_sim_url changed
     # shape: its baseline is run here on a second of arm time.
-    import importlib.util
-
     from armctl.protocol import Delay
 
-    spec = importlib.util.spec_from_file_location("virtual_run", ROOT / "benchmarks" / "virtual_run.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    wall_s, cpu_s = module.baseline([(0.0, Delay(500).encode())], 1.0)
+    wall_s, cpu_s = _load("virtual_run.py").baseline([(0.0, Delay(500).encode())], 1.0)
     assert wall_s > 0 and cpu_s >= 0
-
-
-def _load(script: str):
-    import importlib.util
-
-    spec = importlib.util.spec_from_file_location(script.removesuffix(".py"), ROOT / "benchmarks" / script)
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
 
 
 def test_streamer_cost_builds_its_streamers_and_times_a_batch():

@@ -229,6 +229,12 @@ def _slow_lint(monkeypatch, *args, **kwargs):
         return lint_lines(*args, **kwargs)
 
 
+def _fast_and_slow(monkeypatch, lines, name, profile, **options):
+    """``lint_lines`` of ``lines`` as it runs, and as ``_slow_lint`` runs it."""
+    return (lint_lines(iter(lines), name, profile, **options),
+            _slow_lint(monkeypatch, iter(lines), name, profile, **options))
+
+
 def _found(report):
     return (report.errors, report.warnings, report.hidden,
             [(d.span.line, d.span.column, d.code, d.severity, d.message, d.hint) for d in report.diagnostics])
@@ -263,8 +269,7 @@ def _walk_script(seed: int, steps: int) -> list[str]:
 @pytest.mark.parametrize("seed", range(4))
 def test_fast_lint_is_slow_lint_on_walks_near_the_boundary(monkeypatch, seed):
     lines = _walk_script(seed, 600)
-    fast = lint_lines(iter(lines), "walk.txt", PROFILE, max_diagnostics=1_000_000)
-    slow = _slow_lint(monkeypatch, iter(lines), "walk.txt", PROFILE, max_diagnostics=1_000_000)
+    fast, slow = _fast_and_slow(monkeypatch, lines, "walk.txt", PROFILE, max_diagnostics=1_000_000)
     assert _found(fast) == _found(slow)
     assert sum(1 for d in fast.diagnostics if d.code == "L103") > 20  # the walk does leave the reach
 
@@ -278,8 +283,7 @@ def test_fast_lint_is_slow_lint_on_the_corpus(monkeypatch, script, profile):
     chosen = PROFILE if profile is None else load_profile(ROOT / profile)
     with open(ROOT / script, "rb") as stream:  # as lint reads a file (every_rule.txt is not all UTF-8)
         lines = list(iter_lines(stream, name=script))
-    fast = lint_lines(iter(lines), script, chosen, max_diagnostics=1_000_000)
-    slow = _slow_lint(monkeypatch, iter(lines), script, chosen, max_diagnostics=1_000_000)
+    fast, slow = _fast_and_slow(monkeypatch, lines, script, chosen, max_diagnostics=1_000_000)
     assert _found(fast) == _found(slow)
     assert fast.diagnostics or script.startswith("scripts/")  # the lint corpus does find things
 
@@ -289,8 +293,7 @@ def test_a_long_job_crosses_the_motion_bound_at_the_same_statement(monkeypatch):
     lines = ["G1 X200 Y0 Z150 A180 B0 C0 F60 S1000"]
     lines += [f"G1 X{200 + 100 * (k % 2)} Y0 Z150" for k in range(1, 900)]
     lines += ["o1 repeat [2000]", "G1 X300 Y0 Z150", "G1 X200 Y0 Z150", "o1 endrepeat", "G1 X250 Y0 Z150"]
-    fast = lint_lines(iter(lines), "long.txt", PROFILE)
-    slow = _slow_lint(monkeypatch, iter(lines), "long.txt", PROFILE)
+    fast, slow = _fast_and_slow(monkeypatch, lines, "long.txt", PROFILE)
     assert [d.code for d in fast.diagnostics if d.code == "E012"] == ["E012"]
     assert _found(fast) == _found(slow)
 
@@ -313,8 +316,7 @@ def _expression_script(seed: int, steps: int) -> list[str]:
 @pytest.mark.parametrize("seed", range(2))
 def test_fast_lint_is_slow_lint_on_expression_walks(monkeypatch, seed):
     lines = _expression_script(seed, 300)
-    fast = lint_lines(iter(lines), "expr.txt", PROFILE, max_diagnostics=1_000_000)
-    slow = _slow_lint(monkeypatch, iter(lines), "expr.txt", PROFILE, max_diagnostics=1_000_000)
+    fast, slow = _fast_and_slow(monkeypatch, lines, "expr.txt", PROFILE, max_diagnostics=1_000_000)
     assert _found(fast) == _found(slow)
     codes = {d.code for d in fast.diagnostics}
     assert "L103" in codes and "L401" in codes  # the walk leaves the reach; #<Spare> is never read

@@ -190,8 +190,9 @@ class SimulatedArm:
         advances there (``_run_until``: the frame is built at its due time and sent).  The same
         arithmetic, operation by operation, so the same frames at the same times to the last
         bit; only the per-step machinery (candidate lists, the wire's runs, the lock, a burst
-        decoded apart) is gone.  The caller stops reading at a frame that is news to it: the
-        timing past it is cheap arithmetic thrown away, and no frame is built that is not read."""
+        decoded apart) is gone.  The caller stops reading at a frame that is news to it; the
+        link keeps the steps past it (and the frames it built ahead for them, a batch at a time)
+        for its next wait, so a write throws away at most a batch of built frames."""
         run: list[tuple[float, int, float, float, float]] = []
         arm_line = self.arm_line
         if arm_line._runs or self.faults.active:
