@@ -28,6 +28,12 @@ Rules:
   the summary says so, and so is one still but not re-read in every kind yet (a slack after its
   last change) or with frames rest cannot prove still pending (a slack after their time bound);
   anything else ends "no confirmation" with the likeliest reason.
+- Held mid-job (the FIFO bound, or a control frame on arrival waiting for the frames before it,
+  with only evidence to let the next frame go): the same proof — at rest, at the last target
+  written, not paused, the trailing frames surely done — proves every frame written finished,
+  and the job goes on (``_rest_proves_all_written``): what time cannot confirm (an arc from an
+  unverified joint end) never holds a job for ever.  A status frame that may complete that
+  rest is news to a virtual-time host.
 - Stopping (``request_stop``: Ctrl-C, a failure the host met): nothing more of the job is
   written; the abort sequence goes instead — minus a pause toggle to an arm that reports it
   is paused, which would resume it — then the engine waits for the arm to come to rest and
@@ -261,6 +267,7 @@ class Job:
         self._control_version = 0  # the control state the view shows
         self._last_move = None  # the last frame written that moves the arm (its SentFrame)
         self._resume_at_next = False  # frozen where the first pending frame ends and the next begins
+        self._held = False  # streaming, and only evidence lets the next frame go (``_rest_proves_all_written``)
 
     # --- input ------------------------------------------------------------------------------
 
@@ -271,7 +278,8 @@ class Job:
         position or joints report that moved neither the lower bound nor the streamer's plan
         (``Streamer.plan_changes``: on the same frame's path where the estimate has the arm), or an
         SD run position that did not move, with nothing newly known consumed and no pause asked
-        or in force — a virtual-time host reads on past it without asking (``Wait``'s promise:
+        or in force (and, while only evidence lets the next frame go, no rest that may now prove
+        every frame written finished) — a virtual-time host reads on past it without asking (``Wait``'s promise:
         nothing changes between status frames but at its time)."""
         streamer = self.streamer
         consumed, plan = streamer.consumed_lower_bound, streamer.plan_changes
@@ -329,6 +337,8 @@ class Job:
                 if moved_from is None or (kind != 4 and _slot_moved(kind, moved_from[kind], values)):
                     self._moved_from = motion
                     self._active_s = now
+        elif self._held and now - self._rest[1] >= REST_CHECK_S and self.phase is _Phase.STREAMING:
+            news = True  # the rest that may prove every frame written finished (``_rest_proves_all_written``)
         return news or streamer.consumed_lower_bound != consumed
 
     def wrote(self, now: float) -> None:
@@ -413,6 +423,10 @@ class Job:
             if statement is not None:
                 command = self.control.command_for(statement)
                 when = self.pacing.next_write_time(now, command)
+                self._held = when is None and self.pacing is self.streamer
+                if self._held and self.streamer.pending and self._rest_proves_all_written(now):
+                    self.streamer.confirm_all_done(now)  # (the time bound's chain restarts at now)
+                    when = self.pacing.next_write_time(now, command)
                 if when is not None and when <= now:
                     if self._write is None:
                         self._write, self._command = Write(command.encode(), statement), command
@@ -475,8 +489,7 @@ class Job:
         """Finished means: at rest, at the last target, not paused, and the estimate agrees.
         Anything else ends without claiming the job ran (frames cleared or dropped, a pause)."""
         view = self.view
-        if (self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False
-                and self._trailing_frames_surely_done(now)):
+        if self._rest_proves_all_written(now):
             self._confirm_all_done()
             view.arm_done_s = self._done_at(now)
             if self._overran:
@@ -504,6 +517,16 @@ class Job:
                 lost = bool(self.streamer.losses)
                 return self._finish(Outcome.FRAMES_LOST if lost else Outcome.NO_CONFIRMATION, now)
         return Wait(self._next_change_s(now, limit_s))
+
+    def _rest_proves_all_written(self, now: float) -> bool:
+        """Every frame written has finished: at rest, at the last target, not paused, and the
+        trailing frames surely done.  The end of a job rests on it, and so does a job held mid-way
+        (the FIFO bound, or rule (c), with only evidence to let the next frame go): it is what
+        confirms an arc from an unverified joint end when no later frame's sighting can
+        (armctl/streamer.py ``_unknown_start_s``: time cannot) — the arm has drained its FIFO by
+        then, which costs the job that wait, never a frame."""
+        return (self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False
+                and self._trailing_frames_surely_done(now))
 
     def _trailing_frames_surely_done(self, now: float) -> bool:
         """The frames after the last motion (a delay, M codes, PWM-only moves) leave no trace: an

@@ -38,7 +38,10 @@ motion-time model), the moment its last byte left the wire, and two views of the
     chain from frame to frame; agreeing evidence that frame k has begun restarts the chain at
     k (else it would drift ahead by the slowest factor for as long as the arm is kept busy),
     from the least fraction of k's path both agreeing observations put the arm at (so a frame
-    seen at its end is confirmed soon after, not a whole slow-arm duration later).
+    seen at its end is confirmed soon after, not a whole slow-arm duration later).  A Cartesian
+    move from a joint move's end on an arm whose kinematics are not verified may be longer than
+    planned: a line by at most its start's error, allowed for; an arc without bound, so time
+    never confirms it (``_unknown_start_s``) — a later frame's sighting or the arm at rest does.
   Lost or corrupted status frames can only hold the bound back, i.e. make it more careful.
 * an **estimate** of when each frame ends, from the model, re-anchored on every observation:
   each candidate segment says the arm is now within a window of that segment's time (a short
@@ -574,9 +577,15 @@ class Streamer:
         longer than planned — covered at its own feed (half of it for a move that ramps from rest),
         held to the profile's speed limit as the plan holds it, in the model's seconds (its
         speed_factor: the durations it is added to are).  For a line that bounds it (a start r
-        away makes it at most r longer); for an arc it does not (tests/test_streamer_found_overstatement.py)."""
+        away makes it at most r longer).  For an arc nothing does: the circle through a start r
+        away, the G300 point and the end grows without bound as that start nears the G300 point
+        (tests/test_streamer_found_overstatement.py found a 571 mm arc overrun), so time never
+        confirms it — a sighting on a later frame does, or the arm at rest at the last target
+        (``confirm_all_done``, which armctl/job.py also applies while the FIFO bound holds the job)."""
         if not self._start_unknown(segment):
             return 0.0
+        if segment.kind == "arc":
+            return math.inf
         command, model = segment.command, self.planner.model
         speed_mm_min = getattr(command, "speed_mm_min", None) or getattr(command, "speed1_mm_min", 0.0) / 2
         speed_mm_min = min(speed_mm_min, model.profile.speed.max_linear_mm_min)
@@ -607,6 +616,11 @@ class Streamer:
                 slack = JOINT_TRACE_FRACTION  # matched on chords of its trace
             else:
                 slack = sent.xyz_tolerance_mm / segment.length if segment.length > 0 else 1.0
+            if not sent.path_known:
+                # on the planned path near where the real one may run: at least this far along,
+                # perhaps past its end already (the search stops at it), so no upper end —
+                # else the arm at rest at its target would hold the estimate there for ever
+                return fraction - slack, math.inf
             return fraction - slack, fraction + slack
 
         # A position says nothing about a frame whose X/Y/Z only the unverified kinematics know,
@@ -705,6 +719,18 @@ class Streamer:
         further on, the arm is at least at the first frame not searched, so that is the
         earliest index reported (evidence no stronger than what was searched)."""
         pending = self.pending
+        if 0 < end < len(pending):
+            # Cut before a frame this stream cannot judge: seen at the end of the last frame it
+            # can (or anywhere on a still one), the arm may be past it already, so that window has
+            # no upper end — else an arm at rest there (a held G300 whose joints 4-6 the arc
+            # keeps, the target of a joint move) would hold the estimate, and the job's end, back.
+            edge, judge = pending[end - 1], match
+
+            def match(sent: SentFrame):
+                found = judge(sent)
+                if sent is edge and found is not None and found[1] >= 1.0:
+                    return found[0], math.inf
+                return found
         candidates: list[tuple[int, float, float]] = []
         head = min(end, SCAN_WINDOW_FRAMES)
         for k in range(head):
@@ -986,15 +1012,23 @@ class Streamer:
         """Every frame written is known to have finished."""
         return not self.pending
 
-    def confirm_all_done(self) -> None:
+    def confirm_all_done(self, now: float | None = None) -> None:
         """The caller saw the arm at rest at the last frame's target: every frame written has
         run — except a trailing G300, which the arm holds until its G301 comes.  Sound only on
         the caller's proof (armctl/job.py): every status kind re-read unchanged, and no frame
-        that moves nothing (where the arm rests too) left before the last motion unproven."""
+        that moves nothing (where the arm rests too) left before the last motion unproven.
+        With ``now`` (the proof taken mid-job, more to be written) the time bound's chain starts
+        again there: it may have run to infinity behind an arc it cannot bound."""
         pending = self.pending
         while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             self._consume_one(by_reports=True)
             self.bound_evidence = Evidence.AT_REST
+        if now is None:
+            return
+        if pending:
+            self._restart_time_bound(pending[0].index, now)  # the held G300 is at the head
+        else:
+            self._certain_tail_s = min(self._certain_tail_s, now)
 
     def check_time_bound(self) -> None:
         """A sign of loss, told at the end of a job: the arm was proven to run a frame slower than
@@ -1051,6 +1085,8 @@ def _time_window(segment: Segment, lo: float, hi: float, time_at=None) -> tuple[
     """Seconds after the segment began between which the arm is at fractions ``lo``…``hi``
     of its path (a path of zero length: the whole segment); ``time_at(segment, fraction)``:
     ``Segment.time_at_fraction`` (the streamer's remembers: ``Streamer._time_at``)."""
+    if hi == math.inf:  # no upper end: the arm may be past the frame (``_search``, ``_observe``)
+        return _time_window(segment, lo, 0.0, time_at)[0], math.inf
     if segment.length <= 0:
         return 0.0, segment.duration_s
     if time_at is None:

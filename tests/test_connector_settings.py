@@ -6,14 +6,13 @@ the arm's seconds) and the start pose.  Virtual time throughout."""
 
 from __future__ import annotations
 
-import itertools
 import math
 import subprocess
 import sys
 
 import pytest
 from click.testing import CliRunner
-from hypothesis import HealthCheck, assume, given, settings
+from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import armctl.link
@@ -23,10 +22,10 @@ from armctl.bench.strategies import StreamerStrategy
 from armctl.cli import main
 from armctl.errors import ConfigError, ProfileError
 from armctl.estimate import JobEstimator
-from armctl.motion import MotionModel, Planner
+from armctl.motion import MotionModel
 from armctl.profile import CONNECTOR_KEYS, DOCUMENT, default_profile, load_profile, parse_profile
 from armctl.protocol import (
-    ArcEnd, JointMove, JointsHighStatus, JointsLowStatus, LinearMove, PauseToggle, PositionStatus, SetWorktableOrigin,
+    JointMove, JointsLowStatus, LinearMove, PauseToggle, PositionStatus, SetWorktableOrigin,
     StatusReader, WorktableStatus,
 )
 from armctl.sim.model import SimOptions, SimulatedArm
@@ -365,12 +364,11 @@ def test_random_jobs_on_any_arm_the_profile_describes_never_drop_never_overstate
     """The profile says what the arm is (kinematics unverified: the arm's links may differ); the
     lower bound of frames consumed never passes what the arm has really finished, checked at every
     status frame against the simulator's truth, and nothing is dropped."""
-    check_random_job(ops, fifo, control, frame, speed_factor, link_scale, origin, damage, seed, open_fault_too=False)
+    check_random_job(ops, fifo, control, frame, speed_factor, link_scale, origin, damage, seed)
 
 
-def check_random_job(ops, fifo, control, frame, speed_factor, link_scale, origin, damage, seed,
-                     open_fault_too: bool = True) -> None:
-    """The property's body; ``open_fault_too=False`` leaves out the known open fault's case."""
+def check_random_job(ops, fifo, control, frame, speed_factor, link_scale, origin, damage, seed) -> None:
+    """The property's body (the found cases call it too)."""
     commands = build_job(ops, with_pose_frames=True)  # on arrival too: the streamer keeps them in order
     if origin is not None:
         commands.insert(0, SetWorktableOrigin(*origin))
@@ -383,8 +381,6 @@ def check_random_job(ops, fifo, control, frame, speed_factor, link_scale, origin
                                                     "status_xyz_frame": frame, "speed_factor": speed_factor}}))
     snapshot = arm.snapshot()
     start = host.reported_pose(snapshot.position_mm, snapshot.joints_deg, snapshot.pwm_us, snapshot.origin_mm)
-    if not open_fault_too:
-        assume(link_scale == 1.0 or not _arc_from_an_unverified_joint_end(host, start, commands))  # see below
     strategy = StreamerStrategy(host, start, 2.0, options.baud)
     line: list[str] = []
     overstated = []
@@ -399,20 +395,6 @@ def check_random_job(ops, fifo, control, frame, speed_factor, link_scale, origin
     assert result.dropped == 0
     assert not overstated
     assert not strategy.streamer.losses  # no false alarm of loss on an arm that lost nothing
-
-
-def _arc_from_an_unverified_joint_end(model, start, commands) -> bool:
-    """Whether an arc starts where only the profile's unverified kinematics put a joint move's end:
-    on an arm whose links differ, the known open fault tests/test_streamer_found_overstatement.py
-    holds (a strict xfail; README names it).  The property above leaves exactly that case out, so
-    that it keeps checking everything else without failing at random on the one fault already
-    tracked; when the fault is fixed, drop the ``assume``."""
-    planner = Planner(model, start)
-    for command in commands:
-        segment = planner.feed(command)
-        if isinstance(command, ArcEnd) and segment.start.xyz_derived:
-            return True
-    return False
 
 
 @pytest.mark.timeout(60)
