@@ -585,16 +585,17 @@ class Job:
     def _check_job_time(self, done_s: float) -> None:
         """A sign of loss: the arm at rest at the last target sooner than the motion of every
         frame written could take at the fastest plausible pace.  The arm time may be short by
-        up to a rotation (the last motion seen is reported up to a rotation late)."""
+        up to a rotation (the last motion seen is reported up to a rotation late), and a move from
+        an unverified joint end may be any shorter than planned (``sure_motion_sent_s``)."""
         streamer = self.streamer
         streamer.check_time_bound()  # the other side: an arm slower than the time bound allows
         arm_s = done_s - self.view.started_s
-        least_s = streamer.motion_sent_s * streamer.fastest_factor
+        least_s = streamer.sure_motion_sent_s * streamer.fastest_factor
         if arm_s + ROTATION_S + LOSS_SLACK_S >= least_s:
             return
         streamer.losses.append(
             f"the arm was at rest at the last target {arm_s:.1f} s after the first frame, but the frames sent take "
-            f"{streamer.motion_sent_s:.1f} s of motion (at least {least_s:.1f} s on an arm "
+            f"{streamer.sure_motion_sent_s:.1f} s of motion (at least {least_s:.1f} s on an arm "
             f"{1 / streamer.fastest_factor:g}x faster than the model): some were not run (dropped by a full FIFO?)")
         suspect = streamer.first_time_only_index or 0
         if streamer.first_suspect_index is None or suspect < streamer.first_suspect_index:

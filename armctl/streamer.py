@@ -243,10 +243,18 @@ class SentFrame:
     # earlier frame of the job (a joint move's end): the arm's path is not the planned one, and near
     # its end it may pass within tolerance of the next frame's path, so a sighting may count on it
     # (the earliest claim) but never past it; the time bound, with ``_unknown_start_s``'s
-    # allowance, confirms it.
+    # allowance, confirms a line (never an arc).
     path_known: bool = True
     unknown_start_s: float = 0.0  # ``Streamer._unknown_start_s`` of its segment, reckoned once at write
     motion_before_s: float = 0.0  # the model's motion time of every frame written before it
+    # ... of those whose length the plan knows: a move from an unverified joint end (``path_known``
+    # False) may be any shorter, so the loss checks' least motion counts it as none
+    sure_before_s: float = 0.0
+
+    @property
+    def sure_s(self) -> float:
+        """Its own share of ``sure_before_s`` for the frames after it."""
+        return self.segment.duration_s if self.path_known else 0.0
 
 
 @dataclass(frozen=True)
@@ -324,6 +332,7 @@ class Streamer:
         self._time_proves = True  # False once the FIFO may have been cleared (``cleared``)
         self.confirmed_by_time = 0
         self.motion_sent_s = 0.0  # the model's motion time of every frame written
+        self.sure_motion_sent_s = 0.0  # ... less the frames that may be any shorter (``SentFrame.sure_before_s``)
         # Signs of loss (``losses``): each a sentence with its evidence; ``first_suspect_index``
         # is the earliest frame that may not have run (None: no sign).
         self.losses: list[str] = []
@@ -444,9 +453,11 @@ class Streamer:
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
             chain_end_s=self._certain_tail_s, group_index=self.sent, motion_before_s=self.motion_sent_s,
-            unknown_start_s=allowance_s,
+            unknown_start_s=allowance_s, sure_before_s=self.sure_motion_sent_s,
+            path_known=not (self.sent > 0 and self._start_unknown(segment)),
         )
         self.motion_sent_s += segment.duration_s
+        self.sure_motion_sent_s += frame.sure_s
         self._recent_sent.append(frame)
         if isinstance(command, ArcStart):
             # The arm holds a G300 at the head until its G301 has landed and runs both as one
@@ -463,8 +474,6 @@ class Streamer:
         self.pending.append(frame)
         if segment.kind in ("line", "arc"):
             self._cartesian.append(frame.index)
-        if self._start_unknown(segment) and self.sent > 0:
-            frame.path_known = False
         if self._xyz_unknown(segment) or not frame.path_known:
             self._blind.append(frame.index)
         self.sent += 1
@@ -579,7 +588,7 @@ class Streamer:
         speed_factor: the durations it is added to are).  For a line that bounds it (a start r
         away makes it at most r longer).  For an arc nothing does: the circle through a start r
         away, the G300 point and the end grows without bound as that start nears the G300 point
-        (tests/test_streamer_found_overstatement.py found a 571 mm arc overrun), so time never
+        (tests/test_unverified_joint_end.py found a 571 mm arc overrun), so time never
         confirms it — a sighting on a later frame does, or the arm at rest at the last target
         (``confirm_all_done``, which armctl/job.py also applies while the FIFO bound holds the job)."""
         if not self._start_unknown(segment):
@@ -826,7 +835,8 @@ class Streamer:
             return False  # out of the frames kept: no judgement
         since = last[1]
         at_k = recent[index - first]
-        gap_s = at_k.motion_before_s - recent[last[0] - first].motion_before_s - recent[last[0] - first].segment.duration_s
+        seen = recent[last[0] - first]
+        gap_s = at_k.sure_before_s - seen.sure_before_s - seen.sure_s  # the least motion between
         allowed_s = now - since + LOSS_SLACK_S
         if gap_s * self.fastest_factor <= allowed_s:
             return False
@@ -836,7 +846,7 @@ class Streamer:
                       if last[0] <= sent.index <= latest and last[2](sent)), None)
         if upper is None or upper.index + 1 >= index:
             return False
-        gap_s = at_k.motion_before_s - upper.motion_before_s - upper.segment.duration_s
+        gap_s = at_k.sure_before_s - upper.sure_before_s - upper.sure_s
         if gap_s * self.fastest_factor <= allowed_s:
             return False
         skipped = index - upper.index - 1

@@ -1,6 +1,8 @@
-"""Jobs Hypothesis found for the random-jobs property of tests/test_connector_settings.py, kept as
-explicit cases: an arc (G300/G301) right after a joint move on an arm whose kinematics are not
-verified.  The arc's real start is where the arm's own kinematics put the joint move's end, and
+"""Cartesian moves from a joint move's end on an arm whose kinematics are not verified: where they
+start only the arm's own kinematics know, so they may be longer or shorter than planned.
+
+Jobs Hypothesis found for the random-jobs property of tests/test_connector_settings.py, kept as
+explicit cases: an arc (G300/G301) right after a joint move.  The arc's real start is where the arm's own kinematics put the joint move's end, and
 the circle through it, the G300 point and the end may be far longer than the planned one — so
 the time bound never confirms such an arc (``Streamer._unknown_start_s``); a sighting on a later
 frame does, or the arm at rest at the last target, which the job engine also applies mid-job
@@ -70,3 +72,20 @@ def test_armctl_run_goes_on_past_the_fifo_bound_when_the_arm_rests_at_the_last_t
         cwd=tmp_path, capture_output=True, text=True, timeout=30)
     summary = json.loads(result.stdout.splitlines()[-1])
     assert (result.returncode, summary["outcome"], summary["frames_sent"]) == (0, "finished", 8), result.stderr
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("link_scale", ["0.8", "0.9", "1.0", "1.1"])
+def test_a_move_from_an_unverified_joint_end_shorter_than_planned_is_no_sign_of_loss(tmp_path, link_scale):
+    """A probed profile (``speed_tolerance = 1.05``: the loss checks' fastest arm is 1.05x the model)
+    on an arm whose links differ: the line after the joint move starts elsewhere and was up to 10 %
+    shorter — "frames may have been lost" (exit 1) at link_scale 0.9 before such a move counted as
+    none of the least motion the loss checks require (``SentFrame.sure_before_s``)."""
+    (tmp_path / "job.txt").write_text("G6 J1=30 J2=20 J3=10 J4=0 J5=60 J6=0 S1000 F90\n"
+                                      "G1 X250 Y0 Z150 A180 B0 C0 F300\n")
+    (tmp_path / "armctl.toml").write_text("[connector]\nspeed_tolerance = 1.05\n")
+    result = subprocess.run(
+        [sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", f"sim://?clock=virtual&link_scale={link_scale}"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=30)
+    summary = json.loads(result.stdout.splitlines()[-1])
+    assert (result.returncode, summary["outcome"]) == (0, "finished"), summary["messages"]
