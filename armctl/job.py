@@ -544,15 +544,18 @@ class Job:
         """The frames still pending before the last motion that move nothing (``_moves_arm``), in
         runs between moves that could hold the arm still for ``REST_CHECK_S``: even an arm
         ``slowest_factor`` times slower, fed each frame at the line's pace, leaves a shorter run
-        (a G54, an M code) before the rest check could see it still."""
+        (a G54, an M code) before the rest check could see it still — and where the arm rests
+        there (the end of the motion before them) may read as the last target
+        (``_may_read_as_end_of``): at rest far from it, the arm is plainly not done."""
         last = self._last_move
         if last is None:
             return []
         streamer, resting, run, hold_s = self.streamer, [], [], ARRIVAL_SLACK_S
+        target = self._recent[-1].segment  # what ``_at_last_target`` compares the readings with
         for sent in streamer.pending:
             if sent.index >= last.index or _moves_arm(sent.segment) or isinstance(sent.command, ArcStart):
-                if hold_s >= REST_CHECK_S:  # (a G300 runs with its G301: no rest in it)
-                    resting += run
+                if hold_s >= REST_CHECK_S and self._may_read_as_end_of(run[0].segment.end, target):
+                    resting += run  # (a G300 runs with its G301: no rest in it)
                 run, hold_s = [], ARRIVAL_SLACK_S
                 if sent.index >= last.index:
                     break
@@ -709,6 +712,22 @@ class Job:
             return len(joints) == 6 and max(abs(a - b) for a, b in zip(joints, segment.end.joints)) <= TARGET_DEG
         position = self._reported.get(0)
         return position is not None and max(abs(a - b) for a, b in zip(position, segment.end.xyz)) <= TARGET_MM
+
+    def _may_read_as_end_of(self, pose, segment) -> bool:
+        """Whether an arm at rest at the model's ``pose`` may report what ``_at_end_of(segment)``
+        takes for the end of ``segment``.  It cannot only where the pose is known in the readings
+        compared (not derived through the profile's unverified kinematics), in the same worktable,
+        and more than twice their tolerance away."""
+        end, verified = segment.end, self.streamer.kinematics_verified
+        if pose.origin_mm != end.origin_mm:
+            return True
+        if segment.kind == "joint" or end.xyz_derived:
+            if pose.joints_derived and not verified:
+                return True
+            return max(abs(a - b) for a, b in zip(pose.joints, end.joints)) <= 2 * TARGET_DEG
+        if pose.xyz_derived and not verified:
+            return True
+        return max(abs(a - b) for a, b in zip(pose.xyz, end.xyz)) <= 2 * TARGET_MM
 
     def _done_at(self, now: float) -> float:
         """When the arm finished: the end of its last motion seen, plus the model's time for

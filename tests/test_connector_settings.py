@@ -369,7 +369,7 @@ def test_random_jobs_on_any_arm_the_profile_describes_never_drop_never_overstate
 
 
 def check_random_job(ops, fifo, control, frame, speed_factor, link_scale, origin, damage, seed,
-                     speed_tolerance: float = 2.0) -> None:
+                     speed_tolerance: float = 2.0, time_limit_s: float = 3600.0) -> None:
     """The property's body (the found cases call it too)."""
     commands = build_job(ops, with_pose_frames=True)  # on arrival too: the streamer keeps them in order
     if origin is not None:
@@ -393,7 +393,7 @@ def check_random_job(ops, fifo, control, frame, speed_factor, link_scale, origin
         if strategy.streamer.consumed_lower_bound > truth:
             overstated.append((now, strategy.streamer.consumed_lower_bound, truth))
 
-    result = run_job(commands, strategy, arm, on_status=check, line=line, time_limit_s=3600.0)
+    result = run_job(commands, strategy, arm, on_status=check, line=line, time_limit_s=time_limit_s)
     assert not result.timed_out
     assert result.dropped == 0
     assert not overstated
