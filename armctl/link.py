@@ -371,7 +371,7 @@ class Link:
     def _take_run(self, run: list, built: list | None = None) -> tuple[int, bool]:
         """A run of quiet steps computed ahead by the simulator (``virtual_status_run``: one
         status frame each, with the clock time it is read at), read as ``wait`` reads them one
-        burst at a time — the clock at the frame's time, the frame (built by ``status_frame``
+        burst at a time — the clock at the frame's time, the frame (built by ``status_frames``
         and decoded by ``StatusReader.decode_frame``, ``VIRTUAL_BUILD_FRAMES`` at a time; the
         first ones may be ``built`` already), the state, ``on_status`` — stopping after the
         first frame that is news to ``on_status`` (a run never goes past the wait's end).  The
@@ -381,7 +381,7 @@ class Link:
         clock moved to the last one it took; when it raises, every frame it was given counts as
         read.  Returns (frames read, whether the last was news)."""
         port, clock, reader, on_status, unmerged = self.port, self.clock, self.reader, self.on_status, self._unmerged
-        build, decode = port.status_frame, reader.decode_frame
+        build, decode = port.status_frames, reader.decode_frame
         advance = clock.advance_to
         read = 0
         try:
@@ -393,7 +393,7 @@ class Link:
                         if read == len(run):
                             return read, False
                         if read == len(built):
-                            built += [decode(build(kind, due_s)) for _, kind, due_s, _, _ in run[read:read + VIRTUAL_BUILD_FRAMES]]
+                            built += [decode(data) for data in build(run[read:read + VIRTUAL_BUILD_FRAMES])]
                         frames = built[read:]
                         whole = None not in frames
                         if not whole:  # cannot happen on a clean line: the ordinary way reads it
@@ -417,7 +417,7 @@ class Link:
                             return read, False
                     for at_s, _, _, _, _ in run:
                         if read == len(built):  # the next frames built and decoded a batch at a time
-                            built += [decode(build(kind, due_s)) for _, kind, due_s, _, _ in run[read:read + VIRTUAL_BUILD_FRAMES]]
+                            built += [decode(data) for data in build(run[read:read + VIRTUAL_BUILD_FRAMES])]
                         frame = built[read]
                         if frame is None:  # cannot happen on a clean line: the ordinary way reads it
                             break

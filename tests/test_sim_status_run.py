@@ -55,7 +55,9 @@ def _by_runs(end_s: float, run_frames: int, read_of_each: int | None = None) -> 
         run = arm.status_run(now, end_s, MIN_STEP_S, run_frames, 0.0, 1.0)
         if run:
             used = len(run) if read_of_each is None else min(len(run), read_of_each)
-            read += [(at_s, arm.status_frame(kind, due_s)) for at_s, kind, due_s, _, _ in run[:used]]
+            built = arm.status_frames(run[:used])  # the link's way: a batch at a time
+            assert built == [arm.status_frame(kind, due_s) for _, kind, due_s, _, _ in run[:used]]
+            read += [(step[0], data) for step, data in zip(run, built)]
             arm.commit_status_run(run, used)
             now, from_runs = run[used - 1][0], from_runs + used
             continue
