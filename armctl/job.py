@@ -286,6 +286,7 @@ class Job:
         streaming = self.phase is _Phase.STREAMING
         draining = self.phase is _Phase.DRAINING
         deadline_s = self._deadline_s
+        rest_values = _REST_VALUES
         k = -1
         for frame in frames:
             k += 1
@@ -305,9 +306,8 @@ class Job:
             if other is not None:
                 other.receive_status(frame, now)
                 news = True  # another strategy may act on any frame
-            view.status_frames += 1
             kind = frame.KIND
-            values_of = _REST_VALUES.get(kind)
+            values_of = rest_values.get(kind)
             if values_of is None:
                 if kind == _RUN_POSITION_KIND:
                     if self._run_position is not None and frame.value != self._run_position:
@@ -315,6 +315,7 @@ class Job:
                         news = True
                     self._run_position = frame.value
                 if news or streamer.consumed_lower_bound != consumed:
+                    view.status_frames += k + 1
                     return k
                 continue
             values = values_of(frame)
@@ -346,7 +347,9 @@ class Job:
                         self._moved_from = motion
                         self._active_s = now
             if news or streamer.consumed_lower_bound != consumed:
+                view.status_frames += k + 1
                 return k
+        view.status_frames += k + 1  # (counted once: nothing above reads it)
         return None
 
     def wrote(self, now: float) -> None:
@@ -798,8 +801,7 @@ def _slot_moved(kind: int, old: tuple | None, new: tuple | None) -> bool:
     """One kind's readings (0 position, 1 and 2 the joint halves) changed by more than jitter."""
     if old is None or new is None:
         return old is not new
-    limit = TARGET_MM if kind == 0 else TARGET_DEG  # a plain loop: every moving status frame
-    for a, b in zip(old, new):
-        if abs(a - b) > limit:
-            return True
-    return False
+    limit = TARGET_MM if kind == 0 else TARGET_DEG  # unrolled (three readings a kind): every moving status frame
+    a, b, c = old
+    x, y, z = new
+    return abs(a - x) > limit or abs(b - y) > limit or abs(c - z) > limit
