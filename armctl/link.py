@@ -381,7 +381,7 @@ class Link:
         clock moved to the last one it took; when it raises, every frame it was given counts as
         read.  Returns (frames read, whether the last was news)."""
         port, clock, reader, on_status, unmerged = self.port, self.clock, self.reader, self.on_status, self._unmerged
-        build, decode = port.status_frames, reader.decode_frame
+        build, decode = port.status_frames, reader.decode_frames
         advance = clock.advance_to
         read = 0
         try:
@@ -393,11 +393,15 @@ class Link:
                         if read == len(run):
                             return read, False
                         if read == len(built):
-                            built += [decode(data) for data in build(run[read:read + VIRTUAL_BUILD_FRAMES])]
+                            batch = build(run[read:read + VIRTUAL_BUILD_FRAMES])
+                            decoded = decode(batch)
+                            built += decoded
+                            if len(decoded) < len(batch):  # cannot happen on a clean line: the ordinary way reads it
+                                built.append(None)
                         frames = built[read:]
-                        whole = None not in frames
-                        if not whole:  # cannot happen on a clean line: the ordinary way reads it
-                            frames = frames[:frames.index(None)]
+                        whole = built[-1] is not None
+                        if not whole:
+                            frames.pop()
                             if not frames:
                                 return read, False
                         times = [step[0] for step in run[read:read + len(frames)]]
@@ -417,7 +421,11 @@ class Link:
                             return read, False
                     for at_s, _, _, _, _ in run:
                         if read == len(built):  # the next frames built and decoded a batch at a time
-                            built += [decode(data) for data in build(run[read:read + VIRTUAL_BUILD_FRAMES])]
+                            batch = build(run[read:read + VIRTUAL_BUILD_FRAMES])
+                            decoded = decode(batch)
+                            built += decoded
+                            if len(decoded) < len(batch):
+                                built.append(None)
                         frame = built[read]
                         if frame is None:  # cannot happen on a clean line: the ordinary way reads it
                             break

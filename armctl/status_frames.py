@@ -426,6 +426,25 @@ class StatusReader:
             self._seen[data] = frame
         return frame
 
+    def decode_frames(self, bursts: list) -> list[StatusFrame]:
+        """``decode_frame`` of each burst in order, up to the first that is not one valid frame
+        (the list is then shorter): a batch of a virtual run's frames (``Link._take_run``), the
+        kinds that change all the time (position, joints) decoded here without a call each."""
+        if self._buffer:
+            return []
+        seen, decoders, decode_frame = self._seen, _WORD_DECODERS, self.decode_frame
+        found = []
+        for data in bursts:
+            frame = seen.get(data)
+            if frame is None:
+                kind = data[7] if len(data) == STATUS_SIZE and data[0] == STATUS_HEAD and data[8] == STATUS_TAIL else None
+                decode = decoders.get(kind) if kind not in _REPEATING_KINDS else None
+                frame = decode(data, 1) if decode is not None else decode_frame(data)
+                if frame is None:
+                    break
+            found.append(frame)
+        return found
+
     @staticmethod
     def _aligned(data: bytes) -> list[StatusFrame] | None:
         """The frames of a burst made of whole, valid status frames and nothing else (what a

@@ -101,6 +101,11 @@ def test_decode_frame_is_what_feed_finds():
     held = StatusReader()
     held.feed(frames[0][:4])
     assert held.decode_frame(frames[1]) is None  # bytes held from before: feed's job
+    # a batch: decode_frame of each, up to the first that is not a frame
+    assert StatusReader().decode_frames(frames) == [single.decode_frame(data) for data in frames]
+    assert StatusReader().decode_frames(frames[:7] + [b"\x00" * 9] + frames[8:]) == [single.decode_frame(data) for data in frames[:7]]
+    assert StatusReader().decode_frames(frames[:3] + [frames[3][:8]]) == [single.decode_frame(data) for data in frames[:3]]
+    assert held.decode_frames(frames[1:]) == []
     del arm
 
 
