@@ -802,6 +802,7 @@ class Arm:
         control = _JobControl(runner, spec.on_progress, spec.timeout_s, observer, journal_for(runner, script, spec.log))
         runner.on_update = control.on_update
         link.on_status = runner.on_status
+        link.on_status_run = runner.on_status_run
         with self._lock:
             self._job = control
             stopped = stops != self._stops  # a stop() between the check above and here
@@ -817,6 +818,7 @@ class Arm:
                 self._job = None
                 control.end()
             link.on_status = None
+            link.on_status_run = None
         result = RunResult.of(runner.view, outcome, script.lines(), estimated_job_s=plan.estimate.job_s)
         if control.timed_out:
             raise ArmTimeout(f"the arm did not prove the job done within {spec.timeout_s:g} s: it was stopped "

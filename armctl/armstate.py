@@ -103,23 +103,68 @@ class ArmState:
         """``update`` for each (frame, read time) of ``frames``, in order: the same state.  The
         kinds taken as read (not judged for jumps) are merged by their last frame alone — each
         sets only its own values and time, which a later frame of its kind overwrites — and the
-        judged kinds frame by frame (a jump is judged against the frame before).  ``Link``
-        merges the frames of its virtual runs so, when the state is read (``Link.state``)."""
-        latest = {}
-        update = self.update
-        judged = 0
-        for frame, now in frames:
-            kind = frame.KIND
+        judged kinds kind by kind (``_merge_judged``: a kind is judged against its own frames
+        alone).  ``Link`` merges the frames of its virtual runs so, when the state is read
+        (``Link.state``)."""
+        latest, judged = {}, {}
+        for item in frames:
+            kind = item[0].KIND
             if kind in _JUDGED_KINDS:
-                update(frame, now)
-                judged += 1
+                run = judged.get(kind)
+                if run is None:
+                    judged[kind] = [item]
+                else:
+                    run.append(item)
             else:
-                latest[kind] = frame, now
-        self.frames += len(frames) - judged
+                latest[kind] = item
+        self.frames += len(frames)
+        for kind, run in judged.items():
+            self._merge_judged(kind, run)
         last_seen = self.last_seen
         for kind, (frame, now) in latest.items():  # never held: only the judged kinds are
             _APPLY[kind](self, frame)
             last_seen[kind] = now
+
+    def _merge_judged(self, kind: int, run: list) -> None:
+        """``update`` (less the frame count) for each (frame, read time) of ``run``, all of one
+        judged kind, in order: each frame judged against the values last accepted and the frame
+        held (``_jump_between``'s arithmetic, written out), only the last accepted applied."""
+        speed = self.max_speed_mm_s if kind == _POSITION_KIND else self.max_joint_speed_deg_s
+        held = self._held.get(kind)
+        if speed is None:  # nothing is judged: the last frame is taken
+            accepted, seen = run[-1]
+            held = None
+        else:
+            slack = _JUMP_SLACK_MM if kind == _POSITION_KIND else _JUMP_SLACK_DEG
+            values_of = _VALUE_GETTERS[kind]
+            seen = self.last_seen.get(kind)
+            previous = None if seen is None else self._current(kind)
+            accepted, suspect = None, 0
+            for frame, now in run:
+                values = values_of(frame)
+                if previous is not None:
+                    elapsed_s = now - seen
+                    limit = speed * (0.0 if 0.0 > elapsed_s else elapsed_s) + slack  # max(elapsed_s, 0.0)
+                    p, q, r = previous
+                    x, y, z = values
+                    if abs(p - x) > limit or abs(q - y) > limit or abs(r - z) > limit:
+                        if held is not None:
+                            elapsed_s = now - held[1]
+                            limit = speed * (0.0 if 0.0 > elapsed_s else elapsed_s) + slack
+                            p, q, r = values_of(held[0])
+                        if held is None or abs(p - x) > limit or abs(q - y) > limit or abs(r - z) > limit:
+                            held = (frame, now)
+                            suspect += 1
+                            continue
+                held, previous, seen, accepted = None, values, now, frame
+            self.suspect_frames += suspect
+        if held is None:
+            self._held.pop(kind, None)
+        else:
+            self._held[kind] = held
+        if accepted is not None:
+            _APPLY[kind](self, accepted)
+            self.last_seen[kind] = seen
 
     def _jump_between(self, before: StatusFrame | tuple, after: StatusFrame, elapsed_s: float) -> bool:
         kind = after.KIND

@@ -279,67 +279,90 @@ class Job:
         (``Streamer.plan_changes``: on the same frame's path where the estimate has the arm), or an
         SD run position that did not move, with nothing newly known consumed and no pause asked
         or in force (and, while only evidence lets the next frame go, no rest that may now prove
-        every frame written finished) — a virtual-time host reads on past it without asking (``Wait``'s promise:
-        nothing changes between status frames but at its time)."""
-        streamer = self.streamer
-        consumed, plan = streamer.consumed_lower_bound, streamer.plan_changes
-        streamer.receive_status(frame, now)
-        # Past streaming every frame is news: the end-of-job checks compare times their own way
-        # (``now - since >= REST_CHECK_S``), which may hold a rounding error before the time the
-        # Wait named; a frame read then must find them as it always did.
-        # Draining, one answer holds until the estimate runs out or the deadline (``_draining``:
-        # no rest before the estimated finish, nothing else before the deadline): a frame read
-        # before both that moved neither the estimate nor the bound may change only the time of
-        # a Wait, never to before either (the host is woken by then, or by a later frame).
-        news = self.control.busy or (self.phase is not _Phase.STREAMING and not (
-            self.phase is _Phase.DRAINING and streamer.plan_changes == plan and now < self._deadline_s
-            and now < (streamer.estimated_finish_s() or now)))
-        if self.pacing is not streamer:
-            self.pacing.receive_status(frame, now)
-            news = True  # another strategy may act on any frame
-        self.view.status_frames += 1
-        kind = frame.KIND
-        values_of = _REST_VALUES.get(kind)
-        if values_of is None:
-            if kind == _RUN_POSITION_KIND:
-                if self._run_position is not None and frame.value != self._run_position:
-                    self._active_s = now  # an SD program advancing, even with the arm standing still
-                    news = True
-                self._run_position = frame.value
-            return news or streamer.consumed_lower_bound != consumed
-        values = values_of(frame)
-        if kind == 4:  # news while streaming only through the control state (or the bound)
-            self._pause_reports.append(frame.paused)
-            control = self.control
-            version = control.version
-            control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
-            news = news or control.version != version
-        else:  # position and joints while streaming: news only through the streamer's
-            # evidence (the bound, below) or its plan (the estimate's end times, the pace)
-            news = news or streamer.plan_changes != plan
-            if kind == 0:
-                self.view.position_mm = values = streamer.worktable_xyz(values)  # status_xyz_frame
-        reported = self._reported
-        changed = reported.get(kind) != values  # else so are the readings: _rest and _motion hold them
-        reported[kind] = values
-        self._read_at[kind] = now
-        if changed or self._rest is None:
-            # One kind's values changed (or these are the first readings): the readings differ
-            # from the last ``_rest`` (it always holds the readings before this frame), and so
-            # does the motion unless only the pause and PWM changed.
-            self._rest = ((reported.get(0), reported.get(1), reported.get(2), reported.get(4)), now)
-            if kind != 4 or self._motion is None:
-                motion = self._rest[0][:3]
-                self._motion = (motion, now)
-                moved_from = self._moved_from
-                # Every other kind's readings are within jitter of ``_moved_from`` (checked when
-                # they changed, or equal since it was taken): only this kind's can have moved.
-                if moved_from is None or (kind != 4 and _slot_moved(kind, moved_from[kind], values)):
-                    self._moved_from = motion
-                    self._active_s = now
-        elif self._held and now - self._rest[1] >= REST_CHECK_S and self.phase is _Phase.STREAMING:
-            news = True  # the rest that may prove every frame written finished (``_rest_proves_all_written``)
-        return news or streamer.consumed_lower_bound != consumed
+        every frame written finished) — a virtual-time host reads on past it without asking
+        (``Wait``'s promise: nothing changes between status frames but at its time).
+        ``receive_statuses`` of one frame."""
+        return self.receive_statuses((frame,), (now,)) is not None
+
+    def receive_statuses(self, frames, times) -> int | None:
+        """``receive_status`` for each frame of ``frames`` read at the time of ``times`` at the same
+        place, in order, up to the first that is news: its place (the frames after it are not
+        taken), or None when none was (all taken).  A virtual-time host hands over the frames of
+        a simulator's quiet stretch this way (``JobRunner.on_status_run``): one call, not one a frame."""
+        streamer, view, control = self.streamer, self.view, self.control
+        streamer_receive, reported, read_at = streamer.receive_status, self._reported, self._read_at
+        other = self.pacing if self.pacing is not streamer else None
+        streaming = self.phase is _Phase.STREAMING
+        draining = self.phase is _Phase.DRAINING
+        held = self._held and streaming
+        deadline_s = self._deadline_s
+        rest_values = _REST_VALUES
+        k = -1
+        for frame in frames:
+            k += 1
+            now = times[k]
+            consumed, plan = streamer.consumed_lower_bound, streamer.plan_changes
+            streamer_receive(frame, now)
+            # Past streaming every frame is news: the end-of-job checks compare times their own way
+            # (``now - since >= REST_CHECK_S``), which may hold a rounding error before the time the
+            # Wait named; a frame read then must find them as it always did.
+            # Draining, one answer holds until the estimate runs out or the deadline (``_draining``:
+            # no rest before the estimated finish, nothing else before the deadline): a frame read
+            # before both that moved neither the estimate nor the bound may change only the time of
+            # a Wait, never to before either (the host is woken by then, or by a later frame).
+            news = control.busy or (not streaming and not (
+                draining and streamer.plan_changes == plan and now < deadline_s
+                and now < (streamer.estimated_finish_s() or now)))
+            if other is not None:
+                other.receive_status(frame, now)
+                news = True  # another strategy may act on any frame
+            kind = frame.KIND
+            values_of = rest_values.get(kind)
+            if values_of is None:
+                if kind == _RUN_POSITION_KIND:
+                    if self._run_position is not None and frame.value != self._run_position:
+                        self._active_s = now  # an SD program advancing, even with the arm standing still
+                        news = True
+                    self._run_position = frame.value
+                if news or streamer.consumed_lower_bound != consumed:
+                    view.status_frames += k + 1
+                    return k
+                continue
+            values = values_of(frame)
+            if kind == 4:  # news while streaming only through the control state (or the bound)
+                self._pause_reports.append(frame.paused)
+                version = control.version
+                control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
+                news = news or control.version != version
+            else:  # position and joints while streaming: news only through the streamer's
+                # evidence (the bound, below) or its plan (the estimate's end times, the pace)
+                news = news or streamer.plan_changes != plan
+                if kind == 0:
+                    view.position_mm = values = streamer.worktable_xyz(values)  # status_xyz_frame
+            changed = reported.get(kind) != values  # else so are the readings: _rest and _motion hold them
+            reported[kind] = values
+            read_at[kind] = now
+            if changed or self._rest is None:
+                # One kind's values changed (or these are the first readings): the readings differ
+                # from the last ``_rest`` (it always holds the readings before this frame), and so
+                # does the motion unless only the pause and PWM changed.
+                self._rest = ((reported.get(0), reported.get(1), reported.get(2), reported.get(4)), now)
+                if kind != 4 or self._motion is None:
+                    motion = self._rest[0][:3]
+                    self._motion = (motion, now)
+                    moved_from = self._moved_from
+                    # Every other kind's readings are within jitter of ``_moved_from`` (checked when
+                    # they changed, or equal since it was taken): only this kind's can have moved.
+                    if moved_from is None or (kind != 4 and _slot_moved(kind, moved_from[kind], values)):
+                        self._moved_from = motion
+                        self._active_s = now
+            elif held and now - self._rest[1] >= REST_CHECK_S:
+                news = True  # the rest that may prove every frame written finished (``_rest_proves_all_written``)
+            if news or streamer.consumed_lower_bound != consumed:
+                view.status_frames += k + 1
+                return k
+        view.status_frames += k + 1  # (counted once: nothing above reads it)
+        return None
 
     def wrote(self, now: float) -> None:
         """The host wrote the frame the last ``Write`` asked for, starting at ``now``."""
@@ -823,8 +846,7 @@ def _slot_moved(kind: int, old: tuple | None, new: tuple | None) -> bool:
     """One kind's readings (0 position, 1 and 2 the joint halves) changed by more than jitter."""
     if old is None or new is None:
         return old is not new
-    limit = TARGET_MM if kind == 0 else TARGET_DEG  # a plain loop: every moving status frame
-    for a, b in zip(old, new):
-        if abs(a - b) > limit:
-            return True
-    return False
+    limit = TARGET_MM if kind == 0 else TARGET_DEG  # unrolled (three readings a kind): every moving status frame
+    a, b, c = old
+    x, y, z = new
+    return abs(a - x) > limit or abs(b - y) > limit or abs(c - z) > limit

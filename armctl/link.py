@@ -231,6 +231,9 @@ class Link:
         # frame (``ArmState.update_many``); at most ``UNMERGED_FRAMES_MAX`` held (a long job).
         self._unmerged: list = []
         self.on_status = on_status
+        # ``on_status`` for a batch of frames at once (virtual runs, ``_take_run``): the place of
+        # the first that is news, or None (``JobRunner.on_status_run``); set with ``on_status``
+        self.on_status_run: Callable[[list, list], int | None] | None = None
         self.bytes_received = 0
         # The unread steps of the last status run (the run, the first unread, the clock time of
         # the last read, the frames built for it so far): still the simulator's next steps while
@@ -368,23 +371,61 @@ class Link:
     def _take_run(self, run: list, built: list | None = None) -> tuple[int, bool]:
         """A run of quiet steps computed ahead by the simulator (``virtual_status_run``: one
         status frame each, with the clock time it is read at), read as ``wait`` reads them one
-        burst at a time — the clock at the frame's time, the frame (built by ``status_frame``
+        burst at a time — the clock at the frame's time, the frame (built by ``status_frames``
         and decoded by ``StatusReader.decode_frame``, ``VIRTUAL_BUILD_FRAMES`` at a time; the
         first ones may be ``built`` already), the state, ``on_status`` — stopping after the
         first frame that is news to ``on_status`` (a run never goes past the wait's end).  The
         frames read are committed to the simulator whatever happens (``on_status`` may raise:
-        Ctrl-C), so none is read twice.  Returns (frames read, whether the last was news)."""
+        Ctrl-C), so none is read twice.  With ``on_status_run`` set, the frames built go to it a
+        batch at a time (the engine takes them in one call: ``JobRunner.on_status_run``), the
+        clock moved to the last one it took; when it raises, every frame it was given counts as
+        read.  Returns (frames read, whether the last was news)."""
         port, clock, reader, on_status, unmerged = self.port, self.clock, self.reader, self.on_status, self._unmerged
-        build, decode = port.status_frame, reader.decode_frame
+        build, decode = port.status_frames, reader.decode_frames
         advance = clock.advance_to
         read = 0
         try:
             with self._changed:
                 try:
                     built = [] if built is None else built
+                    on_status_run = self.on_status_run if on_status is not None else None
+                    while on_status_run is not None:  # the frames built, a batch at a time
+                        if read == len(run):
+                            return read, False
+                        if read == len(built):
+                            batch = build(run[read:read + VIRTUAL_BUILD_FRAMES])
+                            decoded = decode(batch)
+                            built += decoded
+                            if len(decoded) < len(batch):  # cannot happen on a clean line: the ordinary way reads it
+                                built.append(None)
+                        frames = built[read:]
+                        whole = built[-1] is not None
+                        if not whole:
+                            frames.pop()
+                            if not frames:
+                                return read, False
+                        times = [step[0] for step in run[read:read + len(frames)]]
+                        news = len(frames) - 1  # if it raises: the engine had them all, or is gone
+                        try:
+                            news = on_status_run(frames, times)
+                        finally:
+                            taken = len(frames) if news is None else news + 1
+                            advance(times[taken - 1])
+                            read += taken
+                            unmerged += zip(frames, times[:taken])  # merged into the state when it is read
+                        if news is not None:
+                            if read < len(run):
+                                self._run_tail = (run, read, times[taken - 1], built)
+                            return read, True
+                        if not whole:
+                            return read, False
                     for at_s, _, _, _, _ in run:
                         if read == len(built):  # the next frames built and decoded a batch at a time
-                            built += [decode(build(kind, due_s)) for _, kind, due_s, _, _ in run[read:read + VIRTUAL_BUILD_FRAMES]]
+                            batch = build(run[read:read + VIRTUAL_BUILD_FRAMES])
+                            decoded = decode(batch)
+                            built += decoded
+                            if len(decoded) < len(batch):
+                                built.append(None)
                         frame = built[read]
                         if frame is None:  # cannot happen on a clean line: the ordinary way reads it
                             break

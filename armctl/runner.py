@@ -91,6 +91,7 @@ class JobRunner:
         # virtual-time frame costs no logging call (``on_status``)
         self._quiet = False
         self._job_receive = self.job.receive_status
+        self._job_receive_run = self.job.receive_statuses
 
     @property
     def failure(self) -> str | None:
@@ -133,6 +134,25 @@ class JobRunner:
         else:
             news = self._receive(frame, at_s)
         return news or self.stop_requested or not requests.empty()
+
+    def on_status_run(self, frames: list, times: list) -> int | None:
+        """``on_status`` for each of ``frames`` read at the model time at the same place of
+        ``times``, in order, on a virtual clock: the place of the first whose answer is True (the
+        frames after it are not taken), or None when the link may read on past them all — with
+        nothing to tell (no --log, -v quiet) and no request queued, the engine takes them in one
+        call (``Job.receive_statuses``); a stop asked meanwhile is seen after them (they are a
+        batch of the simulator's quiet frames: ``Link._take_run``)."""
+        if not self._quiet or self.stop_requested or not self.requests.empty():
+            on_status = self.on_status
+            for k, frame in enumerate(frames):
+                if on_status(frame, times[k]) is not False:
+                    return k
+            return None
+        origin_s = self._origin_s
+        news = self._job_receive_run(frames, [t - origin_s for t in times] if origin_s else times)
+        if news is None and (self.stop_requested or not self.requests.empty()):
+            return len(frames) - 1
+        return news
 
     def control(self, request: Callable[[Job], object]) -> None:
         """Queue ``request(job)`` (e.g. ``Job.pause``) from any thread — the run panel's keys;

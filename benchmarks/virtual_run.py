@@ -82,7 +82,7 @@ def one_run(script_path: Path) -> tuple[tuple[float, float], list[tuple[float, b
 def baseline(written: list[tuple[float, bytes]], end_s: float) -> tuple[float, float]:
     """(wall, CPU) seconds of the bare simulator replaying ``written`` and advancing to ``end_s``
     the way the run's link drives it: its quiet stretches as runs of steps timed ahead, each
-    frame built and decoded (``status_run``, ``status_frame``, ``StatusReader.decode_frame``),
+    frame built and decoded (``status_run``, ``status_frames``, ``StatusReader.decode_frame``),
     every other step burst by burst (``advance``, ``StatusReader.feed``)."""
     from armctl.protocol import StatusReader
     from armctl.sim.model import SimulatedArm
@@ -97,8 +97,8 @@ def baseline(written: list[tuple[float, bytes]], end_s: float) -> tuple[float, f
         until_s = min(writes[k][0], end_s) if k < len(writes) else end_s
         run = arm.status_run(now, until_s, 1e-6, 512, 0.0, 1.0)
         if run:
-            for _, kind, due_s, _, _ in run:
-                frames += reader.decode_frame(arm.status_frame(kind, due_s)) is not None
+            for data in arm.status_frames(run):
+                frames += reader.decode_frame(data) is not None
             arm.commit_status_run(run, len(run))
             now = run[-1][0]
             continue

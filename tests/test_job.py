@@ -308,3 +308,37 @@ def test_frames_after_the_last_motion_are_done_only_when_even_a_slow_arm_has_run
     assert action == Finished(Outcome.FINISHED)
     assert now >= 3 * 0.3 * job.streamer.slowest_factor
     assert job.view.arm_time_s == pytest.approx(0.9, abs=0.1)  # the arm time is still the model's
+
+
+class _NewsArm(FakeArm):
+    """A FakeArm that records which of its frames were news — fed one by one, or as a run
+    (``receive_statuses``, fed again after each frame it names)."""
+
+    def __init__(self, job: Job, as_run: bool) -> None:
+        super().__init__(job)
+        self.as_run = as_run
+        self.news: list[bool] = []
+
+    def report(self, t: float) -> None:
+        frames = [PositionStatus(*self.position(t)), JointsLowStatus(*self.joints[:3]),
+                  JointsHighStatus(*self.joints[3:]), PauseStatus(1 if self.paused else 0, 1500)]
+        if not self.as_run:
+            self.news += [self.job.receive_status(frame, t) for frame in frames]
+            return
+        while frames:
+            k = self.job.receive_statuses(frames, [t] * len(frames))
+            taken = len(frames) if k is None else k + 1
+            self.news += [False] * (taken - 1) + [k is not None]
+            frames = frames[taken:]
+
+
+def test_a_run_of_frames_is_news_where_one_frame_at_a_time_is():
+    """``receive_statuses`` names the first frame ``receive_status`` calls news and takes none
+    after it: fed either way, the same answers frame by frame and the same job."""
+    runs = []
+    for as_run in (False, True):
+        job = make_job()
+        arm = _NewsArm(job, as_run)
+        runs.append((drive(job, arm), arm.news, job.view.frames_sent, job.view.status_frames, job.view.arm_time_s))
+    assert runs[0] == runs[1]
+    assert 0 < sum(runs[0][1]) < len(runs[0][1])  # some frames were news, and some not

@@ -72,13 +72,13 @@ def test_the_steps_of_a_run_past_the_news_are_read_by_the_next_wait_as_a_new_run
             return status_run(*args)
 
         link.port.virtual_status_run = timed
-        status_frame, built = link.port.status_frame, []
+        status_frames, built = link.port.status_frames, []
 
-        def building(*args):
-            built.append(args)
-            return status_frame(*args)
+        def building(steps):
+            built.extend(steps)
+            return status_frames(steps)
 
-        link.port.status_frame = building
+        link.port.status_frames = building
         if not keep_tails:
             take_run = link._take_run
 

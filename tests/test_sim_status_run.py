@@ -55,7 +55,9 @@ def _by_runs(end_s: float, run_frames: int, read_of_each: int | None = None) -> 
         run = arm.status_run(now, end_s, MIN_STEP_S, run_frames, 0.0, 1.0)
         if run:
             used = len(run) if read_of_each is None else min(len(run), read_of_each)
-            read += [(at_s, arm.status_frame(kind, due_s)) for at_s, kind, due_s, _, _ in run[:used]]
+            built = arm.status_frames(run[:used])  # the link's way: a batch at a time
+            assert built == [arm.status_frame(kind, due_s) for _, kind, due_s, _, _ in run[:used]]
+            read += [(step[0], data) for step, data in zip(run, built)]
             arm.commit_status_run(run, used)
             now, from_runs = run[used - 1][0], from_runs + used
             continue
@@ -99,6 +101,11 @@ def test_decode_frame_is_what_feed_finds():
     held = StatusReader()
     held.feed(frames[0][:4])
     assert held.decode_frame(frames[1]) is None  # bytes held from before: feed's job
+    # a batch: decode_frame of each, up to the first that is not a frame
+    assert StatusReader().decode_frames(frames) == [single.decode_frame(data) for data in frames]
+    assert StatusReader().decode_frames(frames[:7] + [b"\x00" * 9] + frames[8:]) == [single.decode_frame(data) for data in frames[:7]]
+    assert StatusReader().decode_frames(frames[:3] + [frames[3][:8]]) == [single.decode_frame(data) for data in frames[:3]]
+    assert held.decode_frames(frames[1:]) == []
     del arm
 
 
@@ -129,12 +136,15 @@ def test_cartesian_at_is_sample(fraction):
     assert checked >= 3  # two lines and the arc
 
 
-def _link_reads(raise_at: int | None, until_s: float) -> list[tuple[int, float]]:
+def _link_reads(raise_at: int | None, until_s: float, as_run: bool = False) -> list[tuple[int, float]]:
     """What a virtual link's news-only waits read up to ``until_s`` when ``on_status`` raises
-    (a Ctrl-C) at frame ``raise_at`` — in the middle of a run — and the waits go on after it."""
+    (a Ctrl-C) at frame ``raise_at`` — in the middle of a run — and the waits go on after it.
+    ``as_run``: the frames of runs go to ``on_status_run`` a batch at a time, which raises
+    after taking the batch that holds frame ``raise_at`` (all its frames count as read)."""
     from armctl.link import Link
 
     seen: list[tuple[int, float]] = []
+    batches = []
 
     def on_status(frame, now):
         seen.append((frame.KIND, now))
@@ -142,7 +152,17 @@ def _link_reads(raise_at: int | None, until_s: float) -> list[tuple[int, float]]
             raise KeyboardInterrupt
         return False
 
+    def on_status_run(frames, times):
+        before = len(seen)
+        batches.append(len(frames))
+        seen.extend((frame.KIND, now) for frame, now in zip(frames, times))
+        if raise_at is not None and before < raise_at <= len(seen):
+            raise KeyboardInterrupt
+        return None
+
     with Link.open("sim://?clock=virtual", on_status=on_status) as link:
+        if as_run:
+            link.on_status_run = on_status_run
         while link.clock.now() < until_s:
             try:
                 link.wait(until_s, news_only=True)
@@ -151,6 +171,7 @@ def _link_reads(raise_at: int | None, until_s: float) -> list[tuple[int, float]]
         assert link.reader.frames == len(seen) and link.bytes_received == 9 * len(seen)
         built = link.port.model.status_frames_built  # every frame built was read once, but one in flight
         assert built - len(seen) == (1 if link.port.model.arm_line.next_arrival_s() is not None else 0)
+    assert max(batches, default=0) > 1 if as_run else not batches  # the runs' frames went as batches
     return seen
 
 
@@ -159,3 +180,6 @@ def test_a_run_cut_short_by_an_exception_reads_no_frame_twice():
     assert len(whole) == 100  # one per 30 ms
     for raise_at in (1, 37, 99):
         assert _link_reads(raise_at, 3.0) == whole
+    assert _link_reads(None, 3.0, as_run=True) == whole  # the frames of runs in batches: the same
+    for raise_at in (1, 37, 99):
+        assert _link_reads(raise_at, 3.0, as_run=True) == whole

@@ -51,17 +51,19 @@ EXPECTED = {  # (the engine's frames read and written with their model times, th
 def _record(monkeypatch, tmp_path, name: str, with_log: bool) -> tuple[str, str]:
     script, url = CASES[name]
     events: list[str] = []
-    receive, write = Job.receive_status, Link.write
+    receive, write = Job.receive_statuses, Link.write
 
-    def receive_status(self, frame, now):
-        events.append(f"rx {now!r} {frame.encode().hex()}")
-        return receive(self, frame, now)
+    def receive_statuses(self, frames, times):  # every frame the engine takes (receive_status too)
+        news = receive(self, frames, times)
+        taken = len(frames) if news is None else news + 1
+        events.extend(f"rx {times[k]!r} {frames[k].encode().hex()}" for k in range(taken))
+        return news
 
     def link_write(self, frame):
         events.append(f"tx {self.clock.now()!r} {bytes(frame).hex()}")
         return write(self, frame)
 
-    monkeypatch.setattr(Job, "receive_status", receive_status)
+    monkeypatch.setattr(Job, "receive_statuses", receive_statuses)
     monkeypatch.setattr(Link, "write", link_write)
     monkeypatch.chdir(SCRIPTS.parent)  # the --log names the script as given: relative, so the digest is the same in any checkout
     args = ["run", f"scripts/{script}", "--no-live", "--port", url]

@@ -240,6 +240,11 @@ class SimulatedArm:
         """The status frame of ``kind`` built at ``at_s`` (a step of a ``status_run``)."""
         return self._status.encode(kind, self.executor, at_s)
 
+    def status_frames(self, steps: list) -> list[bytes]:
+        """``status_frame`` of each step of a ``status_run`` in ``steps``, in one call (the link
+        builds a batch at a time: ``Link._take_run``)."""
+        return self._status.encode_steps(self.executor, steps)
+
     def commit_status_run(self, run: list[tuple[float, int, float, float, float]], frames: int) -> None:
         """Make the first ``frames`` steps of ``run`` (``status_run``, nothing changed since) so:
         their status frames built, sent and read, the model at the last one's time."""

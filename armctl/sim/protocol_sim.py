@@ -342,6 +342,10 @@ class Serial(SerialBase):
         """The status frame of one step of a ``virtual_status_run``."""
         return self.model.status_frame(kind, at_s)
 
+    def status_frames(self, steps: list) -> list[bytes]:
+        """The status frames of some steps of a ``virtual_status_run``, in one call."""
+        return self.model.status_frames(steps)
+
     def commit_status_run(self, run: list, frames: int) -> None:
         """The first ``frames`` of ``run`` were read: the model and the clock move to the last one."""
         if frames <= 0:

@@ -135,6 +135,12 @@ class StatusEncoder:
             raise ValueError(f"no status kind {kind}")
         return encode(executor, at_s)
 
+    def encode_steps(self, executor, steps: list) -> list[bytes]:
+        """``encode`` of each step (kind, due time) of ``SimulatedArm.status_run``'s ``steps``."""
+        by_kind, encode = self._by_kind, self.encode  # (encode: what it says of an unknown kind)
+        return [by_kind[kind](executor, due_s) if kind in by_kind else encode(kind, executor, due_s)
+                for _, kind, due_s, _, _ in steps]
+
     # One method a kind (``_by_kind``).  A pose kind takes the values of the pose from
     # ``executor.cartesian_at`` while a line or an arc runs between its ends (the pose
     # ``Segment.sample`` would build: worktable Cartesian values, its origin, PWM and IK hint the
