@@ -115,3 +115,31 @@ def test_a_move_from_an_unverified_joint_end_shorter_than_planned_is_no_sign_of_
         cwd=tmp_path, capture_output=True, text=True, timeout=30)
     summary = json.loads(result.stdout.splitlines()[-1])
     assert (result.returncode, summary["outcome"]) == (0, "finished"), summary["messages"]
+
+
+FAR_REST_JOB = """\
+G6 J1=20 J2=10 J3=0 J4=0 J5=80 J6=0 S1500 F90
+G300 X250 Y0 Z120 A180 B0 C0 R137.85 F4000
+G301 X200 Y-120 Z120 F4000
+G1 S1000 F3000
+G222 X180 Y80 Z90 K1500 F5000
+POSE 2
+"""
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("link_scale", ["1.0", "1.05"])
+def test_armctl_run_goes_on_when_held_after_the_arc_at_rest_far_from_the_pwm_frame(tmp_path, link_scale):
+    """The installed command on HELD_BY_A_REST_FAR_FROM_THE_TARGET's shape (an arm 2x slower,
+    control frames on arrival, the probe's speed_tolerance): held after the arc, the PWM frame at
+    the arc's end, 100 mm from the last target, must not keep the arm's rest at that target from
+    proving the frames written finished — before, the job waited for ever (here: the timeout)."""
+    (tmp_path / "far.txt").write_text(FAR_REST_JOB)
+    (tmp_path / "armctl.toml").write_text('[connector]\ncontrol_frames = "arrival"\nspeed_factor = 2.0\n'
+                                          'speed_tolerance = 1.05\n')
+    result = subprocess.run(
+        [sys.executable, "-m", "armctl", "run", "far.txt", "--json",
+         "--port", f"sim://?clock=virtual&control_frames=arrival&speed_factor=2&link_scale={link_scale}"],
+        cwd=tmp_path, capture_output=True, text=True, timeout=30)
+    summary = json.loads(result.stdout.splitlines()[-1])
+    assert (result.returncode, summary["outcome"], summary["frames_sent"]) == (0, "finished", 6), result.stderr
