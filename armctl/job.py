@@ -32,7 +32,9 @@ Rules:
   with only evidence to let the next frame go): the same proof — at rest, at the last target
   written, not paused, the trailing frames surely done — proves every frame written finished,
   and the job goes on (``_rest_proves_all_written``): what time cannot confirm (an arc from an
-  unverified joint end) never holds a job for ever.  A status frame that may complete that
+  unverified joint end) never holds a job for ever.  Where a run of frames before the last move
+  may hold the arm at that same target, the rest proves the frames before the first such run
+  (``_rest_proves_done_before``) and time the rest.  A status frame that may complete that
   rest is news to a virtual-time host.
 - Stopping (``request_stop``: Ctrl-C, a failure the host met): nothing more of the job is
   written; the abort sequence goes instead — minus a pause toggle to an arm that reports it
@@ -447,9 +449,11 @@ class Job:
                 command = self.control.command_for(statement)
                 when = self.pacing.next_write_time(now, command)
                 self._held = when is None and self.pacing is self.streamer
-                if self._held and self.streamer.pending and self._rest_proves_all_written(now):
-                    self.streamer.confirm_all_done(now)  # (the time bound's chain restarts at now)
-                    when = self.pacing.next_write_time(now, command)
+                if self._held and self.streamer.pending:
+                    before = self._rest_proves_done_before(now)
+                    if before is not None and before > self.streamer.pending[0].index:
+                        self.streamer.confirm_all_done(now, before)  # (the time bound's chain restarts at now)
+                        when = self.pacing.next_write_time(now, command)
                 if when is not None and when <= now:
                     if self._write is None:
                         self._write, self._command = Write(command.encode(), statement), command
@@ -550,6 +554,23 @@ class Job:
         then, which costs the job that wait, never a frame."""
         return (self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False
                 and self._trailing_frames_surely_done(now))
+
+    def _rest_proves_done_before(self, now: float) -> int | None:
+        """Held mid-job: the first frame the arm's rest at the last target leaves unproven — none
+        (``streamer.sent``) when that rest proves every frame written finished
+        (``_rest_proves_all_written``); else, when a run of frames before the last move may hold
+        the arm there (``_resting_before_last_move``) but every frame written had come before the
+        rest began, the first of the first such run: the arm, at rest and not paused, is in such
+        a run or past the last frame, so every frame before it has run (an arc that time cannot
+        bound among them).  None when the rest proves nothing."""
+        if not (self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False):
+            return None
+        resting = self._resting_before_last_move()
+        if not resting:
+            return self.streamer.sent if now >= self._trailing_done_s() else None
+        if self.streamer.pending[-1].wire_end_s + ARRIVAL_SLACK_S > self._rest[1]:
+            return None  # a frame came during the rest: the arm may have idled before it
+        return resting[0].index
 
     def _trailing_frames_surely_done(self, now: float) -> bool:
         """The frames after the last motion (a delay, M codes, PWM-only moves) leave no trace: an

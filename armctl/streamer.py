@@ -247,14 +247,15 @@ class SentFrame:
     path_known: bool = True
     unknown_start_s: float = 0.0  # ``Streamer._unknown_start_s`` of its segment, reckoned once at write
     motion_before_s: float = 0.0  # the model's motion time of every frame written before it
-    # ... of those whose length the plan knows: a move from an unverified joint end (``path_known``
-    # False) may be any shorter, so the loss checks' least motion counts it as none
+    # ... of those whose length the plan knows: a move whose start only the profile's unverified
+    # kinematics know (``unknown_start_s``) may be any shorter, so the loss checks' least motion
+    # counts it as none
     sure_before_s: float = 0.0
 
     @property
     def sure_s(self) -> float:
         """Its own share of ``sure_before_s`` for the frames after it."""
-        return self.segment.duration_s if self.path_known else 0.0
+        return self.segment.duration_s if self.path_known and not self.unknown_start_s else 0.0
 
 
 @dataclass(frozen=True)
@@ -590,11 +591,19 @@ class Streamer:
         away, the G300 point and the end grows without bound as that start nears the G300 point
         (tests/test_unverified_joint_end.py found a 571 mm arc overrun), so time never
         confirms it — a sighting on a later frame does, or the arm at rest at the last target
-        (``confirm_all_done``, which armctl/job.py also applies while the FIFO bound holds the job)."""
+        (``confirm_all_done``, which armctl/job.py also applies while the FIFO bound holds the job).
+        And the other way round: a joint move from the end of a Cartesian one starts at joints only
+        the arm's own IK knows, anywhere within the joint limits (``joint_move_from_anywhere_s``);
+        its end is exact, so its sightings hold (found: an arm 2x slower, links 5 % short, the
+        probe's speed_tolerance 1.05 — a joint move the plan made 0 s long claimed done by time)."""
+        if segment.kind == "joint":  # (and a fixed pose) from the end of a Cartesian move
+            if self.kinematics_verified or self.sent == 0 or not segment.start.joints_derived:
+                return 0.0
+            return self.planner.model.joint_move_from_anywhere_s(segment)
         if not self._start_unknown(segment):
             return 0.0
-        if segment.kind == "arc":
-            return math.inf
+        if segment.kind == "arc" or isinstance(segment.command, ArcEnd):  # (planned as a line when its
+            return math.inf  # points coincide or line up: through the real start they need not)
         command, model = segment.command, self.planner.model
         speed_mm_min = getattr(command, "speed_mm_min", None) or getattr(command, "speed1_mm_min", 0.0) / 2
         speed_mm_min = min(speed_mm_min, model.profile.speed.max_linear_mm_min)
@@ -1022,15 +1031,17 @@ class Streamer:
         """Every frame written is known to have finished."""
         return not self.pending
 
-    def confirm_all_done(self, now: float | None = None) -> None:
+    def confirm_all_done(self, now: float | None = None, before: int | None = None) -> None:
         """The caller saw the arm at rest at the last frame's target: every frame written has
         run — except a trailing G300, which the arm holds until its G301 comes.  Sound only on
         the caller's proof (armctl/job.py): every status kind re-read unchanged, and no frame
         that moves nothing (where the arm rests too) left before the last motion unproven.
         With ``now`` (the proof taken mid-job, more to be written) the time bound's chain starts
-        again there: it may have run to infinity behind an arc it cannot bound."""
+        again there: it may have run to infinity behind an arc it cannot bound.  With ``before``
+        (mid-job too: the arm rests in that frame or later) only the frames before it."""
         pending = self.pending
-        while pending and not (len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
+        while pending and (before is None or pending[0].index < before) and not (
+                len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             self._consume_one(by_reports=True)
             self.bound_evidence = Evidence.AT_REST
         if now is None:
