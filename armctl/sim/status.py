@@ -184,19 +184,20 @@ class StatusEncoder:
         return self._words2(5, joints[3], joints[4])
 
     def _worktable(self, executor, at_s: float) -> bytes:
-        return self._reuse(3, executor.origin_mm, lambda origin: self._words3(3, *origin))
+        origin = executor.origin_mm
+        return self._reused(3, origin) or self._keep(3, origin, self._words3(3, *origin))
 
     def _pause(self, executor, at_s: float) -> bytes:
         on_path = executor.cartesian_at(at_s)
         pwm_us = (executor.pose_at(at_s) if on_path is None else on_path[1]).pwm_us[0]
         pwm_us = int(round(max(-32768, min(_WORD_MAX, pwm_us))))
-        return self._reuse(4, (executor.paused, pwm_us), lambda key: PauseStatus(
-            PAUSED_STATE_BYTE if key[0] else 0, key[1]).encode())
+        key = (executor.paused, pwm_us)
+        return self._reused(4, key) or self._keep(4, key, PauseStatus(PAUSED_STATE_BYTE if key[0] else 0, pwm_us).encode())
 
     def _program(self, kind: int, value) -> bytes:
         # a float's hex tells -0.0 from 0.0 (equal, but packed differently)
         key = value.hex() if type(value) is float else value
-        return self._reuse(kind, key, lambda _key: build_status(kind, _ProgramValue(value)).encode())
+        return self._reused(kind, key) or self._keep(kind, key, build_status(kind, _ProgramValue(value)).encode())
 
     def _file_length(self, executor, at_s: float) -> bytes:
         return self._program(100, executor.program.length)
@@ -229,11 +230,16 @@ class StatusEncoder:
         return codec.pack(STATUS_HEAD, round(float(a if a > low else low) * scale),
                           round(float(b if b > low else low) * scale), kind, STATUS_TAIL)
 
-    def _reuse(self, kind: int, key, build) -> bytes:
+    # A seldom-changing kind: the bytes built for the same value last time (``_reused``, None if
+    # it changed), else built and kept (``_keep``) — no builder made for a frame that reuses them.
+
+    def _reused(self, kind: int, key) -> bytes | None:
         built = self._built.get(kind)
         if built is not None and built[0] == key and type(built[0]) is type(key):
             return built[1]
-        data = build(key)
+        return None
+
+    def _keep(self, kind: int, key, data: bytes) -> bytes:
         self._built[kind] = (key, data)
         return data
 
