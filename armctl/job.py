@@ -358,7 +358,7 @@ class Job:
                     if moved_from is None or (kind != 4 and _slot_moved(kind, moved_from[kind], values)):
                         self._moved_from = motion
                         self._active_s = now
-            elif held and now - self._rest[1] >= REST_CHECK_S:
+            elif held and now - self._rest_since_s() >= REST_CHECK_S:
                 news = True  # the rest that may prove every frame written finished (``_rest_proves_all_written``)
             if news or streamer.consumed_lower_bound != consumed:
                 view.status_frames += k + 1
@@ -531,10 +531,10 @@ class Job:
             active = self._active_s is not None and now - self._active_s < REST_CHECK_S
             self._overran = self._overran or active
             settle_until = [self._active_s + REST_CHECK_S + SETTLE_SLACK_S] if self._overran else []
-            if self._rest is not None and now - self._rest[1] >= REST_CHECK_S > self._rest_s():
+            if self._rest is not None and now - self._rest_since_s() >= REST_CHECK_S > self._rest_s():
                 # Still for long enough, but some kind not re-read since (its reports lost): the
                 # next reports may yet prove the rest — waited for as for an arm that just stopped.
-                settle_until.append(self._rest[1] + REST_CHECK_S + SETTLE_SLACK_S)
+                settle_until.append(self._rest_since_s() + REST_CHECK_S + SETTLE_SLACK_S)
             resting = self._resting_before_last_move()
             if resting:  # frames rest cannot prove: their time bound (widened by a slow pace) decides
                 settle_until.append(max(sent.certain_end_s for sent in resting) + SETTLE_SLACK_S)
@@ -559,18 +559,16 @@ class Job:
         """Held mid-job: the first frame the arm's rest at the last target leaves unproven — none
         (``streamer.sent``) when that rest proves every frame written finished
         (``_rest_proves_all_written``); else, when a run of frames before the last move may hold
-        the arm there (``_resting_before_last_move``) but every frame written had come before the
-        rest began, the first of the first such run: the arm, at rest and not paused, is in such
-        a run or past the last frame, so every frame before it has run (an arc that time cannot
-        bound among them).  None when the rest proves nothing."""
+        the arm there (``_resting_before_last_move``), the first of the first such run: the arm,
+        at rest since every frame written came and not paused, is in such a run or past the last
+        frame, so every frame before it has run (an arc that time cannot bound among them).  None
+        when the rest proves nothing."""
         if not (self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False):
             return None
         resting = self._resting_before_last_move()
         if not resting:
             return self.streamer.sent if now >= self._trailing_done_s() else None
-        if self.streamer.pending[-1].wire_end_s + ARRIVAL_SLACK_S > self._rest[1]:
-            return None  # a frame came during the rest: the arm may have idled before it
-        return resting[0].index
+        return resting[0].index  # (the rest counts from the last frame's arrival: ``_rest_since_s``)
 
     def _trailing_frames_surely_done(self, now: float) -> bool:
         """The frames after the last motion (a delay, M codes, PWM-only moves) leave no trace: an
@@ -589,8 +587,9 @@ class Job:
         runs between moves that could hold the arm still for ``REST_CHECK_S``: even an arm
         ``slowest_factor`` times slower, fed each frame at the line's pace, leaves a shorter run
         (a G54, an M code) before the rest check could see it still — and where the arm rests
-        there (the end of the motion before them) may read as the last target
-        (``_may_read_as_end_of``): at rest far from it, the arm is plainly not done."""
+        there may read as the last target in one of them (``_may_read_as_end_of``; a G54 among
+        them changes what the worktable X/Y/Z read): at rest far from it, the arm is plainly not
+        done."""
         last = self._last_move
         if last is None:
             return []
@@ -598,7 +597,7 @@ class Job:
         target = self._recent[-1].segment  # what ``_at_last_target`` compares the readings with
         for sent in streamer.pending:
             if sent.index >= last.index or _moves_arm(sent.segment) or isinstance(sent.command, ArcStart):
-                if hold_s >= REST_CHECK_S and self._may_read_as_end_of(run[0].segment.end, target):
+                if hold_s >= REST_CHECK_S and any(self._may_read_as_end_of(r.segment.end, target) for r in run):
                     resting += run  # (a G300 runs with its G301: no rest in it)
                 run, hold_s = [], ARRIVAL_SLACK_S
                 if sent.index >= last.index:
@@ -682,7 +681,7 @@ class Job:
         (``limit_s``, always after ``now``: a Wait never asks the host to wait for nothing)."""
         times = [limit_s]
         if self._rest is not None:
-            times.append(self._rest[1] + REST_CHECK_S)
+            times.append(self._rest_since_s() + REST_CHECK_S)
         if self._active_s is not None:
             times.append(self._active_s + REST_CHECK_S)
         finish = self.streamer.estimated_finish_s()
@@ -736,7 +735,16 @@ class Job:
         are known unchanged (``known_still_s``; 0 until each kind was read once)."""
         if self._rest is None or len(self._read_at) < len(_REST_VALUES):
             return 0.0
-        return known_still_s(self._rest[1], self._read_at.values())
+        return known_still_s(self._rest_since_s(), self._read_at.values())
+
+    def _rest_since_s(self) -> float:
+        """Since when the readings prove a rest: their last change, or the arrival of the last
+        frame written if later — a frame that came while the arm stood still may set it going
+        (its own IK elsewhere) after the readings were taken."""
+        since = self._rest[1]
+        if self._recent:
+            since = max(since, self._recent[-1].wire_end_s + ARRIVAL_SLACK_S)
+        return since
 
     @property
     def arm_paused(self) -> bool | None:

@@ -762,11 +762,13 @@ class MotionModel:
         take from any start within the profile's joint limits, in the model's seconds: where the
         move before it (a Cartesian one) left the joints only the arm's own IK knows when the
         profile's kinematics are not verified — a 5 % error in the links moves an IK solution by
-        up to 36 degrees on the default profile."""
+        up to 36 degrees on the default profile.  And at least a whole turn: the limits are the
+        profile's too, and an arm whose links differ may find its only solution past them (the
+        simulator's IK then ignores them: 124 degrees past J5's found)."""
         speed_deg_s, smoothing = self._joint_speed(segment.command)
         speed_deg_s = min(speed_deg_s, self.profile.speed.max_joint_deg_s)
-        lead_deg = max(max(angle - low, high - angle)
-                       for angle, (low, high) in zip(segment.end.joints, self.profile.joint_limits_deg))
+        lead_deg = max(360.0, max(max(angle - low, high - angle)
+                                  for angle, (low, high) in zip(segment.end.joints, self.profile.joint_limits_deg)))
         ramp = _Ramp(_joint_pieces(lead_deg, speed_deg_s, self.profile.timing.ramp_s(smoothing)))
         return ramp.duration * self.speed_factor
 

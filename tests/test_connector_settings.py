@@ -374,14 +374,27 @@ def check_random_job(ops, fifo, control, frame, speed_factor, link_scale, origin
     commands = build_job(ops, with_pose_frames=True)  # on arrival too: the streamer keeps them in order
     if origin is not None:
         commands.insert(0, SetWorktableOrigin(*origin))
-    if not commands:
-        return
+    if commands:
+        check_job(commands, fifo, control, frame, speed_factor, link_scale, damage, seed, speed_tolerance, time_limit_s)
+
+
+def check_job(commands, fifo, control, frame, speed_factor, link_scale, damage=0.0, seed=0,
+              speed_tolerance: float = 2.0, time_limit_s: float = 3600.0, *,
+              profile_speed_factor: float | None = None, sections: dict | None = None) -> None:
+    """Stream ``commands`` to a simulated arm in virtual time and hold the house's promises: the job
+    ends in time, nothing is dropped, the lower bound never passes what the arm really finished
+    (checked at every status frame), and no false alarm of loss.  The profile says the arm's
+    connector settings (its speed_factor the arm's unless ``profile_speed_factor``) plus
+    ``sections`` (joint limits, …), which the simulated arm shares (its links × ``link_scale``)."""
+    profile = parse_profile({**(sections or {}), "connector": {
+        "fifo_frames": max(fifo, 8), "control_frames": control, "status_xyz_frame": frame,
+        "speed_factor": speed_factor if profile_speed_factor is None else profile_speed_factor,
+        "speed_tolerance": speed_tolerance}})
     options = SimOptions(fifo_frames=fifo, control_frames=control, status_xyz_frame=frame, speed_factor=speed_factor,
-                         link_scale=link_scale, status_loss_rate=damage, status_corrupt_rate=damage, seed=seed)
+                         link_scale=link_scale, status_loss_rate=damage, status_corrupt_rate=damage, seed=seed,
+                         profile=profile if sections else None)
     arm = SimulatedArm(options)
-    host = MotionModel(parse_profile({"connector": {"fifo_frames": max(fifo, 8), "control_frames": control,
-                                                    "status_xyz_frame": frame, "speed_factor": speed_factor,
-                                                    "speed_tolerance": speed_tolerance}}))
+    host = MotionModel(profile)
     snapshot = arm.snapshot()
     start = host.reported_pose(snapshot.position_mm, snapshot.joints_deg, snapshot.pwm_us, snapshot.origin_mm)
     strategy = StreamerStrategy(host, start, 2.0, options.baud)

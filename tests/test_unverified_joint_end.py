@@ -17,7 +17,9 @@ import sys
 
 import pytest
 
-from tests.test_connector_settings import check_random_job
+from armctl.protocol import ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode, SetWorktableOrigin
+from tests.test_connector_settings import check_job, check_random_job
+from tests.test_streamer_sim import POINTS, _joints
 
 # Found on main (58fb5c8): the lower bound passed what the simulated arm had really finished
 # (7 claimed, 5 finished, from t = 76.8 s) — the time bound allowed 10 % of the reach of extra
@@ -88,16 +90,68 @@ ARC_PLANNED_AS_A_LINE = dict(
     origin=None, damage=0.0, seed=0,
 )
 
+# Found by review (helper, 14:20): frames 5 and 6 (a G6 to the profile's IK of where the arm stood,
+# planned 0 s long, and a PWM frame) were written while the arm already rested at the last target;
+# 50 ms later the rest "proved" them done while the arm, its own IK elsewhere, was only starting
+# to turn (7 claimed, 5 finished).  A rest counts only from the arrival of the last frame written.
+FRAMES_WRITTEN_DURING_THE_REST = dict(
+    ops=[("joint", 4, 90.0, 6), ("arc", 5, 3), ("joint", 5, 90.0, 0), ("pwm", 1000.0), ("joint", 5, 30.0, 1),
+         ("pwm", 2000.0)],
+    fifo=8, control="queued", frame="worktable", speed_factor=2.0, link_scale=1.05,
+    origin=None, damage=0.0, seed=898, speed_tolerance=1.05,
+)
+
 
 @pytest.mark.timeout(60)
 @pytest.mark.parametrize("case", [OVERSTATED, HELD_BY_THE_FIFO_BOUND, HELD_BY_A_REST_FAR_FROM_THE_TARGET,
                                   HELD_BY_A_REST_AT_THE_TARGET, HELD_BY_A_REST_AT_THE_TARGET_AFTER_A_TURN,
-                                  JOINT_MOVE_FROM_A_CARTESIAN_END, ARC_PLANNED_AS_A_LINE],
+                                  JOINT_MOVE_FROM_A_CARTESIAN_END, ARC_PLANNED_AS_A_LINE, FRAMES_WRITTEN_DURING_THE_REST],
                          ids=["overstated", "held-by-the-fifo-bound", "held-by-a-rest-far-from-the-target",
                               "held-by-a-rest-at-the-target", "held-by-a-rest-at-the-target-after-a-turn",
-                              "joint-move-from-a-cartesian-end", "arc-planned-as-a-line"])
+                              "joint-move-from-a-cartesian-end", "arc-planned-as-a-line",
+                              "frames-written-during-the-rest"])
 def test_a_move_from_where_only_unverified_kinematics_put_the_arm_is_never_overstated_nor_held_for_ever(case):
     check_random_job(**case)
+
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("fifo, extra", [(50, 0), (12, 10)], ids=["end-of-job", "held-mid-job"])
+def test_a_g54_inside_a_rest_that_makes_the_arm_read_as_the_last_target_keeps_the_rest_from_proving_it(fifo, extra):
+    """Found by review: after an arc from an unverified joint end (the bound stuck behind it), two
+    delays at the arc's end A with a G54 between them that makes the worktable X/Y/Z read there as
+    the last target T; then a G54 back and the way to T.  The arm resting in the second delay read
+    as T — the run's first frame alone said it rests far from T — and the rest proved all 9 frames
+    while 5 had run (held mid-job, with 10 M codes more: 2 frames dropped).  Every pose a run holds
+    counts now."""
+    a, t = POINTS[1], POINTS[5]
+    b = (t[0] + 5.0, t[1], t[2])
+
+    def line(p):
+        return LinearMove(*p, 180.0, 0.0, 0.0, 1500.0, 3000.0)
+
+    commands = [JointMove(*_joints(POINTS[0]), 1500.0, 30.0, smoothing=0),
+                ArcStart(*POINTS[2], 180.0, 0.0, 0.0, 1500.0, 50.0, 4000.0), ArcEnd(*a, 180.0, 0.0, 0.0, 1500.0, 4000.0),
+                Delay(3000.0), SetWorktableOrigin(*(p - q for p, q in zip(a, t))), Delay(3000.0),
+                SetWorktableOrigin(0.0, 0.0, 0.0), line(b), line(t)] + [MCode(7)] * extra + ([line(b)] if extra else [])
+    check_job(commands, fifo, "queued", "worktable", 2.0, 1.0, profile_speed_factor=1.0)
+
+
+@pytest.mark.timeout(60)
+def test_a_joint_move_from_a_cartesian_end_the_arm_reaches_outside_the_profiles_joint_limits():
+    """Found by review: the joint move's time allowance took the profile's joint limits as where
+    the arm's own IK may put it; with links 5 % long the arm (as the simulator's IK does when no
+    solution lies within the limits) stood 124 degrees past J5's limit, a 325-degree turn against an
+    allowance of 229 (5 claimed, 1 finished).  The allowance is at least a whole turn now."""
+    joints = {"j1_deg": [-170.0, 170.0], "j2_deg": [-90.0, 100.0], "j3_deg": [-120.0, 120.0],
+              "j4_deg": [-180.0, 180.0], "j5_deg": [-120.0, 120.0], "j6_deg": [-180.0, 180.0]}
+    from armctl.profile import parse_profile
+    kinematics = parse_profile({"joints": joints}).kinematics
+    p = (-320.0, 0.0, 60.0)
+    q = kinematics.joints_of(p + (180.0, 0.0, 0.0), kinematics.home)
+    commands = [LinearMove(*p, 180.0, 0.0, 0.0, 1500.0, 3000.0), JointMove(*q, 1500.0, 30.0, smoothing=0),
+                MCode(7), MCode(7), MCode(7), LinearMove(-300.0, 0.0, 100.0, 180.0, 0.0, 0.0, 1500.0, 3000.0)]
+    check_job(commands, 50, "queued", "worktable", 1.0, 1.05, speed_tolerance=1.05, sections={"joints": joints})
 
 
 HELD_JOB = """\
