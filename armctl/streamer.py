@@ -239,11 +239,11 @@ class SentFrame:
     chain_end_s: float = 0.0  # the time bound as a chain of frames (a G300's certain end is its G301's)
     group_index: int = -1  # the first frame of its group: an arc's G301 finishes with its G300
     xyz_tolerance_mm: float = POSITION_TOLERANCE_MM  # how near its path an X/Y/Z must be to match
-    # False for a Cartesian move that starts where only the profile's unverified kinematics put an
-    # earlier frame of the job (a joint move's end): the arm's path is not the planned one, and near
-    # its end it may pass within tolerance of the next frame's path, so a sighting may count on it
-    # (the earliest claim) but never past it; the time bound, with ``_unknown_start_s``'s
-    # allowance, confirms a line (never an arc).
+    # False for a move that starts where only the profile's unverified kinematics put an earlier
+    # frame of the job (a Cartesian move at a joint move's end, a joint move at a Cartesian one's):
+    # the arm's path is not the planned one, and it may pass within tolerance of the next frame's
+    # path, so a sighting may count on it (the earliest claim) but never past it; the time bound,
+    # with ``_unknown_start_s``'s allowance, confirms a line or a joint move (never an arc).
     path_known: bool = True
     unknown_start_s: float = 0.0  # ``Streamer._unknown_start_s`` of its segment, reckoned once at write
     motion_before_s: float = 0.0  # the model's motion time of every frame written before it
@@ -317,6 +317,7 @@ class Streamer:
         self._certain_tail_s = 0.0  # the time bound of the last frame written (even a G300's)
         self._cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
         self._blind: deque[int] = deque()  # indexes of pending frames whose X/Y/Z cannot be judged (positions stop there)
+        self._joints_unknown: deque[int] = deque()  # ... joint frames whose path is not the planned one (joint halves stop past them)
         self.write_reason = WaitReason.READY  # why next_write_time answered as it did
         self.next_frame_motion_s = 0.0  # the motion of the frame next_write_time was asked about
         self.bound_evidence: Evidence | None = None  # what last advanced consumed_lower_bound
@@ -475,6 +476,8 @@ class Streamer:
         self.pending.append(frame)
         if segment.kind in ("line", "arc"):
             self._cartesian.append(frame.index)
+        elif not frame.path_known:
+            self._joints_unknown.append(frame.index)
         if self._xyz_unknown(segment) or not frame.path_known:
             self._blind.append(frame.index)
         self.sent += 1
@@ -576,9 +579,14 @@ class Streamer:
         return not self.kinematics_verified and (segment.kind == "joint" or segment.end.xyz_derived)
 
     def _start_unknown(self, segment: Segment) -> bool:
-        """Whether a Cartesian segment starts where only the profile's unverified kinematics say
-        (a joint move's end): its real path is not the planned one."""
-        return not self.kinematics_verified and segment.kind in ("line", "arc") and segment.start.xyz_derived
+        """Whether a segment starts where only the profile's unverified kinematics say — a
+        Cartesian one at a joint move's end, a joint one at a Cartesian move's end: its real path
+        is not the planned one."""
+        if self.kinematics_verified:
+            return False
+        if segment.kind == "joint":
+            return segment.start.joints_derived
+        return segment.kind in ("line", "arc") and segment.start.xyz_derived
 
     def _unknown_start_s(self, segment: Segment) -> float:
         """The time bound's allowance for a Cartesian move that starts where only the profile's
@@ -596,12 +604,10 @@ class Streamer:
         the arm's own IK knows, anywhere within the joint limits (``joint_move_from_anywhere_s``);
         its end is exact, so its sightings hold (found: an arm 2x slower, links 5 % short, the
         probe's speed_tolerance 1.05 — a joint move the plan made 0 s long claimed done by time)."""
-        if segment.kind == "joint":  # (and a fixed pose) from the end of a Cartesian move
-            if self.kinematics_verified or self.sent == 0 or not segment.start.joints_derived:
-                return 0.0
-            return self.planner.model.joint_move_from_anywhere_s(segment)
         if not self._start_unknown(segment):
             return 0.0
+        if segment.kind == "joint":  # (and a fixed pose) from the end of a Cartesian move
+            return 0.0 if self.sent == 0 else self.planner.model.joint_move_from_anywhere_s(segment)
         if segment.kind == "arc" or isinstance(segment.command, ArcEnd):  # (planned as a line when its
             return math.inf  # points coincide or line up: through the real start they need not)
         command, model = segment.command, self.planner.model
@@ -706,12 +712,22 @@ class Streamer:
         end = cartesian[0] - first if cartesian else len(self.pending)
         if end == 0:
             return  # the arm may be on this Cartesian segment: no evidence from joints
+        unknown = self._joints_unknown
+        while unknown and unknown[0] < first:
+            unknown.popleft()  # consumed
+        if unknown and unknown[0] - first < end:
+            # A joint move from a Cartesian end (its real start only the arm's IK knows): its
+            # real path may pass along a later frame's, so a sighting counts on it, never past it.
+            end = unknown[0] - first + 1
         verified = self.kinematics_verified
 
         def match(sent: SentFrame):
             if not verified and sent.segment.end.joints_derived:
                 return None  # a still frame whose joints exist only through the profile's unverified IK
-            return _joint_half_fraction(sent.segment, offset, values)
+            found = _joint_half_fraction(sent.segment, offset, values)
+            if found is None or sent.path_known:
+                return found
+            return found[0], math.inf  # at least this far along, perhaps past its end already
 
         def could_be_on(sent: SentFrame) -> bool:  # for the loss check: joints cannot judge a Cartesian frame
             return sent.segment.kind not in ("joint", "still") or match(sent) is not None
