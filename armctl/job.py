@@ -546,41 +546,33 @@ class Job:
         return Wait(self._next_change_s(now, limit_s))
 
     def _rest_proves_all_written(self, now: float) -> bool:
-        """Every frame written has finished: at rest, at the last target, not paused, and the
-        trailing frames surely done.  The end of a job rests on it, and so does a job held mid-way
-        (the FIFO bound, or rule (c), with only evidence to let the next frame go): it is what
-        confirms an arc from an unverified joint end when no later frame's sighting can
-        (armctl/streamer.py ``_unknown_start_s``: time cannot) — the arm has drained its FIFO by
-        then, which costs the job that wait, never a frame."""
-        return (self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False
-                and self._trailing_frames_surely_done(now))
+        """Every frame written has finished (``_rest_proves_done_before`` leaves none unproven).
+        The end of a job rests on it, and so does a job held mid-way (the FIFO bound, or rule
+        (c), with only evidence to let the next frame go): it is what confirms an arc from an
+        unverified joint end when no later frame's sighting can (armctl/streamer.py
+        ``_unknown_start_s``: time cannot) — the arm has drained its FIFO by then, which costs
+        the job that wait, never a frame."""
+        return self._rest_proves_done_before(now) == self.streamer.sent
 
     def _rest_proves_done_before(self, now: float) -> int | None:
-        """Held mid-job: the first frame the arm's rest at the last target leaves unproven — none
-        (``streamer.sent``) when that rest proves every frame written finished
-        (``_rest_proves_all_written``); else, when a run of frames before the last move may hold
-        the arm there (``_resting_before_last_move``), the first of the first such run: the arm,
-        at rest since every frame written came and not paused, is in such a run or past the last
-        frame, so every frame before it has run (an arc that time cannot bound among them).  None
-        when the rest proves nothing."""
+        """The first frame the arm's rest at the last target (not paused, at rest since every
+        frame written came: ``_rest_since_s``) leaves unproven, or None when it proves nothing.
+        The frames after the last motion (a delay, M codes, PWM-only moves) leave no trace: an
+        arm at rest at the last target says nothing about them, and an arm slower than the model
+        would still be in them when the estimate runs out; they count as done once even an arm
+        ``slowest_factor`` times slower has finished them (``_trailing_done_s``) — then every
+        frame written has run (``streamer.sent``).  And the arm rests as well in such a frame
+        before the last motion, at readings the last target's may be (a wrist turning in place,
+        a way back to the same point: ``_resting_before_last_move``): then the arm is in such a
+        run or past the last frame, so only the frames before the first of them have run (an arc
+        that time cannot bound among them; held mid-job, the rest of them wait for the lower
+        bound: the arm seen on a later frame's path, or their time bound)."""
         if not (self.arm_at_rest(now) and self._at_last_target() and self.arm_paused is False):
             return None
         resting = self._resting_before_last_move()
-        if not resting:
-            return self.streamer.sent if now >= self._trailing_done_s() else None
-        return resting[0].index  # (the rest counts from the last frame's arrival: ``_rest_since_s``)
-
-    def _trailing_frames_surely_done(self, now: float) -> bool:
-        """The frames after the last motion (a delay, M codes, PWM-only moves) leave no trace: an
-        arm at rest at the last target says nothing about them, and an arm slower than the model
-        would still be in them when the estimate runs out.  They count as done once even an arm
-        ``slowest_factor`` times slower has finished them, begun no earlier than the last change
-        of the readings seen (the motion before them ended by then) and their own arrival.  And
-        the arm rests as well in such a frame before the last motion, at the same readings when
-        that motion comes back to them (a wrist turning in place, a way back to the same point):
-        at rest there proves nothing, so each is done only once the streamer's lower bound has
-        passed it (the arm seen on a later frame's path, or its time bound)."""
-        return now >= self._trailing_done_s() and not self._resting_before_last_move()
+        if resting:
+            return resting[0].index
+        return self.streamer.sent if now >= self._trailing_done_s() else None
 
     def _resting_before_last_move(self) -> list:
         """The frames still pending before the last motion that move nothing (``_moves_arm``), in

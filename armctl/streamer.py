@@ -255,7 +255,7 @@ class SentFrame:
     @property
     def sure_s(self) -> float:
         """Its own share of ``sure_before_s`` for the frames after it."""
-        return self.segment.duration_s if self.path_known and not self.unknown_start_s else 0.0
+        return 0.0 if self.unknown_start_s else self.segment.duration_s  # (every path_known False frame has one)
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ import sys
 
 import pytest
 
+from armctl.profile import parse_profile
 from armctl.protocol import ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode, SetWorktableOrigin
 from tests.test_connector_settings import check_job, check_random_job
 from tests.test_streamer_sim import POINTS, _joints
@@ -164,7 +165,6 @@ def test_a_joint_move_from_a_cartesian_end_the_arm_reaches_outside_the_profiles_
     allowance of 229 (5 claimed, 1 finished).  The allowance is at least a whole turn now."""
     joints = {"j1_deg": [-170.0, 170.0], "j2_deg": [-90.0, 100.0], "j3_deg": [-120.0, 120.0],
               "j4_deg": [-180.0, 180.0], "j5_deg": [-120.0, 120.0], "j6_deg": [-180.0, 180.0]}
-    from armctl.profile import parse_profile
     kinematics = parse_profile({"joints": joints}).kinematics
     p = (-320.0, 0.0, 60.0)
     q = kinematics.joints_of(p + (180.0, 0.0, 0.0), kinematics.home)
