@@ -664,7 +664,10 @@ class Streamer:
 
         earliest, candidates, settled = self._search(match, end, now)
         if earliest is None and end < len(self.pending):
-            return  # the arm may be on the frame that cannot be judged: no evidence
+            # the arm may be on the frame that cannot be judged: no evidence — but a report on
+            # a later frame's path still tells the estimate where the arm most likely is
+            self._reanchor_beyond(match, end, now)
+            return
         self._check_reversal(xyz if earliest is None and not blind else None, match)
         self._use("position", earliest, candidates, now, could_be_on, settled)
 
@@ -993,6 +996,27 @@ class Streamer:
                 times.clear()
             t_s = times[fraction] = segment.time_at_fraction(fraction)
         return t_s
+
+    def _reanchor_beyond(self, match, end: int, now: float) -> None:
+        """The estimate (never the lower bound) re-anchored on a report that lies on the path of
+        a pending frame at or after ``end``, past a frame the stream cannot judge (a move from a
+        joint end the profile's kinematics do not verify, whose real length and path only the
+        arm knows).  Without it the estimate runs on by the plan while the arm is still on that
+        frame, so the lead counts less motion queued than there is and an abort outruns the stop
+        bound (``armctl bench``'s ``kinematics`` row: 3.50 s moved against 2.88 s).  A report
+        on one of those paths is evidence for the estimate only: it may also lie on the frame
+        that cannot be judged, so nothing is proven by it.  Flat cost: the frames searched are
+        a window around the frame the estimate has in progress."""
+        pending = self.pending
+        current = next((k for k in range(end, len(pending)) if pending[k].est_end_s > now), len(pending) - 1)
+        lo_k, hi_k = max(end, current - SCAN_WINDOW_FRAMES), min(len(pending), current + SCAN_WINDOW_FRAMES)
+        candidates = []
+        for k in range(lo_k, hi_k):
+            found = match(pending[k])
+            if found is not None:
+                candidates.append((pending[k].index, *found))
+        if candidates:
+            self._reanchor(candidates, now)
 
     def _reanchor(self, candidates: list[tuple[int, float, float]], now: float) -> None:
         """Re-time the pending frames from the candidate the estimate finds most plausible.
