@@ -247,3 +247,19 @@ def test_write_without_a_measured_fifo_says_what_to_set(tmp_path, monkeypatch):
     assert "fifo_frames" not in target.read_text()
     assert "fifo_frames not written" in result.output
     assert "[connector] fifo_frames" in result.output
+
+
+# --- control frames through a buffer --------------------------------------------------------------
+
+
+def test_control_frames_not_misjudged_when_a_buffer_holds_the_toggle_past_the_delay():
+    """On an arm that acts on arrival, an adapter holds the pause toggle until the 2 s delay in
+    front of it has run out: the pause then comes after the delay, as a queued toggle's would.
+    The port's reports show the toggle landed only then: unsure, never 'queued'."""
+    before_control_bytes = 2 * 48  # the two G54
+    stall = (before_control_bytes + 48, 2.5)
+    probe, model, _ = probe_at(9600, "control_frames=arrival", StatusWokenLink, buffered={"stalls": [stall]})
+    found = probe.finding("control_frames")
+    assert found.value is None and found.confidence == "unsure", found.evidence
+    assert "acting on arrival would look the same" in found.evidence
+    assert_as_found(model)

@@ -103,11 +103,10 @@ def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0):
     probe.known.busy_until_s = max(probe.known.busy_until_s, probe.now_s)
     # The hold: the delay cannot end before it landed (not before write() + its wire time, nor
     # while the port still held it) + its length; the last frame surely landed by ``landed_by``.
-    ends_s = max(delay_written_s + probe.frame_s, wire.not_landed_at(delay_end)) + delay_s
-    if wire.reporting:
-        landed_by_s, confidence, how = wire.landed_by(last_end), SURE, "the port's reports prove"
-    else:
-        landed_by_s, confidence, how = last_landed_s, LIKELY, "the line model expects (the port does not say what it sent)"
+    ends_s = probe.earliest_landing(delay_end, delay_written_s) + delay_s
+    landed_by_s = probe.landed_by(last_end, last_landed_s)
+    confidence, how = (SURE, "the port's reports prove") if wire.reporting else \
+        (LIKELY, "the line model expects (the port does not say what it sent)")
     hold = {"delay_s": delay_s, "delay_ends_earliest_s": round(ends_s - delay_written_s, 3)}
     if landed_by_s is None:
         return Fill(None, f"the port still held {wire.unsent_bytes()} bytes {probe.now_s - delay_written_s:.1f} s after "

@@ -222,6 +222,17 @@ class Probe:
             return Write(raw, pending.command)
         return None
 
+    def landed_by(self, end: int, expected_s: float) -> float | None:
+        """The frame ending at stream position ``end`` (``wire.written_bytes`` after its Send)
+        has surely landed by this time: the port's reports prove it (None: they do not show it
+        gone yet); a port that cannot report gets ``expected_s``, the line model's time."""
+        return self.wire.landed_by(end) if self.wire.reporting else expected_s
+
+    def earliest_landing(self, end: int, written_s: float) -> float:
+        """The frame ending at ``end``, handed to the port at ``written_s``, cannot have landed
+        before this: its own wire time after the write, and not while the port still held it."""
+        return max(written_s + self.frame_s, self.wire.not_landed_at(end))
+
     @property
     def arm_time_s(self) -> float:
         return self.now_s - self.start_s
