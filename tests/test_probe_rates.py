@@ -179,6 +179,19 @@ def test_a_buffer_that_stalls_mid_fill_is_caught_and_the_round_tried_again():
     assert_as_found(model)
 
 
+@pytest.mark.parametrize("baud", [9600, 115200])
+def test_a_buffer_that_holds_the_delay_itself(baud):
+    """The adapter holds the FIFO round's delay and its fillers 3 s before the first byte
+    goes: the delay begins 3 s later than the line model expects.  The round's end is judged
+    from when the port's reports prove the delay began, so the quiet of a delay still running
+    is not taken for an arm that accepted nothing (it said 0, sure, at 115200)."""
+    before_fifo_bytes = 5 * 48
+    probe, model, _ = probe_at(baud, "fifo_frames=137", StatusWokenLink, buffered={"stalls": [(before_fifo_bytes, 3.0)]})
+    found = probe.finding("fifo_frames")
+    assert (found.value, found.confidence) == (137, "sure"), found.evidence
+    assert_as_found(model)
+
+
 def test_a_port_that_cannot_say_what_it_sent_gets_a_likely_value():
     """No ``out_waiting`` (socket://, rfc2217://): one frame ahead of the wire, landing times
     from the line model — stated as likely, with the reason; the round is tried again while the

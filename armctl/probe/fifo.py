@@ -89,14 +89,22 @@ def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0):
     deadline_s = end_s + ROUND_LIMIT_S
 
     # Frames that repeat the PWM show nothing while they run: until a change is seen, allow them
-    # a frame time each (an arm slower than that could not keep up with the line anyway).
-    silent_s = QUIET_S + sum(1 for a, b in zip([start_us, *values], values) if a == b) * probe.frame_s
+    # a frame time each (an arm slower than that could not keep up with the line anyway), and the
+    # delay may end as much later than its earliest end as an adapter may hold it.
+    repeats = sum(1 for a, b in zip([start_us, *values], values) if a == b)
+    silent_s = QUIET_S + after_sent_s + repeats * probe.frame_s
 
     def settled() -> bool:
-        times = [t for t, _ in _changes(probe, end_s - 1.0) if t >= end_s]
+        if probe.landed_by(last_end, last_landed_s) is None:  # the port still holds fillers
+            return False
+        # from the delay's end as the model expects it, or later: as late as the port's reports
+        # prove it began (a buffer may have held it), so the quiet of a delay still running
+        # never passes for the end of the round
+        start_s = max(end_s, probe.earliest_landing(delay_end, delay_written_s) + delay_s)
+        times = [t for t, _ in _changes(probe, start_s - 1.0) if t >= start_s]
         if not times:
-            return probe.now_s - end_s >= silent_s
-        gaps = [b - a for a, b in zip([end_s, *times], times)]
+            return probe.now_s - start_s >= silent_s
+        gaps = [b - a for a, b in zip([start_s, *times], times)]
         return probe.now_s - times[-1] >= max(QUIET_S, 3 * max(gaps))
 
     yield Wait(deadline_s, settled)
