@@ -26,7 +26,8 @@ from armctl.link import Link
 from armctl.probe import build_probe
 from armctl.probe.host import FrameInbox, drive
 from armctl.profile import load_profile
-from armctl.protocol import STATUS_PERIOD_S, Delay, decode_command
+from armctl.probe.motion import JOINT_SPEED_DEG_S
+from armctl.protocol import STATUS_PERIOD_S, Delay, JointMove, decode_command
 from test_probe import assert_as_found
 
 RATES = (9600, 38400, 57600, 115200)
@@ -47,16 +48,18 @@ class BufferedPort:
     port that cannot say).  A write that does not fit fails (a real port's write would block
     until its write timeout).  ``stalls``: [(after so many bytes passed, hold the rest so many
     seconds)]; ``stall_behind_delays_s``: hold what follows each delay longer than 2 s for the
-    delay's length and this much more (an adapter no probe delay can outlast)."""
+    delay's length and this much more (an adapter no probe delay can outlast); ``stall_before``:
+    (predicate, seconds): hold the first frame whose command the predicate accepts."""
 
     def __init__(self, port, size: int = 4096, packet: int = 64, tick_s: float = 0.001, stalls=(),
-                 stall_behind_delays_s: float | None = None, reports: bool = True) -> None:
+                 stall_behind_delays_s: float | None = None, stall_before=None, reports: bool = True) -> None:
         self._port, self.size, self.packet, self.tick_s = port, size, packet, tick_s
         self._buffer = bytearray()
         self.passed = 0
         self.most_held = 0
         self._stalls = sorted(stalls)
         self._stall_behind_delays_s = stall_behind_delays_s
+        self._stall_before = stall_before
         self._stalled_until_s: float | None = None
         self.reports = reports
 
@@ -79,6 +82,9 @@ class BufferedPort:
         if self._stall_behind_delays_s is not None and isinstance(command, Delay) and command.delay_ms > 2000:
             self._stalls.append((self.passed + len(self._buffer) + len(data),
                                  command.delay_ms / 1000 + self._stall_behind_delays_s))
+        if self._stall_before is not None and command is not None and self._stall_before[0](command):
+            self._stalls.append((self.passed + len(self._buffer), self._stall_before[1]))
+            self._stall_before = None
         self._buffer += data
         self.most_held = max(self.most_held, len(self._buffer))
         self._release()
@@ -117,15 +123,15 @@ class BufferedPort:
         return data
 
 
-def probe_at(baud: int, options: str, link_class=Link, buffered: dict | None = None):
-    """The probe, no motion, on ``sim://?clock=virtual&baud=…&options`` at ``baud``; (probe, arm, port)."""
+def probe_at(baud: int, options: str, link_class=Link, buffered: dict | None = None, motion: bool = False):
+    """The probe on ``sim://?clock=virtual&baud=…&options`` at ``baud``; (probe, arm, port)."""
     url = f"sim://?clock=virtual&baud={baud}&{options}"
     port = serial.serial_for_url(url, baudrate=baud, timeout=0)
     if buffered is not None:
         port = BufferedPort(port, **buffered)
     inbox = FrameInbox()
     link = link_class(port, url, on_status=inbox)
-    probe = build_probe(load_profile(), baud, link.clock(), False, virtual_clock=True, after_sent_bytes=0)
+    probe = build_probe(load_profile(), baud, link.clock(), motion, virtual_clock=True, after_sent_bytes=0)
     drive(link, probe, inbox, None, threading.Event())
     return probe, port.model, port
 
@@ -275,4 +281,19 @@ def test_control_frames_not_misjudged_when_a_buffer_holds_the_toggle_past_the_de
     found = probe.finding("control_frames")
     assert found.value is None and found.confidence == "unsure", found.evidence
     assert "acting on arrival would look the same" in found.evidence
+    assert_as_found(model)
+
+
+def test_speed_factor_from_when_the_move_landed_not_when_it_was_written():
+    """The adapter holds the joint move's frame 1 s: the move starts 1 s after the line model
+    expects.  Timed from the landing the port's reports prove, the factor stays within its
+    stated precision of the arm's (it read 1.457 ± 0.32 for 1.3 when timed from the write)."""
+    def first_timed_move(command):
+        return isinstance(command, JointMove) and command.speed_deg_s == JOINT_SPEED_DEG_S
+
+    probe, model, _ = probe_at(9600, "speed_factor=1.3", StatusWokenLink, motion=True,
+                               buffered={"stall_before": (first_timed_move, 1.0)})
+    found = probe.finding("speed_factor")
+    assert found.confidence == "sure"
+    assert abs(found.value - 1.3) <= found.details["precision"] <= 0.03, found.evidence
     assert_as_found(model)
