@@ -49,10 +49,12 @@ class BufferedPort:
     until its write timeout).  ``stalls``: [(after so many bytes passed, hold the rest so many
     seconds)]; ``stall_behind_delays_s``: hold what follows each delay longer than 2 s for the
     delay's length and this much more (an adapter no probe delay can outlast); ``stall_before``:
-    (predicate, seconds): hold the first frame whose command the predicate accepts."""
+    (predicate, seconds): hold the first frame whose command the predicate accepts.  ``hidden``:
+    a bridge — every byte goes to the line at once, and ``out_waiting`` counts none of them."""
 
     def __init__(self, port, size: int = 4096, packet: int = 64, tick_s: float = 0.001, stalls=(),
-                 stall_behind_delays_s: float | None = None, stall_before=None, reports: bool = True) -> None:
+                 stall_behind_delays_s: float | None = None, stall_before=None, reports: bool = True,
+                 hidden: bool = False) -> None:
         self._port, self.size, self.packet, self.tick_s = port, size, packet, tick_s
         self._buffer = bytearray()
         self.passed = 0
@@ -62,6 +64,7 @@ class BufferedPort:
         self._stall_before = stall_before
         self._stalled_until_s: float | None = None
         self.reports = reports
+        self.hidden = hidden
 
     def __getattr__(self, name):
         if name == "out_waiting":  # only when ``reports`` is False: as socket:// and rfc2217:// have none
@@ -72,7 +75,7 @@ class BufferedPort:
     def out_waiting(self) -> int:
         if not self.reports:
             raise AttributeError("out_waiting")
-        return len(self._buffer) + self._port.out_waiting
+        return len(self._buffer) + (0 if self.hidden else self._port.out_waiting)
 
     def write(self, data) -> int:
         self._release()
@@ -95,7 +98,7 @@ class BufferedPort:
 
     def _release(self) -> None:
         now_s = self._now_s()
-        while self._buffer and self._port.out_waiting < self.packet:
+        while self._buffer and (self.hidden or self._port.out_waiting < self.packet):
             if self._stalled_until_s is not None:
                 if now_s < self._stalled_until_s:
                     return
@@ -297,3 +300,16 @@ def test_speed_factor_from_when_the_move_landed_not_when_it_was_written():
     assert found.confidence == "sure"
     assert abs(found.value - 1.3) <= found.details["precision"] <= 0.03, found.evidence
     assert_as_found(model)
+
+
+def test_a_bridge_that_reads_everything_at_once_is_not_taken_for_the_line():
+    """A pty bridge (``armctl sim --pty``, an emulator) reads what the host writes at once and
+    puts it on its own line: the port reports nothing unsent though the bytes are still on their
+    way.  The last filler's landing is then never put sooner than the line could carry the round
+    (the delay and 300 frames), and the count is right."""
+    probe, model, _ = probe_at(115200, "fifo_frames=137", StatusWokenLink, buffered={"hidden": True})
+    found = probe.finding("fifo_frames")
+    assert (found.value, found.confidence) == (137, "sure"), found.evidence
+    frame_s = 48 * 10 / 115200
+    assert found.details["round_1"]["last_landed_by_s"] >= 300 * frame_s  # 300 fillers after the delay
+    assert found.details["round_2"]["last_landed_by_s"] >= 144 * frame_s

@@ -9,7 +9,8 @@ left it.  From those reports, for the byte that ends a frame:
 
 - ``landed_by``: the first report at which it had left, plus the bytes a port may still hold
   after it counts them as sent (``after_sent_bytes``: a USB adapter's own FIFO) at the line
-  rate — the frame has surely landed by then (an upper bound);
+  rate — the frame has surely landed by then (an upper bound; ``Probe.landed_by`` also keeps it
+  no sooner than the line model allows, for a bridge that takes every byte at once);
 - ``not_landed_at``: the last report at which it had not left — it surely had not landed then
   (a lower bound; ``write()``'s own time plus one frame's wire time is another).
 

@@ -224,9 +224,14 @@ class Probe:
 
     def landed_by(self, end: int, expected_s: float) -> float | None:
         """The frame ending at stream position ``end`` (``wire.written_bytes`` after its Send)
-        has surely landed by this time: the port's reports prove it (None: they do not show it
-        gone yet); a port that cannot report gets ``expected_s``, the line model's time."""
-        return self.wire.landed_by(end) if self.wire.reporting else expected_s
+        has landed by this time: not before the port's reports show it gone (None: they do not
+        yet), nor before ``expected_s``, the line model's time — a buffer the port does not count
+        (a bridge that reads the bytes at once and puts them on its own line) passes them on no
+        faster than the line.  A port that cannot report: the line model's time alone."""
+        if not self.wire.reporting:
+            return expected_s
+        reported_s = self.wire.landed_by(end)
+        return None if reported_s is None else max(reported_s, expected_s)
 
     def earliest_landing(self, end: int, written_s: float) -> float:
         """The frame ending at ``end``, handed to the port at ``written_s``, cannot have landed
