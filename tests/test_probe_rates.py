@@ -313,3 +313,34 @@ def test_a_bridge_that_reads_everything_at_once_is_not_taken_for_the_line():
     frame_s = 48 * 10 / 115200
     assert found.details["round_1"]["last_landed_by_s"] >= 300 * frame_s  # 300 fillers after the delay
     assert found.details["round_2"]["last_landed_by_s"] >= 144 * frame_s
+
+
+# --- through a real pty, as the emulator was -------------------------------------------------------
+
+
+@pytest.mark.realtime
+@pytest.mark.timeout(120)
+def test_installed_command_through_armctl_sim_pty_at_115200():
+    """``armctl sim --pty`` in another process (a bridge that reads every byte at once, like the
+    emulator the fault was seen on) and ``armctl probe`` through the pty at 115200, on the wall
+    clock: 137, sure (before: null, "the PWM changed 2.42 s into the 2.3 s delay")."""
+    import re
+    import signal
+
+    simulator = subprocess.Popen([sys.executable, "-m", "armctl", "sim", "--pty", "--url",
+                                  "sim://?baud=115200&fifo_frames=137"], stdout=subprocess.PIPE,
+                                 stderr=subprocess.PIPE, text=True,
+                                 preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        ready = simulator.stdout.readline()
+        path = re.fullmatch(r"simulated arm on (/dev/pts/\d+) \(Ctrl-C to stop\)\n", ready)
+        assert path, ready
+        completed = subprocess.run([sys.executable, "-m", "armctl", "probe", "--port", path.group(1), "--baud", "115200",
+                                    "--no-motion", "--json"], capture_output=True, text=True, timeout=100)
+        assert completed.returncode == 0, completed.stderr
+        data = json.loads(completed.stdout)
+        found = data["details"]["fifo_frames"]
+        assert (data["fifo_frames"], found["confidence"]) == (137, "sure"), found
+    finally:
+        simulator.kill()
+        simulator.communicate()
