@@ -4,16 +4,24 @@ Strategy: a long delay (G4) keeps the arm busy while PWM-only frames (a joint mo
 joints the arm reports, a new PWM) are written behind it at the line rate, more than the
 connector can hold.  Nothing leaves the FIFO while the delay runs, so it accepts exactly
 ``fifo_frames`` of them — the frames it holds behind the one the arm executes (whether the
-executing delay keeps a slot of its own is not observable; this number is) — and drops the rest.  When the delay ends the arm runs the accepted frames in
-order; the PWM it finally reports (status kind 4) names the last frame accepted.
+executing delay keeps a slot of its own is not observable; this number is) — and drops the
+rest.  When the delay ends the arm runs the accepted frames in order; the PWM it finally reports
+(status kind 4) names the last frame accepted.
 
 A PWM change takes the servo time (``timing.pwm_change_s`` on the model; 0.3 s), so giving
 all 300 frames distinct values would cost minutes.  Two rounds instead: round 1 changes the
 value every ``BLOCK`` frames (the final value names a block of 16); round 2 repeats the value
 the arm now holds (a frame that changes nothing takes no time) up to that block and gives each
 frame in it its own value.  The end of a round is seen, not assumed: the reported PWM has not
-changed for ``max(QUIET_S, 3 ×`` the longest step seen between new values``)``.  A round whose PWM
-changed before its last frame landed (the delay ended early) proves nothing: unsure.
+changed for ``max(QUIET_S, 3 ×`` the longest step seen between new values``)``.
+
+The hold is proven, not assumed, at any line rate: the fillers go ``FILL_AHEAD_S`` ahead of the
+wire (a host wakes every 20-30 ms; at 115200 a frame takes 4.2 ms), and a round counts only if
+the last one landed — as the port's reports prove it (``Probe.landed_by``, landing.py) —
+``HOLD_MARGIN_S`` before the delay could end (``Probe.earliest_landing`` + its length).  A round
+not proven for want of time is tried again with a longer delay (``ATTEMPTS``); one whose PWM
+changed before its last frame landed proves nothing.  Unproven: unsure, and the evidence says
+what to set by hand.
 """
 
 from __future__ import annotations
@@ -69,76 +77,107 @@ class Fill:
     hold: dict = field(default_factory=dict)
 
 
-def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0):
-    """Delay, then ``values`` as PWM-only frames, written up to ``FILL_AHEAD_S`` ahead of the
-    wire; a ``Fill``.  The round counts only if the last frame landed while the delay held the
-    arm: proven from the port's reports (``probe.wire``), else assumed from the line model."""
-    count = len(values)
-    wire = probe.wire
-    after_sent_s = wire.after_sent_bytes * wire.byte_s
-    delay_s = math.ceil(((count + 1) * probe.frame_s + after_sent_s + FILL_MARGIN_S + extra_s) * 10) / 10
-    delay_written_s = probe.now_s
-    delay_landed_s = yield Send(Delay(delay_s * 1000))
-    delay_end = wire.written_bytes
-    end_s = delay_landed_s + delay_s
-    probe.known.busy_until_s = end_s
-    last_landed_s = delay_landed_s
-    for value in values:
-        last_landed_s = yield Send(pwm_frame(probe, value), ahead_s=FILL_AHEAD_S)
-    last_end = wire.written_bytes
-    deadline_s = end_s + ROUND_LIMIT_S
+@dataclass
+class _Round:
+    """One round's frames as written: the delay (its length, when it was handed to the port, the
+    stream position after it, when the line model expects it to land) and the fillers (the
+    stream position after the last, when the model expects that one to land)."""
 
-    # Frames that repeat the PWM show nothing while they run: until a change is seen, allow them
-    # a frame time each (an arm slower than that could not keep up with the line anyway), and the
-    # delay may end as much later than its earliest end as an adapter may hold it.
-    repeats = sum(1 for a, b in zip([start_us, *values], values) if a == b)
-    silent_s = QUIET_S + after_sent_s + repeats * probe.frame_s
+    values: list[int]
+    start_us: int
+    delay_s: float
+    delay_written_s: float
+    delay_landed_s: float = 0.0
+    delay_end: int = 0
+    last_landed_s: float = 0.0
+    last_end: int = 0
 
-    def settled() -> bool:
-        if probe.landed_by(last_end, last_landed_s) is None:  # the port still holds fillers
+    @property
+    def end_s(self) -> float:
+        """When the delay ends, as the line model expects."""
+        return self.delay_landed_s + self.delay_s
+
+    def earliest_end_s(self, probe) -> float:
+        """The delay cannot end sooner: its landing (not before write() + its wire time, nor
+        while the port still held it) + its length."""
+        return probe.earliest_landing(self.delay_end, self.delay_written_s) + self.delay_s
+
+    def landed_by_s(self, probe) -> float | None:
+        """The last filler has landed by then (None: the port still holds it)."""
+        return probe.landed_by(self.last_end, self.last_landed_s)
+
+    def settled(self, probe, silent_s: float) -> bool:
+        """The arm has run what it accepted: the port holds no filler, and the PWM has been quiet
+        long enough since the delay's end — the model's, or later as the port's reports prove it
+        began (a buffer may have held it), so the quiet of a delay still running never passes
+        for the end of the round."""
+        if self.landed_by_s(probe) is None:
             return False
-        # from the delay's end as the model expects it, or later: as late as the port's reports
-        # prove it began (a buffer may have held it), so the quiet of a delay still running
-        # never passes for the end of the round
-        start_s = max(end_s, probe.earliest_landing(delay_end, delay_written_s) + delay_s)
+        start_s = max(self.end_s, self.earliest_end_s(probe))
         times = [t for t, _ in _changes(probe, start_s - 1.0) if t >= start_s]
         if not times:
             return probe.now_s - start_s >= silent_s
         gaps = [b - a for a, b in zip([start_s, *times], times)]
         return probe.now_s - times[-1] >= max(QUIET_S, 3 * max(gaps))
 
-    yield Wait(deadline_s, settled)
+
+def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0):
+    """Delay, then ``values`` as PWM-only frames, written up to ``FILL_AHEAD_S`` ahead of the
+    wire; a ``Fill``.  The round counts only if the last frame landed while the delay held the
+    arm: proven from the port's reports (``probe.wire``), else assumed from the line model."""
+    wire = probe.wire
+    after_sent_s = wire.after_sent_bytes * wire.byte_s
+    count = len(values)
+    delay_s = math.ceil(((count + 1) * probe.frame_s + after_sent_s + FILL_MARGIN_S + extra_s) * 10) / 10
+    fill = _Round(values, start_us, delay_s, probe.now_s)
+    fill.delay_landed_s = yield Send(Delay(delay_s * 1000))
+    fill.delay_end = wire.written_bytes
+    probe.known.busy_until_s = fill.end_s
+    fill.last_landed_s = fill.delay_landed_s
+    for value in values:
+        fill.last_landed_s = yield Send(pwm_frame(probe, value), ahead_s=FILL_AHEAD_S)
+    fill.last_end = wire.written_bytes
+    # Frames that repeat the PWM show nothing while they run: until a change is seen, allow them
+    # a frame time each (an arm slower than that could not keep up with the line anyway), and the
+    # delay may end as much later than its earliest end as an adapter may hold it.
+    repeats = sum(1 for a, b in zip([start_us, *values], values) if a == b)
+    silent_s = QUIET_S + after_sent_s + repeats * probe.frame_s
+    yield Wait(fill.end_s + ROUND_LIMIT_S, lambda: fill.settled(probe, silent_s))
     probe.known.busy_until_s = max(probe.known.busy_until_s, probe.now_s)
-    # The hold: the delay cannot end before it landed (not before write() + its wire time, nor
-    # while the port still held it) + its length; the last frame surely landed by ``landed_by``.
-    ends_s = probe.earliest_landing(delay_end, delay_written_s) + delay_s
-    landed_by_s = probe.landed_by(last_end, last_landed_s)
+    return _judged(probe, fill, fill.settled(probe, silent_s))
+
+
+def _judged(probe, fill: _Round, settled: bool) -> Fill:
+    """What a round proves: the final PWM if the last filler landed ``HOLD_MARGIN_S`` before the
+    delay could end and the PWM did not change before then; else why not."""
+    wire, written_s, delay_s = probe.wire, fill.delay_written_s, fill.delay_s
+    ends_s, landed_by_s = fill.earliest_end_s(probe), fill.landed_by_s(probe)
     confidence, how = (SURE, "the port's reports prove") if wire.reporting else \
         (LIKELY, "the line model expects (the port does not say what it sent)")
-    hold = {"delay_s": delay_s, "delay_ends_earliest_s": round(ends_s - delay_written_s, 3)}
+    hold = {"delay_s": delay_s, "delay_ends_earliest_s": round(ends_s - written_s, 3)}
     if landed_by_s is None:
-        return Fill(None, f"the port still held {wire.unsent_bytes()} bytes {probe.now_s - delay_written_s:.1f} s after "
+        return Fill(None, f"the port still held {wire.unsent_bytes()} bytes {probe.now_s - written_s:.1f} s after "
                           f"the {delay_s:g} s delay was written: when the frames landed is not known", UNSURE, None, hold)
-    hold["last_landed_by_s"] = round(landed_by_s - delay_written_s, 3)
-    sent = set(values)
-    early = [(t, v) for t, v in _changes(probe, delay_landed_s) if t < landed_by_s and v in sent and v != start_us]
+    hold["last_landed_by_s"] = round(landed_by_s - written_s, 3)
     late_s = landed_by_s + HOLD_MARGIN_S - ends_s
     if late_s > 0:
-        return Fill(None, f"the last of the {count} frames landed by {landed_by_s - delay_written_s:.2f} s ({how}), but the "
-                          f"{delay_s:g} s delay may have ended at {ends_s - delay_written_s:.2f} s (both from when the delay "
+        return Fill(None, f"the last of the {len(fill.values)} frames landed by {landed_by_s - written_s:.2f} s ({how}), but "
+                          f"the {delay_s:g} s delay may have ended at {ends_s - written_s:.2f} s (both from when the delay "
                           f"was written; {HOLD_MARGIN_S:g} s to spare needed): the delay did not surely hold the arm",
                     UNSURE, late_s, hold)
+    sent = set(fill.values)
+    early = [(t, v) for t, v in _changes(probe, fill.delay_landed_s)
+             if t < landed_by_s and v in sent and v != fill.start_us]
     if len(early) >= AGREEING_FRAMES:
-        return Fill(None, f"the PWM changed {early[0][0] - delay_written_s:.2f} s after the {delay_s:g} s delay was written, "
-                          f"before the last frame landed ({landed_by_s - delay_written_s:.2f} s): the arm did not hold "
+        return Fill(None, f"the PWM changed {early[0][0] - written_s:.2f} s after the {delay_s:g} s delay was written, "
+                          f"before the last frame landed ({landed_by_s - written_s:.2f} s): the arm did not hold "
                           "for the delay", UNSURE, None, hold)
-    final = probe.seen.agreed(PauseStatus.KIND, end_s, lambda f: f.pwm_us)
-    if not settled() or final is None:
+    final = probe.seen.agreed(PauseStatus.KIND, fill.end_s, lambda f: f.pwm_us)
+    if not settled or final is None:
         return Fill(None, f"the PWM had not settled {ROUND_LIMIT_S:g} s after the delay", UNSURE, None, hold)
-    final = final[1]
-    return Fill(final, f"{count} PWM-only frames behind a {delay_s:g} s delay, the last landed by "
-                       f"{landed_by_s - delay_written_s:.2f} s and the delay ending at {ends_s - delay_written_s:.2f} s at "
-                       f"the earliest ({how}); the arm ended at PWM {final} µs", confidence, None, hold)
+    return Fill(final[1], f"{len(fill.values)} PWM-only frames behind a {delay_s:g} s delay, the last landed by "
+                          f"{landed_by_s - written_s:.2f} s and the delay ending at {ends_s - written_s:.2f} s at "
+                          f"the earliest ({how}); the arm ended at PWM {final[1]} µs", confidence, None, hold)
 
 
 def held_round(probe, make_values):
