@@ -7,7 +7,10 @@ The fault this covers: at 115200 a frame takes 4.2 ms on the wire, but a host wa
 300 fillers took 4.5 s against a 2.3 s delay, and the probe said "the PWM changed 2.43 s into the
 2.3 s delay" (``fifo_frames: null``) on every try.  ``StatusWokenLink`` gives the virtual clock
 that host: its waits end no sooner than the next status frame.  ``BufferedPort`` puts a bounded
-write buffer (an adapter's, 4 KB) between the host and the simulated line, which may stall.
+write buffer (an adapter's, 4 KB) between the host and the simulated line, which may stall, hide
+what it holds (a pty bridge) or not report at all (socket://) — for the FIFO and for the other
+steps that time a frame's landing (control frames, the speed factor).  Virtual time, but for the
+installed command on the wall clock and through ``armctl sim --pty`` (realtime).
 """
 
 from __future__ import annotations
