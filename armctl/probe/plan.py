@@ -7,8 +7,9 @@ the steps in order and turns their wishes into ``Write``/``Wait`` actions for a 
 writes to the line rate (one frame ahead of the wire, so the line model says when each lands;
 further ahead only where ``WireLog`` — the port's own reports of what it still holds, fed by the
 host — proves the landing) and hands each step the landing time the model expects.  ``Seen``
-keeps every status frame with its time.  ``interrupt()`` abandons the running step for the restore step, which
-is also the last step of a normal run: one mechanism puts back what the probe changed.
+keeps every status frame with its time.  ``interrupt()`` abandons the running step for the
+restore step, which is also the last step of a normal run: one mechanism puts back what the
+probe changed.
 
 No clock, no port, no threads: a host (armctl/probe/host.py) feeds frames and time; the tests
 feed a simulator in virtual time.
@@ -53,10 +54,10 @@ class Finding:
 @dataclass(frozen=True)
 class Send:
     """A step's wish: write this frame (the step receives the landing time the line model
-    expects; ``probe.wire`` proves it, from the port's reports).  ``ahead_s``: the frame may go
-    this much line time ahead of the wire (a port that says what it still holds only: the
-    landing is then proven, never assumed, and the port's buffer keeps the line busy between
-    two of the host's wake-ups)."""
+    expects; ``Probe.landed_by`` proves it from the port's reports).  ``ahead_s``: the frame may
+    go this much more line time ahead of the wire — only on a port that reports what it still
+    holds, where the landing is proven, not assumed; the port's buffer then keeps the line busy
+    between two of the host's wake-ups."""
 
     command: Command
     raw: bytes | None = None  # the bytes, when they are not ``command.encode()`` (a byte-order test)
