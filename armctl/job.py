@@ -52,13 +52,15 @@ Rules:
   statement about to be written, and the streamer plans that very command, so the lead and the
   estimate follow it.  A stop sends its pause toggle only when the arm would otherwise run on.
 - A summary claims only what evidence proves.  Each frame counts as confirmed by the arm's
-  reports or by time alone (``RunView.frames_by_reports`` / ``frames_by_time``).  Any sign of loss
+  reports, by time alone, or as gone from the FIFO without a proof that it ran
+  (``RunView.frames_by_reports`` / ``frames_by_time`` / ``frames_unseen``: armctl/streamer.py).  Any sign of loss
   — the streamer saw the arm skip frames (``Streamer.losses``), or the arm at rest at the end
   sooner than the frames sent could take at the fastest plausible pace — ends FRAMES_LOST with
   the evidence, and nothing from the first frame that may be lost on is claimed executed.
   ``done`` (FINISHED) also needs a proven FIFO size (``fifo_proven``: probed, or a simulator
   known to hold at least the profile's) or every frame confirmed by the arm's reports: time
-  alone cannot tell a frame run from a frame dropped; else the job ends UNPROVEN.
+  alone cannot tell a frame run from a frame dropped (nor can a report on a later frame); else
+  the job ends UNPROVEN.
 """
 
 from __future__ import annotations
@@ -138,6 +140,7 @@ class Outcome(StrEnum):
     NO_CONFIRMATION = "no confirmation"
     FRAMES_LOST = "frames may have been lost"
     UNPROVEN = "finished, unproven"
+    PAUSED = "paused by the script"  # the script's own PAUSE paused the arm with lines still to run
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,6 +188,7 @@ class RunView:
     outcome: str = Outcome.RUNNING  # an Outcome
     frames_by_reports: int = 0  # frames confirmed by the arm's reports (position, joints, at rest at the end)
     frames_by_time: int = 0  # frames confirmed only by time (the slowest-arm bound)
+    frames_unseen: int = 0  # frames a report proves gone from the FIFO (a later frame's sighting), never seen running
     messages: list = field(default_factory=list)
     pause_state: str = "running"  # armctl/job_control.py's PauseState: running, pausing, paused, resuming
     pause_label: str = "running"  # what the panel shows (the arm's reports decide it)
@@ -238,6 +242,7 @@ class Job:
         ``fifo_frames`` (``armctl.link.fifo_proven`` decides for ``armctl run``)."""
         self.streamer = streamer
         self.fifo_proven = fifo_proven
+        streamer.fifo_holds_all = fifo_proven  # else a frame gone from the FIFO may have been dropped, not run
         # pause, resume and the feed override (armctl/job_control.py), under the profile the
         # streamer plans with: its speed limits (never passed) and its control-frame mode (H5)
         profile = streamer.planner.model.profile
@@ -260,6 +265,9 @@ class Job:
         self._active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
         self._reported: dict = {}
         self._pause_reports: deque = deque(maxlen=2)  # the last two pause states reported
+        self._pause_read_s: deque = deque(maxlen=2)  # ... and when they were read
+        self._script_toggles: list = []  # the job's own PAUSE frames written (SentFrame), in order
+        self._script_pause_deadline_s: float | None = None  # held behind one: how long its pause is waited for
         self._recent: deque = deque(maxlen=RECENT_FRAMES)  # the last frames written (SentFrame)
         self._aborts: deque = deque()  # abort frames still to write
         self._deadline_s = 0.0
@@ -333,6 +341,7 @@ class Job:
             values = values_of(frame)
             if kind == 4:  # news while streaming only through the control state (or the bound)
                 self._pause_reports.append(frame.paused)
+                self._pause_read_s.append(now)
                 version = control.version
                 control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
                 news = news or control.version != version
@@ -385,6 +394,8 @@ class Job:
         if self.pacing is not self.streamer:
             self.pacing.wrote(command, now, statement)
         self._recent.append(sent)
+        if isinstance(command, PauseToggle):
+            self._script_toggles.append(sent)
         if _moves_arm(sent.segment):
             self._last_move = sent
         view.frames_sent += 1
@@ -445,6 +456,8 @@ class Job:
                 return held
         if self.phase is _Phase.STREAMING:
             statement = view.next_statement
+            if statement is not None and self._script_pause_holds(statement):
+                return self._held_by_script_pause(now)
             if statement is not None:
                 command = self.control.command_for(statement)
                 when = self.pacing.next_write_time(now, command)
@@ -493,6 +506,46 @@ class Job:
             return Wait(None)  # until the arm reports (pausing → paused) or the user resumes
         return None
 
+    def _script_pause_holds(self, statement) -> bool:
+        """The job's own PAUSE lines left the arm to pause (an odd number written) and the next
+        statement does not resume it: nothing more is written.  On an arm whose control frames
+        queue (H5) a frame behind the PAUSE would wait at the head of the paused FIFO, where no
+        resume toggle could ever reach the head; on either arm the rest of the job waits for a
+        resume nobody in this run can give (the run ends at the pause: ``_held_by_script_pause``)."""
+        return len(self._script_toggles) % 2 == 1 and not isinstance(statement.command, PauseToggle)
+
+    def _paused_by_script(self) -> bool:
+        """The arm reports it is paused (two agreeing reports) in reports read after the job's last
+        PAUSE landed: it acted — and, queued (H5), after every frame before it had run; on
+        arrival, rule (c) wrote it only once they had."""
+        toggles = self._script_toggles
+        if len(toggles) % 2 == 0 or self.arm_paused is not True or len(self._pause_read_s) < 2:
+            return False
+        return self._pause_read_s[0] >= toggles[-1].wire_end_s + ARRIVAL_SLACK_S
+
+    def _script_pause_line(self):
+        return getattr(self._script_toggles[-1].tag, "line", None)
+
+    def _held_by_script_pause(self, now: float) -> Wait | Finished:
+        """Held behind the script's own PAUSE: once the arm reports the pause, every frame written
+        ran, and the run ends "paused by the script" with the resume line after the PAUSE (the
+        resume's start-up un-pauses the arm with its one toggle, its FIFO empty).  An arm that
+        does not report the pause in the time its queue takes ends "no confirmation"."""
+        if self._paused_by_script():
+            self.streamer.confirm_all_done()
+            following = getattr(self.view.next_statement, "line", None)
+            self.view.messages.append(
+                f"paused by the script's PAUSE at line {self._script_pause_line()}: the arm is paused, and the rest "
+                f"of the job (from line {following}) was not sent; the printed resume un-pauses the arm and runs it")
+            return self._finish(Outcome.PAUSED, now)
+        if self._script_pause_deadline_s is None:
+            self._script_pause_deadline_s = self._settle_deadline(now)
+        if now >= self._script_pause_deadline_s:
+            self.view.messages.append(f"the arm did not report the pause of the script's PAUSE at line "
+                                      f"{self._script_pause_line()} in time: the rest of the job was not sent")
+            return self._finish(Outcome.FRAMES_LOST if self.streamer.losses else Outcome.NO_CONFIRMATION, now)
+        return Wait(self._script_pause_deadline_s)
+
     @property
     def streaming(self) -> bool:
         """Frames of the job are still to be written (the pacing strategy's answers are current)."""
@@ -516,9 +569,13 @@ class Job:
         """Finished means: at rest, at the last target, not paused, and the estimate agrees.
         Anything else ends without claiming the job ran (frames cleared or dropped, a pause)."""
         view = self.view
-        if self._rest_proves_all_written(now):
+        paused_at_end = self._paused_by_script()  # the script ends with its own PAUSE: every frame ran
+        if paused_at_end or self._rest_proves_all_written(now):
             self._confirm_all_done()
             view.arm_done_s = self._done_at(now)
+            if paused_at_end:
+                view.messages.append(f"the arm is paused, as the script's PAUSE at line {self._script_pause_line()} "
+                                     "leaves it")
             if self._overran:
                 view.messages.append("the arm kept working past the estimate (moving, or running an SD program "
                                      "whose time armctl cannot know); armctl waited until it stopped")
@@ -644,11 +701,10 @@ class Job:
         streamer = self.streamer
         if streamer.losses:
             return Outcome.FRAMES_LOST
-        if not self.fifo_proven and streamer.confirmed_by_time:
+        if not self.fifo_proven and (streamer.confirmed_by_time or streamer.confirmed_unseen):
             self.view.messages.append(
-                f"finished, unproven: {streamer.confirmed_by_time} frames were confirmed by time alone, and the "
-                "FIFO size is the document's, not measured on this arm: a frame it dropped would look the same; "
-                "run `armctl probe` once")
+                f"finished, unproven: {_frames_not_seen(streamer)}, and the FIFO size is the document's, not "
+                "measured on this arm: a frame it dropped would look the same; run `armctl probe` once")
             return Outcome.UNPROVEN
         return Outcome.FINISHED
 
@@ -703,8 +759,11 @@ class Job:
                                  "and a RESET CONNECTOR cleared the frames queued behind it; the resume command resumes "
                                  "that move, then re-sends its line (an absolute move to where the arm then is)")
         self.control.observe(self.arm_paused)
-        if not self.control.abort_needs_toggle() and any(isinstance(c, PauseToggle) for c in sequence):
-            why = ("a pause was already on its way" if self.control.state == "pausing"
+        script_pause = len(self._script_toggles) % 2 == 1  # the script's own PAUSE pauses (or paused) it
+        if (script_pause or not self.control.abort_needs_toggle()) and any(isinstance(c, PauseToggle) for c in sequence):
+            why = (f"the script's PAUSE at line {self._script_pause_line()} was already written"
+                   if script_pause and self.arm_paused is not True
+                   else "a pause was already on its way" if self.control.state == "pausing"
                    else "the arm was already paused")
             view.messages.append(f"{why}: no pause toggle sent (it would have resumed it)")
             sequence = tuple(c for c in sequence if not isinstance(c, PauseToggle))
@@ -820,6 +879,7 @@ class Job:
             view.pause_state, view.pause_label = control.state.value, control.label
             view.feed_percent, view.feed_clamped = control.feed.percent, control.feed.clamped
         view.frames_by_reports, view.frames_by_time = streamer.confirmed_by_reports, streamer.confirmed_by_time
+        view.frames_unseen = streamer.confirmed_unseen
         suspect = streamer.first_suspect_index
         if suspect is not None and suspect < streamer.consumed_lower_bound:
             # nothing from the first frame that may have been lost on is claimed executed
@@ -849,13 +909,21 @@ class Job:
         return pending[0].tag
 
 
+def _frames_not_seen(streamer) -> str:
+    """The frames the arm's reports did not see run, as the summary says it."""
+    parts = []
+    if streamer.confirmed_by_time:
+        parts.append(f"{streamer.confirmed_by_time} frames were confirmed by time alone")
+    if streamer.confirmed_unseen:
+        parts.append(f"{streamer.confirmed_unseen} only by a report on a later frame (gone from the FIFO, "
+                     "never seen running)")
+    return " and ".join(parts)
+
+
 def _moves_arm(segment) -> bool:
-    """Whether a frame's motion changes the reported position or joints."""
-    if segment.kind == "still":
-        return False
-    if segment.length > 0:
-        return True
-    return max(abs(a - b) for a, b in zip(segment.start.joints, segment.end.joints)) > 1e-6  # attitude only
+    """Whether a frame's motion changes the reported position or joints (the motion model's
+    ``Segment.moves_reported``: not a move of E0/E1 alone, which no status kind reports)."""
+    return segment.moves_reported
 
 
 def _moved_clearly(before: tuple, after: tuple) -> bool:

@@ -95,7 +95,13 @@ until the FIFO bound throttles the job to the proof's rate (``armctl bench``'s `
   pace could be measured (delays, then a long move) may have been overrun.
 
 What the summary may claim is data too: every frame consumed counts as confirmed by the arm's
-reports or by time alone (``confirmed_by_reports`` / ``confirmed_by_time``), and ``losses``
+reports, by time alone, or as gone from the FIFO unseen (``confirmed_by_reports`` /
+``confirmed_by_time`` / ``confirmed_unseen``): a report on a later frame proves a frame left the
+FIFO, and that it ran only where the caller knows the FIFO holds every frame the capacity rule
+lets in (``fifo_holds_all``: a dropped frame leaves too, and the frame after it runs along its
+path when they lie in a row) and no RESET CONNECTOR may have cleared it (``may_be_cleared``,
+which time never confirms either); the arm at rest at the last frame's own target proves that
+one (``_note_seen_at_rest``).  And ``losses``
 holds each sign of loss with its evidence: two agreed sightings of one stream, the later at
 least at frame k, the earlier at most at the latest frame its report may lie on (no later than
 the latest the later report may lie on: the arm runs its frames in order), between which the
@@ -138,6 +144,7 @@ from .protocol import (
     JointsLowStatus,
     PauseStatus,
     PositionStatus,
+    ResetConnector,
     StatusFrame,
     frame_seconds,
 )
@@ -251,6 +258,8 @@ class SentFrame:
     # kinematics know (``unknown_start_s``) may be any shorter, so the loss checks' least motion
     # counts it as none
     sure_before_s: float = 0.0
+    seen: bool = False  # the arm at rest at its target proved it ran (``Streamer._note_seen_at_rest``)
+    may_be_cleared: bool = False  # queued when a RESET CONNECTOR may have cleared it (``Streamer.cleared``)
 
     @property
     def sure_s(self) -> float:
@@ -331,6 +340,12 @@ class Streamer:
         # What proves each frame consumed (the summary's honesty): the arm's reports (a position
         # or joints on a later frame's path, the arm at rest at the last target) or time alone.
         self.confirmed_by_reports = 0
+        self.confirmed_unseen = 0  # gone from the FIFO by a report, not proven run (``_consume_one``)
+        # Whether a frame gone from the FIFO has run: true when the connector holds every frame the
+        # capacity rule lets in (the caller knows: a probed FIFO size, armctl/job.py's fifo_proven);
+        # else a frame a full FIFO dropped leaves it as well.
+        self.fifo_holds_all = True
+        self._reset_index: int | None = None  # the last RESET CONNECTOR written (``wrote``)
         self._time_proves = True  # False once the FIFO may have been cleared (``cleared``)
         self.confirmed_by_time = 0
         self.motion_sent_s = 0.0  # the model's motion time of every frame written
@@ -460,6 +475,14 @@ class Streamer:
         )
         self.motion_sent_s += segment.duration_s
         self.sure_motion_sent_s += frame.sure_s
+        if isinstance(command, ResetConnector):  # it clears what is queued when it acts
+            self._reset_index = frame.index
+            if self.control_on_arrival:
+                for sent in self.pending:
+                    sent.may_be_cleared = True
+        elif (not self.control_on_arrival and self._reset_index is not None and self.pending
+              and self.pending[0].index <= self._reset_index):
+            frame.may_be_cleared = True  # queued behind a RESET CONNECTOR (H5) that may not have acted yet
         self._recent_sent.append(frame)
         if isinstance(command, ArcStart):
             # The arm holds a G300 at the head until its G301 has landed and runs both as one
@@ -525,12 +548,15 @@ class Streamer:
         as it lands): the time bound assumes every frame written waits in the FIFO, so from now
         on only the arm's reports confirm a pending frame."""
         self._time_proves = False
+        for sent in self.pending:
+            sent.may_be_cleared = True
 
     def _advance_by_time(self) -> None:
         if self._running_seen_s is None or self._paused or not self._time_proves:
             return
         certain_now = self._running_seen_s
-        while self.pending and self.pending[0].certain_end_s <= certain_now:
+        # (a frame a RESET CONNECTOR may have cleared has no time to finish in: reports decide it)
+        while self.pending and self.pending[0].certain_end_s <= certain_now and not self.pending[0].may_be_cleared:
             self._consume_one(by_reports=False)
             self.bound_evidence = Evidence.TIME
 
@@ -616,10 +642,17 @@ class Streamer:
         return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3) * model.speed_factor
 
     def _consume_one(self, by_reports: bool) -> None:
-        self._last_done_tag = self.pending.popleft().tag
+        sent = self.pending.popleft()
+        self._last_done_tag = sent.tag
         self.consumed_lower_bound += 1
         if by_reports:
-            self.confirmed_by_reports += 1
+            # A report on a later frame (or the arm at rest at the end) proves a frame left the
+            # FIFO; that the arm ran it only if the FIFO held it (no drop, no RESET CONNECTOR),
+            # or the arm at rest at its very target says so.
+            if sent.seen or self.fifo_holds_all and not sent.may_be_cleared:
+                self.confirmed_by_reports += 1
+            else:
+                self.confirmed_unseen += 1
         else:
             if self.confirmed_by_time == 0:
                 self.first_time_only_index = self.consumed_lower_bound - 1
@@ -1056,9 +1089,16 @@ class Streamer:
         again there: it may have run to infinity behind an arc it cannot bound.  With ``before``
         (mid-job too: the arm rests in that frame or later) only the frames before it."""
         pending = self.pending
+        if pending and (before is None or pending[-1].index < before):
+            self._note_seen_at_rest(pending[-1])
         while pending and (before is None or pending[0].index < before) and not (
                 len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
-            self._consume_one(by_reports=True)
+            if pending[0].seen or pending[0].segment.moves_reported:
+                self._consume_one(by_reports=True)  # seen, or gone from the FIFO unseen
+            else:  # a frame that leaves no trace: the caller's proof of it is time (its slowest-arm bound)
+                self.pending.popleft()
+                self.consumed_lower_bound += 1
+                self.confirmed_by_time += 1
             self.bound_evidence = Evidence.AT_REST
         if now is None:
             return
@@ -1066,6 +1106,33 @@ class Streamer:
             self._restart_time_bound(pending[0].index, now)  # the held G300 is at the head
         else:
             self._certain_tail_s = min(self._certain_tail_s, now)
+
+    def _note_seen_at_rest(self, last: SentFrame) -> None:
+        """The arm at rest at the target of ``last``, the last frame written, proves it ran — had
+        it been dropped, the arm would rest where an earlier frame ended — unless that is where
+        the arm may rest anyway: at its start, or at the end of an earlier frame kept (a way back
+        to the same point), or somewhere only the profile's kinematics know (its path not the
+        planned one)."""
+        segment = last.segment
+        if not (segment.moves_reported and last.path_known):
+            return
+        by_joints = segment.kind == "joint" or segment.end.xyz_derived  # what ``Job._at_end_of`` compares
+        tolerance = 2 * (JOINT_TOLERANCE_DEG if by_joints else POSITION_TOLERANCE_MM)
+        target = segment.end.joints if by_joints else segment.end.xyz
+        for sent in self._recent_sent:  # (``last`` among them: its own start, then no further)
+            pose = segment.start if sent is last else sent.segment.end
+            if pose.origin_mm != segment.end.origin_mm:
+                return
+            derived = pose.joints_derived if by_joints else pose.xyz_derived  # the profile's IK/FK: where?
+            if derived and not self.kinematics_verified:
+                return
+            if max(abs(a - b) for a, b in zip(pose.joints if by_joints else pose.xyz, target)) <= tolerance:
+                return
+            if sent is last:
+                break
+        last.seen = True
+        if last.group_index != last.index and len(self.pending) > 1:
+            self.pending[-2].seen = True  # its G300
 
     def check_time_bound(self) -> None:
         """A sign of loss, told at the end of a job: the arm was proven to run a frame slower than
