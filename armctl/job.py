@@ -74,8 +74,8 @@ from typing import Iterable, Iterator
 from .job_control import JobControl, agreed_pause, control_frames_of  # noqa: F401  (agreed_pause: the pause rule, re-exported)
 from .streamer import LOSS_SLACK_S, ROTATION_S
 from .protocol import (
-    CONTROL_COMMANDS, ArcEnd, ArcStart, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
-    RunPositionStatus, StatusFrame,
+    CONTROL_COMMANDS, ArcEnd, ArcStart, GoToPose, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus,
+    ResetConnector, RunPositionStatus, RunProgram, StatusFrame,
 )
 from .streamer import ARRIVAL_SLACK_S
 
@@ -855,11 +855,35 @@ class Job:
             return "the arm reports it is paused: the rest of the job waits in its buffer"
         position = self._reported.get(0)
         if self._rest is not None and position is not None and self._recent and not self._at_last_target():
-            target = ", ".join(f"{v:.1f}" for v in self._recent[-1].segment.end.xyz)
-            here = ", ".join(f"{v:.1f}" for v in position)
-            return (f"the arm stopped at ({here}) but the job's last target is ({target}): "
+            named = self._arms_own_motion_last()
+            if named is not None:
+                return named
+            return (f"the arm stopped at ({_values(position)}) but the job's last target is "
+                    f"({_values(self._recent[-1].segment.end.xyz)}): "
                     "frames were lost or cleared (a RESET CONNECTOR, a full buffer?)")
         return "the arm did not confirm the end of the job in time (status frames missing?)"
+
+    def _arms_own_motion_last(self) -> str | None:
+        """Why the arm is not at the last target when the job's last positioning frame is one
+        whose motion is the arm's own, not the job's: a ``POSE n`` goes to the arm's fixed pose,
+        which the profile's ``[poses]`` only describe, and a ``PROGRAM n`` runs an SD program
+        armctl cannot see into.  Named as such (None when no such frame comes after the job's own
+        last motion): the arm's rest elsewhere is no sign that frames were lost."""
+        for sent in reversed(self._recent):
+            command = sent.command
+            where = f"line {sent.tag.line}" if getattr(sent.tag, "line", None) is not None else f"frame {sent.index + 1}"
+            if isinstance(command, RunProgram):
+                return (f"the arm stopped at ({_values(self._reported.get(0))}) after PROGRAM {command.program} ({where}): "
+                        "an SD program moves the arm as it says, which armctl cannot know, so where it rests proves "
+                        "nothing about the job's frames")
+            if isinstance(command, GoToPose):
+                joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
+                return (f"POSE {command.pose} ({where}) should end at the profile's fixed pose {command.pose} (joints "
+                        f"{_values(sent.segment.end.joints)}), but the arm stopped at joints ({_values(joints)}): its own "
+                        f"fixed pose {command.pose} is not the profile's [poses] (or the frame did not run)")
+            if _moves_arm(sent.segment):
+                return None  # the job's own move after it says where the arm should be
+        return None
 
     def _confirm_all_done(self) -> None:
         self.streamer.confirm_all_done()
@@ -907,6 +931,10 @@ class Job:
         if isinstance(pending[0].command, ArcEnd) and self.view.last_done is not None:
             return self.view.last_done  # a G301 cannot be resumed alone: resume at its G300
         return pending[0].tag
+
+
+def _values(values) -> str:
+    return ", ".join(f"{v:.1f}" for v in values or ())
 
 
 def _frames_not_seen(streamer) -> str:
