@@ -78,6 +78,7 @@ from .protocol import (
     ResetConnector, RunPositionStatus, RunProgram, StatusFrame,
 )
 from .streamer import ARRIVAL_SLACK_S
+from .motion import distance_to_path
 
 ABORT_SEQUENCES = {
     "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
@@ -278,6 +279,7 @@ class Job:
         self._last_move = None  # the last frame written that moves the arm (its SentFrame)
         self._resume_at_next = False  # frozen where the first pending frame ends and the next begins
         self._held = False  # streaming, and only evidence lets the next frame go (``_rest_proves_all_written``)
+        self._found_arrival = False  # the arm proved its control frames act as they land (``_frozen_mid_move``)
 
     # --- input ------------------------------------------------------------------------------
 
@@ -379,7 +381,7 @@ class Job:
         """The host wrote the frame the last ``Write`` asked for, starting at ``now``."""
         write, self._write = self._write, None
         if self.phase is _Phase.ABORTING:
-            if isinstance(self._aborts.popleft(), ResetConnector) and self.streamer.control_on_arrival:
+            if isinstance(self._aborts.popleft(), ResetConnector) and self._acts_on_arrival:
                 self.streamer.cleared()  # it acted as it landed: what was queued may be gone
             return
         if write is not None and write.control is not None:  # a pause toggle the user asked for
@@ -532,6 +534,7 @@ class Job:
         resume's start-up un-pauses the arm with its one toggle, its FIFO empty).  An arm that
         does not report the pause in the time its queue takes ends "no confirmation"."""
         if self._paused_by_script():
+            self._script_toggles[-1].seen = True  # the arm's pause report: it ran
             self.streamer.confirm_all_done()
             following = getattr(self.view.next_statement, "line", None)
             self.view.messages.append(
@@ -570,6 +573,8 @@ class Job:
         Anything else ends without claiming the job ran (frames cleared or dropped, a pause)."""
         view = self.view
         paused_at_end = self._paused_by_script()  # the script ends with its own PAUSE: every frame ran
+        if paused_at_end:
+            self._script_toggles[-1].seen = True
         if paused_at_end or self._rest_proves_all_written(now):
             self._confirm_all_done()
             view.arm_done_s = self._done_at(now)
@@ -716,10 +721,16 @@ class Job:
             return self._finish(outcome, now)
         still = self._rest_s() >= REST_CHECK_S
         if still and (self.arm_paused or self.arm_at_rest(now)):
-            if self._at_last_target():
-                self._confirm_all_done()
-            elif self.arm_paused and self.streamer.control_on_arrival:
+            if self.arm_paused and not self._acts_on_arrival and self._paused_on_arrival():
+                return self.next_action(now)  # the RESET CONNECTOR that clears what is still queued
+            if self.arm_paused and self._acts_on_arrival:
+                # The pause acted as it landed: the arm at the last target says nothing of the frames
+                # after its last move (a PWM change, a delay: the RESET CONNECTOR cleared them, or
+                # not); the moves it reached the ends of did run.
+                self._confirm_through_last_move()
                 self._resume_at_next = self._frozen_at_a_boundary()
+            elif self._at_last_target():
+                self._confirm_all_done()
             return self._finish(outcome, now)
         return Wait(self._next_change_s(now, self._deadline_s))
 
@@ -909,6 +920,94 @@ class Job:
             # nothing from the first frame that may have been lost on is claimed executed
             view.last_done = streamer.tag_of(suspect - 1) if suspect > 0 else None
             view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
+
+    def _paused_on_arrival(self) -> bool:
+        """On an arm the profile says queues its control frames (H5), the abort's pause acted as it
+        landed — the arm paused with frames still queued behind it, which the next run's toggle
+        would release to run before its resume line re-sends them: then a RESET CONNECTOR goes
+        (it acts as it lands too, on such an arm) and True.  Proven only by the arm frozen
+        mid-move (``_frozen_mid_move``: a queued pause acts only between frames): on a queued arm
+        the same RESET CONNECTOR would wait at the head of its paused FIFO for ever, and a pause
+        that merely came sooner than the queue could run is what a FIFO that dropped frames
+        shows too.  (Frozen in a frame that moves nothing — a PWM change, a delay — such an arm
+        shows nothing: `armctl probe` measures the mode.)"""
+        if self._found_arrival or self._aborts or not self._frozen_mid_move():
+            return False
+        self._found_arrival = True
+        self.view.messages.append(
+            "the arm paused mid-move with frames still queued: its control frames act as they land, though the "
+            "profile says they queue (run `armctl probe`); a RESET CONNECTOR cleared the queue, so the resume runs "
+            "nothing twice")
+        self._aborts.append(ResetConnector())
+        self.phase = _Phase.ABORTING
+        return True
+
+    def _confirm_through_last_move(self) -> None:
+        """The arm at rest at the end of the last frame written that moves it (its target where no
+        other frame kept ends or it starts: ``Streamer.ran_at_rest``): it and every frame before it ran."""
+        last = self._last_move
+        if last is not None and self._at_end_of(last.segment) and self.streamer.ran_at_rest(last):
+            last.seen = True
+            self.streamer.confirm_all_done(before=last.index + 1)
+            return
+        # Else the first pending frame whose path holds where the arm rests: at its end, its motion
+        # is over (the arm is there, or on a later frame), so it is not re-sent; anywhere else on
+        # it, the arm is frozen in it.  Judged in what the arm reports, frame by frame in order,
+        # up to a frame whose pose that cannot judge.
+        position = self._reported.get(0)
+        joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
+        verified = self.streamer.kinematics_verified
+        for sent in self.streamer.pending:
+            segment = sent.segment
+            by_joints = segment.kind == "joint" or segment.kind == "still" and not segment.end.joints_derived
+            if not sent.path_known or (segment.end.joints_derived if by_joints else segment.end.xyz_derived) and not verified:
+                return
+            observed, near = (joints, TARGET_DEG) if by_joints else (position, TARGET_MM)
+            if observed is None or len(observed) != (6 if by_joints else 3):
+                return
+            if distance_to_path(segment, observed)[0] > near:
+                continue
+            end = segment.end.joints if by_joints else segment.end.xyz
+            if _moves_arm(segment) and max(abs(a - b) for a, b in zip(end, observed)) <= near:
+                self.streamer.confirm_all_done(before=sent.index + 1)
+            return
+
+    @property
+    def _acts_on_arrival(self) -> bool:
+        """The arm's control frames act as they land: the profile says so, or the arm showed it."""
+        return self.streamer.control_on_arrival or self._found_arrival
+
+    def _frozen_mid_move(self) -> bool:
+        """The arm, paused and still, rests strictly inside the path of a frame still pending — at
+        no frame's end, where a pause queued behind the frames (H5) would leave it (an arm that
+        dropped frames too): only a pause that acted as it landed freezes a move there.  Judged
+        on what the arm reports: X/Y/Z on a line or arc, joints on a joint move, each on a path
+        the plan knows."""
+        position = self._reported.get(0)
+        joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
+        streamer = self.streamer
+        ends = [sent.segment for sent in self._recent] + list(sent.segment for sent in streamer.pending)
+        for sent in streamer.pending:
+            segment = sent.segment
+            if not sent.path_known or segment.length <= 0:
+                continue
+            cartesian = segment.kind in ("line", "arc")
+            if cartesian and not segment.end.xyz_derived and position is not None:
+                observed, near = position, TARGET_MM
+            elif segment.kind == "joint" and len(joints) == 6:
+                observed, near = joints, TARGET_DEG
+            else:
+                continue
+            if distance_to_path(segment, observed)[0] > near:
+                continue
+            for other in ends:  # at no frame's end (nor the first pending frame's start)
+                for pose in (other.start, other.end):
+                    if (pose.xyz_derived if cartesian else pose.joints_derived) and not streamer.kinematics_verified:
+                        return False  # where that pose really is only the arm knows: no proof
+                    if max(abs(a - b) for a, b in zip(pose.xyz if cartesian else pose.joints, observed)) <= 2 * near:
+                        return False
+            return True
+        return False
 
     def _frozen_at_a_boundary(self) -> bool:
         """A pause that acted as it landed froze the arm at the end of the first pending frame

@@ -101,7 +101,7 @@ FIFO, and that it ran only where the caller knows the FIFO holds every frame the
 lets in (``fifo_holds_all``: a dropped frame leaves too, and the frame after it runs along its
 path when they lie in a row) and no RESET CONNECTOR may have cleared it (``may_be_cleared``,
 which time never confirms either); the arm at rest at the last frame's own target proves that
-one (``_note_seen_at_rest``).  And ``losses``
+one (``ran_at_rest``).  And ``losses``
 holds each sign of loss with its evidence: two agreed sightings of one stream, the later at
 least at frame k, the earlier at most at the latest frame its report may lie on (no later than
 the latest the later report may lie on: the arm runs its frames in order), between which the
@@ -258,7 +258,7 @@ class SentFrame:
     # kinematics know (``unknown_start_s``) may be any shorter, so the loss checks' least motion
     # counts it as none
     sure_before_s: float = 0.0
-    seen: bool = False  # the arm at rest at its target proved it ran (``Streamer._note_seen_at_rest``)
+    seen: bool = False  # the arm at rest at its target proved it ran (``Streamer.ran_at_rest``)
     may_be_cleared: bool = False  # queued when a RESET CONNECTOR may have cleared it (``Streamer.cleared``)
 
     @property
@@ -641,7 +641,10 @@ class Streamer:
         speed_mm_min = min(speed_mm_min, model.profile.speed.max_linear_mm_min)
         return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3) * model.speed_factor
 
-    def _consume_one(self, by_reports: bool) -> None:
+    def _consume_one(self, by_reports: bool, at_rest: bool = False) -> None:
+        """Count the oldest pending frame consumed: by the arm's reports, or by time — the time
+        bound's, or (``at_rest``) the caller's, the trailing frames' at the end of a job (which
+        leaves the time bound's own record, ``first_time_only_index``, as it was)."""
         sent = self.pending.popleft()
         self._last_done_tag = sent.tag
         self.consumed_lower_bound += 1
@@ -653,6 +656,8 @@ class Streamer:
                 self.confirmed_by_reports += 1
             else:
                 self.confirmed_unseen += 1
+        elif at_rest:
+            self.confirmed_by_time += 1
         else:
             if self.confirmed_by_time == 0:
                 self.first_time_only_index = self.consumed_lower_bound - 1
@@ -1089,16 +1094,14 @@ class Streamer:
         again there: it may have run to infinity behind an arc it cannot bound.  With ``before``
         (mid-job too: the arm rests in that frame or later) only the frames before it."""
         pending = self.pending
-        if pending and (before is None or pending[-1].index < before):
-            self._note_seen_at_rest(pending[-1])
+        if pending and (before is None or pending[-1].index < before) and self.ran_at_rest(pending[-1]):
+            pending[-1].seen = True
+            if pending[-1].group_index != pending[-1].index and len(pending) > 1:
+                pending[-2].seen = True  # its G300
         while pending and (before is None or pending[0].index < before) and not (
                 len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
-            if pending[0].seen or pending[0].segment.moves_reported:
-                self._consume_one(by_reports=True)  # seen, or gone from the FIFO unseen
-            else:  # a frame that leaves no trace: the caller's proof of it is time (its slowest-arm bound)
-                self.pending.popleft()
-                self.consumed_lower_bound += 1
-                self.confirmed_by_time += 1
+            # a frame that leaves no trace (unless seen): the caller's proof of it is time
+            self._consume_one(by_reports=pending[0].seen or pending[0].segment.moves_reported, at_rest=True)
             self.bound_evidence = Evidence.AT_REST
         if now is None:
             return
@@ -1107,32 +1110,30 @@ class Streamer:
         else:
             self._certain_tail_s = min(self._certain_tail_s, now)
 
-    def _note_seen_at_rest(self, last: SentFrame) -> None:
-        """The arm at rest at the target of ``last``, the last frame written, proves it ran — had
-        it been dropped, the arm would rest where an earlier frame ended — unless that is where
-        the arm may rest anyway: at its start, or at the end of an earlier frame kept (a way back
-        to the same point), or somewhere only the profile's kinematics know (its path not the
-        planned one)."""
+    def ran_at_rest(self, last: SentFrame) -> bool:
+        """Whether the arm at rest at the target of ``last`` (a frame written; the caller saw it
+        there) proves it ran — had it been dropped or cleared, the arm would rest where an
+        earlier frame ended — that is, unless that is where the arm may rest anyway: at its
+        start, or at the end of an earlier frame kept (a way back to the same point), or
+        somewhere only the profile's kinematics know (its path not the planned one)."""
         segment = last.segment
         if not (segment.moves_reported and last.path_known):
-            return
+            return False
         by_joints = segment.kind == "joint" or segment.end.xyz_derived  # what ``Job._at_end_of`` compares
         tolerance = 2 * (JOINT_TOLERANCE_DEG if by_joints else POSITION_TOLERANCE_MM)
         target = segment.end.joints if by_joints else segment.end.xyz
         for sent in self._recent_sent:  # (``last`` among them: its own start, then no further)
             pose = segment.start if sent is last else sent.segment.end
             if pose.origin_mm != segment.end.origin_mm:
-                return
+                return False
             derived = pose.joints_derived if by_joints else pose.xyz_derived  # the profile's IK/FK: where?
             if derived and not self.kinematics_verified:
-                return
+                return False
             if max(abs(a - b) for a, b in zip(pose.joints if by_joints else pose.xyz, target)) <= tolerance:
-                return
+                return False
             if sent is last:
-                break
-        last.seen = True
-        if last.group_index != last.index and len(self.pending) > 1:
-            self.pending[-2].seen = True  # its G300
+                return True
+        return False
 
     def check_time_bound(self) -> None:
         """A sign of loss, told at the end of a job: the arm was proven to run a frame slower than

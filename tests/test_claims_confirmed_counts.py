@@ -15,10 +15,7 @@ command in a fresh process gives the same summary.
 
 from __future__ import annotations
 
-import os
 import re
-import subprocess
-import sys
 
 import pytest
 from click.testing import CliRunner
@@ -26,22 +23,11 @@ from click.testing import CliRunner
 import armctl.streamer
 from armctl.cli import main
 from armctl.sim.executor import DONE
+from claims_common import fresh, raster
 from test_resume_exactly_once import _open_one_arm
 
 URL = "sim://?clock=virtual&fifo_frames=60"
 COUNTS = r"^frames confirmed by the arm's reports: (\d+); by time only: (\d+)(?:; gone from the buffer, not seen running: (\d+))?$"
-
-
-def _raster(moves: int = 400) -> str:
-    """Rows of 8 mm moves (80 ms at 6000 mm/min): more than the 60-frame FIFO within a 6 s lead."""
-    lines, x, y = ["G1 X200 Y-100 Z150 A180 B0 C0 S1500 F6000"], 200, -100
-    for k in range(moves - 1):
-        if k % 25 == 24:
-            x += 8
-        else:
-            y += 8 if (k // 25) % 2 == 0 else -8
-        lines.append(f"G1 X{x} Y{y} Z150")
-    return "\n".join(lines) + "\n"
 
 
 def _counts(stdout: str) -> tuple[int, int, int]:
@@ -69,7 +55,7 @@ def claimed(monkeypatch):
 def test_no_frame_the_fifo_dropped_is_claimed_seen_by_the_reports(tmp_path, monkeypatch, claimed):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("ARMCTL_PORT", raising=False)
-    (tmp_path / "job.txt").write_text(_raster(), encoding="utf-8")
+    (tmp_path / "job.txt").write_text(raster(400), encoding="utf-8")
     ports = _open_one_arm(monkeypatch)
     result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--lead", "6", "--port", URL])
     arm = ports[URL].model
@@ -85,18 +71,16 @@ def test_no_frame_the_fifo_dropped_is_claimed_seen_by_the_reports(tmp_path, monk
     assert "done: the arm finished the job" not in result.stdout
 
     # the same run, through the installed command in a fresh process: the same counts, told as such
-    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
-    fresh = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--no-live", "--lead", "6", "--port", URL],
-                           cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
-    assert _counts(fresh.stdout) == (by_reports, by_time, unseen)
-    assert unseen and "gone from the buffer, not seen running" in fresh.stdout
-    assert fresh.returncode == 1 and "a frame it dropped would look the same" in fresh.stderr
+    again = fresh(["-m", "armctl", "run", "job.txt", "--no-live", "--lead", "6", "--port", URL], tmp_path)
+    assert _counts(again.stdout) == (by_reports, by_time, unseen)
+    assert unseen and "gone from the buffer, not seen running" in again.stdout
+    assert again.returncode == 1 and "a frame it dropped would look the same" in again.stderr
 
 
 def test_a_job_on_a_fifo_that_holds_it_counts_what_was_seen_and_ends_done(tmp_path, monkeypatch, claimed):
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("ARMCTL_PORT", raising=False)
-    (tmp_path / "job.txt").write_text(_raster(200), encoding="utf-8")
+    (tmp_path / "job.txt").write_text(raster(200), encoding="utf-8")
     ports = _open_one_arm(monkeypatch)
     url = "sim://?clock=virtual"
     result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--port", url])
@@ -113,9 +97,8 @@ def test_frames_a_reset_connector_cleared_are_not_claimed_executed(tmp_path):
     # it (a 60 s lead writes them at once); time never confirms a frame it may have cleared.
     script = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F6000\nG1 Y120\nRESET CONNECTOR\nG1 Y-120\nG1 Z100\nG1 Z150\n"
     (tmp_path / "job.txt").write_text(script, encoding="utf-8")
-    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
-    result = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--no-live", "--lead", "60", "--port",
-                             "sim://?clock=virtual"], cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
+    result = fresh(["-m", "armctl", "run", "job.txt", "--no-live", "--lead", "60", "--port", "sim://?clock=virtual"],
+                   tmp_path)
     assert result.returncode == 1, (result.stdout, result.stderr)
     assert "last line known executed: 3" in result.stdout  # not 6: lines 4-6 were cleared
     assert re.search(r"^resume with: armctl run job.txt --from-line 4 ", result.stdout, re.M)

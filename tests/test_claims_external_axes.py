@@ -12,28 +12,22 @@ against 12.6 s estimated).  Virtual time; the installed command in a fresh proce
 
 from __future__ import annotations
 
-import os
 import re
 import subprocess
-import sys
 
 import pytest
 
 from armctl.motion import MotionModel
 from armctl.profile import load_profile
 from armctl.protocol import JointMove, LinearMove
+from claims_common import fresh
 
 U_ONLY = "G6 J1=0 J2=0 J3=0 J4=0 J5=90 J6=0 U250 S1500 F20\n"
 
 
-def _env() -> dict:
-    return {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
-
-
 def _run(tmp_path, script: str) -> subprocess.CompletedProcess:
     (tmp_path / "job.txt").write_text(script, encoding="utf-8")
-    return subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--no-live", "--port", "sim://?clock=virtual"],
-                          cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=40)
+    return fresh(["-m", "armctl", "run", "job.txt", "--no-live", "--port", "sim://?clock=virtual"], tmp_path, timeout_s=40)
 
 
 @pytest.mark.parametrize("script", [
@@ -55,8 +49,7 @@ def test_arm_move_of_an_external_axis_through_the_api(tmp_path):
                "with Arm.open(port='sim://?clock=virtual') as arm:\n"
                "    r = arm.move(j1=0, j2=0, j3=0, j4=0, j5=90, j6=0, u=250, f=20)\n"
                "    print(r.outcome, round(r.arm_time_s, 1), round(r.estimated_job_s, 1))\n")
-    result = subprocess.run([sys.executable, "-c", program], cwd=tmp_path, env=_env(), capture_output=True, text=True,
-                            timeout=40)
+    result = fresh(["-c", program], tmp_path, timeout_s=40)
     outcome, arm_s, estimated_s = result.stdout.split()
     assert outcome == "finished" and abs(float(arm_s) - float(estimated_s)) < 0.7, (result.stdout, result.stderr)
 

@@ -10,10 +10,9 @@ built-in one.  Virtual time; the installed command in a fresh process.
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
 from importlib.resources import files
+
+from claims_common import fresh
 
 
 def test_a_pose_whose_motion_the_arm_does_not_report_is_named_not_called_loss(tmp_path):
@@ -23,10 +22,8 @@ def test_a_pose_whose_motion_the_arm_does_not_report_is_named_not_called_loss(tm
     (tmp_path / "arm.toml").write_text(arm_profile, encoding="utf-8")
     # the arm starts at its own pose 0 (the host's pose 1); the job moves there, waits, then POSE 0
     (tmp_path / "job.txt").write_text("G6 J1=0 J2=30 J3=30 J4=0 J5=30 J6=0 S1500 F30\nG4 P200\nPOSE 0\n", encoding="utf-8")
-    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
-    result = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--no-live", "--port",
-                             f"sim://?clock=virtual&profile={tmp_path / 'arm.toml'}"],
-                            cwd=tmp_path, env=env, capture_output=True, text=True, timeout=60)
+    result = fresh(["-m", "armctl", "run", "job.txt", "--no-live", "--port",
+                    f"sim://?clock=virtual&profile={tmp_path / 'arm.toml'}"], tmp_path)
     assert result.returncode == 1, (result.stdout, result.stderr)
     assert "lost" not in result.stdout + result.stderr and "cleared" not in result.stderr
     assert ("POSE 0 (line 3) should end at the profile's fixed pose 0 (joints 0.0, 0.0, 0.0, 0.0, 90.0, 0.0), but the "

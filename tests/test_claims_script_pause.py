@@ -13,11 +13,9 @@ fresh process, and the API.
 from __future__ import annotations
 
 import json
-import os
 import re
 import shlex
 import subprocess
-import sys
 
 import pytest
 from click.testing import CliRunner
@@ -25,6 +23,7 @@ from click.testing import CliRunner
 from armctl.cli import main
 from armctl.protocol import GoToPose, LinearMove, PauseToggle
 from armctl.sim.executor import DONE
+from claims_common import fresh
 from test_resume_exactly_once import _open_one_arm
 
 SCRIPT = ("G1 X269.46 Y124.08 Z204.55 A180 B0 C0 S1500 F3000\n"
@@ -33,10 +32,8 @@ SCRIPT = ("G1 X269.46 Y124.08 Z204.55 A180 B0 C0 S1500 F3000\n"
           "G1 X286.52 Y140.45 Z55.33 A180 B0 C0\n")
 
 
-def _armctl(*args: str, cwd, timeout: float = 40.0) -> subprocess.CompletedProcess:
-    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
-    return subprocess.run([sys.executable, "-m", "armctl", *args], cwd=cwd, env=env, capture_output=True, text=True,
-                          timeout=timeout)
+def _armctl(*args: str, cwd) -> subprocess.CompletedProcess:
+    return fresh(["-m", "armctl", *args], cwd, timeout_s=40)
 
 
 @pytest.mark.timeout(60)
@@ -68,9 +65,7 @@ def test_a_scripts_pause_through_the_api_ends_with_the_result(tmp_path):
                "        arm.run('job.txt')\n"
                "    except JobFailed as error:\n"
                "        print(error.result.outcome, error.result.resume_line)\n")
-    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
-    result = subprocess.run([sys.executable, "-c", program], cwd=tmp_path, env=env, capture_output=True, text=True,
-                            timeout=40)
+    result = fresh(["-c", program], tmp_path, timeout_s=40)
     assert result.stdout.strip() == "paused by the script 3", (result.stdout, result.stderr)
 
 
