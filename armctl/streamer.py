@@ -258,13 +258,9 @@ class SentFrame:
     # kinematics know (``unknown_start_s``) may be any shorter, so the loss checks' least motion
     # counts it as none
     sure_before_s: float = 0.0
+    sure_s: float = 0.0  # its own share of ``sure_before_s`` for the frames after it (``Streamer._sure_s``)
     seen: bool = False  # the arm at rest at its target proved it ran (``Streamer.ran_at_rest``)
     may_be_cleared: bool = False  # queued when a RESET CONNECTOR may have cleared it (``Streamer.cleared``)
-
-    @property
-    def sure_s(self) -> float:
-        """Its own share of ``sure_before_s`` for the frames after it."""
-        return 0.0 if self.unknown_start_s else self.segment.duration_s  # (every path_known False frame has one)
 
 
 @dataclass(frozen=True)
@@ -346,6 +342,7 @@ class Streamer:
         # else a frame a full FIFO dropped leaves it as well.
         self.fifo_holds_all = True
         self._reset_index: int | None = None  # the last RESET CONNECTOR written (``wrote``)
+        self._e_known = False  # a move has set E0/E1 since the start (``_sure_s``)
         self._time_proves = True  # False once the FIFO may have been cleared (``cleared``)
         self.confirmed_by_time = 0
         self.motion_sent_s = 0.0  # the model's motion time of every frame written
@@ -455,6 +452,8 @@ class Streamer:
         segment = self._plan(command)
         self._peeked = None
         planner = self.planner
+        allowance_s = self._unknown_start_s(segment)
+        sure_s = 0.0 if allowance_s else self._sure_s(command, segment)  # (every path_known False frame has one)
         planner.pending_arc = command if isinstance(command, ArcStart) else None
         planner.pose = segment.end
         start_s = max(now, self.wire_free_s)
@@ -463,14 +462,13 @@ class Streamer:
         previous = self.pending[-1] if self.pending else None
         est_start = max(wire_end, previous.est_end_s if previous else wire_end)
         certain_start = max(wire_end + ARRIVAL_SLACK_S, self._certain_tail_s)
-        allowance_s = self._unknown_start_s(segment)
         self._certain_tail_s = (certain_start + (segment.duration_s + allowance_s) * self.slowest_factor
                                 + self.frame_slack_s)
         frame = SentFrame(
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
             chain_end_s=self._certain_tail_s, group_index=self.sent, motion_before_s=self.motion_sent_s,
-            unknown_start_s=allowance_s, sure_before_s=self.sure_motion_sent_s,
+            unknown_start_s=allowance_s, sure_before_s=self.sure_motion_sent_s, sure_s=sure_s,
             path_known=not (self.sent > 0 and self._start_unknown(segment)),
         )
         self.motion_sent_s += segment.duration_s
@@ -640,6 +638,22 @@ class Streamer:
         speed_mm_min = getattr(command, "speed_mm_min", None) or getattr(command, "speed1_mm_min", 0.0) / 2
         speed_mm_min = min(speed_mm_min, model.profile.speed.max_linear_mm_min)
         return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3) * model.speed_factor
+
+    def _sure_s(self, command: Command, segment: Segment) -> float:
+        """The least time of ``segment`` the plan knows.  No status kind reports E0/E1, so where
+        they start is unknown — the reported start pose takes the profile's 0 — and the first
+        move that sets them (every move carries them) may need any time for them, down to none
+        (an arm whose axes stand at its targets already: a 2.6 s move of U240 planned, none run,
+        and the job 'finished early').  That move counts only what it needs with the axes
+        already there; after it they are where the job put them."""
+        if self._e_known or segment.kind == "still" or not hasattr(command, "e0_deg"):
+            return segment.duration_s
+        self._e_known = True
+        start = segment.start
+        if (start.e0_deg, start.e1_deg) == (command.e0_deg, command.e1_deg):
+            return segment.duration_s
+        there = start.replace(e0_deg=command.e0_deg, e1_deg=command.e1_deg)
+        return min(segment.duration_s, self.planner.model.plan(command, there, self.planner.pending_arc).duration_s)
 
     def _consume_one(self, by_reports: bool, at_rest: bool = False) -> None:
         """Count the oldest pending frame consumed: by the arm's reports, or by time — the time
