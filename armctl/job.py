@@ -416,7 +416,9 @@ class Job:
     def pause(self) -> bool:
         """Pause the job: a pause toggle, and nothing more written until ``resume`` (False when
         already pausing or paused, the arm reports it is paused, or the job is stopping)."""
-        return self._controllable and self.control.pause()
+        # (not behind the script's own PAUSE: a second toggle would undo it, or, queued, resume the arm
+        # it paused)
+        return self._controllable and len(self._script_toggles) % 2 == 0 and self.control.pause()
 
     def resume(self) -> bool:
         """Resume a pause asked with ``pause``: the toggle goes first, then the job's frames."""

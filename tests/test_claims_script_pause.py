@@ -104,3 +104,31 @@ def test_a_pause_and_its_resume_in_the_script_run_through(tmp_path):
     result = _armctl("run", "job.txt", "--no-live", "--port", "sim://?clock=virtual", cwd=tmp_path)
     assert result.returncode == 0, (result.stdout, result.stderr)
     assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+
+
+@pytest.mark.parametrize("control_frames", ["queued", "arrival"])
+def test_a_user_pause_behind_the_scripts_pause_sends_no_toggle(control_frames):
+    # the panel's or the API's pause, asked while the job waits behind its own PAUSE: a second
+    # toggle would undo that pause (queued: resume the arm at the head of its FIFO)
+    from armctl.job import Job, RunView
+    from armctl.script import InitialState, compile_text
+    from armctl.streamer import Streamer
+    from test_job_pause import MODEL, START, X, Y, Z, drive, make
+
+    _, arm, _ = make(control_frames)
+    initial = InitialState(pose=tuple(START.cartesian), joints_deg=tuple(START.joints), pwm_us={1: START.pwm_us[0]})
+    script = f"G1 X{X + 20:.1f} Y{Y:.1f} Z{Z:.1f} F1200\nPAUSE\nG1 X{X:.1f} F1200\n"
+    statements = list(compile_text(script, initial=initial))
+    streamer = Streamer(MODEL, START)
+    job = Job(streamer, statements, RunView(total_frames=3, estimated_job_s=3.0, lead_s=2.0, capacity=196),
+              control_frames=control_frames)
+    asked = []
+
+    def pause(job, now):
+        if len(job._script_toggles) == 1 and job.outcome is None:
+            asked.append(job.pause())
+
+    outcome, writes, _ = drive(job, arm, at=[(k / 10, pause) for k in range(1, 30)])
+    assert asked and not any(asked)
+    assert outcome == "paused by the script"
+    assert [w.frame for _, w in writes].count(PauseToggle().encode()) == 1  # the script's own
