@@ -41,7 +41,9 @@ motion-time model), the moment its last byte left the wire, and two views of the
     seen at its end is confirmed soon after, not a whole slow-arm duration later).  A Cartesian
     move from a joint move's end on an arm whose kinematics are not verified may be longer than
     planned: a line by at most its start's error, allowed for; an arc without bound, so time
-    never confirms it (``_unknown_start_s``) — a later frame's sighting or the arm at rest does.
+    never confirms it (``_unknown_start_s``) — a later frame's sighting or the arm at rest does;
+    nor the first move that sets E0/E1, which no status reports: from where they stood, its time
+    may be any (``_moves_e_from_the_start``; no pace is measured on it either).
   Lost or corrupted status frames can only hold the bound back, i.e. make it more careful.
 * an **estimate** of when each frame ends, from the model, re-anchored on every observation:
   each candidate segment says the arm is now within a window of that segment's time (a short
@@ -258,7 +260,8 @@ class SentFrame:
     # kinematics know (``unknown_start_s``) may be any shorter, so the loss checks' least motion
     # counts it as none
     sure_before_s: float = 0.0
-    sure_s: float = 0.0  # its own share of ``sure_before_s`` for the frames after it (``Streamer._sure_s``)
+    sure_s: float = 0.0  # its own share of ``sure_before_s`` for the frames after it (0 with an allowance)
+    timing_known: bool = True  # False: its time may be any (``Streamer._moves_e_from_the_start``): no pace from it
     seen: bool = False  # the arm at rest at its target proved it ran (``Streamer.ran_at_rest``)
     may_be_cleared: bool = False  # queued when a RESET CONNECTOR may have cleared it (``Streamer.cleared``)
 
@@ -342,7 +345,7 @@ class Streamer:
         # else a frame a full FIFO dropped leaves it as well.
         self.fifo_holds_all = True
         self._reset_index: int | None = None  # the last RESET CONNECTOR written (``wrote``)
-        self._e_known = False  # a move has set E0/E1 since the start (``_sure_s``)
+        self._e_known = False  # a move has set E0/E1 since the start (``_moves_e_from_the_start``)
         self._time_proves = True  # False once the FIFO may have been cleared (``cleared``)
         self.confirmed_by_time = 0
         self.motion_sent_s = 0.0  # the model's motion time of every frame written
@@ -452,8 +455,9 @@ class Streamer:
         segment = self._plan(command)
         self._peeked = None
         planner = self.planner
-        allowance_s = self._unknown_start_s(segment)
-        sure_s = 0.0 if allowance_s else self._sure_s(command, segment)  # (every path_known False frame has one)
+        e_unknown = self._moves_e_from_the_start(command, segment)
+        allowance_s = math.inf if e_unknown else self._unknown_start_s(segment)
+        sure_s = 0.0 if allowance_s else segment.duration_s  # (every path_known False frame has an allowance)
         planner.pending_arc = command if isinstance(command, ArcStart) else None
         planner.pose = segment.end
         start_s = max(now, self.wire_free_s)
@@ -469,6 +473,7 @@ class Streamer:
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
             chain_end_s=self._certain_tail_s, group_index=self.sent, motion_before_s=self.motion_sent_s,
             unknown_start_s=allowance_s, sure_before_s=self.sure_motion_sent_s, sure_s=sure_s,
+            timing_known=not e_unknown,
             path_known=not (self.sent > 0 and self._start_unknown(segment)),
         )
         self.motion_sent_s += segment.duration_s
@@ -639,21 +644,20 @@ class Streamer:
         speed_mm_min = min(speed_mm_min, model.profile.speed.max_linear_mm_min)
         return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3) * model.speed_factor
 
-    def _sure_s(self, command: Command, segment: Segment) -> float:
-        """The least time of ``segment`` the plan knows.  No status kind reports E0/E1, so where
-        they start is unknown — the reported start pose takes the profile's 0 — and the first
-        move that sets them (every move carries them) may need any time for them, down to none
-        (an arm whose axes stand at its targets already: a 2.6 s move of U240 planned, none run,
-        and the job 'finished early').  That move counts only what it needs with the axes
-        already there; after it they are where the job put them."""
+    def _moves_e_from_the_start(self, command: Command, segment: Segment) -> bool:
+        """Whether this is the first move that sets E0/E1 (every move carries them) and moves them
+        as planned.  No status kind reports them, so where they start is unknown — the reported
+        start pose takes the profile's 0, the arm's state at power-on — and that move may need
+        any time for them: none (an arm whose axes stand at its targets already: a 2.6 s move of
+        U240 planned, none run, and the job 'finished early'), or more than planned (from farther
+        away: the arm then looks slower than the model).  So its time is not known
+        (``SentFrame.timing_known``), the loss checks count none of it, and time never confirms it
+        (as an arc from an unknown start): a later frame's sighting does, or the arm at rest."""
         if self._e_known or segment.kind == "still" or not hasattr(command, "e0_deg"):
-            return segment.duration_s
+            return False
         self._e_known = True
         start = segment.start
-        if (start.e0_deg, start.e1_deg) == (command.e0_deg, command.e1_deg):
-            return segment.duration_s
-        there = start.replace(e0_deg=command.e0_deg, e1_deg=command.e1_deg)
-        return min(segment.duration_s, self.planner.model.plan(command, there, self.planner.pending_arc).duration_s)
+        return (start.e0_deg, start.e1_deg) != (command.e0_deg, command.e1_deg)
 
     def _consume_one(self, by_reports: bool, at_rest: bool = False) -> None:
         """Count the oldest pending frame consumed: by the arm's reports, or by time — the time
@@ -955,7 +959,10 @@ class Streamer:
             if k == index:
                 found = (lo, hi)
                 break
-        segment = self.pending[index - self.pending[0].index].segment
+        sent = self.pending[index - self.pending[0].index]
+        if not sent.timing_known:
+            return  # its time may be any: no pace, no slowness from it
+        segment = sent.segment
         if found is None or segment.length <= 0 and segment.kind != "joint":
             self._pace_from.pop(stream, None)
             return
