@@ -958,12 +958,14 @@ class Job:
         # up to a frame whose pose that cannot judge.
         position = self._reported.get(0)
         joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
-        verified = self.streamer.kinematics_verified
+        verified, origin = self.streamer.kinematics_verified, self.streamer.planner.pose.origin_mm
         for sent in self.streamer.pending:
             segment = sent.segment
             by_joints = segment.kind == "joint" or segment.kind == "still" and not segment.end.joints_derived
             if not sent.path_known or (segment.end.joints_derived if by_joints else segment.end.xyz_derived) and not verified:
                 return
+            if not by_joints and (segment.start.origin_mm != origin or segment.end.origin_mm != origin):
+                return  # X/Y/Z read in the last worktable, its path in another (a G54 between)
             observed, near = (joints, TARGET_DEG) if by_joints else (position, TARGET_MM)
             if observed is None or len(observed) != (6 if by_joints else 3):
                 return
@@ -989,6 +991,7 @@ class Job:
         joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
         streamer = self.streamer
         ends = [sent.segment for sent in self._recent] + list(sent.segment for sent in streamer.pending)
+        origin = streamer.planner.pose.origin_mm  # the worktable the readings are turned into (worktable_xyz)
         for sent in streamer.pending:
             segment = sent.segment
             if not sent.path_known or segment.length <= 0:
@@ -1004,6 +1007,8 @@ class Job:
                 continue
             for other in ends:  # at no frame's end (nor the first pending frame's start)
                 for pose in (other.start, other.end):
+                    if pose.origin_mm != origin:
+                        return False  # a G54 among them: the readings are in one worktable, not in both
                     if (pose.xyz_derived if cartesian else pose.joints_derived) and not streamer.kinematics_verified:
                         return False  # where that pose really is only the arm knows: no proof
                     if max(abs(a - b) for a, b in zip(pose.xyz if cartesian else pose.joints, observed)) <= 2 * near:
