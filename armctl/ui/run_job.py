@@ -438,7 +438,8 @@ def _summary(result, view, wall_s: float, estimate, options: JobOptions) -> int:
         actual = view.arm_time_s
         click.echo(f"arm time: {actual:.1f} s from the first frame to the arm at rest; estimated {estimate.job_s:.1f} s "
                    f"({actual / estimate.job_s - 1:+.1%})" if estimate.job_s else f"arm time: {actual:.1f} s")
-    click.echo(f"frames confirmed by the arm's reports: {result.frames_by_reports}; by time only: {result.frames_by_time}")
+    click.echo(f"frames confirmed by the arm's reports: {result.frames_by_reports}; by time only: {result.frames_by_time}"
+               + (f"; gone from the buffer, not seen running: {result.frames_unseen}" if result.frames_unseen else ""))
     for message in result.messages:
         click.echo(f"note: {message}", err=True)
     if result.finished:
