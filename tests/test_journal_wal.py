@@ -276,12 +276,7 @@ def _continue_earlier(record: dict) -> bool:
 def test_an_edited_record_is_refused_not_obeyed(tmp_path):
     log, edited, again = tmp_path / "job.log", tmp_path / "edited.log", tmp_path / "again.log"
     with Arm.open(port=VIRTUAL) as arm:
-        def stop(progress):
-            if progress.frames_sent >= 6:
-                arm.stop()
-
-        with log.open("w", encoding="utf-8") as file:
-            arm.run(PICK, on_progress=stop, log=file, abort="none")
+        crash_into(arm, PICK, 6, log)
         assert _edit(log, _continue_earlier, edited)
         received = sent(arm)
         with pytest.raises(ArmctlError):
@@ -325,16 +320,11 @@ EDITS = {
 
 @pytest.fixture(scope="module")
 def stopped_log(tmp_path_factory):
-    """pick_and_place journalled through a fresh process, stopped (virtual clock) after some frames."""
+    """pick_and_place journalled through the API, the host dying (virtual clock) after 6 frames."""
     folder = tmp_path_factory.mktemp("stopped")
     log = folder / "job.log"
     with Arm.open(port=VIRTUAL) as arm:
-        def stop(progress):
-            if progress.frames_sent >= 6:
-                arm.stop()
-
-        with log.open("w", encoding="utf-8") as file:
-            arm.run(PICK, on_progress=stop, log=file, abort="none")
+        crash_into(arm, PICK, 6, log)
     return log
 
 
