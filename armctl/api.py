@@ -539,7 +539,9 @@ class Arm:
 
         Raises ``ScriptError`` (the script's errors, nothing sent), ``JobFailed`` (the arm did
         not answer, the job ended "failed", "port lost" or "no confirmation"; ``.result``),
-        ``ResumeRefused`` (a ``resume`` log of another script; nothing sent).
+        ``ResumeRefused`` (a ``resume`` log of another script, of an earlier format, or the file
+        ``log`` writes to; nothing sent), ``joblog.JournalDamaged`` and ``joblog.NotProven`` (a
+        damaged journal; a line it and the arm's report do not prove; nothing sent).
         Returns the ``RunResult`` of a job that finished or that ``stop()`` interrupted.
         """
         from .script.files import ScriptSnapshot, read_script
@@ -781,6 +783,8 @@ class Arm:
         state = read_arm(link, self.status_timeout_s, journal, note=observer.note, control_on_arrival=arrival,
                          unpause=spec.resume is None)
         if spec.resume is not None:
+            for told in spec.resume.notes:  # e.g. the torn last line a crash left, ignored
+                observer.note(f"armctl: --resume: {told}")
             started = resume_start(link, spec.resume, self.status_timeout_s, self.lead_s,
                                    stopped=lambda: stops != self._stops)
             if started is None:  # stop() (Ctrl-C) while the arm ran out its queue: no frame goes

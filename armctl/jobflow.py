@@ -164,7 +164,9 @@ class JournalFile:
     def sync(self) -> None:
         import os
 
-        self.file.flush()
+        flush = getattr(self.file, "flush", None)  # any object with ``write`` may stand for the file
+        if flush is not None:
+            flush()
         try:
             descriptor = self.file.fileno()
         except (AttributeError, OSError, ValueError):  # no descriptor (io.StringIO): flushed is all there is

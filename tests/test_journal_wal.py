@@ -428,3 +428,40 @@ def test_decode_reads_the_journal(tmp_path):
     motion = [f["hex"] for f in frames if f.get("family") == "motion"]
     assert motion == [command.encode().hex() for command in job_commands(JOINT)]  # every frame written, in order
     assert sum(1 for f in frames if f.get("family") == "status") > 100
+
+
+@pytest.mark.realtime
+def test_the_installed_command_resumes_after_ctrl_c_on_an_arrival_arm_or_refuses_sending_nothing(tmp_path):
+    """Issue 21: ``--resume LOG`` after a Ctrl-C on the same arm (``armctl sim --pty``, control
+    frames acting as they land) sent a connector reset and a pause toggle, then refused."""
+    import re
+    import signal
+    import time
+
+    (tmp_path / "armctl.toml").write_text('[connector]\ncontrol_frames = "arrival"\nfifo_frames = 200\n')
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    sim = subprocess.Popen([sys.executable, "-m", "armctl", "sim", "--pty", "--url", "sim://?control_frames=arrival"],
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env, cwd=tmp_path)
+    try:
+        pty = re.search(r"(/dev/\S+)", sim.stdout.readline()).group(1)
+        log, again = tmp_path / "job.log", tmp_path / "again.log"
+        host = subprocess.Popen([sys.executable, "-m", "armctl", "run", str(PICK), "--port", pty, "--no-live",
+                                 "--log", str(log)], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                cwd=tmp_path, env=env)
+        deadline = time.monotonic() + 30
+        while time.monotonic() < deadline and sum(1 for r in _written(log) if r.get("line") is not None) < 3:
+            time.sleep(0.1)
+        host.send_signal(signal.SIGINT)
+        host.communicate(timeout=60)
+        assert host.returncode == 130
+        done = _armctl("run", str(PICK), "--port", pty, "--no-live", "--resume", str(log), "--log", str(again),
+                       cwd=tmp_path, timeout=120)
+        if done.returncode != 0:
+            _one_line_refusal(done)
+            assert "sending a reset" not in done.stderr and "pause toggle to resume" not in done.stderr, done.stderr
+            assert _written(again) == []
+        else:
+            assert "done: the arm finished the job" in done.stdout
+    finally:
+        sim.terminate()
+        sim.wait(10)
