@@ -8,8 +8,10 @@ rotations, an arm that twice reports it is paused resumed), start from its repor
 (``start_from_state``), estimate from there (``estimate_job``: refuses what compiles
 differently from the arm's pose, or runs too long), then build the runner (``start_job``) and drive it (``drive``: one path for every way a
 job stops early — stop feeding, send the abort sequence, wait for the arm — whoever asked).
-A ``--log`` is a journal (``journal_for``: armctl/joblog.py's records) that ``read_resume_point``
-reads back and ``resume_start`` turns into the line to continue at, from the arm's report.
+A ``--log`` is a write-ahead journal (``JournalFile`` seals each of armctl/joblog.py's records
+and fsyncs a frame's before the frame goes out; ``journal_for`` gives the records their fields)
+that ``read_resume_point`` reads back and ``resume_start`` turns into the line to continue at,
+from the arm's report — before anything is sent (``read_arm(unpause=False)``, then ``resume_paused``).
 The pause rule — toggle only when two agreeing reports say the arm is in the other state — is
 armctl/job_control.py's (the engine's); this module reads the reports it needs from the link.
 

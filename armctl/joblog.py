@@ -44,7 +44,6 @@ import json
 import math
 import zlib
 from dataclasses import dataclass, field
-from typing import Iterable
 
 from .errors import ArmctlError, ResumeRefused
 from .protocol import ArcEnd

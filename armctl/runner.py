@@ -3,7 +3,7 @@
 Strategy: the edge where time is real.  The engine holds every rule of a job — pacing through
 the streamer, when it is over, how it stops, where to resume; this module only carries out
 what it asks, in one loop: drain the status frames the link has read into it, ask
-``next_action``, and write (``Write``: link.write, the --log record, ``wrote``), wait
+``next_action``, and write (``Write``: the --log record made durable first, link.write, ``wrote``), wait
 (``Wait``: through the link, until that time or the next status frame) or stop
 (``Finished``).  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S``
 so Ctrl-C and the panel stay prompt; on a virtual clock the engine takes each frame as the link
