@@ -778,7 +778,7 @@ class Arm:
 
         link, observer = self._link, spec.observer
         arrival = self._profile.connector.control_on_arrival
-        journal = None if spec.log is None else JournalFile(spec.log)
+        journal = None if spec.log is None else JournalFile(spec.log, sync=not getattr(link.clock, "virtual", False))
         # a resume decides from the arm as it is, paused or not: it continues or refuses before it sends anything
         state = read_arm(link, self.status_timeout_s, journal, note=observer.note, control_on_arrival=arrival,
                          unpause=spec.resume is None)

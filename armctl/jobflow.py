@@ -148,12 +148,16 @@ class JournalFile:
     """``--log`` as the journal writes it (armctl/joblog.py): each record sealed (its place and
     CRC-32) on a line of its own; ``append(record, durable=True)`` returns once the line is
     flushed and fsynced (a frame's record, before the frame goes to the port).  A file object
-    without a descriptor (``io.StringIO``) is flushed only."""
+    without a descriptor (``io.StringIO``) is flushed only, and so is every record when ``sync``
+    is False: an arm on a virtual clock (``sim://?clock=virtual``) lives in the host's process
+    and its time moves only with the host, so nothing of it runs on after a crash — and an
+    fsync a frame would cost a virtual job more wall time than the job itself."""
 
-    def __init__(self, file) -> None:
+    def __init__(self, file, sync: bool = True) -> None:
         self.file = file
         self.name = getattr(file, "name", "the log")
         self.seq = 0
+        self.sync_each = sync
 
     def append(self, record: dict, durable: bool = False) -> None:
         from .joblog import seal
@@ -164,11 +168,16 @@ class JournalFile:
             self.sync()
 
     def sync(self) -> None:
-        import os
-
+        """Flushed, and fsynced when that is owed (``sync``)."""
         flush = getattr(self.file, "flush", None)  # any object with ``write`` may stand for the file
         if flush is not None:
             flush()
+        if self.sync_each:
+            self._fsync()
+
+    def _fsync(self) -> None:
+        import os
+
         try:
             descriptor = self.file.fileno()
         except (AttributeError, OSError, ValueError):  # no descriptor (io.StringIO): flushed is all there is

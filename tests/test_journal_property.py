@@ -10,10 +10,11 @@ virtual-clock simulator, stopped after ``n`` frames with ``abort="none"`` (tests
   before the frame went out) to anywhere after it, mid-record included: what a power cut leaves;
 - damage: bytes flipped, replaced, deleted or inserted anywhere, lines dropped, repeated or
   swapped, a number in a record changed (an edit by hand, its checksum left as it was).  Line
-  breaks stay where they are, and the log's last line is never dropped: damage that deletes the
-  line break ending the log's last durable frame record makes it a torn last line, and a last
-  record dropped is a cut before the durable end — neither is what a crash leaves, and no check
-  of records can tell them from what it does (nothing after them says they were there).
+  breaks stay where they are, and the log's last complete line is never dropped or moved: damage
+  that deletes the line break ending the log's last durable frame record makes it a torn last
+  line, and a last record dropped (or moved away and dropped) is a cut before the durable end —
+  neither is what a crash leaves, and no check of records can tell them from what it does
+  (nothing after them says they were there).  Both were found by this property before the rule.
 
 Then the resume's decision (``read_resume_log``, ``ResumePoint.line_for`` with the arm's report
 at rest) is judged against the simulator's record: refused, or the line whose compilation is
@@ -110,15 +111,14 @@ def mutate(crash: Crash, cut: float, damage) -> bytes:
             break
         at = int(where * len(data))
         if kind in ("drop", "repeat", "swap"):
-            lines = data.split(b"\n")
+            lines = data.split(b"\n")  # the last is the torn piece after the last line break ("" if none)
+            last = len(lines) - 2  # the last complete line: never dropped or moved (see the docstring)
             k = int(where * (len(lines) - 1))
-            if kind == "drop":
-                if k >= len(lines) - 2:
-                    continue  # the last line dropped is a cut before the durable end (see the docstring)
-                del lines[k]
-            elif kind == "repeat":
+            if kind == "repeat":
                 lines.insert(k, lines[k])
-            elif k + 1 < len(lines) - 1:
+            elif kind == "drop" and k < last:
+                del lines[k]
+            elif kind == "swap" and k + 1 < last:
                 lines[k], lines[k + 1] = lines[k + 1], lines[k]
             data = b"\n".join(lines)
             continue
