@@ -245,11 +245,6 @@ class _Reader:
         if record.get("format") != FORMAT:
             raise ResumeRefused(f"line {number}: a job record of format {record.get('format')!r}; this armctl reads "
                                 f"format {FORMAT}")
-        if record.get("sha256") != script_digest(self.data):
-            logged = record.get("script")
-            same = "the same name" if logged == self.name else f"{logged!r}"
-            raise ResumeRefused(f"it records {same} with other contents (sha256 {str(record.get('sha256'))[:12]}…, "
-                                f"{self.name} is {script_digest(self.data)[:12]}…): the script was edited or is another one")
         from_line, lead_s, frames = record.get("from_line"), record.get("lead_s"), record.get("frames")
         start, arrival = record.get("start"), record.get("control_on_arrival")
         if not (_is_int(from_line) and from_line >= 1 and _is_number(lead_s) and lead_s >= 0 and _is_int(frames)
@@ -273,14 +268,11 @@ class _Reader:
         if not (_is_int(n) and _is_int(line) and _is_int(at) and (after is None or _is_int(after))
                 and (target is None or _valid_target(target))):
             raise self.bad(number, "a frame record's fields are not what armctl writes")
-        if n != len(self.frames) + 1 or n > header["frames"]:
-            raise self.bad(number, f"frame {n} where frame {len(self.frames) + 1} of {header['frames']} was due")
+        if n != len(self.frames) + 1:
+            raise self.bad(number, f"frame {n} where frame {len(self.frames) + 1} was due")
         if not from_line <= at <= line or (after is not None and after < from_line):
             raise self.bad(number, f"frame {n} of line {line} says it continues at line {at} and after it at {after}")
-        if (after is None) != (n == header["frames"]):
-            raise self.bad(number, f"frame {n} of {header['frames']} says {'it is' if after is None else 'it is not'} "
-                                   "the job's last")
-        if self.frames and self.frames[-1].next != at:
+        if self.frames and self.frames[-1].next != at:  # (a frame after the one that said it was the last too)
             raise self.bad(number, f"frame {n} starts at line {at} where the frame before it said {self.frames[-1].next}")
         self.confirmed = len(self.frames)  # its record follows the write of the frame before
         self.frames.append(FrameEntry(n, line, at, after, target))
@@ -300,6 +292,11 @@ class _Reader:
         header = self.header
         if header is None:
             raise ResumeRefused("it has no job record (written by `armctl run --log` since --resume exists)")
+        if header.get("sha256") != script_digest(self.data):  # the last job it records (runs may be appended)
+            logged = header.get("script")
+            same = "the same name" if logged == self.name else f"{logged!r}"
+            raise ResumeRefused(f"it records {same} with other contents (sha256 {str(header.get('sha256'))[:12]}…, "
+                                f"{self.name} is {script_digest(self.data)[:12]}…): the script was edited or is another one")
         return ResumePoint(header["from_line"], float(header["lead_s"]), tuple(self.frames), self.confirmed,
                            self.done, header["start"], self.cleared, notes)
 
@@ -326,14 +323,17 @@ def read_resume_log(text, name: str, data: bytes) -> ResumePoint:
         text = "".join(line + "\n" for line in text)
     lines = text.split("\n")  # the last is what follows the last line break ("" when the text ends with one)
     reader = _Reader(name, data)
+    expected = 0  # each run's records count from 0 (a log may hold several runs, appended)
     for number, line in enumerate(lines, 1):
         if not line.strip():
             continue
         record = unseal(line)
         if record is None:
             return _damaged(reader, line, number, number == len(lines))
-        if not _is_int(record.get("seq")) or record.pop("seq") != number - 1:
+        seq = record.pop("seq", None)
+        if not _is_int(seq) or seq not in (0, expected):
             raise reader.bad(number, "a record out of its place (one dropped, moved or added)")
+        expected = seq + 1
         reader.take(number, record)
     return reader.point(())
 

@@ -108,3 +108,13 @@ def test_a_frame_whose_write_is_unconfirmed_at_a_repeated_target_is_not_guessed(
 def test_another_or_an_edited_script_is_refused(crash):
     with pytest.raises(ResumeRefused, match="other contents"):
         read_resume_log(crash.log.decode(), str(JOINT), JOINT.read_bytes() + b"G4 P1\n")
+
+
+def test_runs_appended_to_one_log_resume_the_last(crash, tmp_path):
+    """A log file opened for appending holds one run after another: the last job record starts
+    the job a resume continues, each run's records counted from 0."""
+    other = make_crash(JOINT.parent / "pick_and_place.txt", 3, tmp_path / "other.log")
+    point = _read(other.log.decode() + crash.log.decode())
+    assert point.line_for(*crash.rest) == 33
+    with pytest.raises(ResumeRefused, match="other contents"):
+        _read(crash.log.decode() + other.log.decode())
