@@ -163,6 +163,7 @@ def carry_out(crash: Crash, data: bytes, decision, folder: Path) -> None:
     if key in _carried_out:
         return
     _carried_out[key] = True
+    event("carried out end to end on a simulator (first time for this crash and decision)")
     log, mutated = folder / "crash.log", folder / "mutated.log"
     mutated.write_bytes(data)
     with Arm.open(port=VIRTUAL) as arm:
