@@ -39,7 +39,7 @@ from dataclasses import dataclass, field, fields
 from decimal import Decimal
 from typing import IO, TYPE_CHECKING, Any, Callable, Mapping, Union
 
-from .errors import ArmctlError, ScriptError
+from .errors import ArmctlError, ResumeRefused, ScriptError
 from .jobflow import JobFailed
 from .streamer import DEFAULT_LEAD_S
 
@@ -544,7 +544,9 @@ class Arm:
 
         Raises ``ScriptError`` (the script's errors, nothing sent), ``JobFailed`` (the arm did
         not answer, the job ended "failed", "port lost" or "no confirmation"; ``.result``),
-        ``ResumeRefused`` (a ``resume`` log of another script; nothing sent).
+        ``ResumeRefused`` (a ``resume`` log of another script, of an earlier format, or the file
+        ``log`` writes to; nothing sent), ``joblog.JournalDamaged`` and ``joblog.NotProven`` (a
+        damaged journal; a line it and the arm's report do not prove; nothing sent).
         Returns the ``RunResult`` of a job that finished or that ``stop()`` interrupted.
         """
         from .script.files import ScriptSnapshot, read_script
@@ -563,8 +565,11 @@ class Arm:
                 hint = " (script text must hold a line break: end a one-line script with \\n)" if isinstance(script, str) else ""
                 raise JobFailed(f"cannot read {path}: {error.strerror or error}{hint}; nothing was sent") from None
         if resume is not None:
-            from .jobflow import read_resume_point
+            from .jobflow import read_resume_point, same_journal
 
+            if log is not None and same_journal(log, resume):
+                raise ResumeRefused(f"log= is the journal resume= reads ({os.fspath(resume)}): give the resumed job a "
+                                    "log of its own; nothing was sent")
             resume = read_resume_point(resume, snapshot, from_line)  # before anything: ResumeRefused, nothing sent
         job = _JobSpec(on_progress, timeout, observer or JobObserver(), log, abort, resume)
         result = self._submit(snapshot, from_line, job, wait=True, from_arm=False)
@@ -771,14 +776,20 @@ class Arm:
     def _run_job(self, script, from_line: int, spec: _JobSpec, from_arm: bool, stops: int) -> RunResult:
         """On the worker: read the arm, plan from its report, drive the runner, report.  A
         ``stop()`` that came after the call and before the first frame ends it with nothing sent."""
-        from .jobflow import drive, from_line_errors, journal_for, plan_job, read_arm, resume_start, start_from_state, start_job
-        from .joblog import job_record
+        from .jobflow import (JournalFile, drive, from_line_errors, journal_for, plan_job, read_arm, resume_paused,
+                              resume_start, start_from_state, start_job)
+        from .joblog import job_record, target_of
         from .runner import abort_frames
 
         link, observer = self._link, spec.observer
         arrival = self._profile.connector.control_on_arrival
-        state = read_arm(link, self.status_timeout_s, spec.log, note=observer.note, control_on_arrival=arrival)
+        journal = None if spec.log is None else JournalFile(spec.log, sync=not getattr(link.clock, "virtual", False))
+        # a resume decides from the arm as it is, paused or not: it continues or refuses before it sends anything
+        state = read_arm(link, self.status_timeout_s, journal, note=observer.note, control_on_arrival=arrival,
+                         unpause=spec.resume is None)
         if spec.resume is not None:
+            for told in spec.resume.notes:  # e.g. the torn last line a crash left, ignored
+                observer.note(f"armctl: --resume: {told}")
             started = resume_start(link, spec.resume, self.status_timeout_s, self.lead_s,
                                    stopped=lambda: stops != self._stops)
             if started is None:  # stop() (Ctrl-C) while the arm ran out its queue: no frame goes
@@ -791,6 +802,8 @@ class Arm:
                 raise error
             observer.note(f"armctl: resuming {script.name} at line {from_line}: the log and the arm's report prove every line "
                           "before it ran")
+            resume_paused(link, self.status_timeout_s, journal, observer.note, arrival)
+            state = link.snapshot()[0]
         report = _check(script, self._profile, start_from_state(self._model, state)[1] if from_arm else None)
         for diagnostic in report.diagnostics:  # for people, not the result (armctl run prints its own, before)
             if diagnostic.severity != "error":
@@ -801,10 +814,13 @@ class Arm:
             return RunResult.nothing_sent("finished", message=f"nothing to send: the script has no frames{where}")
         if stops != self._stops:  # stop() (Ctrl-C) while the arm was read: no frame goes
             return RunResult.nothing_sent("interrupted")
-        runner = start_job(link, script, self._model, plan, self.lead_s, self._baud, report.lines, spec.log)
-        if spec.log is not None:  # which script it records (resume= checks it); a failed write stops the job like any
-            runner.log_record(job_record(script.name, script.data, from_line, self.lead_s))
-        control = _JobControl(runner, spec.on_progress, spec.timeout_s, observer, journal_for(runner, script, spec.log))
+        runner = start_job(link, script, self._model, plan, self.lead_s, self._baud, report.lines, journal)
+        if journal is not None:  # which script it records (resume= checks it); a failed write stops the job like any
+            known = state.position_mm is not None and None not in state.joints_deg
+            start = target_of("line", state.position_mm, state.joints_deg) if known else None
+            runner.log_record(job_record(script.name, script.data, from_line, self.lead_s, plan.estimate.frames, arrival,
+                                         start), durable=True)
+        control = _JobControl(runner, spec.on_progress, spec.timeout_s, observer, journal_for(runner, script, journal))
         runner.on_update = control.on_update
         link.on_status = runner.on_status
         link.on_status_run = runner.on_status_run

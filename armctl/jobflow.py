@@ -8,8 +8,10 @@ rotations, an arm that twice reports it is paused resumed), start from its repor
 (``start_from_state``), estimate from there (``estimate_job``: refuses what compiles
 differently from the arm's pose, or runs too long), then build the runner (``start_job``) and drive it (``drive``: one path for every way a
 job stops early — stop feeding, send the abort sequence, wait for the arm — whoever asked).
-A ``--log`` is a journal (``journal_for``: armctl/joblog.py's records) that ``read_resume_point``
-reads back and ``resume_start`` turns into the line to continue at, from the arm's report.
+A ``--log`` is a write-ahead journal (``JournalFile`` seals each of armctl/joblog.py's records
+and fsyncs a frame's before the frame goes out; ``journal_for`` gives the records their fields)
+that ``read_resume_point`` reads back and ``resume_start`` turns into the line to continue at,
+from the arm's report — before anything is sent (``read_arm(unpause=False)``, then ``resume_paused``).
 The pause rule — toggle only when two agreeing reports say the arm is in the other state — is
 armctl/job_control.py's (the engine's); this module reads the reports it needs from the link.
 
@@ -96,36 +98,91 @@ def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
 
 
 def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
-             control_on_arrival: bool = False):
+             control_on_arrival: bool = False, unpause: bool = True):
     """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
-    kind has been replaced or held back, H9); resume an arm that twice reports it is paused, as
-    its control mode needs (``job.resume_frames``: on an arm that acts on control frames as they
-    land, a RESET CONNECTOR first, so nothing left queued runs twice), and let a move the pause
-    froze finish, so the start pose is where the arm rests (``note`` is told).  The arm's state;
-    ``JobFailed`` when it does not answer."""
-    from .job import resume_frames
-
+    kind has been replaced or held back, H9); with ``unpause``, resume an arm that twice
+    reports it is paused (``resume_paused``).  The arm's state; ``JobFailed`` when it does not
+    answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
         _, received, _, frames = link.snapshot()
         heard = "nothing" if received == 0 else f"{received} bytes, {frames} status frames"
         raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
     wait_rotations(link, READ_ROTATIONS, timeout_s)
-    if _paused_twice(link, timeout_s):
-        commands = resume_frames(control_on_arrival)
-        note("armctl: the arm reports it is paused: sending " + (
-            "a reset host connector (it acts on control frames as they land: nothing left queued runs twice) and "
-            if len(commands) > 1 else "") + "one pause toggle to resume it")
-        for command in commands:
-            frame = command.encode()
-            link.write(frame)
-            if log is not None:
-                log.write(json.dumps({"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}) + "\n")
-        if not link.wait_until(lambda s: s.paused is False, max(timeout_s, 1.0)):
-            raise JobFailed("the arm stayed paused after a pause toggle; nothing else was sent")
-        wait_rotations(link, 1, timeout_s)
-        if control_on_arrival:
-            _wait_still(link, timeout_s)
+    if unpause:
+        resume_paused(link, timeout_s, log, note, control_on_arrival)
     return link.snapshot()[0]
+
+
+def resume_paused(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
+                  control_on_arrival: bool = False) -> None:
+    """Resume an arm that twice reports it is paused, as its control mode needs
+    (``job.resume_frames``: on an arm that acts on control frames as they land, a RESET
+    CONNECTOR first, so nothing left queued runs twice), and let a move the pause froze finish,
+    so the start pose is where the arm rests (``note`` is told).  Each frame's record is durable
+    before the frame is written."""
+    from .job import resume_frames
+
+    if not _paused_twice(link, timeout_s):
+        return
+    commands = resume_frames(control_on_arrival)
+    note("armctl: the arm reports it is paused: sending " + (
+        "a reset host connector (it acts on control frames as they land: nothing left queued runs twice) and "
+        if len(commands) > 1 else "") + "one pause toggle to resume it")
+    for command in commands:
+        frame = command.encode()
+        if log is not None:
+            record = {"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}
+            if hasattr(log, "append"):
+                log.append(record, durable=True)
+            else:
+                log.write(json.dumps(record) + "\n")
+        link.write(frame)
+    if not link.wait_until(lambda s: s.paused is False, max(timeout_s, 1.0)):
+        raise JobFailed("the arm stayed paused after a pause toggle; nothing else was sent")
+    wait_rotations(link, 1, timeout_s)
+    if control_on_arrival:
+        _wait_still(link, timeout_s)
+
+
+class JournalFile:
+    """``--log`` as the journal writes it (armctl/joblog.py): each record sealed (its place and
+    CRC-32) on a line of its own; ``append(record, durable=True)`` returns once the line is
+    flushed and fsynced (a frame's record, before the frame goes to the port).  A file object
+    without a descriptor (``io.StringIO``) is flushed only, and so is every record when ``sync``
+    is False: an arm on a virtual clock (``sim://?clock=virtual``) lives in the host's process
+    and its time moves only with the host, so nothing of it runs on after a crash — and an
+    fsync a frame would cost a virtual job more wall time than the job itself."""
+
+    def __init__(self, file, sync: bool = True) -> None:
+        self.file = file
+        self.name = getattr(file, "name", "the log")
+        self.seq = 0
+        self.sync_each = sync
+
+    def append(self, record: dict, durable: bool = False) -> None:
+        from .joblog import seal
+
+        self.file.write(seal(record, self.seq) + "\n")
+        self.seq += 1
+        if durable:
+            self.sync()
+
+    def sync(self) -> None:
+        """Flushed, and fsynced when that is owed (``sync``)."""
+        flush = getattr(self.file, "flush", None)  # any object with ``write`` may stand for the file
+        if flush is not None:
+            flush()
+        if self.sync_each:
+            self._fsync()
+
+    def _fsync(self) -> None:
+        import os
+
+        try:
+            descriptor = self.file.fileno()
+        except (AttributeError, OSError, ValueError):  # no descriptor (io.StringIO): flushed is all there is
+            return
+        os.fsync(descriptor)
 
 
 RESUME_SETTLE_S = 120.0  # the longest a move frozen by a pause may take to finish after the resume
@@ -251,7 +308,7 @@ def start_job(link, script, model, plan: JobPlan, lead_s: float, baud: int, tota
     streamer = Streamer(model, plan.start, lead_s=lead_s, baud=baud)
     view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=total_lines, lead_s=lead_s,
                    capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
-    statements = script.compile(initial=plan.initial, from_line=plan.from_line)
+    statements = Lookahead(script.compile(initial=plan.initial, from_line=plan.from_line))
     # ``done`` needs a FIFO size that is proven (probed, or a simulator known to hold it): link.fifo_proven
     return JobRunner(link, streamer, statements, view, log=log, fifo_proven=fifo_proven(link.url, model.profile.connector))
 
@@ -303,11 +360,23 @@ def read_resume_point(log, script, from_line: int = 1):
     name = str(log)
     try:  # bounded: an endless file (/dev/zero) is an error, not a hang
         text = read_file_bounded(name, f"--resume {name}").decode("utf-8", errors="replace")
-        return read_resume_log(text.splitlines(), script.name, script.data)
+        return read_resume_log(text, script.name, script.data)
     except ResumeRefused as error:
         raise ResumeRefused(f"--resume {name}: {error}") from None
     except OSError as error:
         raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
+
+
+def same_journal(log, resume) -> bool:
+    """``log`` (an open file) is the file ``resume`` (a path; anything else: no) names."""
+    import os
+
+    if not isinstance(resume, (str, os.PathLike)):
+        return False
+    try:
+        return os.path.samestat(os.fstat(log.fileno()), os.stat(resume))
+    except (AttributeError, OSError, ValueError):
+        return False
 
 
 def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable[[], bool] | None = None):
@@ -324,7 +393,9 @@ def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable
 
 
 def journal_for(runner, script, log) -> Callable[[Any], None] | None:
-    """``--log``'s progress records (armctl/joblog.py) as a runner's ``on_update``; None without a log."""
+    """``--log``'s journal (armctl/joblog.py) on ``runner``: the fields of each job frame's
+    record (written ahead of the frame by the runner) and the progress records, as a runner's
+    ``on_update``; None without a log."""
     if log is None:
         return None
     from .joblog import Journal
@@ -334,13 +405,39 @@ def journal_for(runner, script, log) -> Callable[[Any], None] | None:
     def resume_at(statement) -> int:
         return (blocks.outermost_start(statement.line) or statement.line) if getattr(statement, "loop", ()) else statement.line
 
-    journal = Journal(runner.log_record, resume_at)
+    statements = runner.job.statements
+    journal = Journal(runner.log_record, resume_at, statements.peek if isinstance(statements, Lookahead) else lambda: None)
+    runner.frame_fields = journal.frame
+    return journal.update
 
-    def update(view) -> None:
-        pending = runner.streamer.pending
-        journal.update(view, pending[-1].segment if pending else None)
 
-    return update
+class Lookahead:
+    """An iterator that can tell its next item without taking it (``peek``): the journal's
+    record of a frame, written before the frame, names the line that follows it."""
+
+    _NONE, _END = object(), object()
+
+    def __init__(self, items) -> None:
+        self._items = iter(items)
+        self._next = self._NONE
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        item = self._next
+        if item is self._NONE:
+            return next(self._items)
+        self._next = self._NONE
+        if item is self._END:
+            raise StopIteration
+        return item
+
+    def peek(self):
+        """The next item, or None at the end."""
+        if self._next is self._NONE:
+            self._next = next(self._items, self._END)
+        return None if self._next is self._END else self._next
 
 
 def resume_line(view, lines: Iterable[str]) -> int | None:

@@ -3,7 +3,7 @@
 Strategy: the edge where time is real.  The engine holds every rule of a job — pacing through
 the streamer, when it is over, how it stops, where to resume; this module only carries out
 what it asks, in one loop: drain the status frames the link has read into it, ask
-``next_action``, and write (``Write``: link.write, the --log record, ``wrote``), wait
+``next_action``, and write (``Write``: the --log record made durable first, link.write, ``wrote``), wait
 (``Wait``: through the link, until that time or the next status frame) or stop
 (``Finished``).  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S``
 so Ctrl-C and the panel stay prompt; on a virtual clock the engine takes each frame as the link
@@ -77,6 +77,8 @@ class JobRunner:
         self._virtual = getattr(self.clock, "virtual", False)
         self._origin_s = self.clock()  # model seconds count from here (the log's t)
         self.log = log
+        # the journal's fields of a job frame's record: (n, statement, planned segment) → dict
+        self.frame_fields: Callable[[int, object, object], dict] | None = None
         self.on_update = on_update or (lambda view: None)
         self.status_queue: queue.SimpleQueue = queue.SimpleQueue()
         self.requests: queue.SimpleQueue = queue.SimpleQueue()  # ``control``: calls for the engine, from any thread
@@ -207,15 +209,10 @@ class JobRunner:
             now = self.now()
             action = job.next_action(now)
             if type(action) is Write:
+                if self.log is not None and not self._log_write(action, now):
+                    continue  # no durable record, no frame: the failure stops the job (``fail``)
                 link.write(action.frame)
                 job.wrote(now)
-                if self.log is not None:
-                    if action.control is not None:
-                        self._log("tx", action.frame, now, control=action.control)
-                    elif action.statement is None:
-                        self._log("tx", action.frame, now, abort=True)
-                    else:
-                        self._log("tx", action.frame, now, line=action.statement.line)
                 on_update(view)  # only after every record of the write is complete
             elif type(action) is Wait:
                 if job.streaming:
@@ -325,14 +322,36 @@ class JobRunner:
         the record of what was sent is part of the job."""
         self.log_record({"t": round(at_s, 4), "dir": direction, "hex": frame.hex(), **extra})
 
-    def log_record(self, record: dict) -> None:
-        """One JSON line in the --log (a frame, or a job record of armctl/joblog.py)."""
+    def _log_write(self, action: Write, now: float) -> bool:
+        """The record of the frame ``action`` writes, durable (flushed, fsynced) before the frame
+        goes to the port: the journal is a write-ahead log (armctl/joblog.py).  A job frame's
+        record carries what ``frame_fields`` adds (its number, lines, target).  False when it
+        could not be written: then the frame must not be either."""
+        if action.control is not None:
+            extra = {"control": action.control}
+        elif action.statement is None:
+            extra = {"abort": True}
+        else:
+            extra = {"line": action.statement.line}
+            if self.frame_fields is not None:
+                command = getattr(self.job, "_command", None)
+                segment = self.streamer._plan(command) if command is not None else None  # the planner's, kept for wrote
+                extra.update(self.frame_fields(self.view.frames_sent + 1, action.statement, segment))
+        self.log_record({"t": round(now, 4), "dir": "tx", "hex": action.frame.hex(), **extra}, durable=True)
+        return self.log is not None
+
+    def log_record(self, record: dict, durable: bool = False) -> None:
+        """One sealed JSON line in the --log (a frame, or a job record of armctl/joblog.py);
+        ``durable``: flushed and fsynced before this returns (a frame's record, before the frame)."""
         if self.log is None:
             return
         try:
-            self.log.write(json.dumps(record) + "\n")
+            append = getattr(self.log, "append", None)
+            if append is not None:  # a jobflow.JournalFile: it seals and syncs
+                append(record, durable)
+            else:
+                self.log.write(json.dumps(record) + "\n")
         except (OSError, ValueError) as error:  # ValueError: the file was closed under us
             name = getattr(self.log, "name", "the log")
             self.log = None  # nothing more is written to it (the abort is not logged)
             self.fail(f"the log {name} could not be written ({error})")
-

@@ -52,7 +52,7 @@ def test_a_log_whose_first_frame_was_written_does_not_restart_at_the_first_line(
     crashed = records[: first_tx + 1]
     snapshot = read_script(str(SCRIPT))
     point = read_resume_log(crashed, "scripts/pick_and_place.txt", snapshot.data)
-    target = first_progress["target"]
+    target = json.loads(records[first_tx])["target"]  # the frame's own record (written ahead of it) holds its target
     # the arm is at rest at the target of the only frame written: that frame ran
     try:
         line = point.line_for(tuple(target["xyz_mm"]), tuple(target["joints_deg"]))

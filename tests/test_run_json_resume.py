@@ -28,7 +28,7 @@ from click.testing import CliRunner
 from armctl.api import RunResult
 from armctl.cli import main
 from armctl.errors import ResumeRefused
-from armctl.joblog import NotProven, ResumePoint, read_resume_log
+from armctl.joblog import FrameEntry, NotProven, ResumePoint, read_resume_log
 from armctl.protocol import decode_command
 from armctl.sim.bridge import serve_pty
 from armctl.sim.model import SimOptions, SimulatedArm
@@ -144,27 +144,34 @@ def test_json_a_failure_before_the_first_frame_is_one_summary(tmp_path):
 # --- the resume rules --------------------------------------------------------------------------
 
 TARGET = {"kind": "line", "xyz_mm": [220.0, 10.0, 280.0], "joints_deg": [0.0] * 6}
+ELSEWHERE = {"kind": "line", "xyz_mm": [200.0, 0.0, 250.0], "joints_deg": [0.0] * 6}
+
+
+def _frames(last_target, next_line):
+    """Frames of lines 1..7, the last one's target ``last_target``, then ``next_line``."""
+    frames = [FrameEntry(n, n, n, n + 1, ELSEWHERE) for n in range(1, 7)]
+    return (*frames, FrameEntry(7, 7, 7, next_line, last_target))
 
 
 def test_at_the_last_target_every_frame_written_ran():
-    point = ResumePoint(1, 2.0, sent_line=7, sent_resume=8, done_line=4, done_resume=5, target=TARGET)
+    point = ResumePoint(1, 2.0, _frames(TARGET, 8), confirmed=7, done=4)
     assert point.line_for((220.0, 10.1, 280.0), (None,) * 6) == 8
-    finished = ResumePoint(1, 2.0, sent_line=9, sent_resume=None, done_line=4, done_resume=5, target=TARGET)
+    finished = ResumePoint(1, 2.0, _frames(TARGET, None), confirmed=7, done=4)
     assert finished.line_for((220.0, 10.0, 280.0), (None,) * 6) is None
 
 
 def test_elsewhere_only_a_log_with_nothing_in_flight_proves_the_line():
-    quiet = ResumePoint(1, 2.0, sent_line=7, sent_resume=8, done_line=7, done_resume=8, target=TARGET)
+    quiet = ResumePoint(1, 2.0, _frames(TARGET, 8), confirmed=7, done=7)
     assert quiet.line_for((0.0, 0.0, 0.0), (None,) * 6) == 8
-    in_flight = ResumePoint(1, 2.0, sent_line=7, sent_resume=8, done_line=4, done_resume=5, target=TARGET)
+    in_flight = ResumePoint(1, 2.0, _frames(TARGET, 8), confirmed=7, done=4)
     with pytest.raises(NotProven):
         in_flight.line_for((221.0, 10.0, 280.0), (None,) * 6)
     assert ResumePoint(3, 2.0).line_for(None, (None,) * 6) == 3  # nothing was written: where it started
 
 
 def test_a_joint_target_is_judged_by_the_joints():
-    point = ResumePoint(1, 2.0, sent_line=2, sent_resume=3, done_line=1, done_resume=2,
-                        target={"kind": "joint", "xyz_mm": [0, 0, 0], "joints_deg": [10, 0, 0, 0, 0, 0]})
+    joint = {"kind": "joint", "xyz_mm": [0, 0, 0], "joints_deg": [10, 0, 0, 0, 0, 0]}
+    point = ResumePoint(1, 2.0, (FrameEntry(1, 1, 1, 2, ELSEWHERE), FrameEntry(2, 2, 2, 3, joint)), confirmed=2, done=1)
     assert point.line_for((5.0, 5.0, 5.0), (10.1, 0, 0, 0, 0, 0)) == 3
     with pytest.raises(NotProven):
         point.line_for((0.0, 0.0, 0.0), (11.0, 0, 0, 0, 0, 0))
@@ -174,7 +181,7 @@ def test_a_log_of_another_or_an_edited_script_is_refused(tmp_path):
     log = tmp_path / "job.log"
     result = CliRunner().invoke(main, ["run", str(SHORT), "--port", FAST_SIM, "--no-live", "--log", str(log)])
     assert result.exit_code == 0, result.output
-    assert read_resume_log(log.read_text().splitlines(), str(SHORT), SHORT.read_bytes()).sent_line == 6
+    assert read_resume_log(log.read_text(), str(SHORT), SHORT.read_bytes()).sent_line == 6
     edited = tmp_path / "short_job.txt"
     edited.write_bytes(SHORT.read_bytes() + b"G1 X230\n")
     for script in (edited, SCRIPTS / "resume_job.txt"):

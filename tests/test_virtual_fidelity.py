@@ -47,7 +47,10 @@ EXPECTED = {  # (the engine's frames read and written with their model times, th
     # The log re-recorded when a joint move from a Cartesian end got its time allowance (Streamer.
     # _unknown_start_s): the same frames read and written; the closing POSE 0, confirmed by time at
     # 44.16 s before, is confirmed by the arm's reports at 44.37 s (15 by reports, 1 by time).
-    "square_circle+log": ("866ad8ea6c8dc483", "4a3dd07fe329a721"),
+    # The log re-recorded for the write-ahead journal (armctl/joblog.py format 2): each record
+    # sealed (seq, crc), a frame's record (with n, at, next, target) before the frame, progress
+    # records counting frames written and done; the frames read and written are the same.
+    "square_circle+log": ("866ad8ea6c8dc483", "e6958cbb2137e2e7"),
 }
 
 

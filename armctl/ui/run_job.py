@@ -140,6 +140,16 @@ def _config_baud() -> int:
     return config_baud(config.values, config.path_of("baud"))
 
 
+def _same_file(first: str, second: str) -> bool:
+    """Two names of one file (a link, another spelling), or of one that does not exist yet."""
+    import os
+
+    try:
+        return os.path.samefile(first, second)
+    except OSError:
+        return os.path.realpath(first) == os.path.realpath(second)
+
+
 def _open_log(path: str):
     """The --log file, line-buffered: a write failure (disk full) shows at the line that failed.
     One that cannot be opened is a usage error (exit 2, and with --json its summary object)."""
@@ -212,8 +222,13 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     check_from_line(script, options.from_line)
     if options.dry_run:
         return dry_run(options, script, MotionModel(profile))
-    # read before --log (which may be the same file) is opened for writing, and before the port
+    # read before --log is opened for writing, and before the port
     resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
+    if options.resume_log and options.log_path and _same_file(options.resume_log, options.log_path):
+        from ..cli import UsageFailure
+
+        raise UsageFailure(f"--log {options.log_path} is the journal --resume reads: it is never written over; "
+                           "give the resumed job a --log of its own")
     watch = _RunObserver(options, script, MotionModel(profile), events)
     # the log before the port: one that cannot be written refuses the job before the arm is touched
     with (_log_file(options.log_path) if options.log_path else nullcontext()) as log, \
