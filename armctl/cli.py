@@ -357,6 +357,9 @@ def estimate(script, lead_s, baud, profile_path, as_json):
         click.echo(json.dumps(result.to_json()))
     else:
         print_estimate(result, f"{script} (from the profile's fixed pose 0; the first move depends on where the arm is):")
+        if not profile.connector.is_default("speed_factor"):  # the configured port's arm (armctl config)
+            click.echo(f"  note: the arm's speed_factor {profile.connector.speed_factor:g} "
+                       f"({profile.source_of('connector.speed_factor')})")
 
 
 @main.command()

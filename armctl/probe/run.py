@@ -54,7 +54,7 @@ def progress_display(as_json: bool, say):
 
 
 def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> int:
-    from ..link import connect
+    from ..link import choose_port, connect
     from ..profile import load_profile
     from . import build_probe
     from .host import FrameInbox, deferred_stop, drive
@@ -65,10 +65,11 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     target = Path(write_path) if write_path else None
     if target is not None:
         check_writable(target)  # before anything is sent: exit 2 if it is not valid TOML
-    profile = load_profile()
+    choice = choose_port(port)
+    profile = load_profile(port=choice.url)
     motion = decide_motion(no_motion, yes, say, announcement)
     inbox = FrameInbox()
-    link, baud = connect(port, baud, announce=say, profile=profile, on_status=inbox)
+    link, baud = connect(choice, baud, announce=say, profile=profile, on_status=inbox)
     stop = threading.Event()
     with link:
         probe = build_probe(profile, baud, link.clock(), motion, link.is_virtual)
@@ -101,8 +102,11 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     if probe.stopped is not None:
         click.echo(f"armctl: probe stopped: {probe.stopped}", err=True)
         return EXIT_STOPPED
+    from .keep import keep, written
+
+    arm = keep(choice.url, probe, say)  # with the arm: every command on it uses what was measured
     if target is not None:
-        values = to_write(probe)
+        values = written(arm, to_write(probe))
         write_connector(target, values)
         say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {v!r}" for k, v in values.items()))
     return EXIT_OK
