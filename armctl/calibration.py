@@ -15,7 +15,7 @@ A ``Calibration`` is one arm's measured ``[connector]`` settings, each with the 
 probed, its evidence and how sure the probe was.  A later probe replaces the values it measured
 and keeps the others (a ``--no-motion`` probe does not forget a speed factor measured before).
 The store is one JSON file per arm in the user data directory (``$XDG_DATA_HOME/armctl/arms/``,
-platformdirs' ``user_data_dir("armctl")`` elsewhere), named by a hash of the identity, written
+platformdirs' ``user_data_dir("armctl")`` elsewhere), named by the identity (quoted), written
 atomically (a temporary file, fsync, rename): a crash leaves the old record or the new one.
 
 Pure apart from the edges: ``list_ports`` (``port_infos``, only for a device path) and the
@@ -26,11 +26,8 @@ it reads the profile.  ``stale_notes`` reads a finished job's evidence against t
 
 from __future__ import annotations
 
-import hashlib
-import json
 import os
 import sys
-import tempfile
 import urllib.parse
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -68,6 +65,8 @@ def arm_identity(port: str, ports=None) -> str:
 
 
 def _sim_identity(url: str) -> str:
+    if url in ("sim://", "sim:///", "sim://?"):  # the default arm, without loading the simulator (lint, estimate)
+        return "sim://"
     from .sim.model import SimOptions
     from .sim.protocol_sim import parse_sim_url
 
@@ -180,11 +179,19 @@ def store_dir() -> Path:
 
 
 def record_path(arm: str, directory: Path | None = None) -> Path:
-    digest = hashlib.sha256(arm.encode("utf-8")).hexdigest()[:20]
-    return (store_dir() if directory is None else directory) / f"{digest}.json"
+    """``arm``'s file: the identity, quoted (one name per identity, readable in a listing), or a
+    hash of it when that would be too long a file name."""
+    name = urllib.parse.quote(arm, safe="")
+    if len(name) > 200:
+        import hashlib
+
+        name = "sha256-" + hashlib.sha256(arm.encode("utf-8")).hexdigest()
+    return (store_dir() if directory is None else directory) / f"{name}.json"
 
 
 def _read(path: Path) -> Calibration:
+    import json
+
     try:
         data = json.loads(path.read_bytes())
     except OSError as error:
@@ -205,6 +212,9 @@ def load(arm: str, directory: Path | None = None) -> Calibration | None:
 
 def save(calibration: Calibration, directory: Path | None = None) -> Path:
     """Keep ``calibration``, laid over what was stored for that arm; atomically."""
+    import json
+    import tempfile
+
     directory = store_dir() if directory is None else directory
     earlier = load(calibration.arm, directory)
     record = calibration if earlier is None else earlier.updated(calibration)

@@ -23,10 +23,11 @@ The ``[connector]`` table holds what the vendor document leaves open about the a
 and status (``Connector``: ``fifo_frames``, ``control_frames``, ``status_xyz_frame``,
 ``speed_factor``, ``kinematics_verified``).  Its packaged values are the document's reading (the
 H-decisions, README), so their source is ``DOCUMENT``, not a guess; ``Connector.is_default(key)``
-says whether a value is still that default (``armctl probe --write`` replaces them with measured
-ones).  The table may sit in a profile file, in armctl.toml's ``[profile]`` table, and at the top
-level of armctl.toml (``[connector]``, where ``probe --write`` puts it: it describes the arm on
-the port, so it is laid over whichever profile is in use, key by key, and wins).
+says whether a value is still that default (``armctl probe`` replaces them with measured ones).
+The table may sit in a profile file, in armctl.toml's ``[profile]`` table, and at the top level
+of armctl.toml (``[connector]``).  What is in effect is the arm's on the port (``arm_connector``):
+the profile's own table, then what ``armctl probe`` kept with that arm (armctl/calibration.py),
+then armctl.toml's top-level table if it names no arm or its ``measured_on`` is that arm.
 """
 
 from __future__ import annotations

@@ -19,18 +19,19 @@ def today() -> str:
     return datetime.now(timezone.utc).date().isoformat()
 
 
-def keep(port: str, probe, say) -> str:
-    """Store what ``probe`` found for the arm on ``port``; its identity."""
+arm_identity = calibration.arm_identity
+
+
+def keep(port: str, arm: str, probe, say) -> None:
+    """Store what ``probe`` found for ``arm``, probed through ``port``."""
     from .report import finding_for, to_write
 
-    arm = calibration.arm_identity(port)
     values = to_write(probe)
     findings = [(name, value, finding_for(probe, name).evidence, finding_for(probe, name).confidence)
                 for name, value in values.items()]
     if findings:
         path = calibration.save(calibration.calibration_of(port, arm, findings, today()))
         say(f"kept for {arm} in {path}: every command on this arm uses it (armctl probe --list)")
-    return arm
 
 
 def written(arm: str, values: dict) -> dict:

@@ -102,13 +102,14 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     if probe.stopped is not None:
         click.echo(f"armctl: probe stopped: {probe.stopped}", err=True)
         return EXIT_STOPPED
-    from .keep import keep, written
+    from .keep import arm_identity, keep, written
 
-    arm = keep(choice.url, probe, say)  # with the arm: every command on it uses what was measured
+    arm = arm_identity(choice.url)
     if target is not None:
         values = written(arm, to_write(probe))
         write_connector(target, values)
         say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {v!r}" for k, v in values.items()))
+    keep(choice.url, arm, probe, say)  # with the arm: every command on it uses what was measured
     return EXIT_OK
 
 
