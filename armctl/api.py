@@ -438,15 +438,16 @@ class Arm:
         (``sim://``); ``baud`` and ``profile`` (a TOML path, or a ``Profile`` already loaded, used
         as it is) likewise.  A profile read here carries the ``[connector]`` settings of the arm
         on that port: what ``armctl probe`` stored for it (docs/probe.md), and armctl.toml's
-        ``[connector]`` if it was measured on that arm (``armctl.profile.load_profile(port=…)``).
+        ``[connector]`` if it was measured on that arm (``armctl.calibration.arm_profile(port=…)``).
         Prints nothing.  ``connect``: the function that opens the port,
         ``connect(port, baud, profile=)`` → (an ``armctl.link.Link``, the baud rate; ``port`` an
         ``armctl.link.PortChoice``, resolved once) — default
         ``armctl.link.connect`` with no banner (``armctl run`` passes one that prints the
         simulator's banner; a benchmark one that records the frames written).
         Raises ``ConfigError`` (a bad setting), ``ProfileError`` or ``PortError``."""
+        from .calibration import arm_profile
         from .link import choose_port, connect as open_link
-        from .profile import Profile, load_profile
+        from .profile import Profile
 
         # the CLI's ranges (armctl/limits.py), checked before the port opens
         _in_range("lead_s", lead_s, "LEAD_RANGE_S")
@@ -455,7 +456,7 @@ class Arm:
             _in_range("baud", baud, "BAUD_RANGE", whole=True)
         choice = choose_port(port)  # once: the arm's stored calibration is loaded for this port
         loaded = profile if isinstance(profile, Profile) else \
-            load_profile(None if profile is None else os.fspath(profile), port=choice.url)
+            arm_profile(None if profile is None else os.fspath(profile), port=choice.url)
         link, line_baud = (open_link if connect is None else connect)(choice, baud, profile=loaded)
         try:
             return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s)

@@ -19,9 +19,9 @@ platformdirs' ``user_data_dir("armctl")`` elsewhere), named by the identity (quo
 atomically (a temporary file, fsync, rename): a crash leaves the old record or the new one.
 
 Pure apart from the edges: ``list_ports`` (``port_infos``, only for a device path) and the
-store's files (``load``, ``save``, ``stored``, ``forget``).  Who reads the store: the profile
-(armctl/profile.py ``load_profile(port=…)``) once, where the port is resolved; everything after
-it reads the profile.  ``stale_notes`` reads a finished job's evidence against the values.
+store's files (``load``, ``save``, ``stored``, ``forget``).  Who reads the store: ``arm_profile``
+(the profile of the arm on a port), once, where the port is resolved; everything after it reads
+the profile.  ``stale_notes`` reads a finished job's evidence against the values.
 """
 
 from __future__ import annotations
@@ -86,7 +86,7 @@ def _sim_identity(url: str) -> str:
 
 def _device_identity(path: str, ports) -> str:
     """A USB adapter by VID:PID and serial number (or its USB location); any other device by path."""
-    real = os.path.realpath(path)
+    real = os.path.realpath(path) if os.path.lexists(path) else path  # COM3 is no file: kept as named
     for info in ports:
         if info.device not in (path, real) and os.path.realpath(info.device) != real:
             continue
@@ -157,6 +157,50 @@ def calibration_of(port: str, arm: str, findings, probed_on: str) -> Calibration
     probe states, as ``--write`` writes them)."""
     settings = {name: Measured(value, probed_on, evidence, confidence) for name, value, evidence, confidence in findings}
     return Calibration(arm, port, settings)
+
+
+# --- the profile of the arm on a port --------------------------------------------------------------
+
+
+def arm_profile(path=None, port: str | None = None, start=None):
+    """``armctl.profile.load_profile`` for the arm on ``port`` (a device path or URL, as resolved;
+    None: the configured port — ARMCTL_PORT, armctl.toml, the simulator — for the commands that
+    open none: lint, estimate, plot, a dry run): the chosen profile with that arm's ``[connector]``
+    laid over its own, key by key — what ``armctl probe`` stored for the arm, then armctl.toml's
+    top-level ``[connector]`` if it names no arm or its ``measured_on`` is this arm.  The one
+    lookup of the store: everything after it reads the profile (``Profile.sources`` says where
+    each value came from)."""
+    from .profile import chosen_profile, load_config, with_connector, with_file_connector
+
+    config = load_config(start)
+    profile = chosen_profile(path, config=config)
+    arm = _configured_arm(config) if port is None else arm_identity(port)
+    stored = None if arm is None else load(arm)
+    for name in () if stored is None else stored.settings:
+        profile = with_connector(profile, {name: stored.settings[name].value}, stored.source_of(name))
+    return with_file_connector(profile, config, lambda measured_on, where: _identity_in(measured_on, where) == arm)
+
+
+def _configured_arm(config) -> str | None:
+    """The arm on the configured port, for a command that opens none; None when no port can be
+    resolved (ARMCTL_PORT set empty, a bad sim:// URL): such a command does not talk to the arm,
+    so a port it would not use does not stop it — then no stored calibration applies, and no
+    [connector] that names an arm."""
+    from .link import choose_port
+
+    try:
+        return arm_identity(choose_port(None, config).url)
+    except ConfigError:
+        return None
+
+
+def _identity_in(measured_on: str, where: str) -> str:
+    from .profile import MEASURED_ON
+
+    try:
+        return arm_identity(measured_on)
+    except ConfigError as error:  # a bad sim:// URL
+        raise ConfigError(f"{where}: connector.{MEASURED_ON}: {error}") from None
 
 
 # --- the store (the file edge) -------------------------------------------------------------------

@@ -2,7 +2,7 @@
 
 Strategy: no resolution of its own.  The settings are what the commands themselves compute —
 ``resolve_port`` for the port (``--port``, ``ARMCTL_PORT``, the project armctl.toml, the user
-armctl.toml, the simulator), ``config_baud`` for the line rate, ``load_profile`` for the arm
+armctl.toml, the simulator), ``config_baud`` for the line rate, ``calibration.arm_profile`` for the arm
 profile, ``load_config`` for the files and the ``[lint]``/``[jog]`` tables — so what this
 command prints is what ``run`` would use.  A bad file fails here exactly as it fails there
 (a ConfigError/ProfileError naming the file and key, exit 2).
@@ -10,7 +10,7 @@ command prints is what ``run`` would use.  A bad file fails here exactly as it f
 Each setting has a ``source``: ``option``, ``environment``, ``project`` (the nearest
 armctl.toml), ``user`` (the user's armctl.toml) or ``default`` (built in), and ``where``: the
 option or variable name, the file's path, or null.  The ``connector.*`` settings are the arm's
-on that port (``load_profile(port=…)``): their source is also ``probe`` (where: "probed on DATE
+on that port (``calibration.arm_profile(port=…)``): their source is also ``probe`` (where: "probed on DATE
 for ARM", what ``armctl probe`` stored with the arm), ``profile`` (the profile file) or
 ``document`` (the vendor document's reading).
 """
@@ -49,7 +49,8 @@ def _file_source(config, key: str) -> tuple[str, str | None]:
 def effective_settings(port: str | None = None, baud: int | None = None, environ=None) -> tuple[list[Setting], Any]:
     """The settings a port-using command would take with these options, and the ``Config``."""
     from .link import PORT_ENV, config_baud, resolve_port
-    from .profile import DEFAULT_RESOURCE, load_config, load_profile
+    from .calibration import arm_profile
+    from .profile import DEFAULT_RESOURCE, load_config
 
     environ = os.environ if environ is None else environ
     config = load_config()
@@ -67,7 +68,7 @@ def effective_settings(port: str | None = None, baud: int | None = None, environ
     else:
         settings.append(Setting("baud", config_baud(config.values, config.path_of("baud")), *_file_source(config, "baud")))
 
-    profile = load_profile(port=choice.url)  # checks the profile the files name: a missing one fails here too
+    profile = arm_profile(port=choice.url)  # checks the profile the files name: a missing one fails here too
     entry = config.values.get("profile")
     if entry is None:
         shown = f"<packaged {DEFAULT_RESOURCE[1]}>"

@@ -106,7 +106,7 @@ def resolve_port(option: str | None, environ=os.environ, config: dict | None = N
 
 def choose_port(port: "str | PortChoice | None", config=None) -> PortChoice:
     """``resolve_port`` with the armctl.toml files, a ``sim://`` URL checked: the port a command
-    will open, resolved once (its arm's profile is loaded for it: ``load_profile(port=…)``)."""
+    will open, resolved once (its arm's profile is loaded for it: ``calibration.arm_profile(port=…)``)."""
     if isinstance(port, PortChoice):
         return port
     from .profile import load_config
@@ -124,9 +124,9 @@ def connect(port: "str | PortChoice | None", baud: int | None, announce: Callabl
     armctl.toml, the simulator; a ``PortChoice`` is already resolved: ``choose_port``), tell
     ``announce`` (a command's stderr note; None for a library caller, which prints nothing) when
     it is the simulator, open it with a reader thread whose state judges jumps against the arm's
-    top speeds (H9). ``profile``: the arm's (``load_profile(port=…)``; None: loaded here for the
+    top speeds (H9). ``profile``: the arm's (``calibration.arm_profile(port=…)``; None: loaded here for the
     port). Returns the link and the baud rate."""
-    from .profile import load_config, load_profile
+    from .profile import load_config
 
     config = load_config()
     choice = choose_port(port, config)
@@ -134,7 +134,10 @@ def connect(port: "str | PortChoice | None", baud: int | None, announce: Callabl
     if banner and announce is not None:
         announce(banner)
     baud = baud or config_baud(config.values, config.path_of("baud"))
-    profile = profile or load_profile(port=choice.url)
+    if profile is None:
+        from .calibration import arm_profile
+
+        profile = arm_profile(port=choice.url)
     link_options.setdefault("state", plausible_state(profile))
     return Link.open(choice.url, baud, **link_options), baud
 

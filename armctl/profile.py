@@ -647,64 +647,36 @@ def _short_repr(value, limit: int = 60) -> str:
     return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
-def load_profile(path: Path | str | None = None, start: Path | None = None, port: str | None = None) -> Profile:
+def load_profile(path: Path | str | None = None, start: Path | None = None) -> Profile:
     """The profile to use: ``path`` if given, else the one the project or user armctl.toml
-    names (a path relative to that file), else the default; in every case with the ``[connector]``
-    settings of the arm on ``port`` laid over it (``arm_connector``).  ``port``: a device path or
-    URL, as resolved (None: the configured port — ARMCTL_PORT, armctl.toml, the simulator — for
-    the commands that open none: lint, estimate, plot)."""
+    names (a path relative to that file), else the default; in every case with armctl.toml's
+    top-level ``[connector]`` laid over it if that names no arm (``with_file_connector``).  The
+    ``[connector]`` of the arm on a port — what ``armctl probe`` kept with it, a table measured
+    on it — is ``armctl.calibration.arm_profile``'s, which the commands and the API use."""
     config = load_config(start)
-    return arm_connector(_chosen_profile(path, config), config, port)
+    return with_file_connector(chosen_profile(path, config=config), config)
 
 
-def chosen_profile(path: Path | str | None = None, start: Path | None = None) -> Profile:
-    """The profile alone, no arm's ``[connector]`` laid over it: a simulated arm's own (it takes
-    its connector from its options)."""
-    return _chosen_profile(path, load_config(start))
+def chosen_profile(path: Path | str | None = None, start: Path | None = None, config: Config | None = None) -> Profile:
+    """The profile alone, no ``[connector]`` of armctl.toml laid over it: a simulated arm's own (it
+    takes its connector from its options)."""
+    return _chosen_profile(path, load_config(start) if config is None else config)
 
 
-def arm_connector(profile: Profile, config: Config, port: str | None) -> Profile:
-    """``profile`` with what is known of the arm on ``port`` laid over its ``[connector]``, key by
-    key: the calibration ``armctl probe`` stored for that arm (armctl/calibration.py), then
-    armctl.toml's top-level ``[connector]`` — if it names no arm (set by hand: it applies on every
-    port) or its ``measured_on`` is this arm (``probe --write`` names it).  The one lookup of the
-    store: everything after it reads the profile (``Profile.sources`` says where each came from)."""
-    from . import calibration
-
-    arm = _configured_arm(config) if port is None else calibration.arm_identity(port)
-    stored = None if arm is None else calibration.load(arm)
-    for name in () if stored is None else stored.settings:
-        profile = with_connector(profile, {name: stored.settings[name].value}, stored.source_of(name))
+def with_file_connector(profile: Profile, config: Config,
+                        on_arm: Callable[[str, str], bool] = lambda measured_on, where: False) -> Profile:
+    """``profile`` with armctl.toml's top-level ``[connector]`` laid over it, key by key, if it names
+    no arm (a table written by hand: it applies on every port) or ``on_arm(measured_on, file)``
+    says its ``measured_on`` is the arm in use (``armctl probe --write`` names it).  The table is
+    checked either way."""
     table = config.values.get("connector")
-    if table is not None:
-        where = str(config.path_of("connector"))
-        values, measured_on = connector_table(table, where)
-        if measured_on is None or _identity_in(measured_on, where) == arm:
-            profile = with_connector(profile, values, where)
+    if table is None:
+        return profile
+    where = str(config.path_of("connector"))
+    values, measured_on = connector_table(table, where)
+    if measured_on is None or on_arm(measured_on, where):
+        profile = with_connector(profile, values, where)
     return profile
-
-
-def _configured_arm(config: Config) -> str | None:
-    """The arm on the configured port, for a command that opens none (lint, estimate, plot, a dry
-    run); None when no port can be resolved (ARMCTL_PORT set empty, a bad sim:// URL): such a
-    command does not talk to the arm, so a port it would not use does not stop it — then no
-    stored calibration applies, and no [connector] that names an arm."""
-    from .calibration import arm_identity
-    from .link import choose_port
-
-    try:
-        return arm_identity(choose_port(None, config).url)
-    except ConfigError:
-        return None
-
-
-def _identity_in(measured_on: str, where: str) -> str:
-    from .calibration import arm_identity
-
-    try:
-        return arm_identity(measured_on)
-    except ConfigError as error:  # a bad sim:// URL
-        raise ConfigError(f"{where}: connector.{MEASURED_ON}: {error}") from None
 
 
 def connector_table(table: dict, where: str) -> tuple[dict, str | None]:

@@ -13,7 +13,7 @@ from types import SimpleNamespace
 import pytest
 
 from armctl import calibration
-from armctl.calibration import Calibration, Measured, arm_identity
+from armctl.calibration import Calibration, Measured, arm_identity, arm_profile
 from armctl.errors import ConfigError, ProfileError
 from armctl.profile import DOCUMENT, load_profile
 
@@ -71,6 +71,8 @@ def test_a_device_without_a_serial_number_is_its_usb_location_or_its_path():
     assert arm_identity("/dev/ttyACM0", [_usb("/dev/ttyACM0", serial=None)]) == "usb 0403:6001 at 1-1.2:1.0"
     assert arm_identity("/dev/ttyS0", [_usb("/dev/ttyS0", vid=None, pid=None)]) == "device /dev/ttyS0"
     assert arm_identity("/dev/pts/7", []) == "device /dev/pts/7"
+    assert arm_identity("COM3", [_usb("COM3", serial="W1")]) == "usb 0403:6001 serial W1"  # Windows
+    assert arm_identity("COM4", []) == "device COM4"  # not a file here: as named, whatever the directory
 
 
 def test_an_identity_is_its_own_identity():
@@ -156,12 +158,12 @@ def test_a_damaged_record_is_a_config_error_naming_the_file(tmp_path, content):
 def test_the_stored_calibration_applies_to_its_arm_only(tmp_path):
     arm = "sim://?fifo_frames=50&speed_factor=1.3"
     calibration.save(_record(arm, date="2026-11-01", fifo_frames=50, speed_factor=1.3))
-    mine = load_profile(start=tmp_path, port="sim://?clock=virtual&speed_factor=1.3&fifo_frames=50")
+    mine = arm_profile(start=tmp_path, port="sim://?clock=virtual&speed_factor=1.3&fifo_frames=50")
     assert (mine.connector.fifo_frames, mine.connector.speed_factor) == (50, 1.3)
     assert mine.source_of("connector.fifo_frames") == f"probed on 2026-11-01 for {arm}"
-    assert load_profile(start=tmp_path, port="sim://?fifo_frames=50").connector.speed_factor == 1.0  # another arm
+    assert arm_profile(start=tmp_path, port="sim://?fifo_frames=50").connector.speed_factor == 1.0  # another arm
     assert not mine.connector.is_default("fifo_frames")  # a measured FIFO: ``done`` can be proven
-    other = load_profile(start=tmp_path, port="sim://?clock=virtual")
+    other = arm_profile(start=tmp_path, port="sim://?clock=virtual")
     assert (other.connector.fifo_frames, other.connector.speed_factor) == (200, 1.0)
     assert other.source_of("connector.fifo_frames") == DOCUMENT
 
@@ -169,22 +171,22 @@ def test_the_stored_calibration_applies_to_its_arm_only(tmp_path):
 def test_a_connector_table_measured_on_an_arm_applies_on_that_arm_only(tmp_path):
     (tmp_path / "armctl.toml").write_text('[connector]\nmeasured_on = "sim://?fifo_frames=50&speed_factor=1.3"\n'
                                           "fifo_frames = 50\nspeed_factor = 1.3\n")
-    there = load_profile(start=tmp_path, port="sim://?speed_factor=1.3&fifo=50&clock=virtual")
+    there = arm_profile(start=tmp_path, port="sim://?speed_factor=1.3&fifo=50&clock=virtual")
     assert there.connector.fifo_frames == 50 and there.source_of("connector.fifo_frames") == str(tmp_path / "armctl.toml")
-    elsewhere = load_profile(start=tmp_path, port="sim://?clock=virtual")
+    elsewhere = arm_profile(start=tmp_path, port="sim://?clock=virtual")
     assert elsewhere.connector.fifo_frames == 200 and elsewhere.source_of("connector.fifo_frames") == DOCUMENT
 
 
 def test_a_connector_table_that_names_no_arm_applies_on_every_port(tmp_path):
     (tmp_path / "armctl.toml").write_text("[connector]\nfifo_frames = 120\n")
     for port in ("sim://", "sim://?fifo_frames=50", "socket://arm:4001"):
-        assert load_profile(start=tmp_path, port=port).connector.fifo_frames == 120
+        assert arm_profile(start=tmp_path, port=port).connector.fifo_frames == 120
 
 
 def test_the_project_file_wins_over_the_store_key_by_key(tmp_path):
     calibration.save(_record(fifo_frames=50, speed_factor=1.3))
     (tmp_path / "armctl.toml").write_text('[connector]\nmeasured_on = "sim://?fifo_frames=50"\nspeed_factor = 1.25\n')
-    profile = load_profile(start=tmp_path, port="sim://?fifo_frames=50")
+    profile = arm_profile(start=tmp_path, port="sim://?fifo_frames=50")
     assert (profile.connector.fifo_frames, profile.connector.speed_factor) == (50, 1.25)
     assert profile.source_of("connector.fifo_frames").startswith("probed on ")
     assert profile.source_of("connector.speed_factor") == str(tmp_path / "armctl.toml")
@@ -195,9 +197,9 @@ def test_without_a_port_the_configured_ports_calibration_applies(tmp_path, monke
     calibration.save(_record(fifo_frames=50, speed_factor=1.3))
     monkeypatch.delenv("ARMCTL_PORT", raising=False)
     (tmp_path / "armctl.toml").write_text('port = "sim://?fifo_frames=50&clock=virtual"\n')
-    assert load_profile(start=tmp_path).connector.speed_factor == 1.3
+    assert arm_profile(start=tmp_path).connector.speed_factor == 1.3
     monkeypatch.setenv("ARMCTL_PORT", "sim://")
-    assert load_profile(start=tmp_path).connector.speed_factor == 1.0
+    assert arm_profile(start=tmp_path).connector.speed_factor == 1.0
 
 
 @pytest.mark.parametrize("table, message", [
@@ -208,13 +210,13 @@ def test_without_a_port_the_configured_ports_calibration_applies(tmp_path, monke
 def test_a_bad_connector_table_is_refused_whatever_arm_it_names(tmp_path, table, message):
     (tmp_path / "armctl.toml").write_text("[connector]\n" + table)
     with pytest.raises((ConfigError, ProfileError), match=message):
-        load_profile(start=tmp_path, port="sim://")
+        arm_profile(start=tmp_path, port="sim://")
 
 
 def test_a_damaged_stored_value_is_refused_naming_its_source(tmp_path):
     calibration.save(_record(fifo_frames=0))
     with pytest.raises(ProfileError, match="probed on 2026-11-01 for sim://.fifo_frames=50: connector.fifo_frames"):
-        load_profile(start=tmp_path, port="sim://?fifo_frames=50")
+        arm_profile(start=tmp_path, port="sim://?fifo_frames=50")
 
 
 def test_the_record_is_json_a_person_can_read():
@@ -223,3 +225,13 @@ def test_the_record_is_json_a_person_can_read():
     assert data["arm"] == "sim://?fifo_frames=50" and data["format"] == 1
     assert data["settings"]["fifo_frames"] == {"value": 50, "probed_on": "2026-11-01",
                                                "evidence": "evidence of fifo_frames", "confidence": "sure"}
+
+
+def test_the_portless_profile_takes_only_a_connector_table_that_names_no_arm(tmp_path):
+    """``armctl.profile.load_profile`` knows no port (the simulated arm's own profile, a library
+    reading a profile): a table measured on an arm is not its, one written by hand is."""
+    calibration.save(_record(fifo_frames=50))
+    (tmp_path / "armctl.toml").write_text('[connector]\nmeasured_on = "sim://"\nfifo_frames = 50\n')
+    assert load_profile(start=tmp_path).connector.fifo_frames == 200
+    (tmp_path / "armctl.toml").write_text("[connector]\nfifo_frames = 60\n")
+    assert load_profile(start=tmp_path).connector.fifo_frames == 60

@@ -76,7 +76,8 @@ def _setup(profile_path, repeat_delay_ms, port=None):
     from dataclasses import replace
 
     from ..errors import ProfileError
-    from ..profile import load_config, load_profile
+    from ..calibration import arm_profile
+    from ..profile import load_config
     from .keymap import JogConfigError, keymap_from_config
     from .settings import settings_from_config
 
@@ -90,7 +91,7 @@ def _setup(profile_path, repeat_delay_ms, port=None):
         if not isinstance(keys, dict):
             raise JogConfigError(f"{source}: jog.keys must be a table ([jog.keys]), not {keys!r}")
         keymap = keymap_from_config(keys, source)
-        profile = load_profile(profile_path, port=port)  # the arm's: its stored calibration laid over
+        profile = arm_profile(profile_path, port=port)  # the arm's: its stored calibration laid over
     except (JogConfigError, ProfileError) as error:
         _fail(str(error), EXIT_USAGE)
     if repeat_delay_ms is not None:

@@ -55,7 +55,7 @@ def progress_display(as_json: bool, say):
 
 def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> int:
     from ..link import choose_port, connect
-    from ..profile import load_profile
+    from ..calibration import arm_profile
     from . import build_probe
     from .host import FrameInbox, deferred_stop, drive
     from .report import as_json as json_object, print_lines, print_table, to_write
@@ -66,7 +66,7 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     if target is not None:
         check_writable(target)  # before anything is sent: exit 2 if it is not valid TOML
     choice = choose_port(port)
-    profile = load_profile(port=choice.url)
+    profile = arm_profile(port=choice.url)
     motion = decide_motion(no_motion, yes, say, announcement)
     inbox = FrameInbox()
     link, baud = connect(choice, baud, announce=say, profile=profile, on_status=inbox)

@@ -205,13 +205,13 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     from ..api import Arm
     from ..jobflow import read_resume_point
     from ..link import choose_port
+    from ..calibration import arm_profile
     from ..motion import MotionModel
-    from ..profile import load_profile
 
     # once: the profile carries the stored calibration of the arm on the port (a dry run opens
     # none: the port given, else the configured one, as estimate)
     port = None if options.dry_run else choose_port(options.port)
-    profile = load_profile(options.profile_path, port=options.port if port is None else port.url)
+    profile = arm_profile(options.profile_path, port=options.port if port is None else port.url)
     check_script(script, profile)
     check_from_line(script, options.from_line)
     if options.dry_run:
