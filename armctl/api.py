@@ -440,22 +440,29 @@ class Arm:
              connect: Callable[..., tuple[Any, int]] | None = None) -> Arm:
         """Open the arm on ``port`` as the CLI resolves it: ``port``, else ``ARMCTL_PORT``, else
         ``port`` in armctl.toml (the project's, then yours), else the built-in simulator
-        (``sim://``); ``baud`` and ``profile`` (a TOML path, or a ``Profile`` already loaded)
-        likewise.  Prints nothing.  ``connect``: the function that opens the port,
-        ``connect(port, baud, profile=)`` → (an ``armctl.link.Link``, the baud rate) — default
+        (``sim://``); ``baud`` and ``profile`` (a TOML path, or a ``Profile`` already loaded, used
+        as it is) likewise.  A profile read here carries the ``[connector]`` settings of the arm
+        on that port: what ``armctl probe`` stored for it (docs/probe.md), and armctl.toml's
+        ``[connector]`` if it was measured on that arm (``armctl.calibration.arm_profile(port=…)``).
+        Prints nothing.  ``connect``: the function that opens the port,
+        ``connect(port, baud, profile=)`` → (an ``armctl.link.Link``, the baud rate; ``port`` an
+        ``armctl.link.PortChoice``, resolved once) — default
         ``armctl.link.connect`` with no banner (``armctl run`` passes one that prints the
         simulator's banner; a benchmark one that records the frames written).
         Raises ``ConfigError`` (a bad setting), ``ProfileError`` or ``PortError``."""
-        from .link import connect as open_link
-        from .profile import Profile, load_profile
+        from .calibration import arm_profile
+        from .link import choose_port, connect as open_link
+        from .profile import Profile
 
         # the CLI's ranges (armctl/limits.py), checked before the port opens
         _in_range("lead_s", lead_s, "LEAD_RANGE_S")
         _in_range("status_timeout_s", status_timeout_s, "STATUS_TIMEOUT_RANGE_S")
         if baud is not None:
             _in_range("baud", baud, "BAUD_RANGE", whole=True)
-        loaded = profile if isinstance(profile, Profile) else load_profile(None if profile is None else os.fspath(profile))
-        link, line_baud = (open_link if connect is None else connect)(port, baud, profile=loaded)
+        choice = choose_port(port)  # once: the arm's stored calibration is loaded for this port
+        loaded = profile if isinstance(profile, Profile) else \
+            arm_profile(None if profile is None else os.fspath(profile), port=choice.url)
+        link, line_baud = (open_link if connect is None else connect)(choice, baud, profile=loaded)
         try:
             return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s)
         except BaseException:
@@ -779,6 +786,7 @@ class Arm:
         from .jobflow import (JournalFile, drive, from_line_errors, journal_for, plan_job, read_arm, resume_paused,
                               resume_start, start_from_state, start_job)
         from .joblog import job_record, target_of
+        from .calibration import stale_notes
         from .runner import abort_frames
 
         link, observer = self._link, spec.observer
@@ -840,6 +848,8 @@ class Arm:
                 control.end()
             link.on_status = None
             link.on_status_run = None
+        runner.view.messages.extend(stale_notes(self._profile, link.url, runner.streamer.slowest_proven,
+                                                outcome == "frames may have been lost"))
         result = RunResult.of(runner.view, outcome, script.lines(), estimated_job_s=plan.estimate.job_s)
         if control.timed_out:
             raise ArmTimeout(f"the arm did not prove the job done within {spec.timeout_s:g} s: it was stopped "

@@ -344,12 +344,12 @@ def estimate(script, lead_s, baud, profile_path, as_json):
 
     SCRIPT may be - for standard input.
     """
+    from .calibration import arm_profile
     from .motion import MotionModel
-    from .profile import load_profile
     from .ui.run_job import check_script, estimate_job, print_estimate
 
     snapshot = _read_script(script)
-    profile = load_profile(profile_path)
+    profile = arm_profile(profile_path)  # the configured port's arm
     check_script(snapshot, profile)
     model = MotionModel(profile)
     result = estimate_job(snapshot, model, model.initial_pose(), lead_s, baud)
@@ -357,6 +357,9 @@ def estimate(script, lead_s, baud, profile_path, as_json):
         click.echo(json.dumps(result.to_json()))
     else:
         print_estimate(result, f"{script} (from the profile's fixed pose 0; the first move depends on where the arm is):")
+        if not profile.connector.is_default("speed_factor"):  # the configured port's arm (armctl config)
+            click.echo(f"  note: the arm's speed_factor {profile.connector.speed_factor:g} "
+                       f"({profile.source_of('connector.speed_factor')})")
 
 
 @main.command()

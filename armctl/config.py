@@ -2,14 +2,17 @@
 
 Strategy: no resolution of its own.  The settings are what the commands themselves compute —
 ``resolve_port`` for the port (``--port``, ``ARMCTL_PORT``, the project armctl.toml, the user
-armctl.toml, the simulator), ``config_baud`` for the line rate, ``load_profile`` for the arm
+armctl.toml, the simulator), ``config_baud`` for the line rate, ``calibration.arm_profile`` for the arm
 profile, ``load_config`` for the files and the ``[lint]``/``[jog]`` tables — so what this
 command prints is what ``run`` would use.  A bad file fails here exactly as it fails there
 (a ConfigError/ProfileError naming the file and key, exit 2).
 
 Each setting has a ``source``: ``option``, ``environment``, ``project`` (the nearest
 armctl.toml), ``user`` (the user's armctl.toml) or ``default`` (built in), and ``where``: the
-option or variable name, the file's path, or null.
+option or variable name, the file's path, or null.  The ``connector.*`` settings are the arm's
+on that port (``calibration.arm_profile(port=…)``): their source is also ``probe`` (where: "probed on DATE
+for ARM", what ``armctl probe`` stored with the arm), ``profile`` (the profile file) or
+``document`` (the vendor document's reading).
 """
 
 from __future__ import annotations
@@ -46,7 +49,8 @@ def _file_source(config, key: str) -> tuple[str, str | None]:
 def effective_settings(port: str | None = None, baud: int | None = None, environ=None) -> tuple[list[Setting], Any]:
     """The settings a port-using command would take with these options, and the ``Config``."""
     from .link import PORT_ENV, config_baud, resolve_port
-    from .profile import DEFAULT_RESOURCE, load_config, load_profile
+    from .calibration import arm_profile
+    from .profile import DEFAULT_RESOURCE, load_config
 
     environ = os.environ if environ is None else environ
     config = load_config()
@@ -64,7 +68,7 @@ def effective_settings(port: str | None = None, baud: int | None = None, environ
     else:
         settings.append(Setting("baud", config_baud(config.values, config.path_of("baud")), *_file_source(config, "baud")))
 
-    profile = load_profile()  # checks the profile the files name: a missing one fails here too
+    profile = arm_profile(port=choice.url)  # checks the profile the files name: a missing one fails here too
     entry = config.values.get("profile")
     if entry is None:
         shown = f"<packaged {DEFAULT_RESOURCE[1]}>"
@@ -74,9 +78,31 @@ def effective_settings(port: str | None = None, baud: int | None = None, environ
         shown = str(config.path_of("profile").parent / entry)
     settings.append(Setting("profile", shown, *_file_source(config, "profile")))
 
+    settings += connector_settings(profile, config)
     for table in ("lint", "jog"):
         settings.append(Setting(table, config.values.get(table, {}), *_file_source(config, table)))
     return settings, config
+
+
+def connector_settings(profile, config) -> list[Setting]:
+    """The ``[connector]`` in effect for the arm on the port, each value with its source: ``probe``
+    (``where``: "probed on DATE for ARM", the calibration stored with the arm), ``project`` or
+    ``user`` (armctl.toml's ``[connector]``), ``profile`` (the profile file's own table) or
+    ``document`` (the vendor document's reading, an H-decision)."""
+    from .profile import CONNECTOR_KEYS, DOCUMENT
+
+    files = {str(path): kind for kind, path in (("user", config.user_path), ("project", config.project_path)) if path}
+    settings = []
+    for key in CONNECTOR_KEYS:
+        source = profile.source_of(f"connector.{key}")
+        if source == DOCUMENT:
+            origin = ("document", None)
+        elif source.startswith("probed on "):
+            origin = ("probe", source)
+        else:
+            origin = (files.get(source, "profile"), source)
+        settings.append(Setting(f"connector.{key}", getattr(profile.connector, key), *origin))
+    return settings
 
 
 def settings_json(settings: list[Setting], config) -> dict:
@@ -90,11 +116,14 @@ def settings_json(settings: list[Setting], config) -> dict:
     }
 
 
+_ORIGINS = {"default": "built-in default", "document": "the document's default"}
+
+
 def settings_text(settings: list[Setting], config) -> str:
     lines = []
     for s in settings:
         value = s.value if isinstance(s.value, str) else json.dumps(s.value, ensure_ascii=False)
-        origin = "built-in default" if s.source == "default" else f"{s.source}: {s.where}"
+        origin = _ORIGINS.get(s.source) or (s.where if s.source == "probe" else f"{s.source}: {s.where}")
         lines.append(f"{s.name:<8} {value}  ({origin})")
     project = config.project_path or "none found from the working directory up"
     user = f"{config.user_path}{'' if config.user_path.is_file() else ' (not present)'}"

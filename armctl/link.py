@@ -104,23 +104,40 @@ def resolve_port(option: str | None, environ=os.environ, config: dict | None = N
     return PortChoice(SIMULATOR_URL, "default")
 
 
-def connect(port: str | None, baud: int | None, announce: Callable[[str], None] | None = None, profile=None,
-            **link_options):
-    """What every port-using command does first: resolve the port (``--port``, ARMCTL_PORT,
-    armctl.toml, the simulator), tell ``announce`` (a command's stderr note; None for a library
-    caller, which prints nothing) when it is the simulator, open it with a reader thread whose
-    state judges jumps against the arm's top speeds (H9). Returns the link and the baud rate."""
-    from .profile import load_config, load_profile
+def choose_port(port: "str | PortChoice | None", config=None) -> PortChoice:
+    """``resolve_port`` with the armctl.toml files, a ``sim://`` URL checked: the port a command
+    will open, resolved once (its arm's profile is loaded for it: ``calibration.arm_profile(port=…)``)."""
+    if isinstance(port, PortChoice):
+        return port
+    from .profile import load_config
 
-    config = load_config()
+    config = config or load_config()
     choice = resolve_port(port, config=config.values, config_path=config.path_of("port"))
     if choice.is_simulator:
         check_sim_url(choice)
+    return choice
+
+
+def connect(port: "str | PortChoice | None", baud: int | None, announce: Callable[[str], None] | None = None,
+            profile=None, **link_options):
+    """What every port-using command does first: resolve the port (``--port``, ARMCTL_PORT,
+    armctl.toml, the simulator; a ``PortChoice`` is already resolved: ``choose_port``), tell
+    ``announce`` (a command's stderr note; None for a library caller, which prints nothing) when
+    it is the simulator, open it with a reader thread whose state judges jumps against the arm's
+    top speeds (H9). ``profile``: the arm's (``calibration.arm_profile(port=…)``; None: loaded here for the
+    port). Returns the link and the baud rate."""
+    from .profile import load_config
+
+    config = load_config()
+    choice = choose_port(port, config)
     banner = choice.banner()
     if banner and announce is not None:
         announce(banner)
     baud = baud or config_baud(config.values, config.path_of("baud"))
-    profile = profile or load_profile()
+    if profile is None:
+        from .calibration import arm_profile
+
+        profile = arm_profile(port=choice.url)
     link_options.setdefault("state", plausible_state(profile))
     return Link.open(choice.url, baud, **link_options), baud
 

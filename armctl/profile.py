@@ -23,10 +23,11 @@ The ``[connector]`` table holds what the vendor document leaves open about the a
 and status (``Connector``: ``fifo_frames``, ``control_frames``, ``status_xyz_frame``,
 ``speed_factor``, ``kinematics_verified``).  Its packaged values are the document's reading (the
 H-decisions, README), so their source is ``DOCUMENT``, not a guess; ``Connector.is_default(key)``
-says whether a value is still that default (``armctl probe --write`` replaces them with measured
-ones).  The table may sit in a profile file, in armctl.toml's ``[profile]`` table, and at the top
-level of armctl.toml (``[connector]``, where ``probe --write`` puts it: it describes the arm on
-the port, so it is laid over whichever profile is in use, key by key, and wins).
+says whether a value is still that default (``armctl probe`` replaces them with measured ones).
+The table may sit in a profile file, in armctl.toml's ``[profile]`` table, and at the top level
+of armctl.toml (``[connector]``).  What is in effect is the arm's on the port (``arm_connector``):
+the profile's own table, then what ``armctl probe`` kept with that arm (armctl/calibration.py),
+then armctl.toml's top-level table if it names no arm or its ``measured_on`` is that arm.
 """
 
 from __future__ import annotations
@@ -57,6 +58,7 @@ ILLUSTRATIVE = "illustrative"  # the packaged default's guess: nobody measured i
 PROTOCOL = "protocol"  # a range the protocol itself fixes (PROTOCOL.md), true for every arm
 PROBE = "probe"  # measured on the arm
 DOCUMENT = "document"  # a [connector] default: the vendor document's reading (an H-decision)
+MEASURED_ON = "measured_on"  # armctl.toml's [connector]: the arm its values belong to (armctl probe --write)
 # Keys of the packaged default that are the protocol's own ranges, not guesses about an arm.
 PROTOCOL_KEYS = frozenset({"pwm.range_us", "pwm.channels", "speed.max_accel_mm_s2"})
 
@@ -648,12 +650,45 @@ def _short_repr(value, limit: int = 60) -> str:
 def load_profile(path: Path | str | None = None, start: Path | None = None) -> Profile:
     """The profile to use: ``path`` if given, else the one the project or user armctl.toml
     names (a path relative to that file), else the default; in every case with armctl.toml's
-    top-level ``[connector]`` table laid over it (it describes the arm on the port)."""
+    top-level ``[connector]`` laid over it if that names no arm (``with_file_connector``).  The
+    ``[connector]`` of the arm on a port — what ``armctl probe`` kept with it, a table measured
+    on it — is ``armctl.calibration.arm_profile``'s, which the commands and the API use."""
     config = load_config(start)
-    profile = _chosen_profile(path, config)
-    if "connector" in config.values:
-        profile = with_connector(profile, config.values["connector"], str(config.path_of("connector")))
+    return with_file_connector(chosen_profile(path, config=config), config)
+
+
+def chosen_profile(path: Path | str | None = None, start: Path | None = None, config: Config | None = None) -> Profile:
+    """The profile alone, no ``[connector]`` of armctl.toml laid over it: a simulated arm's own (it
+    takes its connector from its options)."""
+    return _chosen_profile(path, load_config(start) if config is None else config)
+
+
+def with_file_connector(profile: Profile, config: Config,
+                        on_arm: Callable[[str, str], bool] = lambda measured_on, where: False) -> Profile:
+    """``profile`` with armctl.toml's top-level ``[connector]`` laid over it, key by key, if it names
+    no arm (a table written by hand: it applies on every port) or ``on_arm(measured_on, file)``
+    says its ``measured_on`` is the arm in use (``armctl probe --write`` names it).  The table is
+    checked either way."""
+    table = config.values.get("connector")
+    if table is None:
+        return profile
+    where = str(config.path_of("connector"))
+    values, measured_on = connector_table(table, where)
+    if measured_on is None or on_arm(measured_on, where):
+        profile = with_connector(profile, values, where)
     return profile
+
+
+def connector_table(table: dict, where: str) -> tuple[dict, str | None]:
+    """armctl.toml's top-level ``[connector]``: its settings (checked, whether or not they apply
+    to the arm in use) and the arm it was ``measured_on`` (None: it names none)."""
+    values = {key: value for key, value in table.items() if key != MEASURED_ON}
+    measured_on = table.get(MEASURED_ON)
+    if MEASURED_ON in table and (not isinstance(measured_on, str) or not measured_on.strip()):
+        raise ConfigError(f"{where}: connector.{MEASURED_ON} must be the port (or arm) the values were measured on, "
+                          f"such as \"sim://?fifo_frames=50\" or \"usb 0403:6001 serial A10K4XYZ\"")
+    _check({"connector": values}, where)
+    return values, measured_on
 
 
 def _chosen_profile(path: Path | str | None, config: Config) -> Profile:

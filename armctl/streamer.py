@@ -360,6 +360,7 @@ class Streamer:
         self._span_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, least model s, at): first pair on a frame
         self._span_last: dict[str, tuple[int, float, float, float]] = {}  # stream → (index, model s lo, hi, at): last sighting
         self._too_slow: tuple[float, SentFrame] | None = None  # the arm seen slower than slowest_factor on a frame
+        self.slowest_proven = 0.0  # the most ``_too_slow`` was in this job (a stale speed_factor: armctl/calibration.py)
         self._sighting: dict[str, tuple] = {}  # stream → (index, at_s, could_be_on) of its last agreed sighting
         # ``_time_at``'s memory: the times of fractions along the segment last asked about
         self._times_segment: Segment | None = None
@@ -1040,6 +1041,7 @@ class Streamer:
         if any(could_be_on(self.pending[j]) for j in range(k + 1, len(self.pending))):
             return  # the arm may be on a later frame through the same point: no judgement
         self._too_slow = (slowest, self.pending[k])
+        self.slowest_proven = max(self.slowest_proven, slowest)
 
     def _time_at(self, segment: Segment, fraction: float) -> float:
         """``segment.time_at_fraction(fraction)``, remembered for the segment last asked about:

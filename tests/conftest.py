@@ -34,6 +34,10 @@ import armctl.status_frames as status_frames
 # every test, and every armctl it starts, looks in an empty config directory instead.  Tests of
 # the user file point XDG_CONFIG_HOME elsewhere with monkeypatch.
 os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="armctl-test-config-")
+# Likewise the user data directory, where ``armctl probe`` keeps what it measured with the arm
+# (armctl/calibration.py): here for the whole session, and a fresh one for each test (below), so
+# a test that probes an arm changes no other test's run on that arm.
+os.environ["XDG_DATA_HOME"] = tempfile.mkdtemp(prefix="armctl-test-data-")
 
 DATA = Path(__file__).parent / "data"
 
@@ -129,6 +133,12 @@ def all_command_vectors() -> tuple[GoldenVector, ...]:
 @pytest.fixture(scope="session")
 def all_status_vectors() -> tuple[GoldenVector, ...]:
     return golden_status()
+
+
+@pytest.fixture(autouse=True)
+def _own_calibration_store(tmp_path_factory, monkeypatch):
+    """Each test (and every armctl it starts) keeps probed calibrations in its own data directory."""
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path_factory.mktemp("armctl-data")))
 
 
 # --- the real-time tests and Ctrl-C ------------------------------------------------------------

@@ -21,7 +21,7 @@ from click.testing import CliRunner
 from armctl.cli import main
 from armctl.errors import ConfigError, ProfileError
 from armctl.link import PortChoice, resolve_port
-from armctl.profile import find_config, load_config, load_profile, user_config_path
+from armctl.profile import CONNECTOR_KEYS, find_config, load_config, load_profile, user_config_path
 
 
 @pytest.fixture
@@ -137,7 +137,8 @@ def test_config_json_names_every_source(user, project):
     project_path = write(project / "armctl.toml", '[lint]\nignore = ["L203"]\n').resolve()
     data = config_json()
     settings = data["settings"]
-    assert set(settings) == {"port", "baud", "profile", "lint", "jog"}
+    connector = {f"connector.{key}" for key in CONNECTOR_KEYS}  # the arm's [connector], each with its source
+    assert set(settings) == {"port", "baud", "profile", "lint", "jog"} | connector
     assert settings["port"] == {"value": "sim://?clock=virtual", "source": "user", "where": str(user_path)}
     assert settings["lint"] == {"value": {"ignore": ["L203"]}, "source": "project", "where": str(project_path)}
     assert settings["baud"] == {"value": 9600, "source": "default", "where": None}

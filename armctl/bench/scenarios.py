@@ -61,7 +61,7 @@ import random
 from dataclasses import dataclass, field
 
 from ..motion import MotionModel, Planner, circle_through
-from ..profile import load_profile
+from ..profile import default_profile
 from ..protocol import (
     AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, MCode, PauseToggle, SetWorktableOrigin,
     frame_seconds,
@@ -275,7 +275,7 @@ def _joints_for(kinematics, xyz, hint) -> tuple[float, ...]:
 def mixed_job(cycles: int, seed: int = 1) -> list[Command]:
     """Pick-and-place cycles mixing every kind of motion frame (25 frames per cycle)."""
     rng = random.Random(f"mixed/{seed}")
-    kinematics = load_profile().kinematics
+    kinematics = default_profile().kinematics
     hint = (0.0, 0.0, 0.0, 0.0, 90.0, 0.0)
     commands: list[Command] = []
     for cycle in range(cycles):
@@ -323,7 +323,7 @@ def mixed_job(cycles: int, seed: int = 1) -> list[Command]:
 
 def planned_seconds(commands, model: MotionModel | None = None) -> float:
     """The job's motion time by the model (arm from the default start pose)."""
-    model = model or MotionModel(load_profile())
+    model = model or MotionModel(default_profile())
     return sum(segment.duration_s for segment in Planner(model).feed_all(commands))
 
 
@@ -351,7 +351,7 @@ def build_scenarios(size: str = "full", seed: int = 1) -> list[Scenario]:
     mixed = tuple(mixed_job(cycles, seed))
     pause_at = round(PAUSE_AT_SHARE * planned_seconds(mixed), 2)
     pause_events = (Event(pause_at, PauseToggle()), Event(pause_at + PAUSE_FOR_S, PauseToggle()))
-    return [
+    return _self_contained([
         Scenario("long", "long moves (arm-bound)", long_job, SimOptions(seed=seed), ARM_BOUND_RATIO),
         Scenario("tiny", "tiny 10 ms moves (line-bound)", tiny_job, SimOptions(seed=seed), ARM_BOUND_RATIO),
         Scenario("mixed", "mixed job", mixed, SimOptions(seed=seed)),
@@ -388,5 +388,12 @@ def build_scenarios(size: str = "full", seed: int = 1) -> list[Scenario]:
                  SimOptions(link_scale=1.05, seed=seed), MISMATCH_RATIO, probe=True),
         Scenario("slow2x", "mixed, arm 2× slower, Ctrl-C", mixed, SimOptions(speed_factor=2.0, seed=seed),
                  MISMATCH_RATIO, probe=True),
-    ]
+    ])
+
+
+def _self_contained(scenarios: list[Scenario]) -> list[Scenario]:
+    """Every scenario's arm on the packaged profile: the bench reads no armctl.toml (the working
+    directory's or the user's) and no stored calibration, so its table is the same anywhere."""
+    return [dataclasses.replace(s, options=dataclasses.replace(s.options, profile=default_profile()))
+            if s.options.profile is None else s for s in scenarios]
 

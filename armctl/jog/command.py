@@ -72,11 +72,12 @@ def jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, 
         _fail("interrupted", 130)
 
 
-def _setup(profile_path, repeat_delay_ms):
+def _setup(profile_path, repeat_delay_ms, port=None):
     from dataclasses import replace
 
     from ..errors import ProfileError
-    from ..profile import load_config, load_profile
+    from ..calibration import arm_profile
+    from ..profile import load_config
     from .keymap import JogConfigError, keymap_from_config
     from .settings import settings_from_config
 
@@ -90,7 +91,7 @@ def _setup(profile_path, repeat_delay_ms):
         if not isinstance(keys, dict):
             raise JogConfigError(f"{source}: jog.keys must be a table ([jog.keys]), not {keys!r}")
         keymap = keymap_from_config(keys, source)
-        profile = load_profile(profile_path)
+        profile = arm_profile(profile_path, port=port)  # the arm's: its stored calibration laid over
     except (JogConfigError, ProfileError) as error:
         _fail(str(error), EXIT_USAGE)
     if repeat_delay_ms is not None:
@@ -113,18 +114,19 @@ def _open_files(record_path, log_path):
 
 
 def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, timeout_s) -> int:
-    from ..link import connect, require_wall_clock
+    from ..link import choose_port, connect, require_wall_clock
     from ..protocol import frame_seconds
     from .edge import JogLoop, wait_for_pose
     from .keys import KeyDecoder
     from .session import JogSession
 
-    settings, keymap, profile = _setup(profile_path, repeat_delay_ms)
+    choice = choose_port(port)
+    settings, keymap, profile = _setup(profile_path, repeat_delay_ms, choice.url)
     teach, log = _open_files(record_path, log_path)
     try:
         from ..output import announce
 
-        link, baud = connect(port, baud, announce=announce, on_status=log.rx if log else None)
+        link, baud = connect(choice, baud, announce=announce, profile=profile, on_status=log.rx if log else None)
         with link:
             require_wall_clock(link, "jog")
             problem = wait_for_pose(link, timeout_s)

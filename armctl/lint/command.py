@@ -63,9 +63,9 @@ def lint(ctx: click.Context, paths, fmt, as_json, select, ignore, strict, statis
     try:
         config = _config()
         selection = _selection(select, ignore, config)
-        from ..profile import load_profile
+        from ..calibration import arm_profile
 
-        profile = load_profile(profile_path)
+        profile = arm_profile(profile_path)  # the configured port's arm
     except (ConfigError, ProfileError, UnknownCode, ValueError) as error:
         _fail(ctx, str(error))
     ctx.exit(_run(paths, fmt, selection, strict, statistics, profile, stdin_filename, config))

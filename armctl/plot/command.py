@@ -98,10 +98,10 @@ def _require_extra(fmt: str) -> None:
 
 def _profile(profile_path):
     from ..errors import ConfigError, ProfileError
-    from ..profile import load_profile
+    from ..calibration import arm_profile
 
     try:
-        return load_profile(profile_path)
+        return arm_profile(profile_path)  # the configured port's arm
     except (ProfileError, ConfigError) as error:
         _fail(str(error))
     except OSError as error:

@@ -31,10 +31,20 @@ MOTION_ANNOUNCEMENT = (
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (the six settings and details), nothing else.")
 @click.option("--write", "write_path", type=click.Path(dir_okay=False), metavar="FILE",
               help="Put the values into the [connector] table of FILE (an armctl.toml), keeping the rest.")
-def probe(port, baud, no_motion, yes, as_json, write_path):
+@click.option("--list", "list_stored", is_flag=True, help="List the arms probed and what was kept for each; probe nothing.")
+@click.option("--forget", "forget", is_flag=False, flag_value="", default=None, metavar="[ARM]",
+              help="Forget what was kept for ARM (an arm as --list names it, or a port; default: the arm on --port).")
+def probe(port, baud, no_motion, yes, as_json, write_path, list_stored, forget):
     """Find out the arm's unknowns (FIFO size, control-frame timing, status frame, speed factor,
     kinematics) and print them: setting, documented default, measured value, evidence, how sure.
-    See docs/probe.md."""
+    What it measured is kept with the arm (its USB serial number, host:port or sim:// options)
+    and used by every command on that arm. See docs/probe.md."""
+    if list_stored or forget is not None:
+        from .keep import forget_arm, list_stored as listing
+
+        if list_stored and forget is not None:
+            raise click.UsageError("choose --list or --forget, not both")
+        sys.exit(listing(as_json) if list_stored else forget_arm(forget or None, port))
     from .run import run_probe
 
     sys.exit(run_probe(port, baud, no_motion, yes, as_json, write_path, MOTION_ANNOUNCEMENT))

@@ -54,8 +54,8 @@ def progress_display(as_json: bool, say):
 
 
 def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> int:
-    from ..link import SIMULATOR_URL, connect
-    from ..profile import load_profile
+    from ..link import SIMULATOR_URL, choose_port, connect
+    from ..calibration import arm_profile
     from . import ADAPTER_FIFO_BYTES, build_probe
     from .host import FrameInbox, deferred_stop, drive
     from .report import as_json as json_object, print_lines, print_table, to_write
@@ -65,10 +65,11 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     target = Path(write_path) if write_path else None
     if target is not None:
         check_writable(target)  # before anything is sent: exit 2 if it is not valid TOML
-    profile = load_profile()
+    choice = choose_port(port)
+    profile = arm_profile(port=choice.url)
     motion = decide_motion(no_motion, yes, say, announcement)
     inbox = FrameInbox()
-    link, baud = connect(port, baud, announce=say, profile=profile, on_status=inbox)
+    link, baud = connect(choice, baud, announce=say, profile=profile, on_status=inbox)
     stop = threading.Event()
     with link:
         probe = build_probe(profile, baud, link.clock(), motion, link.is_virtual,
@@ -102,12 +103,16 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     if probe.stopped is not None:
         click.echo(f"armctl: probe stopped: {probe.stopped}", err=True)
         return EXIT_STOPPED
+    from .keep import arm_identity, keep, written
+
+    arm = arm_identity(choice.url)
     if target is not None:
-        values = to_write(probe)
+        values = written(arm, to_write(probe))
         write_connector(target, values)
         say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {v!r}" for k, v in values.items()))
         if "fifo_frames" not in values:
             say(unmeasured_fifo_note(target, connector_table(target).get("fifo_frames")))
+    keep(choice.url, arm, probe, say)  # with the arm: every command on it uses what was measured
     return EXIT_OK
 
 

@@ -44,7 +44,7 @@ from .wire import TIME_EPSILON_S, Wire
 class SimOptions:
     """How the simulated arm and its line behave: everything a ``sim://`` URL says, parsed once
     (armctl/sim/protocol_sim.py).  ``profile``: a ``Profile``, a path to a profile TOML, or None
-    for ``load_profile()``'s choice — the arm's speeds, limits and (``link_scale`` apart) links.
+    for ``chosen_profile()``'s choice — the arm's speeds, limits and (``link_scale`` apart) links.
 
     The arm's unknowns carry the names of the profile's ``[connector]`` settings, with the
     document's readings as defaults (the packaged profile's, checked by a test): the simulated
@@ -85,11 +85,11 @@ class SimOptions:
 
 
 def _load_profile(profile):
-    from ..profile import Profile, load_profile
+    from ..profile import Profile, chosen_profile
 
     if isinstance(profile, Profile):
         return profile
-    return load_profile(profile)
+    return chosen_profile(profile)  # its connector is its options': no arm's [connector] laid over
 
 
 def _arm_profile(options: SimOptions):

@@ -214,10 +214,14 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     keys and Ctrl-C as calls on the arm, the summary and the exit code."""
     from ..api import Arm
     from ..jobflow import read_resume_point
+    from ..link import choose_port
+    from ..calibration import arm_profile
     from ..motion import MotionModel
-    from ..profile import load_profile
 
-    profile = load_profile(options.profile_path)
+    # once: the profile carries the stored calibration of the arm on the port (a dry run opens
+    # none: the port given, else the configured one, as estimate)
+    port = None if options.dry_run else choose_port(options.port)
+    profile = arm_profile(options.profile_path, port=options.port if port is None else port.url)
     check_script(script, profile)
     check_from_line(script, options.from_line)
     if options.dry_run:
@@ -232,7 +236,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     watch = _RunObserver(options, script, MotionModel(profile), events)
     # the log before the port: one that cannot be written refuses the job before the arm is touched
     with (_log_file(options.log_path) if options.log_path else nullcontext()) as log, \
-            Arm.open(options.port, options.baud, profile, lead_s=options.lead_s, status_timeout_s=options.timeout_s,
+            Arm.open(port, options.baud, profile, lead_s=options.lead_s, status_timeout_s=options.timeout_s,
                      connect=connect) as arm:
         with _stop_signals(arm, watch), (_keys(arm) if watch.keys else nullcontext()):
             try:

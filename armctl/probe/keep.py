@@ -1,0 +1,74 @@
+"""What ``armctl probe`` keeps: the measured values stored with the arm (armctl/calibration.py),
+``--write``'s ``[connector]`` naming the arm it was measured on, and ``--list`` / ``--forget``.
+
+Strategy: the probe's findings go through ``report.to_write`` — the one choice of what is stated
+(sure or likely) — into the store, dated and with their evidence; ``--write`` writes the same
+values plus ``measured_on``, so a project file never applies to another arm.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime, timezone
+
+import click
+
+from .. import calibration
+
+
+def today() -> str:
+    return datetime.now(timezone.utc).date().isoformat()
+
+
+arm_identity = calibration.arm_identity
+
+
+def keep(port: str, arm: str, probe, say) -> None:
+    """Store what ``probe`` found for ``arm``, probed through ``port``."""
+    from .report import finding_for, to_write
+
+    values = to_write(probe)
+    findings = [(name, value, finding_for(probe, name).evidence, finding_for(probe, name).confidence)
+                for name, value in values.items()]
+    if findings:
+        path = calibration.save(calibration.calibration_of(port, arm, findings, today()))
+        say(f"kept for {arm} in {path}: every command on this arm uses it (armctl probe --list)")
+
+
+def written(arm: str, values: dict) -> dict:
+    """``--write``'s ``[connector]``: the values and the arm they were measured on."""
+    from ..profile import MEASURED_ON
+
+    return {MEASURED_ON: arm, **values}
+
+
+def list_stored(as_json: bool) -> int:
+    records = calibration.stored()
+    if as_json:
+        import json
+
+        click.echo(json.dumps({c.arm: c.to_json() for c in records}, indent=2, ensure_ascii=False))
+        return 0
+    if not records:
+        click.echo(f"no arm probed yet (the store is {calibration.store_dir()})")
+        return 0
+    for record in records:
+        click.echo(f"{record.arm}  (last probed through {record.port})")
+        for name, measured in record.settings.items():
+            value = str(measured.value).lower() if isinstance(measured.value, bool) else measured.value
+            click.echo(f"    {name} = {value}  (probed on {measured.probed_on}, {measured.confidence or 'measured'})")
+    click.echo(f"store: {calibration.store_dir()}")
+    return 0
+
+
+def forget_arm(arm_or_port: str | None, port: str | None) -> int:
+    """``--forget [ARM]``: ARM is an identity or a port; none given: the arm on ``--port`` (or
+    the configured port)."""
+    from ..link import choose_port
+
+    target = arm_or_port or choose_port(port).url
+    arm = calibration.arm_identity(target)
+    if calibration.forget(arm):
+        click.echo(f"forgot the calibration of {arm}")
+        return 0
+    click.echo(f"nothing stored for {arm} (armctl probe --list shows what is)", err=True)
+    return 1
