@@ -552,7 +552,7 @@ def _check_toml_values(document: dict, source: str) -> None:
 
 def read_toml(path: Path) -> dict:
     """A TOML file as a dict; every failure is a ProfileError naming the file."""
-    from .inputs import MAX_TOML_BYTES, InputTooLarge, read_file_bounded
+    from .inputs import MAX_TOML_BYTES, UnusableInput, read_file_bounded
 
     try:
         data = read_file_bounded(str(path), str(path), MAX_TOML_BYTES)  # /dev/zero is not a profile
@@ -560,7 +560,7 @@ def read_toml(path: Path) -> dict:
         raise ProfileError(f"{path}: file not found") from None
     except OSError as error:
         raise ProfileError(f"{path}: cannot read: {error.strerror or error}") from None
-    except InputTooLarge as error:
+    except UnusableInput as error:  # too long, or a named pipe, device or directory
         raise ProfileError(str(error)) from None
     return _parse(data, str(path))
 
