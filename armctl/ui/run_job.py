@@ -184,7 +184,10 @@ def _run_json(options: JobOptions, script, connect) -> int:
     events = JsonEvents(sys.stdout)
     with redirect_stdout(sys.stderr):
         try:
-            return _run_job(replace(options, live=False), script, connect, events)
+            code = _run_job(replace(options, live=False), script, connect, events)
+            if events.reader_gone:  # the job stopped cleanly for it; the exit is the broken pipe's (141)
+                raise BrokenPipeError("the program reading --json went away")
+            return code
         except ScriptRefused as refused:
             events.summary(failure_result("refused", refused.code, diagnostics=refused.diagnostics))
             raise
@@ -219,6 +222,8 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     with (_log_file(options.log_path) if options.log_path else nullcontext()) as log, \
             Arm.open(options.port, options.baud, profile, lead_s=options.lead_s, status_timeout_s=options.timeout_s,
                      connect=connect) as arm:
+        if events is not None:  # `| head -1`: the reader went away — the job stops as Ctrl-C stops it
+            events.on_reader_gone = lambda: arm.stop("the program reading --json went away")
         with _stop_signals(arm, watch), (_keys(arm) if watch.keys else nullcontext()):
             try:
                 result = arm.run(script, from_line=options.from_line, observer=watch, log=log, abort=options.abort,
