@@ -85,11 +85,22 @@ def _flush_stdout() -> None:
 
 def _require_stdout() -> None:
     """Every command writes its data, its summary or its banner on stdout: started with stdout
-    closed (``>&-``; Python then has ``sys.stdout`` None) it would lose them and exit 0, or fail
-    at its first write after the arm was touched.  Exit 2 first, saying so."""
+    closed (``>&-``; Python then has ``sys.stdout`` None) or open for reading only (``1<file``)
+    it would lose them and exit 0, or fail at its first write after the arm was touched.  Exit 2
+    first, saying so."""
     if sys.stdout is None:
         _fail("cannot write the output: standard output is closed (to drop it, redirect it to "
               "/dev/null)", EXIT_USAGE)
+    try:
+        import fcntl
+        import os
+
+        read_only = fcntl.fcntl(sys.stdout.fileno(), fcntl.F_GETFL) & os.O_ACCMODE == os.O_RDONLY
+    except (ImportError, OSError, ValueError, AttributeError):  # Windows; a test runner's stdout
+        return
+    if read_only:
+        _fail("cannot write the output: standard output is open for reading only (to drop it, redirect it "
+              "to /dev/null)", EXIT_USAGE)
 
 
 def _tolerant_output() -> None:

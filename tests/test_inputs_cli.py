@@ -67,3 +67,12 @@ def test_the_sim_url_parse_names_the_url():
 
     with pytest.raises(SimOptionError, match=r"'sim://\[' is not a URL"):
         parse_sim_url("sim://[")
+
+
+@pytest.mark.parametrize("args", [["compile", JOB], ["lint", JOB], ["estimate", JOB]], ids=" ".join)
+def test_a_read_only_stdout_is_exit_2_before_anything_is_done(args):
+    done = subprocess.run(["sh", "-c", '"$@" 1</dev/null', "sh", ARMCTL, *args], capture_output=True, text=True,
+                          timeout=TIMEOUT_S, cwd=ROOT, env=ENV, stdin=subprocess.DEVNULL)
+    assert done.returncode == 2, done.stderr
+    assert only_line(done.stderr) == ("armctl: cannot write the output: standard output is open for reading only "
+                                      "(to drop it, redirect it to /dev/null)")
