@@ -83,3 +83,50 @@ def test_importing_the_cli_installs_no_handler():
             "assert before == {s: signal.getsignal(s) for s in before}, 'changed'")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=TIMEOUT_S)
     assert done.returncode == 0, done.stderr
+
+
+# A signal while `arm.run` checks the script (run's own handlers are in place, the job is not yet
+# registered): SIGTERM and SIGHUP called arm.stop(), which the API did not count before the job
+# existed — the job then ran to its end and exited 0.  The child sends the signal from inside
+# armctl.api._check, patched in when armctl.api loads.
+CHECK_TRIP = '''
+import importlib.abc, importlib.util, os, signal, sys
+
+class _PatchCheck(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name != "armctl.api":
+            return None
+        sys.meta_path.remove(self)
+        spec = importlib.util.find_spec(name)
+        load = spec.loader.exec_module
+
+        def exec_module(module):
+            load(module)
+            real = module._check
+            calls = []
+
+            def _check(*args):
+                calls.append(1)
+                if len(calls) == 1:
+                    os.kill(os.getpid(), getattr(signal, os.environ["ARMCTL_TEST_SIGNAL"]))
+                return real(*args)
+
+            module._check = _check
+
+        spec.loader.exec_module = exec_module
+        return spec
+
+sys.meta_path.insert(0, _PatchCheck())
+'''
+
+
+@pytest.mark.parametrize("signal_name", ["SIGINT", "SIGTERM", "SIGHUP"])
+def test_a_signal_while_run_checks_the_script_is_not_lost(tmp_path, signal_name):
+    (tmp_path / "sitecustomize.py").write_text(CHECK_TRIP)
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    env.update(PYTHONPATH=str(tmp_path), ARMCTL_TEST_SIGNAL=signal_name)
+    done = subprocess.run([str(INSTALLED), "run", "scripts/pick_and_place.txt", "--no-live", "--port", "sim://?clock=virtual"],
+                          capture_output=True, text=True, timeout=TIMEOUT_S, cwd=ROOT, env=env,
+                          preexec_fn=lambda: [signal.signal(s, signal.SIG_DFL) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)])
+    assert done.returncode == 130, (done.returncode, done.stdout[-500:], done.stderr)
+    assert "Traceback" not in done.stderr and "finished" not in done.stdout

@@ -305,16 +305,19 @@ class _RunObserver:
 def _stop_signals(arm, watch):
     """Ctrl-C (or SIGTERM, SIGHUP: armctl/stop_signals.py) is ``arm.stop()``: the job stops at
     its next safe point (between writes), sends the abort sequence and waits for the arm; a
-    second one cuts the wait short.  Before the first frame, Ctrl-C stops at once, as outside a job."""
+    second one cuts the wait short.  Before the first frame, any of the three stops at once, as
+    outside a job: ``arm.stop()`` alone would be lost while ``arm.run`` is still checking the
+    script (the API counts a stop from when it registers the job), and the job would run to its end."""
     import signal
 
     from ..stop_signals import stop_signals
 
     def on_stop(signum: int) -> None:
-        if watch.view is None and signum == signal.SIGINT:
-            arm.stop()  # the arm is being read: nothing will be sent
+        why = None if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}"
+        if watch.view is None:
+            arm.stop(why)  # the arm is being read: nothing will be sent
             raise KeyboardInterrupt
-        arm.stop(None if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}")
+        arm.stop(why)
 
     return stop_signals(on_stop)
 
