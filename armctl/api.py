@@ -622,6 +622,7 @@ class Arm:
         from .joblog import ResumePoint
         from .script.files import ScriptSnapshot, read_script
 
+        stops = self._stops  # a stop() from here on (while the script is read and checked) ends the job, nothing sent
         if abort not in ("pause", "reset-connector", "none"):
             raise ValueError(f"abort={abort!r} must be 'pause', 'reset-connector' or 'none'")
         if not isinstance(script, ScriptSnapshot):  # TypeError for anything else (a str may be the text itself)
@@ -647,7 +648,7 @@ class Arm:
 
             resume = read_resume_point(resume, snapshot, from_line)  # before anything: ResumeRefused, nothing sent
         job = _JobSpec(on_progress, timeout, observer or JobObserver(), log, abort, resume)
-        result = self._submit(snapshot, from_line, job, wait=True, from_arm=False)
+        result = self._submit(snapshot, from_line, job, wait=True, from_arm=False, stops=stops)
         assert result is not None
         return result
 
@@ -804,14 +805,19 @@ class Arm:
         if error is not None:
             raise error
 
-    def _submit(self, script, from_line: int, spec: _JobSpec, wait: bool, from_arm: bool) -> RunResult | None:
+    def _submit(self, script, from_line: int, spec: _JobSpec, wait: bool, from_arm: bool,
+                stops: int | None = None) -> RunResult | None:
         """Check ``script`` here (``ScriptError``, nothing sent), then run it on the worker.
 
         ``from_arm``: the script is a move's one line, whose words left out are the arm's; it
         is checked here from the profile's fixed pose (so a bad word fails at once, even with
         ``wait=False``), and again on the worker from the arm's report before it is sent.  A
-        job (``run``) is checked as ``armctl run`` checks it: from nothing known."""
+        job (``run``) is checked as ``armctl run`` checks it: from nothing known.  ``stops``: the
+        count of ``stop()`` calls when the call began (default: now) — one since then, during the
+        check, ends the job with nothing sent, as one while the arm is read does."""
         from .jobflow import from_line_errors, start_at
+
+        stops = self._stops if stops is None else stops
 
         _check_timeout(spec.timeout_s)
 
@@ -819,8 +825,6 @@ class Arm:
         error = from_line_errors(script, from_line)
         if error is not None:
             raise error
-
-        stops = self._stops
 
         def job() -> RunResult:
             return self._run_job(script, from_line, spec, from_arm, stops)

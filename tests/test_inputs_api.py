@@ -134,3 +134,28 @@ def test_a_fresh_process_gets_the_same_errors():
     assert done.returncode == 0, done.stderr
     lines = done.stdout.splitlines()
     assert [line.split(" ", 2)[:2] for line in lines] == [["TypeError", "port"], ["TypeError", "connect"], ["TypeError", "log"]]
+
+
+def test_a_stop_while_run_checks_the_script_ends_the_job_with_nothing_sent(monkeypatch):
+    """Issue 22's early window, in the API: ``stop()`` (another thread, armctl run's signal
+    handler) while ``run`` reads and checks its script was not counted — the job then ran to its
+    end.  It ends the job now, nothing sent, as a stop while the arm is read does."""
+    import armctl.api as api
+
+    written, opened = [], []
+    real_check = api._check
+    with Arm.open(VIRTUAL, connect=recording_connect(written, opened)) as arm:
+        calls = []
+
+        def check_and_stop(*args):  # the first check is run()'s own, before the job is handed to the worker
+            calls.append(1)
+            if len(calls) == 1:
+                arm.stop("stopped while checking")
+            return real_check(*args)
+
+        monkeypatch.setattr(api, "_check", check_and_stop)
+        result = arm.run(JOB)
+        monkeypatch.setattr(api, "_check", real_check)
+        assert result.outcome == "interrupted" and result.frames_sent == 0
+        assert not [frame for frame in written if frame[:1] == b"\xee"]  # no motion frame
+        assert arm.run(JOB).outcome == "finished"  # the next job runs
