@@ -30,6 +30,7 @@ thread only, and calls ``stop``).
 from __future__ import annotations
 
 import logging
+import math
 import numbers
 import os
 import queue
@@ -55,6 +56,9 @@ _logger = logging.getLogger(__name__)
 
 STATUS_TIMEOUT_S = 3.0  # what `armctl run --timeout` waits for the arm's status by default
 PROGRESS_EVERY_S = 0.25  # on_progress is called at least this often (arm clock), even when nothing moved on
+# feed_override()'s percent (or its step, relative=True): any number here is put on the engine's
+# 10…200 % grid (armctl/feed.py); one far outside it is a mistake, not a wish for 200 %
+FEED_OVERRIDE_RANGE_PERCENT = (-1000.0, 1000.0)
 PAUSE_READ_TIMEOUT_S = 3.0  # how long two agreeing pause reports are waited for (one comes every 0.27 s)
 _MOVE_NAME = "<move>"
 _TEXT_NAME = "<script>"
@@ -158,6 +162,76 @@ def _in_range(name: str, value, limits: str, whole: bool = False) -> float:
     if isinstance(value, bool) or not isinstance(value, kinds) or not low <= value <= high:
         raise ValueError(f"{name}={value!r} must be a {'whole ' if whole else ''}number from {low:g} to {high:g}")
     return value
+
+
+# --- the arguments a caller gives, checked before anything is opened or sent --------------------
+# A wrong type met later — inside the worker, mid-job — would be an AttributeError from deep
+# inside, or a job ended "failed" after frames went out.  Each check names the argument.
+
+_OBSERVER_METHODS = ("started", "update", "note", "warning")
+
+
+def _path_or_none(name: str, value, *, also: tuple = (), none_ok: bool = True) -> Any:
+    """``value`` as a str path (``os.PathLike`` accepted), None (if ``none_ok``), or one of the
+    types ``also``; TypeError naming the argument otherwise (an open file, a number, bytes)."""
+    if (value is None and none_ok) or (also and isinstance(value, also)):
+        return value
+    if isinstance(value, (str, os.PathLike)):
+        path = os.fspath(value)
+        if isinstance(path, str):
+            return path
+    wanted = " or ".join(["a path (str or os.PathLike)", *(t.__name__ for t in also), *(["None"] if none_ok else [])])
+    raise TypeError(f"{name} must be {wanted}, not {_kind(value)}")
+
+
+def _kind(value) -> str:
+    if hasattr(value, "write") or hasattr(value, "read"):
+        return f"an open file ({type(value).__name__})"
+    return type(value).__name__
+
+
+def _check_callable(name: str, value) -> None:
+    if value is not None and not callable(value):
+        raise TypeError(f"{name} must be a function or None, not {_kind(value)}")
+
+
+def _check_observer(observer) -> None:
+    missing = [m for m in _OBSERVER_METHODS if not callable(getattr(observer, m, None))]
+    if observer is not None and missing:
+        raise TypeError(f"observer must be a JobObserver (with {', '.join(_OBSERVER_METHODS)}), not "
+                        f"{_kind(observer)}: it has no {missing[0]}()")
+
+
+def _check_log(log) -> None:
+    """``log=`` is an open text file (the journal is written as the job runs), as ``open(path, "w")``
+    gives: not a path (``armctl run --log`` opens one), not a binary file."""
+    import io
+
+    if log is None:
+        return
+    if isinstance(log, (str, bytes, os.PathLike)):
+        raise TypeError(f"log must be an open text file such as open(path, 'w', encoding='utf-8'), not a path ({log!r})")
+    if not callable(getattr(log, "write", None)):
+        raise TypeError(f"log must be an open text file, not {_kind(log)}")
+    if isinstance(log, (io.RawIOBase, io.BufferedIOBase)) or "b" in getattr(log, "mode", ""):
+        raise TypeError("log must be a text file (open(path, 'w')), not a binary one: the journal is JSON lines of text")
+
+
+def _check_connected(connected) -> tuple[Any, int]:
+    """What ``connect`` returned: (a link, the baud rate), else TypeError (closing what it opened)."""
+    if isinstance(connected, tuple) and len(connected) == 2 and callable(getattr(connected[0], "write", None)) \
+            and isinstance(connected[1], int) and not isinstance(connected[1], bool):
+        return connected
+    for part in connected if isinstance(connected, tuple) else (connected,):
+        close = getattr(part, "close", None)
+        if callable(close):
+            close()
+    raise TypeError(f"connect must return (an armctl.link.Link, the baud rate), not {_short(connected)}")
+
+
+def _short(value, limit: int = 80) -> str:
+    text = repr(value)
+    return text if len(text) <= limit else text[: limit - 1] + "…"
 
 
 def exit_code_of(outcome: str) -> int:
@@ -454,7 +528,10 @@ class Arm:
         from .link import choose_port, connect as open_link
         from .profile import Profile
 
-        # the CLI's ranges (armctl/limits.py), checked before the port opens
+        # types and the CLI's ranges (armctl/limits.py), checked before the port opens
+        port = _path_or_none("port", port)
+        profile = _path_or_none("profile", profile, also=(Profile,))
+        _check_callable("connect", connect)
         _in_range("lead_s", lead_s, "LEAD_RANGE_S")
         _in_range("status_timeout_s", status_timeout_s, "STATUS_TIMEOUT_RANGE_S")
         if baud is not None:
@@ -462,7 +539,7 @@ class Arm:
         choice = choose_port(port)  # once: the arm's stored calibration is loaded for this port
         loaded = profile if isinstance(profile, Profile) else \
             arm_profile(None if profile is None else os.fspath(profile), port=choice.url)
-        link, line_baud = (open_link if connect is None else connect)(choice, baud, profile=loaded)
+        link, line_baud = _check_connected((open_link if connect is None else connect)(choice, baud, profile=loaded))
         try:
             return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s)
         except BaseException:
@@ -556,10 +633,19 @@ class Arm:
         damaged journal; a line it and the arm's report do not prove; nothing sent).
         Returns the ``RunResult`` of a job that finished or that ``stop()`` interrupted.
         """
+        from .joblog import ResumePoint
         from .script.files import ScriptSnapshot, read_script
 
+        stops = self._stops  # a stop() from here on (while the script is read and checked) ends the job, nothing sent
         if abort not in ("pause", "reset-connector", "none"):
             raise ValueError(f"abort={abort!r} must be 'pause', 'reset-connector' or 'none'")
+        if not isinstance(script, ScriptSnapshot):  # TypeError for anything else (a str may be the text itself)
+            _path_or_none("script", script, none_ok=False)
+        _in_range("from_line", from_line, "LINE_RANGE", whole=True)
+        _check_callable("on_progress", on_progress)
+        _check_observer(observer)
+        _check_log(log)
+        resume = _path_or_none("resume", resume, also=(ResumePoint,))
         if isinstance(script, ScriptSnapshot):
             snapshot = script  # read once already (``armctl run`` reads stdin or the file itself)
         elif isinstance(script, str) and ("\n" in script or "\r" in script):
@@ -579,7 +665,7 @@ class Arm:
                                     "log of its own; nothing was sent")
             resume = read_resume_point(resume, snapshot, from_line)  # before anything: ResumeRefused, nothing sent
         job = _JobSpec(on_progress, timeout, observer or JobObserver(), log, abort, resume)
-        result = self._submit(snapshot, from_line, job, wait=True, from_arm=False)
+        result = self._submit(snapshot, from_line, job, wait=True, from_arm=False, stops=stops)
         assert result is not None
         return result
 
@@ -644,9 +730,17 @@ class Arm:
         within the lead.  Returns the percentage in force.  The override lasts for this job
         only; ``ArmctlError`` when no job is running.  ``relative=True``: ``percent`` is added
         to the percentage in force, in the engine's turn (the panel's −/+ keys: ∓10)."""
-        if isinstance(percent, bool) or not isinstance(percent, numbers.Real) or percent != percent:
-            raise TypeError(f"feed_override(): percent must be a number, not {percent!r}")
-        answer = self._ask_job(lambda job: job.set_feed_override(float(percent) + (job.control.feed.percent if relative else 0)))
+        if isinstance(percent, bool) or not isinstance(percent, numbers.Real):
+            raise TypeError(f"feed_override(): percent must be a number, not {_short(percent)}")
+        low, high = FEED_OVERRIDE_RANGE_PERCENT
+        try:  # here, not in the job: a number the engine cannot take must not end the job "failed"
+            value = float(percent)
+        except OverflowError:
+            value = math.inf
+        if not low <= value <= high:  # NaN, ±inf and 10**60 too
+            raise ValueError(f"feed_override(): percent={_short(percent)} must be a number from {low:g} to {high:g} "
+                             "(it is then put on the 10…200 % grid)")
+        answer = self._ask_job(lambda job: job.set_feed_override(value + (job.control.feed.percent if relative else 0)))
         if answer is _JOB_ENDED:
             raise ArmctlError(f"no job is running on {self.url}: there is no feed to override")
         return answer
@@ -728,14 +822,19 @@ class Arm:
         if error is not None:
             raise error
 
-    def _submit(self, script, from_line: int, spec: _JobSpec, wait: bool, from_arm: bool) -> RunResult | None:
+    def _submit(self, script, from_line: int, spec: _JobSpec, wait: bool, from_arm: bool,
+                stops: int | None = None) -> RunResult | None:
         """Check ``script`` here (``ScriptError``, nothing sent), then run it on the worker.
 
         ``from_arm``: the script is a move's one line, whose words left out are the arm's; it
         is checked here from the profile's fixed pose (so a bad word fails at once, even with
         ``wait=False``), and again on the worker from the arm's report before it is sent.  A
-        job (``run``) is checked as ``armctl run`` checks it: from nothing known."""
+        job (``run``) is checked as ``armctl run`` checks it: from nothing known.  ``stops``: the
+        count of ``stop()`` calls when the call began (default: now) — one since then, during the
+        check, ends the job with nothing sent, as one while the arm is read does."""
         from .jobflow import from_line_errors, start_at
+
+        stops = self._stops if stops is None else stops
 
         _check_timeout(spec.timeout_s)
 
@@ -743,8 +842,6 @@ class Arm:
         error = from_line_errors(script, from_line)
         if error is not None:
             raise error
-
-        stops = self._stops
 
         def job() -> RunResult:
             return self._run_job(script, from_line, spec, from_arm, stops)

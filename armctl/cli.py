@@ -12,20 +12,25 @@ reading our output went away (``| head``).
 
 from __future__ import annotations
 
-import json
-import sys
-from itertools import islice
+from .stop_signals import EXIT_INTERRUPTED, command_running, install_for_program, is_the_program
 
-import click
+if is_the_program():  # the armctl command (not a test or a script importing this): before any heavy import
+    install_for_program()
 
-from . import __version__
+import json  # noqa: E402  (the handlers first: a signal in the first instant is exit 130, no traceback)
+import sys  # noqa: E402
+from itertools import islice  # noqa: E402
+
+import click  # noqa: E402
+
+from . import __version__  # noqa: E402
 from .bench import SCENARIO_NAMES as BENCH_SCENARIOS  # the names only: imports nothing else
-from .cli_types import number
+from .cli_types import OutputFile, number
 from .errors import ArmctlError, ConfigError, ProfileError, ResumeRefused
-from .inputs import InputTooLarge
+from .inputs import UnusableInput
 from .limits import BAUD_RANGE, BENCH_JOBS_RANGE, BENCH_LEAD_RANGE_S, LEAD_RANGE_S, LINE_RANGE, START_TIMEOUT_RANGE_S, STATUS_TIMEOUT_RANGE_S, TCP_PORT_RANGE
 
-EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
+EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_BROKEN_PIPE = 0, 1, 2, 141
 
 
 class UsageFailure(ArmctlError):
@@ -36,13 +41,15 @@ class ArmctlGroup(click.Group):
     """Turns the errors a user can cause into a message and an exit code."""
 
     def main(self, *args, **kwargs):
+        _require_stdout()
         _tolerant_output()
         return super().main(*args, **kwargs)
 
     def invoke(self, ctx: click.Context):
         try:
             try:
-                return super().invoke(ctx)
+                with command_running():  # a stop signal is Ctrl-C from here (armctl/stop_signals.py)
+                    return super().invoke(ctx)
             finally:
                 _flush_stdout()
         except ArmctlError as error:
@@ -57,7 +64,7 @@ class ArmctlGroup(click.Group):
 
 def exit_code_for(error: ArmctlError) -> int:
     """2 for usage, configuration, a profile or an input armctl cannot use; 1 for the rest."""
-    return EXIT_USAGE if isinstance(error, (UsageFailure, ProfileError, ConfigError, InputTooLarge, ResumeRefused)) else EXIT_PROBLEMS
+    return EXIT_USAGE if isinstance(error, (UsageFailure, ProfileError, ConfigError, UnusableInput, ResumeRefused)) else EXIT_PROBLEMS
 
 
 def _flush_stdout() -> None:
@@ -74,6 +81,26 @@ def _flush_stdout() -> None:
         raise UsageFailure(f"cannot write the output: {error.strerror or error}") from None
     except ValueError:  # stdout closed by the command itself
         pass
+
+
+def _require_stdout() -> None:
+    """Every command writes its data, its summary or its banner on stdout: started with stdout
+    closed (``>&-``; Python then has ``sys.stdout`` None) or open for reading only (``1<file``)
+    it would lose them and exit 0, or fail at its first write after the arm was touched.  Exit 2
+    first, saying so."""
+    if sys.stdout is None:
+        _fail("cannot write the output: standard output is closed (to drop it, redirect it to "
+              "/dev/null)", EXIT_USAGE)
+    try:
+        import fcntl
+        import os
+
+        read_only = fcntl.fcntl(sys.stdout.fileno(), fcntl.F_GETFL) & os.O_ACCMODE == os.O_RDONLY
+    except (ImportError, OSError, ValueError, AttributeError):  # Windows; a test runner's stdout
+        return
+    if read_only:
+        _fail("cannot write the output: standard output is open for reading only (to drop it, redirect it "
+              "to /dev/null)", EXIT_USAGE)
 
 
 def _tolerant_output() -> None:
@@ -307,7 +334,7 @@ def ports(as_json):
               help="Seconds of motion kept queued ahead of the arm (how long it keeps moving after Ctrl-C).")
 @click.option("--from-line", "from_line", type=number(*LINE_RANGE, whole=True), default=1, help="Start at this line, with the modal state the lines before it set.")
 @click.option("--dry-run", is_flag=True, help="Check, print the frames and the estimate; open no port.")
-@click.option("--log", "log_path", type=click.Path(dir_okay=False, writable=True), help="JSON lines of every frame written and read (armctl decode reads it).")
+@click.option("--log", "log_path", type=OutputFile(writable=True), help="JSON lines of every frame written and read (armctl decode reads it).")
 @click.option("--no-live", is_flag=True, help="Plain progress lines instead of the live panel.")
 @click.option("--abort", type=click.Choice(["pause", "reset-connector", "none"]), default="pause", show_default=True,
               help="What Ctrl-C sends after it stops feeding (see README: Stopping a job).")

@@ -6,6 +6,10 @@ upper bound lets ``--from-line 10**30`` through.  ``number(low, high)`` is the o
 option declares a number: both bounds are required, NaN and ±inf are refused by name, and the
 failure is click's usage error (exit 2, naming the option).  The tests find every numeric
 option through click's own command objects and require it to be ``Bounded``.
+
+``OutputFile`` is the type of an option naming a file armctl writes as it goes (``run --log``,
+``jog --log``, ``jog --record``): a named pipe (its open waits for a reader for ever) or a
+directory is refused as a usage error naming the option; a character device is written through.
 """
 
 from __future__ import annotations
@@ -54,3 +58,21 @@ def number(low: float, high: float, *, whole: bool = False) -> click.ParamType:
     if whole:
         return BoundedInt(int(low), int(high))
     return BoundedFloat(float(low), float(high))
+
+
+class OutputFile(click.Path):
+    """A file to write, named by an option: not a directory, not a named pipe or socket (the
+    check of armctl/inputs.py, decided without opening it); a device such as /dev/null is fine."""
+
+    def __init__(self, *, writable: bool = False) -> None:
+        super().__init__(dir_okay=False, writable=writable)
+
+    def convert(self, value, param, ctx):
+        from .inputs import NotARegularFile, refuse_unless_regular
+
+        path = super().convert(value, param, ctx)
+        try:
+            refuse_unless_regular(path, devices_ok=True)
+        except NotARegularFile as error:
+            self.fail(str(error), param, ctx)
+        return path

@@ -212,9 +212,13 @@ class _Bad(Exception):
 
 
 def _number(value) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+    try:  # a whole number too large for a float (a dict given to parse_profile) is not one either
+        number = None if isinstance(value, bool) or not isinstance(value, (int, float)) else float(value)
+    except OverflowError:
+        number = None
+    if number is None or not math.isfinite(number):
         raise _Bad(f"must be a number, not {_short_repr(value)}")
-    return float(value)
+    return number
 
 
 def _in(low: float, high: float) -> Callable:
@@ -254,8 +258,9 @@ def _pair(low: float, high: float) -> Callable:
 
 
 def _channels(value) -> tuple[int, ...]:
-    if (not isinstance(value, list) or not value or len(set(value)) != len(value)
-            or any(isinstance(v, bool) or v not in (1, 2, 3, 4) for v in value)):
+    if (not isinstance(value, list) or not value
+            or any(isinstance(v, bool) or not isinstance(v, int) or v not in (1, 2, 3, 4) for v in value)
+            or len(set(value)) != len(value)):
         raise _Bad(f"must be a non-empty list of distinct PWM channels 1…4, not {_short_repr(value)}")
     return tuple(int(v) for v in value)
 
@@ -504,18 +509,52 @@ def default_profile() -> Profile:
 # --- files ------------------------------------------------------------------------------------
 
 
+# TOML's own integer range (the spec: a whole number that is not a signed 64-bit one is an error);
+# tomllib reads any length, and a 400-digit number overflows every float a check compares it with.
+TOML_INT_RANGE = (-(2**63), 2**63 - 1)
+MAX_TOML_DEPTH = 32  # tables and arrays nested deeper than this: no armctl setting is, and a check would recurse
+
+
 def _parse(data: bytes, source: str) -> dict:
+    """One TOML document as a dict; every failure (not UTF-8, invalid TOML, a whole number outside
+    TOML's 64 bits, arrays or tables nested deeper than ``MAX_TOML_DEPTH``) is a ProfileError naming
+    ``source``.  A UTF-8 byte-order mark is dropped, as a script's is."""
     try:
-        return tomllib.loads(data.decode("utf-8"))
+        text = data.decode("utf-8").removeprefix("\ufeff")
     except UnicodeDecodeError as error:
         raise ProfileError(f"{source}: not UTF-8 text (byte {error.start})") from None
+    try:
+        parsed = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
         raise ProfileError(f"{source}: invalid TOML: {error}") from None
+    except RecursionError:
+        raise ProfileError(f"{source}: invalid TOML: arrays or tables nested more than {MAX_TOML_DEPTH} deep") from None
+    except ValueError:  # int() past sys.get_int_max_str_digits(): thousands of digits
+        raise ProfileError(f"{source}: invalid TOML: a whole number outside {TOML_INT_RANGE[0]}…{TOML_INT_RANGE[1]}") from None
+    _check_toml_values(parsed, source)
+    return parsed
+
+
+def _check_toml_values(document: dict, source: str) -> None:
+    """ProfileError naming the dotted key of the first whole number outside ``TOML_INT_RANGE`` or
+    the first value nested deeper than ``MAX_TOML_DEPTH`` (iterative: no recursion to run out of)."""
+    low, high = TOML_INT_RANGE
+    pending: list[tuple[str, Any, int]] = [("", document, 0)]
+    while pending:
+        key, value, depth = pending.pop()
+        if depth > MAX_TOML_DEPTH:
+            raise ProfileError(f"{source}: {key} is nested more than {MAX_TOML_DEPTH} deep")
+        if isinstance(value, dict):
+            pending.extend((f"{key}.{k}" if key else k, v, depth + 1) for k, v in value.items())
+        elif isinstance(value, list):
+            pending.extend((f"{key}[{i}]", v, depth + 1) for i, v in enumerate(value))
+        elif isinstance(value, int) and not isinstance(value, bool) and not low <= value <= high:
+            raise ProfileError(f"{source}: {key} = {_short_repr(value)} is outside TOML's whole numbers {low}…{high}")
 
 
 def read_toml(path: Path) -> dict:
     """A TOML file as a dict; every failure is a ProfileError naming the file."""
-    from .inputs import MAX_TOML_BYTES, InputTooLarge, read_file_bounded
+    from .inputs import MAX_TOML_BYTES, UnusableInput, read_file_bounded
 
     try:
         data = read_file_bounded(str(path), str(path), MAX_TOML_BYTES)  # /dev/zero is not a profile
@@ -523,7 +562,7 @@ def read_toml(path: Path) -> dict:
         raise ProfileError(f"{path}: file not found") from None
     except OSError as error:
         raise ProfileError(f"{path}: cannot read: {error.strerror or error}") from None
-    except InputTooLarge as error:
+    except UnusableInput as error:  # too long, or a named pipe, device or directory
         raise ProfileError(str(error)) from None
     return _parse(data, str(path))
 
@@ -613,8 +652,8 @@ def _config_baud(value) -> int:
 
 
 def _config_profile(value):
-    if not isinstance(value, dict) and not (isinstance(value, str) and value.strip()):
-        raise _Bad("must be a table ([profile]) or a path string")
+    if not isinstance(value, dict) and not (isinstance(value, str) and value.strip() and "\0" not in value):
+        raise _Bad("must be a table ([profile]) or a path string (without a NUL character)")
     return value
 
 

@@ -151,11 +151,11 @@ def test_an_endless_stdin_is_refused_at_the_limit(command):
     assert b"Traceback" not in result.stderr
 
 
-def test_decode_dev_zero_is_refused_at_the_limit():
+def test_decode_dev_zero_is_refused_before_it_is_read():
+    # issue 22: where a file is meant, a device is refused before it is opened (stdin is the stream)
     result = armctl("decode", "/dev/zero")
     assert result.returncode == 2
-    assert result.stderr.decode().strip() == ("armctl: /dev/zero: longer than 128 MiB: armctl reads at most that much "
-                                              "(is this the file you meant?)")
+    assert result.stderr.decode().strip() == "armctl: /dev/zero: a character device, not a regular file"
 
 
 @pytest.mark.parametrize("command", [["estimate", "--profile", "/dev/zero", "JOB"], ["lint", "--profile", "/dev/zero", "JOB"],
@@ -164,14 +164,19 @@ def test_a_profile_that_never_ends_is_refused(tmp_path, command):
     (tmp_path / "job.txt").write_text(JOB)
     result = armctl(*[tmp_path / "job.txt" if part == "JOB" else part for part in command])
     assert result.returncode == 2, result.stderr
-    assert b"/dev/zero: longer than 1 MiB" in result.stderr
+    assert b"/dev/zero: a character device, not a regular file" in result.stderr  # issue 22: not opened
+    (tmp_path / "huge.toml").write_bytes(b"#" * (1 << 20) + b"\n")  # a regular file past the bound
+    result = armctl(*[tmp_path / "job.txt" if part == "JOB" else tmp_path / "huge.toml" if part == "/dev/zero" else part
+                      for part in command])
+    assert result.returncode == 2, result.stderr
+    assert b"huge.toml: longer than 1 MiB" in result.stderr
 
 
 def test_a_simulator_profile_that_never_ends_is_refused(tmp_path):
     (tmp_path / "job.txt").write_text(JOB)
     result = armctl("run", tmp_path / "job.txt", "--no-live", "--port", "sim://?clock=virtual&profile=/dev/zero")
     assert result.returncode != 0
-    assert b"/dev/zero: longer than 1 MiB" in result.stderr and b"Traceback" not in result.stderr
+    assert b"/dev/zero: a character device, not a regular file" in result.stderr and b"Traceback" not in result.stderr
 
 
 # --- 3. bounded expansion ------------------------------------------------------------------------

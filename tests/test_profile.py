@@ -185,7 +185,7 @@ def test_profile_entry_of_the_wrong_type(tmp_path):
 
 
 def test_directory_instead_of_file(tmp_path):
-    with pytest.raises(ProfileError, match="cannot read"):
+    with pytest.raises(ProfileError, match="a directory, not a regular file"):  # issue 22: refused before it is opened
         load_profile(tmp_path)
 
 

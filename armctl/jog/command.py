@@ -15,7 +15,7 @@ import sys
 
 import click
 
-from ..cli_types import number
+from ..cli_types import OutputFile, number
 from ..limits import BAUD_RANGE, REPEAT_DELAY_RANGE_MS, START_TIMEOUT_RANGE_S
 
 EXIT_USAGE = 2
@@ -35,10 +35,10 @@ def _fail(message: str, code: int):
               help="Line rate [default: 9600 or `baud` in armctl.toml].")
 @click.option("--mode", type=click.Choice(["joint", "linear"]), default="joint", show_default=True,
               help="Start jogging joints (q/a … y/h) or the tool along X/Y/Z (arrows, PgUp/PgDn).")
-@click.option("--record", "record_path", type=click.Path(dir_okay=False), metavar="FILE",
+@click.option("--record", "record_path", type=OutputFile(), metavar="FILE",
               help="Append a G1 (linear mode) or G6 (joint mode) line per Enter to FILE.")
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
-@click.option("--log", "log_path", type=click.Path(dir_okay=False), metavar="FILE",
+@click.option("--log", "log_path", type=OutputFile(), metavar="FILE",
               help="JSON lines of every frame written and read, and every key (armctl decode reads it).")
 @click.option("--repeat-delay", "repeat_delay_ms", type=number(*REPEAT_DELAY_RANGE_MS), default=None, metavar="MS",
               help="A single key press moves at most this long; set it to your keyboard's auto-repeat delay "

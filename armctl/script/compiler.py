@@ -24,7 +24,10 @@ evaluated now), so ``O1 repeat [1e9]`` or 64 nested ``repeat [2]`` is one locate
 once, in time proportional to the text; a count only known as the block runs is still
 caught by the running total.  Either way compiling stops there: nothing past it is run.
 
-For checking only (``skip_repeats=True``, what lint asks for), a repeat block stops running
+For checking only (``skip_repeats=True``, what lint asks for) — and in every compilation once
+the script has an error, since nothing it yields can then be written or sent (``compile``, ``run``
+and ``estimate`` refuse it: only diagnostics are left to find, and lint finds them this way, so
+``compile`` of an unclosed ``repeat [999990]`` is as fast as lint's refusal) — a repeat block stops running
 once a pass yields the same commands as the pass before it and ends in the same modal state:
 the next pass starts where this one did, so it and every later one would yield exactly those
 commands again and have nothing new to say (a pass with a PAUSE toggle is never cut short: the
@@ -275,7 +278,7 @@ class Compilation(StatementExecution):
             loop = path + (index,)
             self._repeating = repeating or index > 0
             self._count_line(block.opening)  # the pass itself (its endrepeat), even with an empty body
-            commands = [] if self._skip_repeats else None
+            commands = [] if self._skip_repeats or self.error_count else None  # checking only (see the docstring)
             for statement in self._pass(block, loop):
                 if commands is not None:
                     commands.append(statement.command)

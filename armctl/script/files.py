@@ -114,4 +114,4 @@ def read_script(path: str, limit_bytes: int = MAX_INPUT_BYTES, stdin: BinaryIO |
     if path == "-":
         stream = stdin if stdin is not None else sys.stdin.buffer
         return ScriptSnapshot("<stdin>", read_bounded(stream, "<stdin>", limit_bytes, stop_at_nul_line=True))
-    return ScriptSnapshot(path, read_file_bounded(path, path, limit_bytes, stop_at_nul_line=True))
+    return ScriptSnapshot(path, read_file_bounded(path, path, limit_bytes, stop_at_nul_line=True, any_file=True))

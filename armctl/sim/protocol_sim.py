@@ -160,7 +160,10 @@ OPTION_NAMES = tuple(_OPTIONS)
 def parse_sim_url(url: str, baud: int | None = None) -> SimOptions:
     """Everything a ``sim://`` URL asks for, time scale and clock included (``baud``: the port's
     rate, unless the URL names one); SimOptionError if the URL is bad."""
-    parts = urllib.parse.urlsplit(url)
+    try:
+        parts = urllib.parse.urlsplit(url)
+    except ValueError as error:  # "sim://[": an unclosed IPv6 host ("Invalid IPv6 URL")
+        raise SimOptionError(f"{_shown(url)} is not a URL ({error}; {_USAGE})") from None
     if parts.scheme != "sim":
         raise SimOptionError(f"{_shown(url)} does not start with sim:// ({_USAGE})")
     if parts.netloc or parts.path.strip("/") or parts.fragment:

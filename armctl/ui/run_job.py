@@ -194,7 +194,10 @@ def _run_json(options: JobOptions, script, connect) -> int:
     events = JsonEvents(sys.stdout)
     with redirect_stdout(sys.stderr):
         try:
-            return _run_job(replace(options, live=False), script, connect, events)
+            code = _run_job(replace(options, live=False), script, connect, events)
+            if events.reader_gone:  # the job stopped cleanly for it; the exit is the broken pipe's (141)
+                raise BrokenPipeError("the program reading --json went away")
+            return code
         except ScriptRefused as refused:
             events.summary(failure_result("refused", refused.code, diagnostics=refused.diagnostics))
             raise
@@ -238,6 +241,8 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     with (_log_file(options.log_path) if options.log_path else nullcontext()) as log, \
             Arm.open(port, options.baud, profile, lead_s=options.lead_s, status_timeout_s=options.timeout_s,
                      connect=connect) as arm:
+        if events is not None:  # `| head -1`: the reader went away — the job stops as Ctrl-C stops it
+            events.on_reader_gone = lambda: arm.stop("the program reading --json went away")
         with _stop_signals(arm, watch), (_keys(arm) if watch.keys else nullcontext()):
             try:
                 result = arm.run(script, from_line=options.from_line, observer=watch, log=log, abort=options.abort,
@@ -319,16 +324,19 @@ class _RunObserver:
 def _stop_signals(arm, watch):
     """Ctrl-C (or SIGTERM, SIGHUP: armctl/stop_signals.py) is ``arm.stop()``: the job stops at
     its next safe point (between writes), sends the abort sequence and waits for the arm; a
-    second one cuts the wait short.  Before the first frame, Ctrl-C stops at once, as outside a job."""
+    second one cuts the wait short.  Before the first frame, any of the three stops at once, as
+    outside a job: ``arm.stop()`` alone would be lost while ``arm.run`` is still checking the
+    script (the API counts a stop from when it registers the job), and the job would run to its end."""
     import signal
 
     from ..stop_signals import stop_signals
 
     def on_stop(signum: int) -> None:
-        if watch.view is None and signum == signal.SIGINT:
-            arm.stop()  # the arm is being read: nothing will be sent
+        why = None if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}"
+        if watch.view is None:
+            arm.stop(why)  # the arm is being read: nothing will be sent
             raise KeyboardInterrupt
-        arm.stop(None if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}")
+        arm.stop(why)
 
     return stop_signals(on_stop)
 

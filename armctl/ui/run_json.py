@@ -11,6 +11,11 @@ job's control state changes; and last, exactly once, ``summary``: the Python API
 ``resume_line``, ``resume_command``, ``messages``, ``exit_code``).  A script that
 fails its check gives a summary with outcome ``refused`` and, besides, its ``diagnostics``
 (lint's JSON records).  Everything meant for people goes to stderr.
+
+The reader may go away mid-job (``armctl run --json | head -1``): the write that finds the pipe
+broken is the last one tried (``reader_gone``), and ``on_reader_gone`` stops the job the way
+Ctrl-C does — the abort sequence goes and the arm is waited for, so the summary (on stderr) and
+its resume line are what the arm's reports prove; the run then ends as a broken pipe ends (141).
 """
 
 from __future__ import annotations
@@ -34,10 +39,18 @@ class JsonEvents:
         self._last_done = None
         self._state, self._percent = "running", 100  # the control state last told
         self.summarised = False
+        self.reader_gone = False  # a write found the pipe broken: nothing more is written
+        self.on_reader_gone = lambda: None  # armctl run: stop the job as Ctrl-C does
 
     def emit(self, event: str, **fields) -> None:
-        self.stream.write(json.dumps({"event": event, **fields}, ensure_ascii=False) + "\n")
-        self.stream.flush()
+        if self.reader_gone:
+            return
+        try:
+            self.stream.write(json.dumps({"event": event, **fields}, ensure_ascii=False) + "\n")
+            self.stream.flush()
+        except BrokenPipeError:
+            self.reader_gone = True
+            self.on_reader_gone()
 
     def started(self, view, script: str, from_line: int) -> None:
         self.emit("started", script=script, from_line=from_line, total_frames=view.total_frames,
