@@ -38,7 +38,10 @@ class Served:
         request = urllib.request.Request(self.base + path, data=data, method=method, headers=headers or {})
         try:
             with urllib.request.urlopen(request, timeout=timeout) as response:
-                return response.status, json.loads(response.read() or b"null")
+                text = response.read()
+                if response.headers.get_content_type() != "application/json":
+                    return response.status, text.decode("utf-8", "replace")
+                return response.status, json.loads(text or b"null")
         except urllib.error.HTTPError as error:
             text = error.read()
             try:
