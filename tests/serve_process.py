@@ -96,3 +96,68 @@ def served(*arguments: str, journal: Path, listen_host: str = "127.0.0.1", conne
             except subprocess.TimeoutExpired:
                 process.kill()
                 process.wait()
+
+
+def never_reading_viewer(host: str, port: int, path: str) -> socket.socket:
+    """A WebSocket client that asks to upgrade and then never reads (its receive buffer 4 kB)."""
+    raw = socket.socket()
+    raw.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+    raw.connect((host, port))
+    raw.sendall(f"GET {path} HTTP/1.1\r\nHost: {host}:{port}\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
+                "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n".encode())
+    return raw
+
+
+async def flood_a_slow_viewer(events: int = 40_000, size: int = 1000) -> dict:
+    """The server's event hub (armctl/server/hub.py) behind aiohttp on loopback, one viewer that
+    never reads (its socket's receive buffer 4 kB), ``events`` events of ``size`` bytes
+    published at it: the largest queue it held, the events dropped for it, and how far the
+    Python memory (tracemalloc) grew."""
+    import asyncio
+    import tracemalloc
+
+    from aiohttp import web
+
+    from armctl.server.hub import Hub, Viewer
+
+    hub = Hub()
+
+    async def handler(request):
+        ws = web.WebSocketResponse()
+        await ws.prepare(request)
+        viewer = Viewer("slow")
+        hub.add(viewer)
+        sender = asyncio.ensure_future(viewer.send_all(ws.send_str))
+        try:
+            async for _ in ws:
+                pass
+        finally:
+            sender.cancel()
+            hub.remove(viewer)
+        return ws
+
+    app = web.Application()
+    app.router.add_get("/events", handler)
+    runner = web.AppRunner(app)
+    await runner.setup()
+    site = web.TCPSite(runner, "127.0.0.1", 0)
+    await site.start()
+    port = site._server.sockets[0].getsockname()[1]
+    raw = never_reading_viewer("127.0.0.1", port, "/events")
+    while not hub.viewers:
+        await asyncio.sleep(0.01)
+    viewer = next(iter(hub.viewers))
+    tracemalloc.start()
+    base = tracemalloc.get_traced_memory()[0]
+    largest = 0
+    for i in range(events):
+        hub.publish({"event": "status", "n": i, "pad": "x" * size})
+        largest = max(largest, viewer.queue.qsize())
+        if i % 500 == 0:
+            await asyncio.sleep(0)
+    grown = tracemalloc.get_traced_memory()[1] - base
+    tracemalloc.stop()
+    raw.close()
+    await runner.cleanup()
+    return {"published": events, "published_mb": events * size / 1e6, "largest_queue": largest,
+            "dropped": viewer.dropped_total, "peak_growth_mb": grown / 1e6}

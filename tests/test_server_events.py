@@ -13,7 +13,7 @@ import pytest
 
 aiohttp = pytest.importorskip("aiohttp", reason="the serve extra (aiohttp) is not installed: pip install -e '.[serve]'")
 
-from serve_process import served  # noqa: E402
+from serve_process import flood_a_slow_viewer, served  # noqa: E402
 
 pytestmark = [pytest.mark.realtime, pytest.mark.timeout(90)]
 
@@ -124,56 +124,12 @@ def test_jog_gets_the_neutral_within_100_ms_of_a_lost_heartbeat_or_a_closed_sock
 def test_a_slow_viewer_loses_events_and_holds_a_bounded_queue():
     """In-process: a viewer that never reads, 40,000 events of 1 kB published at it (40 MB):
     the server holds at most its queue (and the sockets' buffers), and counts what it dropped."""
-    import socket as sockets
+    from armctl.server.hub import QUEUE_EVENTS
 
-    from aiohttp import web
-
-    from armctl.server.hub import QUEUE_EVENTS, Hub, Viewer
-
-    async def main():
-        hub = Hub()
-
-        async def events(request):
-            ws = web.WebSocketResponse()
-            await ws.prepare(request)
-            viewer = Viewer("slow")
-            hub.add(viewer)
-            sender = asyncio.ensure_future(viewer.send_all(ws.send_str))
-            try:
-                async for _ in ws:
-                    pass
-            finally:
-                sender.cancel()
-                hub.remove(viewer)
-            return ws
-
-        app = web.Application()
-        app.router.add_get("/events", events)
-        runner = web.AppRunner(app)
-        await runner.setup()
-        site = web.TCPSite(runner, "127.0.0.1", 0)
-        await site.start()
-        port = site._server.sockets[0].getsockname()[1]
-        raw = sockets.socket()
-        raw.setsockopt(sockets.SOL_SOCKET, sockets.SO_RCVBUF, 4096)
-        raw.connect(("127.0.0.1", port))
-        raw.sendall(b"GET /events HTTP/1.1\r\nHost: 127.0.0.1\r\nUpgrade: websocket\r\nConnection: Upgrade\r\n"
-                    b"Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n\r\n")
-        while not hub.viewers:
-            await asyncio.sleep(0.01)
-        viewer = next(iter(hub.viewers))
-        largest = 0
-        for i in range(40_000):
-            hub.publish({"event": "status", "n": i, "pad": "x" * 1000})
-            largest = max(largest, viewer.queue.qsize())
-            if i % 500 == 0:
-                await asyncio.sleep(0)  # the sender runs
-        assert largest <= QUEUE_EVENTS
-        assert viewer.dropped_total > 30_000  # it read (almost) nothing: most events were dropped for it
-        raw.close()
-        await runner.cleanup()
-
-    asyncio.run(main())
+    flood = asyncio.run(flood_a_slow_viewer(40_000, 1000))
+    assert flood["largest_queue"] <= QUEUE_EVENTS
+    assert flood["dropped"] > 30_000  # it read (almost) nothing: most events were dropped for it
+    assert flood["peak_growth_mb"] < 5  # against 40 MB published
 
 
 def test_non_loopback_listen_refuses_requests_without_the_token(tmp_path):

@@ -1,0 +1,113 @@
+"""The page at ``/`` in a real headless browser: Debian's chromium driven by Selenium through
+/usr/bin/chromedriver (no browser download).  Skipped, with the reason, where no browser, no
+driver or no Selenium is installed (.ci/run installs all three and runs this)."""
+from __future__ import annotations
+
+import os
+import shutil
+from pathlib import Path
+
+import pytest
+
+pytest.importorskip("aiohttp", reason="the serve extra (aiohttp) is not installed: pip install -e '.[serve]'")
+webdriver = pytest.importorskip("selenium.webdriver", reason="Selenium is not installed (pip install selenium)")
+
+from serve_process import served  # noqa: E402
+from test_server_api import long_job  # noqa: E402
+
+CHROMIUM = os.environ.get("ARMCTL_CHROMIUM", "/usr/bin/chromium")
+CHROMEDRIVER = os.environ.get("ARMCTL_CHROMEDRIVER", "/usr/bin/chromedriver")
+if not (shutil.which(CHROMIUM) and shutil.which(CHROMEDRIVER)):
+    pytest.skip(f"no headless browser: {CHROMIUM} and {CHROMEDRIVER} are needed "
+                "(apt-get install chromium chromium-driver)", allow_module_level=True)
+
+from selenium.webdriver.common.by import By  # noqa: E402
+from selenium.webdriver.support.ui import WebDriverWait  # noqa: E402
+
+pytestmark = [pytest.mark.realtime, pytest.mark.timeout(120)]
+
+BAD = (Path(__file__).parent / "data" / "scripts_cli" / "compile_error_job.txt").read_text()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    options = webdriver.ChromeOptions()
+    options.binary_location = CHROMIUM
+    for argument in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
+                     "--disable-component-update", "--disable-sync", "--window-size=1400,1100"):
+        options.add_argument(argument)
+    driver = webdriver.Chrome(options=options, service=webdriver.ChromeService(executable_path=CHROMEDRIVER))
+    driver.set_page_load_timeout(30)
+    try:
+        yield driver
+    finally:
+        driver.quit()
+
+
+@pytest.fixture(scope="module")
+def server(tmp_path_factory):
+    with served("--arm", "a=sim://?speed=20", "--arm", "b=sim://?speed=20",
+                journal=tmp_path_factory.mktemp("journal")) as running:
+        yield running
+
+
+def wait(driver, condition, timeout_s: float = 20.0):
+    return WebDriverWait(driver, timeout_s, poll_frequency=0.05).until(lambda d: condition(d))
+
+
+def card(driver, arm: str):
+    return driver.find_element(By.CSS_SELECTOR, f'section[data-arm="{arm}"]')
+
+
+def put_script(driver, arm: str, text: str) -> None:
+    area = card(driver, arm).find_element(By.CSS_SELECTOR, 'textarea[data-role="script"]')
+    driver.execute_script("arguments[0].value = arguments[1]; arguments[0].dispatchEvent(new Event('input'));", area, text)
+
+
+def test_the_page_renders_both_arms_with_live_status(browser, server):
+    browser.get(server.base + "/")
+    wait(browser, lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-ready") == "1")
+    assert [s.get_attribute("data-arm") for s in browser.find_elements(By.CSS_SELECTOR, "section.arm")] == ["a", "b"]
+    for arm in ("a", "b"):
+        wait(browser, lambda d: card(d, arm).find_element(By.CSS_SELECTOR, '[data-role="status"]').text.startswith("X "))
+        wait(browser, lambda d: card(d, arm).find_element(By.CSS_SELECTOR, ".badge").text == "in control")
+
+
+def test_lint_findings_show_at_their_lines(browser, server):
+    put_script(browser, "a", BAD)
+    findings = wait(browser, lambda d: card(d, "a").find_elements(By.CSS_SELECTOR, '[data-role="findings"] li.error'))
+    assert findings[0].get_attribute("data-line") == "3" and "line 3:" in findings[0].text
+    gutter = card(browser, "a").find_elements(By.CSS_SELECTOR, ".gutter div")
+    assert gutter[2].get_attribute("class") == "error" and gutter[0].get_attribute("class") in ("", None)
+
+
+def test_run_pause_and_stop_buttons_work_and_the_preview_draws_the_path(browser, server):
+    put_script(browser, "b", long_job(30))
+    wait(browser, lambda d: len(card(d, "b").find_elements(By.CSS_SELECTOR, 'svg[data-role="preview"] polyline')) == 31)
+    card(browser, "b").find_element(By.CSS_SELECTOR, 'button[data-action="run"]').click()
+    job_line = card(browser, "b").find_element(By.CSS_SELECTOR, '[data-role="job"]')
+    wait(browser, lambda d: "frames, last line executed" in job_line.text)
+    job_id = job_line.text.split()[1].rstrip(":")
+    status, arms = server.request("GET", "/api/arms")
+    assert arms[1]["job"] == job_id
+    card(browser, "b").find_element(By.CSS_SELECTOR, 'button[data-action="pause"]').click()
+    wait(browser, lambda d: server.request("GET", f"/api/arms/b/jobs/{job_id}")[1].get("pause_state") == "paused")
+    wait(browser, lambda d: "paused" in job_line.text)
+    card(browser, "b").find_element(By.CSS_SELECTOR, 'button[data-action="resume"]').click()
+    wait(browser, lambda d: server.request("GET", f"/api/arms/b/jobs/{job_id}")[1].get("pause_state") == "running")
+    card(browser, "b").find_element(By.CSS_SELECTOR, 'button[data-action="stop"]').click()
+    wait(browser, lambda d: job_line.get_attribute("data-outcome") == "interrupted", 40)
+    job = server.request("GET", f"/api/arms/b/jobs/{job_id}")[1]
+    assert job["outcome"] == "interrupted" and job["frames_sent"] < job["total_frames"]
+    progress = card(browser, "b").find_element(By.CSS_SELECTOR, '[data-role="progress"]')
+    assert float(progress.get_attribute("value")) == job["frames_sent"]
+
+
+def test_a_job_runs_to_finished_from_the_page(browser, server):
+    put_script(browser, "a", (Path(__file__).parent / "data" / "scripts_cli" / "short_job.txt").read_text())
+    wait(browser, lambda d: not card(d, "a").find_elements(By.CSS_SELECTOR, '[data-role="findings"] li.error'))
+    card(browser, "a").find_element(By.CSS_SELECTOR, 'button[data-action="run"]').click()
+    job_line = card(browser, "a").find_element(By.CSS_SELECTOR, '[data-role="job"]')
+    wait(browser, lambda d: job_line.get_attribute("data-outcome") == "finished", 40)
+    assert "5/5 frames, last line executed 6" in job_line.text
+    browser.save_screenshot(os.environ.get("ARMCTL_SCREENSHOT", str(Path(os.environ.get("TMPDIR", "/tmp")) / "armctl-serve-page.png")))
