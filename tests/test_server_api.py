@@ -217,3 +217,12 @@ def test_requests_from_many_threads_at_once_all_answered(server):
     for thread in threads:
         thread.join(30)
     assert answers == [200] * 20
+
+
+def test_a_body_over_the_script_size_limit_is_413(server):
+    from armctl.inputs import MAX_INPUT_BYTES
+
+    status, answer = server.request("POST", "/api/arms/a/lint", b"; " + bytes(MAX_INPUT_BYTES), timeout=60)
+    assert status == 413 and answer["code"] == "too_large"
+    status, _ = server.request("GET", "/api/arms")  # and the server goes on
+    assert status == 200

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 import uuid
 from importlib import resources
 
@@ -22,6 +23,7 @@ from . import auth
 from .arms import Busy, NotController, UnknownJob
 from .hub import Viewer
 
+_logger = logging.getLogger(__name__)
 CLIENT_HEADER = "X-Armctl-Client"  # which client a state-changing request comes from (the controller's id)
 WS_HEARTBEAT_S = 10.0  # aiohttp's ping on idle WebSockets (a dead peer is noticed)
 SERVICES = web.AppKey("services", dict)
@@ -71,6 +73,11 @@ async def _guard(request: web.Request, handler):
         return _error(400, "bad_json", str(error))
     except (ArmctlError, ValueError, TypeError) as error:
         return _error(422, "refused", str(error))
+    except OSError as error:  # the journal directory, a full disk
+        return _error(503, "io_error", f"{error.strerror or error}{f': {error.filename}' if error.filename else ''}")
+    except Exception as error:  # a fault of ours: logged with its traceback, the client gets JSON
+        _logger.exception("armctl serve: %s %s failed", request.method, request.path)
+        return _error(500, "internal", f"internal error ({type(error).__name__}); the server's log has the details")
 
 
 def _service(request: web.Request):

@@ -99,6 +99,10 @@ class ArmService:
     def busy(self) -> bool:
         return self.running is not None or self.moving
 
+    def check_not_jogging(self) -> None:
+        if self._jog is not None and self._jog.active:
+            raise Busy(f"arm {self.name!r} is jogging: release the jog button first")
+
     def publish(self, event: dict) -> None:
         self.hub.publish({"arm": self.name, **event})
 
@@ -136,6 +140,7 @@ class ArmService:
         if self.busy:
             raise Busy(f"arm {self.name!r} is running job {self.running.id if self.running else '(a move)'}: "
                        "wait for it to end or stop it")
+        self.check_not_jogging()
         report = self.check(snapshot)
         job_id = time.strftime("%Y%m%dT%H%M%S") + "-" + uuid.uuid4().hex[:6]
         self.journal_dir.mkdir(parents=True, exist_ok=True)
@@ -219,6 +224,7 @@ class ArmService:
         self.check_control(client)
         if self.busy:
             raise Busy(f"arm {self.name!r} is busy: wait for its job to end or stop it")
+        self.check_not_jogging()
         self.moving = True
         try:
             result = await self.arm.move(**words)
