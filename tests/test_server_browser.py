@@ -111,3 +111,44 @@ def test_a_job_runs_to_finished_from_the_page(browser, server):
     wait(browser, lambda d: job_line.get_attribute("data-outcome") == "finished", 40)
     assert "5/5 frames, last line executed 6" in job_line.text
     browser.save_screenshot(os.environ.get("ARMCTL_SCREENSHOT", str(Path(os.environ.get("TMPDIR", "/tmp")) / "armctl-serve-page.png")))
+
+
+def test_jog_buttons_move_the_arm_while_held_and_it_stops_on_release_and_on_a_closed_page(browser, tmp_path):
+    """Hold J1+ (the page's 25 ms heartbeat): joint 1 turns; release: it stops.  Hold J1− and
+    leave the page (its WebSocket closes, no release ever comes): it stops too — short of the
+    joint's limit (±170°), which a jog that never stopped would reach in seconds (an arm in real
+    time: at speed 20 a 0.15 s hold already reaches it)."""
+    import time
+
+    from selenium.webdriver.common.action_chains import ActionChains
+
+    with served("--arm", "a=sim://", journal=tmp_path) as server:
+        def joint1() -> float:
+            return server.request("GET", "/api/arms/a/status")[1]["joints"][0]
+
+        def settled() -> float:
+            """Joint 1 once two reads 0.3 s apart agree (the arm stands still)."""
+            deadline = time.monotonic() + 10
+            before = joint1()
+            while time.monotonic() < deadline:
+                time.sleep(0.3)
+                now = joint1()
+                if now == before:
+                    return now
+                before = now
+            raise AssertionError("joint 1 never stopped moving")
+
+        for ending, jog in (("release", "j1_plus"), ("closed page", "j1_minus")):
+            browser.get(server.base + "/")
+            wait(browser, lambda d: card(d, "a").find_element(By.CSS_SELECTOR, ".badge").text == "in control")
+            card(browser, "a").find_element(By.TAG_NAME, "details").click()
+            button = card(browser, "a").find_element(By.CSS_SELECTOR, f'button[data-jog="{jog}"]')
+            start = settled()
+            ActionChains(browser).click_and_hold(button).perform()
+            time.sleep(0.3)
+            if ending == "release":
+                ActionChains(browser).release(button).perform()
+            else:
+                browser.get("about:blank")
+            stopped = settled()
+            assert abs(stopped - start) > 0.5 and abs(stopped) < 160, (ending, start, stopped)  # turned while held, then stood
