@@ -33,7 +33,6 @@ NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]{1,32}")
 STATUS_EVERY_S = 0.25  # a status event this often while someone watches
 JOG_LEASE_S = 0.075  # the jog stops this long after the page's last heartbeat
 JOG_POLL_S = 0.01  # how often the dead-man's lease is looked at
-JOG_OFFSET = 60  # joystick value off-centre (of 127): the jog's speed, as `armctl jog`'s default
 
 
 class Busy(ArmctlError):
@@ -259,6 +258,7 @@ class ArmService:
         from ..jog.deadman import Deadman, DeadmanTiming
         from ..jog.keymap import _jog_actions
         from ..jog.session import joystick_for
+        from ..jog.settings import JogSettings
 
         if client != self.controller:
             raise NotController(f"only the controlling client jogs arm {self.name!r}")
@@ -274,7 +274,9 @@ class ArmService:
             self._jog = Deadman(DeadmanTiming(initial_delay_s=JOG_LEASE_S, repeat_gap_s=JOG_LEASE_S, line_s=line_s,
                                               wake_margin_s=0.0))
             self._jog_task = asyncio.ensure_future(self._jog_loop())
-        await self._write(self._jog.press(joystick_for(jog, JOG_OFFSET), time.monotonic()))
+        settings = JogSettings()  # armctl jog's starting speed level
+        offset = settings.joystick_offsets[settings.level - 1]
+        await self._write(self._jog.press(joystick_for(jog, offset), time.monotonic()))
 
     async def jog_stop(self) -> None:
         """Neutral now on every axis that may move (a released button, a closed page)."""
