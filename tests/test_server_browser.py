@@ -81,6 +81,19 @@ def test_lint_findings_show_at_their_lines(browser, server):
     assert gutter[2].get_attribute("class") == "error" and gutter[0].get_attribute("class") in ("", None)
 
 
+def test_an_uploaded_script_is_linted(browser, server):
+    path = Path(__file__).parent / "data" / "scripts_cli" / "lint_error_job.txt"
+    card(browser, "a").find_element(By.CSS_SELECTOR, 'input[data-role="file"]').send_keys(str(path))
+    area = card(browser, "a").find_element(By.CSS_SELECTOR, 'textarea[data-role="script"]')
+    wait(browser, lambda d: area.get_attribute("value") == path.read_text())
+    status, lint = server.request("POST", "/api/arms/a/lint", path.read_text())
+    expected = [f"line {d['line']}:{d['column']} {d['code']}" for d in lint["diagnostics"]]
+    assert expected
+    wait(browser, lambda d: [item.text.split(" ", 3)[:3] for item in
+                             card(d, "a").find_elements(By.CSS_SELECTOR, '[data-role="findings"] li')]
+         == [e.split(" ") for e in expected])
+
+
 def test_run_pause_and_stop_buttons_work_and_the_preview_draws_the_path(browser, server):
     put_script(browser, "b", long_job(30))
     wait(browser, lambda d: len(card(d, "b").find_elements(By.CSS_SELECTOR, 'svg[data-role="preview"] polyline')) == 31)
