@@ -226,3 +226,14 @@ def test_a_body_over_the_script_size_limit_is_413(server):
     assert status == 413 and answer["code"] == "too_large"
     status, _ = server.request("GET", "/api/arms")  # and the server goes on
     assert status == 200
+
+
+def test_resuming_from_a_journal_whose_script_was_edited_is_refused_before_anything(server):
+    status, created = server.request("POST", "/api/arms/a/jobs?name=short_job.txt", SHORT)
+    assert status == 201
+    assert server.wait_job("a", created["id"])["outcome"] == "finished"
+    script = Path(created["journal"]).with_suffix(".txt")
+    script.write_text(SHORT.replace("Y10", "Y20"))  # not the script the log records
+    status, refused = server.request("POST", f"/api/arms/a/jobs?resume={created['id']}")
+    assert status == 422 and refused["code"] == "refused", refused
+    assert server.request("GET", "/api/arms")[1][0]["busy"] is False  # nothing started

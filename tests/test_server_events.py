@@ -191,3 +191,21 @@ def test_websocket_from_another_origin_is_refused(server):
             assert refused.value.status == 403
 
     asyncio.run(main())
+
+
+def test_viewers_of_one_arm_are_bounded_in_number(server):
+    from armctl.server.arms import MAX_VIEWERS
+
+    async def main():
+        async with aiohttp.ClientSession(connector=aiohttp.TCPConnector(limit=0)) as session:  # no pool limit
+            sockets = [await session.ws_connect(ws_url(server, "a")) for _ in range(MAX_VIEWERS)]
+            with pytest.raises(aiohttp.WSServerHandshakeError) as refused:
+                await session.ws_connect(ws_url(server, "a"))
+            assert refused.value.status == 503
+            await sockets.pop().close()
+            await asyncio.sleep(0.2)
+            sockets.append(await session.ws_connect(ws_url(server, "a")))  # room again
+            for socket in sockets:
+                await socket.close()
+
+    asyncio.run(main())

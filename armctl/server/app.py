@@ -20,7 +20,7 @@ from aiohttp import WSMsgType, web
 from ..errors import ArmctlError, ScriptError
 from ..inputs import MAX_INPUT_BYTES
 from . import auth
-from .arms import Busy, NotController, UnknownJob
+from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob
 from .hub import Viewer
 
 _logger = logging.getLogger(__name__)
@@ -221,6 +221,8 @@ async def move(request: web.Request) -> web.Response:
 async def events(request: web.Request) -> web.WebSocketResponse:
     """The WebSocket: the arm's events; with ``?control=1`` the client asks to control it."""
     service = _service(request)
+    if len(service.hub.viewers) >= MAX_VIEWERS:
+        return _error(503, "too_many_viewers", f"arm {service.name!r} has {MAX_VIEWERS} viewers already")
     # a browser offering "armctl" and "bearer.TOKEN" gets "armctl" back (it must get one it offered)
     socket = web.WebSocketResponse(heartbeat=WS_HEARTBEAT_S, protocols=("armctl",), max_msg_size=64 * 1024)
     await socket.prepare(request)

@@ -30,6 +30,7 @@ from ..errors import ArmctlError, ScriptError
 from .hub import Hub
 
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]{1,32}")
+MAX_VIEWERS = 200  # WebSockets on one arm (each holds at most its queue): more are refused (503)
 STATUS_EVERY_S = 0.25  # a status event this often while someone watches
 JOG_LEASE_S = 0.075  # the jog stops this long after the page's last heartbeat
 JOG_POLL_S = 0.01  # how often the dead-man's lease is looked at
@@ -133,8 +134,9 @@ class ArmService:
             raise ScriptError([d for d in report.diagnostics if d.severity == "error"], errors=report.errors)
         return report
 
-    def start_job(self, snapshot, client: str | None, resume_of: str | None = None) -> tuple[Job, Any]:
-        """Check, journal and start ``snapshot`` (``ScriptError``: nothing sent; ``Busy``)."""
+    def start_job(self, snapshot, client: str | None, resume=None) -> tuple[Job, Any]:
+        """Check, journal and start ``snapshot`` (``ScriptError``: nothing sent; ``Busy``);
+        ``resume``: the ``joblog.ResumePoint`` of an earlier job of this script."""
         self.check_control(client)
         if self.busy:
             raise Busy(f"arm {self.name!r} is running job {self.running.id if self.running else '(a move)'}: "
@@ -145,23 +147,25 @@ class ArmService:
         self.journal_dir.mkdir(parents=True, exist_ok=True)
         job = Job(job_id, snapshot.name, self.journal_dir / f"{job_id}.txt", self.journal_dir / f"{job_id}.log")
         job.script_path.write_bytes(snapshot.data)
-        resume_log = None if resume_of is None else self.journal_dir / f"{resume_of}.log"
         self.jobs[job_id] = self.running = job
-        job.task = asyncio.ensure_future(self._run(job, snapshot, resume_log))
+        job.task = asyncio.ensure_future(self._run(job, snapshot, resume))
         return job, report
 
     def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
         """A job of the journal (this server's or an earlier one's), continued from the line its
         log and the arm's report prove (``Arm.run(resume=)``)."""
+        from ..jobflow import read_resume_point
         from ..script.files import ScriptSnapshot
 
         if not NAME_PATTERN.fullmatch(job_id.replace("T", "")) or not (self.journal_dir / f"{job_id}.txt").is_file():
             raise UnknownJob(f"no job {job_id!r} in the journal of arm {self.name!r}")
-        data = (self.journal_dir / f"{job_id}.txt").read_bytes()
-        return self.start_job(ScriptSnapshot(_journal_name(self.journal_dir / f"{job_id}.log", job_id), data),
-                              client, resume_of=job_id)
+        log = self.journal_dir / f"{job_id}.log"
+        snapshot = ScriptSnapshot(_journal_name(log, job_id), (self.journal_dir / f"{job_id}.txt").read_bytes())
+        self.check_control(client)
+        # before the 201: a log that is no log of this script is refused (422), nothing sent
+        return self.start_job(snapshot, client, resume=read_resume_point(log, snapshot))
 
-    async def _run(self, job: Job, snapshot, resume_log: Path | None) -> None:
+    async def _run(self, job: Job, snapshot, resume) -> None:
         from ..aio import EventObserver
         from ..jobflow import JobFailed
 
@@ -177,8 +181,7 @@ class ArmService:
         try:
             with open(job.log_path, "w", encoding="utf-8", buffering=1) as log:
                 try:
-                    result = await self.arm.run(snapshot, observer=observer, log=log,
-                                                resume=None if resume_log is None else str(resume_log))
+                    result = await self.arm.run(snapshot, observer=observer, log=log, resume=resume)
                     job.result = result.to_json()
                 except JobFailed as error:
                     job.error = str(error)
