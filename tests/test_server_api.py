@@ -237,3 +237,27 @@ def test_resuming_from_a_journal_whose_script_was_edited_is_refused_before_anyth
     status, refused = server.request("POST", f"/api/arms/a/jobs?resume={created['id']}")
     assert status == 422 and refused["code"] == "refused", refused
     assert server.request("GET", "/api/arms")[1][0]["busy"] is False  # nothing started
+
+
+@pytest.mark.parametrize("signal_name", ["SIGINT", "SIGTERM"])
+def test_a_signal_mid_job_stops_the_job_like_ctrl_c_and_exits_130(tmp_path, signal_name):
+    """The job stops as armctl run's Ctrl-C stops it: no more frames, the abort sequence, the
+    arm waited for — the motion queued (the 2 s lead), not the rest of the job's ~40 s."""
+    import signal
+    import time
+
+    with served("--arm", "a=sim://?speed=4", journal=tmp_path) as server:
+        status, created = server.request("POST", "/api/arms/a/jobs?name=long.txt", long_job(40))
+        assert status == 201
+        deadline = time.monotonic() + 20
+        while server.request("GET", f"/api/arms/a/jobs/{created['id']}")[1]["frames_sent"] < 3:
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        started = time.monotonic()
+        server.process.send_signal(getattr(signal, signal_name))
+        assert server.process.wait(20) == 130
+        assert time.monotonic() - started < 6  # the rest of the job would take 10 s of wall time
+    records = [json.loads(line) for line in Path(created["journal"]).read_text().splitlines()]
+    sent = [r for r in records if r["dir"] == "tx"]
+    assert 3 <= len(sent) < 41  # it stopped feeding; the journal has what went
+    assert "Traceback" not in "".join(server.stderr_lines)
