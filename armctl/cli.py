@@ -422,6 +422,27 @@ def sim(use_pty, tcp_port, sim_url):
         raise KeyboardInterrupt
 
 
+# --- armctl serve (issue 25): the arm on the network; the server lives in armctl/server/ ------
+@main.command()
+@click.option("--arm", "arm_specs", multiple=True, metavar="NAME=PORT",
+              help="An arm to serve (repeatable), e.g. --arm 'a=sim://?speed=20' [default: the configured port as `arm`].")
+@click.option("--listen", default="127.0.0.1:8765", show_default=True, metavar="HOST:PORT",
+              help="Where to listen; anything but loopback needs the token (see docs/server.md).")
+@click.option("--token-file", type=click.Path(dir_okay=False), help="Read the token from this file (also on loopback).")
+@click.option("--journal-dir", type=click.Path(file_okay=False), help="Where each arm's job journals go [default: the user data dir].")
+@click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML) for every arm.")
+@click.option("--lead", "lead_s", type=number(*LEAD_RANGE_S), default=2.0, show_default=True, help="Seconds of motion kept queued ahead of each arm.")
+def serve(arm_specs, listen, token_file, journal_dir, profile_path, lead_s):
+    """Serve arms over HTTP + WebSocket, with a web page at / (needs the `serve` extra)."""
+    from .server import EXTRA_MISSING, extra_installed
+
+    if not extra_installed():
+        raise UsageFailure(EXTRA_MISSING)
+    from .server.run import serve as serve_arms
+
+    serve_arms(arm_specs, listen, token_file, journal_dir, profile_path, lead_s, say=lambda text: click.echo(text, err=True))
+
+
 def _register_packaged_commands() -> None:
     """Commands that live with their package; their modules import only click at load."""
     from .config import config

@@ -30,6 +30,7 @@ QUICK_INVOCATIONS = {
     "ports": [],
     "probe": ["--port", VIRTUAL_SIM, "--no-motion", "--json"],
     "run": ["{script}", "--no-live", "--port", VIRTUAL_SIM],
+    "serve": ["--listen", "no-port-here", "--arm", f"a={VIRTUAL_SIM}"],  # a bad --listen: exit 2 at once
     "sim": ["--pty"],  # with --tcp as well: "choose one", at once
     "status": ["--once", "--port", VIRTUAL_SIM],
 }

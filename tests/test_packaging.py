@@ -123,6 +123,15 @@ def test_the_wheel_ships_the_grammar_as_package_data(wheel):
     assert not any(name.startswith("tests/") for name in names)
 
 
+@WHEEL_TIME_LIMIT
+def test_the_wheel_ships_armctl_serve_and_its_page(wheel):
+    """``armctl serve``'s package and the page it serves at / (package data), and the extra."""
+    wheel_file, _, _ = wheel
+    names = zipfile.ZipFile(wheel_file).namelist()
+    assert {"armctl/server/__init__.py", "armctl/server/app.py", "armctl/server/page/index.html", "armctl/aio.py"} <= set(names)
+    assert any(value.startswith("aiohttp") and "serve" in value for value in _metadata(wheel_file)[0]["Requires-Dist"])
+
+
 def _metadata(wheel_file: Path) -> tuple[dict[str, list[str]], str]:
     """The wheel's METADATA headers (name -> every value) and its entry_points.txt."""
     from email.parser import HeaderParser

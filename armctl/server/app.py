@@ -1,0 +1,297 @@
+"""The routes of ``armctl serve`` (docs/server.md documents each, with examples a test runs).
+
+Strategy: each handler reads its request, calls ``ArmService`` and answers JSON; every error a
+client can cause is a 4xx JSON ``{"error": message, "code": word}`` (a script's errors add its
+``diagnostics``), never a traceback.  One middleware does, before any handler: the Host check
+(without a token), the token (``/api`` only), the Origin check (POST and WebSockets), and the
+mapping of armctl's errors to status codes.  Bodies are bounded by the script size limit
+(armctl/inputs.py), so no request can make the server hold more than one script's bytes.
+"""
+from __future__ import annotations
+
+import asyncio
+import json
+import logging
+import uuid
+from importlib import resources
+
+from aiohttp import WSMsgType, web
+
+from ..errors import ArmctlError, ScriptError
+from ..inputs import MAX_INPUT_BYTES
+from . import auth
+from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob
+from .hub import Viewer
+
+_logger = logging.getLogger(__name__)
+CLIENT_HEADER = "X-Armctl-Client"  # which client a state-changing request comes from (the controller's id)
+WS_HEARTBEAT_S = 10.0  # aiohttp's ping on idle WebSockets (a dead peer is noticed)
+SERVICES = web.AppKey("services", dict)
+SETTINGS = web.AppKey("settings", dict)
+
+
+def _error(status: int, code: str, message: str, **extra) -> web.Response:
+    return web.json_response({"error": message, "code": code, **extra}, status=status)
+
+
+def _diagnostics(error: ScriptError) -> list[dict]:
+    from ..lint.formatters import as_record
+
+    return [as_record(d) for d in error.diagnostics]
+
+
+@web.middleware
+async def _guard(request: web.Request, handler):
+    settings = request.app[SETTINGS]
+    token = settings["token"]
+    is_api = request.path.startswith("/api")
+    if token is None and not auth.host_ok(request.headers.get("Host"), settings["host"]):
+        return _error(403, "bad_host", "this server answers only to a loopback Host (start it with a token to serve others)")
+    if token is not None and is_api and not auth.bearer_ok(token, request.headers.get("Authorization"),
+                                                          request.headers.get("Sec-WebSocket-Protocol")):
+        return _error(401, "unauthorized", "this server needs its token: Authorization: Bearer TOKEN")
+    websocket = request.headers.get("Upgrade", "").lower() == "websocket"
+    if (request.method == "POST" or websocket) and not auth.origin_ok(request.headers.get("Origin"), request.headers.get("Host")):
+        return _error(403, "bad_origin", f"requests from the origin {request.headers.get('Origin')!r} are refused")
+    try:
+        return await handler(request)
+    except web.HTTPException as error:
+        if error.status == 413:
+            return _error(413, "too_large", f"the body is over the script size limit ({MAX_INPUT_BYTES} bytes)")
+        if error.status == 404:
+            return _error(404, "not_found", f"no such resource: {request.path}")
+        if error.status == 405:
+            return _error(405, "method_not_allowed", f"{request.method} is not allowed on {request.path}")
+        raise
+    except ScriptError as error:
+        return _error(422, "script_errors", str(error), diagnostics=_diagnostics(error))
+    except (Busy, NotController) as error:
+        return _error(409, "busy" if isinstance(error, Busy) else "read_only", str(error))
+    except UnknownJob as error:
+        return _error(404, "unknown_arm" if isinstance(error, _NotFound) else "unknown_job", str(error))
+    except _BadJson as error:
+        return _error(400, "bad_json", str(error))
+    except (ArmctlError, ValueError, TypeError) as error:
+        return _error(422, "refused", str(error))
+    except OSError as error:  # the journal directory, a full disk
+        return _error(503, "io_error", f"{error.strerror or error}{f': {error.filename}' if error.filename else ''}")
+    except Exception as error:  # a fault of ours: logged with its traceback, the client gets JSON
+        _logger.exception("armctl serve: %s %s failed", request.method, request.path)
+        return _error(500, "internal", f"internal error ({type(error).__name__}); the server's log has the details")
+
+
+def _service(request: web.Request):
+    name = request.match_info["name"]
+    try:
+        return request.app[SERVICES][name]
+    except KeyError:
+        raise _NotFound(f"no arm named {name!r} (GET /api/arms lists them)") from None
+
+
+class _NotFound(UnknownJob):
+    pass
+
+
+class _BadJson(ValueError):
+    pass
+
+
+async def _script(request: web.Request):
+    """The body as a script snapshot (read once; its name from ``?name=``)."""
+    from ..script.files import ScriptSnapshot
+
+    data = await request.read()
+    name = request.query.get("name", "script")
+    return ScriptSnapshot(name[:200], data)
+
+
+async def _json_object(request: web.Request) -> dict:
+    text = await request.text()
+    try:
+        value = json.loads(text) if text.strip() else {}
+    except json.JSONDecodeError as error:
+        raise _BadJson(f"the body is not JSON: {error.msg} at line {error.lineno} column {error.colno}") from None
+    if not isinstance(value, dict):
+        raise _BadJson("the body must be a JSON object")
+    return value
+
+
+def _client(request: web.Request) -> str | None:
+    return request.headers.get(CLIENT_HEADER)
+
+
+# --- handlers --------------------------------------------------------------------------------
+
+async def page(request: web.Request) -> web.Response:
+    html = resources.files("armctl.server").joinpath("page/index.html").read_text(encoding="utf-8")
+    return web.Response(text=html, content_type="text/html",
+                        headers={"Content-Security-Policy": "default-src 'self'; script-src 'unsafe-inline'; "
+                                 "style-src 'unsafe-inline'; connect-src 'self'", "Cache-Control": "no-store"})
+
+
+async def list_arms(request: web.Request) -> web.Response:
+    return web.json_response([service.describe() for service in request.app[SERVICES].values()])
+
+
+async def status(request: web.Request) -> web.Response:
+    service = _service(request)
+    return web.json_response(await service.arm.status_json())
+
+
+async def lint(request: web.Request) -> web.Response:
+    from ..lint.formatters import as_record
+
+    service = _service(request)
+    report = service.check(await _script(request), errors_raise=False)
+    return web.json_response({"errors": report.errors, "diagnostics": [as_record(d) for d in report.diagnostics]})
+
+
+async def preview(request: web.Request) -> web.Response:
+    """The path the job will take (``armctl plot``'s data), from the profile's fixed pose."""
+    from ..lint.formatters import as_record
+    from ..motion import MotionModel
+    from ..plot.path import build_path
+
+    service = _service(request)
+    snapshot = await _script(request)
+    report = service.check(snapshot)
+    path = build_path(snapshot.compile(), MotionModel(service.arm.profile), snapshot.name, report.diagnostics)
+    return web.json_response({
+        "start": list(path.start), "omitted": path.omitted,
+        "segments": [{"line": s.line, "first_line": s.first_line, "kind": s.kind, "points": [list(p) for p in s.points]}
+                     for s in path.segments],
+        "findings": [{**as_record(f.diagnostic), "point": list(f.point)} for f in path.findings]})
+
+
+async def create_job(request: web.Request) -> web.Response:
+    from ..lint.formatters import as_record
+
+    service = _service(request)
+    resume = request.query.get("resume")
+    if resume is not None:
+        job, report = service.resume_job(resume, _client(request))
+    else:
+        job, report = service.start_job(await _script(request), _client(request))
+    return web.json_response({"id": job.id, "journal": str(job.log_path),
+                              "diagnostics": [as_record(d) for d in report.diagnostics]}, status=201)
+
+
+async def list_jobs(request: web.Request) -> web.Response:
+    service = _service(request)
+    return web.json_response([job.to_json() for job in service.jobs.values()])
+
+
+async def get_job(request: web.Request) -> web.Response:
+    service = _service(request)
+    return web.json_response(service.job(request.match_info["id"]).to_json())
+
+
+async def control_job(request: web.Request) -> web.Response:
+    service = _service(request)
+    action = request.match_info["action"]
+    job = await service.running_job(request.match_info["id"], _client(request))
+    arm = service.arm
+    if action == "pause":
+        return web.json_response({"id": job.id, "toggle_sent": await arm.pause()})
+    if action == "resume":
+        return web.json_response({"id": job.id, "toggle_sent": await arm.resume()})
+    if action == "stop":
+        await arm.stop("stopped from the API")
+        return web.json_response({"id": job.id, "stopping": True})
+    body = await _json_object(request)
+    percent = body.get("percent")
+    if isinstance(percent, bool) or not isinstance(percent, (int, float)):
+        raise ValueError('feed needs {"percent": N} with N a number (10-200)')
+    return web.json_response({"id": job.id, "feed_percent": await arm.feed_override(percent)})
+
+
+async def move(request: web.Request) -> web.Response:
+    from ..api import move_line
+
+    service = _service(request)
+    words = await _json_object(request)
+    allowed = {"timeout"} | set("xyzabcuvsthf") | {f"j{i}" for i in range(1, 7)}
+    unknown = sorted(set(words) - allowed)
+    if unknown:
+        raise ValueError(f"unknown move keywords: {', '.join(unknown)} (x y z a b c j1…j6 u v s t h f timeout)")
+    move_line(**{k: v for k, v in words.items() if k != "timeout"})  # the words' own errors, before anything
+    return web.json_response(await service.move(words, _client(request)))
+
+
+async def events(request: web.Request) -> web.WebSocketResponse:
+    """The WebSocket: the arm's events; with ``?control=1`` the client asks to control it."""
+    service = _service(request)
+    if len(service.hub.viewers) >= MAX_VIEWERS:
+        return _error(503, "too_many_viewers", f"arm {service.name!r} has {MAX_VIEWERS} viewers already")
+    # a browser offering "armctl" and "bearer.TOKEN" gets "armctl" back (it must get one it offered)
+    socket = web.WebSocketResponse(heartbeat=WS_HEARTBEAT_S, protocols=("armctl",), max_msg_size=64 * 1024)
+    await socket.prepare(request)
+    client = request.query.get("client") or uuid.uuid4().hex
+    control = request.query.get("control") in ("1", "true") and service.take_control(client)
+    viewer = Viewer(client)
+    await socket.send_json({"event": "hello", "arm": service.name, "client": client, "control": control,
+                            "controlled": service.controller is not None, "status": service.status,
+                            "job": None if service.running is None else service.running.to_json()})
+    if control:
+        service.publish({"event": "control", "controller": "another client"})
+    service.hub.add(viewer)
+    sender = asyncio.ensure_future(viewer.send_all(socket.send_str))
+    try:
+        async for message in socket:
+            if message.type != WSMsgType.TEXT:
+                continue
+            await _on_message(service, client, socket, message.data)
+    finally:
+        sender.cancel()
+        service.hub.remove(viewer)
+        if service.controller == client:
+            await service.jog_stop()  # a closed tab: the neutral at once
+            service.release_control(client)
+    return socket
+
+
+async def _on_message(service, client: str, socket, text: str) -> None:
+    """A message from a viewer: ``{"jog": "j1_plus"}`` (a heartbeat: start or renew),
+    ``{"jog": null}`` (release), ``{"ping": …}``."""
+    try:
+        message = json.loads(text)
+    except json.JSONDecodeError:
+        await socket.send_json({"event": "error", "error": "not JSON"})
+        return
+    if not isinstance(message, dict):
+        return
+    try:
+        if "jog" in message:
+            if message["jog"] is None:
+                if client == service.controller:
+                    await service.jog_stop()
+            else:
+                await service.jog(str(message["jog"]), client)
+        elif "ping" in message:
+            await socket.send_json({"event": "pong", "ping": message["ping"]})
+    except ArmctlError as error:
+        await socket.send_json({"event": "error", "error": str(error)})
+
+
+async def server_stats(request: web.Request) -> web.Response:
+    return web.json_response({name: {**service.hub.stats(), "controlled": service.controller is not None}
+                              for name, service in request.app[SERVICES].items()})
+
+
+def build_app(services: dict, *, token: str | None, host: str) -> web.Application:
+    app = web.Application(middlewares=[_guard], client_max_size=MAX_INPUT_BYTES)
+    app[SERVICES] = services
+    app[SETTINGS] = {"token": token, "host": host}
+    app.router.add_get("/", page)
+    app.router.add_get("/api/arms", list_arms)
+    app.router.add_get("/api/server", server_stats)
+    app.router.add_get("/api/arms/{name}/status", status)
+    app.router.add_post("/api/arms/{name}/lint", lint)
+    app.router.add_post("/api/arms/{name}/preview", preview)
+    app.router.add_post("/api/arms/{name}/jobs", create_job)
+    app.router.add_get("/api/arms/{name}/jobs", list_jobs)
+    app.router.add_get("/api/arms/{name}/jobs/{id}", get_job)
+    app.router.add_post("/api/arms/{name}/jobs/{id}/{action:pause|resume|stop|feed}", control_job)
+    app.router.add_post("/api/arms/{name}/move", move)
+    app.router.add_get("/api/arms/{name}/events", events)
+    return app

@@ -1,0 +1,98 @@
+"""``armctl serve``'s process: open the arms, listen, stop cleanly.
+
+Strategy: everything on one asyncio loop (aiohttp's), the arms opened as ``AsyncArm`` before
+the first request; SIGINT and SIGTERM stop the server the way Ctrl-C stops ``armctl run``: a
+running job is stopped (the abort sequence, the arm waited for, the journal closed), the arms
+closed, then the process exits 130.
+"""
+from __future__ import annotations
+
+import asyncio
+import signal
+import sys
+from pathlib import Path
+
+from ..errors import ConfigError
+from . import auth
+from .arms import NAME_PATTERN, ArmService
+
+DEFAULT_LISTEN = "127.0.0.1:8765"
+DEFAULT_ARM = "arm"
+
+
+def parse_arms(specs: tuple[str, ...]) -> list[tuple[str, str | None]]:
+    """``NAME=PORT`` options → [(name, port)]; none: the configured port as ``arm``."""
+    if not specs:
+        return [(DEFAULT_ARM, None)]
+    arms: list[tuple[str, str | None]] = []
+    for spec in specs:
+        name, sep, port = spec.partition("=")
+        if not sep or not NAME_PATTERN.fullmatch(name) or not port:
+            raise ConfigError(f"--arm {spec!r}: expected NAME=PORT, NAME of 1-32 letters, digits, _ or - "
+                              "(e.g. --arm 'a=sim://?speed=20')")
+        if any(name == other for other, _ in arms):
+            raise ConfigError(f"--arm {spec!r}: the name {name!r} is given twice")
+        arms.append((name, port))
+    return arms
+
+
+def journal_root(journal_dir: str | None) -> Path:
+    if journal_dir is not None:
+        return Path(journal_dir)
+    import platformdirs
+
+    return Path(platformdirs.user_data_dir("armctl", appauthor=False)) / "serve-journal"
+
+
+def serve(arm_specs: tuple[str, ...], listen: str, token_file: str | None, journal_dir: str | None,
+          profile: str | None = None, lead_s: float = 2.0, say=print) -> None:
+    """Serve until SIGINT/SIGTERM (then KeyboardInterrupt).  ConfigError/PortError: nothing served."""
+    host, port = auth.parse_listen(listen)
+    arms = parse_arms(arm_specs)
+    token = None
+    if not auth.is_loopback(host) or token_file is not None:
+        token, generated = auth.load_token(token_file)
+        if generated:
+            say(f"armctl serve: a token was generated and kept (0600) in {auth.token_path()}; it is shown this once:\n"
+                f"  {token}")
+        else:
+            say(f"armctl serve: requests need the token in {token_file or auth.token_path()}")
+    asyncio.run(_serve(arms, host, port, token, journal_root(journal_dir), profile, lead_s, say))
+    raise KeyboardInterrupt  # stopped by SIGINT/SIGTERM, cleanly: exit 130 like every command
+
+
+async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None:
+    from aiohttp import web
+
+    from ..aio import AsyncArm
+    from .app import build_app
+
+    services: dict[str, ArmService] = {}
+    try:
+        for name, url in arms:
+            arm = await AsyncArm.open(url, profile=profile, lead_s=lead_s)
+            services[name] = ArmService(name, url or arm.url, arm, journal / name)
+        app = build_app(services, token=token, host=host)
+        runner = web.AppRunner(app, handle_signals=False, access_log=None)
+        await runner.setup()
+        try:
+            await web.TCPSite(runner, host, port).start()
+        except OSError as error:
+            raise ConfigError(f"cannot listen on {host}:{port}: {error.strerror or error}") from None
+        for service in services.values():
+            service.start()
+        shown = f"[{host}]" if ":" in host else host
+        say(f"armctl serve: {len(services)} arm(s) ({', '.join(f'{n}={s.arm.url}' for n, s in services.items())}) "
+            f"on http://{shown}:{port}/" + ("" if token is None else "?token=TOKEN") + "  (Ctrl-C to stop)")
+        sys.stdout.flush()
+        stop = asyncio.Event()
+        loop = asyncio.get_running_loop()
+        for number in (signal.SIGINT, signal.SIGTERM):
+            loop.add_signal_handler(number, stop.set)
+        await stop.wait()
+        for service in services.values():  # a job or a move stops first: no handler waits for it
+            await service.arm.stop("the server is stopping")
+        await runner.cleanup()
+    finally:
+        for service in services.values():
+            await service.close()
