@@ -525,11 +525,11 @@ class Arm:
         simulator's banner; a benchmark one that records the frames written).
         Raises ``ConfigError`` (a bad setting), ``ProfileError`` or ``PortError``."""
         from .calibration import arm_profile
-        from .link import choose_port, connect as open_link
+        from .link import PortChoice, choose_port, connect as open_link
         from .profile import Profile
 
         # types and the CLI's ranges (armctl/limits.py), checked before the port opens
-        port = _path_or_none("port", port)
+        port = _path_or_none("port", port, also=(PortChoice,))  # (a PortChoice: the CLI's port, resolved once)
         profile = _path_or_none("profile", profile, also=(Profile,))
         _check_callable("connect", connect)
         _in_range("lead_s", lead_s, "LEAD_RANGE_S")
