@@ -77,6 +77,10 @@ class Speeds:
     max_joint_deg_s: float
     max_accel_mm_s2: float
     attitude_deg_s: float
+    # the speed of a move that gives none (``Arm.move``, ``armctl move``/``home``): a value
+    # the profile defines, so sending it keeps the rule "never send a value nobody wrote"
+    default_linear_mm_min: float = 3000.0
+    default_joint_deg_s: float = 30.0
 
 
 @dataclass(frozen=True)
@@ -326,6 +330,7 @@ _SCHEMA: dict[str, Any] = {
     "speed": {
         "max_linear_mm_min": _in(1.0, 100_000.0), "max_joint_deg_s": _in(0.1, 3600.0),
         "max_accel_mm_s2": _in(1.0, 100_000.0), "attitude_deg_s": _in(0.1, 3600.0),
+        "default_linear_mm_min": _in(1.0, 100_000.0), "default_joint_deg_s": _in(0.1, 3600.0),
     },
     "pwm": {
         "range_us": _pair(*PWM_RANGE_US), "channels": _channels, "gripper_open_us": _PWM_US,
