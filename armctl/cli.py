@@ -359,6 +359,98 @@ def estimate(script, lead_s, baud, profile_path, as_json):
         print_estimate(result, f"{script} (from the profile's fixed pose 0; the first move depends on where the arm is):")
 
 
+def _move_words(texts: tuple[str, ...]) -> dict:
+    """``("z=200", "f=3000")`` → ``{"z": 200.0, "f": 3000.0}``: ``Arm.move``'s keywords, each
+    once; a word that is not one (or not a number) is a usage error, nothing sent."""
+    from .api import MOVE_KEYWORDS
+    from .profile import unknown_key_hint
+
+    words: dict = {}
+    for text in texts:
+        name, equals, value = text.partition("=")
+        name = name.strip().lower()
+        if not equals or name not in MOVE_KEYWORDS:
+            hint = unknown_key_hint(name, MOVE_KEYWORDS) if equals else " (write WORD=VALUE, as z=200 or j1=30)"
+            raise click.UsageError(f"{text!r} is not one of move's words{hint}")
+        if name in words:
+            raise click.UsageError(f"{name} is given twice")
+        try:
+            number = float(value) if name not in ("t", "h") else int(value)
+        except ValueError:
+            raise click.UsageError(f"{text}: {value!r} is not a {'whole ' if name in ('t', 'h') else ''}number") from None
+        if number != number or number in (float("inf"), float("-inf")):
+            raise click.UsageError(f"{text}: not a finite number")
+        words[name] = int(number) if isinstance(number, float) and number.is_integer() else number
+    if not words:
+        raise click.UsageError("give at least one word: armctl move z=200 (or x=, y=, a=, b=, c=, j1=…j6=, u=, v=, s=, t=, h=, f=)")
+    return words
+
+
+def _one_line_job(port, baud, profile_path, timeout_s, as_json, act) -> None:
+    """``armctl move``/``home``: open the arm, ``act(arm)`` (one line run as a job, proven at
+    rest), print where the arm ended (text, or the ``RunResult`` as JSON), exit with its code."""
+    from .api import Arm
+    from .errors import ScriptError
+    from .jobflow import JobFailed
+    from .ui.run_job import one_line_summary
+
+    with Arm.open(port, baud, profile_path, status_timeout_s=timeout_s, connect=_connect) as arm:
+        try:
+            result = act(arm)
+        except ScriptError as error:
+            for diagnostic in error.diagnostics:
+                click.echo(diagnostic.render(), err=True)
+            click.echo("nothing was sent to the arm", err=True)
+            sys.exit(EXIT_PROBLEMS)
+        except JobFailed as error:
+            if error.result is None:
+                raise
+            result = error.result
+        status = arm.status() if result.finished else None
+    if as_json:
+        click.echo(json.dumps(result.to_json()))
+    else:
+        click.echo(one_line_summary(result, None if status is None else status.position_mm))
+    sys.exit(result.exit_code)
+
+
+_one_line_options = [
+    port_option, baud_option,
+    click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML)."),
+    click.option("--timeout", "timeout_s", type=number(*START_TIMEOUT_RANGE_S), default=3.0, show_default=True,
+                 help="Seconds to wait for the arm's status before starting."),
+    click.option("--json", "as_json", is_flag=True, help="The result as one JSON object (as run --json's summary)."),
+]
+
+
+def _with_one_line_options(command):
+    for option in reversed(_one_line_options):
+        command = option(command)
+    return command
+
+
+@main.command()
+@click.argument("words", nargs=-1, metavar="WORD=VALUE...")
+@_with_one_line_options
+def move(words, port, baud, profile_path, timeout_s, as_json):
+    """Move the arm with one line, as Arm.move does: armctl move z=200 [f=3000].
+
+    Words: x y z (mm) a b c (deg) for a straight line (G1), or j1…j6 (deg) for a joint move
+    (G6); u v external axes, s PWM (µs), t its channel, h smoothing, f speed (mm/min, or deg/s
+    for joints; default: the profile's [speed] default).  Words left out keep the arm's
+    reported values.  Returns when the arm's reports prove it at rest at the target.
+    """
+    keywords = _move_words(words)
+    _one_line_job(port, baud, profile_path, timeout_s, as_json, lambda arm: arm.move(**keywords))
+
+
+@main.command()
+@_with_one_line_options
+def home(port, baud, profile_path, timeout_s, as_json):
+    """Go to the profile's fixed pose 0 (POSE 0) and wait until the arm is proven at rest there."""
+    _one_line_job(port, baud, profile_path, timeout_s, as_json, lambda arm: arm.home())
+
+
 @main.command()
 @click.option("--pty", "use_pty", is_flag=True, help="Serve the simulated arm on a new pseudo-terminal and print its path.")
 @click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True), help="Serve one client on 127.0.0.1:PORT (socket://127.0.0.1:PORT).")

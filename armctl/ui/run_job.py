@@ -420,6 +420,17 @@ def resume_command(options: JobOptions, line: int) -> str:
     return shlex.join(words)
 
 
+def one_line_summary(result, position_mm) -> str:
+    """What ``armctl move``/``home`` print: the outcome, the arm time and (finished) where the
+    arm reports it is at rest."""
+    time_s = "" if result.arm_time_s is None else f" in {result.arm_time_s:.1f} s of arm time"
+    where = "" if position_mm is None else " at X{:.1f} Y{:.1f} Z{:.1f}".format(*position_mm)
+    if result.finished:
+        return f"finished: the arm is at rest{where}{time_s}"
+    messages = "".join(f"; {message}" for message in result.messages)
+    return f"{result.outcome}{time_s}{messages}"
+
+
 def _repeat_note(view, resume: int | None) -> str:
     """What the summary says when the resume line is a repeat block's start (jobflow.resume_line:
     --from-line cannot start inside one): the passes already done run again."""
