@@ -120,11 +120,39 @@ def main(verbose, quiet):
     Without --port (or ARMCTL_PORT, or `port` in armctl.toml) commands talk to the built-in
     simulator.
     """
+    _configure_output(click.get_current_context())
+
+
+def _configure_output(ctx: click.Context) -> None:
+    """``-v``/``-q`` as given so far (before or after the subcommand), on the root context
+    where ``armctl.output.quiet`` reads them."""
     from .output import configure
 
+    root = ctx.find_root()
+    verbose, quiet = bool(root.params.get("verbose")), bool(root.params.get("quiet"))
     if verbose and quiet:
         raise click.UsageError("choose -v or -q, not both")
     configure(verbose, quiet)
+
+
+def _late_flag(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    """``armctl run job.txt -q``: the group's flag given after the subcommand."""
+    if value:
+        ctx.find_root().params[param.name] = True
+        _configure_output(ctx)
+
+
+def _accept_output_flags_after(group: click.Group) -> None:
+    """Every subcommand takes ``-v``/``-q`` too, meaning exactly what they mean before it."""
+    for command in group.commands.values():
+        if isinstance(command, click.Group):
+            _accept_output_flags_after(command)
+            continue
+        taken = {name for param in command.params for name in getattr(param, "opts", ())}
+        for flag, name, text in (("-v", "verbose", "The same as `armctl -v`."), ("-q", "quiet", "The same as `armctl -q`.")):
+            if flag not in taken and f"--{name}" not in taken:
+                command.params.append(click.Option([flag, f"--{name}"], is_flag=True, expose_value=False,
+                                                   callback=_late_flag, help=text))
 
 
 def _read_input(path: str) -> bytes:
@@ -521,3 +549,6 @@ def bench(size, scenario_names, lead_s, as_json, jobs):
     from .bench.table import main as bench_main
 
     sys.exit(bench_main(size, scenario_names, lead_s, as_json, jobs))
+
+
+_accept_output_flags_after(main)
