@@ -14,6 +14,7 @@ value ends; the outermost rules unwrap it.  A line that does not parse raises
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.util
 import os
@@ -234,4 +235,35 @@ def parse_line(text: str) -> Node:
     try:
         return parser().parse(text)
     except UnexpectedInput as error:
-        raise explain(error, text) from None
+        raise _with_suggestion(explain(error, text), text) from None
+
+
+def _with_suggestion(error: LineSyntaxError, text: str) -> LineSyntaxError:
+    """``error`` with "(did you mean X250?)" when a repair of the line parses (armctl/script/suggest.py)."""
+    from .suggest import did_you_mean
+
+    fix = _suggestion(text, error.column)
+    if fix is None:
+        return error
+    return LineSyntaxError(error.message + did_you_mean(fix), error.column, error.end_column, error.hint, error.code)
+
+
+@functools.lru_cache(maxsize=256)  # a script repeating one bad line repairs it once
+def _suggestion(text: str, column: int):
+    from lark.exceptions import UnexpectedInput
+
+    from .statements import CODES
+    from .suggest import repaired_line
+
+    def parses(candidate: str) -> bool:
+        try:
+            parser().parse(candidate)
+        except UnexpectedInput:
+            return False
+        return True
+
+    def single_word(number: int):
+        spec = CODES.get(number)
+        return spec.letters[0] if spec is not None and len(spec.letters) == 1 else None
+
+    return repaired_line(text, column, parses, single_word)
