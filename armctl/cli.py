@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 import sys
+from contextlib import contextmanager
 from itertools import islice
 
 import click
@@ -175,16 +176,43 @@ def decode(source: str, as_json: bool):
 
     Finds 48-byte command frames and 9-byte status frames in any mix, prints one readable
     line per frame (offset, family, command and fields with units) and marks bytes that
-    belong to no frame.
+    belong to no frame.  A run --log's frames come with their time and direction
+    (host→arm, arm→host), in the log's order.  The input is read as it is decoded.
     """
-    from .formats import bytes_from_input, chunk_record, describe_chunk, summary_line
-    from .protocol import scan_frames
+    from .decode import NotHex, decode_stream
+    from .formats import ChunkTally, decoded_record, describe_decoded
 
-    data = bytes_from_input(_read_input(source))
-    chunks = list(scan_frames(data))
-    for chunk in chunks:
-        click.echo(json.dumps(chunk_record(chunk)) if as_json else describe_chunk(chunk))
-    click.echo(summary_line(chunks), err=True)
+    tally = ChunkTally()
+    out = sys.stdout
+    with _open_input(source) as stream:
+        lines: list[str] = []
+        try:
+            for item in decode_stream(stream, "<stdin>" if source == "-" else source):
+                tally.add(item.chunk)
+                lines.append(json.dumps(decoded_record(item)) if as_json else describe_decoded(item))
+                if len(lines) >= 1024:  # a write per line costs more than the decoding
+                    out.write("\n".join(lines) + "\n")
+                    lines = []
+        except NotHex as error:
+            raise UsageFailure(f"{source}: {error}") from None
+        finally:
+            if lines:
+                out.write("\n".join(lines) + "\n")
+    click.echo(tally.line(), err=True)
+
+
+@contextmanager
+def _open_input(path: str):
+    """``path`` opened for binary reading (``-``: stdin, left open); unreadable: exit 2."""
+    if path == "-":
+        yield sys.stdin.buffer
+        return
+    try:
+        stream = open(path, "rb")
+    except OSError as error:
+        raise UsageFailure(f"cannot read {path}: {error.strerror or error}") from None
+    with stream:
+        yield stream
 
 
 def _read_script(path: str):

@@ -129,17 +129,56 @@ def _short_hex(data: bytes, limit: int = 24) -> str:
     return data[:limit].hex(" ") + f" … (+{len(data) - limit})"
 
 
-def summary_line(chunks: Iterable[Chunk]) -> str:
-    from .status_frames import StatusFrame
+class ChunkTally:
+    """``decode``'s closing count, kept as the chunks go by (none of them is kept)."""
 
-    commands = statuses = invalid = junk = 0
-    for chunk in chunks:
+    def __init__(self) -> None:
+        from .status_frames import StatusFrame
+
+        self._status_class = StatusFrame
+        self.commands = self.statuses = self.invalid = self.junk_bytes = 0
+
+    def add(self, chunk: Chunk) -> None:
         if isinstance(chunk.frame, Command):
-            commands += 1
-        elif isinstance(chunk.frame, StatusFrame):
-            statuses += 1
+            self.commands += 1
+        elif isinstance(chunk.frame, self._status_class):
+            self.statuses += 1
         elif chunk.error is not None:
-            invalid += 1
+            self.invalid += 1
         else:
-            junk += len(chunk.data)
-    return f"{commands} command frame(s), {statuses} status frame(s), {invalid} invalid frame(s), {junk} byte(s) in no frame"
+            self.junk_bytes += len(chunk.data)
+
+    def line(self) -> str:
+        return (f"{self.commands} command frame(s), {self.statuses} status frame(s), {self.invalid} invalid frame(s), "
+                f"{self.junk_bytes} byte(s) in no frame")
+
+
+def summary_line(chunks: Iterable[Chunk]) -> str:
+    tally = ChunkTally()
+    for chunk in chunks:
+        tally.add(chunk)
+    return tally.line()
+
+
+def describe_decoded(item) -> str:
+    """``describe_chunk`` of a ``decode.Decoded``, after its time and direction when a log gave them:
+    ``    0.030 s  arm→host      0  status   position …``."""
+    from .decode import DIRECTIONS
+
+    line = describe_chunk(item.chunk)
+    if item.t_s is None and item.direction is None:
+        return line
+    when = f"{item.t_s:>9.3f} s" if item.t_s is not None else " " * 11
+    return f"{when}  {DIRECTIONS.get(item.direction, '?       ')}  {line}"
+
+
+def decoded_record(item) -> dict:
+    """``chunk_record`` of a ``decode.Decoded``, with ``t`` (s, the log's clock) and ``direction``
+    (``host->arm`` or ``arm->host``) when a log gave them."""
+    record = chunk_record(item.chunk)
+    if item.t_s is not None or item.direction is not None:
+        record = {"t": item.t_s, "direction": _JSON_DIRECTIONS.get(item.direction), **record}
+    return record
+
+
+_JSON_DIRECTIONS = {"tx": "host->arm", "rx": "arm->host"}
