@@ -320,7 +320,8 @@ def _connect(port: str | None, baud: int | None, **link_options):
 @click.option("--once", is_flag=True, help="Wait until all 9 status kinds were seen, print them, exit.")
 @click.option("--watch", is_flag=True, help="A live view, refreshed 12 times a second, until Ctrl-C.")
 @click.option("--json", "as_json", is_flag=True, help="JSON (one object; with --watch, JSON lines).")
-@click.option("--timeout", type=number(*STATUS_TIMEOUT_RANGE_S), default=2.0, show_default=True, help="Seconds to wait for the arm's status.")
+@click.option("--timeout", type=number(*STATUS_TIMEOUT_RANGE_S), default=2.0, show_default=True,
+              help="Seconds to wait for the arm's status (with --watch into a pipe: for the first complete one).")
 def status(port, baud, once, watch, as_json, timeout):
     """Show the arm's decoded status frames (position, joints, PWM, pause, SD program)."""
     from .ui.status_watch import print_once, watch_status
@@ -333,7 +334,7 @@ def status(port, baud, once, watch, as_json, timeout):
             from .link import require_wall_clock
 
             require_wall_clock(link, "status --watch")
-            watch_status(link, baud, as_json)
+            watch_status(link, baud, as_json, timeout)
         else:
             print_once(link, baud, timeout, as_json)
 
