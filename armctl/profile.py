@@ -34,9 +34,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import os
 import pkgutil
-import sys
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -555,15 +553,9 @@ def find_config(start: Path | None = None) -> tuple[Path | None, dict]:
 def user_config_path() -> Path:
     """The user's armctl.toml: ``$XDG_CONFIG_HOME/armctl/armctl.toml`` (``~/.config/…`` when
     unset) on Linux and the BSDs, platformdirs' equivalent on macOS and Windows."""
-    if sys.platform.startswith(("linux", "freebsd", "openbsd", "netbsd")):
-        # platformdirs' own rule for these, without importing it at every start (issue 13)
-        # (the XDG rule: a relative or empty XDG_CONFIG_HOME is ignored); tests/test_user_config.py
-        # holds the two to agreeing
-        base = os.environ.get("XDG_CONFIG_HOME", "")
-        return Path(base if os.path.isabs(base) else os.path.expanduser("~/.config")) / "armctl" / CONFIG_NAME
-    import platformdirs
+    from .folders import user_folder
 
-    return Path(platformdirs.user_config_dir("armctl", appauthor=False)) / CONFIG_NAME
+    return user_folder("config") / CONFIG_NAME
 
 
 @dataclass(frozen=True)
