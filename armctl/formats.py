@@ -89,18 +89,32 @@ def _log_bytes(data: bytes) -> Iterator[bytes]:
             continue
 
 
-def describe_chunk(chunk: Chunk) -> str:
-    from .status_frames import StatusFrame, describe  # decode's: compile needs none of it (start-up)
+_DESCRIBED: dict[bytes, str] = {}  # a frame's bytes → its line after the offset (decode repeats many)
+_DESCRIBED_MAX = 4096  # bounded: memory stays flat whatever the input
 
+
+def describe_chunk(chunk: Chunk) -> str:
+    if chunk.frame is not None:
+        text = _DESCRIBED.get(chunk.data)
+        if text is None:
+            if len(_DESCRIBED) >= _DESCRIBED_MAX:
+                _DESCRIBED.clear()
+            text = _DESCRIBED[chunk.data] = _describe_frame(chunk)
+        return f"{chunk.offset:>6}  {text}"
     where = f"{chunk.offset:>6}"
-    if isinstance(chunk.frame, Command):
-        family = "motion " if chunk.data[0] == 0xEE else "control"
-        return f"{where}  {family}  {describe(chunk.frame)}"
-    if isinstance(chunk.frame, StatusFrame):
-        return f"{where}  status   {describe(chunk.frame)}"
     if chunk.error is not None:
         return f"{where}  invalid  {chunk.error}: {chunk.data.hex(' ')}"
     return f"{where}  ??       {len(chunk.data)} byte(s) in no frame: {_short_hex(chunk.data)}"
+
+
+def _describe_frame(chunk: Chunk) -> str:
+    """A frame's line after its offset: family and description (the same bytes, the same line)."""
+    from .status_frames import StatusFrame, describe  # decode's: compile needs none of it (start-up)
+
+    if isinstance(chunk.frame, StatusFrame):
+        return f"status   {describe(chunk.frame)}"
+    family = "motion " if chunk.data[0] == 0xEE else "control"
+    return f"{family}  {describe(chunk.frame)}"
 
 
 def chunk_record(chunk: Chunk) -> dict:
