@@ -81,10 +81,13 @@ class RunResult:
     ``outcome``: "finished" (the arm's reports proved every frame executed), "finished, unproven"
     (the arm ended, but some frames rest on time alone and the FIFO size was never probed: a
     dropped frame would look the same), "interrupted" (``Arm.stop``, Ctrl-C), "failed", "port
-    lost", "no confirmation" or "frames may have been lost" (the API raises these four as
-    ``JobFailed`` with this result attached); ``armctl run --json`` adds "refused" (the script's
-    errors, nothing sent).  ``frames_by_reports`` / ``frames_by_time``: the frames the arm's
-    reports confirmed, and those confirmed by time alone (the slowest-arm bound).  Lines are the script's line numbers; the move of
+    lost", "no confirmation", "frames may have been lost" or "paused by the script" (the script's own
+    PAUSE paused the arm with lines still to run; ``resume_line`` is the line after it) (the API
+    raises these five as ``JobFailed`` with this result attached); ``armctl run --json`` adds "refused" (the script's
+    errors, nothing sent).  ``frames_by_reports`` / ``frames_by_time`` / ``frames_unseen``: the frames
+    the arm's reports saw run, those confirmed by time alone (the slowest-arm bound), and those a
+    report proves gone from the FIFO without seeing them run (a sighting on a later frame: a frame a
+    full FIFO dropped would look the same).  Lines are the script's line numbers; the move of
     ``Arm.move`` is line 1.  ``last_line_executed``: the last line the arm's reports prove
     executed.  ``arm_time_s``: from the first frame to the arm at rest, in the arm's clock, to
     the millisecond (None when it did not come to rest at the end).  ``resume_line``: where
@@ -106,6 +109,7 @@ class RunResult:
     exit_code: int = 0
     frames_by_reports: int = 0
     frames_by_time: int = 0
+    frames_unseen: int = 0
 
     @property
     def finished(self) -> bool:
@@ -124,7 +128,8 @@ class RunResult:
         return cls(outcome, view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
                    getattr(view.last_done, "line", None), None if arm_time_s is None else round(arm_time_s, 3),
                    estimated_job_s, resume, None if resume is None or resume_command is None else resume_command(resume),
-                   tuple(view.messages), exit_code_of(outcome), view.frames_by_reports, view.frames_by_time)
+                   tuple(view.messages), exit_code_of(outcome), view.frames_by_reports, view.frames_by_time,
+                   view.frames_unseen)
 
     @classmethod
     def nothing_sent(cls, outcome: str, *, exit_code: int | None = None, message: str | None = None) -> RunResult:

@@ -52,13 +52,15 @@ Rules:
   statement about to be written, and the streamer plans that very command, so the lead and the
   estimate follow it.  A stop sends its pause toggle only when the arm would otherwise run on.
 - A summary claims only what evidence proves.  Each frame counts as confirmed by the arm's
-  reports or by time alone (``RunView.frames_by_reports`` / ``frames_by_time``).  Any sign of loss
+  reports, by time alone, or as gone from the FIFO without a proof that it ran
+  (``RunView.frames_by_reports`` / ``frames_by_time`` / ``frames_unseen``: armctl/streamer.py).  Any sign of loss
   — the streamer saw the arm skip frames (``Streamer.losses``), or the arm at rest at the end
   sooner than the frames sent could take at the fastest plausible pace — ends FRAMES_LOST with
   the evidence, and nothing from the first frame that may be lost on is claimed executed.
   ``done`` (FINISHED) also needs a proven FIFO size (``fifo_proven``: probed, or a simulator
   known to hold at least the profile's) or every frame confirmed by the arm's reports: time
-  alone cannot tell a frame run from a frame dropped; else the job ends UNPROVEN.
+  alone cannot tell a frame run from a frame dropped (nor can a report on a later frame); else
+  the job ends UNPROVEN.
 """
 
 from __future__ import annotations
@@ -72,10 +74,11 @@ from typing import Iterable, Iterator
 from .job_control import JobControl, agreed_pause, control_frames_of  # noqa: F401  (agreed_pause: the pause rule, re-exported)
 from .streamer import LOSS_SLACK_S, ROTATION_S
 from .protocol import (
-    CONTROL_COMMANDS, ArcEnd, ArcStart, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, ResetConnector,
-    RunPositionStatus, StatusFrame,
+    CONTROL_COMMANDS, ArcEnd, ArcStart, GoToPose, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus,
+    ResetConnector, RunPositionStatus, RunProgram, StatusFrame,
 )
 from .streamer import ARRIVAL_SLACK_S
+from .motion import distance_to_path
 
 ABORT_SEQUENCES = {
     "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
@@ -138,6 +141,7 @@ class Outcome(StrEnum):
     NO_CONFIRMATION = "no confirmation"
     FRAMES_LOST = "frames may have been lost"
     UNPROVEN = "finished, unproven"
+    PAUSED = "paused by the script"  # the script's own PAUSE paused the arm with lines still to run
 
 
 @dataclass(frozen=True, slots=True)
@@ -185,6 +189,7 @@ class RunView:
     outcome: str = Outcome.RUNNING  # an Outcome
     frames_by_reports: int = 0  # frames confirmed by the arm's reports (position, joints, at rest at the end)
     frames_by_time: int = 0  # frames confirmed only by time (the slowest-arm bound)
+    frames_unseen: int = 0  # frames a report proves gone from the FIFO (a later frame's sighting), never seen running
     messages: list = field(default_factory=list)
     pause_state: str = "running"  # armctl/job_control.py's PauseState: running, pausing, paused, resuming
     pause_label: str = "running"  # what the panel shows (the arm's reports decide it)
@@ -238,6 +243,7 @@ class Job:
         ``fifo_frames`` (``armctl.link.fifo_proven`` decides for ``armctl run``)."""
         self.streamer = streamer
         self.fifo_proven = fifo_proven
+        streamer.fifo_holds_all = fifo_proven  # else a frame gone from the FIFO may have been dropped, not run
         # pause, resume and the feed override (armctl/job_control.py), under the profile the
         # streamer plans with: its speed limits (never passed) and its control-frame mode (H5)
         profile = streamer.planner.model.profile
@@ -260,6 +266,9 @@ class Job:
         self._active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
         self._reported: dict = {}
         self._pause_reports: deque = deque(maxlen=2)  # the last two pause states reported
+        self._pause_read_s: deque = deque(maxlen=2)  # ... and when they were read
+        self._script_toggles: list = []  # the job's own PAUSE frames written (SentFrame), in order
+        self._script_pause_deadline_s: float | None = None  # held behind one: how long its pause is waited for
         self._recent: deque = deque(maxlen=RECENT_FRAMES)  # the last frames written (SentFrame)
         self._aborts: deque = deque()  # abort frames still to write
         self._deadline_s = 0.0
@@ -270,6 +279,7 @@ class Job:
         self._last_move = None  # the last frame written that moves the arm (its SentFrame)
         self._resume_at_next = False  # frozen where the first pending frame ends and the next begins
         self._held = False  # streaming, and only evidence lets the next frame go (``_rest_proves_all_written``)
+        self._found_arrival = False  # the arm proved its control frames act as they land (``_frozen_mid_move``)
 
     # --- input ------------------------------------------------------------------------------
 
@@ -333,6 +343,7 @@ class Job:
             values = values_of(frame)
             if kind == 4:  # news while streaming only through the control state (or the bound)
                 self._pause_reports.append(frame.paused)
+                self._pause_read_s.append(now)
                 version = control.version
                 control.observe(agreed_pause(self._pause_reports))  # pausing… → paused, resuming… → running
                 news = news or control.version != version
@@ -370,7 +381,7 @@ class Job:
         """The host wrote the frame the last ``Write`` asked for, starting at ``now``."""
         write, self._write = self._write, None
         if self.phase is _Phase.ABORTING:
-            if isinstance(self._aborts.popleft(), ResetConnector) and self.streamer.control_on_arrival:
+            if isinstance(self._aborts.popleft(), ResetConnector) and self._acts_on_arrival:
                 self.streamer.cleared()  # it acted as it landed: what was queued may be gone
             return
         if write is not None and write.control is not None:  # a pause toggle the user asked for
@@ -385,6 +396,8 @@ class Job:
         if self.pacing is not self.streamer:
             self.pacing.wrote(command, now, statement)
         self._recent.append(sent)
+        if isinstance(command, PauseToggle):
+            self._script_toggles.append(sent)
         if _moves_arm(sent.segment):
             self._last_move = sent
         view.frames_sent += 1
@@ -403,7 +416,9 @@ class Job:
     def pause(self) -> bool:
         """Pause the job: a pause toggle, and nothing more written until ``resume`` (False when
         already pausing or paused, the arm reports it is paused, or the job is stopping)."""
-        return self._controllable and self.control.pause()
+        # (not behind the script's own PAUSE: a second toggle would undo it, or, queued, resume the arm
+        # it paused)
+        return self._controllable and len(self._script_toggles) % 2 == 0 and self.control.pause()
 
     def resume(self) -> bool:
         """Resume a pause asked with ``pause``: the toggle goes first, then the job's frames."""
@@ -445,6 +460,8 @@ class Job:
                 return held
         if self.phase is _Phase.STREAMING:
             statement = view.next_statement
+            if statement is not None and self._script_pause_holds(statement):
+                return self._held_by_script_pause(now)
             if statement is not None:
                 command = self.control.command_for(statement)
                 when = self.pacing.next_write_time(now, command)
@@ -493,6 +510,47 @@ class Job:
             return Wait(None)  # until the arm reports (pausing → paused) or the user resumes
         return None
 
+    def _script_pause_holds(self, statement) -> bool:
+        """The job's own PAUSE lines left the arm to pause (an odd number written) and the next
+        statement does not resume it: nothing more is written.  On an arm whose control frames
+        queue (H5) a frame behind the PAUSE would wait at the head of the paused FIFO, where no
+        resume toggle could ever reach the head; on either arm the rest of the job waits for a
+        resume nobody in this run can give (the run ends at the pause: ``_held_by_script_pause``)."""
+        return len(self._script_toggles) % 2 == 1 and not isinstance(statement.command, PauseToggle)
+
+    def _paused_by_script(self) -> bool:
+        """The arm reports it is paused (two agreeing reports) in reports read after the job's last
+        PAUSE landed: it acted — and, queued (H5), after every frame before it had run; on
+        arrival, rule (c) wrote it only once they had."""
+        toggles = self._script_toggles
+        if len(toggles) % 2 == 0 or self.arm_paused is not True or len(self._pause_read_s) < 2:
+            return False
+        return self._pause_read_s[0] >= toggles[-1].wire_end_s + ARRIVAL_SLACK_S
+
+    def _script_pause_line(self):
+        return getattr(self._script_toggles[-1].tag, "line", None)
+
+    def _held_by_script_pause(self, now: float) -> Wait | Finished:
+        """Held behind the script's own PAUSE: once the arm reports the pause, every frame written
+        ran, and the run ends "paused by the script" with the resume line after the PAUSE (the
+        resume's start-up un-pauses the arm with its one toggle, its FIFO empty).  An arm that
+        does not report the pause in the time its queue takes ends "no confirmation"."""
+        if self._paused_by_script():
+            self._script_toggles[-1].seen = True  # the arm's pause report: it ran
+            self.streamer.confirm_all_done()
+            following = getattr(self.view.next_statement, "line", None)
+            self.view.messages.append(
+                f"paused by the script's PAUSE at line {self._script_pause_line()}: the arm is paused, and the rest "
+                f"of the job (from line {following}) was not sent; the printed resume un-pauses the arm and runs it")
+            return self._finish(Outcome.PAUSED, now)
+        if self._script_pause_deadline_s is None:
+            self._script_pause_deadline_s = self._settle_deadline(now)
+        if now >= self._script_pause_deadline_s:
+            self.view.messages.append(f"the arm did not report the pause of the script's PAUSE at line "
+                                      f"{self._script_pause_line()} in time: the rest of the job was not sent")
+            return self._finish(Outcome.FRAMES_LOST if self.streamer.losses else Outcome.NO_CONFIRMATION, now)
+        return Wait(self._script_pause_deadline_s)
+
     @property
     def streaming(self) -> bool:
         """Frames of the job are still to be written (the pacing strategy's answers are current)."""
@@ -516,9 +574,15 @@ class Job:
         """Finished means: at rest, at the last target, not paused, and the estimate agrees.
         Anything else ends without claiming the job ran (frames cleared or dropped, a pause)."""
         view = self.view
-        if self._rest_proves_all_written(now):
+        paused_at_end = self._paused_by_script()  # the script ends with its own PAUSE: every frame ran
+        if paused_at_end:
+            self._script_toggles[-1].seen = True
+        if paused_at_end or self._rest_proves_all_written(now):
             self._confirm_all_done()
             view.arm_done_s = self._done_at(now)
+            if paused_at_end:
+                view.messages.append(f"the arm is paused, as the script's PAUSE at line {self._script_pause_line()} "
+                                     "leaves it")
             if self._overran:
                 view.messages.append("the arm kept working past the estimate (moving, or running an SD program "
                                      "whose time armctl cannot know); armctl waited until it stopped")
@@ -644,11 +708,10 @@ class Job:
         streamer = self.streamer
         if streamer.losses:
             return Outcome.FRAMES_LOST
-        if not self.fifo_proven and streamer.confirmed_by_time:
+        if not self.fifo_proven and (streamer.confirmed_by_time or streamer.confirmed_unseen):
             self.view.messages.append(
-                f"finished, unproven: {streamer.confirmed_by_time} frames were confirmed by time alone, and the "
-                "FIFO size is the document's, not measured on this arm: a frame it dropped would look the same; "
-                "run `armctl probe` once")
+                f"finished, unproven: {_frames_not_seen(streamer)}, and the FIFO size is the document's, not "
+                "measured on this arm: a frame it dropped would look the same; run `armctl probe` once")
             return Outcome.UNPROVEN
         return Outcome.FINISHED
 
@@ -660,10 +723,16 @@ class Job:
             return self._finish(outcome, now)
         still = self._rest_s() >= REST_CHECK_S
         if still and (self.arm_paused or self.arm_at_rest(now)):
-            if self._at_last_target():
-                self._confirm_all_done()
-            elif self.arm_paused and self.streamer.control_on_arrival:
+            if self.arm_paused and not self._acts_on_arrival and self._paused_on_arrival():
+                return self.next_action(now)  # the RESET CONNECTOR that clears what is still queued
+            if self.arm_paused and self._acts_on_arrival:
+                # The pause acted as it landed: the arm at the last target says nothing of the frames
+                # after its last move (a PWM change, a delay: the RESET CONNECTOR cleared them, or
+                # not); the moves it reached the ends of did run.
+                self._confirm_through_last_move()
                 self._resume_at_next = self._frozen_at_a_boundary()
+            elif self._at_last_target():
+                self._confirm_all_done()
             return self._finish(outcome, now)
         return Wait(self._next_change_s(now, self._deadline_s))
 
@@ -703,8 +772,11 @@ class Job:
                                  "and a RESET CONNECTOR cleared the frames queued behind it; the resume command resumes "
                                  "that move, then re-sends its line (an absolute move to where the arm then is)")
         self.control.observe(self.arm_paused)
-        if not self.control.abort_needs_toggle() and any(isinstance(c, PauseToggle) for c in sequence):
-            why = ("a pause was already on its way" if self.control.state == "pausing"
+        script_pause = len(self._script_toggles) % 2 == 1  # the script's own PAUSE pauses (or paused) it
+        if (script_pause or not self.control.abort_needs_toggle()) and any(isinstance(c, PauseToggle) for c in sequence):
+            why = (f"the script's PAUSE at line {self._script_pause_line()} was already written"
+                   if script_pause and self.arm_paused is not True
+                   else "a pause was already on its way" if self.control.state == "pausing"
                    else "the arm was already paused")
             view.messages.append(f"{why}: no pause toggle sent (it would have resumed it)")
             sequence = tuple(c for c in sequence if not isinstance(c, PauseToggle))
@@ -796,11 +868,35 @@ class Job:
             return "the arm reports it is paused: the rest of the job waits in its buffer"
         position = self._reported.get(0)
         if self._rest is not None and position is not None and self._recent and not self._at_last_target():
-            target = ", ".join(f"{v:.1f}" for v in self._recent[-1].segment.end.xyz)
-            here = ", ".join(f"{v:.1f}" for v in position)
-            return (f"the arm stopped at ({here}) but the job's last target is ({target}): "
+            named = self._arms_own_motion_last()
+            if named is not None:
+                return named
+            return (f"the arm stopped at ({_values(position)}) but the job's last target is "
+                    f"({_values(self._recent[-1].segment.end.xyz)}): "
                     "frames were lost or cleared (a RESET CONNECTOR, a full buffer?)")
         return "the arm did not confirm the end of the job in time (status frames missing?)"
+
+    def _arms_own_motion_last(self) -> str | None:
+        """Why the arm is not at the last target when the job's last positioning frame is one
+        whose motion is the arm's own, not the job's: a ``POSE n`` goes to the arm's fixed pose,
+        which the profile's ``[poses]`` only describe, and a ``PROGRAM n`` runs an SD program
+        armctl cannot see into.  Named as such (None when no such frame comes after the job's own
+        last motion): the arm's rest elsewhere is no sign that frames were lost."""
+        for sent in reversed(self._recent):
+            command = sent.command
+            where = f"line {sent.tag.line}" if getattr(sent.tag, "line", None) is not None else f"frame {sent.index + 1}"
+            if isinstance(command, RunProgram):
+                return (f"the arm stopped at ({_values(self._reported.get(0))}) after PROGRAM {command.program} ({where}): "
+                        "an SD program moves the arm as it says, which armctl cannot know, so where it rests proves "
+                        "nothing about the job's frames")
+            if isinstance(command, GoToPose):
+                joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
+                return (f"POSE {command.pose} ({where}) should end at the profile's fixed pose {command.pose} (joints "
+                        f"{_values(sent.segment.end.joints)}), but the arm stopped at joints ({_values(joints)}): its own "
+                        f"fixed pose {command.pose} is not the profile's [poses] (or the frame did not run)")
+            if _moves_arm(sent.segment):
+                return None  # the job's own move after it says where the arm should be
+        return None
 
     def _confirm_all_done(self) -> None:
         self.streamer.confirm_all_done()
@@ -820,11 +916,105 @@ class Job:
             view.pause_state, view.pause_label = control.state.value, control.label
             view.feed_percent, view.feed_clamped = control.feed.percent, control.feed.clamped
         view.frames_by_reports, view.frames_by_time = streamer.confirmed_by_reports, streamer.confirmed_by_time
+        view.frames_unseen = streamer.confirmed_unseen
         suspect = streamer.first_suspect_index
         if suspect is not None and suspect < streamer.consumed_lower_bound:
             # nothing from the first frame that may have been lost on is claimed executed
             view.last_done = streamer.tag_of(suspect - 1) if suspect > 0 else None
             view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
+
+    def _paused_on_arrival(self) -> bool:
+        """On an arm the profile says queues its control frames (H5), the abort's pause acted as it
+        landed — the arm paused with frames still queued behind it, which the next run's toggle
+        would release to run before its resume line re-sends them: then a RESET CONNECTOR goes
+        (it acts as it lands too, on such an arm) and True.  Proven only by the arm frozen
+        mid-move (``_frozen_mid_move``: a queued pause acts only between frames): on a queued arm
+        the same RESET CONNECTOR would wait at the head of its paused FIFO for ever, and a pause
+        that merely came sooner than the queue could run is what a FIFO that dropped frames
+        shows too.  (Frozen in a frame that moves nothing — a PWM change, a delay — such an arm
+        shows nothing: `armctl probe` measures the mode.)"""
+        if self._found_arrival or self._aborts or not self._frozen_mid_move():
+            return False
+        self._found_arrival = True
+        self.view.messages.append(
+            "the arm paused mid-move with frames still queued: its control frames act as they land, though the "
+            "profile says they queue (run `armctl probe`); a RESET CONNECTOR cleared the queue, so the resume runs "
+            "nothing twice")
+        self._aborts.append(ResetConnector())
+        self.phase = _Phase.ABORTING
+        return True
+
+    def _confirm_through_last_move(self) -> None:
+        """The arm at rest at the end of the last frame written that moves it (its target where no
+        other frame kept ends or it starts: ``Streamer.ran_at_rest``): it and every frame before it ran."""
+        last = self._last_move
+        if last is not None and self._at_end_of(last.segment) and self.streamer.ran_at_rest(last):
+            last.seen = True
+            self.streamer.confirm_all_done(before=last.index + 1)
+            return
+        # Else the first pending frame whose path holds where the arm rests: at its end, its motion
+        # is over (the arm is there, or on a later frame), so it is not re-sent; anywhere else on
+        # it, the arm is frozen in it.  Judged in what the arm reports, frame by frame in order,
+        # up to a frame whose pose that cannot judge.
+        position = self._reported.get(0)
+        joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
+        verified, origin = self.streamer.kinematics_verified, self.streamer.planner.pose.origin_mm
+        for sent in self.streamer.pending:
+            segment = sent.segment
+            by_joints = segment.kind == "joint" or segment.kind == "still" and not segment.end.joints_derived
+            if not sent.path_known or (segment.end.joints_derived if by_joints else segment.end.xyz_derived) and not verified:
+                return
+            if not by_joints and (segment.start.origin_mm != origin or segment.end.origin_mm != origin):
+                return  # X/Y/Z read in the last worktable, its path in another (a G54 between)
+            observed, near = (joints, TARGET_DEG) if by_joints else (position, TARGET_MM)
+            if observed is None or len(observed) != (6 if by_joints else 3):
+                return
+            if distance_to_path(segment, observed)[0] > near:
+                continue
+            end = segment.end.joints if by_joints else segment.end.xyz
+            if _moves_arm(segment) and max(abs(a - b) for a, b in zip(end, observed)) <= near:
+                self.streamer.confirm_all_done(before=sent.index + 1)
+            return
+
+    @property
+    def _acts_on_arrival(self) -> bool:
+        """The arm's control frames act as they land: the profile says so, or the arm showed it."""
+        return self.streamer.control_on_arrival or self._found_arrival
+
+    def _frozen_mid_move(self) -> bool:
+        """The arm, paused and still, rests strictly inside the path of a frame still pending — at
+        no frame's end, where a pause queued behind the frames (H5) would leave it (an arm that
+        dropped frames too): only a pause that acted as it landed freezes a move there.  Judged
+        on what the arm reports: X/Y/Z on a line or arc, joints on a joint move, each on a path
+        the plan knows."""
+        position = self._reported.get(0)
+        joints = (self._reported.get(1) or ()) + (self._reported.get(2) or ())
+        streamer = self.streamer
+        ends = [sent.segment for sent in self._recent] + list(sent.segment for sent in streamer.pending)
+        origin = streamer.planner.pose.origin_mm  # the worktable the readings are turned into (worktable_xyz)
+        for sent in streamer.pending:
+            segment = sent.segment
+            if not sent.path_known or segment.length <= 0:
+                continue
+            cartesian = segment.kind in ("line", "arc")
+            if cartesian and not segment.end.xyz_derived and position is not None:
+                observed, near = position, TARGET_MM
+            elif segment.kind == "joint" and len(joints) == 6:
+                observed, near = joints, TARGET_DEG
+            else:
+                continue
+            if distance_to_path(segment, observed)[0] > near:
+                continue
+            for other in ends:  # at no frame's end (nor the first pending frame's start)
+                for pose in (other.start, other.end):
+                    if pose.origin_mm != origin:
+                        return False  # a G54 among them: the readings are in one worktable, not in both
+                    if (pose.xyz_derived if cartesian else pose.joints_derived) and not streamer.kinematics_verified:
+                        return False  # where that pose really is only the arm knows: no proof
+                    if max(abs(a - b) for a, b in zip(pose.xyz if cartesian else pose.joints, observed)) <= 2 * near:
+                        return False
+            return True
+        return False
 
     def _frozen_at_a_boundary(self) -> bool:
         """A pause that acted as it landed froze the arm at the end of the first pending frame
@@ -849,13 +1039,25 @@ class Job:
         return pending[0].tag
 
 
+def _values(values) -> str:
+    return ", ".join(f"{v:.1f}" for v in values or ())
+
+
+def _frames_not_seen(streamer) -> str:
+    """The frames the arm's reports did not see run, as the summary says it."""
+    parts = []
+    if streamer.confirmed_by_time:
+        parts.append(f"{streamer.confirmed_by_time} frames were confirmed by time alone")
+    if streamer.confirmed_unseen:
+        parts.append(f"{streamer.confirmed_unseen} only by a report on a later frame (gone from the FIFO, "
+                     "never seen running)")
+    return " and ".join(parts)
+
+
 def _moves_arm(segment) -> bool:
-    """Whether a frame's motion changes the reported position or joints."""
-    if segment.kind == "still":
-        return False
-    if segment.length > 0:
-        return True
-    return max(abs(a - b) for a, b in zip(segment.start.joints, segment.end.joints)) > 1e-6  # attitude only
+    """Whether a frame's motion changes the reported position or joints (the motion model's
+    ``Segment.moves_reported``: not a move of E0/E1 alone, which no status kind reports)."""
+    return segment.moves_reported
 
 
 def _moved_clearly(before: tuple, after: tuple) -> bool:

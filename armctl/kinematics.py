@@ -684,6 +684,11 @@ class Kinematics:
     def _without_limits(self):
         return _prepared(self.links, _NO_LIMITS)
 
+    def can_take(self, pose: Sequence[float], hint: tuple[float, ...]) -> bool:
+        """Whether a robot-frame ``pose`` has joints inside the limits (``has_solution``, with the
+        solver's constants kept by the object: the simulator asks it of every Cartesian target)."""
+        return _solve(pose, self._within_limits, hint, _FIRST)[0] is not None
+
     def joints_of(self, pose: Sequence[float], hint: tuple[float, ...]) -> tuple[float, ...]:
         """The joints a robot-frame ``pose`` is taken to have (``motion.ArmPose.joints``, and so
         every joints status frame of the simulator): ``inverse`` near ``hint`` inside the limits,

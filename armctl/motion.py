@@ -367,6 +367,18 @@ class Segment:
         """Where its path lives: "cartesian" (line, arc), "joint" or None (still)."""
         return _SPACES.get(self.kind)
 
+    @property
+    def moves_reported(self) -> bool:
+        """Whether the arm's status reports show this motion: its position or joints change (an
+        attitude-only move turns the wrist joints).  E0/E1 are in no status kind, and a PWM change
+        is no move: a segment that changes only those takes its time (here, in the simulator, on
+        the arm) with every reading still — the job engine's end of motion must not end there."""
+        if self.kind == "still":
+            return False
+        if self.length > 0:
+            return True
+        return max(abs(a - b) for a, b in zip(self.start.joints, self.end.joints)) > TINY_DEG  # attitude only
+
     def fraction_at(self, t_s: float) -> float:
         """How far along the path (0…1) the arm is t seconds after the segment began."""
         ramp = self._ramp
@@ -531,6 +543,11 @@ class _JointSegment(Segment):
         self._polyline = None
         lead = max(max(abs(d) for d in self._dq), max(abs(d) for d in self._de))
         super().__init__(command, "joint", start, end, lead if lead > TINY_DEG else 0.0)
+
+    @property
+    def moves_reported(self) -> bool:
+        """Its joints move (its length may be E0/E1's alone, which no status reports)."""
+        return max(abs(d) for d in self._dq) > TINY_DEG
 
     def _joints_at(self, f):
         return tuple(a + d * f for a, d in zip(self._q0, self._dq))

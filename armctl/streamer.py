@@ -41,7 +41,9 @@ motion-time model), the moment its last byte left the wire, and two views of the
     seen at its end is confirmed soon after, not a whole slow-arm duration later).  A Cartesian
     move from a joint move's end on an arm whose kinematics are not verified may be longer than
     planned: a line by at most its start's error, allowed for; an arc without bound, so time
-    never confirms it (``_unknown_start_s``) — a later frame's sighting or the arm at rest does.
+    never confirms it (``_unknown_start_s``) — a later frame's sighting or the arm at rest does;
+    nor the first move that sets E0/E1, which no status reports: from where they stood, its time
+    may be any (``_moves_e_from_the_start``; no pace is measured on it either).
   Lost or corrupted status frames can only hold the bound back, i.e. make it more careful.
 * an **estimate** of when each frame ends, from the model, re-anchored on every observation:
   each candidate segment says the arm is now within a window of that segment's time (a short
@@ -95,7 +97,13 @@ until the FIFO bound throttles the job to the proof's rate (``armctl bench``'s `
   pace could be measured (delays, then a long move) may have been overrun.
 
 What the summary may claim is data too: every frame consumed counts as confirmed by the arm's
-reports or by time alone (``confirmed_by_reports`` / ``confirmed_by_time``), and ``losses``
+reports, by time alone, or as gone from the FIFO unseen (``confirmed_by_reports`` /
+``confirmed_by_time`` / ``confirmed_unseen``): a report on a later frame proves a frame left the
+FIFO, and that it ran only where the caller knows the FIFO holds every frame the capacity rule
+lets in (``fifo_holds_all``: a dropped frame leaves too, and the frame after it runs along its
+path when they lie in a row) and no RESET CONNECTOR may have cleared it (``may_be_cleared``,
+which time never confirms either); the arm at rest at the last frame's own target proves that
+one (``ran_at_rest``).  And ``losses``
 holds each sign of loss with its evidence: two agreed sightings of one stream, the later at
 least at frame k, the earlier at most at the latest frame its report may lie on (no later than
 the latest the later report may lie on: the arm runs its frames in order), between which the
@@ -138,6 +146,7 @@ from .protocol import (
     JointsLowStatus,
     PauseStatus,
     PositionStatus,
+    ResetConnector,
     StatusFrame,
     frame_seconds,
 )
@@ -251,11 +260,10 @@ class SentFrame:
     # kinematics know (``unknown_start_s``) may be any shorter, so the loss checks' least motion
     # counts it as none
     sure_before_s: float = 0.0
-
-    @property
-    def sure_s(self) -> float:
-        """Its own share of ``sure_before_s`` for the frames after it."""
-        return 0.0 if self.unknown_start_s else self.segment.duration_s  # (every path_known False frame has one)
+    sure_s: float = 0.0  # its own share of ``sure_before_s`` for the frames after it (0 with an allowance)
+    timing_known: bool = True  # False: its time may be any (``Streamer._moves_e_from_the_start``): no pace from it
+    seen: bool = False  # the arm at rest at its target proved it ran (``Streamer.ran_at_rest``)
+    may_be_cleared: bool = False  # queued when a RESET CONNECTOR may have cleared it (``Streamer.cleared``)
 
 
 @dataclass(frozen=True)
@@ -331,6 +339,13 @@ class Streamer:
         # What proves each frame consumed (the summary's honesty): the arm's reports (a position
         # or joints on a later frame's path, the arm at rest at the last target) or time alone.
         self.confirmed_by_reports = 0
+        self.confirmed_unseen = 0  # gone from the FIFO by a report, not proven run (``_consume_one``)
+        # Whether a frame gone from the FIFO has run: true when the connector holds every frame the
+        # capacity rule lets in (the caller knows: a probed FIFO size, armctl/job.py's fifo_proven);
+        # else a frame a full FIFO dropped leaves it as well.
+        self.fifo_holds_all = True
+        self._reset_index: int | None = None  # the last RESET CONNECTOR written (``wrote``)
+        self._e_known = False  # a move has set E0/E1 since the start (``_moves_e_from_the_start``)
         self._time_proves = True  # False once the FIFO may have been cleared (``cleared``)
         self.confirmed_by_time = 0
         self.motion_sent_s = 0.0  # the model's motion time of every frame written
@@ -440,6 +455,9 @@ class Streamer:
         segment = self._plan(command)
         self._peeked = None
         planner = self.planner
+        e_unknown = self._moves_e_from_the_start(command, segment)
+        allowance_s = math.inf if e_unknown else self._unknown_start_s(segment)
+        sure_s = 0.0 if allowance_s else segment.duration_s  # (every path_known False frame has an allowance)
         planner.pending_arc = command if isinstance(command, ArcStart) else None
         planner.pose = segment.end
         start_s = max(now, self.wire_free_s)
@@ -448,18 +466,26 @@ class Streamer:
         previous = self.pending[-1] if self.pending else None
         est_start = max(wire_end, previous.est_end_s if previous else wire_end)
         certain_start = max(wire_end + ARRIVAL_SLACK_S, self._certain_tail_s)
-        allowance_s = self._unknown_start_s(segment)
         self._certain_tail_s = (certain_start + (segment.duration_s + allowance_s) * self.slowest_factor
                                 + self.frame_slack_s)
         frame = SentFrame(
             index=self.sent, command=command, segment=segment, tag=tag, wire_end_s=wire_end,
             est_end_s=est_start + segment.duration_s, certain_end_s=self._certain_tail_s,
             chain_end_s=self._certain_tail_s, group_index=self.sent, motion_before_s=self.motion_sent_s,
-            unknown_start_s=allowance_s, sure_before_s=self.sure_motion_sent_s,
+            unknown_start_s=allowance_s, sure_before_s=self.sure_motion_sent_s, sure_s=sure_s,
+            timing_known=not e_unknown,
             path_known=not (self.sent > 0 and self._start_unknown(segment)),
         )
         self.motion_sent_s += segment.duration_s
         self.sure_motion_sent_s += frame.sure_s
+        if isinstance(command, ResetConnector):  # it clears what is queued when it acts
+            self._reset_index = frame.index
+            if self.control_on_arrival:
+                for sent in self.pending:
+                    sent.may_be_cleared = True
+        elif (not self.control_on_arrival and self._reset_index is not None and self.pending
+              and self.pending[0].index <= self._reset_index):
+            frame.may_be_cleared = True  # queued behind a RESET CONNECTOR (H5) that may not have acted yet
         self._recent_sent.append(frame)
         if isinstance(command, ArcStart):
             # The arm holds a G300 at the head until its G301 has landed and runs both as one
@@ -525,12 +551,15 @@ class Streamer:
         as it lands): the time bound assumes every frame written waits in the FIFO, so from now
         on only the arm's reports confirm a pending frame."""
         self._time_proves = False
+        for sent in self.pending:
+            sent.may_be_cleared = True
 
     def _advance_by_time(self) -> None:
         if self._running_seen_s is None or self._paused or not self._time_proves:
             return
         certain_now = self._running_seen_s
-        while self.pending and self.pending[0].certain_end_s <= certain_now:
+        # (a frame a RESET CONNECTOR may have cleared has no time to finish in: reports decide it)
+        while self.pending and self.pending[0].certain_end_s <= certain_now and not self.pending[0].may_be_cleared:
             self._consume_one(by_reports=False)
             self.bound_evidence = Evidence.TIME
 
@@ -615,11 +644,38 @@ class Streamer:
         speed_mm_min = min(speed_mm_min, model.profile.speed.max_linear_mm_min)
         return self._unknown_start_mm / max(speed_mm_min / 60.0, 1e-3) * model.speed_factor
 
-    def _consume_one(self, by_reports: bool) -> None:
-        self._last_done_tag = self.pending.popleft().tag
+    def _moves_e_from_the_start(self, command: Command, segment: Segment) -> bool:
+        """Whether this is the first move that sets E0/E1 (every move carries them) and moves them
+        as planned.  No status kind reports them, so where they start is unknown — the reported
+        start pose takes the profile's 0, the arm's state at power-on — and that move may need
+        any time for them: none (an arm whose axes stand at its targets already: a 2.6 s move of
+        U240 planned, none run, and the job 'finished early'), or more than planned (from farther
+        away: the arm then looks slower than the model).  So its time is not known
+        (``SentFrame.timing_known``), the loss checks count none of it, and time never confirms it
+        (as an arc from an unknown start): a later frame's sighting does, or the arm at rest."""
+        if self._e_known or segment.kind == "still" or not hasattr(command, "e0_deg"):
+            return False
+        self._e_known = True
+        start = segment.start
+        return (start.e0_deg, start.e1_deg) != (command.e0_deg, command.e1_deg)
+
+    def _consume_one(self, by_reports: bool, at_rest: bool = False) -> None:
+        """Count the oldest pending frame consumed: by the arm's reports, or by time — the time
+        bound's, or (``at_rest``) the caller's, the trailing frames' at the end of a job (which
+        leaves the time bound's own record, ``first_time_only_index``, as it was)."""
+        sent = self.pending.popleft()
+        self._last_done_tag = sent.tag
         self.consumed_lower_bound += 1
         if by_reports:
-            self.confirmed_by_reports += 1
+            # A report on a later frame (or the arm at rest at the end) proves a frame left the
+            # FIFO; that the arm ran it only if the FIFO held it (no drop, no RESET CONNECTOR),
+            # or the arm at rest at its very target says so.
+            if sent.seen or self.fifo_holds_all and not sent.may_be_cleared:
+                self.confirmed_by_reports += 1
+            else:
+                self.confirmed_unseen += 1
+        elif at_rest:
+            self.confirmed_by_time += 1
         else:
             if self.confirmed_by_time == 0:
                 self.first_time_only_index = self.consumed_lower_bound - 1
@@ -664,7 +720,10 @@ class Streamer:
 
         earliest, candidates, settled = self._search(match, end, now)
         if earliest is None and end < len(self.pending):
-            return  # the arm may be on the frame that cannot be judged: no evidence
+            # the arm may be on the frame that cannot be judged: no evidence — but a report on
+            # a later frame's path still tells the estimate where the arm most likely is
+            self._reanchor_beyond(match, end, now)
+            return
         self._check_reversal(xyz if earliest is None and not blind else None, match)
         self._use("position", earliest, candidates, now, could_be_on, settled)
 
@@ -903,7 +962,10 @@ class Streamer:
             if k == index:
                 found = (lo, hi)
                 break
-        segment = self.pending[index - self.pending[0].index].segment
+        sent = self.pending[index - self.pending[0].index]
+        if not sent.timing_known:
+            return  # its time may be any: no pace, no slowness from it
+        segment = sent.segment
         if found is None or segment.length <= 0 and segment.kind != "joint":
             self._pace_from.pop(stream, None)
             return
@@ -994,6 +1056,27 @@ class Streamer:
             t_s = times[fraction] = segment.time_at_fraction(fraction)
         return t_s
 
+    def _reanchor_beyond(self, match, end: int, now: float) -> None:
+        """The estimate (never the lower bound) re-anchored on a report that lies on the path of
+        a pending frame at or after ``end``, past a frame the stream cannot judge (a move from a
+        joint end the profile's kinematics do not verify, whose real length and path only the
+        arm knows).  Without it the estimate runs on by the plan while the arm is still on that
+        frame, so the lead counts less motion queued than there is and an abort outruns the stop
+        bound (``armctl bench``'s ``kinematics`` row: 3.50 s moved against 2.88 s).  A report
+        on one of those paths is evidence for the estimate only: it may also lie on the frame
+        that cannot be judged, so nothing is proven by it.  Flat cost: the frames searched are
+        a window around the frame the estimate has in progress."""
+        pending = self.pending
+        current = next((k for k in range(end, len(pending)) if pending[k].est_end_s > now), len(pending) - 1)
+        lo_k, hi_k = max(end, current - SCAN_WINDOW_FRAMES), min(len(pending), current + SCAN_WINDOW_FRAMES)
+        candidates = []
+        for k in range(lo_k, hi_k):
+            found = match(pending[k])
+            if found is not None:
+                candidates.append((pending[k].index, *found))
+        if candidates:
+            self._reanchor(candidates, now)
+
     def _reanchor(self, candidates: list[tuple[int, float, float]], now: float) -> None:
         """Re-time the pending frames from the candidate the estimate finds most plausible.
 
@@ -1056,9 +1139,14 @@ class Streamer:
         again there: it may have run to infinity behind an arc it cannot bound.  With ``before``
         (mid-job too: the arm rests in that frame or later) only the frames before it."""
         pending = self.pending
+        if pending and (before is None or pending[-1].index < before) and self.ran_at_rest(pending[-1]):
+            pending[-1].seen = True
+            if pending[-1].group_index != pending[-1].index and len(pending) > 1:
+                pending[-2].seen = True  # its G300
         while pending and (before is None or pending[0].index < before) and not (
                 len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
-            self._consume_one(by_reports=True)
+            # a frame that leaves no trace (unless seen): the caller's proof of it is time
+            self._consume_one(by_reports=pending[0].seen or pending[0].segment.moves_reported, at_rest=True)
             self.bound_evidence = Evidence.AT_REST
         if now is None:
             return
@@ -1066,6 +1154,31 @@ class Streamer:
             self._restart_time_bound(pending[0].index, now)  # the held G300 is at the head
         else:
             self._certain_tail_s = min(self._certain_tail_s, now)
+
+    def ran_at_rest(self, last: SentFrame) -> bool:
+        """Whether the arm at rest at the target of ``last`` (a frame written; the caller saw it
+        there) proves it ran — had it been dropped or cleared, the arm would rest where an
+        earlier frame ended — that is, unless that is where the arm may rest anyway: at its
+        start, or at the end of an earlier frame kept (a way back to the same point), or
+        somewhere only the profile's kinematics know (its path not the planned one)."""
+        segment = last.segment
+        if not (segment.moves_reported and last.path_known):
+            return False
+        by_joints = segment.kind == "joint" or segment.end.xyz_derived  # what ``Job._at_end_of`` compares
+        tolerance = 2 * (JOINT_TOLERANCE_DEG if by_joints else POSITION_TOLERANCE_MM)
+        target = segment.end.joints if by_joints else segment.end.xyz
+        for sent in self._recent_sent:  # (``last`` among them: its own start, then no further)
+            pose = segment.start if sent is last else sent.segment.end
+            if pose.origin_mm != segment.end.origin_mm:
+                return False
+            derived = pose.joints_derived if by_joints else pose.xyz_derived  # the profile's IK/FK: where?
+            if derived and not self.kinematics_verified:
+                return False
+            if max(abs(a - b) for a, b in zip(pose.joints if by_joints else pose.xyz, target)) <= tolerance:
+                return False
+            if sent is last:
+                return True
+        return False
 
     def check_time_bound(self) -> None:
         """A sign of loss, told at the end of a job: the arm was proven to run a frame slower than

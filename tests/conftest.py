@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, settings
 
 import armctl.protocol as protocol
 import armctl.status_frames as status_frames
@@ -35,6 +36,12 @@ import armctl.status_frames as status_frames
 os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="armctl-test-config-")
 
 DATA = Path(__file__).parent / "data"
+
+# The suite runs in parallel processes (README: ``pytest -n 4`` on 2 cores), so a test's CPU time
+# is no measure of its wall time: no Hypothesis example has a deadline and none is judged too slow
+# (every test still has its pytest-timeout limit). A test's own @settings keeps what it names.
+settings.register_profile("armctl", deadline=None, suppress_health_check=[HealthCheck.too_slow])
+settings.load_profile("armctl")
 
 # "a[3..6]   00 00 c8 42   comment": a byte range, its bytes, then two spaces and free text.
 _BYTES_LINE = re.compile(r"a\[(\d+)(?:\.\.(\d+))?\]\s+([0-9a-f]{2}(?: [0-9a-f]{2})*)(?:\s{2,}.*)?")

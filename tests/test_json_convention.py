@@ -23,7 +23,7 @@ from armctl.cli import main
 from armctl.profile import find_config
 
 SIM = "sim://?clock=virtual"
-WARNING_SCRIPT = "G1 X500 Y0 Z150 A180 B-90 C0 S1500 F3000\n"  # L103: outside the illustrative workspace
+WARNING_SCRIPT = "G1 X450 Y0 Z150 A180 B-90 C0 S1500 F3000\n"  # L103: outside the illustrative workspace (the arm still reaches it)
 
 
 @pytest.fixture(autouse=True)
@@ -125,7 +125,7 @@ def test_decode_json_names_every_chunk_and_keeps_the_summary_on_stderr(tmp_path)
     assert result.exit_code == 0, result.output
     records = _strict_json_lines(result.stdout)
     assert [r["family"] for r in records] == ["motion", "invalid", "junk"]
-    assert records[0]["fields"]["x_mm"] == 500 and records[1]["error"].endswith("not a finite number")
+    assert records[0]["fields"]["x_mm"] == 450 and records[1]["error"].endswith("not a finite number")
     assert "1 command frame(s)" in result.stderr
 
 

@@ -9,6 +9,9 @@ armctl's own rows are checked against the targets of DESIGN.md / issue 5:
 
 - no frame dropped (in either run);
 - job time ≤ the scenario's bound × omniscient (1.01 arm- and line-bound, 1.03 the rest);
+- job time ≤ 1.01 × the bound under the stop promise (``scenarios.promise_bound_s``: the best an
+  omniscient host can do while keeping the promise below), on every row — so a row whose floor is
+  the promise's, not the pacing's (``longfirst``), is judged too;
 - motion after the abort ≤ the documented stop bound (README "Stopping a job"), in the arm's
   seconds: **the move in progress + max(lead, the next move)** — to keep the arm fed, a move
   longer than the lead must be queued before the current one ends, so an abort just after that
@@ -47,7 +50,7 @@ from ..sim.executor import DONE
 from ..sim.model import SimulatedArm
 from ..streamer import DEFAULT_LEAD_S
 from .harness import EPSILON_S, RunResult, run_job, start_run
-from .scenarios import Scenario, build_scenarios, physical_bound_s, true_durations_s
+from .scenarios import Scenario, build_scenarios, physical_bound_s, promise_bound_s, true_durations_s
 from .strategies import (
     FixedDelayStrategy, NaiveStrategy, OmniscientStrategy, StopAndGoStrategy, StreamerStrategy,
 )
@@ -55,6 +58,9 @@ from .strategies import (
 STRATEGY_NAMES = ("armctl", "naive", "fixed delay", "stop-and-go", "omniscient")
 NO_PROBE = "armctl no probe"  # the arm-mismatch scenarios' second armctl row: the document's defaults
 FIXED_DELAY_S = 0.1  # the fixed-delay baseline: a frame every 100 ms, a common hand-tuned value
+# armctl's job time ÷ the best any host keeping the stop promise could do (``promise_bound_s``), on
+# every armctl row: the pacing's own cost, once the lead's price (longfirst) is no longer counted
+PROMISE_RATIO = 1.01
 
 
 def host_profile(scenario: Scenario, strategy: str):
@@ -113,6 +119,8 @@ class Cell:
     physical_s: float | None = None  # the physical bound of the job (PROTOCOL.md's last section)
     physical_ratio: float | None = None  # job_s ÷ physical_s, filled in by run_bench (as physical_s)
     physical_bound: float | None = None  # armctl's target for physical_ratio (None: none)
+    promise_s: float | None = None  # the best any host keeping the stop promise can do (``promise_bound_s``)
+    promise_ratio: float | None = None  # job_s ÷ promise_s, filled in by run_bench; armctl: ≤ PROMISE_RATIO
     outcome: str = ""  # the job engine's outcome of the whole run, as ``armctl run`` ends it
     not_once: list[int] | None = None  # resume scenarios: job frames (1-based) not run exactly once
     not_once_run: list[int] | None = None  # issue-9 scenarios: the same, in the whole run
@@ -234,11 +242,14 @@ def run_bench(scenarios: list[Scenario], strategies=STRATEGY_NAMES, lead_s: floa
     reference = {c.scenario: c.job_s for c in cells if c.strategy == "omniscient"}
     # the floor depends on the job alone: planned once per scenario, not once per strategy
     floor_s = {s.name: physical_bound_s(s.commands, s.options, s.outside_stop_s) for s in scenarios}
+    promise_s = {s.name: promise_bound_s(s.commands, s.options, lead_s, s.outside_stop_s) for s in scenarios}
     for cell in cells:
         cell.ratio = cell.job_s / reference[cell.scenario] if reference[cell.scenario] else None
         cell.ratio_bound = by_scenario[cell.scenario].ratio_bound
         cell.physical_s = floor_s[cell.scenario]
         cell.physical_ratio = cell.job_s / cell.physical_s
+        cell.promise_s = promise_s[cell.scenario]
+        cell.promise_ratio = cell.job_s / cell.promise_s
         cell.physical_bound = by_scenario[cell.scenario].physical_bound
         if cell.strategy == "armctl":
             cell.failures = check_targets(cell)
@@ -277,6 +288,8 @@ def check_targets(cell: Cell) -> list[str]:
         failures.append(f"job time {cell.ratio:.3f} × omniscient > {cell.ratio_bound:.2f}")
     if cell.physical_bound is not None and cell.physical_ratio > cell.physical_bound + 1e-9:
         failures.append(f"job time {cell.physical_ratio:.3f} × the physical bound > {cell.physical_bound:.2f}")
+    if cell.promise_ratio is not None and cell.promise_ratio > PROMISE_RATIO + 1e-9:
+        failures.append(f"job time {cell.promise_ratio:.3f} × the bound under the stop promise > {PROMISE_RATIO:.2f}")
     if cell.moving_after_abort_s is not None and cell.moving_after_abort_s > cell.abort_limit_s + 1e-9:
         failures.append(f"moved {cell.moving_after_abort_s:.2f} s after the abort > {cell.abort_limit_s:.2f} s")
     if cell.not_once_run:
@@ -293,8 +306,8 @@ def not_once_text(frames: list[int], where: str) -> str:
 
 # --- output -----------------------------------------------------------------------------------
 
-HEADERS = ("scenario", "strategy", "frames", "dropped", "time ÷ omni", "time ÷ physical", "peak occupancy",
-           "peak queued s", "moving after abort s", "armctl targets")
+HEADERS = ("scenario", "strategy", "frames", "dropped", "time ÷ omni", "time ÷ physical", "time ÷ promise",
+           "peak occupancy", "peak queued s", "moving after abort s", "armctl targets")
 
 
 def _row(cell: Cell) -> tuple[str, ...]:
@@ -304,6 +317,9 @@ def _row(cell: Cell) -> tuple[str, ...]:
     dropped = str(cell.dropped) + (f" (+{cell.abort_dropped})" if cell.abort_dropped else "")
     ratio = "—" if cell.ratio is None else f"{cell.ratio:.3f}"
     physical = "—" if cell.physical_ratio is None else f"{cell.physical_ratio:.3f}"
+    promise = "—" if cell.promise_ratio is None else f"{cell.promise_ratio:.3f}"
+    if cell.strategy == "armctl" and cell.promise_ratio is not None:
+        promise += f" (≤ {PROMISE_RATIO:.2f})"
     if cell.strategy == NO_PROBE:
         verdict = "; ".join(cell.failures) or f"met ({cell.outcome})"
         verdict = ("MISSED: " if cell.failures else "") + verdict
@@ -319,14 +335,14 @@ def _row(cell: Cell) -> tuple[str, ...]:
             verdict = verdict.replace("met", "met (whole run: every frame once)", 1)
     else:
         verdict = ""
-    return (cell.scenario, cell.strategy, str(cell.frames), dropped, ratio, physical, str(cell.peak_occupancy),
+    return (cell.scenario, cell.strategy, str(cell.frames), dropped, ratio, physical, promise, str(cell.peak_occupancy),
             f"{cell.peak_queued_s:.2f}", moving, verdict)
 
 
 def format_table(cells: list[Cell]) -> str:
     rows = [HEADERS] + [_row(c) for c in cells]
     widths = [max(len(r[k]) for r in rows) for k in range(len(HEADERS))]
-    numeric = {2, 3, 6, 7}
+    numeric = {2, 3, 7, 8}
     lines = []
     previous = None
     for n, row in enumerate(rows):

@@ -4,21 +4,30 @@ Strategy: a long delay (G4) keeps the arm busy while PWM-only frames (a joint mo
 joints the arm reports, a new PWM) are written behind it at the line rate, more than the
 connector can hold.  Nothing leaves the FIFO while the delay runs, so it accepts exactly
 ``fifo_frames`` of them — the frames it holds behind the one the arm executes (whether the
-executing delay keeps a slot of its own is not observable; this number is) — and drops the rest.  When the delay ends the arm runs the accepted frames in
-order; the PWM it finally reports (status kind 4) names the last frame accepted.
+executing delay keeps a slot of its own is not observable; this number is) — and drops the
+rest.  When the delay ends the arm runs the accepted frames in order; the PWM it finally reports
+(status kind 4) names the last frame accepted.
 
 A PWM change takes the servo time (``timing.pwm_change_s`` on the model; 0.3 s), so giving
 all 300 frames distinct values would cost minutes.  Two rounds instead: round 1 changes the
 value every ``BLOCK`` frames (the final value names a block of 16); round 2 repeats the value
 the arm now holds (a frame that changes nothing takes no time) up to that block and gives each
 frame in it its own value.  The end of a round is seen, not assumed: the reported PWM has not
-changed for ``max(QUIET_S, 3 ×`` the longest step seen between new values``)``.  A round whose PWM
-changed before its last frame landed (the delay ended early) proves nothing: unsure.
+changed for ``max(QUIET_S, 3 ×`` the longest step seen between new values``)``.
+
+The hold is proven, not assumed, at any line rate: the fillers go ``FILL_AHEAD_S`` ahead of the
+wire (a host wakes every 20-30 ms; at 115200 a frame takes 4.2 ms), and a round counts only if
+the last one landed — as the port's reports prove it (``Probe.landed_by``, landing.py) —
+``HOLD_MARGIN_S`` before the delay could end (``Probe.earliest_landing`` + its length).  A round
+not proven for want of time is tried again with a longer delay (``ATTEMPTS``); one whose PWM
+changed before its last frame landed proves nothing.  Unproven: unsure, and the evidence says
+what to set by hand.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 
 from ..protocol import PWM_RANGE_US, Delay, PauseStatus
 from .plan import AGREEING_FRAMES, LIKELY, SURE, UNSURE, Finding, Send, Wait
@@ -27,7 +36,15 @@ from .steps import DOCUMENTED, QUIET_S, pwm_frame, settle
 MAX_FRAMES = 300  # fillers written per round: the document's 200 and half again
 BLOCK = 16
 STEP_US = 5  # PWM step between values: the gripper barely moves (≤ 100 µs from where it was)
-FILL_MARGIN_S = 1.0  # the delay outlasts the last filler's landing by this much
+FILL_MARGIN_S = 1.0  # the delay outlasts the last filler's landing by this much (as planned)
+# The fillers go up to this much line time ahead of the wire: the port's buffer keeps the line
+# busy between the host's wake-ups (every 20-30 ms: at 115200 a frame takes 4.2 ms).  0.2 s is
+# 2.3 KB at 115200, within any port's buffer (some KB), 4 frames at 9600.
+FILL_AHEAD_S = 0.2
+# The last filler must have landed this long before the delay can end: an arm whose delay timer
+# runs short by up to this much (ticks of 30 ms, say) still held it.
+HOLD_MARGIN_S = 0.1
+ATTEMPTS = 3  # a round whose hold was not proven for want of time is tried again, the delay longer
 ROUND_LIMIT_S = 60.0  # a round that has not settled by then is given up
 
 
@@ -47,42 +64,135 @@ def _direction(start_us: int, span_us: int) -> int:
     return 1 if start_us + span_us <= PWM_RANGE_US[1] else -1
 
 
-def fill_round(probe, values: list[int], start_us: int):
-    """Delay, then ``values`` as PWM-only frames; returns (last value reported, evidence) or
-    (None, why)."""
-    count = len(values)
-    delay_s = math.ceil(((count + 1) * probe.frame_s + FILL_MARGIN_S) * 10) / 10
-    delay_landed_s = yield Send(Delay(delay_s * 1000))
-    end_s = delay_landed_s + delay_s
-    probe.known.busy_until_s = end_s
-    last_landed_s = delay_landed_s
-    for value in values:
-        last_landed_s = yield Send(pwm_frame(probe, value))
-    deadline_s = end_s + ROUND_LIMIT_S
+@dataclass(frozen=True)
+class Fill:
+    """One round's outcome: the PWM the arm ended at (None: the round proves nothing), why, and
+    how sure the hold was; ``late_s``: how much longer the delay would have had to hold (a retry
+    with a delay that much longer may prove it)."""
 
-    # Frames that repeat the PWM show nothing while they run: until a change is seen, allow them
-    # a frame time each (an arm slower than that could not keep up with the line anyway).
-    silent_s = QUIET_S + sum(1 for a, b in zip([start_us, *values], values) if a == b) * probe.frame_s
+    final: int | None
+    evidence: str
+    confidence: str = SURE
+    late_s: float | None = None
+    hold: dict = field(default_factory=dict)
 
-    def settled() -> bool:
-        times = [t for t, _ in _changes(probe, end_s - 1.0) if t >= end_s]
+
+@dataclass
+class _Round:
+    """One round's frames as written: the delay (its length, when it was handed to the port, the
+    stream position after it, when the line model expects it to land) and the fillers (the
+    stream position after the last, when the model expects that one to land)."""
+
+    values: list[int]
+    start_us: int
+    delay_s: float
+    delay_written_s: float
+    delay_landed_s: float = 0.0
+    delay_end: int = 0
+    last_landed_s: float = 0.0
+    last_end: int = 0
+
+    @property
+    def end_s(self) -> float:
+        """When the delay ends, as the line model expects."""
+        return self.delay_landed_s + self.delay_s
+
+    def earliest_end_s(self, probe) -> float:
+        """The delay cannot end sooner: its landing (not before write() + its wire time, nor
+        while the port still held it) + its length."""
+        return probe.earliest_landing(self.delay_end, self.delay_written_s) + self.delay_s
+
+    def landed_by_s(self, probe) -> float | None:
+        """The last filler has landed by then (None: the port still holds it)."""
+        return probe.landed_by(self.last_end, self.last_landed_s)
+
+    def settled(self, probe, silent_s: float) -> bool:
+        """The arm has run what it accepted: the port holds no filler, and the PWM has been quiet
+        long enough since the delay's end — the model's, or later as the port's reports prove it
+        began (a buffer may have held it), so the quiet of a delay still running never passes
+        for the end of the round."""
+        if self.landed_by_s(probe) is None:
+            return False
+        start_s = max(self.end_s, self.earliest_end_s(probe))
+        times = [t for t, _ in _changes(probe, start_s - 1.0) if t >= start_s]
         if not times:
-            return probe.now_s - end_s >= silent_s
-        gaps = [b - a for a, b in zip([end_s, *times], times)]
+            return probe.now_s - start_s >= silent_s
+        gaps = [b - a for a, b in zip([start_s, *times], times)]
         return probe.now_s - times[-1] >= max(QUIET_S, 3 * max(gaps))
 
-    yield Wait(deadline_s, settled)
-    sent = set(values)
-    early = [(t, v) for t, v in _changes(probe, delay_landed_s) if t < last_landed_s and v in sent and v != start_us]
+
+def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0):
+    """Delay, then ``values`` as PWM-only frames, written up to ``FILL_AHEAD_S`` ahead of the
+    wire; a ``Fill``.  The round counts only if the last frame landed while the delay held the
+    arm: proven from the port's reports (``probe.wire``), else assumed from the line model."""
+    wire = probe.wire
+    after_sent_s = wire.after_sent_bytes * wire.byte_s
+    count = len(values)
+    delay_s = math.ceil(((count + 1) * probe.frame_s + after_sent_s + FILL_MARGIN_S + extra_s) * 10) / 10
+    fill = _Round(values, start_us, delay_s, probe.now_s)
+    fill.delay_landed_s = yield Send(Delay(delay_s * 1000))
+    fill.delay_end = wire.written_bytes
+    probe.known.busy_until_s = fill.end_s
+    fill.last_landed_s = fill.delay_landed_s
+    for value in values:
+        fill.last_landed_s = yield Send(pwm_frame(probe, value), ahead_s=FILL_AHEAD_S)
+    fill.last_end = wire.written_bytes
+    # Frames that repeat the PWM show nothing while they run: until a change is seen, allow them
+    # a frame time each (an arm slower than that could not keep up with the line anyway), and the
+    # delay may end as much later than its earliest end as an adapter may hold it.
+    repeats = sum(1 for a, b in zip([start_us, *values], values) if a == b)
+    silent_s = QUIET_S + after_sent_s + repeats * probe.frame_s
+    yield Wait(fill.end_s + ROUND_LIMIT_S, lambda: fill.settled(probe, silent_s))
+    probe.known.busy_until_s = max(probe.known.busy_until_s, probe.now_s)
+    return _judged(probe, fill, fill.settled(probe, silent_s))
+
+
+def _judged(probe, fill: _Round, settled: bool) -> Fill:
+    """What a round proves: the final PWM if the last filler landed ``HOLD_MARGIN_S`` before the
+    delay could end and the PWM did not change before then; else why not."""
+    wire, written_s, delay_s = probe.wire, fill.delay_written_s, fill.delay_s
+    ends_s, landed_by_s = fill.earliest_end_s(probe), fill.landed_by_s(probe)
+    confidence, how = (SURE, "the port's reports prove") if wire.reporting else \
+        (LIKELY, "the line model expects (the port does not say what it sent)")
+    hold = {"delay_s": delay_s, "delay_ends_earliest_s": round(ends_s - written_s, 3)}
+    if landed_by_s is None:
+        return Fill(None, f"the port still held {wire.unsent_bytes()} bytes {probe.now_s - written_s:.1f} s after "
+                          f"the {delay_s:g} s delay was written: when the frames landed is not known", UNSURE, None, hold)
+    hold["last_landed_by_s"] = round(landed_by_s - written_s, 3)
+    late_s = landed_by_s + HOLD_MARGIN_S - ends_s
+    if late_s > 0:
+        return Fill(None, f"the last of the {len(fill.values)} frames landed by {landed_by_s - written_s:.2f} s ({how}), but "
+                          f"the {delay_s:g} s delay may have ended at {ends_s - written_s:.2f} s (both from when the delay "
+                          f"was written; {HOLD_MARGIN_S:g} s to spare needed): the delay did not surely hold the arm",
+                    UNSURE, late_s, hold)
+    sent = set(fill.values)
+    early = [(t, v) for t, v in _changes(probe, fill.delay_landed_s)
+             if t < landed_by_s and v in sent and v != fill.start_us]
     if len(early) >= AGREEING_FRAMES:
-        return None, (f"the PWM changed {early[0][0] - delay_landed_s:.2f} s into the {delay_s:g} s delay, before the "
-                      "last frame landed: the delay did not hold the arm")
-    final = probe.seen.agreed(PauseStatus.KIND, end_s, lambda f: f.pwm_us)
-    if not settled() or final is None:
-        return None, f"the PWM had not settled {ROUND_LIMIT_S:g} s after the delay"
-    final = final[1]
-    probe.known.busy_until_s = probe.now_s
-    return final, f"{count} PWM-only frames behind a {delay_s:g} s delay; the arm ended at PWM {final} µs"
+        return Fill(None, f"the PWM changed {early[0][0] - written_s:.2f} s after the {delay_s:g} s delay was written, "
+                          f"before the last frame landed ({landed_by_s - written_s:.2f} s): the arm did not hold "
+                          "for the delay", UNSURE, None, hold)
+    final = probe.seen.agreed(PauseStatus.KIND, fill.end_s, lambda f: f.pwm_us)
+    if not settled or final is None:
+        return Fill(None, f"the PWM had not settled {ROUND_LIMIT_S:g} s after the delay", UNSURE, None, hold)
+    return Fill(final[1], f"{len(fill.values)} PWM-only frames behind a {delay_s:g} s delay, the last landed by "
+                          f"{landed_by_s - written_s:.2f} s and the delay ending at {ends_s - written_s:.2f} s at "
+                          f"the earliest ({how}); the arm ended at PWM {final[1]} µs", confidence, None, hold)
+
+
+def held_round(probe, make_values):
+    """``fill_round`` on ``make_values(the PWM the arm holds)``, again with a longer delay while
+    the hold was not proven for want of time (up to ``ATTEMPTS``): (the Fill, the values sent,
+    the PWM they started from, what earlier attempts showed)."""
+    extra_s, tried = 0.0, []
+    while True:
+        start_us = _current_pwm(probe)
+        values = make_values(start_us)
+        fill = yield from fill_round(probe, values, start_us, extra_s)
+        if fill.final is not None or fill.late_s is None or len(tried) + 1 == ATTEMPTS:
+            return fill, values, start_us, tried
+        tried.append(fill.evidence)
+        extra_s += fill.late_s + FILL_MARGIN_S
 
 
 def _accepted(values: list[int], final: int, start_us: int) -> int | None:
@@ -93,44 +203,70 @@ def _accepted(values: list[int], final: int, start_us: int) -> int | None:
     return 0 if final == start_us else None
 
 
-def fifo(probe):
-    yield from settle(probe)
-    known = probe.known
-    default = DOCUMENTED["fifo_frames"]
-    start_us = _current_pwm(probe)
+def _round1(start_us: int) -> list[int]:
     blocks = math.ceil(MAX_FRAMES / BLOCK)
     direction = _direction(start_us, STEP_US * (blocks + 1))
-    round1 = [start_us + direction * STEP_US * (k // BLOCK + 1) for k in range(MAX_FRAMES)]
-    final1, evidence1 = yield from fill_round(probe, round1, start_us)
-    if final1 is None:
-        return Finding("fifo_frames", default, None, f"round 1: {evidence1}", UNSURE)
+    return [start_us + direction * STEP_US * (k // BLOCK + 1) for k in range(MAX_FRAMES)]
+
+
+def _round2(lead_count: int, tail: int):
+    def values(start_us: int) -> list[int]:
+        direction = _direction(start_us, STEP_US * (BLOCK + 1))
+        return [start_us] * lead_count + [start_us + direction * STEP_US * (k + 1) for k in range(tail)]
+    return values
+
+
+def _by_hand(why: str) -> str:
+    return (f"{why}. Count the frames your connector holds and set `[connector] fifo_frames = <that number>` in "
+            f"armctl.toml by hand: until then armctl assumes the document's {DOCUMENTED['fifo_frames']}, and a smaller "
+            "FIFO drops frames silently")
+
+
+def _attempts(tried: list[str], last: str) -> str:
+    """``last``, after what the attempts before it showed (each made the next one's delay longer)."""
+    return "".join(f"attempt {k + 1}: {why}; tried again with a longer delay: " for k, why in enumerate(tried)) + \
+        (f"attempt {len(tried) + 1}: {last}" if tried else last)
+
+
+def fifo(probe):
+    yield from settle(probe)
+    default = DOCUMENTED["fifo_frames"]
+    fill1, round1, start_us, tried1 = yield from held_round(probe, _round1)
+    if fill1.final is None:
+        return Finding("fifo_frames", default, None, _by_hand(f"round 1: {_attempts(tried1, fill1.evidence)}"), UNSURE,
+                       {"round_1": fill1.hold})
+    final1, evidence1 = fill1.final, _attempts(tried1, fill1.evidence)
     accepted1 = _accepted(round1, final1, start_us)
     if accepted1 is None:
-        return Finding("fifo_frames", default, None, f"round 1: the arm ended at PWM {final1} µs, a value never sent", UNSURE)
+        return Finding("fifo_frames", default, None,
+                       _by_hand(f"round 1: the arm ended at PWM {final1} µs, a value never sent"), UNSURE)
     if accepted1 == 0:
-        return Finding("fifo_frames", default, 0, f"round 1: {evidence1}: not one frame behind the delay was accepted", SURE)
+        return Finding("fifo_frames", default, 0, f"round 1: {evidence1}: not one frame behind the delay was accepted",
+                       fill1.confidence)
     block = (accepted1 - 1) // BLOCK
     lead_count = block * BLOCK
-    direction2 = _direction(final1, STEP_US * (BLOCK + 1))
     tail = min(BLOCK, MAX_FRAMES - lead_count)
-    round2 = [final1] * lead_count + [final1 + direction2 * STEP_US * (k + 1) for k in range(tail)]
-    final2, evidence2 = yield from fill_round(probe, round2, final1)
-    if final2 is None:
-        return Finding("fifo_frames", default, None, f"round 2: {evidence2}", UNSURE)
-    accepted2 = _accepted(round2, final2, final1)
+    fill2, round2, start2_us, tried2 = yield from held_round(probe, _round2(lead_count, tail))
+    holds = {"round_1": fill1.hold, "round_2": fill2.hold}
+    if fill2.final is None:
+        return Finding("fifo_frames", default, None, _by_hand(f"round 2: {_attempts(tried2, fill2.evidence)}"), UNSURE,
+                       holds)
+    final2, evidence2 = fill2.final, _attempts(tried2, fill2.evidence)
+    accepted2 = _accepted(round2, final2, start2_us)
     if accepted2 is None or not lead_count < accepted2 <= lead_count + tail:
         return Finding("fifo_frames", default, None,
-                       f"round 1 put the last frame accepted in {lead_count + 1}…{lead_count + tail}, round 2 at "
-                       f"{accepted2}: the arm is not consistent", UNSURE)
+                       _by_hand(f"round 1 put the last frame accepted in {lead_count + 1}…{lead_count + tail}, round 2 "
+                                f"at {accepted2}: the arm is not consistent"), UNSURE, holds)
     capacity = accepted2  # fifo_frames: the frames accepted behind the one executing
+    confidence = SURE if SURE == fill1.confidence == fill2.confidence else LIKELY
     evidence = (f"round 1: {evidence1} (block {lead_count + 1}…{lead_count + tail}); round 2: {evidence2}: the last "
                 f"frame accepted was #{accepted2} behind the delay, so the connector holds {capacity} frames behind the one executing")
-    details = {"frames_accepted_behind_delay": accepted2, "frames_written": MAX_FRAMES}
+    details = {"frames_accepted_behind_delay": accepted2, "frames_written": MAX_FRAMES, **holds}
     if accepted2 == MAX_FRAMES:
         return Finding("fifo_frames", default, capacity,
                        evidence + f" or more (all {MAX_FRAMES} frames written were accepted)", LIKELY,
                        {**details, "at_least": True})
-    return Finding("fifo_frames", default, capacity, evidence, SURE, details)
+    return Finding("fifo_frames", default, capacity, evidence, confidence, details)
 
 
 def _current_pwm(probe) -> int:

@@ -5,7 +5,9 @@ status frame to ``on_status``, which only appends it to a deque; the loop drains
 into the pure ``Probe``, asks for the next action, writes or waits.  Ctrl-C, SIGTERM and SIGHUP
 only set a flag (``deferred_stop``): the loop, between two actions, switches the probe to
 restoring and runs on until the arm is as it was; a second signal leaves at once
-(KeyboardInterrupt), and the probe's notes say what is not restored.
+(KeyboardInterrupt), and the probe's notes say what is not restored.  After every write and
+wait the loop asks the port how many written bytes it still holds (``out_waiting``): the probe
+proves its frames' landing times from that, never from ``write()`` returning.
 """
 
 from __future__ import annotations
@@ -36,10 +38,29 @@ class FrameInbox:
             probe.feed(frame, now_s)
 
 
+def unsent_bytes(port) -> int | None:
+    """Bytes written that ``port`` has not sent yet (pyserial's ``out_waiting``), or None when
+    the port cannot say (``socket://``, ``rfc2217://``) or fails to."""
+    try:
+        unsent = port.out_waiting
+    except Exception:  # no such property, or an OS error: the link's own reads report a vanished port
+        return None
+    return unsent if isinstance(unsent, int) and unsent >= 0 else None
+
+
 def drive(link, probe: Probe, inbox: FrameInbox, progress=None, stop: threading.Event | None = None) -> None:
     """Run ``probe`` on ``link`` to its end.  ``stop`` set (a signal): restore, then end with
-    ``probe.interrupted`` true; the caller exits 130."""
+    ``probe.interrupted`` true; the caller exits 130.  After each write and each wait the
+    probe hears what the port still holds (``Probe.port_report``), when the port can say."""
     stop = stop or threading.Event()
+    reports = unsent_bytes(link.port) is not None
+
+    def report() -> None:
+        unsent = unsent_bytes(link.port) if reports else None
+        if unsent is not None:
+            probe.port_report(link.clock(), unsent)
+
+    report()
     while True:
         if stop.is_set() and not probe.interrupted and not probe.done:
             probe.interrupt()
@@ -49,8 +70,10 @@ def drive(link, probe: Probe, inbox: FrameInbox, progress=None, stop: threading.
             return
         if isinstance(action, Write):
             link.write(action.frame)
+            report()
             continue
         link.idle(max(action.until_s - link.clock(), MIN_WAIT_S))
+        report()
         if link.error is not None:
             raise link.error
         if progress is not None:

@@ -119,7 +119,9 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
     its resolution, or None.  ``reading(frame)`` → a comparable value; ``progress_of(value)``
     (also applied to the model's poses through ``reading_of_pose``) → distance from the start."""
     segment = MotionModel(probe.profile, 1.0).plan(command, start)
+    written_s = probe.now_s
     landed_s = yield Send(command)
+    at = probe.wire.written_bytes
     probe.known.moved = True
     probe.known.busy_until_s = landed_s + SLOWEST_FACTOR * segment.duration_s
     limit_s = landed_s + SLOWEST_FACTOR * segment.duration_s + READBACK_TIMEOUT_S
@@ -134,6 +136,13 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
                         f"{SLOWEST_FACTOR:g}× that time: stopped probing")
     arrived_s = probe.seen.agreed(kind, landed_s, reading)[0]
     probe.known.busy_until_s = probe.now_s
+    # The move starts when its frame lands: the line model's time, unless the port's reports
+    # prove it landed later (a buffer held it); the window they leave counts in the resolution.
+    latest_s = probe.landed_by(at, landed_s)
+    earliest_s = probe.earliest_landing(at, written_s)
+    latest_s = max(earliest_s, latest_s if latest_s is not None else probe.now_s)
+    unsure_start_s = 0.0 if earliest_s <= landed_s <= latest_s else latest_s - earliest_s
+    landed_s = min(max(landed_s, earliest_s), latest_s)
     total = progress_of(segment.end)
     samples = []
     for t, frame in probe.seen.since(kind, landed_s):
@@ -158,7 +167,7 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
     # one sample's factor error: the status step at the path's slowest sampled speed, and the clock
     # the fit's error bound: half a status step at the mean speed, and the clock, over the longest τ
     slope = total / segment.duration_s
-    resolution = (quantum / 2 / slope + probe.timestamp_uncertainty_s) / max(tau for _, tau in samples)
+    resolution = (quantum / 2 / slope + probe.timestamp_uncertainty_s + unsure_start_s) / max(tau for _, tau in samples)
     return factor, resolution, len(samples), start_delay_s
 
 

@@ -4,10 +4,12 @@ Strategy (sans-I/O, like armctl/jog/session.py): each measurement is a generator
 what it needs — ``Send(command)`` (a frame to write) or ``Wait(until_s, ready)`` (feed me status
 frames until ``ready()`` holds or the time comes) — and returns a ``Finding``.  ``Probe`` runs
 the steps in order and turns their wishes into ``Write``/``Wait`` actions for a host: it paces
-writes to the line rate (never more than one frame ahead of the wire, so the host knows when
-each lands) and hands each step the landing time of its frame.  ``Seen`` keeps every status
-frame with its time.  ``interrupt()`` abandons the running step for the restore step, which
-is also the last step of a normal run: one mechanism puts back what the probe changed.
+writes to the line rate (one frame ahead of the wire, so the line model says when each lands;
+further ahead only where ``WireLog`` — the port's own reports of what it still holds, fed by the
+host — proves the landing) and hands each step the landing time the model expects.  ``Seen``
+keeps every status frame with its time.  ``interrupt()`` abandons the running step for the
+restore step, which is also the last step of a normal run: one mechanism puts back what the
+probe changed.
 
 No clock, no port, no threads: a host (armctl/probe/host.py) feeds frames and time; the tests
 feed a simulator in virtual time.
@@ -21,11 +23,15 @@ from typing import Callable, Iterator
 
 from ..line import STATUS_SIZE
 from ..protocol import Command, PauseStatus, StatusFrame, byte_seconds, frame_seconds
+from .landing import WireLog
 
 SURE, LIKELY, UNSURE, NOT_MEASURED = "sure", "likely", "unsure", "not measured"
 # Readings from the arm are trusted once two frames of a kind in a row agree: one status byte
 # flipped on the line (H9: no checksum) cannot then make the probe claim a value.
 AGREEING_FRAMES = 2
+# A port that holds written bytes and sends none for this long is stuck (at 9600 a byte leaves
+# every 1.04 ms while it works): the probe stops rather than wait for ever.
+LINE_STUCK_S = 10.0
 
 
 class ProbeStop(Exception):
@@ -47,10 +53,15 @@ class Finding:
 
 @dataclass(frozen=True)
 class Send:
-    """A step's wish: write this frame (the step receives its landing time)."""
+    """A step's wish: write this frame (the step receives the landing time the line model
+    expects; ``Probe.landed_by`` proves it from the port's reports).  ``ahead_s``: the frame may
+    go this much more line time ahead of the wire — only on a port that reports what it still
+    holds, where the landing is proven, not assumed; the port's buffer then keeps the line busy
+    between two of the host's wake-ups."""
 
     command: Command
     raw: bytes | None = None  # the bytes, when they are not ``command.encode()`` (a byte-order test)
+    ahead_s: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -142,9 +153,10 @@ def xyz_of(frame) -> tuple[float, float, float]:
 class Probe:
     """Runs ``steps`` (callables taking the probe, returning a step generator) then ``restore``."""
 
-    def __init__(self, steps, restore, baud: int, start_s: float) -> None:
+    def __init__(self, steps, restore, baud: int, start_s: float, after_sent_bytes: int = 0) -> None:
         self.baud = baud
         self.frame_s = frame_seconds(baud)
+        self.wire = WireLog(byte_seconds(baud), after_sent_bytes)  # what the port says has left it
         self.seen = Seen(STATUS_SIZE * byte_seconds(baud))
         self.start_s = self.now_s = start_s
         self.line_free_s = start_s  # when the last frame written has fully landed
@@ -168,6 +180,13 @@ class Probe:
         self.now_s = max(self.now_s, now_s)
         self.seen.feed(frame, now_s)
 
+    def port_report(self, now_s: float, unsent_bytes: int) -> None:
+        """The port still holds ``unsent_bytes`` of what was written (pyserial's ``out_waiting``):
+        the line stays busy at least that long, whatever the model expected."""
+        self.now_s = max(self.now_s, now_s)
+        self.wire.report(now_s, unsent_bytes)
+        self.line_free_s = max(self.line_free_s, now_s + unsent_bytes * self.wire.byte_s)
+
     def interrupt(self) -> None:
         """Ctrl-C: abandon the running step; restore what was changed, then stop."""
         if not self._restoring:
@@ -188,14 +207,37 @@ class Probe:
                     self._pending, self._reply = None, self.now_s
                     continue
                 return pending
-            # Send: at most one frame ahead of the wire, so its landing time is known
-            if self.line_free_s - self.now_s > self.frame_s * 1.001:
-                return Wait(self.line_free_s - self.frame_s)
+            # Send: at most one frame ahead of the wire, so the line model knows when it lands —
+            # or up to ``ahead_s`` more where the port's reports prove the landing instead
+            ahead_s = self.frame_s * 1.001 + (pending.ahead_s if self.wire.reporting else 0.0)
+            if self.line_free_s - self.now_s > ahead_s:
+                if self.wire.stuck_s(self.now_s) > LINE_STUCK_S:
+                    self._line_stuck()
+                    continue
+                return Wait(self.line_free_s - ahead_s)
             self.line_free_s = max(self.now_s, self.line_free_s) + self.frame_s
             self.sent.append((self.line_free_s, pending.command))
+            raw = pending.raw or pending.command.encode()
+            self.wire.wrote(len(raw))
             self._pending, self._reply = None, self.line_free_s
-            return Write(pending.raw or pending.command.encode(), pending.command)
+            return Write(raw, pending.command)
         return None
+
+    def landed_by(self, end: int, expected_s: float) -> float | None:
+        """The frame ending at stream position ``end`` (``wire.written_bytes`` after its Send)
+        has landed by this time: not before the port's reports show it gone (None: they do not
+        yet), nor before ``expected_s``, the line model's time — a buffer the port does not count
+        (a bridge that reads the bytes at once and puts them on its own line) passes them on no
+        faster than the line.  A port that cannot report: the line model's time alone."""
+        if not self.wire.reporting:
+            return expected_s
+        reported_s = self.wire.landed_by(end)
+        return None if reported_s is None else max(reported_s, expected_s)
+
+    def earliest_landing(self, end: int, written_s: float) -> float:
+        """The frame ending at ``end``, handed to the port at ``written_s``, cannot have landed
+        before this: its own wire time after the write, and not while the port still held it."""
+        return max(written_s + self.frame_s, self.wire.not_landed_at(end))
 
     @property
     def arm_time_s(self) -> float:
@@ -235,6 +277,20 @@ class Probe:
             self.stopped = stop
             self._start_restore()
             return None
+
+    def _line_stuck(self) -> None:
+        """The port holds bytes and has sent none for ``LINE_STUCK_S``: nothing reaches the arm.
+        Stop (restoring needs the line too: if it is stuck while restoring, say so and end)."""
+        stop = ProbeStop(f"the port has sent nothing for {self.wire.stuck_s(self.now_s):.1f} s with "
+                         f"{self.wire.unsent_bytes()} bytes waiting: nothing reaches the arm (hardware flow "
+                         "control? the adapter or the cable?)")
+        self._pending = None
+        if self._restoring:
+            self.notes.append(f"not restored: {stop}")
+            self.done = True
+            return
+        self.stopped = stop
+        self._start_restore()
 
     def _record(self, result) -> None:
         if isinstance(result, Finding):

@@ -54,12 +54,12 @@ def progress_display(as_json: bool, say):
 
 
 def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> int:
-    from ..link import connect
+    from ..link import SIMULATOR_URL, connect
     from ..profile import load_profile
-    from . import build_probe
+    from . import ADAPTER_FIFO_BYTES, build_probe
     from .host import FrameInbox, deferred_stop, drive
     from .report import as_json as json_object, print_lines, print_table, to_write
-    from .toml_edit import check_writable, toml_value, write_connector
+    from .toml_edit import check_writable, connector_table, toml_value, write_connector
 
     say = (lambda text: click.echo(text, err=True)) if as_json else click.echo
     target = Path(write_path) if write_path else None
@@ -71,7 +71,8 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     link, baud = connect(port, baud, announce=say, profile=profile, on_status=inbox)
     stop = threading.Event()
     with link:
-        probe = build_probe(profile, baud, link.clock(), motion, link.is_virtual)
+        probe = build_probe(profile, baud, link.clock(), motion, link.is_virtual,
+                            after_sent_bytes=0 if link.url.startswith(SIMULATOR_URL) else ADAPTER_FIFO_BYTES)
         try:
             with deferred_stop(stop), progress_display(as_json, say) as update:
                 drive(link, probe, inbox, update, stop)
@@ -105,7 +106,24 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
         values = to_write(probe)
         write_connector(target, values)
         say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {toml_value(v)}" for k, v in values.items()))
+        if "fifo_frames" not in values:
+            say(unmeasured_fifo_note(target, connector_table(target).get("fifo_frames")))
     return EXIT_OK
+
+
+def unmeasured_fifo_note(target, kept) -> str:
+    """--write without a measured FIFO: what the file now says, and what to set by hand — a run
+    must not stream into an unmeasured FIFO as if it held the document's 200 frames."""
+    from .steps import DOCUMENTED
+
+    if kept is not None:
+        state = (f"{target} keeps fifo_frames = {kept!r} from before: it holds only if it was measured on this arm "
+                 "and this connector")
+    else:
+        state = (f"{target} has none, so `armctl run` assumes the document's {DOCUMENTED['fifo_frames']} frames and "
+                 "a smaller FIFO drops frames silently")
+    return (f"--write: fifo_frames not written (not measured: see fifo_frames above); {state}. Set "
+            "`[connector] fifo_frames = <the frames your connector holds>` by hand")
 
 
 def probe_origin(probe) -> str:

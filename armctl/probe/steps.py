@@ -35,6 +35,9 @@ LISTEN_S = 1.0  # ≥ 3 rotations of 9 kinds at 30 ms
 FIRST_STATUS_TIMEOUT_S = 4.0
 READBACK_TIMEOUT_S = 2.5  # a value written, read back: ~1 rotation, a few lost frames
 CONTROL_DELAY_S = 2.0  # the delay a pause toggle is written behind
+# An arm that acts on arrival confirms the pause (two kind-4 frames) within 2 rotations of the
+# toggle's landing; one more for lost status frames.
+ARRIVAL_CONFIRM_ROTATIONS = 3
 QUIET_S = 1.5  # nothing the arm reports changes for this long: it has done what it was sent
 QUIET_LIMIT_S = 60.0  # restoring waits at most this long for queued frames to finish
 ORIGIN_OFFSET_MM = (123.4, 56.7, 28.9)  # G54 test origin: negative, fractional, far from the old
@@ -293,10 +296,13 @@ def control(probe):
     it ends → queued (H5).  Then the resume toggle."""
     known = probe.known
     yield from settle(probe)
+    delay_written_s = probe.now_s
     delay_landed_s = yield Send(Delay(CONTROL_DELAY_S * 1000))
+    delay_at = probe.wire.written_bytes
     delay_end_s = delay_landed_s + CONTROL_DELAY_S
     known.busy_until_s = delay_end_s
     pause_landed_s = yield Send(PauseToggle())
+    pause_at = probe.wire.written_bytes
     yield from wait_until(probe, delay_end_s + READBACK_TIMEOUT_S, lambda: _paused_since(probe, pause_landed_s))
     paused = _paused_since(probe, pause_landed_s)
     default = DOCUMENTED["control_frames"]
@@ -307,8 +313,18 @@ def control(probe):
                        f"a pause toggle written {behind} was never reported paused (kind 4)", UNSURE)
     confirmed_s = paused[1]
     lag = f"the pause was reported {paused[0] - pause_landed_s:.2f} s (confirmed {confirmed_s - pause_landed_s:.2f} s) after the toggle landed"
-    if confirmed_s < delay_end_s - 2 * STATUS_PERIOD_S * len(STATUS_ROTATION) / 3:
+    # Judged by what the port's reports prove (a buffer may hold either frame): paused before the
+    # delay could have ended → arrival; paused after it, and after the toggle surely landed by
+    # more than an arrival's confirmation takes (two kind-4 frames, lost ones allowed) → queued.
+    rotation_s = STATUS_PERIOD_S * len(STATUS_ROTATION)
+    earliest_end_s = probe.earliest_landing(delay_at, delay_written_s) + CONTROL_DELAY_S
+    toggle_by_s = probe.landed_by(pause_at, pause_landed_s)
+    if confirmed_s < earliest_end_s - 2 * rotation_s / 3:
         finding = Finding("control_frames", default, "arrival", f"{lag}, {behind}: it acted on arrival", SURE)
+    elif toggle_by_s is None or confirmed_s - toggle_by_s <= ARRIVAL_CONFIRM_ROTATIONS * rotation_s:
+        shown = "after that" if toggle_by_s is None else f"{confirmed_s - toggle_by_s:.2f} s before it"
+        finding = Finding("control_frames", default, None, f"{lag}, {behind}, but the port's reports show the toggle "
+                          f"landed only {shown}: acting on arrival would look the same (a buffer held it?)", UNSURE)
     elif confirmed_s >= delay_end_s:
         finding = Finding("control_frames", default, "queued", f"{lag}, {behind}: it waited in the FIFO", SURE)
     else:

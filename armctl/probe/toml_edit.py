@@ -122,3 +122,9 @@ def write_connector(path: Path, values: dict) -> None:
     temporary = path.with_name(f".{path.name}.probe-tmp")
     temporary.write_text(result, encoding="utf-8")
     os.replace(temporary, path)
+
+
+def connector_table(path: Path) -> dict:
+    """The ``[connector]`` table the file at ``path`` holds now ({} without one)."""
+    table = parse(_existing_text(path), str(path)).get(TABLE, {})
+    return table if isinstance(table, dict) else {}

@@ -34,6 +34,13 @@ Decisions (each in one place, here):
   FIFO stops it (all axes neutral), as do pause and arm reset.  A joystick frame that lands
   while a segment runs (arrival mode only) is ignored (outcome "ignored").
 - A frame framed correctly but carrying no valid command takes its slot and is skipped.
+- **Reach** (issue 24; the document names no fault report, so this is an assumption, kept
+  here): a motion frame whose target the arm cannot take — a Cartesian target with no joints
+  inside its own limits by its own kinematics (the simulated arm's links, ``link_scale``
+  included), or joint targets outside those limits — is refused as a controller refuses an
+  IK failure: it takes its slot, the arm does not move (outcome "refused"), and the status
+  frames keep showing where it stands, so a job holding one can never be proven finished.
+  Only the target is judged: a path that leaves the reach between two reachable targets runs.
 """
 
 from __future__ import annotations
@@ -58,7 +65,7 @@ from .connector import Connector, ReceivedFrame, RecentList
 from .joystick import JoystickMotion
 from .program import Hold, SdProgram
 
-DONE, INTERRUPTED, SKIPPED, IGNORED, RUNNING = "done", "interrupted", "skipped", "ignored", "running"
+DONE, INTERRUPTED, SKIPPED, IGNORED, REFUSED, RUNNING = "done", "interrupted", "skipped", "ignored", "refused", "running"
 
 
 @dataclass(eq=False)
@@ -194,6 +201,11 @@ class Executor:
                     self._stop_jog(now_s)
                     frames = [connector.take(), connector.take()]
                     segment = self.motion.plan(following.command, self._start_pose(), arc_start=command)
+                    problem = self._beyond_reach(segment)
+                    if problem is not None:
+                        for taken in frames:
+                            self._instant(taken, now_s, REFUSED, problem)
+                        continue
                     self._run(segment, frames, now_s)
                     return
                 self._instant(connector.take(), now_s, SKIPPED, "arc start not followed by its arc end")
@@ -206,7 +218,25 @@ class Executor:
             elif isinstance(command, CONTROL_COMMANDS):
                 self._control(frame, now_s)
             else:
-                self._run(self.motion.plan(command, self._start_pose()), [frame], now_s)
+                segment = self.motion.plan(command, self._start_pose())
+                problem = self._beyond_reach(segment)
+                if problem is not None:
+                    self._instant(frame, now_s, REFUSED, problem)
+                    continue
+                self._run(segment, [frame], now_s)
+
+    def _beyond_reach(self, segment) -> str | None:
+        """Why the arm cannot take ``segment``'s target (module docstring, "Reach"), or None."""
+        end = segment.end
+        if segment.kind == "joint":
+            for number, (angle, (low, high)) in enumerate(zip(end.joints, self.profile.joint_limits_deg), 1):
+                if not low <= angle <= high:
+                    return f"J{number} = {angle:g} deg is outside the arm's limits {low:g}…{high:g}"
+            return None
+        if segment.kind in ("line", "arc") and not end.kinematics.can_take(end.robot_cartesian, end.ik_hint):
+            x, y, z = end.robot_cartesian[:3]
+            return f"X{x:.1f} Y{y:.1f} Z{z:.1f} (robot frame) is out of the arm's reach"
+        return None
 
     def _start_pose(self):
         if tuple(self.pose.origin_mm) != self.origin_mm:

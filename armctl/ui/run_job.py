@@ -487,7 +487,8 @@ def _summary(result, view, wall_s: float, estimate, options: JobOptions, departu
                    f"({actual / estimate.job_s - 1:+.1%})" if estimate.job_s else f"arm time: {actual:.1f} s")
         if departures:
             click.echo(f"  ({departures})")
-    click.echo(f"frames confirmed by the arm's reports: {result.frames_by_reports}; by time only: {result.frames_by_time}")
+    click.echo(f"frames confirmed by the arm's reports: {result.frames_by_reports}; by time only: {result.frames_by_time}"
+               + (f"; gone from the buffer, not seen running: {result.frames_unseen}" if result.frames_unseen else ""))
     for message in result.messages:
         click.echo(f"note: {message}", err=True)
     if result.finished:

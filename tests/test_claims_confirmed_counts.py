@@ -1,0 +1,104 @@
+"""Issue 21 item 4: "frames confirmed by the arm's reports" counts only frames a report proves
+*executed*.
+
+A report on a later frame's path proves the frames before it left the FIFO — and a frame a full
+FIFO dropped left it too (and, planned in a row, the arm running the frame after a dropped one
+passes right along the dropped one's path: no sighting tells them apart).  So a frame gone from
+the FIFO counts as confirmed by the reports only where the FIFO size is proven (probed, or a
+simulator that holds the profile's) and no RESET CONNECTOR may have cleared it, or where the arm
+at rest at the last target proves that frame ran; the others are counted apart ("gone from the
+buffer, not seen running"), and they leave the job "finished, unproven".  Judged by the simulator's own record:
+a 60-frame FIFO that the profile believes holds 200, ``--lead 6`` — frames are dropped, and no
+frame the summary counts as seen by the reports is one of them.  Virtual time; the installed
+command in a fresh process gives the same summary.
+"""
+
+from __future__ import annotations
+
+import re
+
+import pytest
+from click.testing import CliRunner
+
+import armctl.streamer
+from armctl.cli import main
+from armctl.sim.executor import DONE
+from claims_common import fresh, raster
+from test_resume_exactly_once import _open_one_arm
+
+URL = "sim://?clock=virtual&fifo_frames=60"
+COUNTS = r"^frames confirmed by the arm's reports: (\d+); by time only: (\d+)(?:; gone from the buffer, not seen running: (\d+))?$"
+
+
+def _counts(stdout: str) -> tuple[int, int, int]:
+    found = re.search(COUNTS, stdout, re.M)
+    assert found, stdout
+    return int(found[1]), int(found[2]), int(found[3] or 0)
+
+
+@pytest.fixture
+def claimed(monkeypatch):
+    """The frames (their indexes) the streamer counts as seen by the arm's reports."""
+    seen: list[int] = []
+    real = armctl.streamer.Streamer._consume_one
+
+    def consume_one(self, by_reports):
+        head, before = self.pending[0], self.confirmed_by_reports
+        real(self, by_reports)
+        if self.confirmed_by_reports > before:
+            seen.append(head.index)
+
+    monkeypatch.setattr(armctl.streamer.Streamer, "_consume_one", consume_one)
+    return seen
+
+
+def test_no_frame_the_fifo_dropped_is_claimed_seen_by_the_reports(tmp_path, monkeypatch, claimed):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("ARMCTL_PORT", raising=False)
+    (tmp_path / "job.txt").write_text(raster(400), encoding="utf-8")
+    ports = _open_one_arm(monkeypatch)
+    result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--lead", "6", "--port", URL])
+    arm = ports[URL].model
+    assert arm.frames_dropped > 20  # the case: a FIFO smaller than the profile says, overrun
+    executed = {e.index for e in arm.execution_log if e.outcome == DONE}
+    dropped = set(arm.dropped_indexes)
+    by_reports, by_time, unseen = _counts(result.stdout)
+    assert by_reports == len(claimed)
+    assert not dropped & set(claimed), sorted(dropped & set(claimed))  # (the job's frame k is the arm's k-th)
+    assert set(claimed) <= executed
+    assert by_reports + by_time + unseen == 400
+    assert by_reports <= 400 - arm.frames_dropped
+    assert "finished: the arm finished the job" not in result.stdout
+
+    # the same run, through the installed command in a fresh process: the same counts, told as such
+    again = fresh(["-m", "armctl", "run", "job.txt", "--no-live", "--lead", "6", "--port", URL], tmp_path)
+    assert _counts(again.stdout) == (by_reports, by_time, unseen)
+    assert unseen and "gone from the buffer, not seen running" in again.stdout
+    assert again.returncode == 1 and "a frame it dropped would look the same" in again.stderr
+
+
+def test_a_job_on_a_fifo_that_holds_it_counts_what_was_seen_and_ends_done(tmp_path, monkeypatch, claimed):
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("ARMCTL_PORT", raising=False)
+    (tmp_path / "job.txt").write_text(raster(200), encoding="utf-8")
+    ports = _open_one_arm(monkeypatch)
+    url = "sim://?clock=virtual"
+    result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--port", url])
+    assert result.exit_code == 0 and result.stdout.splitlines()[-1] == "finished: the arm finished the job", result.output
+    arm = ports[url].model
+    assert arm.frames_dropped == 0
+    by_reports, by_time, unseen = _counts(result.stdout)
+    assert by_reports + by_time + unseen == 200 and by_reports == len(claimed) > 20
+    assert set(claimed) <= {e.index for e in arm.execution_log if e.outcome == DONE}
+
+
+def test_frames_a_reset_connector_cleared_are_not_claimed_executed(tmp_path):
+    # H5: the script's RESET CONNECTOR acts at the head and clears the three moves queued behind
+    # it (a 60 s lead writes them at once); time never confirms a frame it may have cleared.
+    script = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F6000\nG1 Y120\nRESET CONNECTOR\nG1 Y-120\nG1 Z100\nG1 Z150\n"
+    (tmp_path / "job.txt").write_text(script, encoding="utf-8")
+    result = fresh(["-m", "armctl", "run", "job.txt", "--no-live", "--lead", "60", "--port", "sim://?clock=virtual"],
+                   tmp_path)
+    assert result.returncode == 1, (result.stdout, result.stderr)
+    assert "last line known executed: 3" in result.stdout  # not 6: lines 4-6 were cleared
+    assert re.search(r"^resume with: armctl run job.txt --from-line 4 ", result.stdout, re.M)

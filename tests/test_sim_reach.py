@@ -1,0 +1,74 @@
+"""The simulated arm cannot go where it cannot go (issue 24): a target outside its own reach —
+by its own kinematics, ``link_scale`` included — or its joint limits is refused, as a controller
+refuses an IK failure, so a job holding one never ends "finished" (armctl/sim/executor.py, "Reach")."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from armctl.protocol import JointMove, LinearMove
+from armctl.sim.executor import DONE, REFUSED
+from armctl.sim.model import SimOptions, SimulatedArm
+
+START = LinearMove(250, 0, 250, 180, 0, 0, 1500, 6000)
+
+
+def _run(arm: SimulatedArm, *commands) -> None:
+    for command in commands:
+        arm.write(command.encode(), arm.now_s)
+    arm.advance_until_idle(600.0)
+
+
+def _outcomes(arm: SimulatedArm) -> list[str]:
+    return [e.outcome for e in arm.execution_log]
+
+
+def test_a_target_two_metres_away_is_refused_and_the_arm_stays_where_it_was():
+    arm = SimulatedArm(SimOptions())
+    _run(arm, START, LinearMove(2000, 0, 250, 180, 0, 0, 1500, 6000))
+    assert _outcomes(arm) == [DONE, REFUSED]
+    assert arm.snapshot().position_mm == pytest.approx((250, 0, 250), abs=1e-6)
+    assert "out of the arm's reach" in arm.execution_log[-1].note
+
+
+def test_joint_targets_outside_the_limits_are_refused():
+    arm = SimulatedArm(SimOptions())
+    low, high = arm.profile.joint_limits_deg[0]
+    _run(arm, JointMove(high + 10, 0, 0, 0, 90, 0, 1500, 20), JointMove(0, 0, 0, 0, 90, 0, 1500, 20))
+    assert _outcomes(arm) == [REFUSED, DONE]
+    assert "J1" in arm.execution_log[0].note
+
+
+def test_the_arms_own_links_decide_not_the_profiles():
+    """A target near the edge of the profile's reach: taken by an arm with the profile's links,
+    refused by one whose links are 20 % shorter."""
+    edge = LinearMove(0, 0, 0, 180, 0, 0, 1500, 6000)
+    profile_arm = SimulatedArm(SimOptions())
+    reach_mm = profile_arm.profile.workspace.reach_mm
+    for x_mm in range(int(reach_mm), 100, -10):  # the farthest straight-out target the profile's arm takes
+        edge = LinearMove(x_mm, 0, 250, 180, 0, 0, 1500, 6000)
+        arm = SimulatedArm(SimOptions())
+        _run(arm, START, edge)
+        if _outcomes(arm)[-1] == DONE:
+            break
+    else:
+        pytest.fail("no reachable target straight out")
+    short = SimulatedArm(SimOptions(link_scale=0.8))
+    _run(short, START, edge)
+    assert _outcomes(short)[-1] == REFUSED
+
+
+@pytest.mark.timeout(60)
+def test_armctl_run_of_a_2_m_move_never_ends_finished(tmp_path):
+    """Through the installed command in a fresh process (lint may refuse it first: either way the
+    arm is never said to have finished it)."""
+    job = tmp_path / "far.txt"
+    job.write_text("G90\nG1 X250 Y0 Z250 A180 B0 C0 S1500 F6000\nG1 X2000\n")
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", str(job), "--port", "sim://?clock=virtual",
+                           "--no-live", "--json"], capture_output=True, text=True, timeout=60)
+    assert done.returncode in (1, 2), done.stderr
+    assert "Traceback" not in done.stderr
+    outcomes = [json.loads(line).get("outcome") for line in done.stdout.splitlines() if line.startswith("{")]
+    assert "finished" not in outcomes, done.stdout
