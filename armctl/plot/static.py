@@ -59,9 +59,12 @@ def figure(path: JobPath, view: str | None = None) -> Figure:
     # the legend column's height: its handles, then one 7-point row per listed line
     legend_in = (len(handles) + 3) * LEGEND_ROW_IN + (listing.count("\n") + 1) * LISTING_ROW_IN
     if view == "3d":
-        fig = Figure(figsize=(FIGURE_WIDTH_IN, max(7.5, legend_in + MARGIN_TOP_IN + MARGIN_BOTTOM_IN)))
-        _draw_3d(fig.add_axes((0.02, 0.06, 0.58, 0.86), projection="3d"), path, limits)
-        legend_box = (0.62, 0.04, 0.36, 0.86)
+        height_in = max(7.5, legend_in + MARGIN_TOP_IN + MARGIN_BOTTOM_IN)
+        fig = Figure(figsize=(FIGURE_WIDTH_IN, height_in))
+        legend_left = 1 - (LEGEND_WIDTH_IN + MARGIN_RIGHT_IN) / FIGURE_WIDTH_IN
+        _draw_3d(fig.add_axes((0.02, 0.06, legend_left - 0.04, 0.86), projection="3d"), path, limits)
+        legend_box = (legend_left, MARGIN_BOTTOM_IN / height_in, LEGEND_WIDTH_IN / FIGURE_WIDTH_IN,
+                      1 - (MARGIN_TOP_IN + MARGIN_BOTTOM_IN) / height_in)
     else:
         fig, boxes, legend_box = _page(limits, STATIC_VIEWS if view is None else (view,), legend_in)
         for name, box in boxes.items():
