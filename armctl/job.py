@@ -873,7 +873,7 @@ class Job:
                 return named
             return (f"the arm stopped at ({_values(position)}) but the job's last target is "
                     f"({_values(self._recent[-1].segment.end.xyz)}): "
-                    "frames were lost or cleared (a RESET CONNECTOR, a full buffer?)")
+                    "frames were lost, cleared or refused (a RESET CONNECTOR, a full buffer, a target out of the arm's reach?)")
         return "the arm did not confirm the end of the job in time (status frames missing?)"
 
     def _arms_own_motion_last(self) -> str | None:
