@@ -116,7 +116,7 @@ def test_a_fifo_smaller_than_the_profile_says_ends_frames_may_have_been_lost(job
     dropped = port.model.dropped_indexes
     assert dropped
     assert result.exit_code == 1, result.output
-    assert "done: the arm finished" not in result.stdout
+    assert "finished: the arm finished" not in result.stdout
     assert "stopped: frames may have been lost" in result.output
     assert "they were skipped (dropped by a full FIFO, or cleared)" in result.output
     assert re.search(r"frames confirmed by the arm's reports: \d+; by time only: \d+", result.stdout)
