@@ -61,11 +61,13 @@ PROGRESS_EVERY_S = 0.25  # on_progress is called at least this often (arm clock)
 FEED_OVERRIDE_RANGE_PERCENT = (-1000.0, 1000.0)
 PAUSE_READ_TIMEOUT_S = 3.0  # how long two agreeing pause reports are waited for (one comes every 0.27 s)
 _MOVE_NAME = "<move>"
+_HOME_NAME = "<home>"
 _TEXT_NAME = "<script>"
 # move()'s keywords, in the order the line is written: Cartesian (G1) and joint (G6) words
 _CARTESIAN = ("x", "y", "z", "a", "b", "c")
 _JOINTS = ("j1", "j2", "j3", "j4", "j5", "j6")
 _OTHER = ("u", "v", "t", "h", "s", "f")
+MOVE_KEYWORDS = _CARTESIAN + _JOINTS + _OTHER  # Arm.move's words (``armctl move``'s too)
 
 ScriptSource = Union[str, "os.PathLike[str]"]
 
@@ -472,11 +474,22 @@ def _word(letter: str, value: float) -> str:
     return f"{letter}={number}" if letter.startswith("J") else f"{letter}{number}"
 
 
+def default_speed(profile: Profile, words: Mapping[str, float | None]) -> float | None:
+    """The F a move without ``f`` is sent with: the profile's ``[speed]`` default of the line's
+    family (``default_joint_deg_s`` when a joint is named, else ``default_linear_mm_min``).
+    None when no word is given (``move_line`` says what is missing)."""
+    if all(value is None for value in words.values()):
+        return None
+    joint = any(words.get(name) is not None for name in _JOINTS)
+    speed = profile.speed.default_joint_deg_s if joint else profile.speed.default_linear_mm_min
+    return int(speed) if speed.is_integer() else speed
+
+
 def move_line(**words: float | None) -> str:
     """The one script line ``Arm.move`` sends: G6 when a joint is named, else G1 (the
     compiler judges every word: a Cartesian word on G6, say, is its error, not ours)."""
     given = {name: value for name, value in words.items() if value is not None}
-    unknown = sorted(set(given) - set(_CARTESIAN + _JOINTS + _OTHER))
+    unknown = sorted(set(given) - set(MOVE_KEYWORDS))
     if unknown:
         raise TypeError(f"move() got unexpected keyword arguments: {', '.join(unknown)}")
     if not given:
@@ -593,7 +606,8 @@ class Arm:
         X Y Z (mm) A B C (deg), or ``G6`` with J1…J6 (deg) when a joint is given; ``f`` the speed
         (mm/min for G1, deg/s for G6), ``s`` the PWM pulse (µs), ``t`` its channel (G1), ``h``
         the smoothing (G6), ``u``/``v`` the external axes.  Absolute coordinates; words left
-        out keep the arm's reported values (F has none: give ``f``).
+        out keep the arm's reported values.  Without ``f`` the move runs at the profile's
+        default speed (``[speed] default_linear_mm_min``, or ``default_joint_deg_s`` for G6).
 
         ``wait=True``: returns when the arm's reports prove it at rest at the target (the
         ``RunResult``); ``timeout`` seconds of the arm's clock, counted from when the move
@@ -601,11 +615,19 @@ class Arm:
         streams from the worker while you go on.  A line with errors raises ``ScriptError``
         here, in both cases, and nothing is sent.
         """
-        line = move_line(x=x, y=y, z=z, a=a, b=b, c=c, j1=j1, j2=j2, j3=j3, j4=j4, j5=j5, j6=j6,
-                         u=u, v=v, s=s, t=t, h=h, f=f)
+        words = dict(x=x, y=y, z=z, a=a, b=b, c=c, j1=j1, j2=j2, j3=j3, j4=j4, j5=j5, j6=j6, u=u, v=v, s=s, t=t, h=h)
+        line = move_line(**words, f=default_speed(self._profile, words) if f is None else f)
         from .script import ScriptSnapshot
 
         return self._submit(ScriptSnapshot(_MOVE_NAME, line.encode("ascii")), 1, _JobSpec(timeout_s=timeout), wait, from_arm=True)
+
+    def home(self, *, wait: bool = True, timeout: float | None = None) -> RunResult | None:
+        """Go to the profile's fixed pose 0 (``POSE 0``, control 30/5), as a job of one line:
+        ``wait=True`` returns when the arm's reports prove it at rest there; ``timeout`` and
+        ``wait=False`` as for ``move``."""
+        from .script import ScriptSnapshot
+
+        return self._submit(ScriptSnapshot(_HOME_NAME, b"POSE 0\n"), 1, _JobSpec(timeout_s=timeout), wait, from_arm=True)
 
     def run(self, script: ScriptSource, *, from_line: int = 1, on_progress: Callable[[Progress], None] | None = None,
             timeout: float | None = None, observer: JobObserver | None = None, log: IO[str] | None = None,

@@ -19,6 +19,7 @@ if is_the_program():  # the armctl command (not a test or a script importing thi
 
 import json  # noqa: E402  (the handlers first: a signal in the first instant is exit 130, no traceback)
 import sys  # noqa: E402
+from contextlib import contextmanager  # noqa: E402
 from itertools import islice  # noqa: E402
 
 import click  # noqa: E402
@@ -147,11 +148,39 @@ def main(verbose, quiet):
     Without --port (or ARMCTL_PORT, or `port` in armctl.toml) commands talk to the built-in
     simulator.
     """
+    _configure_output(click.get_current_context())
+
+
+def _configure_output(ctx: click.Context) -> None:
+    """``-v``/``-q`` as given so far (before or after the subcommand), on the root context
+    where ``armctl.output.quiet`` reads them."""
     from .output import configure
 
+    root = ctx.find_root()
+    verbose, quiet = bool(root.params.get("verbose")), bool(root.params.get("quiet"))
     if verbose and quiet:
         raise click.UsageError("choose -v or -q, not both")
     configure(verbose, quiet)
+
+
+def _late_flag(ctx: click.Context, param: click.Parameter, value: bool) -> None:
+    """``armctl run job.txt -q``: the group's flag given after the subcommand."""
+    if value:
+        ctx.find_root().params[param.name] = True
+        _configure_output(ctx)
+
+
+def _accept_output_flags_after(group: click.Group) -> None:
+    """Every subcommand takes ``-v``/``-q`` too, meaning exactly what they mean before it."""
+    for command in group.commands.values():
+        if isinstance(command, click.Group):
+            _accept_output_flags_after(command)
+            continue
+        taken = {name for param in command.params for name in getattr(param, "opts", ())}
+        for flag, name, text in (("-v", "verbose", "The same as `armctl -v`."), ("-q", "quiet", "The same as `armctl -q`.")):
+            if flag not in taken and f"--{name}" not in taken:
+                command.params.append(click.Option([flag, f"--{name}"], is_flag=True, expose_value=False,
+                                                   callback=_late_flag, help=text))
 
 
 def _read_input(path: str) -> bytes:
@@ -174,16 +203,43 @@ def decode(source: str, as_json: bool):
 
     Finds 48-byte command frames and 9-byte status frames in any mix, prints one readable
     line per frame (offset, family, command and fields with units) and marks bytes that
-    belong to no frame.
+    belong to no frame.  A run --log's frames come with their time and direction
+    (host→arm, arm→host), in the log's order.  The input is read as it is decoded.
     """
-    from .formats import bytes_from_input, chunk_record, describe_chunk, summary_line
-    from .protocol import scan_frames
+    from .decode import NotHex, decode_stream
+    from .formats import ChunkTally, decoded_record, describe_decoded
 
-    data = bytes_from_input(_read_input(source))
-    chunks = list(scan_frames(data))
-    for chunk in chunks:
-        click.echo(json.dumps(chunk_record(chunk)) if as_json else describe_chunk(chunk))
-    click.echo(summary_line(chunks), err=True)
+    tally = ChunkTally()
+    out = sys.stdout
+    with _open_input(source) as stream:
+        lines: list[str] = []
+        try:
+            for item in decode_stream(stream, "<stdin>" if source == "-" else source):
+                tally.add(item.chunk)
+                lines.append(json.dumps(decoded_record(item)) if as_json else describe_decoded(item))
+                if len(lines) >= 1024:  # a write per line costs more than the decoding
+                    out.write("\n".join(lines) + "\n")
+                    lines = []
+        except NotHex as error:
+            raise UsageFailure(f"{source}: {error}") from None
+        finally:
+            if lines:
+                out.write("\n".join(lines) + "\n")
+    click.echo(tally.line(), err=True)
+
+
+@contextmanager
+def _open_input(path: str):
+    """``path`` opened for binary reading (``-``: stdin, left open); unreadable: exit 2."""
+    if path == "-":
+        yield sys.stdin.buffer
+        return
+    try:
+        stream = open(path, "rb")
+    except OSError as error:
+        raise UsageFailure(f"cannot read {path}: {error.strerror or error}") from None
+    with stream:
+        yield stream
 
 
 def _read_script(path: str):
@@ -291,7 +347,8 @@ def _connect(port: str | None, baud: int | None, **link_options):
 @click.option("--once", is_flag=True, help="Wait until all 9 status kinds were seen, print them, exit.")
 @click.option("--watch", is_flag=True, help="A live view, refreshed 12 times a second, until Ctrl-C.")
 @click.option("--json", "as_json", is_flag=True, help="JSON (one object; with --watch, JSON lines).")
-@click.option("--timeout", type=number(*STATUS_TIMEOUT_RANGE_S), default=2.0, show_default=True, help="Seconds to wait for the arm's status.")
+@click.option("--timeout", type=number(*STATUS_TIMEOUT_RANGE_S), default=2.0, show_default=True,
+              help="Seconds to wait for the arm's status (with --watch into a pipe: for the first complete one).")
 def status(port, baud, once, watch, as_json, timeout):
     """Show the arm's decoded status frames (position, joints, PWM, pause, SD program)."""
     from .ui.status_watch import print_once, watch_status
@@ -304,7 +361,7 @@ def status(port, baud, once, watch, as_json, timeout):
             from .link import require_wall_clock
 
             require_wall_clock(link, "status --watch")
-            watch_status(link, baud, as_json)
+            watch_status(link, baud, as_json, timeout)
         else:
             print_once(link, baud, timeout, as_json)
 
@@ -387,6 +444,98 @@ def estimate(script, lead_s, baud, profile_path, as_json):
         if not profile.connector.is_default("speed_factor"):  # the configured port's arm (armctl config)
             click.echo(f"  note: the arm's speed_factor {profile.connector.speed_factor:g} "
                        f"({profile.source_of('connector.speed_factor')})")
+
+
+def _move_words(texts: tuple[str, ...]) -> dict:
+    """``("z=200", "f=3000")`` → ``{"z": 200.0, "f": 3000.0}``: ``Arm.move``'s keywords, each
+    once; a word that is not one (or not a number) is a usage error, nothing sent."""
+    from .api import MOVE_KEYWORDS
+    from .profile import unknown_key_hint
+
+    words: dict = {}
+    for text in texts:
+        name, equals, value = text.partition("=")
+        name = name.strip().lower()
+        if not equals or name not in MOVE_KEYWORDS:
+            hint = unknown_key_hint(name, MOVE_KEYWORDS) if equals else " (write WORD=VALUE, as z=200 or j1=30)"
+            raise click.UsageError(f"{text!r} is not one of move's words{hint}")
+        if name in words:
+            raise click.UsageError(f"{name} is given twice")
+        try:
+            number = float(value) if name not in ("t", "h") else int(value)
+        except ValueError:
+            raise click.UsageError(f"{text}: {value!r} is not a {'whole ' if name in ('t', 'h') else ''}number") from None
+        if number != number or number in (float("inf"), float("-inf")):
+            raise click.UsageError(f"{text}: not a finite number")
+        words[name] = int(number) if isinstance(number, float) and number.is_integer() else number
+    if not words:
+        raise click.UsageError("give at least one word: armctl move z=200 (or x=, y=, a=, b=, c=, j1=…j6=, u=, v=, s=, t=, h=, f=)")
+    return words
+
+
+def _one_line_job(port, baud, profile_path, timeout_s, as_json, act) -> None:
+    """``armctl move``/``home``: open the arm, ``act(arm)`` (one line run as a job, proven at
+    rest), print where the arm ended (text, or the ``RunResult`` as JSON), exit with its code."""
+    from .api import Arm
+    from .errors import ScriptError
+    from .jobflow import JobFailed
+    from .ui.run_job import one_line_summary
+
+    with Arm.open(port, baud, profile_path, status_timeout_s=timeout_s, connect=_connect) as arm:
+        try:
+            result = act(arm)
+        except ScriptError as error:
+            for diagnostic in error.diagnostics:
+                click.echo(diagnostic.render(), err=True)
+            click.echo("nothing was sent to the arm", err=True)
+            sys.exit(EXIT_PROBLEMS)
+        except JobFailed as error:
+            if error.result is None:
+                raise
+            result = error.result
+        status = arm.status() if result.finished else None
+    if as_json:
+        click.echo(json.dumps(result.to_json()))
+    else:
+        click.echo(one_line_summary(result, None if status is None else status.position_mm))
+    sys.exit(result.exit_code)
+
+
+_one_line_options = [
+    port_option, baud_option,
+    click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML)."),
+    click.option("--timeout", "timeout_s", type=number(*START_TIMEOUT_RANGE_S), default=3.0, show_default=True,
+                 help="Seconds to wait for the arm's status before starting."),
+    click.option("--json", "as_json", is_flag=True, help="The result as one JSON object (as run --json's summary)."),
+]
+
+
+def _with_one_line_options(command):
+    for option in reversed(_one_line_options):
+        command = option(command)
+    return command
+
+
+@main.command()
+@click.argument("words", nargs=-1, metavar="WORD=VALUE...")
+@_with_one_line_options
+def move(words, port, baud, profile_path, timeout_s, as_json):
+    """Move the arm with one line, as Arm.move does: armctl move z=200 [f=3000].
+
+    Words: x y z (mm) a b c (deg) for a straight line (G1), or j1…j6 (deg) for a joint move
+    (G6); u v external axes, s PWM (µs), t its channel, h smoothing, f speed (mm/min, or deg/s
+    for joints; default: the profile's [speed] default).  Words left out keep the arm's
+    reported values.  Returns when the arm's reports prove it at rest at the target.
+    """
+    keywords = _move_words(words)
+    _one_line_job(port, baud, profile_path, timeout_s, as_json, lambda arm: arm.move(**keywords))
+
+
+@main.command()
+@_with_one_line_options
+def home(port, baud, profile_path, timeout_s, as_json):
+    """Go to the profile's fixed pose 0 (POSE 0) and wait until the arm is proven at rest there."""
+    _one_line_job(port, baud, profile_path, timeout_s, as_json, lambda arm: arm.home())
 
 
 @main.command()
@@ -480,3 +629,6 @@ def bench(size, scenario_names, lead_s, as_json, jobs):
     from .bench.table import main as bench_main
 
     sys.exit(bench_main(size, scenario_names, lead_s, as_json, jobs))
+
+
+_accept_output_flags_after(main)

@@ -17,7 +17,7 @@ from __future__ import annotations
 import click
 
 PROG_NAME = "armctl"  # the console script in pyproject.toml's [project.scripts]
-SHELLS = ("bash", "zsh", "fish")
+SHELLS = ("bash", "zsh", "fish", "powershell")  # powershell: click 8.5's PowerShellComplete
 
 
 def complete_var(prog_name: str = PROG_NAME) -> str:
@@ -30,12 +30,13 @@ def complete_var(prog_name: str = PROG_NAME) -> str:
 @click.argument("shell", type=click.Choice(SHELLS))
 @click.pass_context
 def completion(ctx: click.Context, shell: str):
-    """Print the completion script for SHELL (bash, zsh or fish).
+    """Print the completion script for SHELL (bash, zsh, fish or powershell).
 
     \b
     bash:  eval "$(armctl completion bash)"   in ~/.bashrc (bash 4.4 or later)
     zsh:   eval "$(armctl completion zsh)"    in ~/.zshrc
     fish:  armctl completion fish > ~/.config/fish/completions/armctl.fish
+    powershell:  armctl completion powershell | Out-String | Invoke-Expression   in $PROFILE
     """
     from click.shell_completion import get_completion_class
 

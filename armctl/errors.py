@@ -26,8 +26,23 @@ class ScriptError(ArmctlError):
     def __init__(self, diagnostics, errors: int | None = None):
         self.diagnostics = list(diagnostics)
         self.errors = len(self.diagnostics) if errors is None else errors
-        first = self.diagnostics[0] if self.diagnostics else None
-        super().__init__(str(first) if first else "script error")
+        first = leading_diagnostic(self.diagnostics)
+        more = self.errors - 1
+        tail = f" (and {more} more error{'s' if more != 1 else ''}: .diagnostics)" if first and more > 0 else ""
+        super().__init__(f"{first}{tail}" if first else "script error")
+
+
+# E004 (a value nobody wrote) is often what a bad word on the same line leaves behind: a word
+# that is wrong as written is the real diagnostic and leads the message
+_CONSEQUENCES = frozenset({"E004"})
+
+
+def leading_diagnostic(diagnostics):
+    """The diagnostic an error's one-line message leads with: the first line's, a wrong word
+    before a missing one (``G1 S3000`` without F: E005 S outside 500…2500, not E004 needs F)."""
+    if not diagnostics:
+        return None
+    return min(diagnostics, key=lambda d: (d.span.line, d.code in _CONSEQUENCES, d.span.column))
 
 
 class ProfileError(ArmctlError):

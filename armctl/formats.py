@@ -89,18 +89,32 @@ def _log_bytes(data: bytes) -> Iterator[bytes]:
             continue
 
 
-def describe_chunk(chunk: Chunk) -> str:
-    from .status_frames import StatusFrame, describe  # decode's: compile needs none of it (start-up)
+_DESCRIBED: dict[bytes, str] = {}  # a frame's bytes → its line after the offset (decode repeats many)
+_DESCRIBED_MAX = 4096  # bounded: memory stays flat whatever the input
 
+
+def describe_chunk(chunk: Chunk) -> str:
+    if chunk.frame is not None:
+        text = _DESCRIBED.get(chunk.data)
+        if text is None:
+            if len(_DESCRIBED) >= _DESCRIBED_MAX:
+                _DESCRIBED.clear()
+            text = _DESCRIBED[chunk.data] = _describe_frame(chunk)
+        return f"{chunk.offset:>6}  {text}"
     where = f"{chunk.offset:>6}"
-    if isinstance(chunk.frame, Command):
-        family = "motion " if chunk.data[0] == 0xEE else "control"
-        return f"{where}  {family}  {describe(chunk.frame)}"
-    if isinstance(chunk.frame, StatusFrame):
-        return f"{where}  status   {describe(chunk.frame)}"
     if chunk.error is not None:
         return f"{where}  invalid  {chunk.error}: {chunk.data.hex(' ')}"
     return f"{where}  ??       {len(chunk.data)} byte(s) in no frame: {_short_hex(chunk.data)}"
+
+
+def _describe_frame(chunk: Chunk) -> str:
+    """A frame's line after its offset: family and description (the same bytes, the same line)."""
+    from .status_frames import StatusFrame, describe  # decode's: compile needs none of it (start-up)
+
+    if isinstance(chunk.frame, StatusFrame):
+        return f"status   {describe(chunk.frame)}"
+    family = "motion " if chunk.data[0] == 0xEE else "control"
+    return f"{family}  {describe(chunk.frame)}"
 
 
 def chunk_record(chunk: Chunk) -> dict:
@@ -129,17 +143,56 @@ def _short_hex(data: bytes, limit: int = 24) -> str:
     return data[:limit].hex(" ") + f" … (+{len(data) - limit})"
 
 
-def summary_line(chunks: Iterable[Chunk]) -> str:
-    from .status_frames import StatusFrame
+class ChunkTally:
+    """``decode``'s closing count, kept as the chunks go by (none of them is kept)."""
 
-    commands = statuses = invalid = junk = 0
-    for chunk in chunks:
+    def __init__(self) -> None:
+        from .status_frames import StatusFrame
+
+        self._status_class = StatusFrame
+        self.commands = self.statuses = self.invalid = self.junk_bytes = 0
+
+    def add(self, chunk: Chunk) -> None:
         if isinstance(chunk.frame, Command):
-            commands += 1
-        elif isinstance(chunk.frame, StatusFrame):
-            statuses += 1
+            self.commands += 1
+        elif isinstance(chunk.frame, self._status_class):
+            self.statuses += 1
         elif chunk.error is not None:
-            invalid += 1
+            self.invalid += 1
         else:
-            junk += len(chunk.data)
-    return f"{commands} command frame(s), {statuses} status frame(s), {invalid} invalid frame(s), {junk} byte(s) in no frame"
+            self.junk_bytes += len(chunk.data)
+
+    def line(self) -> str:
+        return (f"{self.commands} command frame(s), {self.statuses} status frame(s), {self.invalid} invalid frame(s), "
+                f"{self.junk_bytes} byte(s) in no frame")
+
+
+def summary_line(chunks: Iterable[Chunk]) -> str:
+    tally = ChunkTally()
+    for chunk in chunks:
+        tally.add(chunk)
+    return tally.line()
+
+
+def describe_decoded(item) -> str:
+    """``describe_chunk`` of a ``decode.Decoded``, after its time and direction when a log gave them:
+    ``    0.030 s  arm→host      0  status   position …``."""
+    from .decode import DIRECTIONS
+
+    line = describe_chunk(item.chunk)
+    if item.t_s is None and item.direction is None:
+        return line
+    when = f"{item.t_s:>9.3f} s" if item.t_s is not None else " " * 11
+    return f"{when}  {DIRECTIONS.get(item.direction, '?       ')}  {line}"
+
+
+def decoded_record(item) -> dict:
+    """``chunk_record`` of a ``decode.Decoded``, with ``t`` (s, the log's clock) and ``direction``
+    (``host->arm`` or ``arm->host``) when a log gave them."""
+    record = chunk_record(item.chunk)
+    if item.t_s is not None or item.direction is not None:
+        record = {"t": item.t_s, "direction": _JSON_DIRECTIONS.get(item.direction), **record}
+    return record
+
+
+_JSON_DIRECTIONS = {"tx": "host->arm", "rx": "arm->host"}

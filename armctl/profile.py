@@ -35,9 +35,7 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-import os
 import pkgutil
-import sys
 import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -79,6 +77,10 @@ class Speeds:
     max_joint_deg_s: float
     max_accel_mm_s2: float
     attitude_deg_s: float
+    # the speed of a move that gives none (``Arm.move``, ``armctl move``/``home``): a value
+    # the profile defines, so sending it keeps the rule "never send a value nobody wrote"
+    default_linear_mm_min: float = 3000.0
+    default_joint_deg_s: float = 30.0
 
 
 @dataclass(frozen=True)
@@ -333,6 +335,7 @@ _SCHEMA: dict[str, Any] = {
     "speed": {
         "max_linear_mm_min": _in(1.0, 100_000.0), "max_joint_deg_s": _in(0.1, 3600.0),
         "max_accel_mm_s2": _in(1.0, 100_000.0), "attitude_deg_s": _in(0.1, 3600.0),
+        "default_linear_mm_min": _in(1.0, 100_000.0), "default_joint_deg_s": _in(0.1, 3600.0),
     },
     "pwm": {
         "range_us": _pair(*PWM_RANGE_US), "channels": _channels, "gripper_open_us": _PWM_US,
@@ -591,15 +594,9 @@ def find_config(start: Path | None = None) -> tuple[Path | None, dict]:
 def user_config_path() -> Path:
     """The user's armctl.toml: ``$XDG_CONFIG_HOME/armctl/armctl.toml`` (``~/.config/…`` when
     unset) on Linux and the BSDs, platformdirs' equivalent on macOS and Windows."""
-    if sys.platform.startswith(("linux", "freebsd", "openbsd", "netbsd")):
-        # platformdirs' own rule for these, without importing it at every start (issue 13)
-        # (the XDG rule: a relative or empty XDG_CONFIG_HOME is ignored); tests/test_user_config.py
-        # holds the two to agreeing
-        base = os.environ.get("XDG_CONFIG_HOME", "")
-        return Path(base if os.path.isabs(base) else os.path.expanduser("~/.config")) / "armctl" / CONFIG_NAME
-    import platformdirs
+    from .folders import user_folder
 
-    return Path(platformdirs.user_config_dir("armctl", appauthor=False)) / CONFIG_NAME
+    return user_folder("config") / CONFIG_NAME
 
 
 @dataclass(frozen=True)

@@ -30,7 +30,7 @@ tests/test_records.py holds all of this to twins made by ``dataclass``.
 from __future__ import annotations
 
 import operator
-from dataclasses import MISSING, FrozenInstanceError, dataclass, fields
+from dataclasses import MISSING, FrozenInstanceError, dataclass, field, fields
 from types import MethodType
 
 __all__ = ["record"]
@@ -119,6 +119,15 @@ class _FirstBuild:
         return signature(self._compiled())
 
 
+TYPE_CHECKING = False  # true for type checkers; typing is not imported at run time for this
+if TYPE_CHECKING:
+    from typing import dataclass_transform
+else:
+    def dataclass_transform(**_options):  # type checkers only: at run time the decorator as it is
+        return lambda function: function
+
+
+@dataclass_transform(frozen_default=True, field_specifiers=(field,))
 def record(cls=None, /, *, frozen: bool = True, slots: bool = False):
     """``@dataclass(frozen=frozen, slots=slots)``, its methods shared or compiled on first use."""
 

@@ -24,8 +24,10 @@ QUICK_INVOCATIONS = {
     "completion": ["bash"],
     "decode": ["{script}"],
     "estimate": ["{script}"],
+    "home": ["--port", VIRTUAL_SIM],
     "jog": ["--port", VIRTUAL_SIM],  # refuses a virtual clock (or a non-terminal) at once
     "lint": ["{script}"],
+    "move": ["z=200", "--port", VIRTUAL_SIM],
     "plot": ["{script}", "-o", "{script}.svg", "--view", "xy"],
     "ports": [],
     "probe": ["--port", VIRTUAL_SIM, "--no-motion", "--json"],

@@ -22,7 +22,7 @@ JOB = ROOT / "scripts" / "draw_square_circle.txt"
 ARM = "sim://?fifo_frames=50&speed_factor=1.3"  # the arm's identity: its options, canonical, no clock
 PORT = "sim://?clock=virtual&fifo_frames=50&speed_factor=1.3"
 OTHER = "sim://?clock=virtual"
-DONE = "done: the arm finished the job"
+DONE = "finished: the arm finished the job"
 
 
 def armctl(*args: str, cwd: Path) -> subprocess.CompletedProcess:

@@ -68,7 +68,7 @@ def test_no_frame_the_fifo_dropped_is_claimed_seen_by_the_reports(tmp_path, monk
     assert set(claimed) <= executed
     assert by_reports + by_time + unseen == 400
     assert by_reports <= 400 - arm.frames_dropped
-    assert "done: the arm finished the job" not in result.stdout
+    assert "finished: the arm finished the job" not in result.stdout
 
     # the same run, through the installed command in a fresh process: the same counts, told as such
     again = fresh(["-m", "armctl", "run", "job.txt", "--no-live", "--lead", "6", "--port", URL], tmp_path)
@@ -84,7 +84,7 @@ def test_a_job_on_a_fifo_that_holds_it_counts_what_was_seen_and_ends_done(tmp_pa
     ports = _open_one_arm(monkeypatch)
     url = "sim://?clock=virtual"
     result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--port", url])
-    assert result.exit_code == 0 and result.stdout.splitlines()[-1] == "done: the arm finished the job", result.output
+    assert result.exit_code == 0 and result.stdout.splitlines()[-1] == "finished: the arm finished the job", result.output
     arm = ports[url].model
     assert arm.frames_dropped == 0
     by_reports, by_time, unseen = _counts(result.stdout)

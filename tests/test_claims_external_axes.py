@@ -38,7 +38,7 @@ def _run(tmp_path, script: str) -> subprocess.CompletedProcess:
 def test_a_move_of_the_external_axes_alone_ends_done_with_its_time(tmp_path, script):
     result = _run(tmp_path, script)
     assert result.returncode == 0, (result.stdout, result.stderr)
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     assert "lost" not in result.stdout + result.stderr
     arm_s, estimated_s = map(float, re.search(r"arm time: ([\d.]+) s .*estimated ([\d.]+) s", result.stdout).groups())
     assert abs(arm_s - estimated_s) <= 0.05 * estimated_s + 0.3, result.stdout

@@ -40,7 +40,7 @@ def test_a_second_run_whose_axes_stand_at_the_first_target_is_done(tmp_path, mon
     for run in ("first", "second"):
         result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--port", URL])
         assert result.exit_code == 0, (run, result.output)
-        assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+        assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
         assert "lost" not in result.output
     assert ports[URL].model.frames_dropped == 0
     arm_s, estimated_s = map(float, re.search(r"arm time: ([\d.]+) s .*estimated ([\d.]+) s", result.stdout).groups())
@@ -79,5 +79,5 @@ def test_a_first_move_of_the_axes_from_farther_than_planned_is_no_sign_of_loss(t
     for name in ("away.txt", "job.txt"):
         result = CliRunner().invoke(main, ["run", name, "--no-live", "--port", URL])
         assert result.exit_code == 0, (name, result.output)
-        assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+        assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     assert ports[URL].model.frames_dropped == 0

@@ -94,7 +94,7 @@ def test_a_pause_that_ends_the_script_leaves_the_arm_paused_and_the_job_done(tmp
     (tmp_path / "job.txt").write_text(SCRIPT.split("POSE")[0], encoding="utf-8")
     result = _armctl("run", "job.txt", "--no-live", "--port", "sim://?clock=virtual", cwd=tmp_path)
     assert result.returncode == 0, (result.stdout, result.stderr)
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     assert "the arm is paused, as the script's PAUSE at line 2 leaves it" in result.stderr
 
 
@@ -103,7 +103,7 @@ def test_a_pause_and_its_resume_in_the_script_run_through(tmp_path):
     (tmp_path / "job.txt").write_text(script, encoding="utf-8")
     result = _armctl("run", "job.txt", "--no-live", "--port", "sim://?clock=virtual", cwd=tmp_path)
     assert result.returncode == 0, (result.stdout, result.stderr)
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
 
 
 @pytest.mark.parametrize("control_frames", ["queued", "arrival"])

@@ -50,6 +50,7 @@ NAMED = [
     ("motion", "delay", "delay=120 ms"),
     ("motion", "M code", "number=30"),
 ]
+LOGGED = re.compile(r"^ *(?P<t>\d+\.\d{3}) s  (?P<direction>host→arm|arm→host)  (?P<rest>.*)$")
 DECODED = re.compile(r"^ *(?P<offset>\d+)  (?P<family>motion |control|status |invalid|\?\? ) +(?P<rest>.*)$")
 
 
@@ -187,7 +188,12 @@ def test_the_run_log_is_decoded_too(tmp_path):
 
     result = decode(log)
     assert result.exit_code == 0
-    rows = parsed(result.stdout)
+    # each frame with the time and direction of its record, in the log's order (issue 26)
+    logged = [LOGGED.match(line) for line in result.stdout.splitlines()]
+    assert all(logged), result.stdout
+    assert [(float(m["t"]), m["direction"]) for m in logged] == \
+        [(round(r["t"], 3), "host→arm" if r["dir"] == "tx" else "arm→host") for r in records]
+    rows = parsed("\n".join(m["rest"] for m in logged))
     assert [r["family"].strip() for r in rows] == ["motion" if r["dir"] == "tx" else "status" for r in records]
     assert all(row["rest"].startswith("linear move") or row["rest"].startswith("delay")
                for row in rows if row["family"].strip() == "motion")

@@ -97,7 +97,7 @@ def test_a_small_job_streams_and_finishes_with_a_summary(recorded_writes):
     assert result.stderr.splitlines()[0] == f"armctl: using the built-in simulator ({FAST_SIM})"
     lines = result.stdout.splitlines()
     assert "frames: 5 of 5 sent" in lines
-    assert lines[-1] == "done: the arm finished the job"
+    assert lines[-1] == "finished: the arm finished the job"
     assert any(line.startswith("arm time: ") for line in lines)
     assert opened == [FAST_SIM]
     assert [frame.hex() for frame in writes] == [record["hex"] for record in compiled_frames(SHORT)]
@@ -108,7 +108,7 @@ def test_the_log_holds_tx_and_rx_records_and_the_arm_time_agrees_with_estimate(t
     log = tmp_path / "timed.log"
     result = run(TIMED, "--port", FAST_SIM, "--no-live", "--log", log)
     assert result.exit_code == 0, result.output
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
 
     # the arm time the run measured against `armctl estimate` of the same job (both start at pose 0)
     measured = re.search(r"^arm time: ([\d.]+) s from the first frame to the arm at rest", result.stdout, re.M)

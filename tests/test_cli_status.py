@@ -314,7 +314,9 @@ def test_json_watch_prints_one_json_line_per_period_until_ctrl_c(monkeypatch, ca
     with pytest.raises(KeyboardInterrupt):  # Ctrl-C leaves to the CLI, which exits 130
         status_watch.watch_status(FakeLink(states), 9600, as_json=True)
     lines = capsys.readouterr().out.splitlines()
-    assert [json.loads(line) for line in lines] == [s.to_json() for s in states]
+    records = [json.loads(line) for line in lines]
+    assert [{k: v for k, v in r.items() if k != "t"} for r in records] == [s.to_json() for s in states]
+    assert all(isinstance(r["t"], (int, float)) for r in records)  # every record carries its time (issue 26)
     assert clock.sleeps == [status_watch.JSON_LINE_S] * 3
     assert status_watch.JSON_LINE_S <= 0.27  # at least one line per rotation of the nine kinds
 

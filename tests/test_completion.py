@@ -55,12 +55,12 @@ def test_in_process_the_output_is_clicks_source(shell):
     assert result.output == expected
 
 
-@pytest.mark.parametrize("shell", ["tcsh", "powershell", "BASH", ""])
+@pytest.mark.parametrize("shell", ["tcsh", "pwsh", "BASH", ""])
 def test_an_unknown_shell_is_a_usage_error(shell, tmp_path):
     done = installed("completion", shell, cwd=tmp_path)
     assert done.returncode == 2
     assert done.stdout == ""
-    assert "'bash', 'zsh', 'fish'" in done.stderr and "Traceback" not in done.stderr
+    assert "'bash', 'zsh', 'fish', 'powershell'" in done.stderr and "Traceback" not in done.stderr
     assert CliRunner().invoke(main, ["completion", shell]).exit_code == 2
 
 

@@ -87,7 +87,7 @@ def test_a_profile_that_matches_the_arm_drops_nothing_and_ends_done(job, opened_
     assert arm.frames_dropped == 0, result.output
     assert arm.frames_received.total == JOB_FRAMES
     assert result.exit_code == 0, result.output
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     # the FIFO was what held the streamer back: filled to its bound less the margin, never past it
     assert fifo - 8 <= arm.peak_fifo_occupancy <= fifo
 
@@ -100,7 +100,7 @@ def test_a_fresh_process_with_the_written_profile_ends_done(job):
                            "--log", str(log), "--port", _url(50, "arrival", "robot", 1.3)],
                           capture_output=True, text=True, timeout=120, cwd=job.parent)
     assert done.returncode == 0, done.stdout + done.stderr
-    assert done.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert done.stdout.splitlines()[-1] == "finished: the arm finished the job"
     assert f"frames: {JOB_FRAMES} of {JOB_FRAMES} sent" in done.stdout
 
 
@@ -116,7 +116,7 @@ def test_a_fifo_smaller_than_the_profile_says_ends_frames_may_have_been_lost(job
     dropped = port.model.dropped_indexes
     assert dropped
     assert result.exit_code == 1, result.output
-    assert "done: the arm finished" not in result.stdout
+    assert "finished: the arm finished" not in result.stdout
     assert "stopped: frames may have been lost" in result.output
     assert "they were skipped (dropped by a full FIFO, or cleared)" in result.output
     assert re.search(r"frames confirmed by the arm's reports: \d+; by time only: \d+", result.stdout)
@@ -185,6 +185,6 @@ def test_a_long_run_of_frames_that_move_nothing_is_no_false_alarm(tmp_path, monk
     (tmp_path / "job.txt").write_text("G1 X200 Y0 Z250 A180 B0 C0 S1500 F3000\n" + "G4 P500\n" * 200)
     result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--port", "sim://?clock=virtual"])
     assert result.exit_code == 0, result.output
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     actual, estimated = map(float, re.search(r"arm time: ([\d.]+) s .*estimated ([\d.]+) s", result.stdout).groups())
     assert actual == pytest.approx(estimated, rel=0.02)

@@ -325,7 +325,7 @@ def test_pty_step_mode_moves_by_the_increment_and_taught_poses_lint_clean_and_re
     replay = subprocess.run([armctl, "run", str(record), "--port", "sim://?clock=virtual", "--no-live"],
                             capture_output=True, text=True, cwd=tmp_path, timeout=20)
     assert replay.returncode == 0, replay.stdout + replay.stderr
-    assert "done: the arm finished the job" in replay.stdout
+    assert "finished: the arm finished the job" in replay.stdout
 
 
 def test_pty_no_status_from_the_arm_refuses_to_jog(spawn):

@@ -465,7 +465,7 @@ def test_the_installed_command_resumes_after_ctrl_c_on_an_arrival_arm_or_refuses
             assert "sending a reset" not in done.stderr and "pause toggle to resume" not in done.stderr, done.stderr
             assert _written(again) == []
         else:
-            assert "done: the arm finished the job" in done.stdout
+            assert "finished: the arm finished the job" in done.stdout
     finally:
         sim.terminate()
         sim.wait(10)

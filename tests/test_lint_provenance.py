@@ -157,7 +157,7 @@ def test_run_streams_a_pick_and_place_the_illustrative_profile_dislikes(tmp_path
     result = CliRunner().invoke(main, ["run", str(path), "--port", FAST_SIM, "--no-live"])
     assert result.exit_code == 0, result.output
     assert "frames: 8 of 8 sent" in result.stdout
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     assert f"{path}:3:1: L103 " in result.stderr and NOTE in result.stderr
     assert "nothing was sent" not in result.stderr
 
@@ -180,4 +180,4 @@ def test_lint_and_run_through_the_installed_command(tmp_path):
                          cwd=tmp_path, capture_output=True, text=True, timeout=TIMEOUT_S,
                          env={**__import__("os").environ, "ARMCTL_PORT": ""})
     assert ran.returncode == 0, ran.stderr
-    assert "done: the arm finished the job" in ran.stdout
+    assert "finished: the arm finished the job" in ran.stdout

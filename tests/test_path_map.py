@@ -275,13 +275,13 @@ def test_armctl_run_on_a_terminal_shows_the_map_and_hides_it_when_narrow_or_not_
     arguments = ["run", "scripts/draw_square_circle.txt", "--port", "sim://?clock=virtual"]
     code, text = run_on_a_terminal(arguments, 120, 40)
     assert code == 0, text[-800:]
-    assert "path X/Y (top)" in text and ARM_GLYPH in text and "done: the arm finished the job" in text
+    assert "path X/Y (top)" in text and ARM_GLYPH in text and "finished: the arm finished the job" in text
     code, text = run_on_a_terminal(arguments, 70, 40)
     assert code == 0, text[-800:]
     assert "last line sent" in text and "path X/Y" not in text
     code, text = run_on_a_terminal([*arguments, "--no-live"], 120, 40)
     assert code == 0, text[-800:]
-    assert "frames 16/16" in text or "done: the arm finished the job" in text
+    assert "frames 16/16" in text or "finished: the arm finished the job" in text
     assert "path X/Y" not in text and ARM_GLYPH not in text and "⣀" not in text
 
 
@@ -293,5 +293,5 @@ def test_armctl_run_in_process_without_a_terminal_draws_no_map():
     result = CliRunner().invoke(main, ["run", str(ROOT / "scripts" / "draw_square_circle.txt"),
                                        "--port", "sim://?clock=virtual"], env={"ARMCTL_PORT": None})
     assert result.exit_code == 0, result.output
-    assert "done: the arm finished the job" in result.output
+    assert "finished: the arm finished the job" in result.output
     assert "path X/Y" not in result.output and ARM_GLYPH not in result.output

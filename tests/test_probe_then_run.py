@@ -47,7 +47,7 @@ def test_probe_writes_the_settings_and_run_with_them_is_exact(tmp_path, monkeypa
     assert resume, first.output
     second = CliRunner().invoke(main, shlex.split(resume.group(1))[1:] + ["--no-live"])
     assert second.exit_code == 0, second.output
-    assert second.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert second.stdout.splitlines()[-1] == "finished: the arm finished the job"
 
     arm = ports[url].model
     assert arm.frames_dropped == dropped_by_probe  # the job's runs dropped none

@@ -129,7 +129,7 @@ def test_an_abort_and_its_printed_resume_run_every_line_exactly_once(one_arm, tm
 
     second = CliRunner().invoke(main, words[1:] + ["--no-live"])
     assert second.exit_code == 0, second.output
-    assert second.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert second.stdout.splitlines()[-1] == "finished: the arm finished the job"
     assert arm.frames_dropped == 0
     done = _targets_done(arm)
     collapsed = [t for k, t in enumerate(done) if k == 0 or done[k - 1] != t]  # an idempotent re-send

@@ -74,7 +74,7 @@ def test_json_lines_in_process():
     assert (summary["frames_sent"], summary["total_frames"], summary["last_line_executed"]) == (5, 5, 6)
     assert summary["arm_time_s"] > 0 and summary["resume_line"] is None
     assert any(e["event"] == "progress" for e in events)
-    assert "done: the arm finished the job" in result.stderr  # for people: stderr
+    assert "finished: the arm finished the job" in result.stderr  # for people: stderr
 
 
 def test_json_summary_is_the_api_result_of_the_same_job():
@@ -259,7 +259,7 @@ def test_kill_9_mid_job_then_resume_runs_every_line_exactly_once(tmp_path):
         resumed = CliRunner().invoke(main, ["run", str(script), "--port", ready[0], "--no-live", "--lead", "0.5",
                                             "--profile", str(profile), "--resume", str(log)])
         assert resumed.exit_code == 0, resumed.output
-        assert "done: the arm finished the job" in resumed.stdout
+        assert "finished: the arm finished the job" in resumed.stdout
         resumed_at = int(re.search(r"resuming .* at line (\d+)", resumed.stderr).group(1))
         assert resumed_at > done_at_kill + 1  # the frames in flight at the kill ran: the arm's report proved it
     finally:

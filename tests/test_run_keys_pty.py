@@ -60,7 +60,9 @@ def test_pause_resume_and_feed_override_from_the_keyboard(tmp_path):
         run.wait_for("110 %")
         run.type(b"p")
         assert run.proc.wait(20) == 0, run.text()[-1500:]
-        assert "done: the arm finished the job" in run.text()
+        assert "finished: the arm finished the job" in run.text()
+        # the summary says what the estimate did not assume (issue 26): the pause and the override
+        assert "this job was paused " in run.text() and "ran at 110 % feed" in run.text(), run.text()[-1500:]
         assert run.terminal_restored()
     finally:
         run.close()

@@ -37,7 +37,7 @@ def test_a_job_whose_last_frames_were_cleared_is_not_reported_done(tmp_path):
     script = START + "G1 Y120\nRESET CONNECTOR\nG1 Y-120\nG1 Z100\nG1 Z150\n"
     result = run(tmp_path, script, "--port", "sim://?clock=virtual", "--lead", "60")
     assert result.exit_code == 1, result.output
-    assert "done: the arm finished the job" not in result.stdout
+    assert "finished: the arm finished the job" not in result.stdout
     assert "but the job's last target is (250.0, -120.0, 150.0)" in result.stderr
 
 
@@ -46,13 +46,13 @@ def test_a_job_whose_frames_were_dropped_is_not_reported_done(tmp_path):
     script = START + "".join(f"G1 Y{y}\n" for y in (60, -60, 60, -60, 0)) + "G1 Z100\n"
     result = run(tmp_path, script, "--port", "sim://?clock=virtual&fifo=3", "--lead", "60")
     assert result.exit_code == 1, result.output
-    assert "done: the arm finished the job" not in result.stdout
+    assert "finished: the arm finished the job" not in result.stdout
 
 
 def test_a_finished_job_is_reported_done_with_the_arm_time(tmp_path):
     result = run(tmp_path, START + "G1 Y50\nG4 P300\n", "--port", "sim://?clock=virtual")
     assert result.exit_code == 0, result.output
-    assert "done: the arm finished the job" in result.stdout
+    assert "finished: the arm finished the job" in result.stdout
     assert "arm time:" in result.stdout
 
 
@@ -159,7 +159,7 @@ def test_every_example_finishes_within_5_percent_of_its_estimate(script):
     result = CliRunner().invoke(main, ["run", str(script), "--no-live", "--port", "sim://?clock=virtual"],
                                 env={"ARMCTL_PORT": None})
     assert result.exit_code == 0, result.output
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     measured, estimated = map(float, re.search(ARM_TIME, result.stdout, re.M).groups())
     assert abs(measured / estimated - 1) <= 0.05, (measured, estimated)
 
@@ -181,7 +181,7 @@ def test_an_sd_program_longer_than_the_estimate_is_waited_for_and_reported(tmp_p
     result = CliRunner().invoke(main, ["run", str(sd), "--no-live", "--port", "sim://?clock=virtual"],
                                 env={"ARMCTL_PORT": None})
     assert result.exit_code == 0, result.output
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     assert "armctl waited until it stopped" in result.stderr
     estimate = CliRunner().invoke(main, ["estimate", str(sd)])
     assert "the SD program's own run time is unknown to armctl and not included" in estimate.stdout

@@ -81,7 +81,7 @@ SEMANTIC = [
     ("M3 S5", "E002", "unknown word 'S' in M3", 4, 6),
     ("G2 X5", "E002", "unknown statement G2", 1, 3),
     ("g0", "E002", "unknown statement G0", 1, 3),
-    ("PAUSED", "E002", "unknown statement 'PAUSED'", 1, 7),
+    ("PAUSED", "E002", "unknown statement 'PAUSED' (did you mean PAUSE?)", 1, 7),
     ("RESET FOO", "E002", "unknown statement 'RESET FOO'", 1, 10),
     ("RESET 5", "E002", "RESET takes no number", 7, 8),
     ("G1 X5 X6", "E003", "X appears twice in G1", 7, 9),

@@ -179,8 +179,8 @@ def test_run_with_a_tight_tolerance_catches_a_slower_arm_in_a_fresh_process(tmp_
                              "--baud", "115200"], cwd=tmp_path, capture_output=True, text=True, timeout=60)
     assert result.returncode == exit_code, result.stdout + result.stderr
     if exit_code == 0:
-        assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+        assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     else:
         assert result.stderr.splitlines()[-1] == "stopped: frames may have been lost"
         assert "speed_tolerance" in result.stderr  # and says why
-        assert "done" not in result.stdout.splitlines()[-1]
+        assert not result.stdout.splitlines()[-1].startswith("finished")

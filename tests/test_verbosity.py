@@ -27,7 +27,7 @@ from armctl.streamer import CAPACITY_MARGIN_FRAMES, Evidence, Streamer, WaitReas
 MODEL = MotionModel(load_profile())
 JOB = str(Path(__file__).parent.parent / "scripts" / "pick_and_place.txt")
 SIM = "sim://?clock=virtual"
-SUMMARY_PREFIXES = ("frames: ", "time: ", "arm time: ", "frames confirmed by the arm's reports: ", "done: ")
+SUMMARY_PREFIXES = ("frames: ", "time: ", "arm time: ", "frames confirmed by the arm's reports: ", "finished: ")
 WARNING_SCRIPT = "G1 X450 Y0 Z150 A180 B-90 C0 S1500 F3000\n"  # L103 against the illustrative workspace (the arm still reaches it)
 
 
@@ -149,7 +149,7 @@ def test_quiet_run_in_a_fresh_process(tmp_path):
                           capture_output=True, text=True, timeout=120, env=env, cwd=tmp_path)
     assert done.returncode == 0 and done.stderr == "", done.stderr
     assert [text.split(":")[0] for text in done.stdout.splitlines()] == ["frames", "time", "arm time",
-                                                                             "frames confirmed by the arm's reports", "done"]
+                                                                             "frames confirmed by the arm's reports", "finished"]
 
 
 def test_quiet_still_prints_errors(tmp_path):

@@ -97,7 +97,7 @@ def _run_log(tmp_path, name: str) -> list[dict]:
     log = tmp_path / name
     result = CliRunner().invoke(main, ["run", str(TIMED), "--port", VIRTUAL, "--no-live", "--log", str(log)])
     assert result.exit_code == 0, result.output
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
     return [json.loads(line) for line in log.read_text().splitlines()]
 
 
@@ -140,7 +140,7 @@ def test_idle_on_a_wall_clock_port_returns_after_a_status_frame_or_the_time():
 def test_a_virtual_run_with_faulty_status_still_finishes(faults):
     result = CliRunner().invoke(main, ["run", str(TIMED), "--port", f"{VIRTUAL}&{faults}&seed=3", "--no-live"])
     assert result.exit_code == 0, result.output
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
 
 
 def test_a_virtual_arm_that_says_nothing_times_out_in_model_time():
@@ -157,7 +157,7 @@ def test_the_virtual_clock_keeps_moving_at_large_model_times(tmp_path):
     job.write_text("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\n" + "G4 P60000\n" * 20 + "G1 X250 Y50 Z150\n")
     result = CliRunner().invoke(main, ["run", str(job), "--port", f"{VIRTUAL}&baud=4000000", "--no-live"])
     assert result.exit_code == 0, result.output
-    assert result.stdout.splitlines()[-1] == "done: the arm finished the job"
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
 
 
 def test_status_that_always_looks_like_motion_does_not_keep_run_waiting_for_ever():

@@ -38,6 +38,9 @@ from .tracker import cartesian_target, pwm_channel_of
 
 ARC_POINT_TOLERANCE_MM = 0.05  # arc points closer than this to each other or to one line: degenerate
 ARC_RADIUS_TOLERANCE = (0.5, 0.01)  # R may differ from the circle by max(0.5 mm, 1 %) (as motion.py notes)
+# A target this many times the profile's reach away is an error whatever the profile's provenance
+# (the packaged reach is illustrative, so L103 is otherwise a warning there): no plausible arm
+IMPLAUSIBLE_REACH_FACTOR = 2.0
 ARC_SAMPLES = 24  # points checked along an arc against the workspace box and reach radius
 UNIT_SLIP_FACTOR = 5.0  # a G6 F above 5× the joint maximum reads as mm/min
 SLOW_CARTESIAN_MM_MIN = 60.0  # a Cartesian F below 1 mm/s reads as deg/s
@@ -155,6 +158,9 @@ def _reach_problem(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
     only when ``arm.surely_reachable`` cannot say (issue 13), through the tracker's cache."""
     robot = arm.robot_xyz(pose)
     profile = arm.profile
+    implausible = _beyond_any_desktop_arm(robot, profile.workspace.reach_mm)
+    if implausible is not None:
+        return implausible
     problem = box_problem(robot, profile.workspace)
     if problem is not None:
         return problem, _workspace_hint(arm, problem), _WORKSPACE
@@ -179,6 +185,21 @@ def _reach_problem(pose, arm) -> Optional[tuple[str, str, tuple[str, ...]]]:
             " that far; change the attitude (A180 B0 C0 = tool down reaches it)", _KINEMATICS)
 
 
+def _beyond_any_desktop_arm(robot, reach_mm: float) -> Optional[tuple[str, str, tuple[str, ...]]]:
+    """A point farther from the robot origin than ``IMPLAUSIBLE_REACH_FACTOR`` × the profile's
+    reach: (message, hint, no numbers to rest on) — an error even while the reach is only
+    illustrative, since no desktop arm's real reach is that far off its profile (``G1 X2000``
+    must never run: a typo'd digit, metres for millimetres).  Else None."""
+    distance = math.sqrt(sum(v * v for v in robot))
+    limit = IMPLAUSIBLE_REACH_FACTOR * reach_mm
+    if distance <= limit:
+        return None
+    axis = max(range(3), key=lambda k: abs(robot[k]))
+    return (f"robot {'XYZ'[axis]} = {robot[axis]:.1f} mm puts the tool {distance:.0f} mm from the robot origin, more than"
+            f" {IMPLAUSIBLE_REACH_FACTOR:g}x the profile's reach ({reach_mm:g} mm): beyond any desktop arm",
+            "a digit too many, or metres for millimetres? targets are in mm", ())
+
+
 def _joint_target_outside(statement, arm) -> Iterator[Finding]:
     joints = statement.command.joints_deg
     if any(not low <= j <= high for j, (low, high) in zip(joints, arm.profile.joint_limits_deg, strict=True)):
@@ -199,6 +220,11 @@ def _arc_outside(statement, arm) -> Iterator[Finding]:
         return  # L101
     for k in range(1, ARC_SAMPLES):
         point = _arc_point(arc, points[0], arc.sweep_rad * k / ARC_SAMPLES)
+        implausible = _beyond_any_desktop_arm(arm.robot_xyz(point), arm.profile.workspace.reach_mm)
+        if implausible is not None:
+            message, hint, rests_on = implausible
+            yield (statement.span, f"the arc from line {start.line} passes {_xyz(point)}: {message}", hint, rests_on)
+            return
         problem = box_problem(arm.robot_xyz(point), arm.profile.workspace)
         if problem is not None:
             yield (statement.span, f"the arc from line {start.line} passes {_xyz(point)}: {problem}",

@@ -5,7 +5,9 @@ state).  Each view projects the same sampled path: one line collection per state
 (joint moves dashed, being approximate), each segment's line number written at its middle,
 the start pose, the findings, and the workspace box where it enters the view.  A view fits
 the job (its path, start pose and findings) rather than the whole workspace, so an 80 mm
-square stays readable in an 800 mm box.  The legend panel names the kinds and lists the
+square stays readable in an 800 mm box; every view is drawn at one scale with equal aspect, in
+a box sized to its extent (top over front, side beside front, as a drawing office lays them
+out), no side under a quarter of the longest, ticks as many as their labels have room for.  The legend panel names the kinds and lists the
 script line of every segment drawn.  Artists carry ``gid``s (``view-xy``, ``legend``, …)
 that the SVG keeps as element ids, and SVG text stays text, so the file can be checked and
 searched.  Imported only by ``armctl plot`` once the plot extra is known to be installed.
@@ -28,6 +30,7 @@ _AXIS_INDEX = {"x": 0, "y": 1, "z": 2}
 MAX_LISTED = 40  # segment and finding lines listed in the legend panel; the rest are counted
 MAX_ROW_CHARS = 100  # of one listed line
 MAX_NUMBERED = 200  # segments whose line number is written in a view
+LABEL_CELLS = 40  # a view's side holds this many line numbers: where more would overlap, one is written
 
 
 def write_static(path: JobPath, output: str, fmt: str, view: str | None = None) -> None:
@@ -37,25 +40,82 @@ def write_static(path: JobPath, output: str, fmt: str, view: str | None = None) 
         figure(path, view).savefig(output, format=fmt, dpi=120, metadata=_metadata(fmt))
 
 
+# The page, in inches: the views are laid out by hand at one scale (no layout engine: it cost a
+# second a figure), the legend in a column of its own on the right.
+FIGURE_WIDTH_IN = 14.0
+LEGEND_WIDTH_IN = 6.2  # MAX_ROW_CHARS of 7-point monospace
+MARGIN_LEFT_IN, MARGIN_RIGHT_IN, GAP_IN = 0.9, 0.3, 0.95  # a gap holds the next view's tick labels
+MARGIN_TOP_IN, MARGIN_BOTTOM_IN = 0.75, 0.65
+MIN_HEIGHT_IN, MAX_HEIGHT_IN = 4.0, 15.0
+LEGEND_ROW_IN, LISTING_ROW_IN = 0.19, 0.125  # a legend entry (8 pt) and a listed line (7 pt)
+MIN_VIEW_IN = 1.2  # no view's side shorter than this (a flat job's view is padded instead)
+TICK_SPACING_IN = {"x": 0.9, "y": 0.45}  # room one tick label needs along each axis
+
+
 def figure(path: JobPath, view: str | None = None) -> Figure:
-    views = STATIC_VIEWS if view is None else (view,)
-    if len(views) == 3:
-        fig = Figure(figsize=(14, 11), layout="constrained")
-        grid = fig.add_gridspec(2, 2)
-        cells = [grid[0, 0], grid[1, 0], grid[1, 1]]
-        legend_cell = grid[0, 1]
+    limits = view_box(path.view_limits())
+    listing = _listing(path)
+    handles = _handles(path)
+    # the legend column's height: its handles, then one 7-point row per listed line
+    legend_in = (len(handles) + 3) * LEGEND_ROW_IN + (listing.count("\n") + 1) * LISTING_ROW_IN
+    if view == "3d":
+        height_in = max(7.5, legend_in + MARGIN_TOP_IN + MARGIN_BOTTOM_IN)
+        fig = Figure(figsize=(FIGURE_WIDTH_IN, height_in))
+        legend_left = 1 - (LEGEND_WIDTH_IN + MARGIN_RIGHT_IN) / FIGURE_WIDTH_IN
+        _draw_3d(fig.add_axes((0.02, 0.06, legend_left - 0.04, 0.86), projection="3d"), path, limits)
+        legend_box = (legend_left, MARGIN_BOTTOM_IN / height_in, LEGEND_WIDTH_IN / FIGURE_WIDTH_IN,
+                      1 - (MARGIN_TOP_IN + MARGIN_BOTTOM_IN) / height_in)
     else:
-        fig = Figure(figsize=(14, 7), layout="constrained")
-        grid = fig.add_gridspec(1, 2, width_ratios=(3, 2))
-        cells, legend_cell = [grid[0, 0]], grid[0, 1]
-    for name, cell in zip(views, cells):
-        if name == "3d":
-            _draw_3d(fig.add_subplot(cell, projection="3d"), path)
-        else:
-            _draw_view(fig.add_subplot(cell), path, name)
-    _draw_legend(fig.add_subplot(legend_cell), path)
+        fig, boxes, legend_box = _page(limits, STATIC_VIEWS if view is None else (view,), legend_in)
+        for name, box in boxes.items():
+            _draw_view(fig.add_axes(box), path, name, limits)
+    _draw_legend(fig.add_axes(legend_box), handles, listing)
     fig.suptitle(title(path), fontsize=11)
     return fig
+
+
+def view_box(limits, min_share: float = 0.25):
+    """``limits`` (X, Y, Z) with each span widened, about its middle, to at least ``min_share``
+    of the longest: a job flat in one axis still gets a view that holds its ticks."""
+    longest = max(high - low for low, high in limits)
+    out = []
+    for low, high in limits:
+        grow = max(0.0, longest * min_share - (high - low)) / 2
+        out.append((low - grow, high + grow))
+    return tuple(out)
+
+
+def _page(limits, views, legend_in: float) -> tuple[Figure, dict, tuple]:
+    """The figure and each view's box (figure fractions), every view at one scale (mm per
+    inch) so that equal aspect fills its box: top view over front view (X shared), side view
+    right of the front view (Z shared), the legend in the right-hand column."""
+    span = {letter: high - low for letter, (low, high) in zip("xyz", limits)}
+    columns = [views[0][0]] if len(views) == 1 else ["x", "y"]
+    rows = [views[0][1]] if len(views) == 1 else ["y", "z"]
+    gaps_w = MARGIN_LEFT_IN + GAP_IN * len(columns) + MARGIN_RIGHT_IN
+    scale = (FIGURE_WIDTH_IN - LEGEND_WIDTH_IN - gaps_w) / sum(span[c] for c in columns)  # inches per mm
+    gaps_h = MARGIN_TOP_IN + MARGIN_BOTTOM_IN + GAP_IN * (len(rows) - 1)
+    scale = min(scale, (MAX_HEIGHT_IN - gaps_h) / sum(span[r] for r in rows))
+    scale = max(scale, MIN_VIEW_IN / min(span.values()))
+    widths = [span[c] * scale for c in columns]
+    heights = [span[r] * scale for r in rows]
+    height_in = max(MIN_HEIGHT_IN, gaps_h + sum(heights), MARGIN_TOP_IN + MARGIN_BOTTOM_IN + legend_in)
+    width_in = gaps_w + sum(widths) + LEGEND_WIDTH_IN  # as wide as the views need: no empty band
+    fig = Figure(figsize=(width_in, height_in))
+
+    def box(column: int, row: int) -> tuple[float, float, float, float]:
+        left = MARGIN_LEFT_IN + sum(widths[:column]) + GAP_IN * column
+        top = height_in - MARGIN_TOP_IN - sum(heights[:row]) - GAP_IN * row
+        return (left / width_in, (top - heights[row]) / height_in, widths[column] / width_in, heights[row] / height_in)
+
+    if len(views) == 1:
+        boxes = {views[0]: box(0, 0)}
+    else:
+        boxes = {"xy": box(0, 0), "xz": box(0, 1), "yz": box(1, 1)}
+    legend_left = (width_in - LEGEND_WIDTH_IN) / width_in
+    legend = (legend_left, MARGIN_BOTTOM_IN / height_in, LEGEND_WIDTH_IN / width_in - MARGIN_RIGHT_IN / width_in,
+              1 - (MARGIN_TOP_IN + MARGIN_BOTTOM_IN) / height_in)
+    return fig, boxes, legend
 
 
 def _metadata(fmt: str) -> dict:
@@ -67,7 +127,7 @@ def _project(point, axes: str):
     return tuple(point[_AXIS_INDEX[letter]] for letter in axes)
 
 
-def _draw_view(ax, path: JobPath, view: str) -> None:
+def _draw_view(ax, path: JobPath, view: str, limits) -> None:
     ax.set_gid(f"view-{view}")
     ax.set_title(VIEW_TITLES[view], fontsize=10)
     ax.set_xlabel(AXIS_TITLES[view[0]])
@@ -75,6 +135,9 @@ def _draw_view(ax, path: JobPath, view: str) -> None:
     box = [[_project(a, view), _project(b, view)] for a, b in path.workspace.edges()]
     ax.add_collection(LineCollection(box, colors=WORKSPACE_COLOR, linewidths=0.8, gid=f"workspace-{view}"))
     numbered = 0
+    view_limits = [limits[_AXIS_INDEX[letter]] for letter in view]
+    label_cell = [max((high - low) / LABEL_CELLS, 1e-9) for low, high in view_limits]
+    labelled: set = set()
     for kind in path.kinds:
         segments = path.of_kind(kind)
         color = KIND_COLORS[kind]
@@ -88,9 +151,11 @@ def _draw_view(ax, path: JobPath, view: str) -> None:
             ends = [_project(s.points[-1], view) for s in segments]
             ax.plot(*zip(*ends), linestyle="none", marker=".", markersize=4, color=color)
         for segment in segments:
-            if numbered < MAX_NUMBERED:
+            x, y = _project(segment.points[len(segment.points) // 2], view)
+            cell = (round(x / label_cell[0]), round(y / label_cell[1]))
+            if numbered < MAX_NUMBERED and cell not in labelled:  # one number where several would overlap
                 numbered += 1
-                x, y = _project(segment.points[len(segment.points) // 2], view)
+                labelled.add(cell)
                 ax.annotate(str(segment.line), (x, y), xytext=(3, 3), textcoords="offset points", fontsize=7,
                             color=color)
     sx, sy = _project(path.start, view)
@@ -98,18 +163,23 @@ def _draw_view(ax, path: JobPath, view: str) -> None:
     for finding in path.findings:
         x, y = _project(finding.point, view)
         ax.plot([x], [y], linestyle="none", marker="X", markersize=9, color=SEVERITY_COLORS[finding.diagnostic.severity])
-    _fit(ax, path, view)
+    (x_low, x_high), (y_low, y_high) = view_limits
+    ax.set_xlim(x_low, x_high)
+    ax.set_ylim(y_low, y_high)
     ax.set_aspect("equal", adjustable="box")
+    _readable_ticks(ax)
     ax.grid(True, linewidth=0.3)
 
 
-def _fit(ax, path: JobPath, axes: str) -> list[tuple[float, float]]:
-    """Set the view's limits around the job (path.view_limits); returns them."""
-    around = path.view_limits()  # once: it walks every sampled point
-    limits = [around[_AXIS_INDEX[letter]] for letter in axes]
-    for setter, (low, high) in zip((ax.set_xlim, ax.set_ylim, getattr(ax, "set_zlim", None)), limits):
-        setter(low, high)
-    return limits
+def _readable_ticks(ax) -> None:
+    """As many ticks as the view's sides hold labels (round steps): none overlap."""
+    from matplotlib.ticker import MaxNLocator
+
+    fig = ax.get_figure()
+    left, bottom, width, height = ax.get_position().bounds
+    width_in, height_in = width * fig.get_figwidth(), height * fig.get_figheight()
+    for axis, length_in, spacing in ((ax.xaxis, width_in, TICK_SPACING_IN["x"]), (ax.yaxis, height_in, TICK_SPACING_IN["y"])):
+        axis.set_major_locator(MaxNLocator(nbins=max(2, int(length_in / spacing)), steps=[1, 2, 2.5, 5, 10]))
 
 
 def _clip_edge(a, b, limits):
@@ -124,10 +194,11 @@ def _clip_edge(a, b, limits):
     return tuple(low), tuple(high)
 
 
-def _draw_3d(ax, path: JobPath) -> None:
+def _draw_3d(ax, path: JobPath, limits) -> None:
     ax.set_gid("view-3d")
     ax.set_title(VIEW_TITLES["3d"], fontsize=10)
-    limits = _fit(ax, path, "xyz")
+    for setter, (low, high) in zip((ax.set_xlim, ax.set_ylim, ax.set_zlim), limits):
+        setter(low, high)
     for a, b in path.workspace.edges():  # mplot3d does not clip: keep the parts inside the view
         edge = _clip_edge(a, b, limits)
         if edge is not None:
@@ -146,9 +217,8 @@ def _draw_3d(ax, path: JobPath) -> None:
     ax.set_aspect("equal", adjustable="box")
 
 
-def _draw_legend(ax, path: JobPath) -> None:
-    """The kinds, start, box and findings as a legend, then the script line of every segment."""
-    ax.axis("off")
+def _handles(path: JobPath) -> list:
+    """The legend's entries: the kinds, start, box and findings."""
     handles = [Line2D([], [], color=KIND_COLORS[kind], linestyle="--" if kind == "joint" else "-",
                       marker="o" if kind == STILL else None, label=kind_name(kind)) for kind in path.kinds]
     handles.append(Line2D([], [], color=START_COLOR, marker="D", linestyle="none", label=start_name()))
@@ -158,10 +228,19 @@ def _draw_legend(ax, path: JobPath) -> None:
         if count:
             handles.append(Line2D([], [], color=SEVERITY_COLORS[severity], marker="X", linestyle="none",
                                   label=findings_name(severity, count)))
-    legend = ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False, title="armctl plot")
+    return handles
+
+
+def _draw_legend(ax, handles: list, listing: str) -> None:
+    """The legend at the top of its column, the script line of every segment right below it."""
+    from matplotlib.transforms import offset_copy
+
+    ax.axis("off")
+    legend = ax.legend(handles=handles, loc="upper left", fontsize=8, frameon=False, title="armctl plot",
+                       borderaxespad=0)
     legend.set_gid("legend")
-    ax.text(0.0, 0.62, _listing(path), transform=ax.transAxes, va="top", ha="left", fontsize=7, family="monospace",
-            gid="legend-lines")
+    below = offset_copy(ax.transAxes, fig=ax.get_figure(), y=-(len(handles) + 2) * LEGEND_ROW_IN * 72, units="points")
+    ax.text(0.0, 1.0, listing, transform=below, va="top", ha="left", fontsize=7, family="monospace", gid="legend-lines")
 
 
 def _listing(path: JobPath) -> str:

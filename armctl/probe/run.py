@@ -59,7 +59,7 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     from . import ADAPTER_FIFO_BYTES, build_probe
     from .host import FrameInbox, deferred_stop, drive
     from .report import as_json as json_object, print_lines, print_table, to_write
-    from .toml_edit import check_writable, connector_table, write_connector
+    from .toml_edit import check_writable, connector_table, toml_value, write_connector
 
     say = (lambda text: click.echo(text, err=True)) if as_json else click.echo
     target = Path(write_path) if write_path else None
@@ -109,7 +109,7 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     if target is not None:
         values = written(arm, to_write(probe))
         write_connector(target, values)
-        say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {v!r}" for k, v in values.items()))
+        say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {toml_value(v)}" for k, v in values.items()))
         if "fifo_frames" not in values:
             say(unmeasured_fifo_note(target, connector_table(target).get("fifo_frames")))
     keep(choice.url, arm, probe, say)  # with the arm: every command on it uses what was measured

@@ -6,6 +6,12 @@ is kept as it was (comments, other tables, key order, blank lines).  The file mu
 new key goes after the table's last key, a missing table is appended.  ``connector`` given in
 any other form (dotted keys, an inline table, not a table) is refused: edit it by hand.
 Pure text in, text out (``updated``); ``write_connector`` is the thin file edge.
+
+Why not tomlkit (weighed for issue 26): it writes dotted keys and inline tables, which this
+refuses with the exact lines to set by hand, but on the form the probe itself writes — one
+``[connector]`` table — it puts a new key after the comment that introduces the next table
+(``fifo_frames = 50`` / blank / ``# next`` / ``speed_factor = 1.25`` / ``[jog]``), and it is one
+more dependency for one rare form.  It does not clearly beat this editor, so it is not used.
 """
 
 from __future__ import annotations

@@ -35,6 +35,8 @@ from .grammar import LETTERS, parse_line
 from .modal import CARTESIAN, JOINTS, PWM_KEYS, UNKNOWN
 from .nodes import Assignment, CodeLine, KeywordLine
 from .source import SourceSpan
+from .suggest import did_you_mean
+from .suggest import keyword as keyword_like
 from .statement import NO_WORDS, Statement
 from .statements import (
     CODES, DISTANCE_MODES, PLACEHOLDER, PLACEHOLDERS, PWM_OF_ACTIVE_CHANNEL, MoveSpec, PlainPlan, Resolution, blame,
@@ -384,7 +386,8 @@ class StatementExecution:
         head = (node.column, node.end_column)
         entry = _KEYWORDS.get(node.names)
         if entry is None:
-            self._report("E002", number, text, *head, f"unknown statement '{text[node.column - 1:node.end_column - 1]}'",
+            written = text[node.column - 1:node.end_column - 1]
+            self._report("E002", number, text, *head, f"unknown statement '{written}'{did_you_mean(keyword_like(written))}",
                          messages.STATEMENTS_HINT)
             return
         build, takes, forgets = entry

@@ -14,9 +14,9 @@ value ends; the outermost rules unwrap it.  A line that does not parse raises
 
 from __future__ import annotations
 
+import functools
 import importlib
 import importlib.util
-import os
 import sys
 from pathlib import Path
 from typing import NamedTuple
@@ -191,7 +191,9 @@ def _register_source_checkout_grammars() -> None:
 def cache_path() -> str | bool:
     """Where Lark caches the built parser tables, or False for no cache.
 
-    ``$XDG_CACHE_HOME/armctl/`` (default ``~/.cache/armctl/``): building the LALR tables costs
+    platformdirs' ``user_cache_dir`` (armctl/folders.py): ``$XDG_CACHE_HOME/armctl/`` (default
+    ``~/.cache/armctl/``) on Linux, ``~/Library/Caches/armctl`` on macOS, ``%LOCALAPPDATA%\\armctl\\Cache``
+    on Windows.  Building the LALR tables costs
     28 ms at every start, loading them 2.2 ms (measured here).  Built on first use rather than
     shipped in the wheel, because the tables belong to one Lark version and one Python
     (pyproject does not pin lark), so a shipped file would be stale after most installs.  The
@@ -201,9 +203,10 @@ def cache_path() -> str | bool:
     cache folder, not Lark's default of a shared temporary folder, since the file is a pickle."""
     from lark import __version__ as lark_version
 
+    from ..folders import user_folder
+
     try:
-        base = os.environ.get("XDG_CACHE_HOME", "")
-        folder = Path(base if os.path.isabs(base) else Path.home() / ".cache") / "armctl"
+        folder = user_folder("cache")
         folder.mkdir(parents=True, exist_ok=True)
     except (OSError, RuntimeError):  # RuntimeError: no home directory
         return False
@@ -234,4 +237,35 @@ def parse_line(text: str) -> Node:
     try:
         return parser().parse(text)
     except UnexpectedInput as error:
-        raise explain(error, text) from None
+        raise _with_suggestion(explain(error, text), text) from None
+
+
+def _with_suggestion(error: LineSyntaxError, text: str) -> LineSyntaxError:
+    """``error`` with "(did you mean X250?)" when a repair of the line parses (armctl/script/suggest.py)."""
+    from .suggest import did_you_mean
+
+    fix = _suggestion(text, error.column)
+    if fix is None:
+        return error
+    return LineSyntaxError(error.message + did_you_mean(fix), error.column, error.end_column, error.hint, error.code)
+
+
+@functools.lru_cache(maxsize=256)  # a script repeating one bad line repairs it once
+def _suggestion(text: str, column: int):
+    from lark.exceptions import UnexpectedInput
+
+    from .statements import CODES
+    from .suggest import repaired_line
+
+    def parses(candidate: str) -> bool:
+        try:
+            parser().parse(candidate)
+        except UnexpectedInput:
+            return False
+        return True
+
+    def single_word(number: int):
+        spec = CODES.get(number)
+        return spec.letters[0] if spec is not None and len(spec.letters) == 1 else None
+
+    return repaired_line(text, column, parses, single_word)

@@ -273,7 +273,7 @@ def _report(result, watch, options: JobOptions, events) -> int:
     wall_s = time.monotonic() - watch.wall_start
     if result.resume_line is not None:
         result = replace(result, resume_command=resume_command(options, result.resume_line))
-    code = _summary(result, watch.view, wall_s, watch.estimate, options)
+    code = _summary(result, watch.view, wall_s, watch.estimate, options, watch.departures.explanation())
     if events is not None:
         events.summary(result.to_json())
     return code
@@ -283,6 +283,39 @@ def _nothing_to_run() -> dict:
     from .run_json import failure_result
 
     return failure_result("finished", EXIT_OK)  # nothing was left to send: the job is done
+
+
+class Departures:
+    """What a job did that its estimate does not assume, followed turn by turn: the arm's-clock
+    seconds it was paused (or pausing/resuming), and the feed overrides in force."""
+
+    def __init__(self) -> None:
+        self.paused_s = 0.0
+        self.feed_percents: set[int] = set()
+        self._last: tuple[float, str] | None = None
+
+    def update(self, view) -> None:
+        now_s, state = view.now_s, getattr(view, "pause_state", "running")
+        if self._last is not None and self._last[1] != "running":
+            self.paused_s += max(0.0, now_s - self._last[0])
+        self._last = (now_s, state)
+        percent = getattr(view, "feed_percent", 100)
+        if percent != 100:
+            self.feed_percents.add(percent)
+
+    def explanation(self) -> str:
+        """``the estimate assumes no pause and 100 % feed: this job was paused 8.0 s and ran at
+        120 % feed for part of it, which explains the difference`` — or "" when it did neither."""
+        done = []
+        if self.paused_s >= 0.05:
+            done.append(f"was paused {self.paused_s:.1f} s")
+        if self.feed_percents:
+            percents = "/".join(f"{p} %" for p in sorted(self.feed_percents))
+            done.append(f"ran at {percents} feed for part of it")
+        if not done:
+            return ""
+        return ("the estimate assumes no pause and 100 % feed: this job " + " and ".join(done)
+                + f", which {'explain' if len(done) > 1 else 'explains'} the difference")
 
 
 class _RunObserver:
@@ -299,6 +332,7 @@ class _RunObserver:
         self.quiet = quiet()
         self.view = None  # the job's RunView, once started
         self.wall_start = time.monotonic()
+        self.departures = Departures()  # pauses and feed overrides: what the estimate did not assume
 
     def started(self, view, plan) -> None:
         self.view, self.estimate, self.wall_start = view, plan.estimate, time.monotonic()
@@ -309,6 +343,7 @@ class _RunObserver:
             self.events.started(view, self.options.script, plan.from_line)
 
     def update(self, view) -> None:
+        self.departures.update(view)
         if self.events is not None:
             self.events.update(view)
         elif not self.quiet:  # -q: the summary only
@@ -447,6 +482,17 @@ def resume_command(options: JobOptions, line: int) -> str:
     return shlex.join(words)
 
 
+def one_line_summary(result, position_mm) -> str:
+    """What ``armctl move``/``home`` print: the outcome, the arm time and (finished) where the
+    arm reports it is at rest."""
+    time_s = "" if result.arm_time_s is None else f" in {result.arm_time_s:.1f} s of arm time"
+    where = "" if position_mm is None else " at X{:.1f} Y{:.1f} Z{:.1f}".format(*position_mm)
+    if result.finished:
+        return f"finished: the arm is at rest{where}{time_s}"
+    messages = "".join(f"; {message}" for message in result.messages)
+    return f"{result.outcome}{time_s}{messages}"
+
+
 def _repeat_note(view, resume: int | None) -> str:
     """What the summary says when the resume line is a repeat block's start (jobflow.resume_line:
     --from-line cannot start inside one): the passes already done run again."""
@@ -457,20 +503,23 @@ def _repeat_note(view, resume: int | None) -> str:
             "runs again from its first pass, so the passes already done are repeated)")
 
 
-def _summary(result, view, wall_s: float, estimate, options: JobOptions) -> int:
-    """The text summary of ``result`` (the arm time unrounded, from ``view``); the exit code."""
+def _summary(result, view, wall_s: float, estimate, options: JobOptions, departures: str = "") -> int:
+    """The text summary of ``result`` (the arm time unrounded, from ``view``); the exit code.
+    ``departures``: what explains the difference from the estimate (``Departures``)."""
     click.echo(f"frames: {result.frames_sent} of {result.total_frames} sent")
     click.echo(f"time: {wall_s:.1f} s wall")
     if view.arm_time_s is not None:
         actual = view.arm_time_s
         click.echo(f"arm time: {actual:.1f} s from the first frame to the arm at rest; estimated {estimate.job_s:.1f} s "
                    f"({actual / estimate.job_s - 1:+.1%})" if estimate.job_s else f"arm time: {actual:.1f} s")
+        if departures:
+            click.echo(f"  ({departures})")
     click.echo(f"frames confirmed by the arm's reports: {result.frames_by_reports}; by time only: {result.frames_by_time}"
                + (f"; gone from the buffer, not seen running: {result.frames_unseen}" if result.frames_unseen else ""))
     for message in result.messages:
         click.echo(f"note: {message}", err=True)
     if result.finished:
-        click.echo("done: the arm finished the job")
+        click.echo("finished: the arm finished the job")
         return result.exit_code
     if result.outcome == "finished, unproven":
         click.echo("finished, unproven: the arm is at rest at the last target, but the FIFO size is not proven; "

@@ -30,9 +30,7 @@ class NoStatus(ArmctlError):
 
 
 def print_once(link, baud: int, timeout_s: float, as_json: bool) -> None:
-    if not link.wait_until(lambda s: s.complete, timeout_s):
-        state, received, skipped, frames = link.snapshot()
-        raise NoStatus(_silence_message(link.url, baud, timeout_s, state, received, skipped, frames))
+    _wait_complete(link, baud, timeout_s)
     state = link.snapshot()[0]
     if as_json:
         click.echo(json.dumps(state.to_json()))
@@ -69,16 +67,29 @@ class _Rate:
         return (f1 - f0) / (t1 - t0) if t1 > t0 else 0.0
 
 
-def watch_status(link, baud: int, as_json: bool) -> None:
+def watch_status(link, baud: int, as_json: bool, timeout_s: float | None = None) -> None:
     """Until Ctrl-C: a live panel on a terminal, lines elsewhere.  Ctrl-C leaves as
     KeyboardInterrupt, after the live view has restored the terminal (cursor shown, last
-    panel kept), so the CLI exits 130 like every other command."""
-    if as_json:
-        _watch_lines(link, JSON_LINE_S, lambda s, h: json.dumps(s.to_json()))
-    elif sys.stdout.isatty():
-        _watch_live(link, baud)
+    panel kept), so the CLI exits 130 like every other command.  Lines (JSON or plain) start
+    once every status kind has been seen (``NoStatus`` after ``timeout_s``), so the first
+    record holds values, not nulls; each JSON record carries ``t``, seconds since the watch
+    began on the port's clock."""
+    if as_json or not sys.stdout.isatty():
+        if timeout_s is not None:
+            _wait_complete(link, baud, timeout_s)
+        started_s = link.clock()
+        if as_json:
+            _watch_lines(link, JSON_LINE_S, lambda s, h, now: json.dumps({"t": round(now - started_s, 3), **s.to_json()}))
+        else:
+            _watch_lines(link, PLAIN_LINE_S, lambda s, h, now: status_line(s))
     else:
-        _watch_lines(link, PLAIN_LINE_S, lambda s, h: status_line(s))
+        _watch_live(link, baud)
+
+
+def _wait_complete(link, baud: int, timeout_s: float) -> None:
+    if not link.wait_until(lambda s: s.complete, timeout_s):
+        state, received, skipped, frames = link.snapshot()
+        raise NoStatus(_silence_message(link.url, baud, timeout_s, state, received, skipped, frames))
 
 
 def _health(link, baud, rate, now):
@@ -94,7 +105,7 @@ def _watch_lines(link, period_s, render) -> None:
             raise link.error
         now = link.clock()
         state, health = _health(link, link.port.baudrate, rate, now)
-        click.echo(render(state, health))
+        click.echo(render(state, health, now))
         time.sleep(period_s)
 
 
