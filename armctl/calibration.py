@@ -186,7 +186,7 @@ def _configured_arm(config) -> str | None:
     resolved (ARMCTL_PORT set empty, a bad sim:// URL): such a command does not talk to the arm,
     so a port it would not use does not stop it — then no stored calibration applies, and no
     [connector] that names an arm."""
-    from .link import choose_port
+    from .port_choice import choose_port
 
     try:
         return arm_identity(choose_port(None, config).url)

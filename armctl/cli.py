@@ -230,12 +230,16 @@ def decode(source: str, as_json: bool):
 
 @contextmanager
 def _open_input(path: str):
-    """``path`` opened for binary reading (``-``: stdin, left open); unreadable: exit 2."""
+    """``path`` opened for binary reading (``-``: stdin, left open); unreadable: exit 2.  Only a
+    regular file (``inputs.open_regular``): a named pipe, device or directory is refused before
+    it is opened (``UnusableInput``: exit 2) — stdin is the way to give a stream."""
+    from .inputs import open_regular
+
     if path == "-":
         yield sys.stdin.buffer
         return
     try:
-        stream = open(path, "rb")
+        stream = open_regular(path)
     except OSError as error:
         raise UsageFailure(f"cannot read {path}: {error.strerror or error}") from None
     with stream:

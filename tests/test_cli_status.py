@@ -362,7 +362,7 @@ def test_json_watch_end_to_end_then_ctrl_c_exits_130(tmp_path):
     assert process.returncode == 130, err  # README: 130 Ctrl-C
     assert err.splitlines()[-1] == "armctl: interrupted"
     objects = [json.loads(line) for line in lines + rest.splitlines()]
-    assert all(list(o) == KEYS for o in objects)
+    assert all(list(o) == ["t"] + KEYS for o in objects)  # every --watch record carries its time first (issue 26)
     assert objects[-1]["joints"] == [0.0, 0.0, 0.0, 0.0, 90.0, 0.0]
     assert "Traceback" not in err
 

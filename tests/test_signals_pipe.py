@@ -48,4 +48,4 @@ def test_a_reader_that_goes_away_gets_the_whole_abort_and_a_true_resume_line(tmp
     progress = [r for r in records if r["dir"] == "progress"][-1]
     resume = next(line for line in err.splitlines() if line.startswith("resume with: "))
     assert f"--from-line {progress['done_resume']} " in resume, (resume, progress)
-    assert progress["done_resume"] == progress["sent_resume"], progress  # at rest: every frame written ran
+    assert progress["done_n"] == progress["frames_sent"], progress  # at rest: every frame written ran
