@@ -15,10 +15,12 @@ import subprocess
 import sys
 
 from click.testing import CliRunner
-from hypothesis import HealthCheck, example, given, settings
+from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 from armctl.cli import main
+from armctl.status_frames import decode_command, is_status_frame
+from armctl.protocol import FrameError
 from armctl.formats import bytes_from_input, describe_chunk, json_value, summary_line
 from armctl.protocol import (
     CONTROL_HEAD, CONTROL_TAIL, MOTION_HEAD, MOTION_TAIL, STATUS_HEAD, STATUS_KINDS, STATUS_TAIL, LinearMove,
@@ -89,6 +91,15 @@ def test_float32_max_in_an_out_of_range_field_gives_a_field_message():
 @example(head=(MOTION_HEAD, MOTION_TAIL), code=ord("6"), body=b"\x00" + bytes.fromhex("0000807f") + bytes(40))  # inf
 def test_every_48_byte_frame_decodes_and_is_described(head, code, body):
     frame = bytes([head[0], code]) + body + bytes([head[1]])
+    try:
+        decode_command(frame)
+    except FrameError:
+        # no command (an unknown code): the scan resynchronises (H9), so a whole status frame
+        # inside the 48 bytes is rightly found as one — that stream is another test's (found by
+        # Hypothesis: code 53 with a position frame at byte 32 gave three chunks)
+        assume(not any(is_status_frame(frame, k) for k in range(1, len(frame))))
+    except Exception:
+        pass
     lines = _describe_all(frame)
     assert len(lines) == 1 and lines[0].split()[1] in ("motion", "control", "invalid", "??")
 
