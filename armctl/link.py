@@ -38,7 +38,7 @@ from .armstate import ArmState
 from .clock import Clock, as_clock, port_clock
 from .errors import ConfigError, PortError
 from .profile import CONFIG_NAME, check_config_value
-from .protocol import DEFAULT_BAUD, STATUS_SIZE, StatusFrame, StatusReader
+from .protocol import DEFAULT_BAUD, STATUS_SIZE, StatusFrame, StatusReader, byte_seconds
 
 SIMULATOR_URL = "sim://"
 PORT_ENV = "ARMCTL_PORT"
@@ -57,6 +57,10 @@ VIRTUAL_RUN_FRAMES_MAX = 512
 # simulator's code and the engine's each run in a batch (the 20-minute job: 0.82 -> 0.75 s of
 # CPU), and a write wastes at most this many builds (the tail it forgets).
 VIRTUAL_BUILD_FRAMES = 64
+# On a wall clock the next frame may be handed to the port this long (model seconds) before the
+# line is free (``Streamer.write_ahead_s``): a host thread woken late by the OS then still finds the
+# line busy, not idle — a frame at 9600 baud, twelve at 115200 (576 bytes, well inside a tty's 4 KB).
+WRITE_AHEAD_S = 0.05
 UNMERGED_FRAMES_MAX = 4096  # frames of virtual runs held before they are merged into the state
 
 
@@ -474,6 +478,19 @@ class Link:
             self.port.write(frame)
         except Exception as error:
             raise PortError(f"writing to {self.url} failed: {error}") from None
+
+    def unsent_s(self) -> float | None:
+        """Model seconds until the bytes the port still holds have left it (its ``out_waiting``
+        at its baud rate), or None where the port cannot say (a socket, a fake)."""
+        port = self.port
+        try:
+            waiting = port.out_waiting
+            baud = port.baudrate
+        except Exception:  # (AttributeError, NotImplementedError, OSError: no such ioctl)
+            return None
+        if not isinstance(waiting, int) or not isinstance(baud, int) or baud <= 0:
+            return None
+        return waiting * byte_seconds(baud)
 
     def snapshot(self) -> tuple[ArmState, int, int, int]:
         """A copy of the state with bytes received, bytes skipped and frames read so far."""

@@ -6,7 +6,9 @@ what it asks, in one loop: drain the status frames the link has read into it, as
 ``next_action``, and write (``Write``: link.write, the --log record, ``wrote``), wait
 (``Wait``: through the link, until that time or the next status frame) or stop
 (``Finished``).  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S``
-so Ctrl-C and the panel stay prompt; on a virtual clock the engine takes each frame as the link
+so Ctrl-C and the panel stay prompt, the next frame may be handed to the port up to
+``WRITE_AHEAD_S`` before the line is free (a late wake-up then never idles the line) and the
+port's own unsent bytes push its start back (``Link.unsent_s``); on a virtual clock the engine takes each frame as the link
 reads it (``on_status``) and the wait jumps from burst to burst until a frame is news to the
 engine (``Job.receive_status``), a request or a stop is queued, or the engine's own next time
 comes: a virtual job costs its status frames, and a turn of this loop only for a frame that can
@@ -31,6 +33,7 @@ import queue
 from typing import Callable, Iterator
 
 from .errors import ArmctlError, PortError
+from .link import WRITE_AHEAD_S
 from .job import ABORT_SEQUENCES, abort_frames, resume_frames, Finished, Job, RunView, Wait, Write, _moved_clearly  # noqa: F401  (the runner's surface)
 from .protocol import Command, StatusFrame
 from .streamer import Evidence, Streamer, WaitReason
@@ -92,6 +95,8 @@ class JobRunner:
         self._quiet = False
         self._job_receive = self.job.receive_status
         self._job_receive_run = self.job.receive_statuses
+        if not self._virtual:  # (a virtual clock is never late: its writes go at the line's instant)
+            streamer.write_ahead_s = max(streamer.write_ahead_s, WRITE_AHEAD_S)
 
     @property
     def failure(self) -> str | None:
@@ -207,6 +212,8 @@ class JobRunner:
             now = self.now()
             action = job.next_action(now)
             if type(action) is Write:
+                if not self._virtual:
+                    self._note_unsent(now)
                 link.write(action.frame)
                 job.wrote(now)
                 if self.log is not None:
@@ -230,6 +237,14 @@ class JobRunner:
                 self._explain_bound(now)  # the arm at rest at the last target
                 on_update(view)
                 return action
+
+    def _note_unsent(self, now: float) -> None:
+        """Before a write on a wall clock: what the port still holds leaves first, so the frame
+        lands no earlier than that (``Link.unsent_s``; the streamer's line model is the floor)."""
+        unsent = getattr(self.link, "unsent_s", None)  # (a stand-in link in a test may not say)
+        unsent_s = unsent() if unsent is not None else None
+        if unsent_s:
+            self.streamer.line_busy_until(now + unsent_s)
 
     def check_stop(self) -> None:
         """Ctrl-C is deferred to the loop's safe point (see ``request_stop``)."""

@@ -50,8 +50,12 @@ motion-time model), the moment its last byte left the wire, and two views of the
   in it.  So a still frame never pushes the estimate while the estimate agrees with it, and
   an arm standing still (paused, or slower than the model) holds the estimate back.
 
-A frame may be written only once the previous frame has left the wire (writes are paced to
-the line, so no OS buffer hides seconds of frames) and while both hold:
+A frame may be written only once the previous frame has left the wire — or, on a wall clock,
+at most ``write_ahead_s`` before (``JobRunner``: the host's own wake-up may be late, and a frame
+waiting in the OS buffer starts the moment the line is free, which is when the model has it start
+anyway; the lead and the FIFO bound are judged at the write, so an early frame lands no earlier
+than the model says) — writes are paced to the line, so no OS buffer hides seconds of frames —
+and while both hold:
 (a) frames written − lower bound < capacity − margin (never overflow the FIFO, whatever the
     estimate says);
 (b) the estimated motion waiting behind the frame in progress — including the new frame, when
@@ -281,10 +285,13 @@ class Streamer:
         baud: int = DEFAULT_BAUD,
         slowest_factor: float | None = None,
         now: float = 0.0,
+        write_ahead_s: float = 0.0,
     ) -> None:
         """``capacity``: frames the connector holds behind the one executing (None: the profile's
         ``[connector] fifo_frames``); ``slowest_factor``: how many times slower than the model the
-        arm may run (None: the profile's ``[connector] speed_tolerance``)."""
+        arm may run (None: the profile's ``[connector] speed_tolerance``); ``write_ahead_s``: how
+        long before the line is free the next frame may be handed to the port (a wall-clock host's
+        buffer against its own wake-up jitter; 0 in virtual time, where nobody is late)."""
         if lead_s <= 0:
             raise ValueError("lead_s must be greater than 0")
         self.planner = Planner(model, start)
@@ -305,6 +312,7 @@ class Streamer:
         self.sent = 0
         self.consumed_lower_bound = 0
         self.wire_free_s = now
+        self.write_ahead_s = write_ahead_s
         self._last_candidate: dict[str, int | None] = {}
         self._last_fraction: dict[str, float | None] = {}  # the least fraction on that candidate
         self._last_done_tag = None
@@ -386,9 +394,10 @@ class Streamer:
         if self.frames_in_flight_bound + 1 > self.limit_frames:
             self.write_reason = WaitReason.CAPACITY
             return None
+        wire_ok_at = self.wire_free_s - self.write_ahead_s  # handed over early, it still starts when the line is free
         if not self.pending:
-            self.write_reason = WaitReason.WIRE if self.wire_free_s > now else WaitReason.READY
-            return max(now, self.wire_free_s)
+            self.write_reason = WaitReason.WIRE if wire_ok_at > now else WaitReason.READY
+            return max(now, wire_ok_at)
         if self.control_on_arrival and isinstance(command, CONTROL_COMMANDS):
             self.write_reason = WaitReason.IN_ORDER  # rule (c): only evidence lets it go
             return None
@@ -407,11 +416,11 @@ class Streamer:
                     break
                 began_s = sent.est_end_s
             lead_ok_at = min(lead_ok_at, now if began_s is None else began_s)
-        when = max(now, self.wire_free_s, lead_ok_at)
+        when = max(now, wire_ok_at, lead_ok_at)
         if when <= now:
             self.write_reason = WaitReason.READY
         else:
-            self.write_reason = WaitReason.LEAD if lead_ok_at >= self.wire_free_s else WaitReason.WIRE
+            self.write_reason = WaitReason.LEAD if lead_ok_at >= wire_ok_at else WaitReason.WIRE
         return when
 
     @property
@@ -434,6 +443,12 @@ class Streamer:
             planner = self.planner
             self._peeked = (command, planner.model.plan(command, planner.pose, planner.pending_arc))
         return self._peeked[1]
+
+    def line_busy_until(self, until_s: float) -> None:
+        """The port says bytes written before are still leaving until ``until_s`` (its
+        ``out_waiting``): the next frame starts no earlier (landing times from what has left)."""
+        if until_s > self.wire_free_s:
+            self.wire_free_s = until_s
 
     def wrote(self, command: Command, now: float, tag: object = None) -> SentFrame:
         """Record that the next frame's first byte went on the wire at ``now``."""
