@@ -68,12 +68,14 @@ def serve_pty(
     time_scale: float | None = None,  # None: the options' (speed=)
     model: SimulatedArm | None = None,
     keep_serving: bool = False,
+    on_arm: Callable[[RealtimeArm], None] | None = None,
 ) -> str:
     """Run the arm on a new pseudo-terminal; ``on_ready(path)`` gets its slave path.
 
     ``model``: an arm built by the caller (to inspect it afterwards), else one from ``options``.
     ``keep_serving``: when a program closes the pty, wait for the next one instead of ending
     (``armctl sim --pty``: `armctl status`, then `armctl run`, against the same arm).
+    ``on_arm``: told the ``RealtimeArm`` before ``on_ready`` (its clock start, for ``--stats``).
     ``NeedsPosixTerminal`` where there is no termios (Windows): nothing is opened."""
     require_posix_terminal("armctl sim --pty", "serve the arm with `armctl sim --tcp PORT` instead")
     import termios  # here, not at the top: serve_tcp needs neither and works on Windows
@@ -89,6 +91,8 @@ def serve_pty(
         raise
     os.close(slave_fd)  # so that POLLHUP tells whether a program has the slave open
     arm = RealtimeArm(model or SimulatedArm(options), options.time_scale if time_scale is None else time_scale)
+    if on_arm is not None:
+        on_arm(arm)  # (its clock: ``armctl sim --stats`` places the model's times on the machine's clock)
     try:
         on_ready(path)
         return _pump_pty(master_fd, arm, stop, keep_serving)
