@@ -432,7 +432,12 @@ class Streamer:
                 if end_s >= threshold_s:
                     break
                 began_s = end_s
-            lead_ok_at = min(lead_ok_at, now if began_s is None else began_s)
+            if began_s is None:
+                # the new one fits behind every frame after the first once the first has begun —
+                # not before: a frame written ahead (``write_ahead_s``) while the first is still on
+                # the wire would leave the whole queue to run after a stop then
+                began_s = max(now, ends[0] - self.pending[0].segment.duration_s * pace)
+            lead_ok_at = min(lead_ok_at, began_s)
         when = max(now, wire_ok_at, lead_ok_at)
         if when <= now:
             self.write_reason = WaitReason.READY

@@ -67,12 +67,13 @@ def test_the_figures_come_from_the_arms_records():
     executions = [[k, (k + 1) * f, (k + 1) * f + 0.01, "done"] for k in range(4)]
     mean_s, job_s, end_s = _job_figures(_stats(frames, executions), 4, 9600)
     assert mean_s == pytest.approx(f) and end_s == pytest.approx(4 * f + 0.01) and job_s == pytest.approx(end_s)
-    # the abort written after 2 job frames, 1 ms after the second landed: it lands third; the arm
-    # moved until the second ended (10 ms after it began)
+    # the abort written after 2 job frames, 1 ms after the second landed: it lands third, while the
+    # arm is still in the second (60 ms long here); the arm moved until the second ended
     stopped_s = 100.0 + 2 * f + 0.001
     frames2 = frames[:2] + [[2, 3 * f, True]]
+    executions2 = [executions[0], [1, 2 * f, 2 * f + 0.06, "done"]]
     durations = true_durations_s(commands, SimOptions())
-    moving_s, bound_s = abort_figures(_stats(frames2, executions[:2]), 2, stopped_s, 2.0, durations,
+    moving_s, bound_s = abort_figures(_stats(frames2, executions2), 2, stopped_s, 2.0, durations,
                                       moving_frames(commands, SimOptions()))
-    assert moving_s == pytest.approx(0.01 - 0.001)
+    assert moving_s == pytest.approx(0.06 - 0.001)
     assert bound_s == pytest.approx(durations[1] + max(2.0, durations[2]))  # in progress + max(lead, next)

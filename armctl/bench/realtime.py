@@ -195,12 +195,16 @@ def abort_figures(stats: dict, written: int, stopped_s: float, lead_s: float, du
     log = [SimpleNamespace(index=index, start_s=start, end_s=end) for index, start, end, _ in stats["executions"]]
     arm = SimpleNamespace(execution_log=log)
     line = ["job"] * written + ["abort"] * (len(stats["frames"]) - written)
+    # "The move in progress": the one the arm was in when the pause frame landed — a frame the host
+    # counts begun (its line model) begins a little later at the arm, by the pty's own latency, so
+    # at the instant of the stop it may not have begun yet there (the virtual bench has no latency)
+    landed_s = min((arrival for index, arrival, _ in stats["frames"] if index >= written), default=aborted_s)
     moved_until = max((e.end_s for e in log if e.index < written and e.end_s is not None and moves[e.index]),
                       default=aborted_s)
     running = [e for e in log if e.index < written and e.end_s is None]
     if running:  # frozen by a pause that acted as it landed: it stopped when the pause landed
         moved_until = max(moved_until, min(arrival for index, arrival, _ in stats["frames"] if index >= written))
-    return max(0.0, moved_until - aborted_s), stop_bound_s(arm, line, aborted_s, list(durations_s), lead_s)
+    return max(0.0, moved_until - aborted_s), stop_bound_s(arm, line, landed_s, list(durations_s), lead_s)
 
 
 def run_row(name: str, commands, baud: int, lead_s: float = DEFAULT_LEAD_S) -> RealtimeRow:
