@@ -64,10 +64,14 @@ and while both hold:
     the move in progress.  Model seconds become the arm's through the configured speed_factor
     (in the model) and the measured ``pace``: the arm's observed time ÷ the model's along one
     segment, from two agreeing sightings on it at least ``PACE_MIN_SPAN_S`` of model time apart
-    (the largest of the last few, never below 1).  A frame is also allowed once no more than
-    ``FEED_AHEAD_S`` (or the lead) of the arm's seconds is queued in all, so the arm is never
-    starved of a move longer than the lead by itself.  The pace shapes only this rule: the
-    lower bound never reads it.
+    (the largest of the last few, never below 1).  From a pace of ``PACE_FOLLOWED`` on, the
+    frames are followed at that pace from where a sighting inside a moving path last pinned the
+    arm (``_arm_ends``), since the estimate runs at the model's pace through frames no sighting
+    re-times.  A frame is also allowed once no more than ``FEED_AHEAD_S`` (or the lead) of the
+    arm's seconds is queued in all, so the arm is never starved of a move longer than the lead
+    by itself — and, behind a first pending frame not yet begun (written ahead), only once it
+    begins.  The pace shapes only this rule (and ``queued_seconds``): the lower bound never
+    reads it.
 (c) with ``control_frames = "arrival"`` a control frame (POSE, PROGRAM, G54, a pause toggle…)
     acts the moment it lands, ahead of everything queued: one in a job is written only once the
     lower bound says every frame before it has finished, so the arm runs the job in its order.

@@ -2,34 +2,34 @@
 
 URL: ``sim://[?option=value&…]``, options (all optional):
 
-================  ===============================================================  =========
-option            meaning                                                          default
-================  ===============================================================  =========
-speed             time scale: 4 = the arm runs 4× faster than the wall clock       1
-clock             ``wall``, or ``virtual``: model time moves only while armctl     wall
-                  waits on the port (``run``, ``status`` without ``--watch``), so
-                  a job takes milliseconds and runs identically on any machine
-fifo_frames       frames the connector accepts behind the one executing (alias     200
-                  ``fifo``)
-control_frames    ``queued`` (H5: control frames wait in the FIFO) or ``arrival``   queued
-                  (alias ``control``)
-status_xyz_frame  ``worktable`` or ``robot``: the frame of status kind 0's X/Y/Z    worktable
-                  after G54
-speed_factor      the arm's real motion time ÷ the model's: 1.3 = every motion     1
-                  takes 30 % longer than commanded (alias ``slowdown``)
-link_scale        the arm's link lengths are the profile's × this: its reported   1
-                  joints and X/Y/Z disagree with the profile's kinematics
-baud              line rate in bit/s (else the port's ``baudrate``)                9600
-loss              share of status frames lost                                      0
-corrupt           share of status frames with one byte flipped                     0
-noise             share of status frames preceded by random noise bytes            0
-seed              seed of the faults                                               0
-profile           path of an arm profile (TOML)                                    built-in
-write_buffer_     host bytes held before the wire (a tty's buffer): ``write``      none
-bytes             blocks while it is full (``write_timeout`` applies)
-read_granular     status bytes reach the host only at ticks this many ms apart     0
-ity_ms            (a USB adapter's latency timer; wall clock only)
-================  ===============================================================  =========
+====================  ===============================================================  =========
+option                meaning                                                          default
+====================  ===============================================================  =========
+speed                 time scale: 4 = the arm runs 4× faster than the wall clock       1
+clock                 ``wall``, or ``virtual``: model time moves only while armctl     wall
+                      waits on the port (``run``, ``status`` without ``--watch``), so
+                      a job takes milliseconds and runs identically on any machine
+fifo_frames           frames the connector accepts behind the one executing (alias     200
+                      ``fifo``)
+control_frames        ``queued`` (H5: control frames wait in the FIFO) or ``arrival``   queued
+                      (alias ``control``)
+status_xyz_frame      ``worktable`` or ``robot``: the frame of status kind 0's X/Y/Z    worktable
+                      after G54
+speed_factor          the arm's real motion time ÷ the model's: 1.3 = every motion     1
+                      takes 30 % longer than commanded (alias ``slowdown``)
+link_scale            the arm's link lengths are the profile's × this: its reported   1
+                      joints and X/Y/Z disagree with the profile's kinematics
+baud                  line rate in bit/s (else the port's ``baudrate``)                9600
+loss                  share of status frames lost                                      0
+corrupt               share of status frames with one byte flipped                     0
+noise                 share of status frames preceded by random noise bytes            0
+seed                  seed of the faults                                               0
+profile               path of an arm profile (TOML)                                    built-in
+write_buffer_bytes    host bytes held before the wire (a tty's buffer): ``write``      none
+                      blocks while it is full (``write_timeout`` applies)
+read_granularity_ms   status bytes reach the host only at ticks this many ms apart     0
+                      (a USB adapter's latency timer; wall clock only)
+====================  ===============================================================  =========
 
 The first four after ``clock`` are the arm profile's ``[connector]`` settings under the same
 names: the simulated arm impersonates any arm a profile may describe (its profile's own
