@@ -59,8 +59,10 @@ VIRTUAL_RUN_FRAMES_MAX = 512
 VIRTUAL_BUILD_FRAMES = 64
 # On a wall clock the next frame may be handed to the port this long (model seconds) before the
 # line is free (``Streamer.write_ahead_s``): a host thread woken late by the OS then still finds the
-# line busy, not idle — a frame at 9600 baud, twelve at 115200 (576 bytes, well inside a tty's 4 KB).
-WRITE_AHEAD_S = 0.05
+# line busy, not idle — three frames at 9600 baud, 36 at 115200 (1.7 KB, inside a tty's 4 KB).  At
+# 50 ms (one frame at 9600) a machine at load average 8 on 2 cores left one gap of 153 ms in 400
+# frames (50.30 ms a frame on average).
+WRITE_AHEAD_S = 0.15
 UNMERGED_FRAMES_MAX = 4096  # frames of virtual runs held before they are merged into the state
 
 
