@@ -8,11 +8,12 @@ what it asks, in one loop: drain the status frames the link has read into it, as
 (``Finished``).  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S``
 so Ctrl-C and the panel stay prompt, the next frame may be handed to the port up to
 ``WRITE_AHEAD_S`` before the line is free (a late wake-up then never idles the line) and the
-port's own unsent bytes push its start back (``Link.unsent_s``); on a virtual clock the engine takes each frame as the link
-reads it (``on_status``) and the wait jumps from burst to burst until a frame is news to the
-engine (``Job.receive_status``), a request or a stop is queued, or the engine's own next time
-comes: a virtual job costs its status frames, and a turn of this loop only for a frame that can
-change the next action (``benchmarks/virtual_run.py`` measures it against the bare simulator).
+port's own unsent bytes push its start back (``Link.unsent_s``); on a virtual clock the engine
+takes each frame as the link reads it (``on_status``) and the wait jumps from burst to burst
+until a frame is news to the engine (``Job.receive_status``), a request or a stop is queued, or
+the engine's own next time comes: a virtual job costs its status frames, and a turn of this loop
+only for a frame that can change the next action (``benchmarks/virtual_run.py`` measures it
+against the bare simulator).
 
 The link's reader thread (none on a virtual clock) only queues status frames with the time they
 were read (the loop drains them into the engine); every ending — finished, Ctrl-C, a lost port,
