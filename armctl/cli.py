@@ -546,7 +546,9 @@ def home(port, baud, profile_path, timeout_s, as_json):
 @click.option("--pty", "use_pty", is_flag=True, help="Serve the simulated arm on a new pseudo-terminal and print its path.")
 @click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True), help="Serve one client on 127.0.0.1:PORT (socket://127.0.0.1:PORT).")
 @click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?speed_factor=1.3&loss=0.05.")
-def sim(use_pty, tcp_port, sim_url):
+@click.option("--stats", "stats_path", type=click.Path(dir_okay=False, writable=True), default=None,
+              help="On exit, write what the arm saw (frames landed, dropped, run) as JSON to this file (--pty).")
+def sim(use_pty, tcp_port, sim_url, stats_path):
     """Run the built-in simulated arm for other programs to talk to."""
     from .sim.bridge import INTERRUPTED, serve_pty, serve_tcp
     from .sim.protocol_sim import parse_sim_url
@@ -563,12 +565,23 @@ def sim(use_pty, tcp_port, sim_url):
         raise ConfigError(f"--url: {error}") from None
     if options.virtual_clock:
         raise UsageFailure("a served simulator runs in real time: drop clock=virtual from --url")
+    if stats_path is not None and not use_pty:
+        raise UsageFailure("--stats goes with --pty")
 
     def ready(where: str) -> None:
         click.echo(f"simulated arm on {where} (Ctrl-C to stop)")
 
     if use_pty:
-        ended = serve_pty(options, ready, keep_serving=True)
+        from .sim.model import SimulatedArm
+
+        model, arms = SimulatedArm(options), []
+        try:
+            ended = serve_pty(options, ready, keep_serving=True, model=model, on_arm=arms.append)
+        finally:
+            if stats_path is not None and arms:
+                from .sim.stats import write_stats
+
+                write_stats(stats_path, model, arms[0].clock_start_s, arms[0].time_scale)
     else:
         ended = serve_tcp(tcp_port, options, ready)
     if ended == INTERRUPTED:  # the bridge closed what it opened; Ctrl-C exits 130 like every command
@@ -626,10 +639,18 @@ _register_packaged_commands()
 @click.option("--json", "as_json", is_flag=True, help="Print every cell as JSON.")
 @click.option("--jobs", type=number(*BENCH_JOBS_RANGE, whole=True), default=None, metavar="N",
               help="Parallel processes (default: one per CPU).")
-def bench(size, scenario_names, lead_s, as_json, jobs):
+@click.option("--realtime", is_flag=True,
+              help="The real-time benchmark instead: jobs through `armctl sim --pty` on the wall clock (~2 min).")
+def bench(size, scenario_names, lead_s, as_json, jobs, realtime):
     """The streaming benchmark: scenarios × strategies in virtual time (see docs/bench.md).
 
     Exits 1 if armctl's streamer drops a frame or misses a target anywhere."""
+    if realtime:
+        if scenario_names or size != "full" or jobs is not None:
+            raise UsageFailure("--realtime runs its own jobs, one at a time: drop --scenario, --quick and --jobs")
+        from .bench.realtime import main as realtime_main
+
+        sys.exit(realtime_main(lead_s, as_json))
     from .bench.table import main as bench_main
 
     sys.exit(bench_main(size, scenario_names, lead_s, as_json, jobs))

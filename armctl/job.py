@@ -354,6 +354,7 @@ class Job:
                     view.position_mm = values = streamer.worktable_xyz(values)  # status_xyz_frame
             changed = reported.get(kind) != values  # else so are the readings: _rest and _motion hold them
             reported[kind] = values
+            before_s = read_at.get(kind) if changed else None  # the last reading of this kind that differed
             read_at[kind] = now
             if changed or self._rest is None:
                 # One kind's values changed (or these are the first readings): the readings differ
@@ -362,7 +363,10 @@ class Job:
                 self._rest = ((reported.get(0), reported.get(1), reported.get(2), reported.get(4)), now)
                 if kind != 4 or self._motion is None:
                     motion = self._rest[0][:3]
-                    self._motion = (motion, now)
+                    moving_s = self._motion[2] if self._motion is not None else None
+                    if kind != 4 and before_s is not None and (moving_s is None or before_s > moving_s):
+                        moving_s = before_s
+                    self._motion = (motion, now, moving_s)
                     moved_from = self._moved_from
                     # Every other kind's readings are within jitter of ``_moved_from`` (checked when
                     # they changed, or equal since it was taken): only this kind's can have moved.
@@ -853,9 +857,20 @@ class Job:
         if self._motion is None:  # set with _rest: nothing reported yet
             return now
         # every frame after the last one that moves, however many (not only the recent ones)
-        moved_until_s = 0.0 if self._last_move is None else self._last_move.motion_before_s + self._last_move.segment.duration_s
-        done = self._motion[1] + self.streamer.motion_sent_s - moved_until_s
-        return min(max(done, self._rest[1], self._active_s or 0.0), now)
+        last = self._last_move
+        moved_until_s = 0.0 if last is None else last.motion_before_s + last.segment.duration_s
+        trailing_s = self.streamer.motion_sent_s - moved_until_s
+        _, seen_s, moving_s = self._motion
+        done = max(seen_s + trailing_s, self._rest[1], self._active_s or 0.0)
+        if moving_s is not None and last is not None and done == seen_s + trailing_s:
+            # Every kind of reading had its last value by ``seen_s``, and one still differed from
+            # it at ``moving_s`` (the latest such reading): the arm stopped in between, up to a
+            # rotation before ``seen_s`` (kinds 0-2 come together, then 210 ms of others), so the
+            # end is the estimate's where it lies in that window, else its middle (``seen_s`` made
+            # a 2.63 s job read 2.79 s at 115200 baud).
+            end_s = last.est_end_s
+            done = (end_s if moving_s <= end_s <= seen_s else (moving_s + seen_s) / 2) + trailing_s
+        return min(done, now)
 
     def _overrun_limit_s(self) -> float:
         """How long past the deadline a visibly working arm is waited for: readings that

@@ -40,3 +40,5 @@ SIM_FIFO_RANGE_FRAMES = (1, 100_000)  # fifo_frames= (fifo=): the connector's bu
 SIM_LINK_SCALE_RANGE = (0.5, 2.0)  # link_scale=: the simulated arm's link lengths × this (kinematics mismatch)
 SIM_SEED_RANGE = (0, 2**64 - 1)
 SIM_RATE_RANGE = (0.0, 1.0)  # loss=, corrupt=, noise=: a share of status frames
+SIM_WRITE_BUFFER_RANGE_BYTES = (48, 1 << 20)  # write_buffer_bytes=: host bytes held before the wire (a tty's is 4 KB)
+SIM_READ_GRANULARITY_RANGE_MS = (0.0, 100.0)  # read_granularity_ms=: status bytes reach the host at ticks this far apart

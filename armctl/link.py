@@ -37,7 +37,7 @@ from .clock import Clock, as_clock, port_clock
 from .errors import ConfigError, PortError
 from .port_choice import PORT_ENV, SIMULATOR_URL, PortChoice, check_sim_url, choose_port, resolve_port  # noqa: F401  (re-exported)
 from .profile import check_config_value
-from .protocol import DEFAULT_BAUD, STATUS_SIZE, StatusFrame, StatusReader
+from .protocol import DEFAULT_BAUD, STATUS_SIZE, StatusFrame, StatusReader, byte_seconds
 
 READ_CHUNK = 256
 READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
@@ -54,6 +54,12 @@ VIRTUAL_RUN_FRAMES_MAX = 512
 # simulator's code and the engine's each run in a batch (the 20-minute job: 0.82 -> 0.75 s of
 # CPU), and a write wastes at most this many builds (the tail it forgets).
 VIRTUAL_BUILD_FRAMES = 64
+# On a wall clock the next frame may be handed to the port this long (model seconds) before the
+# line is free (``Streamer.write_ahead_s``): a host thread woken late by the OS then still finds the
+# line busy, not idle — three frames at 9600 baud, 36 at 115200 (1.7 KB, inside a tty's 4 KB).  At
+# 50 ms (one frame at 9600) a machine at load average 8 on 2 cores left one gap of 153 ms in 400
+# frames (50.30 ms a frame on average).
+WRITE_AHEAD_S = 0.15
 UNMERGED_FRAMES_MAX = 4096  # frames of virtual runs held before they are merged into the state
 
 
@@ -237,9 +243,16 @@ class Link:
         self.close()
 
     def _read_loop(self) -> None:
+        port = self.port
         while not self._stop.is_set():
             try:
-                data = self.port.read(READ_CHUNK)
+                # A status frame's bytes, then whatever else is waiting: each frame is taken (and
+                # timed) as it completes, not when a bigger read's timeout runs out (a read of 256
+                # bytes timed the frames up to READ_TIMEOUT_S late, two at a time).
+                data = port.read(STATUS_SIZE)
+                waiting = getattr(port, "in_waiting", 0) if data else 0
+                if waiting:
+                    data += port.read(min(waiting, READ_CHUNK))
             except Exception as error:  # pyserial raises SerialException, OSError or TypeError on unplug
                 if not self._stop.is_set():
                     self._set_error(PortError(f"the port {self.url} went away: {error}"))
@@ -280,10 +293,19 @@ class Link:
         burst, without returning to a caller that has nothing new to decide (runner.py)."""
         clock = self.clock
         if not clock.virtual:
+            # A timer for ``until_s`` itself (the reader thread's notify ends it sooner): a write
+            # due then goes then, not at the next status frame or poll (a 20 ms poll made every
+            # frame of a line-bound job 11 ms late on average: 61 ms a frame at 9600 baud).
             with self._changed:
                 frames = self.reader.frames
-                while self.reader.frames == frames and self.error is None and (until_s is None or clock.now() < until_s):
-                    self._changed.wait(READ_TIMEOUT_S)
+                while self.reader.frames == frames and self.error is None:
+                    if until_s is None:
+                        self._changed.wait(READ_TIMEOUT_S)
+                        continue
+                    left_s = until_s - clock.now()
+                    if left_s <= 0:
+                        break
+                    self._changed.wait(clock.wall_seconds(left_s))
             return
         end_s = max(until_s, clock.now_s + VIRTUAL_MIN_STEP_S) if until_s is not None else None
         port = self.port
@@ -402,6 +424,19 @@ class Link:
             self.port.write(frame)
         except Exception as error:
             raise PortError(f"writing to {self.url} failed: {error}") from None
+
+    def unsent_s(self) -> float | None:
+        """Model seconds until the bytes the port still holds have left it (its ``out_waiting``
+        at its baud rate), or None where the port cannot say (a socket, a fake)."""
+        port = self.port
+        try:
+            waiting = port.out_waiting
+            baud = port.baudrate
+        except Exception:  # (AttributeError, NotImplementedError, OSError: no such ioctl)
+            return None
+        if not isinstance(waiting, int) or not isinstance(baud, int) or baud <= 0:
+            return None
+        return waiting * byte_seconds(baud)
 
     def snapshot(self) -> tuple[ArmState, int, int, int]:
         """A copy of the state with bytes received, bytes skipped and frames read so far."""

@@ -6,11 +6,14 @@ what it asks, in one loop: drain the status frames the link has read into it, as
 ``next_action``, and write (``Write``: the --log record made durable first, link.write, ``wrote``), wait
 (``Wait``: through the link, until that time or the next status frame) or stop
 (``Finished``).  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S``
-so Ctrl-C and the panel stay prompt; on a virtual clock the engine takes each frame as the link
-reads it (``on_status``) and the wait jumps from burst to burst until a frame is news to the
-engine (``Job.receive_status``), a request or a stop is queued, or the engine's own next time
-comes: a virtual job costs its status frames, and a turn of this loop only for a frame that can
-change the next action (``benchmarks/virtual_run.py`` measures it against the bare simulator).
+so Ctrl-C and the panel stay prompt, the next frame may be handed to the port up to
+``WRITE_AHEAD_S`` before the line is free (a late wake-up then never idles the line) and the
+port's own unsent bytes push its start back (``Link.unsent_s``); on a virtual clock the engine
+takes each frame as the link reads it (``on_status``) and the wait jumps from burst to burst
+until a frame is news to the engine (``Job.receive_status``), a request or a stop is queued, or
+the engine's own next time comes: a virtual job costs its status frames, and a turn of this loop
+only for a frame that can change the next action (``benchmarks/virtual_run.py`` measures it
+against the bare simulator).
 
 The link's reader thread (none on a virtual clock) only queues status frames with the time they
 were read (the loop drains them into the engine); every ending — finished, Ctrl-C, a lost port,
@@ -31,6 +34,7 @@ import queue
 from typing import Callable, Iterator
 
 from .errors import ArmctlError, PortError
+from .link import WRITE_AHEAD_S
 from .job import ABORT_SEQUENCES, abort_frames, resume_frames, Finished, Job, RunView, Wait, Write, _moved_clearly  # noqa: F401  (the runner's surface)
 from .protocol import Command, StatusFrame
 from .streamer import Evidence, Streamer, WaitReason
@@ -94,6 +98,8 @@ class JobRunner:
         self._quiet = False
         self._job_receive = self.job.receive_status
         self._job_receive_run = self.job.receive_statuses
+        if not self._virtual:  # (a virtual clock is never late: its writes go at the line's instant)
+            streamer.write_ahead_s = max(streamer.write_ahead_s, WRITE_AHEAD_S)
 
     @property
     def failure(self) -> str | None:
@@ -211,6 +217,8 @@ class JobRunner:
             if type(action) is Write:
                 if self.log is not None and not self._log_write(action, now):
                     continue  # no durable record, no frame: the failure stops the job (``fail``)
+                if not self._virtual:
+                    self._note_unsent(now)
                 link.write(action.frame)
                 job.wrote(now)
                 on_update(view)  # only after every record of the write is complete
@@ -227,6 +235,14 @@ class JobRunner:
                 self._explain_bound(now)  # the arm at rest at the last target
                 on_update(view)
                 return action
+
+    def _note_unsent(self, now: float) -> None:
+        """Before a write on a wall clock: what the port still holds leaves first, so the frame
+        lands no earlier than that (``Link.unsent_s``; the streamer's line model is the floor)."""
+        unsent = getattr(self.link, "unsent_s", None)  # (a stand-in link in a test may not say)
+        unsent_s = unsent() if unsent is not None else None
+        if unsent_s:
+            self.streamer.line_busy_until(now + unsent_s)
 
     def check_stop(self) -> None:
         """Ctrl-C is deferred to the loop's safe point (see ``request_stop``)."""

@@ -52,8 +52,12 @@ motion-time model), the moment its last byte left the wire, and two views of the
   in it.  So a still frame never pushes the estimate while the estimate agrees with it, and
   an arm standing still (paused, or slower than the model) holds the estimate back.
 
-A frame may be written only once the previous frame has left the wire (writes are paced to
-the line, so no OS buffer hides seconds of frames) and while both hold:
+A frame may be written only once the previous frame has left the wire — or, on a wall clock,
+at most ``write_ahead_s`` before (``JobRunner``: the host's own wake-up may be late, and a frame
+waiting in the OS buffer starts the moment the line is free, which is when the model has it start
+anyway; the lead and the FIFO bound are judged at the write, so an early frame lands no earlier
+than the model says) — writes are paced to the line, so no OS buffer hides seconds of frames —
+and while both hold:
 (a) frames written − lower bound < capacity − margin (never overflow the FIFO, whatever the
     estimate says);
 (b) the estimated motion waiting behind the frame in progress — including the new frame, when
@@ -62,10 +66,14 @@ the line, so no OS buffer hides seconds of frames) and while both hold:
     the move in progress.  Model seconds become the arm's through the configured speed_factor
     (in the model) and the measured ``pace``: the arm's observed time ÷ the model's along one
     segment, from two agreeing sightings on it at least ``PACE_MIN_SPAN_S`` of model time apart
-    (the largest of the last few, never below 1).  A frame is also allowed once no more than
-    ``FEED_AHEAD_S`` (or the lead) of the arm's seconds is queued in all, so the arm is never
-    starved of a move longer than the lead by itself.  The pace shapes only this rule: the
-    lower bound never reads it.
+    (the largest of the last few, never below 1).  From a pace of ``PACE_FOLLOWED`` on, the
+    frames are followed at that pace from where a sighting inside a moving path last pinned the
+    arm (``_arm_ends``), since the estimate runs at the model's pace through frames no sighting
+    re-times.  A frame is also allowed once no more than ``FEED_AHEAD_S`` (or the lead) of the
+    arm's seconds is queued in all, so the arm is never starved of a move longer than the lead
+    by itself — and, behind a first pending frame not yet begun (written ahead), only once it
+    begins.  The pace shapes only this rule (and ``queued_seconds``): the lower bound never
+    reads it.
 (c) with ``control_frames = "arrival"`` a control frame (POSE, PROGRAM, G54, a pause toggle…)
     acts the moment it lands, ahead of everything queued: one in a job is written only once the
     lower bound says every frame before it has finished, so the arm runs the job in its order.
@@ -179,6 +187,10 @@ RECENT_SENT_FRAMES = 512
 PACE_MIN_SPAN_S = 0.25
 PACE_SAMPLES = 4
 PACE_MAX = 4.0
+# From this pace on the lead follows the frames at the arm's pace, not the estimate's
+# (``Streamer._arm_ends``); below it the two differ by less than a sighting's timing (a status
+# period in a quarter second: a nominal arm measures 1.000-1.003).
+PACE_FOLLOWED = 1.02
 # Latest a frame may reach the connector after its last byte left the host (USB adapters,
 # kernel buffers), and slack per frame for the controller's own handling at the document-level
 # tolerance (SLOWEST_ARM_FACTOR); a tolerance t allows (t − 1) / (SLOWEST_ARM_FACTOR − 1) of it
@@ -289,10 +301,13 @@ class Streamer:
         baud: int = DEFAULT_BAUD,
         slowest_factor: float | None = None,
         now: float = 0.0,
+        write_ahead_s: float = 0.0,
     ) -> None:
         """``capacity``: frames the connector holds behind the one executing (None: the profile's
         ``[connector] fifo_frames``); ``slowest_factor``: how many times slower than the model the
-        arm may run (None: the profile's ``[connector] speed_tolerance``)."""
+        arm may run (None: the profile's ``[connector] speed_tolerance``); ``write_ahead_s``: how
+        long before the line is free the next frame may be handed to the port (a wall-clock host's
+        buffer against its own wake-up jitter; 0 in virtual time, where nobody is late)."""
         if lead_s <= 0:
             raise ValueError("lead_s must be greater than 0")
         self.planner = Planner(model, start)
@@ -313,6 +328,10 @@ class Streamer:
         self.sent = 0
         self.consumed_lower_bound = 0
         self.wire_free_s = now
+        self.write_ahead_s = write_ahead_s
+        # Where a sighting last pinned the arm on the estimate: (time, frame, model s of it left);
+        # ``_arm_ends`` follows the frames at the measured pace from there
+        self._pin: tuple[float, int, float] | None = None
         self._last_candidate: dict[str, int | None] = {}
         self._last_fraction: dict[str, float | None] = {}  # the least fraction on that candidate
         self._last_done_tag = None
@@ -374,10 +393,14 @@ class Streamer:
         return self.sent - self.consumed_lower_bound
 
     def queued_seconds(self, now: float) -> float:
-        """Estimated motion queued ahead of the arm: when it will finish everything, from now."""
+        """Estimated motion queued ahead of the arm: when it will finish everything, from now —
+        on an arm measured slower than the model, the later of the estimate and the frames
+        followed at its pace (``_arm_ends``: the estimate may have run ahead of the arm)."""
         if not self.pending:
             return 0.0
-        return max(0.0, self.pending[-1].est_end_s - now)
+        ends = self._arm_ends()
+        tail_s = self.pending[-1].est_end_s if ends is None else max(ends[-1], self.pending[-1].est_end_s)
+        return max(0.0, tail_s - now)
 
     def waiting_seconds(self, now: float) -> float:
         """Estimated motion in frames the arm has not begun yet: ``queued_seconds`` without the
@@ -402,33 +425,73 @@ class Streamer:
         if self.frames_in_flight_bound + 1 > self.limit_frames:
             self.write_reason = WaitReason.CAPACITY
             return None
+        wire_ok_at = self.wire_free_s - self.write_ahead_s  # handed over early, it still starts when the line is free
         if not self.pending:
-            self.write_reason = WaitReason.WIRE if self.wire_free_s > now else WaitReason.READY
-            return max(now, self.wire_free_s)
+            self.write_reason = WaitReason.WIRE if wire_ok_at > now else WaitReason.READY
+            return max(now, wire_ok_at)
         if self.control_on_arrival and isinstance(command, CONTROL_COMMANDS):
             self.write_reason = WaitReason.IN_ORDER  # rule (c): only evidence lets it go
             return None
         duration_s = 0.0 if command is None else self._plan(command).duration_s
         self.next_frame_motion_s = duration_s
-        tail_s = self.pending[-1].est_end_s
-        lead_s = self.lead_model_s  # the lead in the arm's seconds, as model seconds
-        lead_ok_at = tail_s - min(lead_s, FEED_AHEAD_S / self.pace)  # the arm must not run dry
+        ends = self._arm_ends()
+        if ends is None:  # the estimate is the arm's time: its durations are the model's
+            ends, pace = [sent.est_end_s for sent in self.pending], 1.0
+        else:
+            pace = self.pace
+        # The lead in the arm's seconds: ``ends`` are the arm's, each duration × the pace (the model
+        # seconds of ``lead_model_s``, the same thing measured the other way)
+        tail_s, lead_s, duration_s = ends[-1], self.lead_model_s * pace, duration_s * pace
+        lead_ok_at = tail_s - min(lead_s, FEED_AHEAD_S / self.pace * pace)  # the arm must not run dry
         if duration_s <= lead_s:
             # The waiting motion once frame j is in progress is tail − end of j: find the first
             # frame after which the new one fits within the lead; it may go once that one began.
             threshold_s = tail_s + duration_s - lead_s
             began_s = None
-            for sent in self.pending:
-                if sent.est_end_s >= threshold_s:
+            for end_s in ends:
+                if end_s >= threshold_s:
                     break
-                began_s = sent.est_end_s
-            lead_ok_at = min(lead_ok_at, now if began_s is None else began_s)
-        when = max(now, self.wire_free_s, lead_ok_at)
+                began_s = end_s
+            if began_s is None:
+                # the new one fits behind every frame after the first once the first has begun —
+                # not before: a frame written ahead (``write_ahead_s``) while the first is still on
+                # the wire would leave the whole queue to run after a stop then
+                began_s = max(now, ends[0] - self.pending[0].segment.duration_s * pace)
+            lead_ok_at = min(lead_ok_at, began_s)
+        when = max(now, wire_ok_at, lead_ok_at)
         if when <= now:
             self.write_reason = WaitReason.READY
         else:
-            self.write_reason = WaitReason.LEAD if lead_ok_at >= self.wire_free_s else WaitReason.WIRE
+            self.write_reason = WaitReason.LEAD if lead_ok_at >= wire_ok_at else WaitReason.WIRE
         return when
+
+    def _arm_ends(self) -> list[float] | None:
+        """When the arm ends each pending frame in its own seconds, on an arm measured slower than
+        the model (None otherwise: the estimate's ends are the arm's).  The estimate runs at the
+        model's pace from its last re-anchoring, so on a slow arm it has begun frames the arm has
+        not (a delay, an M code, a PWM change: frames no sighting re-times), and the lead would
+        hold more of the arm's seconds than it says (issue 21: 3.6 s of motion after a Ctrl-C
+        against a 2.15 s promise, an arm 1.3x slower at 115200).  So from where the last pinning
+        sighting had the arm (``_pin``: at that time, that much of that frame's model time left)
+        the frames follow at the measured ``pace``, each no sooner than it landed (a pause
+        reported drops the pin: the estimate again until the next).  Not the later of this and
+        the estimate's own end: an estimate re-anchored late on a still frame would then hold
+        the line idle (an arm 2x slower, unprobed: 1.32x its physical bound; 1.04x without).
+        Frames before the pinned one end where the estimate has them."""
+        pin, pace = self._pin, self.pace
+        if pin is None or pace < PACE_FOLLOWED:
+            return None
+        at_s, index, left_s = pin
+        end_s = at_s + left_s * pace  # the pinned frame's end
+        ends = []
+        for sent in self.pending:
+            if sent.index < index:
+                ends.append(sent.est_end_s)
+                continue
+            if sent.index > index:
+                end_s = max(sent.wire_end_s, end_s) + sent.segment.duration_s * pace
+            ends.append(end_s)
+        return ends
 
     @property
     def lead_model_s(self) -> float:
@@ -451,6 +514,12 @@ class Streamer:
             self._peeked = (command, planner.model.plan(command, planner.pose, planner.pending_arc))
         return self._peeked[1]
 
+    def line_busy_until(self, until_s: float) -> None:
+        """The port says bytes written before are still leaving until ``until_s`` (its
+        ``out_waiting``): the next frame starts no earlier (landing times from what has left)."""
+        if until_s > self.wire_free_s:
+            self.wire_free_s = until_s
+
     def wrote(self, command: Command, now: float, tag: object = None) -> SentFrame:
         """Record that the next frame's first byte went on the wire at ``now``."""
         segment = self._plan(command)
@@ -466,6 +535,8 @@ class Streamer:
         self.wire_free_s = wire_end
         previous = self.pending[-1] if self.pending else None
         est_start = max(wire_end, previous.est_end_s if previous else wire_end)
+        if previous is None:
+            self._pin = (est_start, self.sent, segment.duration_s)  # the arm waits for it: it starts on the arm's time
         certain_start = max(wire_end + ARRIVAL_SLACK_S, self._certain_tail_s)
         self._certain_tail_s = (certain_start + (segment.duration_s + allowance_s) * self.slowest_factor
                                 + self.frame_slack_s)
@@ -530,6 +601,7 @@ class Streamer:
 
     def _note_pause_state(self, paused: bool, now: float) -> None:
         if paused:
+            self._pin = None  # the arm held still: where it was pinned no longer says where it is
             self._pace_from.clear()  # a pace sample must not span a pause (arrival mode freezes a move)
             self._span_from.clear()
             self._span_last.clear()
@@ -901,6 +973,25 @@ class Streamer:
                 self._measure_pace(stream, earliest, candidates, now, could_be_on)
         if not settled:
             self._reanchor(candidates, now)
+        if self.pace >= PACE_FOLLOWED:
+            self._pin_estimate(candidates, now)
+
+    def _pin_estimate(self, candidates: list[tuple[int, float, float]], now: float) -> None:
+        """``_pin`` where this sighting pins the estimate: the estimate has the arm in the window of
+        a candidate inside a path that moves (a short window).  One on a still frame (a delay, a
+        PWM change) or at a path's end only bounds it: the arm may rest there in frames the
+        estimate ran through already, an arm slower than the model still in the first."""
+        pending = self.pending
+        if not pending:
+            return
+        first = pending[0].index
+        for index, lo, hi in candidates:
+            k = index - first
+            if 0 <= k < len(pending) and _estimate_off_s(pending[k], lo, hi, now, self._time_at) == 0.0:
+                sent = pending[k]
+                if sent.segment.length > 0 and lo > 0.0 and hi < 1.0:
+                    self._pin = (now, sent.index, max(0.0, sent.est_end_s - now))
+                return
 
     def _check_gap(self, stream: str, index: int, now: float, could_be_on) -> bool:
         """A sign of loss: the arm, seen by this stream at ``now`` at least at frame ``index``,

@@ -11,6 +11,9 @@ produced.  The loop ends, closing everything it opened, when
 - the user presses Ctrl-C (KeyboardInterrupt is caught here, not re-raised).
 
 Each function returns why it ended: ``"peer closed"``, ``"stopped"`` or ``"interrupted"``.
+With ``write_buffer_bytes`` the loop reads host bytes only while the arm's write buffer has room
+(the rest wait in the pty's or socket's own buffer); with ``read_granularity_ms`` it sends status
+bytes at the ticks ``RealtimeArm.poll`` releases them.
 Until a program opens the pty, the arm runs and its status bytes are discarded (a tty would
 otherwise hand the first reader a backlog of stale frames).
 """
@@ -25,6 +28,7 @@ import threading
 from typing import Callable
 
 from ..posix_terminal import require_posix_terminal
+from ..protocol import FRAME_SIZE
 from .model import SimOptions, SimulatedArm
 from .realtime import RealtimeArm
 
@@ -33,12 +37,24 @@ IDLE_WAIT_S = 0.05  # longest wait between checks of ``stop`` and the peer
 NO_PEER_WAIT_S = 0.01  # how often to look for a program opening the pty (keeps the first
 # status bytes it gets fresh: output made while nobody listened is discarded)
 READ_CHUNK = 4096
+ROOM_WAIT_S = 0.001  # the shortest wait for room in the write buffer (a byte at 9600 baud)
 TCP_HOST = "127.0.0.1"
 
 
 def _wait_s(arm: RealtimeArm) -> float:
     due = arm.wall_seconds_until_output()
-    return IDLE_WAIT_S if due is None else min(IDLE_WAIT_S, due)
+    wait_s = IDLE_WAIT_S if due is None else min(IDLE_WAIT_S, due)
+    if arm.write_room() == 0:  # the host's bytes wait in the pty until the buffer has room
+        wait_s = min(wait_s, max(arm.model_seconds_until_room(FRAME_SIZE) / arm.time_scale, ROOM_WAIT_S))
+    return wait_s
+
+
+def _take_room(arm: RealtimeArm) -> int:
+    """How many host bytes to read now: all there are, or what the write buffer has room for
+    (``write_buffer_bytes``: the rest stay in the pty's or socket's own buffer, so the host's
+    write blocks when that fills, as on a real line)."""
+    room = arm.write_room()
+    return READ_CHUNK if room is None else min(room, READ_CHUNK)
 
 
 def _stopped(stop: threading.Event | None) -> bool:
@@ -52,12 +68,14 @@ def serve_pty(
     time_scale: float | None = None,  # None: the options' (speed=)
     model: SimulatedArm | None = None,
     keep_serving: bool = False,
+    on_arm: Callable[[RealtimeArm], None] | None = None,
 ) -> str:
     """Run the arm on a new pseudo-terminal; ``on_ready(path)`` gets its slave path.
 
     ``model``: an arm built by the caller (to inspect it afterwards), else one from ``options``.
     ``keep_serving``: when a program closes the pty, wait for the next one instead of ending
     (``armctl sim --pty``: `armctl status`, then `armctl run`, against the same arm).
+    ``on_arm``: told the ``RealtimeArm`` before ``on_ready`` (its clock start, for ``--stats``).
     ``NeedsPosixTerminal`` where there is no termios (Windows): nothing is opened."""
     require_posix_terminal("armctl sim --pty", "serve the arm with `armctl sim --tcp PORT` instead")
     import termios  # here, not at the top: serve_tcp needs neither and works on Windows
@@ -73,6 +91,8 @@ def serve_pty(
         raise
     os.close(slave_fd)  # so that POLLHUP tells whether a program has the slave open
     arm = RealtimeArm(model or SimulatedArm(options), options.time_scale if time_scale is None else time_scale)
+    if on_arm is not None:
+        on_arm(arm)  # (its clock: ``armctl sim --stats`` places the model's times on the machine's clock)
     try:
         on_ready(path)
         return _pump_pty(master_fd, arm, stop, keep_serving)
@@ -87,6 +107,8 @@ def _pump_pty(master_fd: int, arm: RealtimeArm, stop: threading.Event | None, ke
     poller.register(master_fd, select.POLLIN)
     peer_seen = False
     while not _stopped(stop):
+        room = _take_room(arm)
+        poller.modify(master_fd, select.POLLIN if room else 0)  # (POLLHUP is reported either way)
         events = dict(poller.poll(_wait_s(arm) * 1000.0))
         hung_up = bool(events.get(master_fd, 0) & (select.POLLHUP | select.POLLERR))
         if hung_up:
@@ -101,8 +123,8 @@ def _pump_pty(master_fd: int, arm: RealtimeArm, stop: threading.Event | None, ke
             continue
         peer_seen = True
         try:
-            if events.get(master_fd, 0) & select.POLLIN:
-                arm.write(os.read(master_fd, READ_CHUNK))
+            if room and events.get(master_fd, 0) & select.POLLIN:
+                arm.write(os.read(master_fd, room))
             output = arm.poll()
             if output:
                 os.write(master_fd, output)
@@ -154,10 +176,11 @@ def _accept(server: socket.socket, stop: threading.Event | None) -> socket.socke
 
 def _pump_tcp(client: socket.socket, arm: RealtimeArm, stop: threading.Event | None) -> str:
     while not _stopped(stop):
-        readable, _, _ = select.select([client], [], [], _wait_s(arm))
+        room = _take_room(arm)
+        readable, _, _ = select.select([client] if room else [], [], [], _wait_s(arm))
         try:
             if readable:
-                data = client.recv(READ_CHUNK)
+                data = client.recv(room)
                 if not data:
                     return PEER_CLOSED
                 arm.write(data)

@@ -64,6 +64,13 @@ class SimOptions:
     profile: object = None
     time_scale: float = 1.0  # speed=: the arm runs this many times faster than the wall clock
     virtual_clock: bool = False  # clock=virtual: model time moves only while the host waits
+    # The line's edges, as real ones have them (read by armctl/sim/realtime.py, protocol_sim.py and
+    # bridge.py): host bytes not yet on the wire are held in a buffer of this many bytes, and a
+    # write blocks while it is full, as a tty's does (None: never full); the host reads status
+    # bytes only at ticks this many model seconds apart, as a USB adapter's latency timer hands
+    # them over (0: as each byte lands).
+    write_buffer_bytes: int | None = None
+    read_granularity_s: float = 0.0
 
     @property
     def control_on_arrival(self) -> bool:
@@ -82,6 +89,10 @@ class SimOptions:
             raise ValueError(f"status_xyz_frame must be 'worktable' or 'robot', not {self.status_xyz_frame!r}")
         if not self.link_scale > 0:
             raise ValueError(f"link_scale must be positive, not {self.link_scale!r}")
+        if self.write_buffer_bytes is not None and not self.write_buffer_bytes > 0:
+            raise ValueError(f"write_buffer_bytes must be positive, not {self.write_buffer_bytes!r}")
+        if not self.read_granularity_s >= 0:
+            raise ValueError(f"read_granularity_s must be 0 or more, not {self.read_granularity_s!r}")
 
 
 def _load_profile(profile):
@@ -168,6 +179,12 @@ class SimulatedArm:
     def host_bytes_in_flight(self, now_s: float) -> int:
         """Host bytes written but not yet fully landed at ``now_s`` (pyserial's out_waiting)."""
         return self.host_line.in_flight(max(now_s, self.now_s))
+
+    def host_room_at_s(self, limit_bytes: int, want_bytes: int) -> float:
+        """When no more than ``limit_bytes − want_bytes`` host bytes are still in flight (a buffer
+        of ``limit_bytes`` then takes ``want_bytes`` more)."""
+        line = self.host_line
+        return line.free_at_s - max(0, limit_bytes - want_bytes) * line.byte_s
 
     def host_line_free_s(self) -> float:
         """When the last host byte written so far will have landed."""

@@ -2,30 +2,34 @@
 
 URL: ``sim://[?option=value&…]``, options (all optional):
 
-================  ===============================================================  =========
-option            meaning                                                          default
-================  ===============================================================  =========
-speed             time scale: 4 = the arm runs 4× faster than the wall clock       1
-clock             ``wall``, or ``virtual``: model time moves only while armctl     wall
-                  waits on the port (``run``, ``status`` without ``--watch``), so
-                  a job takes milliseconds and runs identically on any machine
-fifo_frames       frames the connector accepts behind the one executing (alias     200
-                  ``fifo``)
-control_frames    ``queued`` (H5: control frames wait in the FIFO) or ``arrival``   queued
-                  (alias ``control``)
-status_xyz_frame  ``worktable`` or ``robot``: the frame of status kind 0's X/Y/Z    worktable
-                  after G54
-speed_factor      the arm's real motion time ÷ the model's: 1.3 = every motion     1
-                  takes 30 % longer than commanded (alias ``slowdown``)
-link_scale        the arm's link lengths are the profile's × this: its reported   1
-                  joints and X/Y/Z disagree with the profile's kinematics
-baud              line rate in bit/s (else the port's ``baudrate``)                9600
-loss              share of status frames lost                                      0
-corrupt           share of status frames with one byte flipped                     0
-noise             share of status frames preceded by random noise bytes            0
-seed              seed of the faults                                               0
-profile           path of an arm profile (TOML)                                    built-in
-================  ===============================================================  =========
+====================  ===============================================================  =========
+option                meaning                                                          default
+====================  ===============================================================  =========
+speed                 time scale: 4 = the arm runs 4× faster than the wall clock       1
+clock                 ``wall``, or ``virtual``: model time moves only while armctl     wall
+                      waits on the port (``run``, ``status`` without ``--watch``), so
+                      a job takes milliseconds and runs identically on any machine
+fifo_frames           frames the connector accepts behind the one executing (alias     200
+                      ``fifo``)
+control_frames        ``queued`` (H5: control frames wait in the FIFO) or ``arrival``   queued
+                      (alias ``control``)
+status_xyz_frame      ``worktable`` or ``robot``: the frame of status kind 0's X/Y/Z    worktable
+                      after G54
+speed_factor          the arm's real motion time ÷ the model's: 1.3 = every motion     1
+                      takes 30 % longer than commanded (alias ``slowdown``)
+link_scale            the arm's link lengths are the profile's × this: its reported   1
+                      joints and X/Y/Z disagree with the profile's kinematics
+baud                  line rate in bit/s (else the port's ``baudrate``)                9600
+loss                  share of status frames lost                                      0
+corrupt               share of status frames with one byte flipped                     0
+noise                 share of status frames preceded by random noise bytes            0
+seed                  seed of the faults                                               0
+profile               path of an arm profile (TOML)                                    built-in
+write_buffer_bytes    host bytes held before the wire (a tty's buffer): ``write``      none
+                      blocks while it is full (``write_timeout`` applies)
+read_granularity_ms   status bytes reach the host only at ticks this many ms apart     0
+                      (a USB adapter's latency timer; wall clock only)
+====================  ===============================================================  =========
 
 The first four after ``clock`` are the arm profile's ``[connector]`` settings under the same
 names: the simulated arm impersonates any arm a profile may describe (its profile's own
@@ -58,18 +62,19 @@ import time
 import urllib.parse
 from typing import Callable
 
-from serial.serialutil import PortNotOpenError, SerialBase, SerialException, to_bytes
+from serial.serialutil import PortNotOpenError, SerialBase, SerialException, SerialTimeoutException, to_bytes
 
 from ..errors import ConfigError
-from ..limits import (BAUD_RANGE, SIM_FIFO_RANGE_FRAMES, SIM_LINK_SCALE_RANGE, SIM_RATE_RANGE, SIM_SEED_RANGE,
-                      SIM_SLOWDOWN_RANGE, SIM_TIME_SCALE_RANGE)
+from ..limits import (BAUD_RANGE, SIM_FIFO_RANGE_FRAMES, SIM_LINK_SCALE_RANGE, SIM_RATE_RANGE,
+                      SIM_READ_GRANULARITY_RANGE_MS, SIM_SEED_RANGE, SIM_SLOWDOWN_RANGE, SIM_TIME_SCALE_RANGE,
+                      SIM_WRITE_BUFFER_RANGE_BYTES)
 from .model import SimOptions, SimulatedArm
 from .realtime import RealtimeArm, VirtualClock
 
 _USAGE = (
     "expected sim://[?option=value&…] with options speed, clock=wall|virtual, fifo_frames, "
     "control_frames=queued|arrival, status_xyz_frame=worktable|robot, speed_factor, link_scale, baud, "
-    "loss, corrupt, noise, seed, profile"
+    "loss, corrupt, noise, seed, profile, write_buffer_bytes, read_granularity_ms"
 )
 
 
@@ -130,6 +135,11 @@ def _path(name: str, text: str) -> str:
     return text
 
 
+def _ms_as_s(low_ms: float, high_ms: float) -> Callable[[str, str], float]:
+    milliseconds = _float_in(low_ms, high_ms)
+    return lambda name, text: milliseconds(name, text) / 1000.0
+
+
 _FIFO = _int_in(*SIM_FIFO_RANGE_FRAMES)
 _CONTROL = _one_of("queued", "arrival")
 _SPEED_FACTOR = _float_in(*SIM_SLOWDOWN_RANGE)
@@ -150,6 +160,8 @@ _OPTIONS: dict[str, tuple[str, Callable[[str, str], object]]] = {
     "noise": ("noise_rate", _float_in(*SIM_RATE_RANGE)),
     "seed": ("seed", _int_in(*SIM_SEED_RANGE)),
     "profile": ("profile", _path),
+    "write_buffer_bytes": ("write_buffer_bytes", _int_in(*SIM_WRITE_BUFFER_RANGE_BYTES)),
+    "read_granularity_ms": ("read_granularity_s", _ms_as_s(*SIM_READ_GRANULARITY_RANGE_MS)),
     "fifo": ("fifo_frames", _FIFO),  # alias of fifo_frames
     "control": ("control_frames", _CONTROL),  # alias of control_frames
     "slowdown": ("speed_factor", _SPEED_FACTOR),  # alias of speed_factor
@@ -185,6 +197,8 @@ def parse_sim_url(url: str, baud: int | None = None) -> SimOptions:
             values[target] = parse(name, texts[0])
         if values.get("virtual_clock") and values.get("time_scale", 1.0) != 1.0:
             raise ValueError("speed has no meaning with clock=virtual (the clock waits for nobody)")
+        if values.get("virtual_clock") and values.get("read_granularity_s", 0.0):
+            raise ValueError("read_granularity_ms has no meaning with clock=virtual (its reads take each burst as it lands)")
         if baud is not None:
             values.setdefault("baud", baud)
         return SimOptions(**values)
@@ -369,10 +383,31 @@ class Serial(SerialBase):
     # --- writing -------------------------------------------------------------------------------
 
     def write(self, data) -> int:
-        """Queue the bytes on the simulated line at the current model time; never blocks."""
+        """Queue the bytes on the simulated line at the current model time; with a write buffer
+        (``write_buffer_bytes``) what does not fit waits until it does — the wall clock sleeps
+        (``SerialTimeoutException`` past ``write_timeout``, as pyserial's ports raise), a virtual
+        clock moves on — else never blocks."""
         data = to_bytes(data)
-        self._check_open().write(data)
-        return len(data)
+        total = len(data)
+        arm = self._check_open()
+        deadline = None if self._write_timeout is None else time.monotonic() + self._write_timeout
+        while True:
+            room = arm.write_room()
+            if room is None or room >= len(data):
+                arm.write(data)
+                return total
+            if room:
+                arm.write(data[:room])
+                data = data[room:]
+            wait_s = arm.model_seconds_until_room(len(data))
+            if self.virtual_clock is not None:
+                self.virtual_clock.advance_to(self.virtual_clock.now_s + max(wait_s, 1e-9))
+                continue
+            pause = wait_s / arm.time_scale
+            if deadline is not None and time.monotonic() + pause > deadline:
+                raise SerialTimeoutException("Write timeout")
+            if self._wake.wait(pause) and not self.is_open:
+                raise PortNotOpenError()
 
     @property
     def out_waiting(self) -> int:

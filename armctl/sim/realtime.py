@@ -8,6 +8,11 @@ can share it.  It never sleeps itself: it says how long the caller may sleep bef
 status byte is due (``wall_seconds_until_output``), and the edges (``protocol_sim``,
 ``bridge``) do the waiting with whatever primitive suits them.
 
+The line's edges a real port has are options of the arm (``SimOptions``) and live here, where
+real time is: ``read_granularity_s`` holds status bytes back to the next tick (a USB adapter's
+latency timer), ``write_buffer_bytes`` bounds what the host may hand over ahead of the wire
+(``write_room``; the edges block a writer while it is full, as a tty does).
+
 ``VirtualClock`` replaces the wall clock when the waiting itself is simulated: ``Link`` moves
 it forward instead of sleeping, so a job runs in milliseconds and the same run gives the same
 bytes at the same model times on any machine, however loaded (the end-to-end tests need that).
@@ -15,12 +20,14 @@ bytes at the same model times on any machine, however loaded (the end-to-end tes
 
 from __future__ import annotations
 
+import math
 import threading
 import time
 from typing import Callable
 
 from ..clock import VirtualClock  # noqa: F401  (the clock=virtual port's clock; imported from here)
 from .model import SimulatedArm
+from .wire import TIME_EPSILON_S
 
 
 class RealtimeArm:
@@ -32,6 +39,12 @@ class RealtimeArm:
         self._clock = clock
         self._start_wall_s = clock() - model.now_s / self.time_scale
         self.lock = threading.RLock()
+        # The line's edges (``SimOptions``): status bytes held until the next read tick, and the
+        # host's write buffer
+        self.read_granularity_s = model.options.read_granularity_s
+        self.write_buffer_bytes = model.options.write_buffer_bytes
+        self._held = bytearray()
+        self._release_s: float | None = None  # the tick the held bytes reach the host at
 
     @property
     def clock_start_s(self) -> float:
@@ -47,9 +60,37 @@ class RealtimeArm:
             self.model.write(data, self.model_now_s())
 
     def poll(self) -> bytes:
-        """Run the arm up to now; the status bytes that have reached the host since last time."""
+        """Run the arm up to now; the status bytes that have reached the host since last time —
+        with a read granularity, at the first tick (a multiple of it, model time) at or after
+        they landed, all those held until then at once."""
         with self.lock:
-            return self.model.advance(self.model_now_s())
+            now_s = self.model_now_s()
+            data = self.model.advance(now_s)
+            tick_s = self.read_granularity_s
+            if not tick_s:
+                return data
+            if data:
+                self._held += data
+                if self._release_s is None:
+                    self._release_s = math.ceil(now_s / tick_s - TIME_EPSILON_S) * tick_s
+            if self._release_s is None or now_s < self._release_s - TIME_EPSILON_S:
+                return b""
+            data, self._held, self._release_s = bytes(self._held), bytearray(), None
+            return data
+
+    def write_room(self) -> int | None:
+        """Bytes the host's write buffer takes now (None: no limit)."""
+        limit = self.write_buffer_bytes
+        if limit is None:
+            return None
+        with self.lock:
+            return max(0, limit - self.model.host_bytes_in_flight(self.model_now_s()))
+
+    def model_seconds_until_room(self, want_bytes: int) -> float:
+        """Model seconds until the write buffer takes ``want_bytes`` (at most its size) more."""
+        with self.lock:
+            limit = self.write_buffer_bytes
+            return max(0.0, self.model.host_room_at_s(limit, min(want_bytes, limit)) - self.model_now_s())
 
     def out_waiting(self) -> int:
         """Host bytes written but not yet fully on the wire."""
@@ -60,6 +101,11 @@ class RealtimeArm:
         """Wall seconds until the next status byte reaches the host (None: never)."""
         with self.lock:
             due_s = self.model.next_output_time()
+            tick_s = self.read_granularity_s
+            if self._release_s is not None:
+                due_s = self._release_s  # (what lands before the tick goes with it)
+            elif due_s is not None and tick_s:
+                due_s = math.ceil(due_s / tick_s - TIME_EPSILON_S) * tick_s
             if due_s is None:
                 return None
             return max(0.0, (due_s - self.model_now_s()) / self.time_scale)
