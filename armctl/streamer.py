@@ -462,7 +462,9 @@ class Streamer:
         if when <= now:
             self.write_reason = WaitReason.READY
         else:
-            self.write_reason = WaitReason.LEAD if lead_ok_at >= wire_ok_at else WaitReason.WIRE
+            # a tie is the wire's: the frame before must leave it first whatever the lead says (a frame
+            # written ahead waits for the one before to begin, which is when the line frees in virtual time)
+            self.write_reason = WaitReason.LEAD if lead_ok_at > wire_ok_at + 1e-9 else WaitReason.WIRE
         return when
 
     def _arm_ends(self) -> list[float] | None:

@@ -144,6 +144,9 @@ def _sim_options():
             if name not in ("clock", "control", "control_frames", "status_xyz_frame", "profile")]
 
 
+WHOLE_NUMBER_OPTIONS = ("baud", "fifo", "fifo_frames", "seed", "write_buffer_bytes")  # read with int(): blanks stripped
+
+
 def _sim_accepts(name: str, text: str) -> bool:
     from armctl import limits
 
@@ -151,7 +154,8 @@ def _sim_accepts(name: str, text: str) -> bool:
               "fifo": limits.SIM_FIFO_RANGE_FRAMES, "seed": limits.SIM_SEED_RANGE, "loss": limits.SIM_RATE_RANGE,
               "corrupt": limits.SIM_RATE_RANGE, "noise": limits.SIM_RATE_RANGE,
               "speed_factor": limits.SIM_SLOWDOWN_RANGE, "fifo_frames": limits.SIM_FIFO_RANGE_FRAMES,
-              "link_scale": limits.SIM_LINK_SCALE_RANGE}
+              "link_scale": limits.SIM_LINK_SCALE_RANGE, "write_buffer_bytes": limits.SIM_WRITE_BUFFER_RANGE_BYTES,
+              "read_granularity_ms": limits.SIM_READ_GRANULARITY_RANGE_MS}
     low, high = ranges[name]
     if not text.isascii():  # "١" is a number to int() and float(), not in a URL
         return False
@@ -174,21 +178,22 @@ def test_a_sim_option_is_parsed_or_refused_naming_it(name, text):
     from armctl.sim.protocol_sim import SimOptionError, parse_sim_url
 
     url = f"sim://?{name}={urllib.parse.quote(text)}"
-    if _sim_accepts(name, text.strip() if name in ("baud", "fifo", "fifo_frames", "seed") else text):
+    if _sim_accepts(name, text.strip() if name in WHOLE_NUMBER_OPTIONS else text):
         parse_sim_url(url)
     else:
         with pytest.raises(SimOptionError, match=rf"^{name} must be"):
             parse_sim_url(url)
 
 
-@pytest.mark.parametrize("name", [n for n in _sim_options() if n != "speed"])  # speed: no virtual clock
+# speed and read_granularity_ms: no virtual clock (each refused with it, whatever its value: its own test)
+@pytest.mark.parametrize("name", [n for n in _sim_options() if n not in ("speed", "read_granularity_ms")])
 @settings(max_examples=8, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
 @given(text=st.sampled_from(SPECIAL_NUMBERS))
 def test_every_port_command_refuses_a_bad_sim_option_with_exit_2(name, text, script):
     url = f"{FAST_SIM}&{name}={urllib.parse.quote(text)}"
     result = _invoke(["status", "--once", "--port", url, "--timeout", "0.5"])
     _no_traceback(result)
-    accepted = _sim_accepts(name, text.strip() if name in ("baud", "fifo", "fifo_frames", "seed") else text)
+    accepted = _sim_accepts(name, text.strip() if name in WHOLE_NUMBER_OPTIONS else text)
     if accepted:
         assert result.exit_code in (0, 1), result.output
     else:
