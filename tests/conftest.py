@@ -144,7 +144,19 @@ def _own_calibration_store(tmp_path_factory, monkeypatch):
 # --- the real-time tests and Ctrl-C ------------------------------------------------------------
 
 
+# The few tests that take a worker for 10-70 s (the journal property's 2,000 examples, a probe on the
+# wall clock at 115200 through a pty, a server killed and resumed, the bench read from two
+# directories): run first, so that ``pytest -n 4`` spreads them over the workers at the start
+# instead of leaving one to finish alone at the end.
+LONG_FIRST = (
+    "test_journal_property.py::", "test_probe_rates.py::test_installed_command_through_armctl_sim_pty_at_115200",
+    "test_server_api.py::test_a_job_survives_a_crashed_server", "test_calibration_cli.py::test_bench_reads_no_configuration",
+    "test_journal_wal.py::test_the_installed_command_resumes_after_ctrl_c",
+)
+
+
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    items.sort(key=lambda item: not any(name in item.nodeid for name in LONG_FIRST))  # stable: the rest keep their order
     if not os.environ.get("ARMCTL_SKIP_REALTIME"):
         return
     skip = pytest.mark.skip(reason="ARMCTL_SKIP_REALTIME is set")
