@@ -144,6 +144,25 @@ def _own_calibration_store(tmp_path_factory, monkeypatch):
 # --- the real-time tests and Ctrl-C ------------------------------------------------------------
 
 
+def pytest_sessionstart(session: pytest.Session) -> None:
+    """Compile the package once, before the tests start armctl in fresh processes (hundreds of
+    them): where PYTHONDONTWRITEBYTECODE is set (CI machines, containers), Python never writes its
+    bytecode, and each fresh ``python -m armctl`` compiled every module it imports again — 0.3 s of
+    CPU against 0.08 s with the bytecode there (``armctl lint`` of one line).  compileall writes it
+    whatever that variable says; on the xdist controller only."""
+    if hasattr(session.config, "workerinput"):
+        return
+    import compileall
+
+    compileall.compile_dir(str(Path(armctl_package_dir())), quiet=1)
+
+
+def armctl_package_dir() -> str:
+    import armctl
+
+    return os.path.dirname(armctl.__file__)
+
+
 # The few tests that take a worker for 10-70 s (the journal property's 2,000 examples, a probe on the
 # wall clock at 115200 through a pty, a server killed and resumed, the bench read from two
 # directories): run first, so that ``pytest -n 4`` spreads them over the workers at the start
