@@ -104,12 +104,12 @@ class AsyncArm:
     @property
     def profile(self):
         """The arm's ``Profile`` (the one its checks use)."""
-        return self.arm._profile
+        return self.arm.profile
 
     @property
     def is_virtual(self) -> bool:
         """A ``sim://?clock=virtual`` port: model time moves only while someone waits on it."""
-        return self.arm._link.is_virtual
+        return self.arm.is_virtual
 
     async def __aenter__(self) -> AsyncArm:
         return self
@@ -178,24 +178,10 @@ class AsyncArm:
         return await self._call(self.arm.status, timeout)
 
     async def status_json(self, timeout: float | None = None) -> dict:
-        """The arm's decoded report with the keys of ``armctl status --once --json``.  On a
-        wall-clock port it is read at once, even while a job runs (the link's reader thread
-        keeps it; the read takes the link's lock); on a virtual-clock port it is read by the
-        arm's worker (model time moves only there), so it waits for a running job."""
-        from .errors import ArmctlError
-
-        arm = self.arm
-        timeout_s = arm.status_timeout_s if timeout is None else timeout
-
-        def read() -> dict:
-            link = arm._link
-            if not link.wait_until(lambda s: s.complete, timeout_s):
-                raise ArmctlError(f"no complete status from {link.url} within {timeout_s:g} s")
-            return link.snapshot()[0].to_json()
-
-        if self.is_virtual:
-            return await self._call(arm._call, read)
-        return await self._call(read)
+        """The arm's decoded report with the keys of ``armctl status --once --json``
+        (``Arm.status_json``): on a wall-clock port read at once, even while a job runs; on a
+        virtual-clock port by the arm's worker (model time moves only there), after a running job."""
+        return await self._call(self.arm.status_json, timeout, at_once=True)
 
     async def pause(self) -> bool:
         return await self._call(self.arm.pause)

@@ -570,6 +570,17 @@ class Arm:
     def baud(self) -> int:
         return self._baud
 
+    @property
+    def profile(self) -> Profile:
+        """The arm's profile: the one its checks, plans and summaries use (with this arm's kept
+        calibration, ``armctl.calibration``)."""
+        return self._profile
+
+    @property
+    def is_virtual(self) -> bool:
+        """A ``sim://?clock=virtual`` port: model time moves only while the arm's worker waits."""
+        return self._link.is_virtual
+
     def __enter__(self) -> Arm:
         return self
 
@@ -704,10 +715,7 @@ class Arm:
         timeout_s = self.status_timeout_s if timeout is None else _check_timeout(timeout, "STATUS_TIMEOUT_RANGE_S")
 
         def read() -> ArmStatus:
-            link = self._link
-            if not link.wait_until(lambda s: s.complete, timeout_s):
-                raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s")
-            state, now = link.snapshot()[0], link.clock()
+            state, now = self._complete_state(timeout_s), self._link.clock()
 
             def age(kinds) -> float | None:
                 seen = [state.last_seen[k] for k in kinds if k in state.last_seen]
@@ -719,6 +727,27 @@ class Arm:
                              ages_s={name: age(kinds) for name, kinds in _AGE_KINDS.items()})
 
         return self._call(read)
+
+    def status_json(self, timeout: float | None = None, *, at_once: bool = False) -> dict:
+        """The arm's decoded report with the keys of ``armctl status --once --json``, once every
+        status kind has been seen (``JobFailed`` otherwise, within ``timeout`` seconds).  After
+        everything queued on the worker — or, ``at_once``, read from the link's reader thread now,
+        even while a job runs (a wall-clock port only: on a virtual clock model time moves only on
+        the worker, so there it waits its turn all the same)."""
+        timeout_s = self.status_timeout_s if timeout is None else _check_timeout(timeout, "STATUS_TIMEOUT_RANGE_S")
+
+        def read() -> dict:
+            return self._complete_state(timeout_s).to_json()
+
+        return read() if at_once and not self.is_virtual else self._call(read)
+
+    def _complete_state(self, timeout_s: float):
+        """A copy of the link's state once every status kind has been seen (``JobFailed`` after
+        ``timeout_s``): what ``status`` and ``status_json`` read."""
+        link = self._link
+        if not link.wait_until(lambda s: s.complete, timeout_s):
+            raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s")
+        return link.snapshot()[0]
 
     def pause(self) -> bool:
         """Pause the arm.  During a job (``run``, or a ``move`` with ``wait=False``) this asks

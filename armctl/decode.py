@@ -28,7 +28,7 @@ from collections import deque
 from dataclasses import dataclass
 from typing import BinaryIO, Iterator
 
-from .inputs import MAX_INPUT_BYTES, InputTooLarge
+from .inputs import MAX_INPUT_BYTES, read_blocks_bounded
 from .protocol import CONTROL_HEAD, FRAME_SIZE, MOTION_HEAD, STATUS_HEAD, STATUS_SIZE
 from .status_frames import Chunk, _chunk_at
 
@@ -109,7 +109,7 @@ class FrameScanner:
 def decode_stream(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES) -> Iterator[Decoded]:
     """Every chunk of ``stream`` in order (``InputTooLarge`` past ``limit_bytes``, ``NotHex``
     for hex text that stops being hex beyond its first block)."""
-    blocks = _bounded_blocks(stream, name, limit_bytes)
+    blocks = read_blocks_bounded(stream, name, limit_bytes, BLOCK_BYTES)
     first = b""
     for block in blocks:  # the probe: up to PROBE_BYTES, or the whole input
         first += block
@@ -123,22 +123,6 @@ def decode_stream(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTE
         yield from (Decoded(chunk) for chunk in _scan_all(_hex_bytes(first, rest)))
     else:
         yield from (Decoded(chunk) for chunk in _scan_all(_chain(first, rest)))
-
-
-def _bounded_blocks(stream: BinaryIO, name: str, limit_bytes: int) -> Iterator[bytes]:
-    from .inputs import _file_size
-
-    if _file_size(stream) > limit_bytes:  # a regular file: refused before anything is printed
-        raise InputTooLarge.beyond(name, limit_bytes)
-    total = 0
-    while True:
-        block = stream.read(BLOCK_BYTES)
-        if not block:
-            return
-        total += len(block)
-        if total > limit_bytes:
-            raise InputTooLarge.beyond(name, limit_bytes)
-        yield block
 
 
 def _chain(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:

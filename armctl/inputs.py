@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import os
 import stat
-from typing import BinaryIO
+from typing import BinaryIO, Iterator
 
 from .errors import ArmctlError
 
@@ -72,6 +72,24 @@ def read_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES
         if total > limit_bytes:
             raise InputTooLarge.beyond(name, limit_bytes)
     return b"".join(chunks)
+
+
+def read_blocks_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES,
+                        block_bytes: int = _CHUNK_BYTES) -> Iterator[bytes]:
+    """``read_bounded`` for a reader that streams (``armctl decode``): ``stream`` in blocks of at
+    most ``block_bytes``, and ``InputTooLarge`` as soon as it is longer than ``limit_bytes`` — at
+    once, before any block, for a regular file already that long (nothing printed for it)."""
+    if _file_size(stream) > limit_bytes:
+        raise InputTooLarge.beyond(name, limit_bytes)
+    total = 0
+    while True:
+        block = stream.read(block_bytes)
+        if not block:
+            return
+        total += len(block)
+        if total > limit_bytes:
+            raise InputTooLarge.beyond(name, limit_bytes)
+        yield block
 
 
 def _file_size(stream) -> int:
