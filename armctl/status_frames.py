@@ -5,7 +5,10 @@ lint, estimate) does not need, kept apart so that such a command does not build 
 frozen dataclasses at every start (issue 13: start-up).  ``armctl.protocol`` still offers
 every name defined here (its module ``__getattr__`` imports this module on first use; the
 import system's lock defines the classes once even when two threads ask at once), so callers
-import from either.  The rules are protocol.py's: bytes and nothing else, no I/O.
+import from either.  This module imports the protocol's parts below the façade (the wire's
+numbers and field checks from armctl/frame_fields.py, ``decode_command`` from
+armctl/commands.py), never the façade itself: no cycle.  The rules are protocol.py's: bytes
+and nothing else, no I/O.
 """
 
 from __future__ import annotations
@@ -16,9 +19,10 @@ from dataclasses import dataclass, fields
 from typing import ClassVar, Iterator
 
 from .errors import FieldError, FrameError
-from .protocol import (
+from .commands import AnyCommand, decode_command
+from .frame_fields import (
     CONTROL_HEAD, CONTROL_TAIL, FLOAT_CODEC, FRAME_SIZE, MOTION_HEAD, MOTION_TAIL, STATUS_HEAD, STATUS_SIZE, STATUS_TAIL,
-    STATUS_WORD_CODEC, AnyCommand, Command, _f32, _int, decode_command, f32_repr,
+    STATUS_WORD_CODEC, Command, f32_field, f32_repr, int_field,
 )
 
 # --- arm → host status frames -----------------------------------------------------------------
@@ -228,8 +232,8 @@ class PauseStatus(StatusFrame):
     pwm_us: int
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "pause_state", _int("PauseStatus", "pause_state", self.pause_state, 0, 255))
-        object.__setattr__(self, "pwm_us", _int("PauseStatus", "pwm_us", self.pwm_us, -32768, 32767))
+        object.__setattr__(self, "pause_state", int_field("PauseStatus", "pause_state", self.pause_state, 0, 255))
+        object.__setattr__(self, "pwm_us", int_field("PauseStatus", "pwm_us", self.pwm_us, -32768, 32767))
 
     @property
     def paused(self) -> bool:
@@ -250,7 +254,7 @@ class _FloatStatus(StatusFrame):
     value: float
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "value", _f32(type(self).__name__, "value", self.value))
+        object.__setattr__(self, "value", f32_field(type(self).__name__, "value", self.value))
 
     def _data(self) -> bytes:
         return FLOAT_CODEC.pack(self.value)
@@ -260,7 +264,7 @@ class _FloatStatus(StatusFrame):
         value = FLOAT_CODEC.unpack_from(data, 0)[0]
         if not math.isfinite(value):
             raise FieldError(f"{cls.NAME} carries {f32_repr(value)}, not a finite number")
-        return _as_read(cls, value=value)  # a finite float32 already: what _f32 would give
+        return _as_read(cls, value=value)  # a finite float32 already: what f32_field would give
 
 
 @dataclass(frozen=True)
@@ -288,7 +292,7 @@ class FileStatus(StatusFrame):
     raw: int
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "raw", _int("FileStatus", "raw", self.raw, 0, 0xFFFF))
+        object.__setattr__(self, "raw", int_field("FileStatus", "raw", self.raw, 0, 0xFFFF))
 
     def _data(self) -> bytes:
         return self.raw.to_bytes(2, "big")
