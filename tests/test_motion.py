@@ -435,14 +435,14 @@ def test_planner_chains_segments_end_to_start(points, factor):
 
 
 def _composed_line_distance(segment, p):
-    """_LineSegment._distance_xyz as it was composed of the vector helpers (before it was
+    """LineSegment._distance_xyz as it was composed of the vector helpers (before it was
     written out for the streamer's every position report): the reference it must equal."""
-    from armctl import motion
+    from armctl.motion_paths import dot3, norm3, sub3
 
     if not segment.length:
-        return motion._norm(motion._sub(p, segment._p0)), 0.0
-    u = min(max(motion._dot(motion._sub(p, segment._p0), segment._d) / (segment.length * segment.length), 0.0), 1.0)
-    return motion._norm(motion._sub(p, segment._point(u))), u
+        return norm3(sub3(p, segment._p0)), 0.0
+    u = min(max(dot3(sub3(p, segment._p0), segment._d) / (segment.length * segment.length), 0.0), 1.0)
+    return norm3(sub3(p, segment._point(u))), u
 
 
 _ANY_FLOAT = st.one_of(st.floats(-1e3, 1e3), st.sampled_from([0.0, -0.0, 1e-300, 1e300, math.inf, -math.inf, math.nan]))
@@ -452,9 +452,9 @@ _ANY_FLOAT = st.one_of(st.floats(-1e3, 1e3), st.sampled_from([0.0, -0.0, 1e-300,
 @given(st.tuples(_ANY_FLOAT, _ANY_FLOAT, _ANY_FLOAT), st.tuples(_ANY_FLOAT, _ANY_FLOAT, _ANY_FLOAT),
        st.one_of(st.floats(1e-3, 400.0), st.sampled_from([100.0, 1e-200])), st.tuples(_ANY_FLOAT, _ANY_FLOAT, _ANY_FLOAT))
 def test_a_line_distance_is_the_vector_helpers_float_for_float(p0, d, length, p):
-    from armctl.motion import _LineSegment
+    from armctl.motion import LineSegment
 
-    segment = _LineSegment.__new__(_LineSegment)  # only the fields _distance_xyz reads
+    segment = LineSegment.__new__(LineSegment)  # only the fields _distance_xyz reads
     segment._p0, segment._d, segment.length = p0, d, length
 
     def outcome(distance_xyz):
@@ -463,7 +463,7 @@ def test_a_line_distance_is_the_vector_helpers_float_for_float(p0, d, length, p)
         except ZeroDivisionError:  # a length whose square underflows: both divide by zero
             return "ZeroDivisionError"
 
-    expected, got = outcome(_composed_line_distance), outcome(_LineSegment._distance_xyz)
+    expected, got = outcome(_composed_line_distance), outcome(LineSegment._distance_xyz)
     if isinstance(expected, str) or isinstance(got, str):
         assert got == expected
     else:  # the same float (NaN as NaN), sign of zero included
