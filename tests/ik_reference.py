@@ -10,7 +10,9 @@ from __future__ import annotations
 import math
 from typing import Iterator, Sequence
 
-from armctl.kinematics import JOINT_COUNT, Links, Unreachable, _arm, _fit, _flange_of, _mul, wrap_deg
+from armctl.kinematics import JOINT_COUNT, Links, Unreachable, wrap_deg
+from armctl.kinematics_frames import arm_rotation as _arm, rotation_product as _mul
+from armctl.kinematics_inverse import _fit, flange_of as _flange_of
 
 
 def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None = None) -> list[tuple[float, ...]]:

@@ -21,7 +21,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import ik_reference
-from armctl.kinematics import Links, Unreachable, _fit, _fitted, forward, has_solution, inverse, solutions, wrap_deg
+from armctl.kinematics import Links, Unreachable, forward, has_solution, inverse, solutions, wrap_deg
+from armctl.kinematics_inverse import _fit, _fitted
 
 LINKS = Links(base_height_mm=150, shoulder_offset_mm=30, upper_arm_mm=180, elbow_offset_mm=30, forearm_mm=180,
               tool_mm=60)

@@ -18,7 +18,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import ik_reference
-from armctl.kinematics import Kinematics, Unreachable, _fit, _fitted, wrap_deg
+from armctl.kinematics import Kinematics, Unreachable, wrap_deg
+from armctl.kinematics_inverse import _fit, _fitted
 from armctl.profile import default_profile
 
 _PROFILE = default_profile()

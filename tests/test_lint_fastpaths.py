@@ -24,7 +24,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from armctl import kinematics
+from armctl import kinematics_regions
 from armctl.kinematics import (
     SolvableCells, Unreachable, ball_has_solution, box_problem, forward, has_solution, inverse,
 )
@@ -156,7 +156,7 @@ def _boundary_walk(rng, steps, attitudes):
 @pytest.mark.parametrize("box", [None, PROFILE.workspace, SMALL_BOX], ids=["no box", "box", "small box"])
 def test_solvable_cells_answer_as_has_solution_on_walks_across_the_edge(monkeypatch, cell_mm, limits, box):
     proofs = []
-    monkeypatch.setattr(kinematics, "ball_has_solution",
+    monkeypatch.setattr(kinematics_regions, "ball_has_solution",
                         lambda *args: proofs.append(ball_has_solution(*args)) or proofs[-1])
     rng = random.Random(int(cell_mm) * 7 + len(limits[0]))
     attitudes = [(180.0, 0.0, 0.0), (180.0, 0.0, 45.0), (150.0, 20.0, -30.0), (90.0, 0.0, 0.0), (180.0, 89.0, 0.0),
@@ -225,7 +225,7 @@ def _slow_lint(monkeypatch, *args, **kwargs):
     with monkeypatch.context() as patch:
         patch.setattr(SolvableCells, "proven", lambda self, pose, near: False)  # every target by box_problem and has_solution
         patch.setattr(Planner, "feed_s", lambda self, command: self.feed(command).duration_s)
-        patch.setattr(kinematics, "ball_has_solution", lambda *a: pytest.fail("the slow lint proved a cube"))
+        patch.setattr(kinematics_regions, "ball_has_solution", lambda *a: pytest.fail("the slow lint proved a cube"))
         return lint_lines(*args, **kwargs)
 
 
