@@ -5,7 +5,7 @@ Strategy: Hypothesis writes the files and options a user controls — an arm pro
 (``--profile``), an armctl.toml (in the working directory), the options of a ``sim://`` URL
 (``--port``, with ``profile=`` naming a generated file too), scripts with huge repeat counts,
 lint rule codes and prefixes in ``--select``/``--ignore`` and in ``[lint]`` — each either as raw
-bytes or as TOML built from the real schemas (``armctl.profile._SCHEMA``, ``CONFIG_SCHEMA``, the
+bytes or as TOML built from the real schemas (``armctl.profile.PROFILE_SCHEMA``, ``CONFIG_SCHEMA``, the
 jog settings, ``sim://``'s option table), so most examples get past the TOML parser to the checks
 behind it, with values from the edges: whole numbers past 64 bits, floats near the float32 and
 float64 limits, NaN, inf, strings with NUL or a BOM, lists nested deeper than any setting.  The
@@ -58,12 +58,12 @@ def _schema_keys() -> dict[str, list[str]]:
 
     from armctl.jog.settings import JogSettings
     from armctl.lint.command import CONFIG_KEYS
-    from armctl.profile import _SCHEMA, CONFIG_SCHEMA
+    from armctl.profile import PROFILE_SCHEMA, CONFIG_SCHEMA
 
-    sections = {name: list(rule) for name, rule in _SCHEMA.items() if isinstance(rule, dict)}
+    sections = {name: list(rule) for name, rule in PROFILE_SCHEMA.items() if isinstance(rule, dict)}
     sections["jog"] = [f.name for f in fields(JogSettings)] + ["keys"]
     sections["lint"] = list(CONFIG_KEYS)
-    sections[""] = [name for name, rule in _SCHEMA.items() if not isinstance(rule, dict)] + list(CONFIG_SCHEMA)
+    sections[""] = [name for name, rule in PROFILE_SCHEMA.items() if not isinstance(rule, dict)] + list(CONFIG_SCHEMA)
     return sections
 
 

@@ -26,7 +26,7 @@ from hypothesis import strategies as st
 
 from armctl.cli import main
 from armctl.cli_types import Bounded
-from armctl.profile import _SCHEMA, find_config
+from armctl.profile import PROFILE_SCHEMA, find_config
 
 from cli_catalogue import numeric_options, quick_args
 
@@ -287,10 +287,10 @@ def test_no_port_anywhere_is_the_simulator_and_says_so():
 
 def _profile_keys():
     """(section, key) of every numeric profile key, read from the schema."""
-    from armctl.profile import _default_data
+    from armctl.profile import default_profile_data
 
-    defaults, keys = _default_data(), []
-    for section, rule in _SCHEMA.items():
+    defaults, keys = default_profile_data(), []
+    for section, rule in PROFILE_SCHEMA.items():
         if isinstance(rule, dict):
             for key in rule:
                 # a boolean or a word ([connector] kinematics_verified, control_frames) is not a number
@@ -309,9 +309,9 @@ TOML_VALUES = st.one_of(
 
 def _toml_line(section: str, key: str, value: str) -> str:
     """Put ``value`` where a number goes: the key itself, one end of a pair, one entry of a list."""
-    from armctl.profile import _default_data
+    from armctl.profile import default_profile_data
 
-    current = _default_data()[section][key]
+    current = default_profile_data()[section][key]
     if isinstance(current, tuple):
         items = [repr(v) for v in current]
         items[0] = value
@@ -399,7 +399,7 @@ def _edge_or_inside(low: float, high: float):
 
 def test_the_edges_listed_here_are_the_schema_s():
     for (section, key), (low, high) in SPEED_AND_TIMING_EDGES.items():
-        rule = _SCHEMA[section][key]
+        rule = PROFILE_SCHEMA[section][key]
         assert rule(low) == low and rule(high) == high
         for outside in (low - 1e-9 * max(1.0, abs(low)) - 1e-12, high * (1 + 1e-9)):
             with pytest.raises(Exception):
