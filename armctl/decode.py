@@ -28,14 +28,14 @@ from collections import deque
 from dataclasses import dataclass
 from typing import BinaryIO, Iterator
 
+from .formats import DIRECTIONS, looks_like_hex, looks_like_log  # noqa: F401 - DIRECTIONS: the log's words
 from .inputs import MAX_INPUT_BYTES, read_blocks_bounded
 from .protocol import CONTROL_HEAD, FRAME_SIZE, MOTION_HEAD, STATUS_HEAD, STATUS_SIZE
-from .status_frames import Chunk, _chunk_at
+from .status_frames import Chunk, chunk_at
 
 PROBE_BYTES = 1 << 16  # an input up to this size is judged whole, as before streaming
 BLOCK_BYTES = 1 << 16
 JUNK_PIECE_BYTES = 1 << 16  # a longer run of stray bytes comes out in pieces of this size
-DIRECTIONS = {"tx": "host→arm", "rx": "arm→host"}  # the log's words → what decode prints
 
 _COMMAND_HEADS = frozenset((MOTION_HEAD, CONTROL_HEAD))
 _HEADS = _COMMAND_HEADS | {STATUS_HEAD}
@@ -82,7 +82,7 @@ class FrameScanner:
             ahead = size - position
             if not final and (ahead < FRAME_SIZE if buffer[position] in _COMMAND_HEADS else ahead < STATUS_SIZE):
                 break  # what lies here depends on bytes not fed yet
-            chunk = _chunk_at(buffer, position) if buffer[position] in _HEADS else None
+            chunk = chunk_at(buffer, position) if buffer[position] in _HEADS else None
             if chunk is None:
                 # no frame starts before the next head byte: skip to it at C speed (/dev/zero)
                 found = _NEXT_HEAD.search(buffer, position + 1)
@@ -141,8 +141,6 @@ def _scan_all(blocks: Iterator[bytes]) -> Iterator[Chunk]:
 def _looks_like_hex(first: bytes, ended: bool) -> bool:
     """Only hex digits and whitespace (an even count of digits when the whole input is here)."""
     if ended:
-        from .formats import looks_like_hex
-
         return looks_like_hex(first)
     return all(byte in _HEX_DIGITS or byte in _WHITESPACE for byte in first)
 
@@ -168,8 +166,6 @@ def _hex_bytes(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:
 
 def _looks_like_log(first: bytes, ended: bool) -> bool:
     if ended:
-        from .formats import looks_like_log
-
         return looks_like_log(first)
     return first.lstrip()[:1] == b"{"
 

@@ -177,8 +177,6 @@ def summary_line(chunks: Iterable[Chunk]) -> str:
 def describe_decoded(item) -> str:
     """``describe_chunk`` of a ``decode.Decoded``, after its time and direction when a log gave them:
     ``    0.030 s  arm→host      0  status   position …``."""
-    from .decode import DIRECTIONS
-
     line = describe_chunk(item.chunk)
     if item.t_s is None and item.direction is None:
         return line
@@ -195,4 +193,7 @@ def decoded_record(item) -> dict:
     return record
 
 
+# A log record's direction (``dir``, run --log) → what decode prints and what its JSON says.  Here,
+# with the other input formats: armctl/decode.py reads the log's words from this table.
+DIRECTIONS = {"tx": "host→arm", "rx": "arm→host"}
 _JSON_DIRECTIONS = {"tx": "host->arm", "rx": "arm->host"}

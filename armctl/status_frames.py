@@ -502,7 +502,7 @@ def scan_frames(data: bytes) -> Iterator[Chunk]:
             yield Chunk(junk_start, data[junk_start:end])
 
     while position < len(data):
-        chunk = _chunk_at(data, position)
+        chunk = chunk_at(data, position)
         if chunk is None:
             position += 1
             continue
@@ -513,7 +513,9 @@ def scan_frames(data: bytes) -> Iterator[Chunk]:
     yield from junk_until(len(data))
 
 
-def _chunk_at(data: bytes, position: int) -> Chunk | None:
+def chunk_at(data: bytes, position: int) -> Chunk | None:
+    """The frame that starts at ``position`` of ``data`` (a Chunk), or None when none does: what
+    ``scan_frames`` and decode's block-by-block ``FrameScanner`` both decide at a head byte."""
     head = data[position]
     if head in (MOTION_HEAD, CONTROL_HEAD) and len(data) - position >= FRAME_SIZE:
         frame = data[position : position + FRAME_SIZE]
