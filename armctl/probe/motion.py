@@ -28,16 +28,17 @@ from ..kinematics import reach_problem
 from ..motion import PWM_CHANNEL_COUNT, ArmPose, MotionModel
 from ..protocol import JointMove, JointsHighStatus, LinearMove, PositionStatus
 from .plan import LIKELY, SURE, UNSURE, Finding, ProbeStop, Send
-from .steps import DOCUMENTED, READBACK_TIMEOUT_S, agreed_joints, settle, wait_until
+from .steps import (  # JOINT_SPEED_DEG_S, ARRIVED_DEG: shared with the restore step's return move
+    ARRIVED_DEG, DOCUMENTED, JOINT_SPEED_DEG_S, READBACK_TIMEOUT_S, agreed_joints, settle, wait_until,
+)
 
 JOINT_INDEX = 4  # joint 5: the wrist; the tool tip moves least
 JOINT_STEP_DEG = 5.0
-JOINT_SPEED_DEG_S = 2.0
 LINEAR_STEP_MM = 10.0
 LINEAR_SPEED_MM_MIN = 300.0
 SLOWEST_FACTOR = 4.0  # a move not finished by 4 × the model's time (+ a rotation) is given up
 KINEMATICS_TOLERANCE_MM = 1.0
-ARRIVED_DEG, ARRIVED_MM = 0.02, 0.15
+ARRIVED_MM = 0.15
 SAMPLE_MARGIN = 3  # samples within this many status steps of either end are left out
 # speed_tolerance's least excess over 1: what two small slow moves do not exercise (short fast
 # moves, loads).  0.05 keeps 10 ms moves confirmed by time at 91 % of the arm's rate, i.e. 1,000
@@ -294,20 +295,3 @@ def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding
                 f"{delay_s * 1000:.1f} ms, at least ±{SPEED_TOLERANCE_MARGIN:g}: the time bound confirms a frame "
                 f"once an arm {tolerance:g}x slower has finished it")
     return Finding("speed_tolerance", DOCUMENTED["speed_tolerance"], tolerance, evidence, SURE)
-
-
-def return_to_start(probe):
-    """After an interrupted move: a slow joint move back to the joints the arm started at."""
-    known = probe.known
-    joints = agreed_joints(probe, probe.now_s - 0.6)
-    if joints is not None and max(abs(a - b) for a, b in zip(joints, known.joints_deg)) <= ARRIVED_DEG:
-        return
-    landed_s = yield Send(JointMove(*known.joints_deg, pwm_us=known.pwm_us, speed_deg_s=JOINT_SPEED_DEG_S))
-
-    def back():
-        now = agreed_joints(probe, landed_s)
-        return now is not None and max(abs(a - b) for a, b in zip(now, known.joints_deg)) <= ARRIVED_DEG
-
-    ok = yield from wait_until(probe, landed_s + 30.0, back)
-    probe.notes.append("pose put back (joints as found)" if ok else "not restored: the arm did not report its start joints")
-

@@ -1,5 +1,7 @@
 """The probe's measurements that need no motion: listen, the encoding (H1/H8) and the status
-frame after G54, control-frame timing (H5), the status stream; and the restore step.
+frame after G54, control-frame timing (H5), the status stream; and the restore step, with the
+move back to the joints the arm started at after armctl/probe/motion.py's moves (motion.py
+imports from here, never the other way).
 
 Strategy: each step is a generator over ``plan.Probe`` (see plan.py).  Every frame sent here
 leaves the arm where it is: G54 changes only the frame of reference (read back through kind
@@ -45,6 +47,10 @@ ORIGIN_TOLERANCE_MM = 0.051  # one status step (0.1 mm) rounds to ±0.05
 STILL_TOLERANCE_DEG = 0.02
 STILL_SPAN_S = 0.5  # the joints read the same over at least this long: the arm is still
 GRIPPER_SPEED_DEG_S = 10.0  # joint speed of a PWM-only frame (nothing moves; the slot needs a value)
+# The probe's slow joint moves (motion.py's measuring moves, and the restore step's move back to
+# the joints the arm started at) and when a joint has arrived.
+JOINT_SPEED_DEG_S = 2.0
+ARRIVED_DEG = 0.02
 
 def _documented() -> dict:
     """The document's readings: the packaged profile's [connector] table (one place)."""
@@ -419,8 +425,6 @@ def restore(probe):
     yield from wait_until(probe, since_s + READBACK_TIMEOUT_S, lambda: _readings(probe, since_s) is not None)
     yield from resume_if_paused(probe, since_s)  # a pause toggle that was still queued has acted by now
     if known.moved:
-        from .motion import return_to_start
-
         yield from return_to_start(probe)
     if not _origin_is(probe, since_s, known.origin_mm):
         yield from put_origin_back(probe)
@@ -429,6 +433,22 @@ def restore(probe):
         yield from put_pwm_back(probe)
     yield from check_as_found(probe)
     return None
+
+
+def return_to_start(probe):
+    """After an interrupted move: a slow joint move back to the joints the arm started at."""
+    known = probe.known
+    joints = agreed_joints(probe, probe.now_s - 0.6)
+    if joints is not None and max(abs(a - b) for a, b in zip(joints, known.joints_deg)) <= ARRIVED_DEG:
+        return
+    landed_s = yield Send(JointMove(*known.joints_deg, pwm_us=known.pwm_us, speed_deg_s=JOINT_SPEED_DEG_S))
+
+    def back():
+        now = agreed_joints(probe, landed_s)
+        return now is not None and max(abs(a - b) for a, b in zip(now, known.joints_deg)) <= ARRIVED_DEG
+
+    ok = yield from wait_until(probe, landed_s + 30.0, back)
+    probe.notes.append("pose put back (joints as found)" if ok else "not restored: the arm did not report its start joints")
 
 
 def check_as_found(probe):
