@@ -1,8 +1,8 @@
 """How each statement runs against the modal state: moves, arcs, keywords, parameters.
 
 Strategy: ``StatementExecution`` is the half of ``Compilation`` (armctl/script/compiler.py)
-that gives statements their meaning; the other half reads lines, pairs blocks and keeps the
-diagnostics.  Moves take one of three paths, each starting from the same untouched state:
+that gives statements their meaning; the other half reads lines and keeps the diagnostics,
+and armctl/script/repeats.py runs repeat blocks.  Moves take one of three paths, each starting from the same untouched state:
 
   1. ``_plain_move`` — the hot path: a line the regex fast path scanned, in absolute mode,
      with every value known (``resolve_planned``: one plan per line shape, compiled once); no node is built.
@@ -11,7 +11,8 @@ diagnostics.  Moves take one of three paths, each starting from the same untouch
      runs its shape's plan as path 1 does; else the general ``resolve``; at the first sign of
      trouble the line takes path 3 (re-parsed with Lark if it has no word columns).
   3. ``_move_with_diagnostics`` — a Lark node with columns: report everything wrong with the
-     line, commit what it did set, poison what it failed to set.
+     line, commit what it did set, poison what it failed to set (armctl/script/move_diagnostics.py,
+     the base class ``MoveDiagnostics``).
 
 A G300 is held back (``_arc``) until its G301 arrives; anything else in between is reported
 and the half arc dropped, so no half arc is ever yielded.
@@ -24,7 +25,6 @@ list of statements to yield), ``_arc`` and the reporters ``_report``, ``_report_
 from __future__ import annotations
 
 import math
-from dataclasses import MISSING
 from typing import Optional
 
 from ..errors import FieldError
@@ -32,18 +32,15 @@ from ..protocol import GoToPose, MCode, PauseToggle, ResetArm, ResetConnector, R
 from . import messages
 from .expressions import POISONED, ExpressionError, Unavailable, evaluate, format_value
 from .grammar import LETTERS, parse_line
-from .modal import CARTESIAN, JOINTS, PWM_KEYS, UNKNOWN
+from .modal import CARTESIAN, JOINTS, UNKNOWN
+from .move_diagnostics import MoveDiagnostics
 from .nodes import Assignment, CodeLine, KeywordLine
 from .source import SourceSpan
 from .suggest import did_you_mean
 from .suggest import keyword as keyword_like
 from .statement import NO_WORDS, Statement
-from .statements import (
-    CODES, DISTANCE_MODES, PLACEHOLDER, PLACEHOLDERS, PWM_OF_ACTIVE_CHANNEL, MoveSpec, PlainPlan, Resolution, blame,
-    plain_plan, resolve,
-)
+from .statements import CODES, DISTANCE_MODES, MoveSpec, PlainPlan, plain_plan, resolve
 
-FLOAT32_MAX = 3.4028234663852886e38
 NOT_PLAIN = object()  # _plain_move: take the general path
 _new_statement = tuple.__new__  # _moved builds a Statement (a NamedTuple) from all its fields
 
@@ -78,7 +75,7 @@ def _plan(shape: tuple) -> Optional[PlainPlan]:
     return plan
 
 
-class StatementExecution:
+class StatementExecution(MoveDiagnostics):
     """Runs one parsed line (see the module docstring for what the host class provides)."""
 
     def _execute(self, number: int, text: str, node, loop: tuple) -> None:
@@ -203,68 +200,6 @@ class StatementExecution:
             node = parse_line(text)
         return self._move_with_diagnostics(number, text, node, spec, loop)
 
-    def _move_with_diagnostics(self, number: int, text: str, node: CodeLine, spec: MoveSpec, loop: tuple):
-        """``_move`` for a line with spans (Lark-parsed): report everything that is wrong."""
-        state, code = self.state, spec.code
-        written, failed = self._collect_words(number, text, node, spec)
-        resolution = resolve(spec, written, state)
-        poison = [] if resolution.ok else self._unresolved(number, text, node, spec, resolution, written)
-        command, bad_keys = self._build(number, text, node, spec, written, resolution.arguments)
-        values = state.values
-        values.update(resolution.updates)
-        for key in poison + bad_keys:
-            values[key] = POISONED
-        if spec.forgets:
-            state.forget(spec.forgets, (code, number))
-        statement = None
-        if command is not None and resolution.ok and not failed:
-            statement = Statement(command, self.file, number, node.column, node.end_column, text, code, written,
-                                  state.relative, loop)
-        return self._sequence(code, number, text, (node.column, node.end_column), statement)
-
-    def _build(self, number, text, node: CodeLine, spec: MoveSpec, written: dict, arguments: list):
-        """Build the command, reporting every value out of the protocol's range (E005).
-
-        Fields nothing could fill get a placeholder every field accepts, and so does each
-        field once reported, so that one pass checks every word of the line.  Returns the
-        command (None if anything was substituted) and the modal keys to poison."""
-        arguments = list(arguments)
-        substituted = set()
-        for index, value in enumerate(arguments):
-            if value is MISSING:
-                arguments[index] = PLACEHOLDERS.get(spec.field_names[index], PLACEHOLDER)
-                substituted.add(index)
-        spans = dict(zip((letter for letter, _ in node.words), node.spans))
-        bad_keys = []
-        for _ in arguments:
-            try:
-                command = spec.make(*arguments)
-            except FieldError as error:
-                slot, message = blame(spec, error)
-                index = spec.index_of[slot.field] if slot else None
-                if index is None or index in substituted:  # pragma: no cover - a placeholder is valid
-                    self._report("E005", number, text, node.column, node.end_column, message)
-                    return None, bad_keys
-                value = arguments[index]
-                if isinstance(value, float) and not (math.isfinite(value) and abs(value) <= FLOAT32_MAX):
-                    message = f"{slot.letter} is too large for a frame: a 32-bit float holds at most ±3.4e38"
-                if slot.letter in written and slot.letter in spans:
-                    self._report("E005", number, text, *spans[slot.letter], message)
-                else:
-                    name = slot.letter or slot.key
-                    self._report("E005", number, text, node.column, node.end_column, message,
-                                 f"{name} is modal: the value from an earlier line applies; write {name} here")
-                key = slot.key
-                if key == PWM_OF_ACTIVE_CHANNEL:
-                    key = PWM_KEYS.get(arguments[spec.index_of["pwm_channel"]])
-                if key:
-                    bad_keys.append(key)
-                arguments[index] = PLACEHOLDERS.get(slot.field, PLACEHOLDER)
-                substituted.add(index)
-                continue
-            return (None if substituted else command), bad_keys
-        return None, bad_keys  # pragma: no cover - each round substitutes one more field
-
     def _sequence(self, code: str, number: int, text: str, head: tuple[int, int], statement: Optional[Statement]):
         """Arc pairing for a move that just ran (``statement`` None if it failed): hold a G300
         back, pair a G301 with it, and report a G300 something else follows."""
@@ -285,69 +220,6 @@ class StatementExecution:
         if statement is not None and number >= self.from_line:
             return statement
         return None
-
-    def _collect_words(self, number, text, node: CodeLine, spec: MoveSpec) -> tuple[dict, bool]:
-        """The words' values (letter → number), reporting unknown, duplicate and bad values."""
-        written, seen, failed = {}, set(), False
-        for (letter, value), (column, end) in zip(node.words, node.spans):
-            if letter in seen:
-                failed = True
-                written.pop(letter, None)
-                self._poison_word(spec, letter)
-                self._report("E003", number, text, column, end, f"{letter} appears twice in {spec.code}",
-                             "a word may appear once per line")
-            elif letter not in spec.letter_set:
-                failed = True
-                self._report("E002", number, text, column, end, *messages.unknown_word(letter, text[column - 1:end - 1], spec))
-            else:
-                try:
-                    written[letter] = evaluate(value, self.state.parameters)
-                except ExpressionError as error:
-                    failed = True
-                    self._poison_word(spec, letter)
-                    self._report(error.code, number, text, error.column, error.end_column, error.message, error.hint)
-                except Unavailable:
-                    failed = True
-                    self._poison_word(spec, letter)
-            seen.add(letter)
-        return written, failed
-
-    def _poison_word(self, spec: MoveSpec, letter: str) -> None:
-        key = self._key(spec.key_of.get(letter))
-        if key is not None:
-            self.state.values[key] = POISONED
-
-    def _key(self, key: Optional[str]) -> Optional[str]:
-        if key == PWM_OF_ACTIVE_CHANNEL:
-            channel = self.state.values["T"]
-            return PWM_KEYS.get(channel) if type(channel) is float else None
-        return key
-
-    def _unresolved(self, number, text, node: CodeLine, spec: MoveSpec, resolution: Resolution, written: dict) -> list:
-        """Report what a move lacks; return the modal keys to poison."""
-        code, head = spec.code, (node.column, node.end_column)
-        spans = dict(zip((letter for letter, _ in node.words), node.spans))
-        poison = []
-        if resolution.bad_channel:
-            column, end = spans["T"]
-            self._report("E005", number, text, column, end, f"{text[column - 1:end - 1]} is not a PWM channel (1…4)",
-                         "T selects the PWM channel of G1; channel 1 drives the tool")
-            poison.append("T")
-        if resolution.missing:
-            letters = [letter for letter, _ in resolution.missing]
-            self._report("E004", number, text, *head, messages.missing(code, letters),
-                         messages.missing_hint(code, letters, self.state, written.get("T")))
-            poison += [key for _, key in resolution.missing]
-        # A required word that is on the line but failed (E003, E007, E009) was reported already.
-        required = [slot for slot in resolution.required if slot.letter not in spans]
-        if required:
-            self._report("E004", number, text, *head, *messages.required(code, required))
-        for letter, key in resolution.relative_unknown:
-            self._report("E004", number, text, *spans[letter],
-                         f"{letter} is relative (G91), but no earlier move set {letter}",
-                         f"set {letter} with an absolute move (G90) first")
-            poison.append(key)
-        return poison
 
     # --- the other statements ----------------------------------------------------------------
 
