@@ -156,16 +156,18 @@ class MotionModel:
             other_s = self.profile.timing.pwm_change_s
         return Ramp.constant(1.0, other_s)
 
-    def _end_cartesian(self, command, start: ArmPose, pwm_us=None) -> ArmPose:
-        return ArmPose(
-            self.kinematics, cartesian=(command.x_mm, command.y_mm, command.z_mm, command.b0_deg, command.b1_deg,
-                                        command.w_deg),
-            pwm_us=start.pwm_us if pwm_us is None else pwm_us, e0_deg=command.e0_deg, e1_deg=command.e1_deg,
-            origin_mm=start.origin_mm, hint=start.known_joints,
+    def _end_cartesian(self, command, start: ArmPose, pwm_us: tuple | None = None) -> ArmPose:
+        return ArmPose.at_cartesian(
+            self.kinematics, (command.x_mm, command.y_mm, command.z_mm, command.b0_deg, command.b1_deg, command.w_deg),
+            start.pwm_us if pwm_us is None else pwm_us, command.e0_deg, command.e1_deg, start.origin_mm,
+            start.known_joints,
         )
 
     def _plan_linear(self, command: LinearMove, start: ArmPose) -> Segment:
-        end = self._end_cartesian(command, start, start.with_pwm(command.pwm_channel, command.pwm_us))
+        pwm_us = start.pwm_us
+        if pwm_us[command.pwm_channel - 1] != command.pwm_us:  # else the same values: no new tuple
+            pwm_us = start.with_pwm(command.pwm_channel, command.pwm_us)
+        end = self._end_cartesian(command, start, pwm_us)
         segment = LineSegment(command, start, end)
         v = self._speed(command.speed_mm_min, segment)
         return self._time_cartesian(segment, [(segment.length, v, v)])

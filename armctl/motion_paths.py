@@ -14,10 +14,11 @@ from __future__ import annotations
 import math
 from typing import NamedTuple, Sequence
 
-from .motion_pose import TINY_DEG, TINY_MM, ArmPose, short_deg
+from .motion_pose import TINY_DEG, TINY_MM, ArmPose
 from .motion_ramps import NO_MOTION, Ramp
 
 _FK_POLYLINE_POINTS = 16  # joint segments matched against a Cartesian observation
+_sqrt = math.sqrt
 
 
 # --- arc geometry (also for lint) -----------------------------------------------------------------
@@ -103,7 +104,8 @@ class Segment:
     def __init__(self, command, kind: str, start: ArmPose, end: ArmPose, length: float = 0.0):
         self.command, self.kind, self.start, self.end, self.length = command, kind, start, end, length
         self.note: str | None = None
-        self._set_timing(NO_MOTION)
+        # _set_timing(NO_MOTION) written in (a segment of every command of a run): duration 0.0 + 0.0 × 1.0
+        self._ramp, self._scale, self._wait, self.duration_s = NO_MOTION, 1.0, 0.0, 0.0
 
     def _set_timing(self, ramp: Ramp, scale: float = 1.0, wait_s: float = 0.0) -> "Segment":
         self._ramp, self._scale, self._wait = ramp, scale, wait_s
@@ -141,7 +143,8 @@ class Segment:
         ramp = self._ramp
         if fraction >= 1.0 or not ramp.length:
             return self.duration_s if fraction >= 1.0 else self._wait
-        return self._wait + self._scale * ramp.time_at(max(fraction, 0.0) * ramp.length)
+        # max(fraction, 0.0) without the call: fraction unless 0.0 is greater (NaN and -0.0 stay)
+        return self._wait + self._scale * ramp.time_at((0.0 if 0.0 > fraction else fraction) * ramp.length)
 
     def sample(self, t_s: float) -> ArmPose:
         if t_s >= self.duration_s:
@@ -188,11 +191,17 @@ class CartesianSegment(Segment):
         super().__init__(command, kind, start, end, length)
         a, b = start.cartesian, end.cartesian
         self._att0 = a[3:]
-        self._datt = (short_deg(b[3] - a[3]), short_deg(b[4] - a[4]), short_deg(b[5] - a[5]))
-        self._e = (start.e0_deg, start.e1_deg)
-        self._de = (end.e0_deg - start.e0_deg, end.e1_deg - start.e1_deg)
-        self.att_lead_deg = max(abs(d) for d in self._datt)
-        self.ext_lead_deg = max(abs(d) for d in self._de)
+        # short_deg of each difference and the leads' max of abs, written out: the same operations
+        # in the same order (the planner builds one of these for every Cartesian move of a run)
+        d0, d1, d2 = (b[3] - a[3] + 180.0) % 360.0 - 180.0, (b[4] - a[4] + 180.0) % 360.0 - 180.0, \
+            (b[5] - a[5] + 180.0) % 360.0 - 180.0
+        self._datt = (d0, d1, d2)
+        e0, e1 = start.e0_deg, start.e1_deg
+        self._e = (e0, e1)
+        de0, de1 = end.e0_deg - e0, end.e1_deg - e1
+        self._de = (de0, de1)
+        self.att_lead_deg = max(abs(d0), abs(d1), abs(d2))
+        self.ext_lead_deg = max(abs(de0), abs(de1))
 
     def cartesian_at(self, t_s: float) -> tuple[float, float, float, float, float, float] | None:
         """``sample(t_s).cartesian`` as a plain tuple, the same floats, where the arm is between
@@ -222,9 +231,12 @@ class LineSegment(CartesianSegment):
     __slots__ = ("_p0", "_d")
 
     def __init__(self, command, start, end):
-        self._p0 = start.xyz
-        self._d = sub3(end.xyz, self._p0)
-        length = norm3(self._d)
+        # start.xyz, sub3(end.xyz, p0) and norm3 written out, operation by operation (the same floats)
+        p0, b = start.cartesian[:3], end.cartesian
+        self._p0 = p0
+        dx, dy, dz = b[0] - p0[0], b[1] - p0[1], b[2] - p0[2]
+        self._d = (dx, dy, dz)
+        length = _sqrt(dx * dx + dy * dy + dz * dz)
         super().__init__(command, "line", start, end, length if length > TINY_MM else 0.0)
 
     def _point(self, f):
@@ -246,13 +258,13 @@ class LineSegment(CartesianSegment):
             return norm3(sub3(p, self._p0)), 0.0
         # sub3, dot3, min(max(…)), _point, sub3 and norm3 written out, operation by operation
         # (the same floats; the streamer asks this of every position report, ~4,500 a 20-minute job)
-        p0, d = self._p0, self._d
+        (p0x, p0y, p0z), (dx, dy, dz) = self._p0, self._d
         px, py, pz = p
-        u = ((px - p0[0]) * d[0] + (py - p0[1]) * d[1] + (pz - p0[2]) * d[2]) / (self.length * self.length)
+        u = ((px - p0x) * dx + (py - p0y) * dy + (pz - p0z) * dz) / (self.length * self.length)
         u = 0.0 if 0.0 > u else u  # max(u, 0.0): u unless 0.0 is greater (NaN stays)
         u = 1.0 if 1.0 < u else u  # min(…, 1.0)
-        ex, ey, ez = px - (p0[0] + d[0] * u), py - (p0[1] + d[1] * u), pz - (p0[2] + d[2] * u)
-        return math.sqrt(ex * ex + ey * ey + ez * ez), u
+        ex, ey, ez = px - (p0x + dx * u), py - (p0y + dy * u), pz - (p0z + dz * u)
+        return _sqrt(ex * ex + ey * ey + ez * ez), u
 
 
 class ArcSegment(CartesianSegment):

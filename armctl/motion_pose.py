@@ -18,6 +18,8 @@ from .kinematics import CartesianPose, Kinematics
 PWM_CHANNEL_COUNT = 4
 TINY_MM = 1e-6  # shorter Cartesian distances count as no motion
 TINY_DEG = 1e-6
+_new_pose = object.__new__  # ArmPose.at_cartesian
+_new_tuple = tuple.__new__  # a CartesianPose (a NamedTuple) from its six values, as its __new__ builds it
 
 
 def short_deg(delta: float) -> float:
@@ -56,6 +58,20 @@ class ArmPose:
         self.pwm_us = tuple(pwm_us)
         self.e0_deg, self.e1_deg = e0_deg, e1_deg
         self.origin_mm = tuple(origin_mm)
+
+    @classmethod
+    def at_cartesian(cls, kinematics: Kinematics, cartesian: tuple, pwm_us: tuple, e0_deg: float, e1_deg: float,
+                     origin_mm: tuple, hint: tuple) -> "ArmPose":
+        """``ArmPose(kinematics, cartesian=…, pwm_us=…, e0_deg=…, e1_deg=…, origin_mm=…, hint=…)`` for
+        a caller whose ``cartesian`` is six numbers and whose ``pwm_us``, ``origin_mm`` and ``hint``
+        are tuples already (the planner's every Cartesian end, three per move of a run): the same
+        pose, built without the keyword parsing and the copies (``tuple`` of a tuple is itself)."""
+        pose = _new_pose(cls)
+        pose.kinematics, pose._joints, pose._hint = kinematics, None, hint
+        pose._cartesian = _new_tuple(CartesianPose, cartesian)
+        pose.xyz_derived, pose.joints_derived = False, True
+        pose.pwm_us, pose.e0_deg, pose.e1_deg, pose.origin_mm = pwm_us, e0_deg, e1_deg, origin_mm
+        return pose
 
     @property
     def cartesian(self) -> CartesianPose:

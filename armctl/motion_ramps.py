@@ -12,6 +12,8 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
+_sqrt = math.sqrt
+
 
 def piece_s(distance: float, v_from: float, v_to: float) -> float:
     """Seconds to cover ``distance`` at constant acceleration from ``v_from`` to ``v_to``."""
@@ -66,7 +68,11 @@ class Ramp:
         for t0, s0, v0, a in self._pieces:
             if s >= s0:
                 ds = s - s0
-                return t0 + 2.0 * ds / (v0 + math.sqrt(max(v0 * v0 + 2.0 * a * ds, 0.0))) if ds > 0 else t0
+                if ds > 0:
+                    square = v0 * v0 + 2.0 * a * ds
+                    # sqrt(max(square, 0.0)) without the max call: square unless 0.0 is greater
+                    return t0 + 2.0 * ds / (v0 + _sqrt(0.0 if 0.0 > square else square))
+                return t0
         return 0.0
 
 

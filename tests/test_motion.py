@@ -468,3 +468,21 @@ def test_a_line_distance_is_the_vector_helpers_float_for_float(p0, d, length, p)
         assert got == expected
     else:  # the same float (NaN as NaN), sign of zero included
         assert all(a[1:] == b[1:] and (a[2] or a[0] == b[0]) for a, b in zip(got, expected))
+
+
+_SLOTS = ("kinematics", "_cartesian", "_joints", "_hint", "pwm_us", "e0_deg", "e1_deg", "origin_mm", "xyz_derived",
+          "joints_derived")
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.lists(_ANY_FLOAT, min_size=6, max_size=6), st.lists(st.floats(500, 2500), min_size=4, max_size=4),
+       _ANY_FLOAT, _ANY_FLOAT, st.lists(_ANY_FLOAT, min_size=3, max_size=3), st.lists(_ANY_FLOAT, min_size=6, max_size=6))
+def test_at_cartesian_builds_the_pose_the_keyword_constructor_builds(cartesian, pwm, e0, e1, origin, hint):
+    """The planner's fast constructor of a Cartesian end: every slot the same object or equal bits."""
+    args = (tuple(cartesian), tuple(pwm), e0, e1, tuple(origin), tuple(hint))
+    fast = ArmPose.at_cartesian(MODEL.kinematics, *args)
+    slow = ArmPose(MODEL.kinematics, cartesian=args[0], pwm_us=args[1], e0_deg=e0, e1_deg=e1, origin_mm=args[4],
+                   hint=args[5])
+    for name in _SLOTS:
+        a, b = getattr(fast, name), getattr(slow, name)
+        assert type(a) is type(b) and repr(a) == repr(b), name  # repr: -0.0 and nan told apart, unlike ==
