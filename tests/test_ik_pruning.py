@@ -106,3 +106,25 @@ def test_joints_of_is_inverse_with_its_fallbacks(x, y, z, attitude, hint, limits
     found, expected = kinematics.joints_of(pose, hint), _joints_by_inverse(kinematics, pose, hint)
     assert repr(found) == repr(expected)
     assert (found is hint) == (expected is hint)
+
+
+@settings(max_examples=200, deadline=None)
+@given(st.floats(-450, 450), st.floats(-450, 450), st.floats(-100, 600),
+       st.tuples(st.sampled_from([0.0, -0.0, 180.0, -180.0, 90.0]), st.sampled_from([0.0, -0.0, 45.0]),
+                 st.sampled_from([0.0, -0.0, 30.0])),
+       st.sampled_from([_LIMITS, None, ((-10, 10),) * 6]))
+@example(0.0, 0.0, 150.0, (180.0, 0.0, 0.0), _LIMITS)  # on the base axis: J1 is the hint's
+@example(900.0, 0.0, 150.0, (180.0, 0.0, 0.0), _LIMITS)  # out of reach: the hint itself
+def test_answers_kept_by_the_object_are_the_solver_s_for_those_very_bits(x, y, z, attitude, limits):
+    """``can_take`` and ``joints_of`` give an answer found before again (``Kinematics._answers``):
+    asked twice, and with 0.0 and -0.0 swapped (equal, but a different question for atan2), each
+    answer is the one a fresh object computes — and the caller's own hint when nothing reaches."""
+    kept = Kinematics(_PROFILE.links, limits, _HOME)
+    signed = tuple(-v if v == 0.0 else v for v in (x, y, z, *attitude))
+    for pose in ((x, y, z, *attitude), signed, (x, y, z, *attitude), signed):
+        for hint in (_HOME, tuple(-v if v == 0.0 else v for v in _HOME), (0.0, 10.0, -20.0, 0.0, 90.0, 0.0)):
+            fresh = Kinematics(_PROFILE.links, limits, _HOME)
+            assert kept.can_take(pose, hint) is fresh.can_take(pose, hint)
+            found, expected = kept.joints_of(pose, hint), fresh.joints_of(pose, hint)
+            assert repr(found) == repr(expected)
+            assert (found is hint) == (expected is hint)
