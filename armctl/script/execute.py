@@ -7,9 +7,9 @@ and armctl/script/repeats.py runs repeat blocks.  Moves take one of three paths,
   1. ``_plain_move`` — the hot path: a line the regex fast path scanned, in absolute mode,
      with every value known (``resolve_planned``: one plan per line shape, compiled once); no node is built.
   2. ``_move`` — any other node (a fast-path line in a repeat body, or G91; a line with
-     expression words): in absolute mode a line with expression words evaluates them and
-     runs its shape's plan as path 1 does; else the general ``resolve``; at the first sign of
-     trouble the line takes path 3 (re-parsed with Lark if it has no word columns).
+     expression words): in absolute mode it runs its shape's plan as path 1 does (expression
+     words evaluated first); else the general ``resolve``; at the first sign of trouble the
+     line takes path 3 (re-parsed with Lark if it has no word columns).
   3. ``_move_with_diagnostics`` — a Lark node with columns: report everything wrong with the
      line, commit what it did set, poison what it failed to set (armctl/script/move_diagnostics.py,
      the base class ``MoveDiagnostics``).
@@ -156,11 +156,12 @@ class StatementExecution(MoveDiagnostics):
         (a completed arc pair goes to ``self._out``)."""
         words = node.words
         state = self.state
-        if node.spans is not None and not state.relative:
-            # expression words in absolute mode (issue 13): their values now, then the line
-            # shape's plan as _plain_move runs it (resolve() and the constructor as straight-line
-            # code); any doubt takes the path below.  tests/test_script_expression_moves.py holds
-            # this to the reporting path, tests/test_script_fastpath.py the plans to resolve()
+        if not state.relative:
+            # absolute mode: the words' values (expression words evaluated now, issue 13), then the
+            # line shape's plan as _plain_move runs it (resolve() and the constructor as straight-line
+            # code) — a repeat body's plain lines come this way, once per pass; any doubt takes the
+            # path below.  tests/test_script_expression_moves.py holds this to the reporting path,
+            # tests/test_script_fastpath.py the plans to resolve()
             shape = (node.number, tuple([letter for letter, _ in words]))
             plan = _EXPRESSION_PLANS.get(shape, NOT_PLAIN)
             if plan is NOT_PLAIN:
