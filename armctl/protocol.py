@@ -20,8 +20,9 @@ only downwards:
 - armctl/control_commands.py — the eight 0xFC control commands;
 - armctl/commands.py — all fifteen, and ``decode_command``;
 - armctl/status_frames.py — status frames, finding frames in a byte stream and the readable
-  form, imported on first use (the module ``__getattr__`` below): compile and lint never
-  build them.  It imports the parts above, never this façade.
+  form, and armctl/status_reader.py — the resynchronising ``StatusReader``: both imported on
+  first use (the module ``__getattr__`` below), so compile and lint never build them.  They
+  import the parts above, never this façade.
 """
 
 from __future__ import annotations
@@ -41,18 +42,19 @@ from .frame_fields import (  # noqa: F401
 from .motion_commands import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode  # noqa: F401
 
 
-# --- status frames, byte streams, readable form: armctl/status_frames.py -----------------------
+# --- status frames, byte streams, readable form, the reader: status_frames.py, status_reader.py ---
 
 
 def __getattr__(name: str):
-    """``StatusFrame``, ``decode_status``, ``StatusReader``, ``scan_frames``, ``describe`` … live
-    in armctl/status_frames.py, imported on first use (a command that never reads the arm does
-    not build them at every start); they are part of this module's interface all the same."""
+    """``StatusFrame``, ``decode_status``, ``scan_frames``, ``describe`` … live in
+    armctl/status_frames.py and ``StatusReader`` in armctl/status_reader.py, imported on first
+    use (a command that never reads the arm does not build them at every start); they are part
+    of this module's interface all the same."""
     if name.startswith("__"):  # the import system asks for __path__ at every "from armctl.protocol import …"
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
-    from . import status_frames
+    from . import status_frames, status_reader
 
-    try:
-        return getattr(status_frames, name)
-    except AttributeError:
-        raise AttributeError(f"module {__name__!r} has no attribute {name!r}") from None
+    for module in (status_frames, status_reader):
+        if name in vars(module):
+            return vars(module)[name]
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
