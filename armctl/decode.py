@@ -28,7 +28,9 @@ from collections import deque
 from dataclasses import dataclass
 from typing import BinaryIO, Iterator
 
-from .formats import DIRECTIONS, looks_like_hex, looks_like_log  # noqa: F401 - DIRECTIONS: the log's words
+from .formats import (  # noqa: F401 - DIRECTIONS: the log's words, offered here too
+    DIRECTIONS, HEX_DIGIT_BYTES, WHITESPACE_BYTES, looks_like_hex, looks_like_log,
+)
 from .inputs import MAX_INPUT_BYTES, read_blocks_bounded
 from .protocol import CONTROL_HEAD, FRAME_SIZE, MOTION_HEAD, STATUS_HEAD, STATUS_SIZE
 from .status_frames import Chunk, chunk_at
@@ -40,8 +42,6 @@ JUNK_PIECE_BYTES = 1 << 16  # a longer run of stray bytes comes out in pieces of
 _COMMAND_HEADS = frozenset((MOTION_HEAD, CONTROL_HEAD))
 _HEADS = _COMMAND_HEADS | {STATUS_HEAD}
 _NEXT_HEAD = re.compile(b"[" + re.escape(bytes(sorted(_HEADS))) + b"]")
-_HEX_DIGITS = frozenset(string.hexdigits.encode())
-_WHITESPACE = frozenset(string.whitespace.encode())
 
 
 class NotHex(Exception):
@@ -142,7 +142,7 @@ def _looks_like_hex(first: bytes, ended: bool) -> bool:
     """Only hex digits and whitespace (an even count of digits when the whole input is here)."""
     if ended:
         return looks_like_hex(first)
-    return all(byte in _HEX_DIGITS or byte in _WHITESPACE for byte in first)
+    return all(byte in HEX_DIGIT_BYTES or byte in WHITESPACE_BYTES for byte in first)
 
 
 def _hex_bytes(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:

@@ -19,8 +19,9 @@ from .protocol import Command, f32_repr
 if TYPE_CHECKING:
     from .status_frames import Chunk
 
-_HEX_DIGITS = frozenset(string.hexdigits.encode())
-_WHITESPACE = frozenset(string.whitespace.encode())
+# the bytes hex text is made of (decode judges a long input's first block with them too)
+HEX_DIGIT_BYTES = frozenset(string.hexdigits.encode())
+WHITESPACE_BYTES = frozenset(string.whitespace.encode())
 
 
 def json_value(value):
@@ -50,9 +51,9 @@ def looks_like_hex(data: bytes) -> bool:
     """True when the input is hex text: only hex digits and whitespace, an even count of digits."""
     digits = 0
     for byte in data:
-        if byte in _HEX_DIGITS:
+        if byte in HEX_DIGIT_BYTES:
             digits += 1
-        elif byte not in _WHITESPACE:
+        elif byte not in WHITESPACE_BYTES:
             return False
     return digits > 0 and digits % 2 == 0
 
