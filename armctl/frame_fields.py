@@ -140,8 +140,9 @@ def slot_offset(slot: int) -> int:
 # --- host → arm commands ----------------------------------------------------------------------
 
 # Every command is a frozen dataclass (``record``: its __eq__, __hash__ and __repr__ shared, not
-# compiled for each class at import; armctl/records.py).  The three bases have no fields and are
-# never built, so they are plain classes: a frozen dataclass may extend a plain class.
+# compiled for each class at import; armctl/records.py).  The three bases — Command here,
+# _MotionCommand and _ControlCommand with their commands — have no fields and are never built,
+# so they are plain classes: a frozen dataclass may extend a plain class.
 
 
 class Command:
