@@ -19,10 +19,11 @@ to hear of.
 
 from __future__ import annotations
 
+from bisect import bisect_left
 from collections import deque
 
 from .constants import PACE_FOLLOWED, PACE_MAX, PACE_MIN_SPAN_S, PACE_SAMPLES, SCAN_WINDOW_FRAMES
-from .frames import SentFrame
+from .frames import SentFrame, est_end
 from .geometry import TimeMemo, estimate_off_s, time_window
 from .ledger import Ledger
 
@@ -42,6 +43,9 @@ class Estimate:
         self.plan_changes = 0
         self.pace_samples: deque[float] = deque(maxlen=PACE_SAMPLES)
         self.pace_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, model s, now)
+        # Pending frames (indexes) whose estimated end is sooner than the frame's before them: a
+        # re-anchoring moved them (``_note_order``); every other pending frame ends in order.
+        self.out_of_order: set[int] = set()
 
     def written(self, frame: SentFrame, previous: SentFrame | None) -> None:
         """Give a frame just written its estimated end: no sooner than its last byte left the
@@ -185,12 +189,51 @@ class Estimate:
         if sent.group_index != sent.index and k > 0:
             self.ledger.pending[k - 1].est_end_s = start  # its G300: the arc's start
         previous_end_s = sent.est_end_s
-        for j in range(k + 1, len(self.ledger.pending)):
-            nxt = self.ledger.pending[j]
+        pending = self.ledger.pending
+        last = k
+        for j in range(k + 1, len(pending)):
+            nxt = pending[j]
             end_s = max(nxt.wire_end_s, previous_end_s) + nxt.segment.duration_s
             if end_s == nxt.est_end_s:
                 break  # and so are the frames after it
             nxt.est_end_s = previous_end_s = end_s
+            last = j
+        self._note_order(k - 1 if sent.group_index != sent.index and k > 0 else k, last)
+
+    def _note_order(self, k: int, last: int) -> None:
+        """The ends of pending frames ``k``…``last`` moved: each of them now ends no sooner than the
+        one before it, and so does the frame after them (where the chain stopped, nothing moved);
+        only frame ``k`` may end sooner than the frame before it (``out_of_order``)."""
+        pending, out_of_order = self.ledger.pending, self.out_of_order
+        if out_of_order:
+            for j in range(k + 1, min(last + 2, len(pending))):
+                out_of_order.discard(pending[j].index)
+        if k > 0:
+            if pending[k - 1].est_end_s > pending[k].est_end_s:
+                out_of_order.add(pending[k].index)
+            else:
+                out_of_order.discard(pending[k].index)
+
+    def began_before(self, threshold_s: float) -> float | None:
+        """The estimated end of the pending frame before the first that ends at or after
+        ``threshold_s`` (that one's start: None when it is the first).  The ends are in order
+        but where ``out_of_order`` says (a frame re-anchored sooner than the one before it
+        ended): in order, a bisection finds it; else one pass from the oldest."""
+        pending, out_of_order = self.ledger.pending, self.out_of_order
+        if out_of_order:
+            first = pending[0].index
+            for index in [index for index in out_of_order if index <= first]:
+                out_of_order.discard(index)  # its pair left the queue
+        if not out_of_order:
+            i = bisect_left(pending, threshold_s, key=est_end)
+            return pending[i - 1].est_end_s if i else None
+        began_s = None
+        for sent in pending:
+            end_s = sent.est_end_s
+            if end_s >= threshold_s:
+                break
+            began_s = end_s
+        return began_s
 
     def pace_window(self, stream: str, index: int, candidates) -> tuple[SentFrame, float, float] | None:
         """Where this stream's agreed sighting on frame ``index`` puts the arm inside a moving

@@ -105,27 +105,23 @@ class Gate:
         self.next_frame_motion_s = duration_s
         ends = estimate.arm_ends()
         if ends is None:  # the estimate is the arm's time: its durations are the model's
-            ends, pace = [sent.est_end_s for sent in pending], 1.0
+            pace, head_end_s, tail_s = 1.0, pending[0].est_end_s, pending[-1].est_end_s
         else:
-            pace = estimate.pace
+            pace, head_end_s, tail_s = estimate.pace, ends[0], ends[-1]
         # The lead in the arm's seconds: ``ends`` are the arm's, each duration × the pace (the model
         # seconds of ``lead_model_s``, the same thing measured the other way)
-        tail_s, lead_s, duration_s = ends[-1], self.lead_model_s * pace, duration_s * pace
+        lead_s, duration_s = self.lead_model_s * pace, duration_s * pace
         lead_ok_at = tail_s - min(lead_s, FEED_AHEAD_S / estimate.pace * pace)  # the arm must not run dry
         if duration_s <= lead_s:
             # The waiting motion once frame j is in progress is tail − end of j: find the first
             # frame after which the new one fits within the lead; it may go once that one began.
             threshold_s = tail_s + duration_s - lead_s
-            began_s = None
-            for end_s in ends:
-                if end_s >= threshold_s:
-                    break
-                began_s = end_s
+            began_s = estimate.began_before(threshold_s) if ends is None else _began_before(ends, threshold_s)
             if began_s is None:
                 # the new one fits behind every frame after the first once the first has begun —
                 # not before: a frame written ahead (``write_ahead_s``) while the first is still on
                 # the wire would leave the whole queue to run after a stop then
-                began_s = max(now, ends[0] - pending[0].segment.duration_s * pace)
+                began_s = max(now, head_end_s - pending[0].segment.duration_s * pace)
             lead_ok_at = min(lead_ok_at, began_s)
         when = max(now, wire_ok_at, lead_ok_at)
         if when <= now:
@@ -135,3 +131,13 @@ class Gate:
             # written ahead waits for the one before to begin, which is when the line frees in virtual time)
             self.write_reason = WaitReason.LEAD if lead_ok_at > wire_ok_at + 1e-9 else WaitReason.WIRE
         return when
+
+
+def _began_before(ends: list[float], threshold_s: float) -> float | None:
+    """The end before the first of ``ends`` at or after ``threshold_s`` (None: the first is)."""
+    began_s = None
+    for end_s in ends:
+        if end_s >= threshold_s:
+            break
+        began_s = end_s
+    return began_s
