@@ -19,6 +19,7 @@ to hear of.
 
 from __future__ import annotations
 
+import math
 from bisect import bisect_left
 from collections import deque
 
@@ -26,6 +27,11 @@ from .constants import PACE_FOLLOWED, PACE_MAX, PACE_MIN_SPAN_S, PACE_SAMPLES, S
 from .frames import SentFrame, est_end
 from .geometry import TimeMemo, estimate_off_s, time_window
 from .ledger import Ledger
+
+
+# Rounding in a frame's start and in ``Segment.time_at_fraction`` (ulps of seconds) is far below
+# this: a bound on how far off the estimate is, less this much, is never above the true one.
+_OFF_MARGIN_S = 1e-6
 
 
 class Estimate:
@@ -165,18 +171,10 @@ class Estimate:
         still frame never pushes the estimate while the estimate agrees with it, and an arm
         standing still (paused, or slower than the model) holds the estimate back.
         """
-        if not self.ledger.pending:
+        pending = self.ledger.pending
+        if not pending:
             return
-        first = self.ledger.pending[0].index
-        best = None
-        for index, lo, hi in candidates:
-            if index < first:
-                continue
-            off = estimate_off_s(self.ledger.pending[index - first], lo, hi, now, self.memo.time_at)
-            if best is None or off < best[0]:
-                best = (off, index - first, lo, hi)
-            if off == 0.0:
-                break
+        best = self._nearest(candidates, now)
         if best is None or best[0] == 0.0:
             return
         _, k, lo, hi = best
@@ -234,6 +232,44 @@ class Estimate:
                 break
             began_s = end_s
         return began_s
+
+    def _nearest(self, candidates, now: float):
+        """(off, k, lo, hi) of the first candidate whose window the estimate is nearest to
+        (``estimate_off_s``; the first at 0 ends the search), k its place in the queue; None with
+        no pending candidate.  Flat cost: a frame that ended ``now − est_end`` ago (or begins
+        ``start − now`` from now) is at least that far off, so once one candidate is reckoned,
+        a candidate bound to be farther (by more than ``_OFF_MARGIN_S``) is never reckoned."""
+        pending, time_at = self.ledger.pending, self.memo.time_at
+        first = pending[0].index
+        bounds = []
+        for index, lo, hi in candidates:
+            if index < first:
+                bounds.append(None)
+                continue
+            sent = pending[index - first]
+            end_s = sent.est_end_s
+            least_s = end_s - sent.segment.duration_s - now  # (starts that long from now)
+            if hi != math.inf and now - end_s > least_s:
+                least_s = now - end_s  # (ended that long ago)
+            bounds.append(least_s - _OFF_MARGIN_S)
+        reckoned = [b for b in bounds if b is not None]
+        if not reckoned:
+            return None
+        # one candidate reckoned first, the one most likely nearest: its ``off`` bounds the rest
+        k_star = bounds.index(min(reckoned))
+        index, lo, hi = candidates[k_star]
+        off_star = estimate_off_s(pending[index - first], lo, hi, now, time_at)
+        best = None
+        for j, (index, lo, hi) in enumerate(candidates):
+            least_s = bounds[j]
+            if least_s is None or least_s > off_star:
+                continue  # not pending, or farther than a candidate already reckoned: never the nearest
+            off = off_star if j == k_star else estimate_off_s(pending[index - first], lo, hi, now, time_at)
+            if best is None or off < best[0]:
+                best = (off, index - first, lo, hi)
+            if off == 0.0:
+                break
+        return best
 
     def pace_window(self, stream: str, index: int, candidates) -> tuple[SentFrame, float, float] | None:
         """Where this stream's agreed sighting on frame ``index`` puts the arm inside a moving
