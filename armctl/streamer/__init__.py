@@ -6,8 +6,9 @@ The connector holds at most ``fifo_frames`` frames behind the one executing (the
 where it is.  What the document leaves open is read from the profile, never assumed here:
 ``fifo_frames`` (the capacity), ``speed_factor`` (in the motion model's durations),
 ``status_xyz_frame`` (robot-frame X/Y/Z are turned into the worktable frame of the segment they
-are matched against) and ``kinematics_verified`` (below).  So for every frame written the streamer keeps its planned ``Segment`` (the shared
-motion-time model), the moment its last byte left the wire, and two views of the arm:
+are matched against) and ``kinematics_verified`` (below).  So for every frame written the
+streamer keeps its planned ``Segment`` (the shared motion-time model), the moment its last byte
+left the wire, and two views of the arm:
 
 * a **lower bound of frames consumed**, advanced only on evidence:
   - *position*: a reported position (or joint half, for joint and still segments) lies on the
@@ -41,9 +42,9 @@ motion-time model), the moment its last byte left the wire, and two views of the
     seen at its end is confirmed soon after, not a whole slow-arm duration later).  A Cartesian
     move from a joint move's end on an arm whose kinematics are not verified may be longer than
     planned: a line by at most its start's error, allowed for; an arc without bound, so time
-    never confirms it (``_unknown_start_s``) — a later frame's sighting or the arm at rest does;
+    never confirms it (``TimeBound.allowance_s``) — a later frame's sighting or the arm at rest does;
     nor the first move that sets E0/E1, which no status reports: from where they stood, its time
-    may be any (``_moves_e_from_the_start``; no pace is measured on it either).
+    may be any (``TimeBound.moves_e_from_the_start``; no pace is measured on it either).
   Lost or corrupted status frames can only hold the bound back, i.e. make it more careful.
 * an **estimate** of when each frame ends, from the model, re-anchored on every observation:
   each candidate segment says the arm is now within a window of that segment's time (a short
@@ -68,7 +69,7 @@ and while both hold:
     segment, from two agreeing sightings on it at least ``PACE_MIN_SPAN_S`` of model time apart
     (the largest of the last few, never below 1).  From a pace of ``PACE_FOLLOWED`` on, the
     frames are followed at that pace from where a sighting inside a moving path last pinned the
-    arm (``_arm_ends``), since the estimate runs at the model's pace through frames no sighting
+    arm (``Estimate.arm_ends``), since the estimate runs at the model's pace through frames no sighting
     re-times.  A frame is also allowed once no more than ``FEED_AHEAD_S`` (or the lead) of the
     arm's seconds is queued in all, so the arm is never starved of a move longer than the lead
     by itself — and, behind a first pending frame not yet begun (written ahead), only once it
@@ -96,7 +97,7 @@ until the FIFO bound throttles the job to the proof's rate (``armctl bench``'s `
     back-and-forth throttles again); only a position on one pending path re-anchors it.
   The hypothesis is checked as the job runs, twice.  A measured ``pace`` (the arm slower than
   its profile's speed_factor) widens the bound to ``speed_tolerance × pace`` for every pending
-  frame and every later one (``_widen_time_bound``: only ever more careful), so an arm 1.3x or
+  frame and every later one (``TimeBound.allow_pace``: only ever more careful), so an arm 1.3x or
   2x slower than a profile probed at 1.05 drops nothing once one frame long enough to time has
   run.  And pairs of agreed sightings along one frame (a status period of slack at each end, one
   corrupted report cannot decide) that prove the arm slower than the tolerance, on no later
@@ -131,6 +132,90 @@ move in progress, so an abort near its end (or a feed override, whose effect sho
 lead — in either control-frame mode) would wait longer than the lead after it: the stop bound
 is not traded for speed.  The idle is exactly the lead's: at 2 s, 50 of the 40 ms moves wait
 behind the 4.7 s move and the line has nothing to send for the rest of it (docs/bench.md).
+
+The parts (each owns its state; ``Streamer``, the façade, routes events and owns no rule):
+
+  ledger.py      ``Ledger``     the frames written and not known consumed (``pending``), the
+                                lower bound, and what proved each frame consumed
+  evidence.py    ``Sightings``  which pending frames a report may lie on (a ``Sighting``)
+  time_bound.py  ``TimeBound``  the slow-arm deadline chain and the arm-running clock
+  estimate.py    ``Estimate``   the re-anchored end of each frame, the measured pace
+  losses.py      ``Losses``     the signs of loss, each with its evidence
+  gate.py        ``Gate``       the write rules (a)–(c), the plan of the next frame, the wire
+  facade.py      ``Streamer``   the callers' one object: a write to every part, a report to
+                                the evidence and from its ``Sighting`` to the rest
+  frames.py, geometry.py, constants.py   the records, path/time geometry and numbers they share
+
+Soundness, written once
+=======================
+
+The streamer's one promise is rule (a): it never writes a frame the FIFO has no room for, so
+everything rests on ``consumed_lower_bound`` never passing the frames that have really left the
+FIFO.  Each part may conclude only what its evidence says; this is the whole list.
+
+1. *A frame left the FIFO* (the ledger pops it; nothing else does), on exactly three grounds:
+
+   a. **An agreed sighting** (``Sightings`` → ``Streamer._take`` → ``Ledger.consume_before``): a
+      report and the last one of the same stream (position, joints 1–3, joints 4–6) that a
+      search judged each lie on the path of a pending frame, and the bound moves to the smaller
+      of the two earliest such frames — every frame before it has finished, because the arm runs
+      its frames in order and this one's path holds the arm.  Only the earliest candidate counts
+      (a point on several pending paths proves the first); a stream searches only the frames it
+      can judge (X/Y/Z stops at a frame whose X/Y/Z only unverified kinematics know, counting on
+      a move from its end but never past it; joint halves stop at the first Cartesian frame and
+      count on a joint move from a Cartesian end but never past it); a match beyond the part of
+      the queue not searched proves only that part's first frame; an arc's G300 is never
+      confirmed by its arc alone (``group_index``).  One corrupted report cannot move the bound
+      (agreement), a lost one only delays it.
+   b. **Time** (``TimeBound.advance``): the head frame's deadline has passed on the arm-running
+      clock — the time of the last kind-4 report that said running; a paused or silent arm stops
+      the clock, and a resume moves every deadline back by the whole pause.  A deadline chains
+      from frame to frame: no sooner than the frame landed (``ARRIVAL_SLACK_S`` after its last
+      byte) nor than the frame before surely ended, plus its model duration and its allowance
+      (``allowance_s``: a longer path from an unverified start) times ``slowest_factor``, plus
+      ``frame_slack_s``.  This rests on one hypothesis, the profile's ``speed_tolerance`` (the
+      arm never that much slower than the model), and the chain only ever loosens on a measured
+      pace (``allow_pace``); it tightens only on an agreed sighting that frame k has begun, from
+      the least fraction of k's path both reports allow (``restart``), or on the arm seen at
+      rest mid-job (``at_rest``).  Never on time: a frame whose time may be any (an arc from an
+      unverified start, the first move of E0/E1: deadline infinite), a G300 before its G301
+      lands, a frame a RESET CONNECTOR may have cleared, and nothing at all once the FIFO may
+      have been cleared (``cleared``).
+   c. **The arm at rest** (``Streamer.confirm_all_done``): on the caller's proof (armctl/job.py:
+      every status kind re-read unchanged at the last frame's target), every frame written, or
+      those before ``before`` — never a trailing G300.
+
+   Left the FIFO is not *ran*: a report on a later frame counts a frame ``confirmed_by_reports``
+   only when the caller says the FIFO holds every frame the capacity rule lets in
+   (``fifo_holds_all``) and no RESET CONNECTOR may have cleared it, or when the arm rests at its
+   very target and could rest there no other way (``evidence.ran_at_rest``); else it is
+   ``confirmed_unseen``.  Time alone is ``confirmed_by_time``.
+
+2. *Where the arm probably is* (``Estimate``): from the model's times, re-anchored on every
+   sighting, agreed or not, even past a frame the stream cannot judge (``reanchor_beyond``).
+   It proves nothing: it feeds only rule (b), ``queued_seconds`` and the pin the pace follows.
+   A wrong estimate costs pace or a longer stop, never a frame: rule (a) reads the bound alone.
+
+3. *How much slower than the model the arm runs* (``Estimate.pace``): from two agreed sightings
+   of one stream inside the moving path of one frame whose time is known, at least
+   ``PACE_MIN_SPAN_S`` of model time apart, no pause between; the largest of the last few,
+   never below 1 nor above ``PACE_MAX``.  The lead follows it (in model seconds it is the lead
+   ÷ the pace); the time bound only ever widens on it (``allow_pace``), never narrows when an
+   old sample ages out.
+
+4. *The arm skipped frames or broke the hypothesis* (``Losses``), never from one report:
+   a **gap** — between two agreed sightings less time passed (plus ``LOSS_SLACK_S``) than the
+   motion between takes even ``speed_tolerance`` times faster than the model, counting only
+   frames whose length the plan knows and the earlier sighting at the latest frame it may lie
+   on; a **reversal** — two reports in a row inside a finished frame's path and on no pending
+   path; **slowness** — pairs of agreed sightings along one frame (a status period of slack at
+   each end) slower than the tolerance, on no later frame through the same point, told at the
+   end only when time confirmed frames at a narrower factor and was still trusted.  Losses move
+   neither the bound nor the estimate: they change what the job may claim (``losses``,
+   ``first_suspect_index``).
+
+5. *The next frame may go* (``Gate``): rules (a)–(c) above, from the bound (a, c) and the
+   estimate and pace (b) — so the FIFO bound holds whatever the estimate says.
 """
 
 from __future__ import annotations
