@@ -244,12 +244,12 @@ from .constants import (
     frame_slack_s,
 )
 from .facade import Streamer
-from .frames import Evidence, Observation, SentFrame, WaitReason
+from .frames import Evidence, SentFrame, WaitReason
 
 __all__ = [
     "ARRIVAL_SLACK_S", "CAPACITY_MARGIN_FRAMES", "DEFAULT_LEAD_S", "FASTEST_ARM_FACTOR", "FEED_AHEAD_S",
     "FRAME_SLACK_S", "JOINT_TOLERANCE_DEG", "JOINT_TRACE_FRACTION", "JOINT_TRACE_SLACK", "LOSS_SLACK_S",
     "PACE_FOLLOWED", "PACE_MAX", "PACE_MIN_SPAN_S", "PACE_SAMPLES", "POSITION_TOLERANCE_MM",
     "RECENT_SENT_FRAMES", "ROTATION_S", "SCAN_WINDOW_FRAMES", "SLOWEST_ARM_FACTOR", "UNVERIFIED_FK_SHARE",
-    "Evidence", "Observation", "SentFrame", "Streamer", "WaitReason", "frame_slack_s",
+    "Evidence", "SentFrame", "Streamer", "WaitReason", "frame_slack_s",
 ]

@@ -35,7 +35,7 @@ class Evidence(StrEnum):
     AT_REST = "at rest"  # the caller saw the arm at rest at the last target (confirm_all_done)
 
 
-@dataclass
+@dataclass(slots=True)
 class SentFrame:
     """A frame on its way to, in, or through the connector's FIFO."""
 
@@ -65,15 +65,6 @@ class SentFrame:
     timing_known: bool = True  # False: its time may be any (``TimeBound.moves_e_from_the_start``): no pace from it
     seen: bool = False  # the arm at rest at its target proved it ran (``evidence.ran_at_rest``)
     may_be_cleared: bool = False  # queued when a RESET CONNECTOR may have cleared it (``Streamer.cleared``)
-
-
-@dataclass(frozen=True)
-class Observation:
-    """Where the arm was seen: a segment index and how far along it (0…1)."""
-
-    index: int
-    fraction: float
-    at_s: float
 
 
 def where(sent: SentFrame) -> str:
