@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import StrEnum
+from operator import attrgetter
 
 from ..motion import Segment
 from ..protocol import Command
@@ -73,5 +74,4 @@ def where(sent: SentFrame) -> str:
     return f"frame {sent.index + 1}" if line is None else f"frame {sent.index + 1} (line {line})"
 
 
-def est_end(sent: SentFrame) -> float:
-    return sent.est_end_s
+est_end = attrgetter("est_end_s")  # a frame's estimated end: the key the queue is searched by

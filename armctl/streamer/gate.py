@@ -91,7 +91,7 @@ class Gate:
         waits for a move that is longer than the lead by itself."""
         ledger, estimate = self.ledger, self.estimate
         pending = ledger.pending
-        if ledger.frames_in_flight_bound + 1 > self.limit_frames:
+        if ledger.sent - ledger.consumed_lower_bound + 1 > self.limit_frames:  # (frames_in_flight_bound)
             self.write_reason = WaitReason.CAPACITY
             return None
         wire_ok_at = self.wire_free_s - self.write_ahead_s  # handed over early, it still starts when the line is free
@@ -110,7 +110,7 @@ class Gate:
             pace, head_end_s, tail_s = estimate.pace, ends[0], ends[-1]
         # The lead in the arm's seconds: ``ends`` are the arm's, each duration × the pace (the model
         # seconds of ``lead_model_s``, the same thing measured the other way)
-        lead_s, duration_s = self.lead_model_s * pace, duration_s * pace
+        lead_s, duration_s = self.lead_s / estimate.pace * pace, duration_s * pace  # (lead_model_s)
         lead_ok_at = tail_s - min(lead_s, FEED_AHEAD_S / estimate.pace * pace)  # the arm must not run dry
         if duration_s <= lead_s:
             # The waiting motion once frame j is in progress is tail − end of j: find the first
