@@ -38,7 +38,12 @@ class Evidence(StrEnum):
 
 @dataclass(slots=True)
 class SentFrame:
-    """A frame on its way to, in, or through the connector's FIFO."""
+    """A frame on its way to, in, or through the connector's FIFO.
+
+    Set once when it is written (``Streamer.wrote``), except the fields one part keeps up to
+    date, each by that part alone: ``est_end_s`` the estimate; ``certain_end_s`` and
+    ``chain_end_s`` the time bound; ``may_be_cleared`` the ledger; ``seen`` the at-rest proof
+    (``Streamer.confirm_all_done``, and the caller, armctl/job.py)."""
 
     index: int
     command: Command
@@ -54,7 +59,7 @@ class SentFrame:
     # frame of the job (a Cartesian move at a joint move's end, a joint move at a Cartesian one's):
     # the arm's path is not the planned one, and it may pass within tolerance of the next frame's
     # path, so a sighting may count on it (the earliest claim) but never past it; the time bound,
-    # with ``_unknown_start_s``'s allowance, confirms a line or a joint move (never an arc).
+    # with ``TimeBound.allowance_s``, confirms a line or a joint move (never an arc).
     path_known: bool = True
     unknown_start_s: float = 0.0  # ``TimeBound.allowance_s`` of its segment, reckoned once at write
     motion_before_s: float = 0.0  # the model's motion time of every frame written before it
