@@ -34,7 +34,7 @@ def loaded_streamer(pending: int):
     for command in commands:
         streamer.wrote(command, now)
         now += streamer.frame_s
-    streamer._consume_one(by_reports=True)  # the long move from home is known done: the tiny moves remain
+    streamer._ledger.consume_one(by_reports=True)  # the long move from home is known done: the tiny moves remain
     first = streamer.pending[0].segment
     x, y, z = first.sample(first.duration_s * 0.4).xyz
     return streamer, [PositionStatus(x, y, z), JointsLowStatus(0.0, 0.0, 0.0)], now

@@ -233,11 +233,11 @@ def test_an_unverified_profiles_kinematics_never_prove_a_joint_move_from_x_y_z()
             x, y, z = segment.sample(t * segment.duration_s).xyz
             s.receive_status(PositionStatus(x, y, z), 0.1 + t * segment.duration_s)
         assert s.last_known_done() is None  # nothing before the joint move to confirm, either way
-        assert (s._last_candidate.get("position") is not None) == verified
+        assert (s._evidence.last_candidate.get("position") is not None) == verified
         j = segment.sample(0.9 * segment.duration_s).joints
         s.receive_status(JointsLowStatus(*j[:3]), 1.0)
         s.receive_status(JointsLowStatus(*j[:3]), 1.1)
-        assert s._last_candidate["joints0"] == 0  # the joints place the arm on it either way
+        assert s._evidence.last_candidate["joints0"] == 0  # the joints place the arm on it either way
 
 
 def test_robot_frame_reports_are_turned_into_the_frame_the_job_plans_in():

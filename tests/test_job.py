@@ -210,13 +210,18 @@ def test_the_engine_imports_no_io():
         if name in seen:
             continue
         seen.add(name)
-        tree = ast.parse((package / f"{name.replace('.', '/')}.py").read_text(encoding="utf-8"))
+        path = package / name.replace(".", "/")
+        is_package = path.is_dir()  # (a package: its __init__.py, its relative imports from inside it)
+        tree = ast.parse((path / "__init__.py" if is_package else path.with_suffix(".py")).read_text(encoding="utf-8"))
         for node in ast.walk(tree):
             if isinstance(node, ast.Import):
                 roots = [alias.name.split(".")[0] for alias in node.names]
             elif isinstance(node, ast.ImportFrom):
                 if node.level:  # within armctl: follow it ("from . import status_frames" names the module)
-                    todo.extend([node.module] if node.module else [alias.name for alias in node.names])
+                    base = name.split(".") if is_package else name.split(".")[:-1]
+                    base = base[: len(base) - (node.level - 1)]
+                    todo.extend([".".join(base + [node.module])] if node.module
+                                else [".".join(base + [alias.name]) for alias in node.names])
                     continue
                 roots = [node.module.split(".")[0]]
             else:

@@ -5,7 +5,7 @@ moves from a Cartesian move's end, whose start joints only the arm's own IK know
 Jobs Hypothesis found for the random-jobs property of tests/test_connector_settings.py, kept as
 explicit cases: an arc (G300/G301) right after a joint move.  The arc's real start is where the arm's own kinematics put the joint move's end, and
 the circle through it, the G300 point and the end may be far longer than the planned one — so
-the time bound never confirms such an arc (``Streamer._unknown_start_s``); a sighting on a later
+the time bound never confirms such an arc (``TimeBound.allowance_s``); a sighting on a later
 frame does, or the arm at rest at the last target, which the job engine also applies mid-job
 while the FIFO bound holds the next frame (``Job._rest_proves_all_written``)."""
 

@@ -8,7 +8,6 @@ model time, well under a second of wall time), in-process and in a fresh process
 from __future__ import annotations
 
 import ast
-import inspect
 import os
 import subprocess
 import sys
@@ -46,12 +45,14 @@ def line(x, y, z, speed=6000.0):
 
 
 def test_the_streamer_stays_pure():
-    tree = ast.parse(inspect.getsource(streamer_module))
-    imported = {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, (ast.Import, ast.ImportFrom))
-                for alias in node.names} | {node.module.split(".")[0] for node in ast.walk(tree)
-                                            if isinstance(node, ast.ImportFrom) and node.module}
-    assert not imported & {"logging", "time", "serial", "click", "rich", "threading"}
-    assert "print(" not in inspect.getsource(streamer_module)
+    for path in sorted(Path(streamer_module.__file__).parent.glob("*.py")):  # every module of the package
+        source = path.read_text(encoding="utf-8")
+        tree = ast.parse(source)
+        imported = {alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, (ast.Import, ast.ImportFrom))
+                    for alias in node.names} | {node.module.split(".")[0] for node in ast.walk(tree)
+                                                if isinstance(node, ast.ImportFrom) and node.module}
+        assert not imported & {"logging", "time", "serial", "click", "rich", "threading"}, path.name
+        assert "print(" not in source, path.name
 
 
 def test_write_reason_names_the_wire_the_lead_and_the_capacity():

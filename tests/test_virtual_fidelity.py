@@ -49,8 +49,8 @@ EXPECTED = {  # (the engine's frames read and written with their model times, th
     "sd_program": ("294f9cf754cad7ef", ""),
     "square_circle": ("58fef2b545a618aa", ""),
     "worktable": ("58b11fbc5c5d51a6", ""),
-    # The log re-recorded when a joint move from a Cartesian end got its time allowance (Streamer.
-    # _unknown_start_s): the same frames read and written; the closing POSE 0, confirmed by time at
+    # The log re-recorded when a joint move from a Cartesian end got its time allowance (armctl/
+    # streamer/time_bound.py, TimeBound.allowance_s): the same frames read and written; the closing POSE 0, confirmed by time at
     # 44.16 s before, is confirmed by the arm's reports at 44.37 s (15 by reports, 1 by time).
     # The log re-recorded for the write-ahead journal (armctl/joblog.py format 2): each record
     # sealed (seq, crc), a frame's record (with n, at, next, target) before the frame, progress

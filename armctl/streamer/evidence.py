@@ -1,0 +1,290 @@
+"""Position and joint evidence: which pending frames a status report may have been taken on.
+
+Strategy: a report is matched against the paths of the pending frames (``search``), and the
+result is a ``Sighting`` — the earliest frame the arm is at least at, every candidate with the
+window of its path the report puts the arm in, and whether the previous report of the same
+stream agrees.  This part concludes nothing itself: the streamer moves the lower bound only on
+an agreed ``Sighting`` and the estimate on any.  What it guarantees is that the earliest frame
+is sound:
+
+* a stream stops at a frame it cannot judge: X/Y/Z at a frame whose X/Y/Z only the profile's
+  unverified kinematics know (``xyz_unknown``) — counted on a move from such a frame's end, never
+  past it — and joint halves at the first pending Cartesian frame (that would need IK), and on
+  a joint move from a Cartesian end (its real path is not the planned one);
+* the earliest candidate counts (a point on several pending paths proves only the first), and a
+  match beyond an unsearched gap proves only the gap's first frame (``search``'s flat cost);
+* a window on the last frame a stream can judge has no upper end when the report is at its end:
+  the arm may be past it already.
+"""
+
+from __future__ import annotations
+
+import math
+from bisect import bisect_right
+from collections import deque
+from dataclasses import dataclass
+
+from ..motion import distance_to_path
+from .constants import (
+    JOINT_TOLERANCE_DEG,
+    JOINT_TRACE_FRACTION,
+    JOINT_TRACE_SLACK,
+    POSITION_TOLERANCE_MM,
+    SCAN_WINDOW_FRAMES,
+)
+from .frames import SentFrame, est_end
+from .geometry import TimeMemo, estimate_off_s, in_frame, joint_half_fraction, trace_deviation_mm
+from .ledger import Ledger
+
+
+@dataclass(slots=True)
+class Sighting:
+    """One report matched: ``earliest`` (None: on no pending path searched), its ``candidates``
+    (index, lo, hi), ``settled`` when the estimate already has the arm where the earliest does;
+    ``previous`` is this stream's last earliest (None: no agreement possible) and
+    ``least_fraction`` the least fraction of ``earliest`` both reports allow (0 unless both were
+    on it).  ``could_be_on(frame)`` says whether the report may lie on a frame (the loss
+    checks); ``off_path_xyz`` is the position when it lies on no pending path (the reversal
+    check); ``beyond``: only frames past one the stream cannot judge matched (``end`` on), so it
+    may re-time the estimate, and nothing else."""
+
+    stream: str
+    earliest: int | None
+    candidates: list
+    settled: bool = False
+    could_be_on: object = None
+    previous: int | None = None
+    least_fraction: float = 0.0
+    match: object = None
+    end: int = 0
+    off_path_xyz: tuple | None = None
+    beyond: bool = False
+
+
+class Sightings:
+    """Matches reports against the pending frames (see the module docstring)."""
+
+    def __init__(self, ledger: Ledger, memo: TimeMemo, kinematics_verified: bool, reports_robot_xyz: bool) -> None:
+        self.ledger, self.memo = ledger, memo
+        self.kinematics_verified = kinematics_verified
+        self.reports_robot_xyz = reports_robot_xyz
+        self.last_candidate: dict[str, int | None] = {}
+        self.last_fraction: dict[str, float | None] = {}  # the least fraction on that candidate
+        self.cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
+        self.blind: deque[int] = deque()  # indexes of pending frames whose X/Y/Z cannot be judged (positions stop there)
+        self.joints_unknown: deque[int] = deque()  # ... joint frames whose path is not the planned one (joint halves stop past them)
+
+    def written(self, frame: SentFrame) -> None:
+        """Note what a frame just written lets each stream judge."""
+        segment = frame.segment
+        verified = self.kinematics_verified
+        if segment.kind == "joint" and verified:
+            frame.xyz_tolerance_mm = POSITION_TOLERANCE_MM + JOINT_TRACE_SLACK * trace_deviation_mm(segment)
+        if segment.kind in ("line", "arc"):
+            self.cartesian.append(frame.index)
+        elif not frame.path_known:
+            self.joints_unknown.append(frame.index)
+        if not verified and (segment.kind == "joint" or segment.end.xyz_derived) or not frame.path_known:
+            self.blind.append(frame.index)
+
+    def remember(self, stream: str, earliest: int | None, candidates) -> tuple[int | None, float]:
+        """Keep this report's earliest frame for the next of its stream; the previous one's and
+        the least fraction both allow on ``earliest`` (0 unless both were on it)."""
+        previous = self.last_candidate.get(stream)
+        previous_fraction = self.last_fraction.get(stream)
+        self.last_candidate[stream] = earliest
+        fraction = None
+        for index, lo, _ in candidates:
+            if index == earliest:
+                fraction = lo
+                break
+        self.last_fraction[stream] = fraction
+        both = previous == earliest and fraction is not None and previous_fraction is not None
+        return previous, (max(0.0, min(previous_fraction, fraction)) if both else 0.0)
+
+    def _sighting(self, stream: str, earliest, candidates, settled: bool, could_be_on, match, end: int,
+                  off_path_xyz=None) -> Sighting:
+        previous, least = self.remember(stream, earliest, candidates)
+        return Sighting(stream, earliest, candidates, settled, could_be_on, previous, least, match, end, off_path_xyz)
+
+    def position(self, xyz, now: float) -> Sighting | None:
+        """A reported X/Y/Z at ``now``; None when it can say nothing."""
+        robot, verified = self.reports_robot_xyz, self.kinematics_verified
+
+        def match(sent: SentFrame):
+            segment = sent.segment
+            if not verified and (segment.kind == "joint" or segment.end.xyz_derived):
+                return None  # its X/Y/Z exist only through the profile's unverified FK
+            distance, fraction = distance_to_path(segment, in_frame(xyz, segment.start.origin_mm) if robot else xyz)
+            if distance > sent.xyz_tolerance_mm:
+                return None
+            if segment.kind == "joint":
+                slack = JOINT_TRACE_FRACTION  # matched on chords of its trace
+            else:
+                slack = sent.xyz_tolerance_mm / segment.length if segment.length > 0 else 1.0
+            if not sent.path_known:
+                # on the planned path near where the real one may run: at least this far along,
+                # perhaps past its end already (the search stops at it), so no upper end —
+                # else the arm at rest at its target would hold the estimate there for ever
+                return fraction - slack, math.inf
+            return fraction - slack, fraction + slack
+
+        # A position says nothing about a frame whose X/Y/Z only the unverified kinematics know,
+        # nor about any frame after it: the arm may be on that frame, at a point that also lies
+        # on a later path (a wrist turning in place, then a move that starts there).
+        pending = self.ledger.pending
+        blind, first = self.blind, pending[0].index if pending else self.ledger.sent
+        while blind and blind[0] < first:
+            blind.popleft()  # consumed
+        end = blind[0] - first if blind else len(pending)
+        if blind and not pending[end].path_known:
+            end += 1  # a line from an unverified joint end: a sighting may count on it, never past it
+        if blind and end == 0:
+            return None
+
+        def could_be_on(sent: SentFrame) -> bool:  # for the loss check: a frame this report may lie on
+            segment = sent.segment
+            return (not verified and (segment.kind == "joint" or segment.end.xyz_derived) or not sent.path_known
+                    or match(sent) is not None)
+
+        earliest, candidates, settled = self.search(match, end, now)
+        if earliest is None and end < len(pending):
+            # the arm may be on the frame that cannot be judged: no evidence — but a report on
+            # a later frame's path still tells the estimate where the arm most likely is
+            return Sighting("position", None, candidates, match=match, end=end, beyond=True)
+        off_path = xyz if earliest is None and not blind else None
+        return self._sighting("position", earliest, candidates, settled, could_be_on, match, end, off_path)
+
+    def joint_half(self, offset: int, values, now: float) -> Sighting | None:
+        """Joints ``offset``…``offset+2`` reported at ``now``; None when they can say nothing.
+        Joint halves say nothing about a Cartesian segment (that would need IK), so a match on a
+        joint segment counts only up to the first pending Cartesian segment."""
+        stream = f"joints{offset}"
+        pending = self.ledger.pending
+        if not pending:
+            self.remember(stream, None, [])
+            return None
+        cartesian, first = self.cartesian, pending[0].index
+        while cartesian and cartesian[0] < first:
+            cartesian.popleft()  # consumed
+        end = cartesian[0] - first if cartesian else len(pending)
+        if end == 0:
+            return None  # the arm may be on this Cartesian segment: no evidence from joints
+        unknown = self.joints_unknown
+        while unknown and unknown[0] < first:
+            unknown.popleft()  # consumed
+        if unknown and unknown[0] - first < end:
+            # A joint move from a Cartesian end (its real start only the arm's IK knows): its
+            # real path may pass along a later frame's, so a sighting counts on it, never past it.
+            end = unknown[0] - first + 1
+        verified = self.kinematics_verified
+
+        def match(sent: SentFrame):
+            if not verified and sent.segment.end.joints_derived:
+                return None  # a still frame whose joints exist only through the profile's unverified IK
+            found = joint_half_fraction(sent.segment, offset, values)
+            if found is None or sent.path_known:
+                return found
+            return found[0], math.inf  # at least this far along, perhaps past its end already
+
+        def could_be_on(sent: SentFrame) -> bool:  # for the loss check: joints cannot judge a Cartesian frame
+            return sent.segment.kind not in ("joint", "still") or match(sent) is not None
+
+        earliest, candidates, settled = self.search(match, end, now)
+        if earliest is None and end < len(pending):
+            return None  # the arm may be on the Cartesian segment after these: no evidence
+        return self._sighting(stream, earliest, candidates, settled, could_be_on, match, end)
+
+    def scan(self, match, end: int, now: float):
+        """``search``'s (earliest, candidates)."""
+        return self.search(match, end, now)[:2]
+
+    def search(self, match, end: int, now: float):
+        """Match one observation against the pending frames before ``end``: (earliest, candidates,
+        settled) — settled when the earliest candidate is the one where the estimate has the arm
+        (nothing to re-anchor).
+
+        Flat cost: the search covers the oldest ``SCAN_WINDOW_FRAMES`` pending frames (where the
+        lower bound's evidence is) and as many around the frame the estimate has in progress
+        (where the re-anchoring evidence is); the rest only when neither window matches.  The
+        earliest candidate stays sound: with no match among the oldest frames and a match
+        further on, the arm is at least at the first frame not searched, so that is the
+        earliest index reported (evidence no stronger than what was searched)."""
+        pending = self.ledger.pending
+        if 0 < end < len(pending):
+            # Cut before a frame this stream cannot judge: seen at the end of the last frame it
+            # can (or anywhere on a still one), the arm may be past it already, so that window has
+            # no upper end — else an arm at rest there (a held G300 whose joints 4-6 the arc
+            # keeps, the target of a joint move) would hold the estimate, and the job's end, back.
+            edge, judge = pending[end - 1], match
+
+            def match(sent: SentFrame):
+                found = judge(sent)
+                if sent is edge and found is not None and found[1] >= 1.0:
+                    return found[0], math.inf
+                return found
+        candidates: list[tuple[int, float, float]] = []
+        time_at = self.memo.time_at
+        head = min(end, SCAN_WINDOW_FRAMES)
+        for k in range(head):
+            sent = pending[k]
+            found = match(sent)
+            if found is not None:
+                candidates.append((sent.index, *found))
+                if estimate_off_s(sent, *found, now, time_at) == 0.0:
+                    # The usual case: the earliest candidate is where the estimate has the arm,
+                    # so no later candidate can change the bound or the estimate.
+                    return sent.index, candidates, True
+                break
+        else:
+            k = head
+
+        def search(lo: int, hi: int) -> None:
+            for j in range(lo, hi):
+                sent = pending[j]
+                found = match(sent)
+                if found is not None:
+                    candidates.append((sent.index, *found))
+
+        search(k + 1, head)
+        if head == end:
+            return (candidates[0][0] if candidates else None), candidates, False
+        in_head = bool(candidates)
+        centre = bisect_right(pending, now, key=est_end)  # the frame the estimate has in progress
+        lo = max(head, centre - SCAN_WINDOW_FRAMES // 2)
+        hi = min(end, max(lo, centre + SCAN_WINDOW_FRAMES // 2))
+        search(lo, hi)
+        if in_head or (candidates and lo == head):
+            return candidates[0][0], candidates, False
+        if candidates:
+            # Nothing among the oldest frames: the arm is at least at the first frame not searched.
+            return pending[head].index, candidates, False
+        search(head, lo)  # neither window matched (the estimate is far off, or this is noise)
+        search(hi, end)
+        return (candidates[0][0] if candidates else None), candidates, False
+
+
+def ran_at_rest(last: SentFrame, recent_sent, kinematics_verified: bool) -> bool:
+    """Whether the arm at rest at the target of ``last`` (a frame written; the caller saw it
+    there) proves it ran — had it been dropped or cleared, the arm would rest where an
+    earlier frame ended — that is, unless that is where the arm may rest anyway: at its
+    start, or at the end of an earlier frame kept (a way back to the same point), or
+    somewhere only the profile's kinematics know (its path not the planned one)."""
+    segment = last.segment
+    if not (segment.moves_reported and last.path_known):
+        return False
+    by_joints = segment.kind == "joint" or segment.end.xyz_derived  # what ``Job._at_end_of`` compares
+    tolerance = 2 * (JOINT_TOLERANCE_DEG if by_joints else POSITION_TOLERANCE_MM)
+    target = segment.end.joints if by_joints else segment.end.xyz
+    for sent in recent_sent:  # (``last`` among them: its own start, then no further)
+        pose = segment.start if sent is last else sent.segment.end
+        if pose.origin_mm != segment.end.origin_mm:
+            return False
+        derived = pose.joints_derived if by_joints else pose.xyz_derived  # the profile's IK/FK: where?
+        if derived and not kinematics_verified:
+            return False
+        if max(abs(a - b) for a, b in zip(pose.joints if by_joints else pose.xyz, target)) <= tolerance:
+            return False
+        if sent is last:
+            return True
+    return False
