@@ -91,3 +91,15 @@ def test_no_class_over_300_lines():
             if isinstance(node, ast.ClassDef) and node.end_lineno - node.lineno + 1 > MAX_CLASS_LINES:
                 long[f"{path.relative_to(PACKAGE.parent)}:{node.name}"] = node.end_lineno - node.lineno + 1
     assert long == {}
+
+
+def test_every_package_of_armctl_is_in_the_wheel():
+    """pyproject.toml names its packages one by one (armctl.grammars lives outside armctl/): a
+    package made by splitting a module must be named there too, or the installed wheel lacks it
+    while an editable install still finds it."""
+    import tomllib
+
+    listed = set(tomllib.loads((PACKAGE.parent / "pyproject.toml").read_text(encoding="utf-8"))
+                 ["tool"]["setuptools"]["packages"])
+    on_disk = {".".join(p.parent.relative_to(PACKAGE.parent).parts) for p in PACKAGE.rglob("__init__.py")}
+    assert on_disk - listed == set()
