@@ -233,24 +233,34 @@ class Link:
 
     def take(self, data: bytes, news: News | None = None) -> bool:
         """Feed bytes read to the status reader and the state; whether a frame was found — with
-        ``news``, whether one of them was news to it (it takes every frame found: it is asked
-        again with those after the one it named)."""
+        ``news`` (a virtual wait), whether one of them was news to it (it takes every frame
+        found: it is asked again with those after the one it named; the state merges them when
+        it is read, as a run's)."""
         now = self.clock()
         frames = self.reader.feed(data)
+        if news is not None:
+            return self._take_news(frames, now, len(data), news)
         with self._changed:
             self.bytes_received += len(data)
-            update = self.state.update
+            update, on_status = self.state.update, self.on_status
             for frame in frames:
                 update(frame, now)
-            if news is None:
-                on_status = self.on_status
                 if on_status is not None:
-                    for frame in frames:
-                        on_status(frame, now)
+                    on_status(frame, now)
             if not self.clock.virtual:  # a virtual link's waits run the simulator: nobody sleeps on it
                 self._changed.notify_all()
-        if news is None or not frames:
-            return bool(frames)
+        return bool(frames)
+
+    def _take_news(self, frames: list, now: float, received_bytes: int, news: News) -> bool:
+        with self._changed:
+            self.bytes_received += received_bytes
+            if not frames:
+                return False
+            self.unmerged += [(frame, now) for frame in frames]
+            if len(self.unmerged) >= UNMERGED_FRAMES_MAX:
+                self._merge()
+        if len(frames) == 1:
+            return news(frames, [now]) is not None
         found, start = False, 0
         while start < len(frames):
             rest = frames[start:]
