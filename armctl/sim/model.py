@@ -259,7 +259,7 @@ class SimulatedArm:
 
     def status_frames(self, steps: list) -> list[bytes]:
         """``status_frame`` of each step of a ``status_run`` in ``steps``, in one call (the link
-        builds a batch at a time: ``Link._take_run``)."""
+        builds a batch at a time: ``VirtualWaits._take_run``)."""
         return self._status.encode_steps(self.executor, steps)
 
     def commit_status_run(self, run: list[tuple[float, int, float, float, float]], frames: int) -> None:
