@@ -154,7 +154,7 @@ class Link:
         self.clock: Clock = virtual or (port_clock(port, url) if clock is None else as_clock(clock))
         self.reader = StatusReader()
         self._state = state or ArmState()
-        # Frames read by virtual runs, merged into the state when it is read (``state``): nothing
+        # Frames read by virtual waits, merged into the state when it is read (``state``): nothing
         # reads it while a job runs, and the kinds taken as read then cost one merge, not one a
         # frame (``ArmState.update_many``); at most ``UNMERGED_FRAMES_MAX`` held (a long job).
         self.unmerged: list = []
@@ -252,6 +252,7 @@ class Link:
         return bool(frames)
 
     def _take_news(self, frames: list, now: float, received_bytes: int, news: News) -> bool:
+        """``take``'s frames of a virtual wait: held for the state, every one handed to ``news``."""
         with self._changed:
             self.bytes_received += received_bytes
             if not frames:

@@ -63,13 +63,9 @@ class VirtualWaits:
         end_s = max(until_s, clock.now_s + VIRTUAL_MIN_STEP_S) if until_s is not None else None
         run_frames = VIRTUAL_RUN_FRAMES_MIN
         tail, self.tail = self.tail, None
-        while True:
+        while True:  # burst after burst (or run after run) until one holds news, or end_s
             if news is not None:
-                if tail is not None and tail[2] == clock.now_s:
-                    run = _steps_by(tail[0], tail[1], end_s)
-                    built = tail[3][tail[1]:tail[1] + len(run)]
-                else:
-                    run, built = self.link.port.virtual_status_run(end_s, VIRTUAL_MIN_STEP_S, run_frames), []
+                run, built = self._next_run(tail, end_s, run_frames)
                 tail = None
                 if run:
                     read, is_news = self._take_run(run, built, news)
@@ -81,6 +77,15 @@ class VirtualWaits:
                     # a frame the run could not decode (never on a clean line): the ordinary way reads it
             if self._burst(end_s, news) or (end_s is not None and clock.now_s >= end_s):
                 return
+
+    def _next_run(self, tail, end_s: float | None, run_frames: int) -> tuple[list, list]:
+        """The simulator's next quiet steps and the frames built for them already: the steps
+        kept from the last run when the clock is where it left them (cut at ``end_s``), else up
+        to ``run_frames`` timed afresh (none when the next step is not a quiet one)."""
+        if tail is not None and tail[2] == self.link.clock.now_s:
+            run = _steps_by(tail[0], tail[1], end_s)
+            return run, tail[3][tail[1]:tail[1] + len(run)]
+        return self.link.port.virtual_status_run(end_s, VIRTUAL_MIN_STEP_S, run_frames), []
 
     def _burst(self, end_s: float | None, news: News | None) -> bool:
         """Read the next status burst (``next_event_s``, at least ``VIRTUAL_MIN_STEP_S`` on and
