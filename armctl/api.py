@@ -979,7 +979,6 @@ class Arm:
         control = _JobControl(runner, spec.on_progress, spec.timeout_s, observer, journal_for(runner, script, journal))
         runner.on_update = control.on_update
         link.on_status = runner.on_status
-        link.on_status_run = runner.on_status_run
         with self._lock:
             self._job = control
             stopped = stops != self._stops  # a stop() between the check above and here
@@ -995,7 +994,6 @@ class Arm:
                 self._job = None
                 control.end()
             link.on_status = None
-            link.on_status_run = None
         runner.view.messages.extend(stale_notes(self._profile, link.url, runner.streamer.slowest_proven,
                                                 outcome == "frames may have been lost"))
         result = RunResult.of(runner.view, outcome, script.lines(), estimated_job_s=plan.estimate.job_s)

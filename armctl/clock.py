@@ -6,7 +6,7 @@ that is the wall clock; for ``sim://?speed=N`` it is the wall clock × N (the si
 N times faster); for ``sim://?clock=virtual`` it is a ``VirtualClock`` that moves only when the
 program using the port waits, so waiting costs nothing and a host jumps from event to event.
 The port owns the clock (``Link.clock``, made once when it opens, from the port itself and the
-``sim://`` options parsed once by armctl/sim/protocol_sim.py); everything else asks it
+``sim://`` options parsed once by armctl/sim/protocol_sim.py: armctl/link.py's ``port_clock``); everything else asks it
 (``now()``, ``virtual``, ``wall_seconds``) and waits through the link (``Link.wait``), so no
 module branches on the kind of port.
 """
@@ -66,20 +66,3 @@ def as_clock(clock) -> Clock:
     """A ``Clock`` from a Clock or a plain callable of model seconds (tests pass lambdas)."""
     return clock if isinstance(clock, Clock) else Clock(1.0, clock)
 
-
-def port_clock(port, url: str) -> Clock:
-    """The clock of an opened port: the simulator's virtual clock, else the wall × the
-    ``sim://`` speed (1 for any other port)."""
-    virtual = getattr(port, "virtual_clock", None)
-    if virtual is not None:
-        return virtual
-    return Clock(sim_time_scale(url))
-
-
-def sim_time_scale(url: str) -> float:
-    """``sim://?speed=N``'s N (1 for any other port); the one parse is protocol_sim's."""
-    if not url.startswith("sim://"):
-        return 1.0
-    from .sim.protocol_sim import parse_sim_url
-
-    return parse_sim_url(url).time_scale

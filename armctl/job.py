@@ -144,25 +144,9 @@ class Outcome(StrEnum):
     PAUSED = "paused by the script"  # the script's own PAUSE paused the arm with lines still to run
 
 
-@dataclass(frozen=True, slots=True)
-class Write:
-    """Write ``frame`` now, then call ``wrote(now)``; ``statement`` is None for an abort frame."""
-
-    frame: bytes
-    statement: object | None
-    control: str | None = None  # "pause toggle" for one the user asked for (``Job.pause``/``resume``)
-
-
-@dataclass(frozen=True, slots=True)
-class Wait:
-    """Nothing to do until ``until_s`` (None: until the next status frame) or the next status frame."""
-
-    until_s: float | None
-
-
-@dataclass(frozen=True, slots=True)
-class Finished:
-    outcome: Outcome
+# The host's actions: the one vocabulary of the host driver (armctl/actions.py), imported here
+# where they were defined (``from armctl.job import Write, Wait, Finished`` keeps working).
+from .actions import Done, Finished, Wait, Write  # noqa: E402,F401
 
 
 @dataclass

@@ -1,58 +1,50 @@
 """``armctl run``'s host: the pure job engine (armctl/job.py) driven against an open Link.
 
 Strategy: the edge where time is real.  The engine holds every rule of a job — pacing through
-the streamer, when it is over, how it stops, where to resume; this module only carries out
-what it asks, in one loop: drain the status frames the link has read into it, ask
-``next_action``, and write (``Write``: the --log record made durable first, link.write, ``wrote``), wait
-(``Wait``: through the link, until that time or the next status frame) or stop
-(``Finished``).  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S``
-so Ctrl-C and the panel stay prompt, the next frame may be handed to the port up to
-``WRITE_AHEAD_S`` before the line is free (a late wake-up then never idles the line) and the
-port's own unsent bytes push its start back (``Link.unsent_s``); on a virtual clock the engine
-takes each frame as the link reads it (``on_status``) and the wait jumps from burst to burst
-until a frame is news to the engine (``Job.receive_status``), a request or a stop is queued, or
-the engine's own next time comes: a virtual job costs its status frames, and a turn of this loop
-only for a frame that can change the next action (``benchmarks/virtual_run.py`` measures it
-against the bare simulator).
+the streamer, when it is over, how it stops, where to resume; the one host driver
+(armctl/driver.py) carries out what it asks — write, wait, stop — and this module is the job's
+``Host``: before each action the stop asked for and the status frames read meanwhile (the
+link's reader thread queues them, ``on_status``; the panel's requests first), before a write the
+--log record made durable (a frame without one does not go), after it ``Job.wrote`` and the
+panel.  Time is the link's one ``Clock``: on the wall a wait is capped at ``POLL_S`` so Ctrl-C
+and the panel stay prompt, the next frame may be handed to the port up to ``WRITE_AHEAD_S``
+before the line is free (a late wake-up then never idles the line) and the port's own unsent
+bytes push its start back (``Link.unsent_s``); on a virtual clock the link hands the frames to
+``take_statuses`` as it reads them, and the wait jumps from burst to burst until a frame is news
+to the engine (``Job.receive_statuses``), a request or a stop is queued, or the engine's own
+next time comes: a virtual job costs its status frames, and a turn of the loop only for a frame
+that can change the next action (``benchmarks/virtual_run.py`` measures it against the bare
+simulator).  Either way the engine takes status frames one way: ``Job.receive_statuses``.
 
-The link's reader thread (none on a virtual clock) only queues status frames with the time they
-were read (the loop drains them into the engine); every ending — finished, Ctrl-C, a lost port,
-a failure such as a --log that cannot be written — leaves a ``RunView`` that says the last line
-sent, the last line known executed and where to resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks
-to stop at the next safe point, and the caller sends the abort sequence (``abort``).
-
-With ``-v`` it tells the pacing story through ``logging`` (logger ``armctl.runner``): the
-streamer leaves why it decided as data (``write_reason``, ``bound_evidence``) and this edge logs
-a line only when that reason changes, so a long job reads as a few lines, not one per frame.
+Every ending — finished, Ctrl-C, a lost port, a failure such as a --log that cannot be written —
+leaves a ``RunView`` that says the last line sent, the last line known executed and where to
+resume.  A failure the runner meets itself (``fail``) takes the Ctrl-C path: it asks to stop at
+the next safe point, and the caller sends the abort sequence (``abort``).  With ``-v`` it tells
+the pacing story (armctl/pacing_story.py).
 """
 
 from __future__ import annotations
 
 import json
-import logging
 import queue
 from typing import Callable, Iterator
 
+from .driver import Host, drive
 from .errors import ArmctlError, PortError
 from .link import WRITE_AHEAD_S
 from .job import ABORT_SEQUENCES, abort_frames, resume_frames, Finished, Job, RunView, Wait, Write, _moved_clearly  # noqa: F401  (the runner's surface)
+from .pacing_story import PacingStory, telling
 from .protocol import Command, StatusFrame
-from .streamer import Evidence, Streamer, WaitReason
-
-_logger = logging.getLogger(__name__)
+from .streamer import Streamer
 
 POLL_S = 0.05  # the longest wait on a wall clock (model seconds): Ctrl-C and the panel stay prompt
-# -v: the wire is told as the reason only once this many frames in a row waited for it alone
-# (about a second at 9600 baud): between frames held back by the lead or the FIFO, the line's
-# own pace between two writes is not news, and telling it would alternate with them frame by frame.
-WIRE_STORY_FRAMES = 20
 
 
 class Aborted(ArmctlError):
     """The user stopped the job (Ctrl-C); the view says where."""
 
 
-class JobRunner:
+class JobRunner(Host):
     """Streams compiled statements through ``link`` with ``streamer``'s pacing (a ``Job``)."""
 
     def __init__(
@@ -89,15 +81,12 @@ class JobRunner:
         self.stop_requested = False
         self._aborting = False
         self._cut = False  # cut_short: the abort's wait for the arm ends at the next turn
-        self._told_wait: WaitReason | None = None  # the last wait reason logged
-        self._wire_frames = 0  # frames in a row that waited for the wire alone (WIRE_STORY_FRAMES)
-        self._wire_counted_at = -1  # frames_sent when a wire wait was last counted (once a frame)
-        self._told_evidence: Evidence | None = None  # the last evidence logged
+        self.story = PacingStory(streamer, view)
         # Nothing to tell for a frame (no --log, -v's logger quiet): read at each wait, so a
-        # virtual-time frame costs no logging call (``on_status``)
+        # virtual-time frame costs no logging call (``take_statuses``)
         self._quiet = False
-        self._job_receive = self.job.receive_status
-        self._job_receive_run = self.job.receive_statuses
+        self._job_receive = self.job.receive_statuses
+        self.news = self.take_statuses if self._virtual else None
         if not self._virtual:  # (a virtual clock is never late: its writes go at the line's instant)
             streamer.write_ahead_s = max(streamer.write_ahead_s, WRITE_AHEAD_S)
 
@@ -116,21 +105,36 @@ class JobRunner:
 
     # --- time and status --------------------------------------------------------------------
 
-    def now(self) -> float:
+    def now(self, clock=None) -> float:
         """Model seconds since the runner was made (the link's clock)."""
         return self.clock() - self._origin_s
 
-    def on_status(self, frame: StatusFrame, read_s: float) -> bool | None:
-        """Called by the link with each frame and the model time it was read.  From its reader
-        thread (a wall clock): queue it for the loop.  On a virtual clock the caller is the loop
-        itself, waiting in ``link.wait``: the engine takes the frame at once (the requests queued
-        before it first, as ``_drain`` orders them), and the answer says whether the wait must
-        return — only when the frame is news to the engine (``Job.receive_status``), a request
-        is queued or a stop asked; otherwise the link reads on to the next burst."""
-        at_s = read_s - self._origin_s
-        if not self._virtual:
-            self.status_queue.put((frame, at_s))
+    def on_status(self, frame: StatusFrame, read_s: float) -> None:
+        """Called by the link's reader thread (a wall clock) with each frame and the model time
+        it was read: queued for the loop's next turn."""
+        self.status_queue.put((frame, read_s - self._origin_s))
+
+    def take_statuses(self, frames: list, times: list) -> int | None:
+        """A virtual wait's frames (``Host.news``), read at the model time at the same place of
+        ``times``, in order: the place of the first that is news — it may change the engine's
+        next action, a request is queued or a stop asked (the frames after it are not taken) —
+        or None when the link may read on past them all.  With nothing to tell (no --log, -v
+        quiet) and no request queued, the engine takes them in one call; a stop asked meanwhile
+        is seen after them (they are a batch of the simulator's quiet frames)."""
+        origin_s = self._origin_s
+        if not self._quiet or self.stop_requested or not self.requests.empty():
+            for k, frame in enumerate(frames):
+                if self._take_one(frame, times[k] - origin_s):
+                    return k
             return None
+        news = self._job_receive(frames, [t - origin_s for t in times] if origin_s else times)
+        if news is None and (self.stop_requested or not self.requests.empty()):
+            return len(frames) - 1
+        return news
+
+    def _take_one(self, frame: StatusFrame, at_s: float) -> bool:
+        """One frame of a virtual wait into the engine (the requests queued before it first, as
+        ``turn`` orders them); whether it ends the wait."""
         requests = self.requests
         if not requests.empty():
             while not requests.empty():
@@ -138,103 +142,80 @@ class JobRunner:
             self._receive(frame, at_s)
             return True  # the engine's answer after a request is news
         if self._quiet:  # _receive with nothing to tell (the log level as it was when the wait began)
-            news = self._job_receive(frame, at_s) is not False
+            news = self._job_receive((frame,), (at_s,)) is not None
         else:
             news = self._receive(frame, at_s)
         return news or self.stop_requested or not requests.empty()
-
-    def on_status_run(self, frames: list, times: list) -> int | None:
-        """``on_status`` for each of ``frames`` read at the model time at the same place of
-        ``times``, in order, on a virtual clock: the place of the first whose answer is True (the
-        frames after it are not taken), or None when the link may read on past them all — with
-        nothing to tell (no --log, -v quiet) and no request queued, the engine takes them in one
-        call (``Job.receive_statuses``); a stop asked meanwhile is seen after them (they are a
-        batch of the simulator's quiet frames: ``Link._take_run``)."""
-        if not self._quiet or self.stop_requested or not self.requests.empty():
-            on_status = self.on_status
-            for k, frame in enumerate(frames):
-                if on_status(frame, times[k]) is not False:
-                    return k
-            return None
-        origin_s = self._origin_s
-        news = self._job_receive_run(frames, [t - origin_s for t in times] if origin_s else times)
-        if news is None and (self.stop_requested or not self.requests.empty()):
-            return len(frames) - 1
-        return news
 
     def control(self, request: Callable[[Job], object]) -> None:
         """Queue ``request(job)`` (e.g. ``Job.pause``) from any thread — the run panel's keys;
         the loop carries it out at its next turn, between writes (within ``POLL_S``)."""
         self.requests.put(request)
 
-    def _drain(self) -> None:
-        requests = self.requests
-        while not requests.empty():  # the panel's keys first: their effect shows in this turn
-            requests.get_nowait()(self.job)
-        status_queue = self.status_queue
-        if status_queue.empty():
-            return
-        while True:
-            try:
-                frame, at_s = status_queue.get_nowait()
-            except queue.Empty:
-                return
-            self._receive(frame, at_s)
-
     def _receive(self, frame: StatusFrame, at_s: float) -> bool:
         """One status frame into the engine (and -v's story, the --log); whether it was news."""
-        news = self.job.receive_status(frame, at_s)
-        if _logger.isEnabledFor(logging.INFO):
-            self._explain_bound(at_s)  # the streamer names new evidence only when the bound moved
+        news = self._job_receive((frame,), (at_s,)) is not None
+        if telling():
+            self.story.bound(at_s)  # the streamer names new evidence only when the bound moved
         if self.log is not None:
             self._log("rx", frame.encode(), at_s, kind=frame.KIND)
-        return news is not False
+        return news
 
-    # --- the job ----------------------------------------------------------------------------
+    # --- the job: the driver's hooks --------------------------------------------------------
 
     def run(self) -> RunView:
         """Stream every statement, then wait for the arm to finish. Raises KeyboardInterrupt
         at the first safe point after a stop was asked for (then call ``abort``), or
         PortError (after updating the view)."""
         try:
-            self._loop()
+            drive(self.job, self.link, self)
         except PortError:
             self.job.port_lost()
             self.on_update(self.view)
             raise
         return self.view
 
-    def _loop(self) -> Finished:
-        job, link, view, on_update = self.job, self.link, self.view, self.on_update
-        while True:
-            if self.stop_requested and (self._cut or not self._aborting):
-                raise KeyboardInterrupt  # Ctrl-C is deferred to here: between writes, never inside one
-            self._drain()
-            if link.error is not None:
-                raise link.error
-            now = self.now()
-            action = job.next_action(now)
-            if type(action) is Write:
-                if self.log is not None and not self._log_write(action, now):
-                    continue  # no durable record, no frame: the failure stops the job (``fail``)
-                if not self._virtual:
-                    self._note_unsent(now)
-                link.write(action.frame)
-                job.wrote(now)
-                on_update(view)  # only after every record of the write is complete
-            elif type(action) is Wait:
-                if job.streaming:
-                    self._explain_wait(now, action.until_s)
-                on_update(view)
-                until_s = action.until_s
-                if not self._virtual:  # a wall clock: wake at least every POLL_S (Ctrl-C, the panel)
-                    until_s = now + POLL_S if until_s is None else min(until_s, now + POLL_S)
-                self._quiet = self.log is None and not _logger.isEnabledFor(logging.INFO)
-                link.wait(None if until_s is None else until_s + self._origin_s, news_only=True)
-            else:
-                self._explain_bound(now)  # the arm at rest at the last target
-                on_update(view)
-                return action
+    def turn(self) -> None:
+        if self.stop_requested and (self._cut or not self._aborting):
+            raise KeyboardInterrupt  # Ctrl-C is deferred to here: between writes, never inside one
+        self._drain()
+
+    def _drain(self) -> None:
+        requests = self.requests
+        while not requests.empty():  # the panel's keys first: their effect shows in this turn
+            requests.get_nowait()(self.job)
+        status_queue = self.status_queue
+        while not status_queue.empty():
+            try:
+                frame, at_s = status_queue.get_nowait()
+            except queue.Empty:
+                return
+            self._receive(frame, at_s)
+
+    def writing(self, action: Write, now: float) -> bool:
+        if self.log is not None and not self._log_write(action, now):
+            return False  # no durable record, no frame: the failure stops the job (``fail``)
+        if not self._virtual:
+            self._note_unsent(now)
+        return True
+
+    def wrote(self, action: Write, now: float) -> None:
+        self.job.wrote(now)
+        self.on_update(self.view)  # only after every record of the write is complete
+
+    def waiting(self, action: Wait, now: float) -> float | None:
+        if self.job.streaming:
+            self.story.wait(now, action.until_s)
+        self.on_update(self.view)
+        until_s = action.until_s
+        if not self._virtual:  # a wall clock: wake at least every POLL_S (Ctrl-C, the panel)
+            until_s = now + POLL_S if until_s is None else min(until_s, now + POLL_S)
+        self._quiet = self.log is None and not telling()
+        return None if until_s is None else until_s + self._origin_s
+
+    def done(self, action, now: float) -> None:
+        self.story.bound(now)  # the arm at rest at the last target
+        self.on_update(self.view)
 
     def _note_unsent(self, now: float) -> None:
         """Before a write on a wall clock: what the port still holds leaves first, so the frame
@@ -278,60 +259,12 @@ class JobRunner:
         job.request_stop()
         self._aborting = self.stop_requested = True
         try:
-            self._loop()
+            drive(job, self.link, self)
         except PortError as error:
             job.port_lost(f"the abort sequence was NOT sent: {error}" if job.aborting else str(error))
             self.on_update(self.view)
 
-    # --- -v: the pacing story ---------------------------------------------------------------
-
-    def _explain_wait(self, now: float, when: float | None) -> None:
-        """Log why the next write waits, when the reason differs from the last one logged."""
-        reason = self.streamer.write_reason
-        if reason is WaitReason.READY or not _logger.isEnabledFor(logging.INFO):
-            return
-        if reason is not WaitReason.WIRE:
-            self._wire_frames = 0
-        elif self._wire_counted_at != self.view.frames_sent:
-            self._wire_frames += 1
-            self._wire_counted_at = self.view.frames_sent
-        if reason is self._told_wait or (reason is WaitReason.WIRE and self._wire_frames < WIRE_STORY_FRAMES):
-            return
-        self._told_wait = reason
-        streamer, line = self.streamer, self.view.next_statement.line
-        if reason is WaitReason.CAPACITY:
-            why = (f"the FIFO's capacity: {streamer.frames_in_flight_bound} frames written and not known consumed, "
-                   f"the bound is {streamer.limit_frames} (the connector's FIFO less a margin); only new evidence "
-                   "that frames finished lets it go")
-        elif reason is WaitReason.IN_ORDER:
-            why = "every frame before it to be known finished: the arm acts on this control frame as it lands"
-        elif reason is WaitReason.LEAD:
-            why = (f"the lead: {streamer.waiting_seconds(now):.2f} s of motion waits behind the move in progress "
-                   f"and this frame adds {streamer.next_frame_motion_s:.2f} s (lead {streamer.lead_s:g} s); "
-                   f"it may go in {when - now:.2f} s")
-        else:
-            why = (f"the wire: the last {WIRE_STORY_FRAMES} frames waited only for the frame before to leave at "
-                   f"the line's rate ({streamer.frame_s * 1000:.0f} ms a frame): the job is line-bound here")
-        _logger.info("t=%.2f s: line %s waits for %s", now - self.view.started_s, line, why)
-
-    def _explain_bound(self, now: float) -> None:
-        """Log what advanced the lower bound of frames consumed, when the kind of evidence changes."""
-        evidence = self.streamer.bound_evidence
-        if evidence is None or evidence is self._told_evidence or not _logger.isEnabledFor(logging.INFO):
-            return
-        self._told_evidence = evidence
-        streamer = self.streamer
-        done = streamer.last_known_done()
-        how = {
-            Evidence.POSITION: "two agreeing position reports lie on the path of a later frame",
-            Evidence.JOINTS: "two agreeing joint reports lie on the path of a later frame",
-            Evidence.TIME: f"even an arm {streamer.slowest_factor:g}x slower than the model has finished them "
-                           "(time the arm was seen running)",
-            Evidence.AT_REST: "the arm is at rest at the last target",
-        }[evidence]
-        _logger.info("t=%.2f s: evidence (%s): %s; frames known consumed: %d, through line %s",
-                     now - self.view.started_s, evidence, how, streamer.consumed_lower_bound,
-                     getattr(done, "line", "?"))
+    # --- the --log --------------------------------------------------------------------------
 
     def _log(self, direction: str, frame: bytes, at_s: float, **extra) -> None:
         """One JSON line; a log that cannot be written (disk full, EIO) stops the job (``fail``):

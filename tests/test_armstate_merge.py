@@ -10,6 +10,7 @@ from hypothesis import given, settings, strategies as st
 
 from armctl.armstate import ArmState
 from armctl.link import Link
+from test_link_news import news_of
 from armctl.protocol import (
     FileLengthStatus, FileStatus, JointsHighStatus, JointsLowStatus, PauseStatus, PositionStatus, RunPositionStatus,
     WorktableStatus, WristStatus,
@@ -60,13 +61,14 @@ def test_a_virtual_links_state_is_every_frame_it_read_merged():
         return len(seen) % 50 == 0  # news now and then: the link runs on past the rest
 
     reference = ArmState(max_speed_mm_s=100.0, max_joint_speed_deg_s=90.0)
-    link = Link.open("sim://?clock=virtual", state=copy.deepcopy(reference), on_status=on_status)
+    news = news_of(on_status)
+    link = Link.open("sim://?clock=virtual", state=copy.deepcopy(reference))
     with link:
         for _ in range(3):
-            link.wait(None, news_only=True)
+            link.wait(None, news)
         state = link.snapshot()[0]
         for _ in range(100):  # more than a merge holds (UNMERGED_FRAMES_MAX): merged on the way
-            link.wait(None, news_only=True)
+            link.wait(None, news)
         later = link.state
     assert len(seen) == 103 * 50
     for frame, now in seen[:150]:

@@ -1,13 +1,26 @@
-"""A virtual-clock ``Link.wait(…, news_only=True)`` drives the simulator burst after burst past
-the frames ``on_status`` says are no news, and returns at the first that is (or at its time
-limit); without ``news_only`` every frame ends the wait, whatever ``on_status`` answers."""
+"""A virtual-clock ``Link.wait(…, news)`` drives the simulator burst after burst past the frames
+``news`` says are no news, and returns at the first that is (or at its time limit); without
+``news`` every frame ends the wait, whatever ``on_status`` answers."""
 
 from __future__ import annotations
 
-from armctl.link import VIRTUAL_BUILD_FRAMES, Link
+from armctl.link import Link
 from armctl.protocol import STATUS_PERIOD_S
+from armctl.virtual_wait import VIRTUAL_BUILD_FRAMES
 
 URL = "sim://?clock=virtual"
+
+
+def news_of(on_status):
+    """A wait's ``news`` from a per-frame answer (True: news): the place of the first, or None."""
+
+    def news(frames, times):
+        for k, frame in enumerate(frames):
+            if on_status(frame, times[k]):
+                return k
+        return None
+
+    return news
 
 
 def _open(news_kinds):
@@ -17,28 +30,28 @@ def _open(news_kinds):
         seen.append((frame.KIND, now))
         return frame.KIND in news_kinds
 
-    return Link.open(URL, on_status=on_status), seen
+    return Link.open(URL, on_status=on_status), seen, news_of(on_status)
 
 
 def test_a_news_only_wait_reads_on_to_the_first_frame_that_is_news():
-    link, seen = _open({4})
+    link, seen, news = _open({4})
     with link:
-        link.wait(None, news_only=True)
+        link.wait(None, news)
         assert [kind for kind, _ in seen] == [0, 1, 2, 3, 4]  # the rotation up to the first kind 4
         assert link.clock.now() == seen[-1][1]  # it stopped where that frame was read
-        link.wait(None, news_only=True)
+        link.wait(None, news)
         assert [kind for kind, _ in seen[5:]] == [5, 100, 102, 103, 0, 1, 2, 3, 4]
 
 
 def test_a_news_only_wait_still_ends_at_its_time():
-    link, seen = _open(set())
+    link, seen, news = _open(set())
     with link:
-        link.wait(link.clock.now() + 10 * STATUS_PERIOD_S, news_only=True)
+        link.wait(link.clock.now() + 10 * STATUS_PERIOD_S, news)
         assert 9 <= len(seen) <= 11 and link.clock.now() == 10 * STATUS_PERIOD_S
 
 
-def test_without_news_only_every_frame_ends_the_wait():
-    link, seen = _open(set())
+def test_without_news_every_frame_ends_the_wait():
+    link, seen, _ = _open(set())
     with link:
         link.wait(None)
         assert len(seen) == 1
@@ -52,18 +65,18 @@ def _news_every(count):
         seen.append((now, frame.encode()))
         return len(seen) % count == 0
 
-    return Link.open(URL, on_status=on_status), seen
+    return Link.open(URL), seen, news_of(on_status)
 
 
 def test_the_steps_of_a_run_past_the_news_are_read_by_the_next_wait_as_a_new_run_would_time_them(monkeypatch):
     """The link keeps a status run's steps past the frame that was news, and the frames built for
-    them, for the next wait (``Link._run_tail``): the same frames at the same times as timing
+    them, for the next wait (``VirtualWaits.tail``): the same frames at the same times as timing
     each wait's run afresh, with fewer runs timed and no frame built twice; a wait's own end
     cuts them, and a write forgets them."""
     from armctl.protocol import PauseToggle
 
     def read(keep_tails: bool):
-        link, seen = _news_every(7)
+        link, seen, news = _news_every(7)
         runs = []
         status_run = link.port.virtual_status_run
 
@@ -80,21 +93,22 @@ def test_the_steps_of_a_run_past_the_news_are_read_by_the_next_wait_as_a_new_run
 
         link.port.status_frames = building
         if not keep_tails:
-            take_run = link._take_run
+            waits = link._virtual
+            take_run = waits._take_run
 
-            def forgetting(run, built=None):
-                result = take_run(run, built)
-                link._run_tail = None
+            def forgetting(run, built, news):
+                result = take_run(run, built, news)
+                waits.tail = None
                 return result
 
-            link._take_run = forgetting
+            waits._take_run = forgetting
         with link:
             for k in range(60):
                 if k == 30:
                     link.write(PauseToggle().encode())
                     link.write(PauseToggle().encode())
                 until_s = link.clock.now() + 0.2 if k % 3 == 0 else None  # some waits end by their time
-                link.wait(until_s, news_only=True)
+                link.wait(until_s, news)
             return seen, len(runs), link.clock.now(), len(built)
 
     kept, kept_runs, kept_end_s, kept_built = read(True)

@@ -42,8 +42,8 @@ class StatusWokenLink(Link):
     """A host that wakes only when a status frame arrives (every 30 ms), however short the wait
     it asked for — as a real link's reader does, and the emulator's host did."""
 
-    def idle(self, seconds: float) -> None:
-        self.wait(self.clock.now() + max(seconds, STATUS_PERIOD_S))
+    def wait(self, until_s, news=None) -> None:
+        super().wait(None if until_s is None else max(until_s, self.clock.now() + STATUS_PERIOD_S), news)
 
 
 class BufferedPort:
@@ -121,12 +121,16 @@ class BufferedPort:
             self.passed += len(chunk)
             self._port.write(chunk)
 
-    def step_virtual(self, end_s, min_step_s, size):
+    def next_event_s(self):
         self._release()
+        next_s = self._port.next_event_s()
         if self._buffer:  # stop at the adapter's next tick (or the end of a stall)
             tick_s = max(self._now_s() + self.tick_s, self._stalled_until_s or 0.0)
-            end_s = tick_s if end_s is None else min(end_s, tick_s)
-        data = self._port.step_virtual(end_s, min_step_s, size)
+            next_s = tick_s if next_s is None else min(next_s, tick_s)
+        return next_s
+
+    def advance_to(self, t_s):
+        data = self._port.advance_to(t_s)
         self._release()
         return data
 

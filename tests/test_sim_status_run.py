@@ -2,8 +2,8 @@
 
 ``SimulatedArm.status_run`` times the steps a virtual-time host would take ahead, ``status_frame``
 builds a step's frame and ``commit_status_run`` makes the steps read so: the same frames at the
-same clock times, to the last bit, as ``Serial.step_virtual`` taking them one by one.  The status
-encoder builds a pose kind on a path from ``Segment.cartesian_at``: the same floats as
+same clock times, to the last bit, as ``Serial.next_event_s`` and ``advance_to`` taking them one
+by one.  The status encoder builds a pose kind on a path from ``Segment.cartesian_at``: the same floats as
 ``Segment.sample``.  tests/test_virtual_fidelity.py holds whole runs to their recorded digests.
 """
 
@@ -37,7 +37,7 @@ def _arm() -> SimulatedArm:
 
 
 def _by_steps(end_s: float) -> list[tuple[float, bytes]]:
-    """``step_virtual``'s arithmetic, one burst at a time (model time = clock time)."""
+    """``next_event_s`` and ``advance_to``'s arithmetic, one burst at a time (model time = clock time)."""
     arm, now, read = _arm(), 0.0, []
     while now < end_s:
         now = now + max(max(0.0, arm.next_output_time() - now), MIN_STEP_S)
@@ -137,10 +137,11 @@ def test_cartesian_at_is_sample(fraction):
 
 
 def _link_reads(raise_at: int | None, until_s: float, as_run: bool = False) -> list[tuple[int, float]]:
-    """What a virtual link's news-only waits read up to ``until_s`` when ``on_status`` raises
-    (a Ctrl-C) at frame ``raise_at`` — in the middle of a run — and the waits go on after it.
-    ``as_run``: the frames of runs go to ``on_status_run`` a batch at a time, which raises
-    after taking the batch that holds frame ``raise_at`` (all its frames count as read)."""
+    """What a virtual link's waits read up to ``until_s`` when the frames' receiver raises (a
+    Ctrl-C) at frame ``raise_at`` and the waits go on after it: ``on_status`` one burst at a time,
+    or (``as_run``) a wait's ``news`` that takes the frames of runs a batch at a time and raises
+    after taking the batch that holds frame ``raise_at`` — in the middle of a run (all its
+    frames count as read)."""
     from armctl.link import Link
 
     seen: list[tuple[int, float]] = []
@@ -161,11 +162,9 @@ def _link_reads(raise_at: int | None, until_s: float, as_run: bool = False) -> l
         return None
 
     with Link.open("sim://?clock=virtual", on_status=on_status) as link:
-        if as_run:
-            link.on_status_run = on_status_run
         while link.clock.now() < until_s:
             try:
-                link.wait(until_s, news_only=True)
+                link.wait(until_s, on_status_run if as_run else None)
             except KeyboardInterrupt:
                 pass
         assert link.reader.frames == len(seen) and link.bytes_received == 9 * len(seen)

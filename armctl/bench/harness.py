@@ -4,7 +4,9 @@ Strategy: the same job engine ``armctl run`` drives (armctl/job.py) — it feeds
 status frames, writes when the strategy allows, and ends the job by the same rules (at rest at
 the last target, the deadline, the abort sequence) — with this module as its host: the clock
 jumps from event to event (the next status byte, the next moment the strategy may write, the
-engine's own next time), so an hour of arm time costs seconds.  Every strategy row goes through
+engine's own next time), so an hour of arm time costs seconds.  The loop is the one host driver
+(armctl/driver.py) with the simulated arm as its link (``_ArmLink``) and this module's hooks
+(``_BenchHost``).  Every strategy row goes through
 the engine; for the baselines armctl's streamer only watches (what is known done, the end of
 the job), the baseline paces.  The simulator's true state (FIFO, drops, what executed when) is
 read only for the result, never by the strategy (except the omniscient baseline, which exists
@@ -18,7 +20,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, NamedTuple, Sequence
 
-from ..job import Finished, Job, RunView, Write, agreed_pause, resume_frames
+from ..actions import Wait, Write
+from ..driver import Host, drive
+from ..job import Job, RunView, agreed_pause, resume_frames
 from ..jobflow import READ_ROTATIONS, RESUME_SETTLE_S
 from ..motion import MotionModel
 from ..protocol import Command, PauseStatus, PauseToggle, StatusReader, STATUS_PERIOD_S, STATUS_ROTATION
@@ -106,54 +110,108 @@ def run_job(
     """
     line = _Discard() if line is None else line  # not kept unless asked for: memory stays flat
     job = job_engine(commands, strategy, arm, abort_sequence)
-    reader = StatusReader()
-    pending_events = sorted(events, key=lambda e: e.at_s)
-    now = arm.now_s  # a fresh arm's 0; an arm already read from (as ``armctl run`` does first) goes on
-    written = 0
-    aborted_at: float | None = None
-    total = len(commands)
-    stop_after = None if abort_after_frames is None else min(abort_after_frames, total)
-    while True:
-        frames = reader.feed(arm.advance(now))
-        for frame in frames:
-            job.receive_status(frame, now)
-        if frames and on_status is not None:
-            on_status(now)
-        while pending_events and pending_events[0].at_s <= now + EPSILON_S:
-            arm.write(pending_events.pop(0).command.encode(), now)
-            line.append("event")
-        if stop_after is not None and written >= stop_after and aborted_at is None:
-            aborted_at = now
-            job.request_stop()
-        action = job.next_action(now)
-        if type(action) is Write:
-            arm.write(action.frame, now)
-            job.wrote(now)
-            if action.statement is None:
-                line.append("abort")
-            else:
-                line.append("job")
-                if on_write is not None:
-                    on_write(written, now)
-                written += 1
-            continue
-        if type(action) is Finished or (aborted_at is not None and not settle):
-            if on_status is not None:
-                on_status(now)  # the engine's last word: at rest at the last target confirms the rest
-            break
-        if now > time_limit_s:
-            return _result(arm, total, written, now, None, job, timed_out=True)
-        candidates = [arm.next_event_time(), action.until_s]
-        if pending_events:
-            candidates.append(pending_events[0].at_s)
-        upcoming = min((t for t in candidates if t is not None), default=None)
-        if upcoming is None:
-            break
-        now = max(upcoming, now + EPSILON_S)
+    link = _ArmLink(arm)  # a fresh arm's 0; an arm already read from (as ``armctl run`` does first) goes on
+    stop_after = None if abort_after_frames is None else min(abort_after_frames, len(commands))
+    host = _BenchHost(job, arm, link, sorted(events, key=lambda e: e.at_s), stop_after, time_limit_s,
+                      on_write, on_status, line, settle)
+    try:
+        drive(job, link, host)
+    except _Over:
+        if host.timed_out:
+            return _result(arm, len(commands), host.written, link.now_s, None, job, timed_out=True)
+    aborted_at = host.aborted_at
     moving_after = _motion_after(arm, aborted_at, time_limit_s) if aborted_at is not None and not settle else None
-    result = _result(arm, total, written, now, moving_after, job)
+    result = _result(arm, len(commands), host.written, link.now_s, moving_after, job)
     result.aborted_at_s = aborted_at
     return result
+
+
+class _Over(Exception):
+    """The bench's own end of a run: its time limit, an abort whose motion it measures, no event left."""
+
+
+class _ArmLink:
+    """The simulated arm as the host driver's link, in the bench's own virtual time: a wait
+    jumps to the clock reading the host named (``_BenchHost.waiting``), at least ``EPSILON_S``
+    on; the frames that arrived meanwhile are read at the next turn."""
+
+    error = None
+
+    def __init__(self, arm: SimulatedArm) -> None:
+        self.arm, self.now_s = arm, arm.now_s
+
+    def clock(self) -> float:
+        return self.now_s
+
+    def write(self, frame: bytes) -> None:
+        self.arm.write(frame, self.now_s)
+
+    def wait(self, until_s: float, news=None) -> None:
+        self.now_s = max(until_s, self.now_s + EPSILON_S)
+
+
+class _BenchHost(Host):
+    """The bench's hooks of the host driver: before each action the arm run up to now, its
+    status frames into the engine, the scenario's events and the abort; the clock's next reading
+    the first of the arm's next event, the engine's time and the next scenario event."""
+
+    def __init__(self, job: Job, arm: SimulatedArm, link: _ArmLink, events: list, stop_after: int | None,
+                 time_limit_s: float, on_write, on_status, line, settle: bool) -> None:
+        self.job, self.arm, self.link, self.events, self.stop_after = job, arm, link, events, stop_after
+        self.time_limit_s, self.on_write, self.on_status, self.line, self.settle = (
+            time_limit_s, on_write, on_status, line, settle)
+        self.reader = StatusReader()
+        self.written = 0
+        self.aborted_at: float | None = None
+        self.timed_out = False
+
+    def now(self, clock) -> float:
+        return self.link.now_s
+
+    def turn(self) -> None:
+        job, arm, now, events = self.job, self.arm, self.link.now_s, self.events
+        frames = self.reader.feed(arm.advance(now))
+        taken = 0
+        while taken < len(frames):  # every frame into the engine (it stops at each that is news)
+            news = job.receive_statuses(frames[taken:], [now] * (len(frames) - taken))
+            taken = len(frames) if news is None else taken + news + 1
+        if frames and self.on_status is not None:
+            self.on_status(now)
+        while events and events[0].at_s <= now + EPSILON_S:
+            arm.write(events.pop(0).command.encode(), now)
+            self.line.append("event")
+        if self.stop_after is not None and self.written >= self.stop_after and self.aborted_at is None:
+            self.aborted_at = now
+            job.request_stop()
+
+    def wrote(self, action: Write, now: float) -> None:
+        self.job.wrote(now)
+        if action.statement is None:
+            self.line.append("abort")
+            return
+        self.line.append("job")
+        if self.on_write is not None:
+            self.on_write(self.written, now)
+        self.written += 1
+
+    def waiting(self, action: Wait, now: float) -> float:
+        if self.aborted_at is not None and not self.settle:
+            self.done(action, now)
+            raise _Over
+        if now > self.time_limit_s:
+            self.timed_out = True
+            raise _Over
+        candidates = [self.arm.next_event_time(), action.until_s]
+        if self.events:
+            candidates.append(self.events[0].at_s)
+        upcoming = min((t for t in candidates if t is not None), default=None)
+        if upcoming is None:
+            raise _Over
+        return upcoming
+
+    def done(self, action, now: float) -> None:
+        if self.on_status is not None:
+            self.on_status(now)  # the engine's last word: at rest at the last target confirms the rest
 
 
 START_ROTATIONS = 1 + READ_ROTATIONS  # ``armctl run`` reads all nine kinds and two more rotations before it writes

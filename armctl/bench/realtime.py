@@ -154,14 +154,14 @@ def drive_on(link, model, commands, baud: int, lead_s: float, abort_after: int |
             runner.request_stop()
 
     runner = JobRunner(link, streamer, statements, view, on_update=on_update)
-    link.on_status, link.on_status_run = runner.on_status, runner.on_status_run  # (as Arm.run wires them)
+    link.on_status = runner.on_status  # (as Arm.run wires it)
     try:
         try:
             runner.run()
         except KeyboardInterrupt:
             runner.abort((PauseToggle(),))
     finally:
-        link.on_status = link.on_status_run = None
+        link.on_status = None
     return stopped_at[0] if stopped_at else None
 
 

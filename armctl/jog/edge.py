@@ -1,10 +1,11 @@
 """``armctl jog``'s edge: the one loop where keys, the port, the clock and the screen meet.
 
-Strategy: a thin loop around the pure parts.  Each turn waits on stdin with ``select`` for at
-most a few tens of milliseconds (less when the session or the key decoder has a deadline
-sooner), turns the bytes into keys (``KeyDecoder``), hands keys and a snapshot of the arm's
-state to the ``JogSession``, carries out the effects it returns — frames to the link (and the
-``--log``), taught lines to the ``--record`` file — and refreshes the panel.  Every way out —
+Strategy: a thin loop around the pure parts, on the one host driver (armctl/driver.py).  Each
+wait is on stdin with ``select`` for at most a few tens of milliseconds (less when the session
+or the key decoder has a deadline sooner: ``_Terminal``); then the bytes become keys
+(``KeyDecoder``), the keys and a snapshot of the arm's state go to the ``JogSession``, and the
+effects it returns are carried out in order — frames to the link as the driver's ``Write``s
+(and the ``--log``), taught lines to the ``--record`` file — and the panel is refreshed.  Every way out —
 quit, Ctrl-C, an error, the port lost, the terminal gone, SIGTERM/SIGHUP — goes through
 ``session.finish`` (the neutral frame, at once) and then the ``raw_terminal`` and ``Live``
 exits that restore the screen.
@@ -21,6 +22,8 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Callable
 
+from ..actions import Done, Wait, Write
+from ..driver import Host, drive
 from ..errors import ArmctlError, PortError
 from ..protocol import describe
 from .keys import KeyDecoder
@@ -106,7 +109,11 @@ class Outcome:
     stop_failed: str | None = None  # the neutral frame could not be written (the port is gone)
 
 
-class JogLoop:
+class JogLoop(Host):
+    """The jog session on the host driver (armctl/driver.py): the engine's side answers the
+    session's effects as actions (``next_action``), the host's side waits on the terminal
+    (``_Terminal``) and redraws the panel."""
+
     def __init__(self, link, session: JogSession, decoder: KeyDecoder, *, profile, keymap, url: str,
                  log: FrameLog | None = None, teach: TeachFile | None = None, display=None,
                  clock: Callable[[], float] = time.monotonic) -> None:
@@ -116,6 +123,10 @@ class JogLoop:
         self.clock = clock
         self._last_refresh = float("-inf")
         self.stop_failed: str | None = None
+        self._input = b""  # what the last wait read from the terminal
+        self._waited = False  # a wait ended since the keys were last handled
+        self._pending: list = []  # the effects of the keys and the tick last handled, carried out in order
+        self._round: tuple | None = None  # (now, keys came, state) of that round: its tx records, its redraw
 
     def run(self, fd: int) -> Outcome:
         session = self.session
@@ -124,8 +135,7 @@ class JogLoop:
                 try:
                     with self.display or _Nothing():
                         self._refresh(self.clock(), final=True)
-                        while not session.done:
-                            self._turn(fd)
+                        drive(self, _Terminal(self, fd), self)
                         self._refresh(self.clock(), final=True)
                 except BaseException as error:
                     # Any way out that is not a key (a lost port, the terminal gone, SIGTERM,
@@ -139,23 +149,56 @@ class JogLoop:
             self.log.note(f"jog ended: {session.reason} (exit {session.exit_code})", self.clock())
         return Outcome(session.exit_code, session.reason, session.recorded, session.unrecorded, self.stop_failed)
 
-    def _turn(self, fd: int) -> None:
+    # --- the engine: the session's effects as the driver's actions ------------------------------
+
+    def next_action(self, now: float):
+        """Each wait's keys (and the session's tick) handled once, their frames written one by
+        one in order (a taught line appended where it comes), then the next wait — or the end."""
+        while True:
+            if self._pending:
+                effect = self._pending.pop(0)
+                if isinstance(effect, Send):
+                    return Write(effect.command.encode(), effect.command)
+                self._record(effect)
+                continue
+            if self._waited and not self.session.done:
+                self._waited = False
+                self._handle(now)
+                continue
+            return Done(self.session.exit_code) if self.session.done else Wait(None)
+
+    def _handle(self, now: float) -> None:
         session = self.session
-        now = self.clock()
-        data = read_input(fd, self._timeout(now))
-        now = self.clock()
         state = self.link.snapshot()[0]
+        data, self._input = self._input, b""
         keys = self.decoder.feed(data, now) if data else self.decoder.expire(now)
+        self._round = (now, bool(keys), state)
         for key in keys:
             if self.log is not None:
                 self.log.key(key.name, now)
-            self._carry_out(session.key(key.name, now, state), now)
+            self._pending += session.key(key.name, now, state)
             if session.done:
                 return
-        self._carry_out(session.tick(now, state), now)
-        if self.link.error is not None:
-            raise self.link.error
-        self._refresh(now, force=bool(keys), state=state)
+        self._pending += session.tick(now, state)
+
+    # --- the host: the driver's hooks ----------------------------------------------------------
+
+    def wrote(self, action: Write, now: float) -> None:
+        if self.log is not None:
+            self.log.tx(action.statement, self._round[0] if self._round else now)
+
+    def waiting(self, action: Wait, now: float) -> float:
+        """The panel of the round just handled, then a wait on the terminal until the session's,
+        the key decoder's or the panel's next deadline (at most ``IDLE_WAIT_S``)."""
+        if self._round is not None:
+            round_s, keys, state = self._round
+            self._round = None
+            self._refresh(round_s, force=keys, state=state)
+        now_s = self.clock()
+        return now_s + self._timeout(now_s)
+
+    def waited(self) -> None:
+        self._waited = True
 
     def _timeout(self, now: float) -> float:
         wait = BUSY_WAIT_S if self.session.waiting else IDLE_WAIT_S
@@ -165,13 +208,18 @@ class JogLoop:
         return max(wait, 0.0)
 
     def _carry_out(self, effects: list, now: float) -> None:
+        """Effects carried out at once, outside the driver (the neutral frame on the way out)."""
         for effect in effects:
             if isinstance(effect, Send):
                 self.link.write(effect.command.encode())
                 if self.log is not None:
                     self.log.tx(effect.command, now)
-            elif isinstance(effect, Record) and self.teach is not None:
-                self.teach.append(taught_line(effect.mode, effect.pose, effect.speed, datetime.now().astimezone()))
+            else:
+                self._record(effect)
+
+    def _record(self, effect) -> None:
+        if isinstance(effect, Record) and self.teach is not None:
+            self.teach.append(taught_line(effect.mode, effect.pose, effect.speed, datetime.now().astimezone()))
 
     def _stop(self, reason: str, code: int) -> None:
         """Neutral at once, on the way out; a port that fails again is left alone."""
@@ -199,6 +247,24 @@ class JogLoop:
         gripper = (self.profile.pwm.gripper_open_us, self.profile.pwm.gripper_close_us)
         self.display.update(render_jog(view, pose, state.pwm_us, self.keymap, gripper), refresh=True)
         self._last_refresh = now
+
+
+class _Terminal:
+    """The driver's link for jog: the port's writes and error, the jog's clock, and a wait that
+    is a wait for keys (``read_input``: until the time given, or the first key)."""
+
+    def __init__(self, loop: JogLoop, fd: int) -> None:
+        self.loop, self.fd, self.clock = loop, fd, loop.clock
+
+    @property
+    def error(self):
+        return self.loop.link.error
+
+    def write(self, frame: bytes) -> None:
+        self.loop.link.write(frame)
+
+    def wait(self, until_s: float, news=None) -> None:
+        self.loop._input = read_input(self.fd, until_s - self.clock())
 
 
 class _Nothing:

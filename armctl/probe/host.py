@@ -1,8 +1,9 @@
 """The probe over a Link: feed it status frames and the link's clock, write what it asks.
 
 Strategy: a thin edge.  The link's reader (a thread, or the virtual clock's waits) hands each
-status frame to ``on_status``, which only appends it to a deque; the loop drains the deque
-into the pure ``Probe``, asks for the next action, writes or waits.  Ctrl-C, SIGTERM and SIGHUP
+status frame to ``on_status``, which only appends it to a deque; the one host driver
+(armctl/driver.py) runs the pure ``Probe`` — asks for the next action, writes or waits — and
+``ProbeHost`` drains the deque into it before each action.  Ctrl-C, SIGTERM and SIGHUP
 only set a flag (``deferred_stop``): the loop, between two actions, switches the probe to
 restoring and runs on until the arm is as it was; a second signal leaves at once
 (KeyboardInterrupt), and the probe's notes say what is not restored.  After every write and
@@ -15,7 +16,9 @@ from __future__ import annotations
 import threading
 from collections import deque
 
-from .plan import Probe, Write
+from ..actions import Wait, Write
+from ..driver import Host, drive as run
+from .plan import Probe
 
 MIN_WAIT_S = 0.001
 
@@ -48,36 +51,49 @@ def unsent_bytes(port) -> int | None:
     return unsent if isinstance(unsent, int) and unsent >= 0 else None
 
 
-def drive(link, probe: Probe, inbox: FrameInbox, progress=None, stop: threading.Event | None = None) -> None:
-    """Run ``probe`` on ``link`` to its end.  ``stop`` set (a signal): restore, then end with
-    ``probe.interrupted`` true; the caller exits 130.  After each write and each wait the
-    probe hears what the port still holds (``Probe.port_report``), when the port can say."""
-    stop = stop or threading.Event()
-    reports = unsent_bytes(link.port) is not None
+class ProbeHost(Host):
+    """The probe's hooks of the host driver: the stop and the frames read meanwhile before each
+    action, the port's report of what it still holds after each write and wait, and the
+    progress after a wait."""
 
-    def report() -> None:
-        unsent = unsent_bytes(link.port) if reports else None
+    def __init__(self, link, probe: Probe, inbox: FrameInbox, progress, stop: threading.Event) -> None:
+        self.link, self.probe, self.inbox, self.progress, self.stop = link, probe, inbox, progress, stop
+        self.reports = unsent_bytes(link.port) is not None
+
+    def report(self) -> None:
+        unsent = unsent_bytes(self.link.port) if self.reports else None
         if unsent is not None:
-            probe.port_report(link.clock(), unsent)
+            self.probe.port_report(self.link.clock(), unsent)
 
-    report()
-    while True:
-        if stop.is_set() and not probe.interrupted and not probe.done:
+    def turn(self) -> None:
+        probe = self.probe
+        if self.stop.is_set() and not probe.interrupted and not probe.done:
             probe.interrupt()
-        inbox.drain_into(probe)
-        action = probe.next_action(link.clock())
-        if action is None:
-            return
-        if isinstance(action, Write):
-            link.write(action.frame)
-            report()
-            continue
-        link.idle(max(action.until_s - link.clock(), MIN_WAIT_S))
-        report()
-        if link.error is not None:
-            raise link.error
-        if progress is not None:
-            progress(probe)
+        self.inbox.drain_into(probe)
+
+    def wrote(self, action: Write, now: float) -> None:
+        self.report()
+
+    def waiting(self, action: Wait, now: float) -> float:
+        now_s = self.link.clock()
+        return now_s + max(action.until_s - now_s, MIN_WAIT_S)
+
+    def waited(self) -> None:
+        self.report()
+        if self.link.error is not None:
+            raise self.link.error
+        if self.progress is not None:
+            self.progress(self.probe)
+
+
+def drive(link, probe: Probe, inbox: FrameInbox, progress=None, stop: threading.Event | None = None) -> None:
+    """Run ``probe`` on ``link`` to its end (the host driver, armctl/driver.py).  ``stop`` set
+    (a signal): restore, then end with ``probe.interrupted`` true; the caller exits 130.  After
+    each write and each wait the probe hears what the port still holds (``Probe.port_report``),
+    when the port can say."""
+    host = ProbeHost(link, probe, inbox, progress, stop or threading.Event())
+    host.report()
+    run(probe, link, host)
 
 
 def deferred_stop(stop: threading.Event):

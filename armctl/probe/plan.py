@@ -21,6 +21,7 @@ from collections import defaultdict
 from dataclasses import dataclass, field
 from typing import Callable, Iterator
 
+from ..actions import Wait, Write  # a step's wish Wait(until_s, ready), and the host's actions (the probe's Command as Write.statement)
 from ..line import STATUS_SIZE
 from ..protocol import Command, PauseStatus, StatusFrame, byte_seconds, frame_seconds
 from .landing import WireLog
@@ -62,22 +63,6 @@ class Send:
     command: Command
     raw: bytes | None = None  # the bytes, when they are not ``command.encode()`` (a byte-order test)
     ahead_s: float = 0.0
-
-
-@dataclass(frozen=True)
-class Wait:
-    """A step's wish: status frames until ``ready()`` holds or ``until_s``."""
-
-    until_s: float
-    ready: Callable[[], bool] | None = None
-
-
-@dataclass(frozen=True)
-class Write:
-    """For the host: write ``frame`` now."""
-
-    frame: bytes
-    command: Command
 
 
 class Seen:

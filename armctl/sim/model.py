@@ -201,9 +201,9 @@ class SimulatedArm:
         step — and ends by ``end_s``.  ``status_frame`` builds a step's frame (the executor's
         state cannot change in a quiet stretch); ``commit_status_run`` makes the first n steps so.
 
-        A step is ``protocol_sim.Serial.step_virtual``'s: the clock (``clock_s``; model time =
-        (clock − ``clock_start_s``) × ``time_scale``) moves to when the next status frame has
-        reached the host (``next_output_time``), at least ``min_step_s`` on, and the model
+        A step is a burst of ``protocol_sim.Serial``'s virtual time (``next_event_s``, then
+        ``advance_to``): the clock (``clock_s``; model time = (clock − ``clock_start_s``) ×
+        ``time_scale``) moves to when the next status frame has reached the host (``next_output_time``), at least ``min_step_s`` on, and the model
         advances there (``_run_until``: the frame is built at its due time and sent).  The same
         arithmetic, operation by operation, so the same frames at the same times to the last
         bit; only the per-step machinery (candidate lists, the wire's runs, the lock, a burst
@@ -259,7 +259,7 @@ class SimulatedArm:
 
     def status_frames(self, steps: list) -> list[bytes]:
         """``status_frame`` of each step of a ``status_run`` in ``steps``, in one call (the link
-        builds a batch at a time: ``Link._take_run``)."""
+        builds a batch at a time: ``VirtualWaits._take_run``)."""
         return self._status.encode_steps(self.executor, steps)
 
     def commit_status_run(self, run: list[tuple[float, int, float, float, float]], frames: int) -> None:

@@ -42,8 +42,11 @@ armctl (exit 2 on every command) and a ``SerialException`` for any other pyseria
 included); everything else calls it.
 
 Strategy: a thin edge.  With ``clock=virtual`` nothing blocks: ``read`` returns what has
-arrived by the current model time, and ``Link`` moves ``virtual_clock`` forward instead of
-sleeping (``next_output_s`` says how far the next status burst is).  Otherwise:  ``write`` hands the bytes to the model at the current model time and
+arrived by the current model time, and the host moves the clock instead of sleeping, through
+the virtual-time interface: ``next_event_s`` (when the next status burst has reached the host),
+``advance_to(t)`` (the clock there, the bytes that arrived) and, for the quiet stretches where
+nothing happens but status frames, ``virtual_status_run`` / ``status_frames`` /
+``commit_status_run`` (armctl/virtual_wait.py drives them).  Otherwise:  ``write`` hands the bytes to the model at the current model time and
 returns at once (they queue on the simulated wire; ``out_waiting`` counts those not yet sent);
 ``read`` runs the model up to now and, while it lacks bytes, sleeps until the next status byte
 is due — on an ``Event``, so ``close``/``cancel_read`` wake it — never busy-waiting.  All model
@@ -320,30 +323,35 @@ class Serial(SerialBase):
         """Model seconds until the next status burst has reached the host (None: never)."""
         return self._check_open().wall_seconds_until_output() if self.virtual_clock else None
 
-    def step_virtual(self, end_s: float | None, min_step_s: float, size: int) -> bytes:
-        """``clock=virtual`` only: move the clock to when the next status burst has fully reached
-        the host — at least ``min_step_s`` on, never past ``end_s`` (None: no limit) — and read up
-        to ``size`` bytes.  The same arithmetic as ``next_output_s``, the clock's ``advance_to``
-        and ``read`` one after the other (so the same model times to the last bit), without the
-        wall-clock machinery between them: ``Link.wait`` calls it once per status burst."""
+    # --- virtual time: the interface armctl/virtual_wait.py drives (``clock=virtual`` only) ------
+
+    def next_event_s(self) -> float | None:
+        """The clock's reading when the next status burst has fully reached the host (None:
+        never); ``next_output_s``'s arithmetic on the clock's own reading."""
         arm = self._check_open()
-        clock, model, received = self.virtual_clock, self.model, self._received
         with arm.lock:
-            now_s = clock.now_s
-            step_to = now_s + max(max(0.0, (model.next_output_time() - arm.model_now_s()) / arm.time_scale), min_step_s)
-            if end_s is not None and end_s < step_to:
-                step_to = end_s
-            clock.advance_to(step_to)
-            data = model.advance(arm.model_now_s())
-            if received or len(data) > size:  # bytes left from before, or more than asked for
-                received += data
-                data = bytes(received[:size])
-                del received[:size]
+            due_s = self.model.next_output_time()
+            if due_s is None:
+                return None
+            return self.virtual_clock.now_s + max(0.0, (due_s - arm.model_now_s()) / arm.time_scale)
+
+    def advance_to(self, t_s: float) -> bytes:
+        """Move the clock to ``t_s`` (never back) and read every status byte that has reached the
+        host by then: ``read`` after the clock's ``advance_to``, without the wall-clock machinery
+        between them (``VirtualWaits`` calls it once per status burst)."""
+        arm = self._check_open()
+        received = self._received
+        with arm.lock:
+            self.virtual_clock.advance_to(t_s)
+            data = self.model.advance(arm.model_now_s())
+            if received:  # bytes left from before (a ``read`` of fewer than arrived)
+                data = bytes(received + data)
+                received.clear()
         return data
 
     def virtual_status_run(self, end_s: float | None, min_step_s: float, max_frames: int) -> list:
-        """``clock=virtual`` only: the timing of up to ``max_frames`` calls of ``step_virtual``
-        that would each read one whole status frame and nothing else happens, computed ahead and
+        """The timing of up to ``max_frames`` bursts (``next_event_s``, at least ``min_step_s``
+        on, then ``advance_to``) that would each read one whole status frame and nothing else happens, computed ahead and
         changing nothing (``SimulatedArm.status_run``: [(clock time, kind, due time, …)]; empty
         when the next step is not such a quiet one).  The caller reads them in order — the
         clock at each one's time, its frame from ``status_frame`` — and then commits those it
