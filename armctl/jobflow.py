@@ -22,7 +22,6 @@ Errors are ``ScriptError`` (diagnostics and the count of errors; nothing was sen
 from __future__ import annotations
 
 import json
-import re
 from dataclasses import dataclass
 from typing import Any, Callable, Iterable
 
@@ -30,7 +29,6 @@ from .errors import ArmctlError, ScriptError
 from .job_control import agreed_pause, pause_toggle_needed
 
 READ_ROTATIONS = 2  # after all nine status kinds: two more rotations (a corrupted first frame of a kind replaced, H9)
-_BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
 
 
 class JobFailed(ArmctlError):
@@ -457,9 +455,11 @@ class BlockIndex:
 
     def __init__(self, lines: Iterable[str]) -> None:
         self.blocks: list[tuple[int, int]] = []  # (first line, last line) of each outermost block, in order
+        from .lint.scan import block_line
+
         depth, start = 0, None
         for number, text in enumerate(lines, 1):
-            match = _BLOCK_LINE.match(text)
+            match = block_line(text)
             if match is None:
                 continue
             if match.group(1).lower() == "repeat":
