@@ -434,13 +434,12 @@ def estimate(script, lead_s, baud, profile_path, as_json):
     """
     from .calibration import arm_profile
     from .motion import MotionModel
-    from .ui.run_job import check_script, estimate_job, print_estimate
+    from .ui.run_job import check_script, plan_job, print_estimate
 
     snapshot = _read_script(script)
     profile = arm_profile(profile_path)  # the configured port's arm
-    check_script(snapshot, profile)
-    model = MotionModel(profile)
-    result = estimate_job(snapshot, model, model.initial_pose(), lead_s, baud)
+    checked = check_script(snapshot, profile)
+    result = plan_job(checked, MotionModel(profile), lead_s, baud).estimate
     if as_json:
         click.echo(json.dumps(result.to_json()))
     else:
