@@ -22,9 +22,9 @@ import sys
 import click
 
 from ..cli_types import number
+from ..exits import EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE
 from ..limits import LINE_RANGE
 
-EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE = 0, 1, 2
 FORMATS = {".html": "html", ".htm": "html", ".svg": "svg", ".png": "png"}
 LIBRARY_OF = {"html": "plotly", "svg": "matplotlib", "png": "matplotlib"}
 INSTALL_HINT = "pip install -e '.[plot]'"

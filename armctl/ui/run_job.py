@@ -29,12 +29,12 @@ from dataclasses import dataclass
 import click
 
 from ..errors import ArmctlError, ScriptError
+from ..exits import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS, UsageFailure, exit_code_for
 from ..jobflow import JobFailed
 from ..jobflow import outermost_block_start  # noqa: F401 - re-exported (tests)
 from ..protocol import describe
 from ..streamer import DEFAULT_LEAD_S
 
-EXIT_OK, EXIT_PROBLEMS, EXIT_INTERRUPTED = 0, 1, 130
 LIVE_REFRESH_S = 0.1
 PLAIN_PROGRESS_S = 2.0
 # The least terminal the panel's map is drawn in: its ~24 rows with the map, a few lines of
@@ -148,8 +148,6 @@ def _open_log(path: str):
     try:
         return open(path, "w", encoding="utf-8", buffering=1)
     except OSError as error:
-        from ..cli import UsageFailure
-
         raise UsageFailure(f"cannot write --log {path}: {error.strerror or error}") from None
 
 
@@ -194,8 +192,6 @@ def _run_json(options: JobOptions, script, connect) -> int:
             events.summary(failure_result("refused", refused.code, diagnostics=refused.diagnostics))
             raise
         except ArmctlError as error:
-            from ..cli import exit_code_for
-
             events.summary(failure_result("failed", exit_code_for(error), message=str(error)))
             raise
         except KeyboardInterrupt:
@@ -223,8 +219,6 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     # read before --log is opened for writing, and before the port
     resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
     if options.resume_log and options.log_path and _same_file(options.resume_log, options.log_path):
-        from ..cli import UsageFailure
-
         raise UsageFailure(f"--log {options.log_path} is the journal --resume reads: it is never written over; "
                            "give the resumed job a --log of its own")
     watch = _RunObserver(options, MotionModel(profile), events)
