@@ -227,12 +227,7 @@ class Arm:
         the job asked for before it ran); ``JobFailed`` when it is not complete within
         ``timeout`` seconds (default ``status_timeout_s``)."""
         timeout_s = self.status_timeout_s if timeout is None else args.check_timeout(timeout, "STATUS_TIMEOUT_RANGE_S")
-
-        def read() -> ArmStatus:
-            state = self._complete_state(timeout_s)
-            return ArmStatus.of(state, self._link.clock())
-
-        return self._call(read)
+        return self._call(lambda: ArmStatus.of(self._complete_state(timeout_s), self._link.clock()))
 
     def status_json(self, timeout: float | None = None, *, at_once: bool = False) -> dict:
         """The arm's decoded report with the keys of ``armctl status --once --json``, once every
@@ -241,10 +236,8 @@ class Arm:
         even while a job runs (a wall-clock port only: on a virtual clock model time moves only on
         the worker, so there it waits its turn all the same)."""
         timeout_s = self.status_timeout_s if timeout is None else args.check_timeout(timeout, "STATUS_TIMEOUT_RANGE_S")
-
         def read() -> dict:
             return self._complete_state(timeout_s).to_json()
-
         return read() if at_once and not self.is_virtual else self._call(read)
 
     def _complete_state(self, timeout_s: float):
