@@ -1,8 +1,9 @@
 """``armctl run`` and ``armctl estimate``: check, then a client of the Python API; report.
 
 Strategy: ``armctl run`` is the Python API (``armctl.Arm``, armctl/api.py) plus presentation.
-It checks the whole script first, printing every finding (nothing is opened before it passes),
-then ``Arm.open`` and ``Arm.run`` do the job — read the arm, plan, stream through the one job
+It checks the whole script first (``checked.check``), printing every finding (nothing is opened
+before it passes), then ``Arm.open`` and ``Arm.run`` — handed that ``CheckedScript``, which they
+do not check again — do the job — read the arm, plan, stream through the one job
 engine, end it, journal it to ``--log``, resume from a log — and this module only shows it: the
 live panel or plain progress lines or ``--json`` events (a ``JobObserver``), notes on stderr
 above the panel, the panel's keys and Ctrl-C as calls on the arm (``toggle_pause``,
@@ -11,7 +12,7 @@ above the panel, the panel's keys and Ctrl-C as calls on the arm (``toggle_pause
 What was checked is exactly what is sent: the script is read once, before anything else, into
 an immutable ``ScriptSnapshot`` (armctl/script/files.py), and every step — the lint check, the
 ``--from-line`` check, the estimate, the stream and the resume line of the summary — compiles
-that same snapshot, never the file again (``Arm.run`` takes the snapshot itself).  Compiling is
+that same snapshot, never the file again (``Arm.run`` takes the checked snapshot itself).  Compiling is
 deterministic, so an edit to the file while the job streams changes nothing that is sent;
 stdin (``run -``) works the same way.
 
