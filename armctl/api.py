@@ -1,33 +1,34 @@
 """The Python API: ``from armctl import Arm`` — open an arm, move it, run a job, read it, pause it.
 
-Strategy: the steps a job takes, once, going down (armctl/checked.py, then armctl/arm_worker.py
-and armctl/jobflow.py), and ``armctl run`` is a client of this module, not a second host: a script
-is checked once before anything leaves (``checked.check``: a ``CheckedScript``, which a caller
-that checked it already hands in instead), the arm's report is read and the job planned from it (or, with ``resume=``, from the line a ``--log`` and the arm's
-report prove), the runner streams it with the streamer's pacing, journals it to ``log=`` and
-ends it by the engine's end-of-job rules, and any early stop takes ``jobflow.drive``'s one path
-(stop feeding, the abort sequence, wait for the arm).  ``move`` writes ONE script line from its
-keywords and runs it as a job of one line: the same compiler, lint checks and streamer, never a
-second encoder.  Nothing here prints: what a job has to say goes to a ``JobObserver`` (its
-default: the ``armctl.api`` logger at INFO); ``armctl run``'s observer draws the panel, the
-``--json`` events and the notes on stderr (armctl/ui/run_job.py).
+Strategy: the steps a job takes, once, going down (armctl/checked.py, then armctl/arm_worker.py and
+armctl/jobflow.py), and ``armctl run`` is a client of this module, not a second host: a script is
+checked once before anything leaves (``checked.check``: a ``CheckedScript``, which a caller that
+checked it already hands in instead), the arm's report is read and the job planned from it (or,
+with ``resume=``, from the line a ``--log`` and the arm's report prove), the runner streams it with
+the streamer's pacing, journals it to ``log=`` and ends it by the engine's end-of-job rules, and
+any early stop takes ``jobflow.drive``'s one path (stop feeding, the abort sequence, wait for the
+arm). ``move`` writes ONE script line from its keywords and runs it as a job of one line: the same
+compiler, lint checks and streamer, never a second encoder.  Nothing here prints: what a job has to
+say goes to a ``JobObserver`` (its default: the ``armctl.api`` logger at INFO); ``armctl run``'s
+observer draws the panel, the ``--json`` events and the notes on stderr (armctl/ui/run_job.py).
 
-Threads: each ``Arm`` has one worker thread that owns its link — every write, every wait, and
-the virtual clock of a ``sim://?clock=virtual`` port, which moves only while someone waits on
-it and so must have one owner.  Public calls put a task on the worker's queue; a blocking call
-waits for its task, ``move(wait=False)`` returns at once and its move streams while the caller
-goes on.  Tasks run in order, so a later ``move``, ``run``, ``status``, ``wait`` or ``close``
-sees every queued move executed, each exactly once.  A queued move that fails cancels the
-moves queued after it (the arm is no longer where they assume) and its error is raised by the
-next blocking call.  Control of a running job (``pause``, ``resume``, ``toggle_pause``,
-``feed_override`` — the run panel's keys call these) is a request to the job engine that the
-worker carries out between two writes (``JobRunner.control``); ``stop`` and a timeout take the
-Ctrl-C path (``JobRunner.request_stop``, then ``jobflow.drive``'s abort; a second ``stop`` once
-the abort went, ``JobRunner.cut_short``) — never a write from another thread.  Observers and
-``on_progress`` run on the worker.  This module is the façade; the values it returns are
-armctl/results.py's, its argument checks armctl/arguments.py's, its worker armctl/arm_worker.py's.  Nothing is module-level state: several arms work at once in
-one process.  No signal handler is installed (``armctl run`` installs its own, in the main
-thread only, and calls ``stop``).
+Threads: each ``Arm`` has one worker thread that owns its link — every write, every wait, and the
+virtual clock of a ``sim://?clock=virtual`` port, which moves only while someone waits on it and so
+must have one owner.  Public calls put a task on the worker's queue; a blocking call waits for its
+task, ``move(wait=False)`` returns at once and its move streams while the caller goes on.  Tasks
+run in order, so a later ``move``, ``run``, ``status``, ``wait`` or ``close`` sees every queued
+move executed, each exactly once.  A queued move that fails cancels the moves queued after it (the
+arm is no longer where they assume) and its error is raised by the next blocking call.  Control of
+a running job (``pause``, ``resume``, ``toggle_pause``, ``feed_override`` — the run panel's keys
+call these) is a request to the job engine that the worker carries out between two writes
+(``JobRunner.control``); ``stop`` and a timeout take the Ctrl-C path (``JobRunner.request_stop``,
+then ``jobflow.drive``'s abort; a second ``stop`` once the abort went, ``JobRunner.cut_short``) —
+never a write from another thread.  Observers and ``on_progress`` run on the worker.  This module
+is the façade: the values it returns are armctl/results.py's, its argument checks
+armctl/arguments.py's, the worker and its queue armctl/arm_tasks.py's, a job on it
+armctl/arm_worker.py's.  Nothing is module-level state: several arms work at once in one process.
+No signal handler is installed (``armctl run`` installs its own, in the main thread only, and calls
+``stop``).
 """
 from __future__ import annotations
 
@@ -41,7 +42,7 @@ from .arm_tasks import Tasks
 from .arm_worker import JOB_ENDED, ArmLine, ArmTimeout, JobControl, JobObserver, JobSpec, run_job, toggle_idle_arm
 from .errors import ArmctlError, ResumeRefused
 from .jobflow import JobFailed
-from .results import ArmStatus, Progress, RunResult, exit_code_of
+from .results import ArmStatus, Progress, RunResult
 from .streamer import DEFAULT_LEAD_S
 
 if TYPE_CHECKING:
@@ -49,7 +50,7 @@ if TYPE_CHECKING:
     from .profile import Profile
 
 __all__ = ["Arm", "ArmStatus", "ArmTimeout", "JobFailed", "JobObserver", "Progress", "RunResult"]
-_REEXPORTED = (MOVE_KEYWORDS, default_speed, move_line, exit_code_of)  # for their callers: armctl move, the CLI
+_REEXPORTED = (MOVE_KEYWORDS, move_line)  # for their callers: armctl move, the server
 
 STATUS_TIMEOUT_S = 3.0  # what `armctl run --timeout` waits for the arm's status by default
 _MOVE_NAME = "<move>"
