@@ -27,15 +27,10 @@ import click  # noqa: E402
 from . import __version__  # noqa: E402
 from .bench import SCENARIO_NAMES as BENCH_SCENARIOS  # the names only: imports nothing else
 from .cli_types import OutputFile, number
-from .errors import ArmctlError, ConfigError, ProfileError, ResumeRefused
-from .inputs import UnusableInput
+from .errors import ArmctlError, ConfigError, ProfileError
+from .exits import EXIT_BROKEN_PIPE, EXIT_PROBLEMS, EXIT_USAGE, UsageFailure, exit_code_for
 from .limits import BAUD_RANGE, BENCH_JOBS_RANGE, BENCH_LEAD_RANGE_S, LEAD_RANGE_S, LINE_RANGE, START_TIMEOUT_RANGE_S, STATUS_TIMEOUT_RANGE_S, TCP_PORT_RANGE
 
-EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_BROKEN_PIPE = 0, 1, 2, 141
-
-
-class UsageFailure(ArmctlError):
-    """A file that cannot be read or an option that makes no sense: exit 2."""
 
 
 class ArmctlGroup(click.Group):
@@ -61,11 +56,6 @@ class ArmctlGroup(click.Group):
             _reader_went_away()
         except OSError as error:
             _fail(_os_error_text(error), EXIT_USAGE)
-
-
-def exit_code_for(error: ArmctlError) -> int:
-    """2 for usage, configuration, a profile or an input armctl cannot use; 1 for the rest."""
-    return EXIT_USAGE if isinstance(error, (UsageFailure, ProfileError, ConfigError, UnusableInput, ResumeRefused)) else EXIT_PROBLEMS
 
 
 def _flush_stdout() -> None:
@@ -434,13 +424,12 @@ def estimate(script, lead_s, baud, profile_path, as_json):
     """
     from .calibration import arm_profile
     from .motion import MotionModel
-    from .ui.run_job import check_script, estimate_job, print_estimate
+    from .ui.run_job import check_script, plan_job, print_estimate
 
     snapshot = _read_script(script)
     profile = arm_profile(profile_path)  # the configured port's arm
-    check_script(snapshot, profile)
-    model = MotionModel(profile)
-    result = estimate_job(snapshot, model, model.initial_pose(), lead_s, baud)
+    checked = check_script(snapshot, profile)
+    result = plan_job(checked, MotionModel(profile), lead_s, baud).estimate
     if as_json:
         click.echo(json.dumps(result.to_json()))
     else:
@@ -448,61 +437,6 @@ def estimate(script, lead_s, baud, profile_path, as_json):
         if not profile.connector.is_default("speed_factor"):  # the configured port's arm (armctl config)
             click.echo(f"  note: the arm's speed_factor {profile.connector.speed_factor:g} "
                        f"({profile.source_of('connector.speed_factor')})")
-
-
-def _move_words(texts: tuple[str, ...]) -> dict:
-    """``("z=200", "f=3000")`` → ``{"z": 200.0, "f": 3000.0}``: ``Arm.move``'s keywords, each
-    once; a word that is not one (or not a number) is a usage error, nothing sent."""
-    from .api import MOVE_KEYWORDS
-    from .profile import unknown_key_hint
-
-    words: dict = {}
-    for text in texts:
-        name, equals, value = text.partition("=")
-        name = name.strip().lower()
-        if not equals or name not in MOVE_KEYWORDS:
-            hint = unknown_key_hint(name, MOVE_KEYWORDS) if equals else " (write WORD=VALUE, as z=200 or j1=30)"
-            raise click.UsageError(f"{text!r} is not one of move's words{hint}")
-        if name in words:
-            raise click.UsageError(f"{name} is given twice")
-        try:
-            number = float(value) if name not in ("t", "h") else int(value)
-        except ValueError:
-            raise click.UsageError(f"{text}: {value!r} is not a {'whole ' if name in ('t', 'h') else ''}number") from None
-        if number != number or number in (float("inf"), float("-inf")):
-            raise click.UsageError(f"{text}: not a finite number")
-        words[name] = int(number) if isinstance(number, float) and number.is_integer() else number
-    if not words:
-        raise click.UsageError("give at least one word: armctl move z=200 (or x=, y=, a=, b=, c=, j1=…j6=, u=, v=, s=, t=, h=, f=)")
-    return words
-
-
-def _one_line_job(port, baud, profile_path, timeout_s, as_json, act) -> None:
-    """``armctl move``/``home``: open the arm, ``act(arm)`` (one line run as a job, proven at
-    rest), print where the arm ended (text, or the ``RunResult`` as JSON), exit with its code."""
-    from .api import Arm
-    from .errors import ScriptError
-    from .jobflow import JobFailed
-    from .ui.run_job import one_line_summary
-
-    with Arm.open(port, baud, profile_path, status_timeout_s=timeout_s, connect=_connect) as arm:
-        try:
-            result = act(arm)
-        except ScriptError as error:
-            for diagnostic in error.diagnostics:
-                click.echo(diagnostic.render(), err=True)
-            click.echo("nothing was sent to the arm", err=True)
-            sys.exit(EXIT_PROBLEMS)
-        except JobFailed as error:
-            if error.result is None:
-                raise
-            result = error.result
-        status = arm.status() if result.finished else None
-    if as_json:
-        click.echo(json.dumps(result.to_json()))
-    else:
-        click.echo(one_line_summary(result, None if status is None else status.position_mm))
-    sys.exit(result.exit_code)
 
 
 _one_line_options = [
@@ -531,15 +465,19 @@ def move(words, port, baud, profile_path, timeout_s, as_json):
     for joints; default: the profile's [speed] default).  Words left out keep the arm's
     reported values.  Returns when the arm's reports prove it at rest at the target.
     """
-    keywords = _move_words(words)
-    _one_line_job(port, baud, profile_path, timeout_s, as_json, lambda arm: arm.move(**keywords))
+    from .ui.one_line import move_words, one_line_job
+
+    keywords = move_words(words)
+    one_line_job(port, baud, profile_path, timeout_s, as_json, lambda arm: arm.move(**keywords), _connect)
 
 
 @main.command()
 @_with_one_line_options
 def home(port, baud, profile_path, timeout_s, as_json):
     """Go to the profile's fixed pose 0 (POSE 0) and wait until the arm is proven at rest there."""
-    _one_line_job(port, baud, profile_path, timeout_s, as_json, lambda arm: arm.home())
+    from .ui.one_line import one_line_job
+
+    one_line_job(port, baud, profile_path, timeout_s, as_json, lambda arm: arm.home(), _connect)
 
 
 @main.command()

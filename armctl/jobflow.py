@@ -1,13 +1,13 @@
 """A job's steps around the runner, once, for ``armctl run`` and the Python API (armctl/api.py).
 
-Strategy: the steps a careful operator takes before streaming, each a function that says what
-it found and prints nothing — the caller decides how a finding is shown (``armctl run``: on
-stderr, then exit 1; ``armctl.Arm``: an exception or a log record).  Check the script
-(``lint_script``, ``from_line_errors``), read the arm (``read_arm``: every status kind, two more
-rotations, an arm that twice reports it is paused resumed), start from its reported state
-(``start_from_state``), estimate from there (``estimate_job``: refuses what compiles
-differently from the arm's pose, or runs too long), then build the runner (``start_job``) and drive it (``drive``: one path for every way a
-job stops early — stop feeding, send the abort sequence, wait for the arm — whoever asked).
+Strategy: the steps a careful operator takes on the arm, each a function that says what it
+found and prints nothing — the caller decides how a finding is shown (``armctl run``: on
+stderr, then exit 1; ``armctl.Arm``: an exception or a log record).  The script was checked
+before (armctl/checked.py: ``check``, then ``prepare`` from the arm's report, a ``CheckedJob``);
+here: read the arm (``read_arm``: every status kind, two more rotations, an arm that twice
+reports it is paused resumed), build the runner of a ``CheckedJob`` (``start_job``) and drive it
+(``drive``: one path for every way a job stops early — stop feeding, send the abort sequence,
+wait for the arm — whoever asked).
 A ``--log`` is a write-ahead journal (``JournalFile`` seals each of armctl/joblog.py's records
 and fsyncs a frame's before the frame goes out; ``journal_for`` gives the records their fields)
 that ``read_resume_point`` reads back and ``resume_start`` turns into the line to continue at,
@@ -15,22 +15,19 @@ from the arm's report — before anything is sent (``read_arm(unpause=False)``, 
 The pause rule — toggle only when two agreeing reports say the arm is in the other state — is
 armctl/job_control.py's (the engine's); this module reads the reports it needs from the link.
 
-Errors are ``ScriptError`` (diagnostics and the count of errors; nothing was sent) and
-``JobFailed`` (the arm did not answer, or the job did not finish).
+Errors are ``JobFailed`` (the arm did not answer, or the job did not finish).
 """
 
 from __future__ import annotations
 
 import json
-import re
-from dataclasses import dataclass
 from typing import Any, Callable, Iterable
 
-from .errors import ArmctlError, ScriptError
+from .checked import start_from_state  # noqa: F401 - re-exported (bench/realtime.py)
+from .errors import ArmctlError
 from .job_control import agreed_pause, pause_toggle_needed
 
 READ_ROTATIONS = 2  # after all nine status kinds: two more rotations (a corrupted first frame of a kind replaced, H9)
-_BLOCK_LINE = re.compile(r"^\s*(?:N\d+\s+)?O(?:<[^>]*>|\d+)\s*(repeat|endrepeat)\b", re.IGNORECASE)
 
 
 class JobFailed(ArmctlError):
@@ -40,61 +37,6 @@ class JobFailed(ArmctlError):
     def __init__(self, message: str, result: Any = None) -> None:
         super().__init__(message)
         self.result = result
-
-
-_last_lint: tuple | None = None  # (script, profile, initial, report): the last check, see lint_script
-
-
-def lint_script(script, profile, initial=None):
-    """``armctl lint``'s checks over the whole script (a ``ScriptSnapshot``): the report.
-    ``initial``: the modal state known before line 1 (``Arm.move``'s line starts from the arm's).
-
-    The same snapshot checked again against the same profile object and initial state gets the
-    same report without a second pass: ``armctl run`` prints the findings before it opens the
-    port, then ``Arm.run`` checks the job it was handed (once when it is submitted, once on the
-    worker).  Both are frozen, so identity means the same bytes and the same profile."""
-    from .lint.engine import lint_lines
-
-    global _last_lint
-    last = _last_lint  # one read: another thread (a second Arm) may replace it meanwhile
-    if last is not None and last[0] is script and last[1] is profile and last[2] == initial:
-        return last[3]
-    report = lint_lines(script.lines(), script.name, profile, initial=initial)
-    _last_lint = (script, profile, initial, report)
-    return report
-
-
-def from_line_errors(script, from_line: int) -> ScriptError | None:
-    """A resume line the compiler cannot start at (inside an arc, inside a repeat block, past
-    the end) is an error like any other; None when ``from_line`` can start the job."""
-    if from_line <= 1:
-        return None
-    check = script.compile(from_line=from_line)
-    check.finish()
-    if not check.error_count:
-        return None
-    return ScriptError([d for d in check.diagnostics if d.severity == "error"], errors=check.error_count)
-
-
-def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
-    """The estimate of the job in ``script`` (a ``ScriptSnapshot``) from ``start``; raises
-    ``ScriptError`` for a job whose motion time passes ``MAX_JOB_MOTION_S`` (E012 at the line
-    where it does) or that does not compile from this initial state."""
-    from .estimate import JobEstimator, motion_time_overrun
-
-    estimator = JobEstimator(model, start, lead_s, baud)
-    compilation = script.compile(initial=initial, from_line=from_line)
-    for statement in compilation:
-        estimator.add(statement.command)
-        overrun = motion_time_overrun(statement, estimator.result.motion_s)
-        if overrun is not None:
-            raise ScriptError([overrun], errors=1)
-    # This pass is the stream's twin (same snapshot, same initial state, same from_line): if it
-    # compiled cleanly, so will the stream, frame for frame; the arm's reported state can make
-    # a line fail that passed the check (a G91 offset from the real pose), and then nothing goes.
-    if compilation.error_count:
-        raise ScriptError([d for d in compilation.diagnostics if d.is_error], errors=compilation.error_count)
-    return estimator.result
 
 
 def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
@@ -256,61 +198,19 @@ def _paused_twice(link, timeout_s: float) -> bool:
     return pause_toggle_needed(want_paused=False, agreed=reported_pause(link, timeout_s)) is True
 
 
-def start_from_state(model, state):
-    """The streamer's start pose and the compiler's initial state, from the arm's report: its
-    X/Y/Z and its joints as reported (``MotionModel.reported_pose``: an unverified profile's
-    kinematics never decide where the arm starts)."""
-    from .script import InitialState
-
-    joints = tuple(state.joints_deg)
-    pose = model.reported_pose(state.position_mm, joints, float(state.pwm_us), tuple(state.worktable_mm))
-    initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: float(state.pwm_us)})
-    return pose, initial
-
-
-def start_at(model, joints: tuple | None = None, pwm_us: float | None = None, origin_mm: tuple = (0.0, 0.0, 0.0)):
-    """The start pose and initial state of an arm at ``joints`` with ``pwm_us`` (default: the
-    profile's fixed pose 0 and initial pulse, as ``armctl run --dry-run`` assumes)."""
-    from .script import InitialState
-
-    pose = model.initial_pose(joints=joints, pwm_us=pwm_us, origin_mm=origin_mm)
-    joints = tuple(model.profile.poses[0]) if joints is None else joints
-    pwm_us = pose.pwm_us[0] if pwm_us is None else pwm_us
-    initial = InitialState(pose=tuple(pose.cartesian), joints_deg=joints, pwm_us={1: pwm_us})
-    return pose, initial
-
-
-@dataclass(frozen=True)
-class JobPlan:
-    """A checked job on one arm: where it starts (the arm's report) and its estimate."""
-
-    start: Any  # motion.Pose
-    initial: Any  # script.InitialState
-    estimate: Any  # estimate.JobEstimate
-    from_line: int
-
-
-def plan_job(script, model, state, lead_s: float, baud: int, from_line: int = 1) -> JobPlan:
-    """Start from the arm's reported ``state`` and estimate ``script`` from there (``ScriptError``
-    when it cannot run from there)."""
-    start, initial = start_from_state(model, state)
-    return JobPlan(start, initial, estimate_job(script, model, start, lead_s, baud, from_line, initial), from_line)
-
-
-def start_job(link, script, model, plan: JobPlan, lead_s: float, baud: int, total_lines: int, log=None):
-    """The runner that streams ``script`` as ``plan`` says (not started: call ``run``), with the
-    link's status frames routed to it."""
+def start_job(link, model, job, log=None):
+    """The runner that streams ``job`` (a ``checked.CheckedJob``; not started: call ``run``)."""
     from .link import fifo_proven
     from .runner import JobRunner, RunView
     from .streamer import Streamer
 
-    estimate = plan.estimate
-    streamer = Streamer(model, plan.start, lead_s=lead_s, baud=baud)
-    view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=total_lines, lead_s=lead_s,
-                   capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
-    statements = Lookahead(script.compile(initial=plan.initial, from_line=plan.from_line))
+    estimate = job.estimate
+    streamer = Streamer(model, job.start, lead_s=job.lead_s, baud=job.baud)
+    view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=job.total_lines,
+                   lead_s=job.lead_s, capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
     # ``done`` needs a FIFO size that is proven (probed, or a simulator known to hold it): link.fifo_proven
-    return JobRunner(link, streamer, statements, view, log=log, fifo_proven=fifo_proven(link.url, model.profile.connector))
+    return JobRunner(link, streamer, Lookahead(job.statements()), view, log=log,
+                     fifo_proven=fifo_proven(link.url, model.profile.connector))
 
 
 def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = lambda why: None) -> str:
@@ -457,9 +357,11 @@ class BlockIndex:
 
     def __init__(self, lines: Iterable[str]) -> None:
         self.blocks: list[tuple[int, int]] = []  # (first line, last line) of each outermost block, in order
+        from .lint.scan import block_line
+
         depth, start = 0, None
         for number, text in enumerate(lines, 1):
-            match = _BLOCK_LINE.match(text)
+            match = block_line(text)
             if match is None:
                 continue
             if match.group(1).lower() == "repeat":

@@ -19,6 +19,15 @@ less than the wall time.
 
     .venv/bin/python benchmarks/virtual_run.py             # 5 pairs
     .venv/bin/python benchmarks/virtual_run.py --pairs 9
+
+Issue 23's measure (``--cost``): the CPU of a 24,000-frame ``armctl -q run JOB --port
+'sim://?clock=virtual' --no-live`` (JOB: 12,000 passes of two 1 mm moves at F3000, about 1,400 s of
+arm time) — the installed command in a fresh process, its CPU from the child's rusage (user +
+system) — against the bare simulator replaying the same frames (``baseline``, target at most
+1.5×) and against ``armctl compile JOB`` in a fresh process (target at most 10×).  Each
+figure is the median of ``--pairs`` runs, taken in alternating order.
+
+    .venv/bin/python benchmarks/virtual_run.py --cost --pairs 3
 """
 
 from __future__ import annotations
@@ -26,7 +35,9 @@ from __future__ import annotations
 import argparse
 import contextlib
 import io
+import os
 import statistics
+import subprocess
 import sys
 import tempfile
 import time
@@ -111,10 +122,64 @@ def baseline(written: list[tuple[float, bytes]], end_s: float) -> tuple[float, f
     return time.perf_counter() - start, time.process_time() - cpu_start
 
 
+COST_PASSES = 12_000  # two frames a pass, plus the first move: 24,001 frames
+COST_TARGET_SIMULATOR = 1.5  # run CPU / the bare simulator's CPU on the same frames
+COST_TARGET_COMPILE = 10.0  # run CPU / `armctl compile` CPU of the same script
+ARMCTL = Path(sys.executable).with_name("armctl")  # the installed command, next to this interpreter
+
+
+def write_cost_job(path: Path) -> None:
+    """Issue 23's 24,000-frame job (as /work/perf24k.sh writes it)."""
+    path.write_text(f"G90\nG1 X250 Y-50 Z150 A180 B0 C0 F3000 S1000\nO<a> repeat [{COST_PASSES}]\n"
+                    "G1 Y-49 F3000\nG1 Y-50\nO<a> endrepeat\n", encoding="utf-8")
+
+
+def child_cpu_s(*words: str) -> float:
+    """User + system CPU seconds of ``armctl WORDS`` in a fresh process (its own rusage); its
+    output is discarded, a failure stops the benchmark."""
+    with tempfile.TemporaryFile() as errors:  # a file, not a pipe: a chatty child cannot block on it
+        process = subprocess.Popen([str(ARMCTL), *words], stdout=subprocess.DEVNULL, stderr=errors)
+        _, status, usage = os.wait4(process.pid, 0)
+        process.returncode = os.waitstatus_to_exitcode(status)
+        if process.returncode != 0:
+            errors.seek(0)
+            raise SystemExit(f"armctl {' '.join(words)} failed (exit {process.returncode}): "
+                             f"{errors.read().decode(errors='replace')}")
+    return usage.ru_utime + usage.ru_stime
+
+
+def cost(pairs: int) -> int:
+    """Issue 23's measure (see the module docstring); exit 1 when a target is missed."""
+    with tempfile.TemporaryDirectory() as tmp:
+        script = Path(tmp) / "job24k.txt"
+        write_cost_job(script)
+        _, written, end_s, _ = one_run(script)  # the frames to replay (the same every run)
+        run_words = ("-q", "run", str(script), "--port", URL, "--no-live")
+        runs, bases, compiles = [], [], []
+        for pair in range(pairs):
+            steps = [lambda: runs.append(child_cpu_s(*run_words)), lambda: bases.append(baseline(written, end_s)[1]),
+                     lambda: compiles.append(child_cpu_s("compile", str(script)))]
+            for step in steps if pair % 2 == 0 else reversed(steps):
+                step()
+    run_s, base_s, compile_s = (statistics.median(values) for values in (runs, bases, compiles))
+    print(f"job: {len(written)} frames, model time simulated {end_s:.1f} s")
+    print(f"armctl -q run (fresh process) CPU median {run_s:.2f} s, runs {', '.join(f'{r:.2f}' for r in runs)}")
+    print(f"bare simulator (same frames) CPU median {base_s:.2f} s; ratio {run_s / base_s:.2f} (target <= {COST_TARGET_SIMULATOR:g})")
+    print(f"armctl compile (fresh process) CPU median {compile_s:.2f} s; ratio {run_s / compile_s:.1f} "
+          f"(target <= {COST_TARGET_COMPILE:g})")
+    met = run_s / base_s <= COST_TARGET_SIMULATOR and run_s / compile_s <= COST_TARGET_COMPILE
+    print("targets met" if met else "targets missed")
+    return 0 if met else 1
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pairs", type=int, default=5)
+    parser.add_argument("--cost", action="store_true", help="issue 23's measure: a 24,000-frame run against the "
+                        "bare simulator and against armctl compile, each in a fresh process")
     args = parser.parse_args()
+    if args.cost:
+        return cost(args.pairs)
     with tempfile.TemporaryDirectory() as tmp:
         script = Path(tmp) / "twenty_minutes.txt"
         write_job(script)

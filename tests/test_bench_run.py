@@ -32,7 +32,7 @@ from armctl.script import compile_text
 from armctl.sim.model import SimulatedArm
 from armctl.sim.protocol_sim import parse_sim_url
 from armctl.streamer import DEFAULT_LEAD_S
-from armctl.jobflow import start_from_state
+from armctl.checked import start_from_state
 
 URL = "sim://?clock=virtual"
 SCRIPTS = Path(__file__).resolve().parent.parent / "scripts"

@@ -60,6 +60,18 @@ def test_virtual_run_baseline_replays_frames_on_the_simulator():
     assert wall_s > 0 and cpu_s >= 0
 
 
+def test_virtual_run_cost_times_the_installed_command_in_a_fresh_process(tmp_path):
+    # issue 23's measure (virtual_run.py --cost): its job and its child's CPU, on a job of 2 passes
+    module = _load("virtual_run.py")
+    script = tmp_path / "job.txt"
+    module.write_cost_job(script)
+    assert "O<a> repeat [12000]" in script.read_text()
+    script.write_text(script.read_text().replace("[12000]", "[2]"))
+    assert module.child_cpu_s("compile", str(script)) > 0
+    with pytest.raises(SystemExit, match="exit 2"):  # a failing child stops the benchmark, saying why
+        module.child_cpu_s("compile", str(tmp_path / "missing.txt"))
+
+
 def test_streamer_cost_builds_its_streamers_and_times_a_batch():
     # benchmarks/streamer_cost.py (issue 13's flat-cost row) called a private streamer method
     # whose signature had changed, and ended in a TypeError unnoticed: its code runs here.

@@ -143,7 +143,7 @@ def test_a_stop_while_run_checks_the_script_ends_the_job_with_nothing_sent(monke
     import armctl.api as api
 
     written, opened = [], []
-    real_check = api._check
+    real_check = api.Arm._checked
     with Arm.open(VIRTUAL, connect=recording_connect(written, opened)) as arm:
         calls = []
 
@@ -153,9 +153,9 @@ def test_a_stop_while_run_checks_the_script_ends_the_job_with_nothing_sent(monke
                 arm.stop("stopped while checking")
             return real_check(*args)
 
-        monkeypatch.setattr(api, "_check", check_and_stop)
+        monkeypatch.setattr(api.Arm, "_checked", check_and_stop)
         result = arm.run(JOB)
-        monkeypatch.setattr(api, "_check", real_check)
+        monkeypatch.setattr(api.Arm, "_checked", real_check)
         assert result.outcome == "interrupted" and result.frames_sent == 0
         assert not [frame for frame in written if frame[:1] == b"\xee"]  # no motion frame
         assert arm.run(JOB).outcome == "finished"  # the next job runs

@@ -1,9 +1,11 @@
 """A job is checked once: ``armctl run`` prints the findings before it opens the port and hands
-the same snapshot to ``Arm.run``, which checks it when submitted and again on its worker — one
-lint pass in all (a large script paid three).  The report is reused only for the very same
-snapshot, profile and initial state."""
+the ``CheckedScript`` to ``Arm.run``, which takes it as it is — one lint pass in all (a large
+script paid three), and no module-level cache: the check is a value passed down.  A check made
+for another profile or another first line is made afresh."""
 
 from __future__ import annotations
+
+import copy
 
 import pytest
 from click.testing import CliRunner
@@ -11,8 +13,7 @@ from click.testing import CliRunner
 import armctl.lint.engine as engine
 from armctl import Arm
 from armctl.cli import main
-from armctl.jobflow import lint_script
-from armctl.profile import load_profile
+from armctl.checked import check
 from armctl.script.files import ScriptSnapshot
 
 pytestmark = pytest.mark.timeout(60)
@@ -47,12 +48,21 @@ def test_arm_run_lints_the_job_once(passes):
     assert passes[0] == 1
 
 
-def test_another_snapshot_or_profile_is_checked_afresh(passes):
-    profile = load_profile()
-    first = ScriptSnapshot("a.txt", JOB.encode())
-    same_bytes = ScriptSnapshot("a.txt", JOB.encode())
-    assert lint_script(first, profile) is lint_script(first, profile)
-    assert passes[0] == 1
-    lint_script(same_bytes, profile)  # equal but not the same object: no identity, no reuse
-    lint_script(first, load_profile())
-    assert passes[0] == 3
+def test_a_checked_script_is_taken_as_it_is_and_another_check_made_afresh(passes):
+    with Arm.open("sim://?clock=virtual") as arm:
+        checked = check(ScriptSnapshot("a.txt", JOB.encode()), arm.profile)
+        assert passes[0] == 1
+        assert arm.run(checked).finished
+        assert passes[0] == 1  # taken as it is
+        other = copy.copy(arm.profile)  # equal, but another object: identity is what a check is for
+        assert other is not arm.profile
+        assert arm.run(check(checked.snapshot, other)).finished  # another profile: the arm's check
+        assert passes[0] == 3
+        assert arm.run(checked, from_line=3).finished  # another first line
+        assert passes[0] == 4
+
+
+def test_no_module_holds_a_check():
+    import armctl.jobflow as jobflow
+
+    assert not hasattr(jobflow, "_last_lint") and not hasattr(jobflow, "lint_script")

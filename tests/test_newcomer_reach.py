@@ -12,7 +12,7 @@ from pathlib import Path
 import pytest
 
 from armctl import Arm, ScriptError
-from armctl.jobflow import lint_script
+from armctl.checked import check
 from armctl.lint.rules import IMPLAUSIBLE_REACH_FACTOR
 from armctl.profile import default_profile
 from armctl.script import ScriptSnapshot
@@ -22,7 +22,7 @@ START = "G1 X200 Y0 Z200 A180 B0 C0 S1500 F3000\n"
 
 
 def findings(text: str):
-    report = lint_script(ScriptSnapshot("job.txt", text.encode()), default_profile())
+    report = check(ScriptSnapshot("job.txt", text.encode()), default_profile())
     return [(d.code, d.severity, d.span.line) for d in report.diagnostics if d.code == "L103"]
 
 
@@ -38,7 +38,7 @@ def test_a_worktable_origin_counts():
 
 
 def test_the_message_says_why_and_names_no_illustrative_numbers():
-    report = lint_script(ScriptSnapshot("job.txt", (START + "G1 X2000\n").encode()), default_profile())
+    report = check(ScriptSnapshot("job.txt", (START + "G1 X2000\n").encode()), default_profile())
     (finding,) = [d for d in report.diagnostics if d.code == "L103"]
     assert "more than 2x the profile's reach (470 mm): beyond any desktop arm" in finding.message
     assert "illustrative" not in finding.message and finding.span.snippet == "X2000"

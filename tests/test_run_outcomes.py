@@ -204,3 +204,18 @@ def test_a_job_ending_in_an_sd_program_is_done_only_when_the_program_stops_advan
     assert result.exit_code == 0, result.output
     measured = float(re.search(ARM_TIME, result.stdout, re.M).group(1))
     assert 4.0 <= measured <= 5.5, result.stdout
+
+
+@pytest.mark.parametrize("opening, closing", [("N10O<a> repeat [3]", "O<a> endrepeat"),  # an N number written close
+                                              ("O<a> (three rows) repeat [3]", "O<a> (done) endrepeat")])
+def test_a_stopped_job_resumes_at_the_repeat_line_however_the_grammar_lets_it_be_written(opening, closing):
+    # The compiler reads "N10O<a> repeat" and "O<a> (comment) repeat" as repeat lines, so the
+    # resume line must move out of the block for them too (one rule for what a repeat line is:
+    # lint/scan.py's, which follows the grammar): a line inside the block cannot start a job.
+    from armctl import Arm, ArmTimeout
+
+    script = START + f"{opening}\nG1 Y50 F600\nG1 Y-50\n{closing}\nG1 Z100\n"
+    with Arm.open("sim://?clock=virtual") as arm:
+        with pytest.raises(ArmTimeout) as stopped:
+            arm.run(script, timeout=12)
+    assert stopped.value.result.resume_line == 2

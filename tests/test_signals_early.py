@@ -88,7 +88,7 @@ def test_importing_the_cli_installs_no_handler():
 # A signal while `arm.run` checks the script (run's own handlers are in place, the job is not yet
 # registered): SIGTERM and SIGHUP called arm.stop(), which the API did not count before the job
 # existed — the job then ran to its end and exited 0.  The child sends the signal from inside
-# armctl.api._check, patched in when armctl.api loads.
+# armctl.api.Arm._checked (run's check of the script it is handed), patched in when armctl.api loads.
 CHECK_TRIP = '''
 import importlib.abc, importlib.util, os, signal, sys
 
@@ -102,16 +102,16 @@ class _PatchCheck(importlib.abc.MetaPathFinder):
 
         def exec_module(module):
             load(module)
-            real = module._check
+            real = module.Arm._checked
             calls = []
 
-            def _check(*args):
+            def _checked(*args):
                 calls.append(1)
                 if len(calls) == 1:
                     os.kill(os.getpid(), getattr(signal, os.environ["ARMCTL_TEST_SIGNAL"]))
                 return real(*args)
 
-            module._check = _check
+            module.Arm._checked = _checked
 
         spec.loader.exec_module = exec_module
         return spec

@@ -15,7 +15,8 @@ from __future__ import annotations
 
 import click
 
-EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE = 0, 1, 2
+from ..exits import EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE
+
 CONFIG_KEYS = ("include", "exclude", "select", "ignore")
 
 

@@ -30,8 +30,10 @@ _PARAMETER = re.compile(r"#<([A-Za-z_][A-Za-z0-9_]*)>")
 # up to the first ")", or the rest of the line from a ";" (group 1 empty for those)
 _PARAMETER_OR_COMMENT = re.compile(r"\([^)]*\)|;.*|#<([a-z_][a-z0-9_]*)>", re.S)
 _ASSIGNMENT = re.compile(r"\s*(?:[Nn][0-9]+\s*)?#<([A-Za-z_][A-Za-z0-9_]*)>\s*=")
-# compiled on first use (re's cache): only a line with an O needs it, and compiling it cost
-# every start-up 0.5 ms
+# A repeat line as the grammar reads it (grammars/armctl.lark: LINE_NUMBER, LABEL, NAME), in a
+# line whose comments code_text blanked: the one rule, for lint and for the resume line
+# (``block_line``).  Compiled on first use (re's cache): only a line with an O needs it, and
+# compiling it cost every start-up 0.5 ms.
 _BLOCK = r"\s*(?:[Nn][0-9]+\s*)?[Oo](?:<[A-Za-z0-9_]+>|[0-9]+)\s*(repeat|endrepeat)\b\s*(.*?)\s*$"
 # Searched from just after the line's first ";" only: every later ";" finds the same first match,
 # and trying the pattern at each of them (``;.*?armctl…``) was quadratic in the number of ";".
@@ -54,6 +56,17 @@ def ignored_codes(text: str) -> Optional[tuple[str, ...]]:
     if match.group(1) is None:
         return ()
     return tuple(code.strip().upper() for code in re.split(r"[,\s]+", match.group(1)) if code.strip())
+
+
+def block_line(text: str) -> Optional[re.Match]:
+    """The repeat or endrepeat of a script line (group 1, any case; group 2 the count's text),
+    comments and all as the compiler reads it; None for any other line."""
+    if "o" not in text and "O" not in text:
+        return None
+    code = code_text(text)
+    if "o" not in code and "O" not in code:
+        return None
+    return re.match(_BLOCK, code, re.I)
 
 
 def code_text(text: str) -> str:
@@ -147,11 +160,9 @@ class LineScanner:
                                   "save the script as UTF-8"))
 
     def _look(self, number: int, text: str) -> None:
-        code = code_text(text)
-        if "o" in code or "O" in code:
-            block = re.match(_BLOCK, code, re.I)
-            if block is not None:
-                self._block(number, text, block)
+        block = block_line(text)
+        if block is not None:
+            self._block(number, text, block)
 
     def _define(self, number: int, text: str, name: str) -> None:
         """The first assignment of ``name`` (lower case): the line's first parameter."""

@@ -2,7 +2,7 @@
 
 Strategy: the order a user needs.  Usage problems first (an output format we cannot write,
 a script that cannot be read, a missing plot extra, a bad profile: exit 2, nothing linted),
-then the same checks as ``armctl lint`` (armctl/lint/engine.py's ``lint_lines``) with the
+then the same checks as ``armctl lint`` (armctl/checked.py's ``check``, lint's engine) with the
 same located diagnostics on stderr — a script with errors is not drawn (exit 1) unless
 ``--force``, which draws it with its findings and still exits 1.  Then the job is compiled
 and sampled by the pure armctl/plot/path.py and handed to a renderer: plotly for .html
@@ -22,9 +22,9 @@ import sys
 import click
 
 from ..cli_types import number
+from ..exits import EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE
 from ..limits import LINE_RANGE
 
-EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE = 0, 1, 2
 FORMATS = {".html": "html", ".htm": "html", ".svg": "svg", ".png": "png"}
 LIBRARY_OF = {"html": "plotly", "svg": "matplotlib", "png": "matplotlib"}
 INSTALL_HINT = "pip install -e '.[plot]'"
@@ -110,10 +110,10 @@ def _profile(profile_path):
 
 def _check(snapshot, profile, from_line: int, force: bool) -> list:
     """Lint's findings (and a bad --from-line) on stderr; exit 1 on errors unless ``force``."""
-    from ..lint.engine import lint_lines
+    from ..checked import check
     from ..lint.formatters import TextFormatter
 
-    report = lint_lines(snapshot.lines(), snapshot.name, profile)
+    report = check(snapshot, profile).report  # the check run and estimate make (the from-line check is plot's own, below)
     errors = report.errors
     if from_line > 1:  # a resume line the compiler cannot start at is an error like any other
         resume = [d for d in snapshot.compile(from_line=from_line).finish() if d.code == "E010"]

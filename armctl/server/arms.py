@@ -1,7 +1,7 @@
 """One served arm: its ``AsyncArm``, its jobs and their journals, its controller, its viewers.
 
 Strategy: the server's state of one arm, and nothing about HTTP.  A job is checked here
-(``jobflow.lint_script``, the check ``Arm.run`` makes: errors → ``ScriptError``, nothing sent),
+(``checked.check``, once: errors → ``ScriptError``, nothing sent; ``Arm.run`` takes the ``CheckedScript``),
 given an id, its script kept and its journal opened (``run --log``'s journal, through
 ``Arm.run``'s ``log=``: ``<journal dir>/<id>.txt`` and ``<id>.log``), then run as an asyncio
 task that no client owns: it survives its client going away, and a restarted server resumes
@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ..errors import ArmctlError, ScriptError
+from ..errors import ArmctlError
 from .hub import Hub
 
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_-]{1,32}")
@@ -126,13 +126,14 @@ class ArmService:
     # --- jobs --------------------------------------------------------------------------------
 
     def check(self, snapshot, *, errors_raise: bool = True):
-        """``armctl lint``'s report of ``snapshot`` for this arm's profile (``Arm.run``'s check)."""
-        from ..jobflow import lint_script
+        """``snapshot`` checked for this arm's profile (``Arm.run``'s check, made once: the
+        ``CheckedScript`` is what the job runs): ``errors`` and ``diagnostics`` are ``armctl lint``'s."""
+        from ..checked import check
 
-        report = lint_script(snapshot, self.arm.profile)
-        if errors_raise and report.errors:
-            raise ScriptError([d for d in report.diagnostics if d.severity == "error"], errors=report.errors)
-        return report
+        checked = check(snapshot, self.arm.profile)
+        if errors_raise and checked.refusal() is not None:
+            raise checked.refusal()
+        return checked
 
     def start_job(self, snapshot, client: str | None, resume=None) -> tuple[Job, Any]:
         """Check, journal and start ``snapshot`` (``ScriptError``: nothing sent; ``Busy``);
@@ -142,14 +143,14 @@ class ArmService:
             raise Busy(f"arm {self.name!r} is running job {self.running.id if self.running else '(a move)'}: "
                        "wait for it to end or stop it")
         self.check_not_jogging()
-        report = self.check(snapshot)
+        checked = self.check(snapshot)
         job_id = time.strftime("%Y%m%dT%H%M%S") + "-" + uuid.uuid4().hex[:6]
         self.journal_dir.mkdir(parents=True, exist_ok=True)
         job = Job(job_id, snapshot.name, self.journal_dir / f"{job_id}.txt", self.journal_dir / f"{job_id}.log")
         job.script_path.write_bytes(snapshot.data)
         self.jobs[job_id] = self.running = job
-        job.task = asyncio.ensure_future(self._run(job, snapshot, resume))
-        return job, report
+        job.task = asyncio.ensure_future(self._run(job, checked, resume))
+        return job, checked
 
     def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
         """A job of the journal (this server's or an earlier one's), continued from the line its
@@ -165,7 +166,7 @@ class ArmService:
         # before the 201: a log that is no log of this script is refused (422), nothing sent
         return self.start_job(snapshot, client, resume=read_resume_point(log, snapshot))
 
-    async def _run(self, job: Job, snapshot, resume) -> None:
+    async def _run(self, job: Job, checked, resume) -> None:
         from ..aio import EventObserver
         from ..jobflow import JobFailed
 
@@ -176,12 +177,12 @@ class ArmService:
                 job.streaming.set()
             self.publish({"job": job.id, **item})
 
-        observer = job.observer = EventObserver(lambda item: loop.call_soon_threadsafe(event, item), snapshot.name)
+        observer = job.observer = EventObserver(lambda item: loop.call_soon_threadsafe(event, item), checked.name)
         self.publish({"event": "job", "job": job.id, "name": job.name, "state": "started"})
         try:
             with open(job.log_path, "w", encoding="utf-8", buffering=1) as log:
                 try:
-                    result = await self.arm.run(snapshot, observer=observer, log=log, resume=resume)
+                    result = await self.arm.run(checked, observer=observer, log=log, resume=resume)
                     job.result = result.to_json()
                 except JobFailed as error:
                     job.error = str(error)

@@ -1,8 +1,9 @@
 """``armctl run`` and ``armctl estimate``: check, then a client of the Python API; report.
 
 Strategy: ``armctl run`` is the Python API (``armctl.Arm``, armctl/api.py) plus presentation.
-It checks the whole script first, printing every finding (nothing is opened before it passes),
-then ``Arm.open`` and ``Arm.run`` do the job — read the arm, plan, stream through the one job
+It checks the whole script first (``checked.check``), printing every finding (nothing is opened
+before it passes), then ``Arm.open`` and ``Arm.run`` — handed that ``CheckedScript``, which they
+do not check again — do the job — read the arm, plan, stream through the one job
 engine, end it, journal it to ``--log``, resume from a log — and this module only shows it: the
 live panel or plain progress lines or ``--json`` events (a ``JobObserver``), notes on stderr
 above the panel, the panel's keys and Ctrl-C as calls on the arm (``toggle_pause``,
@@ -11,7 +12,7 @@ above the panel, the panel's keys and Ctrl-C as calls on the arm (``toggle_pause
 What was checked is exactly what is sent: the script is read once, before anything else, into
 an immutable ``ScriptSnapshot`` (armctl/script/files.py), and every step — the lint check, the
 ``--from-line`` check, the estimate, the stream and the resume line of the summary — compiles
-that same snapshot, never the file again (``Arm.run`` takes the snapshot itself).  Compiling is
+that same snapshot, never the file again (``Arm.run`` takes the checked snapshot itself).  Compiling is
 deterministic, so an edit to the file while the job streams changes nothing that is sent;
 stdin (``run -``) works the same way.
 
@@ -29,12 +30,12 @@ from dataclasses import dataclass
 import click
 
 from ..errors import ArmctlError, ScriptError
+from ..exits import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS, UsageFailure, exit_code_for
 from ..jobflow import JobFailed
 from ..jobflow import outermost_block_start  # noqa: F401 - re-exported (tests)
 from ..protocol import describe
 from ..streamer import DEFAULT_LEAD_S
 
-EXIT_OK, EXIT_PROBLEMS, EXIT_INTERRUPTED = 0, 1, 130
 LIVE_REFRESH_S = 0.1
 PLAIN_PROGRESS_S = 2.0
 # The least terminal the panel's map is drawn in: its ~24 rows with the map, a few lines of
@@ -59,27 +60,20 @@ class JobOptions:
     resume_log: str | None = None  # --resume LOG: continue the job that LOG records
 
 
-def check_script(script, profile):
+def check_script(script, profile, from_line: int = 1):
     """The same checks as ``armctl lint`` over the whole script (a ``ScriptSnapshot``) before
-    anything is sent: any error prints every finding and exits 1; warnings are shown and the
-    job goes on."""
+    anything is sent, and then whether ``from_line`` can start it: any error prints every finding
+    and exits 1; warnings are shown and the job goes on.  The ``CheckedScript``, for ``Arm.run``."""
+    from ..checked import check
     from ..output import quiet
-    from ..jobflow import lint_script
 
-    report = lint_script(script, profile)
+    checked = check(script, profile, from_line=from_line)
+    report = checked.report
     shown = [d for d in report.diagnostics if d.severity == "error"] if quiet() else report.diagnostics  # -q: no warnings
     _refuse_on_errors(shown, report.errors)
-    return report
-
-
-def check_from_line(script, from_line: int) -> None:
-    """A resume line the compiler cannot start at (inside an arc, inside a repeat block, past
-    the end) is an error like any other: nothing is sent."""
-    from ..jobflow import from_line_errors
-
-    error = from_line_errors(script, from_line)
-    if error is not None:
-        _refuse_on_errors(error.diagnostics, error.errors)
+    if checked.from_line_error is not None:  # a resume line the compiler cannot start at (inside an arc, a block, past the end)
+        _refuse_on_errors(checked.from_line_error.diagnostics, checked.from_line_error.errors)
+    return checked
 
 
 class ScriptRefused(SystemExit):
@@ -98,13 +92,13 @@ def _refuse_on_errors(diagnostics, errors: int) -> None:
         raise ScriptRefused([d for d in diagnostics if d.severity == "error"])
 
 
-def estimate_job(script, model, start, lead_s, baud, from_line=1, initial=None):
-    """The estimate of the job in ``script`` (a ``ScriptSnapshot``); a job whose motion time
-    passes ``MAX_JOB_MOTION_S`` is refused (E012 at the line where it does; exit 1)."""
-    from .. import jobflow
+def plan_job(checked, model, lead_s: float, baud: int):
+    """``checked`` planned from the profile's fixed pose 0 (a ``CheckedJob``); a job whose motion
+    time passes ``MAX_JOB_MOTION_S`` is refused (E012 at the line where it does; exit 1)."""
+    from ..checked import plan
 
     try:
-        return jobflow.estimate_job(script, model, start, lead_s, baud, from_line, initial)
+        return plan(checked, model, model.initial_pose(), None, lead_s, baud)
     except ScriptError as error:
         _refuse_on_errors(error.diagnostics, error.errors)
 
@@ -121,14 +115,13 @@ def print_estimate(result, header: str) -> None:
         click.echo(f"  note: {note}")
 
 
-def dry_run(options: JobOptions, script, model) -> int:
-    start = model.initial_pose()
+def dry_run(options: JobOptions, checked, model) -> int:
     # the estimate first: it refuses a job too long to run (E012) before a frame is printed
-    result = estimate_job(script, model, start, options.lead_s, options.baud or _config_baud(), options.from_line)
-    for statement in script.compile(from_line=options.from_line):
+    job = plan_job(checked, model, options.lead_s, options.baud or _config_baud())
+    for statement in job.statements():
         frame = statement.command.encode()
         click.echo(f"{statement.line:>6}  {frame.hex()}  {describe(statement.command)}")
-    print_estimate(result, "dry run: no port opened; estimate from the profile's fixed pose 0:")
+    print_estimate(job.estimate, "dry run: no port opened; estimate from the profile's fixed pose 0:")
     return EXIT_OK
 
 
@@ -156,8 +149,6 @@ def _open_log(path: str):
     try:
         return open(path, "w", encoding="utf-8", buffering=1)
     except OSError as error:
-        from ..cli import UsageFailure
-
         raise UsageFailure(f"cannot write --log {path}: {error.strerror or error}") from None
 
 
@@ -202,8 +193,6 @@ def _run_json(options: JobOptions, script, connect) -> int:
             events.summary(failure_result("refused", refused.code, diagnostics=refused.diagnostics))
             raise
         except ArmctlError as error:
-            from ..cli import exit_code_for
-
             events.summary(failure_result("failed", exit_code_for(error), message=str(error)))
             raise
         except KeyboardInterrupt:
@@ -225,18 +214,15 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     # none: the port given, else the configured one, as estimate)
     port = None if options.dry_run else choose_port(options.port)
     profile = arm_profile(options.profile_path, port=options.port if port is None else port.url)
-    check_script(script, profile)
-    check_from_line(script, options.from_line)
+    checked = check_script(script, profile, options.from_line)
     if options.dry_run:
-        return dry_run(options, script, MotionModel(profile))
+        return dry_run(options, checked, MotionModel(profile))
     # read before --log is opened for writing, and before the port
     resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
     if options.resume_log and options.log_path and _same_file(options.resume_log, options.log_path):
-        from ..cli import UsageFailure
-
         raise UsageFailure(f"--log {options.log_path} is the journal --resume reads: it is never written over; "
                            "give the resumed job a --log of its own")
-    watch = _RunObserver(options, script, MotionModel(profile), events)
+    watch = _RunObserver(options, MotionModel(profile), events)
     # the log before the port: one that cannot be written refuses the job before the arm is touched
     with (_log_file(options.log_path) if options.log_path else nullcontext()) as log, \
             Arm.open(port, options.baud, profile, lead_s=options.lead_s, status_timeout_s=options.timeout_s,
@@ -245,7 +231,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
             events.on_reader_gone = lambda: arm.stop("the program reading --json went away")
         with _stop_signals(arm, watch), (_keys(arm) if watch.keys else nullcontext()):
             try:
-                result = arm.run(script, from_line=options.from_line, observer=watch, log=log, abort=options.abort,
+                result = arm.run(checked, from_line=options.from_line, observer=watch, log=log, abort=options.abort,
                                  resume=resume)
             except ScriptError as error:  # the script cannot run from where the arm is: nothing was sent
                 _refuse_on_errors(error.diagnostics, error.errors)
@@ -322,11 +308,11 @@ class _RunObserver:
     """``armctl run``'s ``JobObserver`` (duck-typed: the API's import stays lazy): the live panel,
     the plain progress lines or the --json events, and the notes on stderr above the panel."""
 
-    def __init__(self, options: JobOptions, script, model, events) -> None:
+    def __init__(self, options: JobOptions, model, events) -> None:
         from ..output import quiet
         from .run_keys import FOOTER, keys_available
 
-        self.options, self.script, self.model, self.events = options, script, model, events
+        self.options, self.model, self.events = options, model, events
         self.keys = _live(options) and keys_available()
         self.display = _Display(f"armctl run {options.script}", _live(options), footer=FOOTER if self.keys else None)
         self.quiet = quiet()
@@ -337,7 +323,7 @@ class _RunObserver:
     def started(self, view, plan) -> None:
         self.view, self.estimate, self.wall_start = view, plan.estimate, time.monotonic()
         if self.display.live:  # the panel's map: the job compiled as it is sent, sampled once before the first frame
-            self.display.grid = _job_grid(self.script, self.model, plan.start, plan.initial, plan.from_line)
+            self.display.grid = _job_grid(plan, self.model)
         self.display.__enter__()
         if self.events is not None:
             self.events.started(view, self.options.script, plan.from_line)
@@ -389,10 +375,10 @@ def _live(options: JobOptions) -> bool:
     return options.live and sys.stdout.isatty() and not quiet()
 
 
-def _job_grid(script, model, start, initial, from_line: int):
+def _job_grid(job, model):
     from .path_map import job_grid
 
-    return job_grid(script.compile(initial=initial, from_line=from_line), model, start)
+    return job_grid(job.statements(), model, job.start)
 
 
 class _Display:

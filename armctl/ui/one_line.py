@@ -1,0 +1,71 @@
+"""``armctl move`` and ``armctl home``: one line run as a job through the Python API, and its summary.
+
+Strategy: the command line's ``WORD=VALUE`` words become ``Arm.move``'s keywords (``move_words``:
+a word that is not one is a usage error, nothing opened); ``Arm.open`` and the one call do the
+job — the same checks, streamer and proof of rest as ``armctl run`` — and this module prints
+where the arm ended, or the ``RunResult`` as JSON, and exits with the result's code.
+"""
+from __future__ import annotations
+
+import json
+import sys
+
+import click
+
+from ..exits import EXIT_PROBLEMS
+
+
+def move_words(texts: tuple[str, ...]) -> dict:
+    """``("z=200", "f=3000")`` → ``{"z": 200.0, "f": 3000.0}``: ``Arm.move``'s keywords, each
+    once; a word that is not one (or not a number) is a usage error, nothing sent."""
+    from ..api import MOVE_KEYWORDS
+    from ..profile import unknown_key_hint
+
+    words: dict = {}
+    for text in texts:
+        name, equals, value = text.partition("=")
+        name = name.strip().lower()
+        if not equals or name not in MOVE_KEYWORDS:
+            hint = unknown_key_hint(name, MOVE_KEYWORDS) if equals else " (write WORD=VALUE, as z=200 or j1=30)"
+            raise click.UsageError(f"{text!r} is not one of move's words{hint}")
+        if name in words:
+            raise click.UsageError(f"{name} is given twice")
+        try:
+            number = float(value) if name not in ("t", "h") else int(value)
+        except ValueError:
+            raise click.UsageError(f"{text}: {value!r} is not a {'whole ' if name in ('t', 'h') else ''}number") from None
+        if number != number or number in (float("inf"), float("-inf")):
+            raise click.UsageError(f"{text}: not a finite number")
+        words[name] = int(number) if isinstance(number, float) and number.is_integer() else number
+    if not words:
+        raise click.UsageError("give at least one word: armctl move z=200 (or x=, y=, a=, b=, c=, j1=…j6=, u=, v=, s=, t=, h=, f=)")
+    return words
+
+
+def one_line_job(port, baud, profile_path, timeout_s, as_json, act, connect) -> None:
+    """``armctl move``/``home``: open the arm, ``act(arm)`` (one line run as a job, proven at
+    rest), print where the arm ended (text, or the ``RunResult`` as JSON), exit with its code.
+    ``connect``: how the port is opened (``Arm.open``'s; the CLI's prints the simulator's banner)."""
+    from ..api import Arm
+    from ..errors import ScriptError
+    from ..jobflow import JobFailed
+    from .run_job import one_line_summary
+
+    with Arm.open(port, baud, profile_path, status_timeout_s=timeout_s, connect=connect) as arm:
+        try:
+            result = act(arm)
+        except ScriptError as error:
+            for diagnostic in error.diagnostics:
+                click.echo(diagnostic.render(), err=True)
+            click.echo("nothing was sent to the arm", err=True)
+            sys.exit(EXIT_PROBLEMS)
+        except JobFailed as error:
+            if error.result is None:
+                raise
+            result = error.result
+        status = arm.status() if result.finished else None
+    if as_json:
+        click.echo(json.dumps(result.to_json()))
+    else:
+        click.echo(one_line_summary(result, None if status is None else status.position_mm))
+    sys.exit(result.exit_code)
