@@ -53,18 +53,15 @@ class Written:
         self.recent: deque = deque(maxlen=RECENT_FRAMES)  # the last frames written
         self.last_move = None  # the last frame written that moves the arm
         self.script_toggles: list = []  # the job's own PAUSE frames written, in order
+        self.script_paused = False  # the job's own PAUSE lines left the arm to pause: an odd number written
 
     def note(self, sent) -> None:
         self.recent.append(sent)
         if isinstance(sent.command, PauseToggle):
             self.script_toggles.append(sent)
+            self.script_paused = len(self.script_toggles) % 2 == 1  # (a plain attribute: read for every frame)
         if sent.segment.moves_reported:  # (``moves_arm``)
             self.last_move = sent
-
-    @property
-    def script_paused(self) -> bool:
-        """The job's own PAUSE lines left the arm to pause: an odd number written."""
-        return len(self.script_toggles) % 2 == 1
 
     def script_pause_line(self):
         return getattr(self.script_toggles[-1].tag, "line", None)
