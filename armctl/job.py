@@ -212,6 +212,9 @@ class Job:
         self._write: Write | None = None  # the Write asked for and not yet done
         self._command = None  # the command that Write carries (the feed override applied)
         self._control_version = 0  # the control state the view shows
+        # the view is current at this time: ``wrote`` refreshed it and nothing was taken or asked
+        # since (``next_action`` at that time would refresh it to the same values: it skips that)
+        self._fresh_s: float | None = None
         self._held = False  # streaming, and only evidence lets the next frame go (``JobEnd.rest_proves_all_written``)
 
     # --- input ------------------------------------------------------------------------------
@@ -226,6 +229,7 @@ class Job:
         place, in order, up to the first that is news: its place (the frames after it are not
         taken), or None when none was (all taken).  A virtual-time host hands over the frames of
         a simulator's quiet stretch this way (``JobRunner.on_status_run``): one call, not one a frame."""
+        self._fresh_s = None
         streamer, view, control, readings = self.streamer, self.view, self.control, self.readings
         streamer_receive, take = streamer.receive_status, readings.take
         other = self.pacing if self.pacing is not streamer else None
@@ -298,21 +302,24 @@ class Job:
         # the estimate's remaining motion is at 100 %: the frame's own time, unscaled
         view.remaining_motion_s = max(0.0, view.remaining_motion_s - sent.segment.duration_s * self.control.feed.percent / 100)
         self._refresh(now)
+        self._fresh_s = now
 
     def request_stop(self, why: str | None = None) -> None:
         """Stop at the next action: the abort sequence, then wait for rest.  ``why`` (a failure
         the host met, e.g. a --log that cannot be written) makes the outcome FAILED."""
         self.failure = self.failure or why
-        self.stop_requested = True
+        self.stop_requested, self._fresh_s = True, None
 
     def pause(self) -> bool:
         """Pause the job: a pause toggle, and nothing more written until ``resume`` (False when
         already pausing or paused, the arm reports it is paused, or the job is stopping; not behind
         the script's own PAUSE: a second toggle would undo it, or, queued, resume the arm it paused)."""
+        self._fresh_s = None
         return self._controllable and not self.written.script_paused and self.control.pause()
 
     def resume(self) -> bool:
         """Resume a pause asked with ``pause``: the toggle goes first, then the job's frames."""
+        self._fresh_s = None
         return self._controllable and self.control.resume()
 
     @property
@@ -323,6 +330,7 @@ class Job:
     def set_feed_override(self, percent: int) -> int:
         """Rescale the speed of the frames not yet written (10…200 %, 10 % steps); returns the
         percentage in force."""
+        self._fresh_s = None
         return self.control.set_feed_override(percent)
 
     def port_lost(self, why: str | None = None) -> None:
@@ -345,7 +353,9 @@ class Job:
         if self.stop_requested and phase in (_Phase.STREAMING, _Phase.DRAINING):
             self._begin_abort()
             phase = self.phase
-        self._refresh(now)
+        fresh, self._fresh_s = self._fresh_s, None
+        if fresh != now:  # (else ``wrote`` refreshed the view at this time, and nothing changed since)
+            self._refresh(now)
         if self.control.busy and phase in (_Phase.STREAMING, _Phase.DRAINING):
             held = self._control_action(now)
             if held is not None:
@@ -462,21 +472,25 @@ class Job:
     # --- the view ---------------------------------------------------------------------------
 
     def _refresh(self, now: float) -> None:
-        view, streamer = self.view, self.streamer
-        view.now_s = now
-        view.queued_frames_bound = streamer.frames_in_flight_bound
-        view.queued_s = streamer.queued_seconds(now)
-        view.last_done = streamer.last_known_done()
-        view.first_not_done = self.arrival.first_not_done(view)
-        control = self.control  # it follows the pause reports as they come (receive_status)
-        if control.version != self._control_version:  # the view follows only a change
-            self._control_version = control.version
-            view.pause_state, view.pause_label = control.state.value, control.label
-            view.feed_percent, view.feed_clamped = control.feed.percent, control.feed.clamped
-        view.frames_by_reports, view.frames_by_time = streamer.confirmed_by_reports, streamer.confirmed_by_time
-        view.frames_unseen = streamer.confirmed_unseen
-        suspect = streamer.first_suspect_index
-        if suspect is not None and suspect < streamer.consumed_lower_bound:
-            # nothing from the first frame that may have been lost on is claimed executed
-            view.last_done = streamer.tag_of(suspect - 1) if suspect > 0 else None
-            view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
+        self._control_version = _follow(self.view, self.streamer, self.arrival, self.control, self._control_version, now)
+
+
+def _follow(view: RunView, streamer, arrival, control, shown_version: int, now: float) -> int:
+    """The view follows the engine at ``now``; the control state's version it now shows."""
+    view.now_s = now
+    view.queued_frames_bound = streamer.frames_in_flight_bound
+    view.queued_s = streamer.queued_seconds(now)
+    view.last_done = streamer.last_known_done()
+    view.first_not_done = arrival.first_not_done(view)
+    if control.version != shown_version:  # the view follows only a change (it follows the pause reports)
+        shown_version = control.version
+        view.pause_state, view.pause_label = control.state.value, control.label
+        view.feed_percent, view.feed_clamped = control.feed.percent, control.feed.clamped
+    view.frames_by_reports, view.frames_by_time = streamer.confirmed_by_reports, streamer.confirmed_by_time
+    view.frames_unseen = streamer.confirmed_unseen
+    suspect = streamer.first_suspect_index
+    if suspect is not None and suspect < streamer.consumed_lower_bound:
+        # nothing from the first frame that may have been lost on is claimed executed
+        view.last_done = streamer.tag_of(suspect - 1) if suspect > 0 else None
+        view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
+    return shown_version
