@@ -357,13 +357,28 @@ class Job:
         if fresh != now:  # (else ``wrote`` refreshed the view at this time, and nothing changed since)
             self._refresh(now)
         if self.control.busy and phase in (_Phase.STREAMING, _Phase.DRAINING):
-            held = self._control_action(now)
+            held = _control_action(self, now)
             if held is not None:
                 return held
         if phase is _Phase.STREAMING:
             statement = self.view.next_statement
-            if statement is not None:
-                return self._stream(statement, now)
+            if statement is not None:  # written when the pacing lets it go, else the time it may
+                if self.written.script_paused and self.end.script_pause_holds(statement):
+                    return self._ended_or_wait(self.end.held_by_script_pause(now), now)
+                command = self.control.command_for(statement)
+                pacing, streamer = self.pacing, self.streamer
+                when = pacing.next_write_time(now, command)
+                self._held = when is None and pacing is streamer
+                if self._held and streamer.pending:
+                    before = self.end.rest_proves_done_before(now)
+                    if before is not None and before > streamer.pending[0].index:
+                        streamer.confirm_all_done(now, before)  # (the time bound's chain restarts at now)
+                        when = pacing.next_write_time(now, command)
+                if when is not None and when <= now:
+                    if self._write is None:
+                        self._write, self._command = Write(command.encode(), statement), command
+                    return self._write
+                return Wait(when)
             self.phase = _Phase.DRAINING
             self.end.restart(now)
             return self._ended_or_wait(self.end.drain(now), now)
@@ -378,49 +393,9 @@ class Job:
             self.end.restart(now)
         return self._settling(now)
 
-    def _stream(self, statement, now: float) -> Write | Wait | Finished:
-        """The next statement: written when the pacing lets it go, else the time it may."""
-        if self.written.script_paused and self.end.script_pause_holds(statement):
-            return self._ended_or_wait(self.end.held_by_script_pause(now), now)
-        command = self.control.command_for(statement)
-        pacing, streamer = self.pacing, self.streamer
-        when = pacing.next_write_time(now, command)
-        self._held = when is None and pacing is streamer
-        if self._held and streamer.pending:
-            before = self.end.rest_proves_done_before(now)
-            if before is not None and before > streamer.pending[0].index:
-                streamer.confirm_all_done(now, before)  # (the time bound's chain restarts at now)
-                when = pacing.next_write_time(now, command)
-        if when is not None and when <= now:
-            if self._write is None:
-                self._write, self._command = Write(command.encode(), statement), command
-            return self._write
-        return Wait(when)
-
     def _ended_or_wait(self, answer: Outcome | float, now: float) -> Wait | Finished:
         """A part's answer (armctl/job_end.py): how the job ended, or the time to wait until."""
         return self._finish(answer, now) if isinstance(answer, Outcome) else Wait(answer)
-
-    def _control_action(self, now: float) -> Write | Wait | None:
-        """A pause toggle the user asked for goes as soon as the wire is free — never behind the
-        streamer's capacity or lead, so a resume is not held behind a FIFO it counts as full;
-        while a pause is asked or in force nothing else is written, and the end of the job
-        waits (its deadline starts again from the resume).  None: carry on."""
-        control = self.control
-        if control.toggle_due:
-            if self._write is not None and self._write.statement is not None:
-                self._write = None  # a frame asked for and not written yet: the toggle goes first
-            wire_s = self.streamer.wire_free_s
-            if wire_s > now:
-                return Wait(wire_s)
-            if self._write is None:
-                self._write = Write(PauseToggle().encode(), None, "pause toggle")
-            return self._write
-        if control.holds_feed:
-            if self.phase is _Phase.DRAINING:
-                self.end.restart(now)
-            return Wait(None)  # until the arm reports (pausing → paused) or the user resumes
-        return None
 
     @property
     def streaming(self) -> bool:
@@ -472,25 +447,44 @@ class Job:
     # --- the view ---------------------------------------------------------------------------
 
     def _refresh(self, now: float) -> None:
-        self._control_version = _follow(self.view, self.streamer, self.arrival, self.control, self._control_version, now)
+        """The view follows the engine at ``now``."""
+        view, streamer, control = self.view, self.streamer, self.control
+        view.now_s = now
+        view.queued_frames_bound = streamer.frames_in_flight_bound
+        view.queued_s = streamer.queued_seconds(now)
+        view.last_done = streamer.last_known_done()
+        view.first_not_done = self.arrival.first_not_done(view)
+        if control.version != self._control_version:  # the view follows only a change (it follows the pause reports)
+            self._control_version = control.version
+            view.pause_state, view.pause_label = control.state.value, control.label
+            view.feed_percent, view.feed_clamped = control.feed.percent, control.feed.clamped
+        view.frames_by_reports, view.frames_by_time = streamer.confirmed_by_reports, streamer.confirmed_by_time
+        view.frames_unseen = streamer.confirmed_unseen
+        suspect = streamer.first_suspect_index
+        if suspect is not None and suspect < streamer.consumed_lower_bound:
+            # nothing from the first frame that may have been lost on is claimed executed
+            view.last_done = streamer.tag_of(suspect - 1) if suspect > 0 else None
+            view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
 
 
-def _follow(view: RunView, streamer, arrival, control, shown_version: int, now: float) -> int:
-    """The view follows the engine at ``now``; the control state's version it now shows."""
-    view.now_s = now
-    view.queued_frames_bound = streamer.frames_in_flight_bound
-    view.queued_s = streamer.queued_seconds(now)
-    view.last_done = streamer.last_known_done()
-    view.first_not_done = arrival.first_not_done(view)
-    if control.version != shown_version:  # the view follows only a change (it follows the pause reports)
-        shown_version = control.version
-        view.pause_state, view.pause_label = control.state.value, control.label
-        view.feed_percent, view.feed_clamped = control.feed.percent, control.feed.clamped
-    view.frames_by_reports, view.frames_by_time = streamer.confirmed_by_reports, streamer.confirmed_by_time
-    view.frames_unseen = streamer.confirmed_unseen
-    suspect = streamer.first_suspect_index
-    if suspect is not None and suspect < streamer.consumed_lower_bound:
-        # nothing from the first frame that may have been lost on is claimed executed
-        view.last_done = streamer.tag_of(suspect - 1) if suspect > 0 else None
-        view.first_not_done = streamer.tag_of(suspect) or view.first_not_done
-    return shown_version
+def _control_action(job: Job, now: float) -> Write | Wait | None:
+    """A pause toggle the user asked for goes as soon as the wire is free — never behind the
+    streamer's capacity or lead, so a resume is not held behind a FIFO it counts as full;
+    while a pause is asked or in force nothing else is written, and the end of the job
+    waits (its deadline starts again from the resume).  None: carry on.  (``Job.next_action``'s
+    own step, outside the class: it runs only while a pause or resume is in hand.)"""
+    control = job.control
+    if control.toggle_due:
+        if job._write is not None and job._write.statement is not None:
+            job._write = None  # a frame asked for and not written yet: the toggle goes first
+        wire_s = job.streamer.wire_free_s
+        if wire_s > now:
+            return Wait(wire_s)
+        if job._write is None:
+            job._write = Write(PauseToggle().encode(), None, "pause toggle")
+        return job._write
+    if control.holds_feed:
+        if job.phase is _Phase.DRAINING:
+            job.end.restart(now)
+        return Wait(None)  # until the arm reports (pausing → paused) or the user resumes
+    return None

@@ -11,14 +11,13 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-import armctl.job as job_module
 from armctl.cli import main
 from armctl.job import Job
 
 from test_job import FakeArm, drive, make_job
 
 SCRIPTS = Path(__file__).resolve().parent.parent / "scripts"
-# the fields ``_follow`` sets
+# the fields ``Job._refresh`` sets
 FOLLOWED = ("now_s", "queued_frames_bound", "queued_s", "last_done", "first_not_done", "pause_state", "pause_label",
             "feed_percent", "feed_clamped", "frames_by_reports", "frames_by_time", "frames_unseen")
 
@@ -31,9 +30,11 @@ def skips(monkeypatch) -> list:
 
     def checked(self, now):
         if self._fresh_s == now:
-            view = copy.copy(self.view)
-            job_module._follow(view, self.streamer, self.arrival, self.control, self._control_version, now)
-            assert [getattr(view, f) for f in FOLLOWED] == [getattr(self.view, f) for f in FOLLOWED]
+            shown, version = self.view, self._control_version
+            self.view = copy.copy(shown)
+            self._refresh(now)  # on a copy of the view
+            refreshed, self.view, self._control_version = self.view, shown, version
+            assert [getattr(refreshed, f) for f in FOLLOWED] == [getattr(shown, f) for f in FOLLOWED]
             seen.append(now)
         return next_action(self, now)
 
