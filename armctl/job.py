@@ -100,7 +100,6 @@ class _Phase(Enum):
     DONE = "done"
 
 
-
 @dataclass(frozen=True, slots=True)
 class Write:
     """Write ``frame`` now, then call ``wrote(now)``; ``statement`` is None for an abort frame."""
