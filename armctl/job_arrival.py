@@ -204,6 +204,21 @@ class Arrival:
             return True
         return False
 
+    def proves_arrival(self) -> bool:
+        """True the first time the arm, paused and still, is frozen mid-move (``frozen_mid_move``):
+        its control frames act as they land, whatever the profile says (``found_arrival``)."""
+        if self.found_arrival or not self.frozen_mid_move():
+            return False
+        self.found_arrival = True
+        return True
+
+    def settle_paused(self) -> None:
+        """Paused by a pause that acted as it landed: the moves whose ends the arm reached ran
+        (``confirm_through_last_move``), and frozen at a boundary the resume goes to the next
+        frame (``frozen_at_a_boundary``)."""
+        self.confirm_through_last_move()
+        self.resume_at_next = self.frozen_at_a_boundary()
+
     def frozen_at_a_boundary(self) -> bool:
         """A pause that acted as it landed froze the arm at the end of the first pending frame
         (or on it, if it moves nothing), i.e. at the start of the next, a move: either is the

@@ -113,8 +113,7 @@ class Stop:
                 # The pause acted as it landed: the arm at the last target says nothing of the frames
                 # after its last move (a PWM change, a delay: the RESET CONNECTOR cleared them, or
                 # not); the moves it reached the ends of did run.
-                arrival.confirm_through_last_move()
-                arrival.resume_at_next = arrival.frozen_at_a_boundary()
+                arrival.settle_paused()
             elif arrival.at_last_target():
                 self.streamer.confirm_all_done()
             return outcome
@@ -130,10 +129,8 @@ class Stop:
         and a pause that merely came sooner than the queue could run is what a FIFO that dropped
         frames shows too.  (Frozen in a frame that moves nothing — a PWM change, a delay — such
         an arm shows nothing: `armctl probe` measures the mode.)"""
-        arrival = self.arrival
-        if arrival.found_arrival or self.frames or not arrival.frozen_mid_move():
+        if self.frames or not self.arrival.proves_arrival():
             return False
-        arrival.found_arrival = True
         self.view.messages.append(
             "the arm paused mid-move with frames still queued: its control frames act as they land, though the "
             "profile says they queue (run `armctl probe`); a RESET CONNECTOR cleared the queue, so the resume runs "
