@@ -5,7 +5,7 @@ was read; nothing here reads a clock or a port.  The status reader only knows by
 where H9's second half lives — a value that jumps faster than the arm can move is *suspect*
 and is held back until the next frame of its kind confirms it (one corrupted frame with a
 plausible frame on either side changes nothing; a real jump, e.g. after a reset, is accepted
-one frame later).
+one frame later): armctl/evidence.py's rule of a confirmed jump (``reach``, ``beyond_reach``).
 """
 
 from __future__ import annotations
@@ -13,6 +13,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from operator import attrgetter
 
+from .evidence import beyond_reach, reach
 from .protocol import (
     STATUS_PERIOD_S,
     STATUS_ROTATION,
@@ -128,7 +129,7 @@ class ArmState:
     def _merge_judged(self, kind: int, run: list) -> None:
         """``update`` (less the frame count) for each (frame, read time) of ``run``, all of one
         judged kind, in order: each frame judged against the values last accepted and the frame
-        held (``_jump_between``'s arithmetic, written out), only the last accepted applied."""
+        held (``_jump_between``'s test: armctl/evidence.py), only the last accepted applied."""
         speed = self.max_speed_mm_s if kind == _POSITION_KIND else self.max_joint_speed_deg_s
         held = self._held.get(kind)
         if speed is None:  # nothing is judged: the last frame is taken
@@ -142,20 +143,12 @@ class ArmState:
             accepted, suspect = None, 0
             for frame, now in run:
                 values = values_of(frame)
-                if previous is not None:
-                    elapsed_s = now - seen
-                    limit = speed * (0.0 if 0.0 > elapsed_s else elapsed_s) + slack  # max(elapsed_s, 0.0)
-                    p, q, r = previous
-                    x, y, z = values
-                    if abs(p - x) > limit or abs(q - y) > limit or abs(r - z) > limit:
-                        if held is not None:
-                            elapsed_s = now - held[1]
-                            limit = speed * (0.0 if 0.0 > elapsed_s else elapsed_s) + slack
-                            p, q, r = values_of(held[0])
-                        if held is None or abs(p - x) > limit or abs(q - y) > limit or abs(r - z) > limit:
-                            held = (frame, now)
-                            suspect += 1
-                            continue
+                if previous is not None and beyond_reach(previous, values, reach(speed, now - seen, slack)):
+                    # a jump: taken only once the next report lands within reach of the held one
+                    if held is None or beyond_reach(values_of(held[0]), values, reach(speed, now - held[1], slack)):
+                        held = (frame, now)
+                        suspect += 1
+                        continue
                 held, previous, seen, accepted = None, values, now, frame
             self.suspect_frames += suspect
         if held is None:
@@ -171,17 +164,13 @@ class ArmState:
         if kind == _POSITION_KIND:
             if self.max_speed_mm_s is None:
                 return False
-            limit = self.max_speed_mm_s * max(elapsed_s, 0.0) + _JUMP_SLACK_MM
+            limit = reach(self.max_speed_mm_s, elapsed_s, _JUMP_SLACK_MM)
         elif kind in _JUDGED_KINDS and self.max_joint_speed_deg_s is not None:
-            limit = self.max_joint_speed_deg_s * max(elapsed_s, 0.0) + _JUMP_SLACK_DEG
+            limit = reach(self.max_joint_speed_deg_s, elapsed_s, _JUMP_SLACK_DEG)
         else:
             return False
         values = _VALUE_GETTERS[kind]
-        a = before if type(before) is tuple else values(before)
-        p, q, r = a
-        x, y, z = values(after)
-        # unrolled: every position and joints frame
-        return abs(p - x) > limit or abs(q - y) > limit or abs(r - z) > limit
+        return beyond_reach(before if type(before) is tuple else values(before), values(after), limit)
 
     def _current(self, kind: int) -> tuple | None:
         """The values the state holds for a kind judged for jumps (as ``_values`` of its frame)."""

@@ -4,7 +4,8 @@ and the pause rule, once, for everything that sends a pause toggle.
 The rule: the toggle flips the arm between running and paused, so it is sent to reach a state
 only when the arm is known to be in the other one, and one corrupted status byte must not
 decide that — the arm's state counts as known when its last two pause reports agree
-(``agreed_pause``); ``pause_toggle_needed`` is the one decision.  ``armctl run``'s start
+(``agreed_pause``: armctl/evidence.py's rule of agreeing reports); ``pause_toggle_needed`` is the
+one decision.  ``armctl run``'s start
 (armctl/jobflow.py: resume an arm that reports it is paused), the engine's pause, resume and
 abort (``JobControl``, below) and ``armctl.Arm`` on an idle arm all ask it.  A toggle sent and
 not yet acted on is ``JobControl``'s "pausing…"/"resuming…" state.
@@ -37,18 +38,15 @@ undo the pause.
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import Iterable
 
+from .evidence import agreed
 from .feed import FeedOverride
 from .profile import CONTROL_FRAMES
 
-def agreed_pause(reports: Iterable[bool | None]) -> bool | None:
-    """The pause state when the last two pause reports agree (one corrupted byte must not make
-    armctl toggle the arm); None while they disagree or fewer than two were read."""
-    reports = tuple(reports)[-2:]
-    if len(reports) == 2 and reports[0] == reports[1]:
-        return reports[0]
-    return None
+# The pause state when the last two pause reports agree (one corrupted byte must not make armctl
+# toggle the arm); None while they disagree or fewer than two were read: armctl/evidence.py's rule
+# of agreeing reports, named for the pause reports.
+agreed_pause = agreed
 
 
 def pause_toggle_needed(want_paused: bool, agreed: bool | None) -> bool | None:

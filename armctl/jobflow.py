@@ -140,11 +140,11 @@ def _wait_still(link, timeout_s: float) -> None:
 
 
 def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = None):
-    """The arm's state once its position and joints stayed the same for ``job.REST_CHECK_S``, each
-    kind re-read in that time (the engine's own test of rest, ``job.known_still_s``); ``JobFailed``
-    after ``timeout_s``; None as soon as ``stopped()`` says a stop was asked (Ctrl-C while a
-    resume waits: nothing was sent, nothing is owed)."""
-    from .job import REST_CHECK_S, known_still_s
+    """The arm's state once its position and joints stayed the same for ``REST_CHECK_S``, each
+    kind re-read in that time (armctl/evidence.py's rule of rest, the engine's own:
+    ``still_long_enough``); ``JobFailed`` after ``timeout_s``; None as soon as ``stopped()`` says a
+    stop was asked (Ctrl-C while a resume waits: nothing was sent, nothing is owed)."""
+    from .evidence import still_long_enough
     from .protocol import JointsHighStatus, JointsLowStatus, PositionStatus
 
     kinds = (PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND)
@@ -158,7 +158,7 @@ def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = N
         read_s = [state.last_seen.get(kind, float("-inf")) for kind in kinds]  # -inf: never read
         if (state.position_mm, tuple(state.joints_deg)) != reading:
             reading, since = (state.position_mm, tuple(state.joints_deg)), now
-        elif known_still_s(since, read_s) >= REST_CHECK_S:
+        elif still_long_enough(since, read_s):
             return state
         if now >= deadline:
             raise JobFailed(f"the arm did not come to rest within {timeout_s:g} s; nothing was sent")

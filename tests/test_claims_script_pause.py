@@ -125,7 +125,7 @@ def test_a_user_pause_behind_the_scripts_pause_sends_no_toggle(control_frames):
     asked = []
 
     def pause(job, now):
-        if len(job._script_toggles) == 1 and job.outcome is None:
+        if len(job.written.script_toggles) == 1 and job.outcome is None:
             asked.append(job.pause())
 
     outcome, writes, _ = drive(job, arm, at=[(k / 10, pause) for k in range(1, 30)])

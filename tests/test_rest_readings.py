@@ -86,7 +86,7 @@ def test_past_the_deadline_a_still_arm_is_waited_for_until_every_kind_is_read_ag
     after = tuple(round(v, 2) for v in segment.end.joints[3:])
     report(job, 0.1, joints_high=before)
     assert not isinstance(job.next_action(0.1), Finished)
-    deadline_s = job._deadline_s
+    deadline_s = job.end.deadline_s
     changed_s = 1.9 * segment.duration_s  # the turn ends; every kind read then
     report(job, changed_s, joints_high=after)
     assert changed_s + REST_CHECK_S < deadline_s  # at rest before the deadline, if the reports came
@@ -198,9 +198,9 @@ def test_only_runs_long_enough_to_look_at_rest_wait_for_their_time_bound():
     x, y, z = START.xyz
     turn = f"G1 X{x:.1f} Y{y:.1f} Z{z:.1f} A180 B0 C45 F3000\n"
     # a G54 (no motion time) cannot hold even a slow arm still for REST_CHECK_S: rest decides
-    assert written_job("G54 X0 Y0 Z0\n" + turn)._resting_before_last_move() == []
+    assert written_job("G54 X0 Y0 Z0\n" + turn).end.resting_before_last_move() == []
     # 0.3 s of delays can, on an arm twice slower (0.6 s, with its per-frame slack): the time bound decides
     job = written_job("G4 P150\nG4 P150\n" + turn)
-    assert [sent.index for sent in job._resting_before_last_move()] == [0, 1]
+    assert [sent.index for sent in job.end.resting_before_last_move()] == [0, 1]
     # frames after the last motion are the trailing rule's, not these
-    assert written_job(turn + "G4 P3000\n")._resting_before_last_move() == []
+    assert written_job(turn + "G4 P3000\n").end.resting_before_last_move() == []

@@ -19,17 +19,19 @@ from __future__ import annotations
 
 from collections import defaultdict
 from dataclasses import dataclass, field
+from itertools import takewhile
 from typing import Callable, Iterator
 
 from ..actions import Wait, Write  # a step's wish Wait(until_s, ready), and the host's actions (the probe's Command as Write.statement)
 from ..line import STATUS_SIZE
 from ..protocol import Command, PauseStatus, StatusFrame, byte_seconds, frame_seconds
+from ..evidence import AGREEING_REPORTS, agreeing_runs
 from .landing import WireLog
 
 SURE, LIKELY, UNSURE, NOT_MEASURED = "sure", "likely", "unsure", "not measured"
 # Readings from the arm are trusted once two frames of a kind in a row agree: one status byte
-# flipped on the line (H9: no checksum) cannot then make the probe claim a value.
-AGREEING_FRAMES = 2
+# flipped on the line (H9: no checksum) cannot then make the probe claim a value (armctl/evidence.py).
+AGREEING_FRAMES = AGREEING_REPORTS
 # A port that holds written bytes and sends none for this long is stuck (at 9600 a byte leaves
 # every 1.04 ms while it works): the probe stops rather than wait for ever.
 LINE_STUCK_S = 10.0
@@ -91,36 +93,19 @@ class Seen:
         return entries[low:]
 
     def agreed_runs(self, kind: int, since_s: float, key=lambda f: f) -> list[tuple[float, object]]:
-        """(start time, value) of every run of ``AGREEING_FRAMES``+ equal readings since ``since_s``."""
-        runs, value, count, start_s = [], None, 0, None
-        for t, frame in self.since(kind, since_s):
-            current = key(frame)
-            if count and current == value:
-                count += 1
-            else:
-                value, count, start_s = current, 1, t
-            if count == AGREEING_FRAMES:
-                runs.append((start_s, value))
-        return runs
+        """(start time, value) of every run of ``AGREEING_FRAMES``+ equal readings since ``since_s``
+        (armctl/evidence.py ``agreeing_runs``)."""
+        readings = ((t, key(frame)) for t, frame in self.since(kind, since_s))
+        return [(start_s, value) for start_s, _, value in agreeing_runs(readings)]
 
     def agreed(self, kind: int, since_s: float = float("-inf"), key=lambda f: f,
                until_s: float = float("inf")) -> tuple[float, object] | None:
         """The latest value (``key(frame)``) that ``AGREEING_FRAMES`` consecutive frames of
         ``kind`` built from ``since_s`` to ``until_s`` report, with the time its run began; or None."""
-        entries = self.since(kind, since_s)
-        run, value, start_s = 0, None, None
-        best = None
-        for t, frame in entries:
-            if t > until_s:
-                break
-            current = key(frame)
-            if run and current == value:
-                run += 1
-            else:
-                run, value, start_s = 1, current, t
-            if run >= AGREEING_FRAMES:
-                best = (start_s, value)
-        return best
+        readings = ((t, key(frame)) for t, frame in takewhile(lambda entry: entry[0] <= until_s,
+                                                             self.since(kind, since_s)))
+        runs = agreeing_runs(readings)
+        return (runs[-1][0], runs[-1][2]) if runs else None
 
 
 def pwm_of(frame: PauseStatus) -> int:

@@ -17,6 +17,7 @@ import math
 import struct
 from dataclasses import dataclass, field
 
+from ..evidence import agreeing_runs
 from ..protocol import (
     PWM_RANGE_US,
     STATUS_PERIOD_S,
@@ -31,7 +32,7 @@ from ..protocol import (
     SetWorktableOrigin,
     WorktableStatus,
 )
-from .plan import AGREEING_FRAMES, LIKELY, SURE, UNSURE, Finding, ProbeStop, Send, Wait, paused_of, pwm_of, xyz_of
+from .plan import LIKELY, SURE, UNSURE, Finding, ProbeStop, Send, Wait, paused_of, pwm_of, xyz_of
 
 LISTEN_S = 1.0  # ≥ 3 rotations of 9 kinds at 30 ms
 FIRST_STATUS_TIMEOUT_S = 4.0
@@ -279,17 +280,11 @@ def _note(probe, text: str) -> None:
 
 def _paused_since(probe, since_s: float):
     """(time of the first paused frame, time the second one confirmed it) of the first run of
-    ``AGREEING_FRAMES`` paused kind-4 frames since ``since_s``, or None.  The confirmation time is
-    what the control test judges by: one corrupted frame can make a run begin early, never confirm it."""
-    run_start_s, count = None, 0
-    for t, frame in probe.seen.since(PauseStatus.KIND, since_s):
-        if frame.paused:
-            run_start_s, count = (t, 1) if count == 0 else (run_start_s, count + 1)
-            if count >= AGREEING_FRAMES:
-                return run_start_s, t
-        else:
-            count = 0
-    return None
+    ``AGREEING_FRAMES`` paused kind-4 frames since ``since_s``, or None (armctl/evidence.py
+    ``agreeing_runs``).  The confirmation time is what the control test judges by: one corrupted
+    frame can make a run begin early, never confirm it."""
+    readings = ((t, frame.paused) for t, frame in probe.seen.since(PauseStatus.KIND, since_s))
+    return next(((start_s, confirmed_s) for start_s, confirmed_s, paused in agreeing_runs(readings) if paused), None)
 
 
 def _running_since(probe, since_s: float) -> bool:
