@@ -12,7 +12,7 @@ reading our output went away (``| head``).
 
 from __future__ import annotations
 
-from .stop_signals import EXIT_INTERRUPTED, command_running, install_for_program, is_the_program
+from .stop_signals import command_running, install_for_program, is_the_program
 
 if is_the_program():  # the armctl command (not a test or a script importing this): before any heavy import
     install_for_program()
@@ -28,7 +28,7 @@ from . import __version__  # noqa: E402
 from .bench import SCENARIO_NAMES as BENCH_SCENARIOS  # the names only: imports nothing else
 from .cli_types import OutputFile, number
 from .errors import ArmctlError, ConfigError, ProfileError
-from .exits import EXIT_BROKEN_PIPE, EXIT_PROBLEMS, EXIT_USAGE, UsageFailure, exit_code_for
+from .errors import EXIT_BROKEN_PIPE, EXIT_INTERRUPTED, EXIT_PROBLEMS, EXIT_USAGE, UsageFailure, exit_code_for
 from .limits import BAUD_RANGE, BENCH_JOBS_RANGE, BENCH_LEAD_RANGE_S, LEAD_RANGE_S, LINE_RANGE, START_TIMEOUT_RANGE_S, STATUS_TIMEOUT_RANGE_S, TCP_PORT_RANGE
 
 

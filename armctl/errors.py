@@ -1,10 +1,17 @@
-"""The one root of armctl's errors, and its few precise children.
+"""The one root of armctl's errors, its few precise children, and the exit code each ends with.
 
 Every error a user can cause ends up as one of these; the CLI turns them into a message and
-an exit code, never a traceback.
+an exit code, never a traceback.  The exit codes are one table for every command (README: 0 ok,
+1 problems, 2 usage, configuration or an unreadable input, 130 Ctrl-C, 141 the reader of our
+output went away) and one rule maps an error to its code (``exit_code_for``).  This module
+imports nothing, so the signal handlers installed on the program's first line can take
+``EXIT_INTERRUPTED`` from here without delaying them.
 """
 
 from __future__ import annotations
+
+
+EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 0, 1, 2, 130, 141
 
 
 class ArmctlError(Exception):
@@ -59,3 +66,17 @@ class ResumeRefused(ArmctlError):
 
 class PortError(ArmctlError):
     """A serial port that cannot be opened, or that went away."""
+
+
+class UnusableInput(ArmctlError):
+    """An input armctl refuses to read (exit 2, nothing done with it)."""
+
+
+class UsageFailure(ArmctlError):
+    """A file that cannot be read or an option that makes no sense: exit 2."""
+
+
+def exit_code_for(error: ArmctlError) -> int:
+    """2 for usage, configuration, a profile or an input armctl cannot use; 1 for the rest."""
+    usage = (UsageFailure, ProfileError, ConfigError, UnusableInput, ResumeRefused)
+    return EXIT_USAGE if isinstance(error, usage) else EXIT_PROBLEMS

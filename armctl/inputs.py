@@ -23,15 +23,11 @@ import os
 import stat
 from typing import BinaryIO, Iterator
 
-from .errors import ArmctlError
+from .errors import UnusableInput
 
 MAX_INPUT_BYTES = 128 * 1024 * 1024
 MAX_TOML_BYTES = 1024 * 1024
 _CHUNK_BYTES = 1024 * 1024
-
-
-class UnusableInput(ArmctlError):
-    """An input armctl refuses to read (exit 2, nothing done with it)."""
 
 
 class InputTooLarge(UnusableInput):

@@ -10,6 +10,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field, fields
 from typing import Callable, Mapping
 
+from .errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS
+
 # status kinds behind each group of ArmStatus (armctl/protocol.py's STATUS_ROTATION)
 _AGE_KINDS = {"position": (0,), "joints": (1, 2), "worktable": (3,), "pause_pwm": (4,), "wrist": (5,),
               "program": (100, 102, 103)}
@@ -89,7 +91,7 @@ class RunResult:
 
 def exit_code_of(outcome: str) -> int:
     """What ``armctl run`` exits with after a job that ended ``outcome`` (docs/cli.md's codes)."""
-    return 0 if outcome == "finished" else 130 if outcome == "interrupted" else 1
+    return EXIT_OK if outcome == "finished" else EXIT_INTERRUPTED if outcome == "interrupted" else EXIT_PROBLEMS
 
 
 @dataclass(frozen=True)

@@ -23,12 +23,13 @@ import sys
 import threading
 from contextlib import contextmanager
 
+from .errors import EXIT_INTERRUPTED
+
 TYPE_CHECKING = False  # typing's import costs milliseconds at start-up, before the handlers below
 if TYPE_CHECKING:
     from typing import Callable, Iterator
 
 STOP_SIGNALS = tuple([signal.SIGINT] + [getattr(signal, name) for name in ("SIGTERM", "SIGHUP") if hasattr(signal, name)])
-EXIT_INTERRUPTED = 130  # README: Ctrl-C; armctl/cli.py takes it from here (it imports click, this module must not)
 
 _command_running = False  # the program's phase: set by the CLI around a command (``command_running``)
 

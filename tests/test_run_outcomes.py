@@ -20,7 +20,7 @@ from armctl.link import config_baud, plausible_state
 from armctl.motion import MotionModel
 from armctl.profile import load_profile
 from armctl.protocol import Delay
-from armctl.ui.run_job import outermost_block_start
+from armctl.jobflow import outermost_block_start
 
 START = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F6000\n"
 

@@ -18,8 +18,7 @@ import click
 from ..cli_types import OutputFile, number
 from ..limits import BAUD_RANGE, REPEAT_DELAY_RANGE_MS, START_TIMEOUT_RANGE_S
 
-EXIT_USAGE = 2
-EXIT_FAILED = 1
+from ..errors import EXIT_PROBLEMS as EXIT_FAILED, EXIT_USAGE
 
 
 def _fail(message: str, code: int):

@@ -28,7 +28,8 @@ from ..errors import ArmctlError, PortError
 from ..protocol import describe
 from .keys import KeyDecoder
 from .moves import POSE_KINDS, reported_pose
-from .session import EXIT_FAILED, EXIT_INTERRUPTED, JogSession, Record, Send
+from ..errors import EXIT_INTERRUPTED, EXIT_PROBLEMS as EXIT_FAILED
+from .session import JogSession, Record, Send
 from .teach import FILE_HEADER, taught_line
 from .terminal import TerminalGone, Terminated, raw_terminal, read_input
 

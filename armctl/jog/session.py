@@ -37,7 +37,7 @@ from .keymap import JOG_ACTIONS, JOINT, LINEAR, JogAxis, KeyMap
 from .moves import Refused, Reported, Target, fresh, gripper_move, reported_pose, step_move
 from .settings import JogSettings
 
-EXIT_OK, EXIT_FAILED, EXIT_INTERRUPTED = 0, 1, 130
+from ..errors import EXIT_INTERRUPTED, EXIT_OK
 STATUS_SLACK_S = 0.015  # a status frame read this long after an instant describes the arm after it
 
 

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import click
 
-from ..exits import EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE
+from ..errors import EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE
 
 CONFIG_KEYS = ("include", "exclude", "select", "ignore")
 

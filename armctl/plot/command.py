@@ -22,7 +22,7 @@ import sys
 import click
 
 from ..cli_types import number
-from ..exits import EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE
+from ..errors import EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE
 from ..limits import LINE_RANGE
 
 FORMATS = {".html": "html", ".htm": "html", ".svg": "svg", ".png": "png"}

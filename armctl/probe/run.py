@@ -15,7 +15,7 @@ from pathlib import Path
 
 import click
 
-EXIT_OK, EXIT_STOPPED, EXIT_INTERRUPTED = 0, 1, 130
+from ..errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS as EXIT_STOPPED
 
 
 def decide_motion(no_motion: bool, yes: bool, say, announcement: str) -> bool:

@@ -12,7 +12,7 @@ import sys
 
 import click
 
-from ..exits import EXIT_PROBLEMS
+from ..errors import EXIT_PROBLEMS
 
 
 def move_words(texts: tuple[str, ...]) -> dict:

@@ -30,9 +30,8 @@ from dataclasses import dataclass
 import click
 
 from ..errors import ArmctlError, ScriptError
-from ..exits import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS, UsageFailure, exit_code_for
+from ..errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS, UsageFailure, exit_code_for
 from ..jobflow import JobFailed
-from ..jobflow import outermost_block_start  # noqa: F401 - re-exported (tests)
 from ..protocol import describe
 from ..streamer import DEFAULT_LEAD_S
 
