@@ -41,7 +41,7 @@ from enum import StrEnum
 
 from .evidence import agreed
 from .feed import FeedOverride
-from .profile import CONTROL_FRAMES
+from .profile_model import CONTROL_FRAMES
 
 # The pause state when the last two pause reports agree (one corrupted byte must not make armctl
 # toggle the arm); None while they disagree or fewer than two were read: armctl/evidence.py's rule
