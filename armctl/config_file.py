@@ -13,10 +13,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
 
-from .errors import ConfigError
+from .errors import ConfigError, ProfileError
 from .limits import BAUD_RANGE
 from .profile_schema import BadValue, unknown_key_hint
-from .toml_reading import read_toml, short_repr
+from .toml_reading import parse_toml, short_repr
 
 CONFIG_NAME = "armctl.toml"
 
@@ -27,6 +27,21 @@ def read_config(path: Path) -> dict:
     for key, value in data.items():
         check_config_value(path, key, value)
     return data
+
+
+def read_toml(path: Path) -> dict:
+    """A TOML file as a dict; every failure is a ProfileError naming the file."""
+    from .inputs import MAX_TOML_BYTES, UnusableInput, read_file_bounded
+
+    try:
+        data = read_file_bounded(str(path), str(path), MAX_TOML_BYTES)  # /dev/zero is not a profile
+    except FileNotFoundError:
+        raise ProfileError(f"{path}: file not found") from None
+    except OSError as error:
+        raise ProfileError(f"{path}: cannot read: {error.strerror or error}") from None
+    except UnusableInput as error:  # too long, or a named pipe, device or directory
+        raise ProfileError(str(error)) from None
+    return parse_toml(data, str(path))
 
 
 def find_config(start: Path | None = None) -> tuple[Path | None, dict]:

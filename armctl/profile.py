@@ -55,7 +55,8 @@ from .profile_model import (  # noqa: F401
     Workspace,
 )
 from .profile_schema import MIN_TIME_S, PROFILE_SCHEMA, check_profile_data, unknown_key_hint  # noqa: F401
-from .toml_reading import MAX_TOML_DEPTH, TOML_INT_RANGE, read_toml  # noqa: F401
+from .config_file import read_toml  # noqa: F401
+from .toml_reading import MAX_TOML_DEPTH, TOML_INT_RANGE  # noqa: F401
 
 
 def load_profile(path: Path | str | None = None, start: Path | None = None) -> Profile:

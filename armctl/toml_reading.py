@@ -2,15 +2,14 @@
 
 Strategy: ``tomllib`` does the parsing; this module adds what it leaves open — the input must be
 UTF-8 (a byte-order mark is dropped), whole numbers must be TOML's 64-bit ones and nesting is
-bounded (``MAX_TOML_DEPTH``), checked iteratively so nothing can recurse out of stack — and
-reads a file through the bounded reader (armctl/inputs.py), so ``/dev/zero`` is no profile.
-The profile and armctl.toml are both read here.
+bounded (``MAX_TOML_DEPTH``), checked iteratively so nothing can recurse out of stack.  Bytes
+in, a dict out: pure.  Reading the file (through the bounded reader, so ``/dev/zero`` is no
+profile) is armctl/config_file.py's ``read_toml``, on the host's side with the other files.
 """
 
 from __future__ import annotations
 
 import tomllib
-from pathlib import Path
 from typing import Any
 
 from .errors import ProfileError
@@ -56,21 +55,6 @@ def _check_toml_values(document: dict, source: str) -> None:
             pending.extend((f"{key}[{i}]", v, depth + 1) for i, v in enumerate(value))
         elif isinstance(value, int) and not isinstance(value, bool) and not low <= value <= high:
             raise ProfileError(f"{source}: {key} = {short_repr(value)} is outside TOML's whole numbers {low}…{high}")
-
-
-def read_toml(path: Path) -> dict:
-    """A TOML file as a dict; every failure is a ProfileError naming the file."""
-    from .inputs import MAX_TOML_BYTES, UnusableInput, read_file_bounded
-
-    try:
-        data = read_file_bounded(str(path), str(path), MAX_TOML_BYTES)  # /dev/zero is not a profile
-    except FileNotFoundError:
-        raise ProfileError(f"{path}: file not found") from None
-    except OSError as error:
-        raise ProfileError(f"{path}: cannot read: {error.strerror or error}") from None
-    except UnusableInput as error:  # too long, or a named pipe, device or directory
-        raise ProfileError(str(error)) from None
-    return parse_toml(data, str(path))
 
 
 def short_repr(value, limit: int = 60) -> str:
