@@ -17,7 +17,11 @@ Strategy: two steps, each done once, each a frozen value the next layer takes.
 The frames are not held: a statement and its planned segment take about 2.6 KB, a day's job
 millions of frames, and a run's memory stays flat in the job's length.  ``statements()``
 compiles the same snapshot from the same initial state and line — the compiler is
-deterministic, so what streams is frame for frame what was estimated.
+deterministic, so what streams is frame for frame what was estimated.  Neither pass pays per
+frame for what repeats (issue 23): a repeat pass that ran exactly as the one before is yielded
+again from its statements (armctl/script/repeats.py), and the estimate times a LinearMove
+without building its segment (``Planner.feed_line``); the streamer's gate plans each frame's
+segment once, as it is written.
 
 Pure: no port, no clock, nothing printed; errors are ``ScriptError`` (nothing was sent).
 """
