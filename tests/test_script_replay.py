@@ -87,3 +87,17 @@ def test_a_replay_stops_where_the_line_limit_is_passed(monkeypatch):
     replayed, _ = _compiled(text, monkeypatch, True)
     executed, _ = _compiled(text, monkeypatch, False)
     assert replayed == executed and "E012" in replayed["diagnostics"]
+
+
+def test_a_block_whose_passes_differ_stops_keeping_them(monkeypatch):
+    kept = []
+    init = repeats._Pass.__init__
+
+    def counting(self, *args):
+        kept.append(1)
+        init(self, *args)
+
+    monkeypatch.setattr(repeats._Pass, "__init__", counting)
+    text = START + "G91\nO1 repeat [100]\nG1 Y0.5\nO1 endrepeat\n"  # every pass moves on
+    assert len(list(compile_text(text, "job.txt"))) == 101
+    assert len(kept) == 1 + repeats.MAX_PASS_MISSES

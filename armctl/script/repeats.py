@@ -11,7 +11,8 @@ in the same modal state: every later pass would repeat it (compiler.py's docstri
 When compiling to send, the same argument, made to the bit (``_Pass``), runs such a block's
 later passes from the statements of the one that repeated — its pass number changed, its lines
 counted — instead of executing its lines again; a pass longer than ``MAX_PASS_KEPT`` statements
-is not kept, so memory stays flat.
+is not kept, so memory stays flat, and a block whose passes keep differing (a G91 loop) stops
+keeping them after ``MAX_PASS_MISSES``, so it costs what it did.
 
 Contract with the host class: it provides ``state``, ``from_line``, ``error_count``, ``_out``,
 ``_blocks``, ``_skip_repeats``, ``_repeating``, ``lines_run``, ``skipped_passes``,
@@ -32,6 +33,7 @@ from .source import MAX_LINES_RUN
 from .statement import Statement
 
 MAX_PASS_KEPT = 4096  # statements of one pass kept to run it again (``_Pass``): memory stays flat
+MAX_PASS_MISSES = 3  # passes of a block that differed from the one before, before its passes are no longer kept
 _new_statement = tuple.__new__  # a Statement (a NamedTuple) from all its fields
 
 
@@ -70,6 +72,8 @@ class RepeatExpansion:
         repeating = self._repeating
         previous = None  # (the commands of the last pass, the modal state it ended with)
         last = None  # running: the last pass, while the passes may repeat it (``_Pass``)
+        keep = MAX_PASS_KEPT > 0  # running: passes are kept until MAX_PASS_MISSES differed from the one before
+        misses = 0
         count = count or 0
         index = 0
         while index < count:
@@ -82,7 +86,7 @@ class RepeatExpansion:
             lines_before = self.lines_run
             self._count_line(block.opening)  # the pass itself (its endrepeat), even with an empty body
             commands = [] if self._skip_repeats or self.error_count else None  # checking only (see the docstring)
-            statements = [] if commands is None and MAX_PASS_KEPT else None  # running: kept while the pass is short
+            statements = [] if commands is None and keep else None  # running: kept while the pass is short
             for statement in self._pass(block, loop):
                 if commands is not None:
                     commands.append(statement.command)
@@ -100,8 +104,11 @@ class RepeatExpansion:
                         self.skipped_passes.append((commands, count - index - 1))
                     break
                 previous = current
-            last = None if statements is None or self.error_count else _Pass(
+            before, last = last, None if statements is None or self.error_count else _Pass(
                 statements, len(path), self.lines_run - lines_before, self._fingerprint, last)
+            if before is not None and last is not None and last._state is None:
+                misses += 1  # (a G91 loop's passes all differ: it stops paying for keeping them)
+                keep = misses < MAX_PASS_MISSES
             index += 1
         self._repeating = repeating
 
