@@ -86,7 +86,8 @@ class RepeatExpansion:
             lines_before = self.lines_run
             self._count_line(block.opening)  # the pass itself (its endrepeat), even with an empty body
             commands = [] if self._skip_repeats or self.error_count else None  # checking only (see the docstring)
-            statements = [] if commands is None and keep else None  # running: kept while the pass is short
+            # running: kept while the pass is short and another pass may repeat it
+            statements = [] if commands is None and keep and index + 1 < count else None
             for statement in self._pass(block, loop):
                 if commands is not None:
                     commands.append(statement.command)
@@ -194,7 +195,7 @@ class _Pass:
     lines: a block of absolute moves is compiled once or twice, whatever its count (issue 23).
     Bits, not ``==``: 0.0 equals -0.0, but a frame holding the one is not the other."""
 
-    __slots__ = ("statements", "commands", "depth", "lines", "repeated", "_state")
+    __slots__ = ("statements", "commands", "depth", "lines", "_state", "_before", "_repeated")
 
     def __init__(self, statements: list, depth: int, lines: int, fingerprint, before: "_Pass | None") -> None:
         self.statements, self.depth, self.lines = statements, depth, lines
@@ -203,9 +204,19 @@ class _Pass:
         # loop's passes never do: they pay for no fingerprint), so a repeat is seen a pass later at worst
         same = before is not None and before.lines == lines and before.commands == self.commands
         self._state = fingerprint() if same else None
-        self.repeated = same and before._state is not None and before._state == self._state and not any(
-            type(c) is PauseToggle for c in self.commands) and (
-            repr(before._state) == repr(self._state) and before._bits() == self._bits())  # == first, then the bits
+        # equal by ==: the bits are compared only if a pass is left to run (``repeated``)
+        self._before = before if same and before._state is not None and before._state == self._state else None
+        self._repeated = None
+        if before is not None:
+            before._before = None  # each pass keeps at most the one before it
+
+    @property
+    def repeated(self) -> bool:
+        if self._repeated is None:
+            before, self._before = self._before, None
+            self._repeated = before is not None and not any(type(c) is PauseToggle for c in self.commands) and (
+                repr(before._state) == repr(self._state) and before._bits() == self._bits())
+        return self._repeated
 
     def _bits(self) -> str:
         depth = self.depth
