@@ -8,6 +8,8 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from armctl.script import compile_text, compiler, repeats
 from armctl.script.execute import StatementExecution
@@ -101,3 +103,27 @@ def test_a_block_whose_passes_differ_stops_keeping_them(monkeypatch):
     text = START + "G91\nO1 repeat [100]\nG1 Y0.5\nO1 endrepeat\n"  # every pass moves on
     assert len(list(compile_text(text, "job.txt"))) == 101
     assert len(kept) == 1 + repeats.MAX_PASS_MISSES
+
+
+_LINES = ["G1 Y-1", "G1 Y0", "G1 Y[#<a>]", "G1 X250 Y[#<a> * 0] Z150", "#<a> = #<a> + 1", "#<a> = -#<a>", "#<a> = 0",
+          "G91", "G90", "PAUSE", "G4 P10", "G1 Z151 F2000", "G300 X260 Y10 Z150 R10\nG301 X270 Y0 Z150", "G1 Y0.5 Q1"]
+
+
+@st.composite
+def _bodies(draw, depth=0):
+    lines = []
+    for _ in range(draw(st.integers(0, 4))):
+        if depth < 2 and draw(st.integers(0, 3)) == 0:
+            label = f"L{depth}{len(lines)}"
+            lines += [f"O<{label}> repeat [{draw(st.integers(0, 6))}]", *draw(_bodies(depth + 1)), f"O<{label}> endrepeat"]
+        else:
+            lines.append(draw(st.sampled_from(_LINES)))
+    return lines
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(_bodies(), st.integers(1, 12))
+def test_random_blocks_compile_as_when_every_pass_runs(monkeypatch, body, from_line):
+    text = START + "#<a> = 0\nO<top> repeat [7]\n" + "\n".join(body) + "\nO<top> endrepeat\nG1 Y2\n"
+    assert _compiled(text, monkeypatch, True, from_line=from_line)[0] == \
+        _compiled(text, monkeypatch, False, from_line=from_line)[0]
