@@ -150,13 +150,15 @@ def plan(checked: CheckedScript, model, start, initial, lead_s: float, baud: int
     that does not compile from this initial state."""
     from .estimate import JobEstimator, motion_time_overrun
 
+    from .script.source import MAX_JOB_MOTION_S
+
     estimator = JobEstimator(model, start, lead_s, baud)
+    add, result = estimator.add, estimator.result
     compilation = checked.snapshot.compile(initial=initial, from_line=checked.from_line)
     for statement in compilation:
-        estimator.add(statement.command)
-        overrun = motion_time_overrun(statement, estimator.result.motion_s)
-        if overrun is not None:
-            raise ScriptError([overrun], errors=1)
+        add(statement.command)
+        if result.motion_s > MAX_JOB_MOTION_S:  # motion_time_overrun's own first test, without the call
+            raise ScriptError([motion_time_overrun(statement, result.motion_s)], errors=1)
     # the arm's reported state can make a line fail that passed the check (a G91 offset from the
     # real pose): then it is refused here, and nothing goes
     if compilation.error_count:
