@@ -17,7 +17,11 @@ Strategy: two steps, each done once, each a frozen value the next layer takes.
 The frames are not held: a statement and its planned segment take about 2.6 KB, a day's job
 millions of frames, and a run's memory stays flat in the job's length.  ``statements()``
 compiles the same snapshot from the same initial state and line — the compiler is
-deterministic, so what streams is frame for frame what was estimated.
+deterministic, so what streams is frame for frame what was estimated.  Neither pass pays per
+frame for what repeats (issue 23): a repeat pass that ran exactly as the one before is yielded
+again from its statements (armctl/script/repeats.py), and the estimate times a LinearMove
+without building its segment (``Planner.feed_line``); the streamer's gate plans each frame's
+segment once, as it is written.
 
 Pure: no port, no clock, nothing printed; errors are ``ScriptError`` (nothing was sent).
 """
@@ -146,13 +150,15 @@ def plan(checked: CheckedScript, model, start, initial, lead_s: float, baud: int
     that does not compile from this initial state."""
     from .estimate import JobEstimator, motion_time_overrun
 
+    from .script.source import MAX_JOB_MOTION_S
+
     estimator = JobEstimator(model, start, lead_s, baud)
+    add, result = estimator.add, estimator.result
     compilation = checked.snapshot.compile(initial=initial, from_line=checked.from_line)
     for statement in compilation:
-        estimator.add(statement.command)
-        overrun = motion_time_overrun(statement, estimator.result.motion_s)
-        if overrun is not None:
-            raise ScriptError([overrun], errors=1)
+        add(statement.command)
+        if result.motion_s > MAX_JOB_MOTION_S:  # motion_time_overrun's own first test, without the call
+            raise ScriptError([motion_time_overrun(statement, result.motion_s)], errors=1)
     # the arm's reported state can make a line fail that passed the check (a G91 offset from the
     # real pose): then it is refused here, and nothing goes
     if compilation.error_count:

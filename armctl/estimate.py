@@ -13,8 +13,8 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass, field
 
-from .motion import ArmPose, MotionModel, Planner
-from .protocol import DEFAULT_BAUD, RunProgram, frame_seconds
+from .motion import ArmPose, MotionModel, Planner, speed_note
+from .protocol import DEFAULT_BAUD, LinearMove, RunProgram, frame_seconds
 from .script.source import MAX_JOB_MOTION_S, Diagnostic
 
 
@@ -72,6 +72,7 @@ class JobEstimator:
         from .streamer import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S
 
         self.planner = Planner(model, start)
+        self._feed_line, self._max_linear_mm_min = self.planner.feed_line, model.profile.speed.max_linear_mm_min
         self.lead_s = DEFAULT_LEAD_S if lead_s is None else lead_s
         # the streamer never lets more frames be in flight than this (see streamer.py)
         self.frame_limit = model.profile.connector.fifo_frames - CAPACITY_MARGIN_FRAMES
@@ -82,8 +83,17 @@ class JobEstimator:
         self._ends: deque[float] = deque()  # end times of frames possibly still queued
 
     def add(self, command) -> float:
-        """Plan one more frame; returns its duration."""
+        """Plan one more frame; returns its duration.  A LinearMove is timed without its segment
+        (``Planner.feed_line``: the same seconds and length, issue 23), every other command planned."""
+        if type(command) is LinearMove and command.speed_mm_min > 0:
+            duration_s, length = self._feed_line(command)
+            speed, limit = command.speed_mm_min, self._max_linear_mm_min
+            return self._count(command, duration_s, "line", length, speed_note(speed, limit) if speed > limit else None)
         segment = self.planner.feed(command)
+        return self._count(command, segment.duration_s, segment.kind, segment.length, segment.note)
+
+    def _count(self, command, duration_s: float, kind: str, length: float, note: str | None) -> float:
+        """One frame of ``duration_s`` written as early as the streamer would allow (the module docstring)."""
         result = self.result
         write = max(self._wire_free, self._arm_free - self.lead_s)
         ends = self._ends
@@ -96,16 +106,16 @@ class JobEstimator:
         if result.frames and land > self._arm_free:
             result.arm_waiting_s += land - self._arm_free
         start = max(land, self._arm_free)
-        self._arm_free = start + segment.duration_s
+        self._arm_free = start + duration_s
         result.frames += 1
-        result.motion_s += segment.duration_s
+        result.motion_s += duration_s
         result.job_s = self._arm_free
-        if segment.kind in ("line", "arc"):
-            result.path_mm += segment.length
-        elif segment.kind == "joint":
-            result.joint_path_deg += segment.length
-        if segment.note and len(result.notes) < self.MAX_NOTES:
-            result.notes.append(segment.note)
+        if kind in ("line", "arc"):
+            result.path_mm += length
+        elif kind == "joint":
+            result.joint_path_deg += length
+        if note and len(result.notes) < self.MAX_NOTES:
+            result.notes.append(note)
         if isinstance(command, RunProgram) and SD_PROGRAM_NOTE not in result.notes:
             result.notes.append(SD_PROGRAM_NOTE)
         while ends and ends[0] <= land:
@@ -113,7 +123,7 @@ class JobEstimator:
         ends.append(self._arm_free)
         result.peak_queue_frames = max(result.peak_queue_frames, len(ends))
         result.peak_queue_s = max(result.peak_queue_s, self._arm_free - land)
-        return segment.duration_s
+        return duration_s
 
 
 def estimate_commands(commands, model: MotionModel, start: ArmPose, lead_s: float | None = None,

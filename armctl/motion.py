@@ -129,7 +129,7 @@ class MotionModel:
         """mm/s, clamped to the profile's maximum (noted on the segment)."""
         limit = self.profile.speed.max_linear_mm_min
         if speed_mm_min > limit:
-            segment.note = f"speed {speed_mm_min:g} mm/min clamped to the profile's {limit:g} mm/min"
+            segment.note = speed_note(speed_mm_min, limit)
         return mm_s(speed_mm_min, limit)
 
     def _time_cartesian(self, segment: CartesianSegment, pieces) -> Segment:
@@ -260,6 +260,11 @@ class MotionModel:
         return StillSegment(command, "still", start, end)
 
 
+def speed_note(speed_mm_min: float, limit_mm_min: float) -> str:
+    """The note of a Cartesian move whose speed the profile's maximum clamps."""
+    return f"speed {speed_mm_min:g} mm/min clamped to the profile's {limit_mm_min:g} mm/min"
+
+
 class Planner:
     """Plans a command stream in order: keeps the current pose and a pending ArcStart.
 
@@ -268,6 +273,8 @@ class Planner:
     ``feed_s(command)`` is ``feed(command).duration_s`` for a caller that needs the time alone
     (lint's E012 clock, issue 13): a LinearMove is then timed without building its segment or
     its end pose — ``pose`` builds that pose when it is next read, as ``feed`` would have.
+    ``feed_line(command)`` is the same for a LinearMove, with its segment's length too (the
+    estimate: its path length; issue 23).
     """
 
     def __init__(self, model: MotionModel, start: ArmPose | None = None):
@@ -308,6 +315,12 @@ class Planner:
         so the hint stays the chain's first."""
         if type(command) is not LinearMove or not command.speed_mm_min > 0:
             return self.feed(command).duration_s
+        return self.feed_line(command)[0]
+
+    def feed_line(self, command: LinearMove) -> tuple[float, float]:
+        """``(segment.duration_s, segment.length)`` of ``feed(command)`` for a LinearMove whose
+        speed is above 0 (``feed_s``'s arithmetic; the segment's length is 0.0 for a move
+        shorter than ``TINY_MM``, as ``LineSegment`` has it)."""
         end = self._line_end
         if end is None:
             start = self._pose
@@ -342,8 +355,8 @@ class Planner:
         length = math.sqrt(dx * dx + dy * dy + dz * dz)  # LineSegment's norm3
         if length > TINY_MM:  # _time_cartesian's path: one constant-speed piece, its Ramp's duration
             path_s = piece_s(length, v := mm_s(command.speed_mm_min, max_mm_min), v)
-            return overhead_s + path_s * (speed_factor * stretch(path_s, other_s))  # as Segment._set_timing
-        return overhead_s + self.model._still_ramp(other_s, spwm != pwm).duration * speed_factor
+            return overhead_s + path_s * (speed_factor * stretch(path_s, other_s)), length  # as Segment._set_timing
+        return overhead_s + self.model._still_ramp(other_s, spwm != pwm).duration * speed_factor, 0.0
 
     def feed_all(self, commands) -> list[Segment]:
         return [self.feed(command) for command in commands]

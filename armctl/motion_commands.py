@@ -19,8 +19,8 @@ from typing import ClassVar
 
 from .errors import FieldError, FrameError
 from .frame_fields import (
-    FLOAT_CODEC, FRAME_SIZE, LINEAR_SUBCOMMAND_FOR_CHANNEL_1, M_CODE_CODEC, MOTION_HEAD, MOTION_TAIL, PWM_RANGE_US,
-    SMOOTHING_RANGE, ACCEL_RANGE_MM_S2, Command, check_range, f32_field, f32_repr, int_field, slot_offset,
+    FRAME_SIZE, LINEAR_SUBCOMMAND_FOR_CHANNEL_1, M_CODE_CODEC, MOTION_HEAD, MOTION_TAIL, PWM_RANGE_US,
+    SMOOTHING_RANGE, ACCEL_RANGE_MM_S2, Command, check_range, f32_field, f32_repr, int_field,
 )
 from .records import record
 
@@ -50,6 +50,7 @@ class _MotionCommand(Command):
         by_slot = {slot: name for name, slot in cls.SLOTS.items()}
         cls._FRAME_CODEC = struct.Struct("<3B" + "".join("f" if k in by_slot else "4x" for k in range(1, 12)) + "B")
         cls._slot_values = operator.itemgetter(*(by_slot[k] for k in sorted(by_slot))) if len(by_slot) > 1 else one
+        cls._SLOT_NAMES = tuple(by_slot[k] for k in sorted(by_slot))  # _FRAME_CODEC's floats, in order
 
     @classmethod
     def from_fields(cls, *values):
@@ -132,8 +133,19 @@ class _MotionCommand(Command):
 
     @classmethod
     def _from_frame(cls, frame: bytes) -> "_MotionCommand":
-        values = {name: FLOAT_CODEC.unpack_from(frame, slot_offset(slot))[0] for name, slot in cls.SLOTS.items()}
-        return cls(**values, **cls._ints_from_subcommand(frame[2]))
+        # the slots in one unpack (``_FRAME_CODEC``: head, code, sub-command, the named slots in
+        # slot order, tail), the command built as ``from_fields`` builds it: ``cls(**values)``,
+        # the same checks (the simulated arm decodes every frame it is sent)
+        values = dict(zip(cls._SLOT_NAMES, cls._FRAME_CODEC.unpack_from(frame)[3:-1]))
+        values.update(cls._ints_from_subcommand(frame[2]))
+        names = cls._FIELD_NAMES
+        if len(values) == len(names):
+            try:
+                arguments = [values[name] for name in names]
+            except KeyError:  # (a field the frame does not hold: its default, from the keywords)
+                return cls(**values)
+            return cls.from_fields(*arguments)
+        return cls(**values)
 
     @classmethod
     def _ints_from_subcommand(cls, subcommand: int) -> dict:

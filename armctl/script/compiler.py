@@ -32,7 +32,9 @@ once a pass yields the same commands as the pass before it and ends in the same 
 the next pass starts where this one did, so it and every later one would yield exactly those
 commands again and have nothing new to say (a pass with a PAUSE toggle is never cut short: the
 pause state alternates).  A loop of absolute moves then costs two or three passes, whatever
-its count; a G91 loop, whose targets move on, still runs each pass.
+its count; a G91 loop, whose targets move on, still runs each pass.  Compiling to send, such a
+pass is not cut short but run again from its statements (armctl/script/repeats.py): the same
+statements, to the bit, without executing its lines once per pass.
 """
 
 from __future__ import annotations

@@ -8,6 +8,11 @@ from its text (``_check_expansion``: count × one pass, nested counts evaluated 
 absurd count is one E012 at once.  When checking only (``skip_repeats``, or once the script has
 an error) a block stops as soon as a pass yields the same commands as the one before and ends
 in the same modal state: every later pass would repeat it (compiler.py's docstring says why).
+When compiling to send, the same argument, made to the bit (``_Pass``), runs such a block's
+later passes from the statements of the one that repeated — its pass number changed, its lines
+counted — instead of executing its lines again; a pass longer than ``MAX_PASS_KEPT`` statements
+is not kept, so memory stays flat, and a block whose passes keep differing (a G91 loop) stops
+keeping them after ``MAX_PASS_MISSES``, so it costs what it did.
 
 Contract with the host class: it provides ``state``, ``from_line``, ``error_count``, ``_out``,
 ``_blocks``, ``_skip_repeats``, ``_repeating``, ``lines_run``, ``skipped_passes``,
@@ -26,6 +31,10 @@ from .expressions import ExpressionError, Unavailable, evaluate, format_value
 from .nodes import BlockLine
 from .source import MAX_LINES_RUN
 from .statement import Statement
+
+MAX_PASS_KEPT = 4096  # statements of one pass kept to run it again (``_Pass``): memory stays flat
+MAX_PASS_MISSES = 3  # passes of a block that differed from the one before, before its passes are no longer kept
+_new_statement = tuple.__new__  # a Statement (a NamedTuple) from all its fields
 
 
 class RepeatExpansion:
@@ -62,14 +71,30 @@ class RepeatExpansion:
             self._check_expansion(block, count)
         repeating = self._repeating
         previous = None  # (the commands of the last pass, the modal state it ended with)
-        for index in range(count or 0):
+        last = None  # running: the last pass, while the passes may repeat it (``_Pass``)
+        keep = MAX_PASS_KEPT > 0  # running: passes are kept until MAX_PASS_MISSES differed from the one before
+        misses = 0
+        count = count or 0
+        index = 0
+        while index < count:
+            if last is not None and last.repeated and self.lines_run + last.lines <= MAX_LINES_RUN:
+                yield from last.again(self, path, index)  # the same pass run again (see the docstring)
+                index += 1
+                continue
             loop = path + (index,)
             self._repeating = repeating or index > 0
+            lines_before = self.lines_run
             self._count_line(block.opening)  # the pass itself (its endrepeat), even with an empty body
             commands = [] if self._skip_repeats or self.error_count else None  # checking only (see the docstring)
+            # running: kept while the pass is short and another pass may repeat it
+            statements = [] if commands is None and keep and index + 1 < count else None
             for statement in self._pass(block, loop):
                 if commands is not None:
                     commands.append(statement.command)
+                elif statements is not None:
+                    statements.append(statement)
+                    if len(statements) > MAX_PASS_KEPT:
+                        statements = None
                 yield statement
             self._interrupt_arc(block.end_line, f"{block.label} endrepeat")
             if commands is not None:
@@ -80,6 +105,12 @@ class RepeatExpansion:
                         self.skipped_passes.append((commands, count - index - 1))
                     break
                 previous = current
+            before, last = last, None if statements is None or self.error_count else _Pass(
+                statements, len(path), self.lines_run - lines_before, self._fingerprint, last)
+            if before is not None and last is not None and last._state is None:
+                misses += 1  # (a G91 loop's passes all differ: it stops paying for keeping them)
+                keep = misses < MAX_PASS_MISSES
+            index += 1
         self._repeating = repeating
 
     def _pass(self, block: Block, loop: tuple) -> Iterator[Statement]:
@@ -153,3 +184,49 @@ class RepeatExpansion:
                          f"a repeat count must be a whole number >= 0, not {format_value(value)}")
             return None
         return int(value)
+
+
+class _Pass:
+    """One pass of a repeat block as it ran — its statements, the lines it counted — and whether
+    it ran exactly as the pass before it (``repeated``): the same statements to the bit (all but
+    their own pass number), no PAUSE (the arm's pause state alternates), ending in the same modal
+    state to the bit.  Then every later pass starts where this one did and would run it again,
+    so ``again`` yields its statements with the pass number changed instead of executing its
+    lines: a block of absolute moves is compiled once or twice, whatever its count (issue 23).
+    Bits, not ``==``: 0.0 equals -0.0, but a frame holding the one is not the other."""
+
+    __slots__ = ("statements", "commands", "depth", "lines", "_state", "_before", "_repeated")
+
+    def __init__(self, statements: list, depth: int, lines: int, fingerprint, before: "_Pass | None") -> None:
+        self.statements, self.depth, self.lines = statements, depth, lines
+        self.commands = [s.command for s in statements]
+        # the modal state is read only after a pass that yielded what the one before did (a G91
+        # loop's passes never do: they pay for no fingerprint), so a repeat is seen a pass later at worst
+        same = before is not None and before.lines == lines and before.commands == self.commands
+        self._state = fingerprint() if same else None
+        # equal by ==: the bits are compared only if a pass is left to run (``repeated``)
+        self._before = before if same and before._state is not None and before._state == self._state else None
+        self._repeated = None
+        if before is not None:
+            before._before = None  # each pass keeps at most the one before it
+
+    @property
+    def repeated(self) -> bool:
+        if self._repeated is None:
+            before, self._before = self._before, None
+            self._repeated = before is not None and not any(type(c) is PauseToggle for c in self.commands) and (
+                repr(before._state) == repr(self._state) and before._bits() == self._bits())
+        return self._repeated
+
+    def _bits(self) -> str:
+        depth = self.depth
+        return repr([(s[:-1], s.loop[depth + 1:]) for s in self.statements])
+
+    def again(self, compilation, path: tuple, index: int) -> Iterator[Statement]:
+        """Pass ``index`` of the block: this pass's statements, numbered ``index`` (nested passes kept)."""
+        compilation._repeating = True
+        compilation.lines_run += self.lines
+        depth, loop = self.depth, path + (index,)
+        for statement in self.statements:
+            inner = statement.loop[depth + 1:]
+            yield _new_statement(Statement, statement[:-1] + ((loop + inner) if inner else loop,))
