@@ -31,9 +31,12 @@ VIRTUAL_MIN_STEP_S = 1e-6
 # 20-minute job of benchmarks/virtual_run.py (8 was best before the steps were kept).
 VIRTUAL_RUN_FRAMES_MIN = 32
 VIRTUAL_RUN_FRAMES_MAX = 512
-# The frames of a run are built and decoded this many at a time, ahead of reading them: the
+# The frames of a run are built and decoded a batch at a time, ahead of reading them: the
 # simulator's code and the engine's each run in a batch (the 20-minute job: 0.82 -> 0.75 s of
-# CPU), and a write wastes at most this many builds (the tail it forgets).
+# CPU).  A run's first batch is one frame and each next one as many as were read before it, up
+# to this many: a wait that ends at its first frames (the 24,000-frame job's waits for room in
+# the FIFO end at the next kind-4 frame, often the run's first) built 97,000 frames to read
+# 16,000 at 64 a batch; a write wastes at most this many builds (the tail it forgets).
 VIRTUAL_BUILD_FRAMES = 64
 UNMERGED_FRAMES_MAX = 4096  # frames of virtual runs held before they are merged into the state
 
@@ -101,8 +104,9 @@ class VirtualWaits:
     def _take_run(self, run: list, built: list, news: News) -> tuple[int, bool]:
         """A run of quiet steps timed ahead (``virtual_status_run``: one status frame each, with
         the clock time it is read at), read as bursts are: the frames (built by ``status_frames``
-        and decoded by ``StatusReader.decode_frames``, ``VIRTUAL_BUILD_FRAMES`` at a time; the
-        first ones may be ``built`` already) go to ``news`` a batch at a time, the clock moved to
+        and decoded by ``StatusReader.decode_frames``, a batch at a time, as many as were read
+        before it: 1, 1, 2, 4 … up to ``VIRTUAL_BUILD_FRAMES``; the first ones may be ``built``
+        already) go to ``news`` a batch at a time, the clock moved to
         the last one it took, up to the first that is news (a run never goes past the wait's
         end).  The frames read are committed to the simulator whatever happens (``news`` may
         raise: Ctrl-C; every frame it was given then counts as read), so none is read twice.
@@ -115,7 +119,7 @@ class VirtualWaits:
                 try:
                     while read < len(run):
                         if read == len(built):  # the next frames built and decoded a batch at a time
-                            built += self._build(run[read:read + VIRTUAL_BUILD_FRAMES])
+                            built += self._build(run[read:read + min(VIRTUAL_BUILD_FRAMES, read or 1)])
                         frames = built[read:]
                         whole = built[-1] is not None
                         if not whole:  # a frame that could not be decoded: the ordinary way reads it
