@@ -33,14 +33,15 @@ VIRTUAL_RUN_FRAMES_MIN = 32
 VIRTUAL_RUN_FRAMES_MAX = 512
 # The frames of a run are built and decoded a batch at a time, ahead of reading them: the
 # simulator's code and the engine's each run in a batch (the 20-minute job: 0.82 -> 0.75 s of
-# CPU).  A run's first batch is ``VIRTUAL_BUILD_FIRST`` frames and each next one as many as the
-# waits read of the run before it, up to ``VIRTUAL_BUILD_FRAMES``: the 24,000-frame job's waits
-# for room in the FIFO end at the next kind-4 frame (within a rotation, 9 frames), often a run's
-# first, and built 96,837 frames to read 15,594 at 64 a batch (33,941 from 8; from 1, 15,594,
-# but the 20-minute job's long runs then cost 0.39 s against 0.32 s of CPU; from 8, 0.34 s).
-# A write wastes at most a batch of builds (the tail it forgets).
+# CPU).  A batch is as many frames as the waits read of the run before it, at least
+# ``VIRTUAL_BUILD_FIRST`` — after a write, when the wait may end at once — else
+# ``VIRTUAL_BUILD_FRAMES``, and at most that.  The 24,000-frame job writes every 50 ms and its
+# waits end at their first frames (the next kind-4 frame, when the FIFO bound holds it): at 64 a
+# batch it built 96,837 frames to read 15,594 (now 15,594, 3 % of its CPU); the 20-minute job
+# writes 13 frames and reads long runs, 64 a batch as before (from 1 or 8 after every wait, not
+# only after a write, it cost 8 % more).  A write wastes at most a batch (the tail it forgets).
 VIRTUAL_BUILD_FRAMES = 64
-VIRTUAL_BUILD_FIRST = 8
+VIRTUAL_BUILD_FIRST = 1
 UNMERGED_FRAMES_MAX = 4096  # frames of virtual runs held before they are merged into the state
 
 News = Callable[[list, list], "int | None"]
@@ -56,10 +57,12 @@ class VirtualWaits:
         # so far): still the simulator's next steps while nothing else touched the port and the
         # clock is where that run left it
         self.tail: tuple[list, int, float, list, int] | None = None
+        self.wrote = True  # a write came since the last run was read: the next wait may end soon
 
     def forget(self) -> None:
         """Something else touched the port (a write): the steps kept are not its next any more."""
         self.tail = None
+        self.wrote = True
 
     def wait(self, until_s: float | None, news: News | None = None) -> None:
         """Jump to the next status burst or to ``until_s``, at least a microsecond on (a wait
@@ -106,7 +109,7 @@ class VirtualWaits:
         the clock time it is read at), read as bursts are: the frames (built by ``status_frames``
         and decoded by ``StatusReader.decode_frames``, a batch at a time, as many as were read
         of the run before it (``read_before`` by earlier waits), at least ``VIRTUAL_BUILD_FIRST``
-        and at most ``VIRTUAL_BUILD_FRAMES``; the first ones may be ``built`` already) go to ``news`` a batch at a time, the clock moved to
+        after a write and ``VIRTUAL_BUILD_FRAMES`` else, at most ``VIRTUAL_BUILD_FRAMES``; the first ones may be ``built`` already) go to ``news`` a batch at a time, the clock moved to
         the last one it took, up to the first that is news (a run never goes past the wait's
         end).  The frames read are committed to the simulator whatever happens (``news`` may
         raise: Ctrl-C; every frame it was given then counts as read), so none is read twice.
@@ -119,7 +122,8 @@ class VirtualWaits:
                 try:
                     while read < len(run):
                         if read == len(built):  # the next frames built and decoded a batch at a time
-                            built += self._build(run[read:read + min(VIRTUAL_BUILD_FRAMES, max(VIRTUAL_BUILD_FIRST, read_before + read))])
+                            first = VIRTUAL_BUILD_FIRST if self.wrote else VIRTUAL_BUILD_FRAMES
+                            built += self._build(run[read:read + min(VIRTUAL_BUILD_FRAMES, max(first, read_before + read))])
                         frames = built[read:]
                         whole = built[-1] is not None
                         if not whole:  # a frame that could not be decoded: the ordinary way reads it
@@ -143,6 +147,7 @@ class VirtualWaits:
                             return read, False
                     return read, False
                 finally:  # the counts for the whole run at once, before the lock is let go
+                    self.wrote = False
                     link.counted(read, read * STATUS_SIZE)
         finally:
             port.commit_status_run(run, read)
