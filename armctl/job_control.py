@@ -179,6 +179,11 @@ class JobControl:
             return True
         return self.state is PauseState.RUNNING and pause_toggle_needed(True, self.arm_paused) is not False
 
+    def planned_for(self, statement) -> bool:
+        """Whether ``command_for(statement)`` has its command already (it then changes nothing)."""
+        cached = self._scaled
+        return cached is not None and cached[0] is statement and cached[1] == self.feed.percent
+
     def command_for(self, statement):
         """The command to plan and write for ``statement``: the override applied once per
         statement and percentage, so the streamer plans exactly what is written."""
