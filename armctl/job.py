@@ -337,22 +337,35 @@ class Job:
             self._begin_abort()
             phase = self.phase
         fresh, self._fresh_s = self._fresh_s, None
-        if fresh != now:  # (else ``wrote`` refreshed the view at this time, and nothing changed since)
+        control, view = self.control, self.view
+        statement = view.next_statement
+        # The view follows the engine at ``now`` before anything is decided — except where only
+        # the pacing decides (streaming, no control in hand, the feed's command for ``statement``
+        # planned already: ``command_for`` changes nothing a view shows): there it follows once
+        # the answer is known, and not at all for a Write, which ``wrote`` refreshes at this time
+        # before anyone reads the view (a write that fails: ``port_lost`` refreshes at ``now_s``).
+        deferred = fresh != now and phase is _Phase.STREAMING and not control.busy and statement is not None \
+            and not self.written.script_paused and control.planned_for(statement)
+        if deferred:
+            view.now_s = now
+        elif fresh != now:  # (else ``wrote`` refreshed the view at this time, and nothing changed since)
             self._refresh(now)
-        if self.control.busy and phase in (_Phase.STREAMING, _Phase.DRAINING):
+        if control.busy and phase in (_Phase.STREAMING, _Phase.DRAINING):
             held = _control_action(self, now)
             if held is not None:
                 return held
         if phase is _Phase.STREAMING:
-            statement = self.view.next_statement
             if statement is not None:  # written when the pacing lets it go, else the time it may
                 if self.written.script_paused and self.end.script_pause_holds(statement):
                     return self._ended_or_wait(self.end.held_by_script_pause(now), now)
-                command = self.control.command_for(statement)
+                command = control.command_for(statement)
                 pacing, streamer = self.pacing, self.streamer
                 when = pacing.next_write_time(now, command)
                 self._held = when is None and pacing is streamer
                 if self._held and streamer.pending:
+                    if deferred:  # (before the rest is judged and confirms frames)
+                        self._refresh(now)
+                        deferred = False
                     before = self.end.rest_proves_done_before(now)
                     if before is not None and before > streamer.pending[0].index:
                         streamer.confirm_all_done(now, before)  # (the time bound's chain restarts at now)
@@ -361,6 +374,8 @@ class Job:
                     if self._write is None:
                         self._write, self._command = Write(command.encode(), statement), command
                     return self._write
+                if deferred:
+                    self._refresh(now)
                 return Wait(when)
             self.phase = _Phase.DRAINING
             self.end.restart(now)

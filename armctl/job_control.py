@@ -179,17 +179,21 @@ class JobControl:
             return True
         return self.state is PauseState.RUNNING and pause_toggle_needed(True, self.arm_paused) is not False
 
+    def planned_for(self, statement) -> bool:
+        """Whether ``command_for(statement)`` has its command already (it then changes nothing)."""
+        cached = self._scaled
+        return cached is not None and cached[0] is statement and cached[1] == self.feed.percent
+
     def command_for(self, statement):
         """The command to plan and write for ``statement``: the override applied once per
         statement and percentage, so the streamer plans exactly what is written."""
-        cached = self._scaled
-        percent = self.feed.percent
-        if cached is None or cached[0] is not statement or cached[1] != percent:
-            clamped = self.feed.clamped
-            cached = self._scaled = (statement, percent, self.feed.apply(statement.command))
-            if self.feed.clamped is not clamped:
+        if not self.planned_for(statement):
+            feed = self.feed
+            clamped = feed.clamped
+            self._scaled = (statement, feed.percent, feed.apply(statement.command))
+            if feed.clamped is not clamped:
                 self.version += 1
-        return cached[2]
+        return self._scaled[2]
 
     @property
     def label(self) -> str:
