@@ -11,23 +11,33 @@ __version__ = "0.1.0"
 
 # name → the module that defines it, imported when the name is first used
 _API = {
-    "Arm": "armctl.api", "ArmStatus": "armctl.api", "ArmTimeout": "armctl.api", "Progress": "armctl.api",
-    "RunResult": "armctl.api", "JobObserver": "armctl.api", "JobFailed": "armctl.jobflow",
+    "Arm": "armctl.host.api", "ArmStatus": "armctl.host.api", "ArmTimeout": "armctl.host.api", "Progress": "armctl.host.api",
+    "RunResult": "armctl.host.api", "JobObserver": "armctl.host.api", "JobFailed": "armctl.host.jobflow",
     "ArmctlError": "armctl.errors", "ConfigError": "armctl.errors", "PortError": "armctl.errors",
     "ProfileError": "armctl.errors", "ScriptError": "armctl.errors",
+    # the values docs/api.md names, here so that user code does not depend on the package's layout
+    "CheckedScript": "armctl.core.checked", "CheckedJob": "armctl.core.checked", "check": "armctl.core.checked",
+    "ScriptSnapshot": "armctl.script", "PortChoice": "armctl.host.link", "ResumePoint": "armctl.core.joblog",
+    "JournalDamaged": "armctl.core.joblog", "NotProven": "armctl.core.joblog",
+    "read_resume_point": "armctl.host.jobflow",
 }
 # written out, not computed: type checkers read __all__ statically (mypy --strict's "explicitly
 # export"); tests/test_newcomer_typing.py holds it to _API
 __all__ = [
-    "Arm", "ArmStatus", "ArmTimeout", "ArmctlError", "ConfigError", "JobFailed", "JobObserver", "PortError",
-    "ProfileError", "Progress", "RunResult", "ScriptError",
+    "Arm", "ArmStatus", "ArmTimeout", "ArmctlError", "CheckedJob", "CheckedScript", "ConfigError", "JobFailed",
+    "JobObserver", "JournalDamaged", "NotProven", "PortChoice", "PortError", "ProfileError", "Progress", "ResumePoint",
+    "RunResult", "ScriptError", "ScriptSnapshot", "check", "read_resume_point",
 ]
 
 TYPE_CHECKING = False  # true for type checkers; not typing's, whose import costs milliseconds here
 if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ imports them
-    from .api import Arm, ArmStatus, ArmTimeout, JobObserver, Progress, RunResult
+    from .host.api import Arm, ArmStatus, ArmTimeout, JobObserver, Progress, RunResult
+    from .core.checked import CheckedJob, CheckedScript, check
+    from .core.joblog import JournalDamaged, NotProven, ResumePoint
     from .errors import ArmctlError, ConfigError, PortError, ProfileError, ScriptError
-    from .jobflow import JobFailed
+    from .host.jobflow import JobFailed, read_resume_point
+    from .host.link import PortChoice
+    from .script import ScriptSnapshot
 
 
 def __getattr__(name: str):

@@ -1,6 +1,6 @@
 """The asyncio API: ``from armctl.aio import AsyncArm`` — ``Arm``'s calls as coroutines.
 
-Strategy: not a second engine.  An ``AsyncArm`` wraps one ``armctl.Arm`` (armctl/api.py) and
+Strategy: not a second engine.  An ``AsyncArm`` wraps one ``armctl.Arm`` (armctl/host/api.py) and
 runs each of its blocking calls in a small thread pool of its own, so the event loop never
 blocks and a long ``run`` does not starve the loop's default executor; the arm's own worker
 thread still owns the link, so the checks, the pacing, the journal and the end-of-job proof are
@@ -21,8 +21,8 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import IO, Any, Callable
 
-from .api import Arm, ArmStatus, JobObserver, RunResult
-from .streamer import DEFAULT_LEAD_S
+from .host.api import Arm, ArmStatus, JobObserver, RunResult
+from .core.streamer import DEFAULT_LEAD_S
 
 __all__ = ["AsyncArm", "EventObserver"]
 
@@ -150,7 +150,7 @@ class AsyncArm:
         """``Arm.run`` (same arguments), awaited.  ``on_event(dict)``: the ``run --json`` events,
         called on this loop; the last is the ``summary`` (the ``RunResult``'s words), sent also
         when the job ends ``JobFailed`` (its result; then the error is raised)."""
-        from .jobflow import JobFailed
+        from .host.jobflow import JobFailed
 
         loop = asyncio.get_running_loop()
         if observer is None and on_event is not None:

@@ -25,7 +25,7 @@ STATUS = bytes.fromhex("ce083400000bb800cf")
 
 _CHILD = """
 import json, resource, sys, time
-from armctl.cli import main
+from armctl.ui.cli import main
 start = time.perf_counter()
 try:
     main.main(args=["decode", *sys.argv[1:]], standalone_mode=False)

@@ -49,7 +49,7 @@ def frames_digest(script: str, url: str) -> str:
     exit code and the summary's arm time."""
     from click.testing import CliRunner
 
-    from armctl.cli import main
+    from armctl.ui.cli import main
     from armctl.sim.model import SimulatedArm
 
     events: list[str] = []

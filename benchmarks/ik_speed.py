@@ -1,4 +1,4 @@
-"""Calls per second of the closed-form IK (armctl/kinematics.py's one flat solver, issues 11, 13).
+"""Calls per second of the closed-form IK (armctl/core/kinematics.py's one flat solver, issues 11, 13).
 
   inverse, path      the simulator's case: poses along benchmarks/virtual_run.py's job (X250,
                      Y −50…50, Z150, tool down), each hinted by the joints before it, the default
@@ -26,8 +26,8 @@ POSES = 4000
 
 
 def workloads():
-    from armctl.kinematics import Unreachable, has_solution, inverse
-    from armctl.profile import default_profile
+    from armctl.core.kinematics import Unreachable, has_solution, inverse
+    from armctl.host.profile import default_profile
 
     profile = default_profile()
     links, limits, home = profile.links, profile.joint_limits_deg, tuple(profile.poses[0])

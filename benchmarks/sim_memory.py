@@ -39,7 +39,7 @@ class SquareJob:
 def one_run(frames: int) -> int:
     from armctl.bench.harness import run_job
     from armctl.bench.strategies import StreamerStrategy
-    from armctl.motion import MotionModel
+    from armctl.core.motion import MotionModel
     from armctl.sim.model import SimOptions, SimulatedArm
 
     arm = SimulatedArm(SimOptions())

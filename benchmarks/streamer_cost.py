@@ -15,10 +15,10 @@ import sys
 import time
 
 from armctl.bench.scenarios import tiny_moves
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
-from armctl.protocol import JointsLowStatus, PositionStatus
-from armctl.streamer import Streamer
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
+from armctl.core.protocol import JointsLowStatus, PositionStatus
+from armctl.core.streamer import Streamer
 
 PAIRS = 31
 BATCH = 200  # status frames per timed batch

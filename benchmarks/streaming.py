@@ -4,7 +4,7 @@ The same click command as ``armctl bench`` and ``python -m armctl.bench``; see d
 what it measures.
 """
 
-from armctl.cli import bench
+from armctl.ui.cli import bench
 
 if __name__ == "__main__":
     bench(prog_name="python benchmarks/streaming.py")

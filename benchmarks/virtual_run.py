@@ -59,8 +59,8 @@ def write_job(path: Path) -> None:
 def one_run(script_path: Path) -> tuple[tuple[float, float], list[tuple[float, bytes]], float, str]:
     """(wall, CPU) seconds of ``armctl run`` in this process; the frames written with their
     model times; the last model time; the summary printed."""
-    from armctl.cli import _read_script
-    from armctl.link import connect as real_connect
+    from armctl.ui.cli import _read_script
+    from armctl.host.link import connect as real_connect
     from armctl.ui.run_job import JobOptions, run_job
 
     written: list[tuple[float, bytes]] = []
@@ -95,7 +95,7 @@ def baseline(written: list[tuple[float, bytes]], end_s: float) -> tuple[float, f
     the way the run's link drives it: its quiet stretches as runs of steps timed ahead, each
     frame built and decoded (``status_run``, ``status_frames``, ``StatusReader.decode_frame``),
     every other step burst by burst (``advance``, ``StatusReader.feed``)."""
-    from armctl.protocol import StatusReader
+    from armctl.core.protocol import StatusReader
     from armctl.sim.model import SimulatedArm
     from armctl.sim.protocol_sim import parse_sim_url
 

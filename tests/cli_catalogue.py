@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import click
 
-from armctl.cli import main
+from armctl.ui.cli import main
 
 VIRTUAL_SIM = "sim://?clock=virtual"
 

@@ -27,15 +27,15 @@ from pathlib import Path
 import pytest
 from hypothesis import HealthCheck, settings
 
-import armctl.protocol as protocol
-import armctl.status_frames as status_frames
+import armctl.core.protocol as protocol
+import armctl.core.status_frames as status_frames
 
 # The user's own armctl.toml (~/.config/armctl/armctl.toml) must not change what the tests see:
 # every test, and every armctl it starts, looks in an empty config directory instead.  Tests of
 # the user file point XDG_CONFIG_HOME elsewhere with monkeypatch.
 os.environ["XDG_CONFIG_HOME"] = tempfile.mkdtemp(prefix="armctl-test-config-")
 # Likewise the user data directory, where ``armctl probe`` keeps what it measured with the arm
-# (armctl/calibration.py): here for the whole session, and a fresh one for each test (below), so
+# (armctl/host/calibration.py): here for the whole session, and a fresh one for each test (below), so
 # a test that probes an arm changes no other test's run on that arm.
 os.environ["XDG_DATA_HOME"] = tempfile.mkdtemp(prefix="armctl-test-data-")
 
@@ -55,7 +55,7 @@ _BYTES_LINE = re.compile(r"a\[(\d+)(?:\.\.(\d+))?\]\s+([0-9a-f]{2}(?: [0-9a-f]{2
 class GoldenVector:
     name: str
     call: str  # the constructor call exactly as written in the file
-    obj: object  # that call, evaluated with armctl.protocol's names
+    obj: object  # that call, evaluated with armctl.core.protocol's names
     data: bytes
     decode_only: bool  # bytes → object only (e.g. a linear move with a[2]=0)
     where: str  # "file:line", for failure messages

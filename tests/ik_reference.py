@@ -1,18 +1,18 @@
 """The closed-form IK as it was before the one flat solver (issue 13): a test-only reference.
 
-``inverse``, ``solutions`` and their helpers copied verbatim from armctl/kinematics.py at
+``inverse``, ``solutions`` and their helpers copied verbatim from armctl/core/kinematics.py at
 88a2591 (enumerating generators, the wrist matrix by ``_mul``), so that
 tests/test_ik_flat.py can hold the package's flat solver to the same answers bit for bit.
-Not part of the package: the IK math lives once, in armctl/kinematics.py."""
+Not part of the package: the IK math lives once, in armctl/core/kinematics.py."""
 
 from __future__ import annotations
 
 import math
 from typing import Iterator, Sequence
 
-from armctl.kinematics import JOINT_COUNT, Links, Unreachable, wrap_deg
-from armctl.kinematics_frames import arm_rotation as _arm, rotation_product as _mul
-from armctl.kinematics_inverse import _fit, flange_of as _flange_of
+from armctl.core.kinematics import JOINT_COUNT, Links, Unreachable, wrap_deg
+from armctl.core.kinematics_frames import arm_rotation as _arm, rotation_product as _mul
+from armctl.core.kinematics_inverse import _fit, flange_of as _flange_of
 
 
 def solutions(pose: Sequence[float], links: Links, near: Sequence[float] | None = None) -> list[tuple[float, ...]]:

@@ -76,7 +76,7 @@ def make_crash(script: Path, n: int, log: Path) -> Crash:
 
 def at_rest(arm: Arm) -> tuple:
     """(position_mm, joints_deg) once the arm is at rest, as ``--resume`` waits for it."""
-    from armctl.jobflow import wait_for_rest
+    from armctl.host.jobflow import wait_for_rest
 
     state = arm._call(lambda: wait_for_rest(arm._link, 600.0))
     return state.position_mm, tuple(state.joints_deg)

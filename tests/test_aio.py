@@ -31,7 +31,6 @@ async def streaming(arm):
 
 def test_run_gives_the_run_json_events_on_the_loop_and_the_same_result_as_arm_run():
     from armctl import Arm
-
     async def main():
         events, threads = [], set()
         import threading

@@ -25,8 +25,8 @@ from hypothesis import strategies as st
 
 import armctl
 from armctl import Arm, ArmTimeout, JobFailed, RunResult, ScriptError
-from armctl.protocol import JointMove, LinearMove, PauseToggle
-from armctl.api import move_line
+from armctl.core.protocol import JointMove, LinearMove, PauseToggle
+from armctl.host.api import move_line
 from armctl.script import InitialState, ScriptSnapshot, compile_text
 
 SCRIPTS = Path(__file__).resolve().parent / "data" / "scripts_cli"
@@ -95,8 +95,8 @@ def test_the_issue_example_in_a_fresh_process_with_the_port_from_the_environment
 
 
 def test_importing_armctl_does_not_import_the_api_and_every_exported_name_resolves():
-    code = ("import sys, armctl; print('armctl.api' in sys.modules, 'armctl.jobflow' in sys.modules);"
-            "[getattr(armctl, name) for name in armctl.__all__]; print('armctl.api' in sys.modules)")
+    code = ("import sys, armctl; print('armctl.host.api' in sys.modules, 'armctl.host.jobflow' in sys.modules);"
+            "[getattr(armctl, name) for name in armctl.__all__]; print('armctl.host.api' in sys.modules)")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=30)
     assert done.stdout == "False False\nTrue\n", done.stderr
     assert issubclass(ScriptError, armctl.ArmctlError) and issubclass(ArmTimeout, JobFailed)
@@ -364,10 +364,10 @@ def test_open_errors_are_the_commands_errors_and_print_nothing(capfd, tmp_path):
     ({"baud": float("nan")}, "baud"), ({"baud": 9600.5}, "baud"), ({"baud": True}, "baud"),
 ])
 def test_open_refuses_numbers_outside_the_clis_ranges_before_the_port_opens(kwargs, name, monkeypatch):
-    import armctl.link
+    import armctl.host.link
 
     opened = []
-    monkeypatch.setattr(armctl.link, "open_port", lambda *args, **kw: opened.append(args))
+    monkeypatch.setattr(armctl.host.link, "open_port", lambda *args, **kw: opened.append(args))
     with pytest.raises(ValueError, match=name):
         Arm.open(port=VIRTUAL, **kwargs)
     assert opened == []

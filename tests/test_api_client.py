@@ -16,7 +16,7 @@ import pytest
 
 from armctl import Arm, ArmctlError, JobObserver
 from armctl.errors import ResumeRefused
-from armctl.protocol import PauseToggle, ResetConnector
+from armctl.core.protocol import PauseToggle, ResetConnector
 
 SCRIPTS = Path(__file__).resolve().parent / "data" / "scripts_cli"
 SHORT = SCRIPTS / "short_job.txt"  # 5 frames, under a second of arm time
@@ -148,7 +148,7 @@ def test_toggle_pause_acts_on_the_job_only_and_feed_override_steps_relative():
 
 
 def _recording_connect(written: list):
-    from armctl.link import connect as real_connect
+    from armctl.host.link import connect as real_connect
 
     def connect(port, baud, profile=None):
         link, baud = real_connect(port, baud, profile=profile)
@@ -221,7 +221,7 @@ def test_stop_why_goes_into_the_results_messages():
 
 
 def test_open_takes_a_connect_seam_and_a_loaded_profile():
-    from armctl.profile import load_profile
+    from armctl.host.profile import load_profile
 
     written: list[bytes] = []
     with Arm.open(VIRTUAL, profile=load_profile(None), connect=_recording_connect(written)) as arm:

@@ -1,6 +1,6 @@
 """Control of a running job through the Python API: ``Arm.pause``, ``resume``, ``feed_override``.
 
-Strategy: each call is a request to the job engine (armctl/job.py, via ``JobRunner.control``),
+Strategy: each call is a request to the job engine (armctl/core/job.py, via ``JobRunner.control``),
 so these tests drive a job through ``Arm.run`` on a simulator in virtual time, in both
 control-frame modes (H5: ``sim://?clock=virtual&control_frames=queued|arrival``), and judge it
 by the simulated arm's own record: what it took and when (``execution_log``, model time) and
@@ -14,7 +14,7 @@ import threading
 import pytest
 
 from armctl import Arm, ArmctlError
-from armctl.protocol import LinearMove, PauseToggle
+from armctl.core.protocol import LinearMove, PauseToggle
 
 MODES = ["queued", "arrival"]
 SPEED_MM_MIN = 1200.0

@@ -1,7 +1,7 @@
 """ArmState: the nine kinds merged, ages, completeness and H9's plausibility hold-back."""
 
-from armctl.armstate import STALE_AFTER_S, ArmState
-from armctl.protocol import (
+from armctl.core.armstate import STALE_AFTER_S, ArmState
+from armctl.core.protocol import (
     STATUS_ROTATION,
     FileLengthStatus,
     FileStatus,

@@ -8,10 +8,10 @@ import copy
 
 from hypothesis import given, settings, strategies as st
 
-from armctl.armstate import ArmState
-from armctl.link import Link
+from armctl.core.armstate import ArmState
+from armctl.host.link import Link
 from test_link_news import news_of
-from armctl.protocol import (
+from armctl.core.protocol import (
     FileLengthStatus, FileStatus, JointsHighStatus, JointsLowStatus, PauseStatus, PositionStatus, RunPositionStatus,
     WorktableStatus, WristStatus,
 )

@@ -9,8 +9,7 @@ from functools import lru_cache
 import pytest
 from click.testing import CliRunner
 
-from armctl import cli
-
+from armctl.ui import cli
 from armctl.bench import table
 from armctl.bench.harness import run_job
 from armctl.bench.scenarios import (
@@ -18,11 +17,11 @@ from armctl.bench.scenarios import (
     planned_seconds, tiny_moves,
 )
 from armctl.bench.strategies import NaiveStrategy
-from armctl.kinematics import CartesianPose, Unreachable
-from armctl.motion import MotionModel, Planner
-from armctl.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode
+from armctl.core.kinematics import CartesianPose, Unreachable
+from armctl.core.motion import MotionModel, Planner
+from armctl.core.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode
 from armctl.sim.model import SimOptions, SimulatedArm
-from armctl.streamer import DEFAULT_LEAD_S
+from armctl.core.streamer import DEFAULT_LEAD_S
 
 
 @lru_cache(maxsize=None)

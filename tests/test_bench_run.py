@@ -4,7 +4,7 @@ the same arm time.
 The harness (armctl/bench/harness.py) is started where ``run`` starts: ``run`` first reads the
 arm (every status kind, then two more rotations: jobflow.read_arm) and plans from the pose
 it reported, so the harness's arm is read the same way and the job compiled from the same
-reported state.  Both then drive armctl/job.py against the same deterministic simulated arm, in
+reported state.  Both then drive armctl/core/job.py against the same deterministic simulated arm, in
 virtual time, so the frames go at the same model times and the engine sees the same status
 frames: the arm times agree to the printed precision (0.1 s), not merely within a status
 rotation — a host loop that ended the job by its own rules would not.
@@ -22,17 +22,17 @@ from click.testing import CliRunner
 
 from armctl.bench.harness import run_job
 from armctl.bench.strategies import StreamerStrategy
-from armctl.cli import main
-from armctl.jobflow import READ_ROTATIONS  # read_arm: all nine kinds, then two more rotations
-from armctl.link import plausible_state
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
-from armctl.protocol import StatusReader
+from armctl.ui.cli import main
+from armctl.host.jobflow import READ_ROTATIONS  # read_arm: all nine kinds, then two more rotations
+from armctl.host.link import plausible_state
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
+from armctl.core.protocol import StatusReader
 from armctl.script import compile_text
 from armctl.sim.model import SimulatedArm
 from armctl.sim.protocol_sim import parse_sim_url
-from armctl.streamer import DEFAULT_LEAD_S
-from armctl.checked import start_from_state
+from armctl.core.streamer import DEFAULT_LEAD_S
+from armctl.core.checked import start_from_state
 
 URL = "sim://?clock=virtual"
 SCRIPTS = Path(__file__).resolve().parent.parent / "scripts"

@@ -54,7 +54,7 @@ def test_readme_installs_the_bench_extra_before_the_benchmark():
 def test_virtual_run_baseline_replays_frames_on_the_simulator():
     # issue 11's row (benchmarks/virtual_run.py) broke silently when parse_sim_url changed
     # shape: its baseline is run here on a second of arm time.
-    from armctl.protocol import Delay
+    from armctl.core.protocol import Delay
 
     wall_s, cpu_s = _load("virtual_run.py").baseline([(0.0, Delay(500).encode())], 1.0)
     assert wall_s > 0 and cpu_s >= 0

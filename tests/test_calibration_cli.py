@@ -142,7 +142,6 @@ def test_the_api_uses_the_stored_calibration_of_the_arm_it_opens(tmp_path, monke
     monkeypatch.chdir(tmp_path)
     monkeypatch.delenv("ARMCTL_PORT", raising=False)
     from armctl import Arm
-
     with Arm.open(PORT) as arm:
         assert arm.run(JOB).outcome == "finished, unproven"  # the document's FIFO of 200, unproven on this arm
     probe(tmp_path)

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import pytest
 
-from armctl import calibration
-from armctl.calibration import arm_identity, calibration_of, stale_notes
-from armctl.profile import default_profile, with_connector
+from armctl.host import calibration
+from armctl.host.calibration import arm_identity, calibration_of, stale_notes
+from armctl.host.profile import default_profile, with_connector
 
 pytestmark = pytest.mark.timeout(60)
 

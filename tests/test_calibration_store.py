@@ -1,4 +1,4 @@
-"""Issue 24 item 1, the store itself (armctl/calibration.py): an arm's identity from its port,
+"""Issue 24 item 1, the store itself (armctl/host/calibration.py): an arm's identity from its port,
 one record per arm in the user data directory, written atomically, a later probe laid over an
 earlier one, list and forget; and the profile that lays a stored calibration over its own
 ``[connector]`` for the arm on the port, and only for that arm."""
@@ -12,10 +12,10 @@ from types import SimpleNamespace
 
 import pytest
 
-from armctl import calibration
-from armctl.calibration import Calibration, Measured, arm_identity, arm_profile
+from armctl.host import calibration
+from armctl.host.calibration import Calibration, Measured, arm_identity, arm_profile
 from armctl.errors import ConfigError, ProfileError
-from armctl.profile import DOCUMENT, load_profile
+from armctl.host.profile import DOCUMENT, load_profile
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -228,7 +228,7 @@ def test_the_record_is_json_a_person_can_read():
 
 
 def test_the_portless_profile_takes_only_a_connector_table_that_names_no_arm(tmp_path):
-    """``armctl.profile.load_profile`` knows no port (the simulated arm's own profile, a library
+    """``armctl.host.profile.load_profile`` knows no port (the simulated arm's own profile, a library
     reading a profile): a table measured on an arm is not its, one written by hand is."""
     calibration.save(_record(fifo_frames=50))
     (tmp_path / "armctl.toml").write_text('[connector]\nmeasured_on = "sim://"\nfifo_frames = 50\n')

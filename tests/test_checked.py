@@ -1,4 +1,4 @@
-"""A checked job is a value (armctl/checked.py): checked once before any port opens, planned once
+"""A checked job is a value (armctl/core/checked.py): checked once before any port opens, planned once
 from the arm's report, and what streams is what was estimated, frame for frame."""
 
 from __future__ import annotations
@@ -8,9 +8,9 @@ import dataclasses
 import pytest
 
 from armctl import Arm, ScriptError
-from armctl.checked import CheckedScript, check, checked_for, plan, start_at
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
+from armctl.core.checked import CheckedScript, check, checked_for, plan, start_at
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
 from armctl.script.files import ScriptSnapshot
 
 pytestmark = pytest.mark.timeout(60)

@@ -28,8 +28,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.protocol import AccelLinearMove, ArcEnd, Delay, GoToPose, JointMove, LinearMove
+from armctl.ui.cli import main
+from armctl.core.protocol import AccelLinearMove, ArcEnd, Delay, GoToPose, JointMove, LinearMove
 from armctl.sim.executor import DONE
 from claims_common import fresh, raster
 from test_resume_exactly_once import _open_one_arm, _stop_after

@@ -20,8 +20,8 @@ import re
 import pytest
 from click.testing import CliRunner
 
-import armctl.streamer.ledger
-from armctl.cli import main
+import armctl.core.streamer.ledger
+from armctl.ui.cli import main
 from armctl.sim.executor import DONE
 from claims_common import fresh, raster
 from test_resume_exactly_once import _open_one_arm
@@ -40,7 +40,7 @@ def _counts(stdout: str) -> tuple[int, int, int]:
 def claimed(monkeypatch):
     """The frames (their indexes) the streamer counts as seen by the arm's reports."""
     seen: list[int] = []
-    real = armctl.streamer.ledger.Ledger.consume_one
+    real = armctl.core.streamer.ledger.Ledger.consume_one
 
     def consume_one(self, by_reports):
         head, before = self.pending[0], self.confirmed_by_reports
@@ -48,7 +48,7 @@ def claimed(monkeypatch):
         if self.confirmed_by_reports > before:
             seen.append(head.index)
 
-    monkeypatch.setattr(armctl.streamer.ledger.Ledger, "consume_one", consume_one)
+    monkeypatch.setattr(armctl.core.streamer.ledger.Ledger, "consume_one", consume_one)
     return seen
 
 

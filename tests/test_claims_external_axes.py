@@ -17,9 +17,9 @@ import subprocess
 
 import pytest
 
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
-from armctl.protocol import JointMove, LinearMove
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
+from armctl.core.protocol import JointMove, LinearMove
 from claims_common import fresh
 
 U_ONLY = "G6 J1=0 J2=0 J3=0 J4=0 J5=90 J6=0 U250 S1500 F20\n"

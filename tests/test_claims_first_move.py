@@ -17,7 +17,7 @@ import re
 
 from click.testing import CliRunner
 
-from armctl.cli import main
+from armctl.ui.cli import main
 from claims_common import fresh
 from test_resume_exactly_once import _open_one_arm
 

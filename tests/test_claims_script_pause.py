@@ -20,8 +20,8 @@ import subprocess
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.protocol import GoToPose, LinearMove, PauseToggle
+from armctl.ui.cli import main
+from armctl.core.protocol import GoToPose, LinearMove, PauseToggle
 from armctl.sim.executor import DONE
 from claims_common import fresh
 from test_resume_exactly_once import _open_one_arm
@@ -110,9 +110,9 @@ def test_a_pause_and_its_resume_in_the_script_run_through(tmp_path):
 def test_a_user_pause_behind_the_scripts_pause_sends_no_toggle(control_frames):
     # the panel's or the API's pause, asked while the job waits behind its own PAUSE: a second
     # toggle would undo that pause (queued: resume the arm at the head of its FIFO)
-    from armctl.job import Job, RunView
+    from armctl.core.job import Job, RunView
     from armctl.script import InitialState, compile_text
-    from armctl.streamer import Streamer
+    from armctl.core.streamer import Streamer
     from test_job_pause import MODEL, START, X, Y, Z, drive, make
 
     _, arm, _ = make(control_frames)

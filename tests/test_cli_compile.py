@@ -1,7 +1,7 @@
 """``armctl compile`` as a user sees it: the exact frames PROTOCOL.md defines, and errors.
 
 The expected frames are written out here a second time, straight from PROTOCOL.md's byte
-table, with ``struct`` — an encoder that shares nothing with ``armctl.protocol``:
+table, with ``struct`` — an encoder that shares nothing with ``armctl.core.protocol``:
 
     motion   a[0]=0xEE  a[1]=command as ASCII  a[2]=sub-command  f1…f11 at a[3+4(k-1)]  a[47]=0xEF
     control  a[0]=0xFC  a[1], a[2] decimal bytes  argument from a[3]                   a[47]=0xFD
@@ -22,7 +22,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
+from armctl.ui.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 SCRIPTS = ROOT / "tests" / "data" / "scripts_cli"
@@ -286,10 +286,10 @@ def test_undecodable_bytes_in_a_comment_are_reported_on_every_line_shape(tmp_pat
 def test_bin_refuses_to_write_to_a_terminal(monkeypatch):
     import types
 
-    import armctl.cli
+    import armctl.ui.cli
 
     terminal = types.SimpleNamespace(isatty=lambda: True)
-    monkeypatch.setattr(armctl.cli, "sys", types.SimpleNamespace(stdout=terminal, exit=sys.exit))
+    monkeypatch.setattr(armctl.ui.cli, "sys", types.SimpleNamespace(stdout=terminal, exit=sys.exit))
     result = CliRunner().invoke(main, ["compile", str(EVERY), "--format", "bin"])
     assert result.exit_code == 2
     assert "refusing to write binary frames to a terminal" in result.stderr

@@ -2,7 +2,7 @@
 
 Strategy: the invariants are one function, ``check_outcome``: the exit code is documented
 (0 ok, 1 problems in the input, 2 usage / unreadable), no traceback, and a failure says why
-(on stderr; ``lint`` prints its findings on stdout).  Hypothesis drives ``armctl.cli.main``
+(on stderr; ``lint`` prints its findings on stdout).  Hypothesis drives ``armctl.ui.cli.main``
 in-process (click's CliRunner) with inputs a user can type; a bounded sample of the same inputs
 goes through the *installed* command in a fresh process (``sys.executable -m armctl``, always
 with ``timeout=``), because a registry that fills on import passes in-process and fails for
@@ -40,7 +40,7 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from armctl.cli import main
+from armctl.ui.cli import main
 from cli_catalogue import QUICK_INVOCATIONS, VIRTUAL_SIM, all_commands, numeric_options, quick_args
 
 EXIT_CODES = {0, 1, 2}  # 130 (Ctrl-C) and 141 (broken pipe) only where a test causes them
@@ -171,7 +171,7 @@ def write(directory: Path, text: str, name: str = "job.txt") -> Path:
 @pytest.fixture
 def workdir(tmp_path, monkeypatch):
     """An empty directory with no armctl.toml above it, and no ARMCTL_* in the environment."""
-    from armctl.profile import find_config
+    from armctl.host.profile import find_config
 
     monkeypatch.chdir(tmp_path)
     for name in [k for k in os.environ if k.startswith("ARMCTL_")]:

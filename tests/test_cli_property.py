@@ -5,7 +5,7 @@ Strategy: Hypothesis writes the files and options a user controls — an arm pro
 (``--profile``), an armctl.toml (in the working directory), the options of a ``sim://`` URL
 (``--port``, with ``profile=`` naming a generated file too), scripts with huge repeat counts,
 lint rule codes and prefixes in ``--select``/``--ignore`` and in ``[lint]`` — each either as raw
-bytes or as TOML built from the real schemas (``armctl.profile.PROFILE_SCHEMA``, ``CONFIG_SCHEMA``, the
+bytes or as TOML built from the real schemas (``armctl.host.profile.PROFILE_SCHEMA``, ``CONFIG_SCHEMA``, the
 jog settings, ``sim://``'s option table), so most examples get past the TOML parser to the checks
 behind it, with values from the edges: whole numbers past 64 bits, floats near the float32 and
 float64 limits, NaN, inf, strings with NUL or a BOM, lists nested deeper than any setting.  The
@@ -39,7 +39,7 @@ VIRTUAL = "sim://?clock=virtual"
 @pytest.fixture
 def workdir(tmp_path, monkeypatch):
     """An empty directory holding job.txt, with no armctl.toml above it and no ARMCTL_* set."""
-    from armctl.profile import find_config
+    from armctl.host.profile import find_config
 
     monkeypatch.chdir(tmp_path)
     for name in [k for k in __import__("os").environ if k.startswith("ARMCTL_")]:
@@ -58,7 +58,7 @@ def _schema_keys() -> dict[str, list[str]]:
 
     from armctl.jog.settings import JogSettings
     from armctl.lint.command import CONFIG_KEYS
-    from armctl.profile import PROFILE_SCHEMA, CONFIG_SCHEMA
+    from armctl.host.profile import PROFILE_SCHEMA, CONFIG_SCHEMA
 
     sections = {name: list(rule) for name, rule in PROFILE_SCHEMA.items() if isinstance(rule, dict)}
     sections["jog"] = [f.name for f in fields(JogSettings)] + ["keys"]

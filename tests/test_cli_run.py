@@ -27,8 +27,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-import armctl.link
-from armctl.cli import main
+import armctl.host.link
+from armctl.ui.cli import main
 from armctl.sim.bridge import serve_pty, serve_tcp
 from armctl.sim.model import SimOptions, SimulatedArm
 
@@ -65,7 +65,7 @@ def recorded_writes(monkeypatch):
     """Every frame any Link writes, and every port opened."""
     writes: list[bytes] = []
     opened: list[str] = []
-    real_write, real_open = armctl.link.Link.write, armctl.link.open_port
+    real_write, real_open = armctl.host.link.Link.write, armctl.host.link.open_port
 
     def write(self, frame):
         writes.append(bytes(frame))
@@ -75,8 +75,8 @@ def recorded_writes(monkeypatch):
         opened.append(url)
         return real_open(url, *args, **kwargs)
 
-    monkeypatch.setattr(armctl.link.Link, "write", write)
-    monkeypatch.setattr(armctl.link, "open_port", open_port)
+    monkeypatch.setattr(armctl.host.link.Link, "write", write)
+    monkeypatch.setattr(armctl.host.link, "open_port", open_port)
     return writes, opened
 
 
@@ -121,7 +121,7 @@ def test_the_log_holds_tx_and_rx_records_and_the_arm_time_agrees_with_estimate(t
 
     # the log: every frame written (in order, with its line) and the status frames read
     records = read_log(log)
-    assert {r["dir"] for r in records} == {"job", "tx", "rx", "progress"}  # job, progress: armctl/joblog.py
+    assert {r["dir"] for r in records} == {"job", "tx", "rx", "progress"}  # job, progress: armctl/core/joblog.py
     assert records[0]["dir"] == "job"
     records = [r for r in records if r["dir"] in ("tx", "rx")]
     assert all(set(r) >= {"t", "dir", "hex"} for r in records)
@@ -212,8 +212,8 @@ def test_dry_run_prints_the_frames_and_the_estimate_and_opens_no_port(monkeypatc
     def no_port(*args, **kwargs):
         raise AssertionError("--dry-run opened a port")
 
-    monkeypatch.setattr(armctl.link, "open_port", no_port)
-    monkeypatch.setattr(armctl.link.Link, "open", no_port)
+    monkeypatch.setattr(armctl.host.link, "open_port", no_port)
+    monkeypatch.setattr(armctl.host.link.Link, "open", no_port)
     result = run(SHORT, "--dry-run")
     assert result.exit_code == 0, result.output
     lines = result.stdout.splitlines()

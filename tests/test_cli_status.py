@@ -25,11 +25,11 @@ import types
 import pytest
 from click.testing import CliRunner
 
-from armctl.armstate import ArmState
-from armctl.cli import main
+from armctl.core.armstate import ArmState
+from armctl.ui.cli import main
 from armctl.errors import PortError
-from armctl.profile import find_config
-from armctl.protocol import FileLengthStatus, JointsLowStatus, PauseStatus, PositionStatus
+from armctl.host.profile import find_config
+from armctl.core.protocol import FileLengthStatus, JointsLowStatus, PauseStatus, PositionStatus
 from armctl.sim.bridge import serve_pty, serve_tcp
 from armctl.sim.model import SimOptions
 

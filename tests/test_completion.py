@@ -14,8 +14,8 @@ import pytest
 from click.shell_completion import get_completion_class
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.completion import SHELLS, complete_var
+from armctl.ui.cli import main
+from armctl.ui.completion import SHELLS, complete_var
 
 # The console script pip installed beside this interpreter (the editable install of the suite's
 # virtualenv): what a user runs, with the environment a user has.

@@ -24,9 +24,9 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from armctl.cli import main
-from armctl.cli_types import Bounded
-from armctl.profile import PROFILE_SCHEMA, find_config
+from armctl.ui.cli import main
+from armctl.ui.cli_types import Bounded
+from armctl.host.profile import PROFILE_SCHEMA, find_config
 
 from cli_catalogue import numeric_options, quick_args
 
@@ -101,7 +101,7 @@ def test_the_option_list_is_read_from_click_and_is_not_empty():
 
 @pytest.mark.parametrize("command, param", NUMERIC_OPTIONS, ids=lambda p: getattr(p, "name", p))
 def test_every_numeric_option_is_bounded_on_both_sides(command, param):
-    assert isinstance(param.type, Bounded), f"{command} {param.opts[-1]}: declare it with armctl.cli_types.number()"
+    assert isinstance(param.type, Bounded), f"{command} {param.opts[-1]}: declare it with armctl.ui.cli_types.number()"
     assert math.isfinite(param.type.min) and math.isfinite(param.type.max)
 
 
@@ -148,8 +148,7 @@ WHOLE_NUMBER_OPTIONS = ("baud", "fifo", "fifo_frames", "seed", "write_buffer_byt
 
 
 def _sim_accepts(name: str, text: str) -> bool:
-    from armctl import limits
-
+    from armctl.core import limits
     ranges = {"speed": limits.SIM_TIME_SCALE_RANGE, "slowdown": limits.SIM_SLOWDOWN_RANGE, "baud": limits.BAUD_RANGE,
               "fifo": limits.SIM_FIFO_RANGE_FRAMES, "seed": limits.SIM_SEED_RANGE, "loss": limits.SIM_RATE_RANGE,
               "corrupt": limits.SIM_RATE_RANGE, "noise": limits.SIM_RATE_RANGE,
@@ -287,7 +286,7 @@ def test_no_port_anywhere_is_the_simulator_and_says_so():
 
 def _profile_keys():
     """(section, key) of every numeric profile key, read from the schema."""
-    from armctl.profile import default_profile_data
+    from armctl.host.profile import default_profile_data
 
     defaults, keys = default_profile_data(), []
     for section, rule in PROFILE_SCHEMA.items():
@@ -309,7 +308,7 @@ TOML_VALUES = st.one_of(
 
 def _toml_line(section: str, key: str, value: str) -> str:
     """Put ``value`` where a number goes: the key itself, one end of a pair, one entry of a list."""
-    from armctl.profile import default_profile_data
+    from armctl.host.profile import default_profile_data
 
     current = default_profile_data()[section][key]
     if isinstance(current, tuple):
@@ -410,9 +409,9 @@ def test_the_edges_listed_here_are_the_schema_s():
 @given(choice=st.fixed_dictionaries({k: _edge_or_inside(*v) for k, v in SPEED_AND_TIMING_EDGES.items()}),
        ramp=_edge_or_inside(1e-6, 60.0))
 def test_the_motion_model_gives_finite_times_for_any_accepted_profile(choice, ramp):
-    from armctl.estimate import JobEstimator
-    from armctl.motion import MotionModel
-    from armctl.profile import parse_profile
+    from armctl.core.estimate import JobEstimator
+    from armctl.core.motion import MotionModel
+    from armctl.host.profile import parse_profile
     from armctl.script import compile_text
 
     data: dict = {}

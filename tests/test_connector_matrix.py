@@ -18,8 +18,8 @@ import sys
 import pytest
 from click.testing import CliRunner
 
-import armctl.link
-from armctl.cli import main
+import armctl.host.link
+from armctl.ui.cli import main
 
 FIFOS = (50, 120, 200, 250)
 CONTROLS = ("queued", "arrival")
@@ -55,14 +55,14 @@ def job(tmp_path, monkeypatch):
 def opened_ports(monkeypatch):
     """Every port ``armctl`` opens (the sim:// ones carry ``.model``, the simulated arm)."""
     ports = []
-    real_open = armctl.link.open_port
+    real_open = armctl.host.link.open_port
 
     def open_port(*args, **kwargs):
         port = real_open(*args, **kwargs)
         ports.append(port)
         return port
 
-    monkeypatch.setattr(armctl.link, "open_port", open_port)
+    monkeypatch.setattr(armctl.host.link, "open_port", open_port)
     return ports
 
 
@@ -152,8 +152,8 @@ def test_an_unprobed_profile_on_a_smaller_fifo_never_ends_done(job, opened_ports
 
 
 def test_the_fifo_is_proven_by_a_probe_or_a_simulator_that_holds_at_least_the_profiles():
-    from armctl.link import fifo_proven
-    from armctl.profile import default_profile, parse_profile
+    from armctl.host.link import fifo_proven
+    from armctl.host.profile import default_profile, parse_profile
 
     document = default_profile().connector  # 200, the document's, not measured
     assert fifo_proven("sim://", document)  # the simulator holds 200 unless told otherwise

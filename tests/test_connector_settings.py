@@ -15,22 +15,22 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import armctl.link
-import armctl.runner
+import armctl.host.link
+import armctl.host.runner
 from armctl.bench.harness import job_frames_finished, run_job
 from armctl.bench.strategies import StreamerStrategy
-from armctl.cli import main
+from armctl.ui.cli import main
 from armctl.errors import ConfigError, ProfileError
-from armctl.estimate import JobEstimator
-from armctl.motion import MotionModel
-from armctl.profile import CONNECTOR_KEYS, DOCUMENT, default_profile, load_profile, parse_profile
-from armctl.protocol import (
+from armctl.core.estimate import JobEstimator
+from armctl.core.motion import MotionModel
+from armctl.host.profile import CONNECTOR_KEYS, DOCUMENT, default_profile, load_profile, parse_profile
+from armctl.core.protocol import (
     JointMove, JointsLowStatus, LinearMove, PauseToggle, PositionStatus, SetWorktableOrigin,
     StatusReader, WorktableStatus,
 )
 from armctl.sim.model import SimOptions, SimulatedArm
 from armctl.sim.protocol_sim import SimOptionError, parse_sim_url
-from armctl.streamer import CAPACITY_MARGIN_FRAMES, ROTATION_S, Streamer
+from armctl.core.streamer import CAPACITY_MARGIN_FRAMES, ROTATION_S, Streamer
 
 from test_streamer_sim import build_job, op
 
@@ -283,8 +283,8 @@ def test_the_streamer_measures_the_arms_pace_and_counts_the_lead_in_its_seconds(
 
 
 def test_on_an_arm_that_acts_on_control_frames_as_they_land_they_wait_until_the_queue_is_known_done():
-    from armctl.protocol import GoToPose
-    from armctl.streamer import WaitReason
+    from armctl.core.protocol import GoToPose
+    from armctl.core.streamer import WaitReason
 
     move = LinearMove(250.0, 20.0, 150.0, 180.0, 0.0, 0.0, 1500.0, 6000.0)
     for control, held in (("queued", False), ("arrival", True)):
@@ -307,7 +307,7 @@ def _stop_mid_job(tmp_path, monkeypatch, profile_factor: float, arm_factor: floa
     lines += [f"G1 X{210 if k % 2 == 0 else 200} Y{(k % 7) * 3} Z250 F1200" for k in range(60)]
     (tmp_path / "job.txt").write_text("\n".join(lines) + "\n")
     (tmp_path / "armctl.toml").write_text(f"[connector]\nspeed_factor = {profile_factor}\n")
-    ports, real_open, real_refresh = [], armctl.link.open_port, armctl.runner.JobRunner._drain
+    ports, real_open, real_refresh = [], armctl.host.link.open_port, armctl.host.runner.JobRunner._drain
 
     def open_port(*args, **kwargs):
         ports.append(real_open(*args, **kwargs))
@@ -318,8 +318,8 @@ def _stop_mid_job(tmp_path, monkeypatch, profile_factor: float, arm_factor: floa
             self.request_stop()
         real_refresh(self)
 
-    monkeypatch.setattr(armctl.link, "open_port", open_port)
-    monkeypatch.setattr(armctl.runner.JobRunner, "_drain", refresh)
+    monkeypatch.setattr(armctl.host.link, "open_port", open_port)
+    monkeypatch.setattr(armctl.host.runner.JobRunner, "_drain", refresh)
     result = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--lead", str(lead_s),
                                        "--port", f"sim://?clock=virtual&speed_factor={arm_factor}"])
     assert result.exit_code == 130, result.output

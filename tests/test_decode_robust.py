@@ -18,11 +18,11 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
-from armctl.cli import main
-from armctl.status_frames import decode_command, is_status_frame
-from armctl.protocol import FrameError
-from armctl.formats import bytes_from_input, describe_chunk, json_value, summary_line
-from armctl.protocol import (
+from armctl.ui.cli import main
+from armctl.core.status_frames import decode_command, is_status_frame
+from armctl.core.protocol import FrameError
+from armctl.ui.formats import bytes_from_input, describe_chunk, json_value, summary_line
+from armctl.core.protocol import (
     CONTROL_HEAD, CONTROL_TAIL, MOTION_HEAD, MOTION_TAIL, STATUS_HEAD, STATUS_KINDS, STATUS_TAIL, LinearMove,
     SetWorktableOrigin, as_f32, decode_command, f32_repr, scan_frames,
 )

@@ -20,7 +20,7 @@ from typing import NamedTuple, Optional
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
+from armctl.ui.cli import main
 from armctl.script import RULES, compile_file
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "language.md"

@@ -1,4 +1,4 @@
-"""The one host driver (armctl/driver.py): it carries out ``Write | Wait | Done`` on a link, the
+"""The one host driver (armctl/host/driver.py): it carries out ``Write | Wait | Done`` on a link, the
 host's hooks around each action; and the job's host hands the engine its status frames one way
 (``Job.receive_statuses``), on a wall clock as on a virtual one."""
 
@@ -6,11 +6,11 @@ from __future__ import annotations
 
 import pytest
 
-from armctl.actions import Done, Wait, Write
-from armctl.driver import Host, drive
+from armctl.core.actions import Done, Wait, Write
+from armctl.host.driver import Host, drive
 from armctl.errors import PortError
-from armctl.job import Finished, Job
-from armctl.protocol import PauseStatus
+from armctl.core.job import Finished, Job
+from armctl.core.protocol import PauseStatus
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -98,7 +98,7 @@ def test_a_lost_port_ends_the_drive_at_the_next_turn():
 @pytest.mark.parametrize("url", ["sim://?clock=virtual", "sim://?speed=50"])
 def test_the_job_takes_status_frames_only_through_receive_statuses(monkeypatch, url):
     """``Job.receive_status`` is never called by the host: a run ends as it does with it."""
-    from armctl.api import Arm
+    from armctl.host.api import Arm
 
     def refused(self, frame, now):
         raise AssertionError("the host handed a frame to Job.receive_status")
@@ -118,7 +118,7 @@ def test_the_job_takes_status_frames_only_through_receive_statuses(monkeypatch, 
 
 
 def test_the_wall_clocks_queued_frames_reach_the_engine_through_receive_statuses(monkeypatch):
-    from armctl.runner import JobRunner
+    from armctl.host.runner import JobRunner
     from test_job import make_job
 
     class WallLink:

@@ -8,10 +8,10 @@ import dataclasses
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from armctl.estimate import JobEstimator
-from armctl.motion import MotionModel, Planner
-from armctl.profile import default_profile
-from armctl.protocol import LinearMove, RunProgram
+from armctl.core.estimate import JobEstimator
+from armctl.core.motion import MotionModel, Planner
+from armctl.host.profile import default_profile
+from armctl.core.protocol import LinearMove, RunProgram
 
 from test_lint_fastpaths import _commands
 

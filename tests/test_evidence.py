@@ -1,4 +1,4 @@
-"""armctl/evidence.py: the rules of arm evidence, once — and the places that used to restate them
+"""armctl/core/evidence.py: the rules of arm evidence, once — and the places that used to restate them
 give the answers they gave (the old code kept here as the reference)."""
 
 from __future__ import annotations
@@ -9,12 +9,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from armctl.evidence import (
+from armctl.core.evidence import (
     AGREEING_REPORTS, REST_CHECK_S, agreed, agreeing_runs, beyond_reach, known_still_s, reach, still_long_enough,
 )
-from armctl.job_control import agreed_pause
+from armctl.core.job_control import agreed_pause
 from armctl.probe.plan import Seen
-from armctl.protocol import PauseStatus
+from armctl.core.protocol import PauseStatus
 
 
 def _old_agreed_pause(reports):  # job_control.agreed_pause before issue 23

@@ -1,4 +1,4 @@
-"""Feed override (armctl/feed.py) against PROTOCOL.md's speed slots and lint's L201.
+"""Feed override (armctl/core/feed.py) against PROTOCOL.md's speed slots and lint's L201.
 
 Strategy: golden bytes written by hand (the speed slot of each scaled frame, as IEEE-754
 single little-endian; every other byte identical to the unscaled frame), then Hypothesis:
@@ -14,10 +14,10 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from armctl.feed import FeedOverride, clamp_percent, scale_speed
+from armctl.core.feed import FeedOverride, clamp_percent, scale_speed
 from armctl.lint.rules import speed_above_max
-from armctl.profile import Speeds
-from armctl.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove, PauseToggle
+from armctl.host.profile import Speeds
+from armctl.core.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove, PauseToggle
 
 SPEEDS = Speeds(max_linear_mm_min=6000.0, max_joint_deg_s=120.0, max_accel_mm_s2=3200.0, attitude_deg_s=90.0)
 POSE = dict(x_mm=200.0, y_mm=0.0, z_mm=100.0, b0_deg=180.0, b1_deg=0.0, w_deg=0.0)

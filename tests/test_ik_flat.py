@@ -1,6 +1,6 @@
 """The one flat IK solver gives the enumeration's answers bit for bit (issues 11 and 13).
 
-armctl/kinematics.py's ``_solve`` replaced two copies of the closed form (the enumerating
+armctl/core/kinematics.py's ``_solve`` replaced two copies of the closed form (the enumerating
 ``inverse``/``solutions`` the simulator used, and lint's flat ``has_solution``).  The old
 enumeration is kept, test-only, in tests/ik_reference.py; here the package's ``inverse``,
 ``solutions`` and ``has_solution`` are held to it over random poses (reachable ones from
@@ -21,8 +21,8 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import ik_reference
-from armctl.kinematics import Links, Unreachable, forward, has_solution, inverse, solutions, wrap_deg
-from armctl.kinematics_inverse import _fit, _fitted
+from armctl.core.kinematics import Links, Unreachable, forward, has_solution, inverse, solutions, wrap_deg
+from armctl.core.kinematics_inverse import _fit, _fitted
 
 LINKS = Links(base_height_mm=150, shoulder_offset_mm=30, upper_arm_mm=180, elbow_offset_mm=30, forearm_mm=180,
               tool_mm=60)

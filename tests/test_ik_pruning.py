@@ -1,6 +1,6 @@
 """The IK solver's shortcuts for the simulator's status frames change no answer (issue 11).
 
-armctl/kinematics.py's ``_solve`` (``inverse``: the simulator asks it of every joints status
+armctl/core/kinematics.py's ``_solve`` (``inverse``: the simulator asks it of every joints status
 frame, 13,372 times in benchmarks/virtual_run.py's 20-minute job) fits a joint with
 ``_fitted``'s first test inline and asks ``_fitted`` for the rest, with the cost so far and the
 best's: ``_fitted`` answers None without ``_fit`` when no answer of ``_fit`` could keep the
@@ -18,9 +18,9 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 import ik_reference
-from armctl.kinematics import Kinematics, Unreachable, wrap_deg
-from armctl.kinematics_inverse import _fit, _fitted
-from armctl.profile import default_profile
+from armctl.core.kinematics import Kinematics, Unreachable, wrap_deg
+from armctl.core.kinematics_inverse import _fit, _fitted
+from armctl.host.profile import default_profile
 
 _PROFILE = default_profile()
 _LIMITS = tuple(tuple(pair) for pair in _PROFILE.joint_limits_deg)

@@ -20,8 +20,8 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
-from armctl import link as link_module
-from armctl.cli import main
+from armctl.host import link as link_module
+from armctl.ui.cli import main
 from armctl.script import MAX_LINE_LENGTH, compile_text, read_script
 from armctl.script.source import MAX_LINES_RUN
 
@@ -387,7 +387,7 @@ BODY_LINES = ["G1 Y10", "G1 Y-10 S1500", "G91", "G90", "G1 X5", "G1 X600", "PAUS
        inner=st.lists(st.sampled_from(BODY_LINES), max_size=2), count=st.integers(0, 6), inner_count=st.integers(0, 4))
 def test_skipping_repeated_passes_never_changes_what_lint_reports(body, inner, count, inner_count):
     from armctl.lint import engine, lint_lines
-    from armctl.profile import default_profile
+    from armctl.host.profile import default_profile
 
     script = ("#<i> = 0\n#<z> = 1\n" + START + f"O<a> repeat [{count}]\n" + "\n".join(body) + "\n"
               + (f"O<b> repeat [{inner_count}]\n" + "\n".join(inner) + "\nO<b> endrepeat\n" if inner else "")

@@ -17,14 +17,13 @@ from pathlib import Path
 import pytest
 
 from armctl import Arm, JobObserver
-
 ROOT = Path(__file__).resolve().parents[1]
 VIRTUAL = "sim://?clock=virtual"
 JOB = ROOT / "scripts" / "pick_and_place.txt"
 
 
 def recording_connect(written: list, opened: list):
-    from armctl.link import connect as real_connect
+    from armctl.host.link import connect as real_connect
 
     def connect(port, baud, profile=None):
         link, baud = real_connect(port, baud, profile=profile)
@@ -52,7 +51,7 @@ def test_arm_open_names_a_wrong_argument(kwargs, error, message):
 
 
 def test_a_connect_returning_a_bare_link_is_refused_and_the_link_closed():
-    from armctl.link import connect as real_connect
+    from armctl.host.link import connect as real_connect
 
     links = []
 
@@ -61,7 +60,7 @@ def test_a_connect_returning_a_bare_link_is_refused_and_the_link_closed():
         links.append(link)
         return link  # forgot the baud
 
-    with pytest.raises(TypeError, match=r"^connect must return \(an armctl.link.Link, the baud rate\)"):
+    with pytest.raises(TypeError, match=r"^connect must return \(an armctl.host.link.Link, the baud rate\)"):
         Arm.open(VIRTUAL, connect=bare)
     assert links and not links[0].port.is_open
 
@@ -140,7 +139,7 @@ def test_a_stop_while_run_checks_the_script_ends_the_job_with_nothing_sent(monke
     """Issue 22's early window, in the API: ``stop()`` (another thread, armctl run's signal
     handler) while ``run`` reads and checks its script was not counted — the job then ran to its
     end.  It ends the job now, nothing sent, as a stop while the arm is read does."""
-    import armctl.api as api
+    import armctl.host.api as api
 
     written, opened = [], []
     real_check = api.Arm._checked

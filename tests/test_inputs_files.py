@@ -79,8 +79,8 @@ def test_stdin_and_an_output_device_still_work(place):
 
 def test_the_library_refuses_before_opening(place):
     from armctl.errors import ProfileError
-    from armctl.inputs import NotARegularFile, open_regular, read_file_bounded
-    from armctl.profile import load_profile
+    from armctl.host.inputs import NotARegularFile, open_regular, read_file_bounded
+    from armctl.host.profile import load_profile
 
     pipe = str(place / "pipe")
     with pytest.raises(NotARegularFile, match="a named pipe"):
@@ -96,7 +96,7 @@ def test_the_library_refuses_before_opening(place):
 
 def test_the_api_refuses_a_named_pipe_as_resume(place):
     from armctl import Arm
-    from armctl.inputs import NotARegularFile
+    from armctl.host.inputs import NotARegularFile
 
     with Arm.open(SIM) as arm:
         with pytest.raises(NotARegularFile, match="a named pipe"):

@@ -15,7 +15,7 @@ import sys
 import pytest
 
 from armctl.lint import lint_lines
-from armctl.profile import default_profile
+from armctl.host.profile import default_profile
 from armctl.script import compile_text
 
 ARMCTL = [sys.executable, "-m", "armctl"]

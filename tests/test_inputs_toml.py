@@ -17,7 +17,7 @@ import sys
 import pytest
 
 from armctl.errors import ProfileError
-from armctl.profile import parse_profile
+from armctl.host.profile import parse_profile
 
 ARMCTL = [sys.executable, "-m", "armctl"]
 JOB = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F6000\n"

@@ -1,4 +1,4 @@
-"""The job engine (armctl/job.py) on its own: hand-fed status frames and ``now``, no port, no
+"""The job engine (armctl/core/job.py) on its own: hand-fed status frames and ``now``, no port, no
 simulator, no thread — every test runs in milliseconds of CPU whatever the model times.
 
 A ``FakeArm`` stands for the arm: it runs each frame written for the motion model's time (it
@@ -10,16 +10,16 @@ from __future__ import annotations
 
 import pytest
 
-from armctl.job import (
+from armctl.core.job import (
     REST_CHECK_S, SETTLE_SLACK_S, Finished, Job, Outcome, RunView, Wait, Write, agreed_pause,
 )
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
-from armctl.protocol import (
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
+from armctl.core.protocol import (
     STATUS_PERIOD_S, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus,
 )
 from armctl.script import InitialState, compile_text
-from armctl.streamer import Streamer
+from armctl.core.streamer import Streamer
 
 MODEL = MotionModel(load_profile())
 START = MODEL.initial_pose()
@@ -197,14 +197,14 @@ def test_asking_again_without_news_gives_the_same_write():
 
 
 def test_the_engine_imports_no_io():
-    """armctl/job.py and the armctl modules it imports (transitively) name no clock, thread,
+    """armctl/core/job.py and the armctl modules it imports (transitively) name no clock, thread,
     port or terminal library: the engine is pure, whoever hosts it."""
     import ast
     from pathlib import Path
 
     package = Path(__file__).resolve().parent.parent / "armctl"
     forbidden = {"time", "threading", "serial", "click", "rich", "queue", "socket", "select", "signal"}
-    seen, todo = set(), ["job"]
+    seen, todo = set(), ["core.job"]
     while todo:
         name = todo.pop()
         if name in seen:
@@ -227,7 +227,7 @@ def test_the_engine_imports_no_io():
             else:
                 continue
             assert not forbidden & set(roots), f"armctl/{name}.py imports {roots}"
-    assert "protocol" in seen
+    assert "core.protocol" in seen
 
 
 # --- whatever the arm says: the engine ends, never spins, never writes the job after a stop ----
@@ -279,7 +279,7 @@ def test_the_engine_always_ends_and_never_spins(moves, stop_at_s, why, silent_af
 
 
 def test_a_port_lost_while_sending_the_abort_says_it_was_not_sent():
-    from armctl.runner import JobRunner
+    from armctl.host.runner import JobRunner
 
     class LostPort:
         """A link whose port goes away at the first abort frame."""

@@ -1,4 +1,4 @@
-"""Pause, resume and feed override of a running job (armctl/job_control.py), pure.
+"""Pause, resume and feed override of a running job (armctl/core/job_control.py), pure.
 
 Strategy: the state machine driven by hand — user requests in, the arm's (twice-agreeing)
 pause state in, and what the engine is told out: a toggle due, the feed held, the command to
@@ -11,9 +11,9 @@ from types import SimpleNamespace
 
 import pytest
 
-from armctl.job_control import JobControl, PauseState
-from armctl.profile import Speeds
-from armctl.protocol import LinearMove
+from armctl.core.job_control import JobControl, PauseState
+from armctl.host.profile import Speeds
+from armctl.core.protocol import LinearMove
 
 SPEEDS = Speeds(max_linear_mm_min=6000.0, max_joint_deg_s=120.0, max_accel_mm_s2=3200.0, attitude_deg_s=90.0)
 

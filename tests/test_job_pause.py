@@ -1,4 +1,4 @@
-"""Pause, resume and feed override through the job engine (armctl/job.py), in virtual time.
+"""Pause, resume and feed override through the job engine (armctl/core/job.py), in virtual time.
 
 Strategy: the engine drives the pure simulated arm (armctl/sim/model.py) directly — bytes
 written go to ``SimulatedArm.write``, its status bytes come back through a ``StatusReader`` —
@@ -13,13 +13,13 @@ from __future__ import annotations
 
 import pytest
 
-from armctl.job import Finished, Job, Outcome, RunView, Write
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
-from armctl.protocol import LinearMove, PauseToggle, StatusReader, decode_command
+from armctl.core.job import Finished, Job, Outcome, RunView, Write
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
+from armctl.core.protocol import LinearMove, PauseToggle, StatusReader, decode_command
 from armctl.script import InitialState, compile_text
 from armctl.sim.model import SimOptions, SimulatedArm
-from armctl.streamer import Streamer
+from armctl.core.streamer import Streamer
 
 PROFILE = load_profile()
 MODEL = MotionModel(PROFILE)

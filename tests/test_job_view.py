@@ -1,5 +1,5 @@
 """The engine's view skips a refresh only where it would change nothing: ``next_action`` at the
-time ``wrote`` refreshed it, with nothing taken or asked since (armctl/job.py ``_fresh_s``).
+time ``wrote`` refreshed it, with nothing taken or asked since (armctl/core/job.py ``_fresh_s``).
 Checked by refreshing a copy at every such skip — over virtual runs of the example scripts on
 the simulator, and over the engine's host loop with a pause, a resume and a stop."""
 
@@ -11,8 +11,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.job import Job
+from armctl.ui.cli import main
+from armctl.core.job import Job
 
 from test_job import FakeArm, drive, make_job
 

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings, strategies as st
 
 from armctl.jog.deadman import Deadman, DeadmanTiming, neutral
-from armctl.protocol import Joystick
+from armctl.core.protocol import Joystick
 
 TIMING = DeadmanTiming(initial_delay_s=0.5, repeat_gap_s=0.1, line_s=0.05)
 J1_PLUS = Joystick(0, (152,))

@@ -25,7 +25,7 @@ from pathlib import Path
 
 import pytest
 
-from armctl.protocol import JointMove, Joystick, decode_command, decode_status
+from armctl.core.protocol import JointMove, Joystick, decode_command, decode_status
 
 pytestmark = pytest.mark.realtime  # ARMCTL_SKIP_REALTIME=1 skips these (tests/conftest.py)
 
@@ -36,9 +36,9 @@ TAP_LIMIT_S = 0.5  # jog's default initial delay
 
 
 def _jog_command() -> list[str]:
-    from armctl.cli import main
+    from armctl.ui.cli import main
 
-    if "jog" in main.commands:  # registered by the lead in armctl/cli.py
+    if "jog" in main.commands:  # registered by the lead in armctl/ui/cli.py
         return [str(Path(sys.executable).with_name("armctl")), "jog"]
     return [sys.executable, "-m", "armctl.jog"]
 

@@ -13,14 +13,14 @@ from datetime import datetime, timezone
 
 import pytest
 
-from armctl.armstate import ArmState
+from armctl.core.armstate import ArmState
 from armctl.jog.deadman import neutral
 from armctl.jog.keymap import JOG_ACTIONS, default_keymap
 from armctl.jog.moves import Refused, Reported, step_move
 from armctl.jog.session import EXIT_INTERRUPTED, EXIT_OK, JogSession, Record, Send
 from armctl.jog.settings import JogSettings
 from armctl.jog.teach import taught_line
-from armctl.protocol import JointMove, Joystick, LinearMove, PauseToggle, StatusReader, frame_seconds
+from armctl.core.protocol import JointMove, Joystick, LinearMove, PauseToggle, StatusReader, frame_seconds
 from armctl.script import compile_text
 from armctl.sim import SimOptions, SimulatedArm
 

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 from armctl.jog.moves import Reported
 from armctl.jog.teach import FILE_HEADER, taught_line
 from armctl.lint import lint_lines
-from armctl.profile import default_profile
+from armctl.host.profile import default_profile
 
 WHEN = datetime(2024, 5, 1, 14, 30, 5, tzinfo=timezone(timedelta(hours=2)))
 

@@ -44,7 +44,7 @@ from hypothesis import strategies as st
 
 from armctl import Arm
 from armctl.errors import ResumeRefused
-from armctl.joblog import JournalDamaged, NotProven, read_resume_log
+from armctl.core.joblog import JournalDamaged, NotProven, read_resume_log
 from armctl.script.files import read_script
 
 from journal_crash import VIRTUAL, Crash, crash_into, make_crash, ran, sent

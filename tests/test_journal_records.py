@@ -1,4 +1,4 @@
-"""armctl/joblog.py's records and reader, pure: sealing, the intact prefix, the consistency
+"""armctl/core/joblog.py's records and reader, pure: sealing, the intact prefix, the consistency
 checks, and the proof from the arm's report (the candidates a crash leaves uncertain).
 
 Strategy: one real journal (scripts/joint_routine.txt through the API on a virtual clock, the
@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from armctl.errors import ResumeRefused
-from armctl.joblog import JournalDamaged, NotProven, read_resume_log, seal, unseal
+from armctl.core.joblog import JournalDamaged, NotProven, read_resume_log, seal, unseal
 from armctl.script.files import read_script
 
 from journal_crash import make_crash

@@ -150,7 +150,7 @@ def test_the_installed_command_fsyncs_each_frames_record_before_the_frame(tmp_pa
     log, events = tmp_path / "job.log", tmp_path / "events.txt"
     program = f"""
 import os, sys
-from armctl import link
+from armctl.host import link
 events = open({str(events)!r}, "w")
 real_fsync, real_write = os.fsync, link.Link.write
 def fsync(fd):
@@ -160,7 +160,7 @@ def write(self, frame):
     events.write("write %s\\n" % frame.hex()); events.flush()
     real_write(self, frame)
 os.fsync, link.Link.write = fsync, write
-from armctl.cli import main
+from armctl.ui.cli import main
 main(["run", {str(JOINT)!r}, "--port", {WALL!r}, "--no-live", "--log", {str(log)!r}])
 """
     env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}

@@ -19,8 +19,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.profile import find_config
+from armctl.ui.cli import main
+from armctl.host.profile import find_config
 
 SIM = "sim://?clock=virtual"
 WARNING_SCRIPT = "G1 X450 Y0 Z150 A180 B-90 C0 S1500 F3000\n"  # L103: outside the illustrative workspace (the arm still reaches it)
@@ -132,8 +132,8 @@ def test_decode_json_names_every_chunk_and_keeps_the_summary_on_stderr(tmp_path)
 @settings(max_examples=200, deadline=None)
 @given(data=st.binary(max_size=200))
 def test_decode_json_of_any_bytes_is_strict_json_lines(data):
-    from armctl.formats import bytes_from_input, chunk_record
-    from armctl.protocol import scan_frames
+    from armctl.ui.formats import bytes_from_input, chunk_record
+    from armctl.core.protocol import scan_frames
 
     text = "\n".join(json.dumps(chunk_record(chunk)) for chunk in scan_frames(bytes_from_input(data)))
     records = _strict_json_lines(text)

@@ -6,12 +6,12 @@ import pytest
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
-from armctl.kinematics import (
+from armctl.core.kinematics import (
     CartesianPose, Kinematics, Links, Unreachable, forward, has_solution, inverse, reach_problem, reachable, rotation_matrix,
     solutions, wrap_deg,
 )
-from armctl.kinematics_inverse import _fit
-from armctl.profile import parse_profile
+from armctl.core.kinematics_inverse import _fit
+from armctl.host.profile import parse_profile
 
 LINKS = Links(base_height_mm=150, shoulder_offset_mm=30, upper_arm_mm=180, elbow_offset_mm=30, forearm_mm=180,
               tool_mm=60)

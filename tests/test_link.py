@@ -1,4 +1,4 @@
-"""The port edge (armctl/link.py): which port, what an open failure says, and a Link whose port
+"""The port edge (armctl/host/link.py): which port, what an open failure says, and a Link whose port
 fails.
 
 ``resolve_port`` and ``describe_open_error`` are pure and tested on values; ``Link`` runs its
@@ -17,10 +17,10 @@ import time
 import pytest
 import serial
 
-from armctl.armstate import ArmState
+from armctl.core.armstate import ArmState
 from armctl.errors import ConfigError, PortError
-from armctl.link import SIMULATOR_URL, Link, PortChoice, describe_open_error, open_port, resolve_port
-from armctl.protocol import PositionStatus
+from armctl.host.link import SIMULATOR_URL, Link, PortChoice, describe_open_error, open_port, resolve_port
+from armctl.core.protocol import PositionStatus
 
 # --- resolve_port: --port > ARMCTL_PORT > armctl.toml > the simulator ----------------------------
 

@@ -4,9 +4,9 @@
 
 from __future__ import annotations
 
-from armctl.link import Link
-from armctl.protocol import STATUS_PERIOD_S, STATUS_SIZE
-from armctl.virtual_wait import VIRTUAL_BUILD_FRAMES
+from armctl.host.link import Link
+from armctl.core.protocol import STATUS_PERIOD_S, STATUS_SIZE
+from armctl.host.virtual_wait import VIRTUAL_BUILD_FRAMES
 
 URL = "sim://?clock=virtual"
 
@@ -73,7 +73,7 @@ def test_the_steps_of_a_run_past_the_news_are_read_by_the_next_wait_as_a_new_run
     them, for the next wait (``VirtualWaits.tail``): the same frames at the same times as timing
     each wait's run afresh, with fewer runs timed and no frame built twice; a wait's own end
     cuts them, and a write forgets them."""
-    from armctl.protocol import PauseToggle
+    from armctl.core.protocol import PauseToggle
 
     def read(keep_tails: bool):
         link, seen, news = _news_every(7)

@@ -1,6 +1,6 @@
 """``armctl lint`` as a user and CI see it: formats, exit codes, paths, stdin, bad input.
 
-The command object is invoked through a click group of our own, as armctl/cli.py will
+The command object is invoked through a click group of our own, as armctl/ui/cli.py will
 register it.  Every test runs in an empty working directory, so no armctl.toml from the
 checkout changes the profile (the default profile, unless a test writes one).
 """
@@ -76,9 +76,9 @@ def test_example_scripts_compile():
 
 
 def test_pick_and_place_takes_20_to_40_seconds_of_arm_time():
-    estimate = pytest.importorskip("armctl.estimate")
-    from armctl.motion import MotionModel
-    from armctl.profile import default_profile
+    estimate = pytest.importorskip("armctl.core.estimate")
+    from armctl.core.motion import MotionModel
+    from armctl.host.profile import default_profile
     from armctl.script import compile_file
 
     model = MotionModel(default_profile())

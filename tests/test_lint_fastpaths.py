@@ -24,16 +24,16 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from armctl import kinematics_regions
-from armctl.kinematics import (
+from armctl.core import kinematics_regions
+from armctl.core.kinematics import (
     SolvableCells, Unreachable, ball_has_solution, box_problem, forward, has_solution, inverse,
 )
-from armctl.profile import Workspace
+from armctl.host.profile import Workspace
 from armctl.lint.engine import lint_lines
-from armctl.motion import MotionModel, Planner
-from armctl.profile import default_profile, load_profile
+from armctl.core.motion import MotionModel, Planner
+from armctl.host.profile import default_profile, load_profile
 from armctl.script.files import iter_lines
-from armctl.protocol import ArcEnd, ArcStart, Delay, JointMove, LinearMove, SetWorktableOrigin
+from armctl.core.protocol import ArcEnd, ArcStart, Delay, JointMove, LinearMove, SetWorktableOrigin
 
 ROOT = Path(__file__).resolve().parents[1]
 PROFILE = default_profile()

@@ -1,4 +1,4 @@
-"""Lint judges a job's motion time as run and estimate do (E012, armctl/estimate.py
+"""Lint judges a job's motion time as run and estimate do (E012, armctl/core/estimate.py
 ``motion_time_overrun``), in time that follows the text: a delay or an external-axis value that
 would keep the arm busy for days, and a loop that adds up past the bound."""
 
@@ -9,7 +9,7 @@ from click.testing import CliRunner
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from armctl.cli import main
+from armctl.ui.cli import main
 from armctl.script.source import MAX_JOB_MOTION_S
 
 FIRST = "G1 X250 Y0 Z150 A180 B0 C0 S1500 F3000\n"

@@ -12,8 +12,8 @@ from click.testing import CliRunner
 
 import armctl.lint.engine as engine
 from armctl import Arm
-from armctl.cli import main
-from armctl.checked import check
+from armctl.ui.cli import main
+from armctl.core.checked import check
 from armctl.script.files import ScriptSnapshot
 
 pytestmark = pytest.mark.timeout(60)
@@ -63,6 +63,6 @@ def test_a_checked_script_is_taken_as_it_is_and_another_check_made_afresh(passes
 
 
 def test_no_module_holds_a_check():
-    import armctl.jobflow as jobflow
+    import armctl.host.jobflow as jobflow
 
     assert not hasattr(jobflow, "_last_lint") and not hasattr(jobflow, "lint_script")

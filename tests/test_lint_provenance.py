@@ -16,9 +16,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
+from armctl.ui.cli import main
 from armctl.lint import lint_lines
-from armctl.profile import ILLUSTRATIVE, PROTOCOL, default_profile, load_profile, parse_profile
+from armctl.host.profile import ILLUSTRATIVE, PROTOCOL, default_profile, load_profile, parse_profile
 
 FAST_SIM = "sim://?clock=virtual"
 TIMEOUT_S = 60  # bounds a hang on a loaded machine; not a speed assertion

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from armctl.lint import RULES, Selection, lint_lines
-from armctl.profile import default_profile, load_profile
+from armctl.host.profile import default_profile, load_profile
 from armctl.script import iter_lines
 
 DATA = Path(__file__).parent / "data" / "lint"

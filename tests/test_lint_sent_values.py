@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from armctl.lint.engine import lint_lines
-from armctl.profile import load_profile
-from armctl.protocol import as_f32
+from armctl.host.profile import load_profile
+from armctl.core.protocol import as_f32
 
 EDGE = st.one_of(
     st.floats(min_value=2499.99, max_value=2500.01), st.floats(min_value=499.99, max_value=500.01),

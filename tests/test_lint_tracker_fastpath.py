@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from armctl.lint.tracker import ArmTracker
-from armctl.profile import default_profile
+from armctl.host.profile import default_profile
 from armctl.script import compile_lines
 
 PROFILE = default_profile()

@@ -6,12 +6,12 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from armctl.motion import (
+from armctl.core.motion import (
     TINY_MM,
     ArmPose, MotionModel, Planner, arc_through, circle_through, distance_to_path, on_path,
 )
-from armctl.profile import parse_profile
-from armctl.protocol import (
+from armctl.host.profile import parse_profile
+from armctl.core.protocol import (
     AccelLinearMove, ArcEnd, ArcStart, Delay, GoToPose, JointMove, LinearMove, MCode, PauseToggle, ResetArm,
     SetWorktableOrigin,
 )
@@ -437,7 +437,7 @@ def test_planner_chains_segments_end_to_start(points, factor):
 def _composed_line_distance(segment, p):
     """LineSegment._distance_xyz as it was composed of the vector helpers (before it was
     written out for the streamer's every position report): the reference it must equal."""
-    from armctl.motion_paths import dot3, norm3, sub3
+    from armctl.core.motion_paths import dot3, norm3, sub3
 
     if not segment.length:
         return norm3(sub3(p, segment._p0)), 0.0
@@ -452,7 +452,7 @@ _ANY_FLOAT = st.one_of(st.floats(-1e3, 1e3), st.sampled_from([0.0, -0.0, 1e-300,
 @given(st.tuples(_ANY_FLOAT, _ANY_FLOAT, _ANY_FLOAT), st.tuples(_ANY_FLOAT, _ANY_FLOAT, _ANY_FLOAT),
        st.one_of(st.floats(1e-3, 400.0), st.sampled_from([100.0, 1e-200])), st.tuples(_ANY_FLOAT, _ANY_FLOAT, _ANY_FLOAT))
 def test_a_line_distance_is_the_vector_helpers_float_for_float(p0, d, length, p):
-    from armctl.motion import LineSegment
+    from armctl.core.motion import LineSegment
 
     segment = LineSegment.__new__(LineSegment)  # only the fields _distance_xyz reads
     segment._p0, segment._d, segment.length = p0, d, length

@@ -9,9 +9,9 @@ import struct
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from armctl.frame_fields import FLOAT_CODEC, slot_offset
-from armctl.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove
-from armctl.protocol import decode_command as decode
+from armctl.core.frame_fields import FLOAT_CODEC, slot_offset
+from armctl.core.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove
+from armctl.core.protocol import decode_command as decode
 
 KINDS = (LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Delay)
 

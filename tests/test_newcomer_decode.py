@@ -21,10 +21,10 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from armctl import decode
-from armctl.decode import FrameScanner, decode_stream
-from armctl.formats import decoded_record, describe_decoded
-from armctl.protocol import scan_frames
+from armctl.ui import decode
+from armctl.ui.decode import FrameScanner, decode_stream
+from armctl.ui.formats import decoded_record, describe_decoded
+from armctl.core.protocol import scan_frames
 
 ARMCTL = Path(sys.executable).with_name("armctl")
 STATUS = bytes.fromhex("ce083400000bb800cf")

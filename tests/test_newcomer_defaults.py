@@ -15,8 +15,8 @@ import sys
 import pytest
 
 from armctl import Arm, ScriptError
-from armctl.profile import default_profile, parse_profile
-from armctl.protocol import JointMove, LinearMove
+from armctl.host.profile import default_profile, parse_profile
+from armctl.core.protocol import JointMove, LinearMove
 
 VIRTUAL = "sim://?clock=virtual"
 

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
+from armctl.ui.cli import main
 
 ARMCTL = Path(sys.executable).with_name("armctl")
 VIRTUAL = "sim://?clock=virtual"

@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from armctl import Arm
-from armctl.profile import default_profile
+from armctl.host.profile import default_profile
 
 ARMCTL = Path(sys.executable).with_name("armctl")
 VIRTUAL = "sim://?clock=virtual"

@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from armctl import folders
-from armctl.folders import user_folder
+from armctl.host import folders
+from armctl.host.folders import user_folder
 
 ROOT = Path(__file__).resolve().parents[1]
 ARMCTL = Path(sys.executable).with_name("armctl")

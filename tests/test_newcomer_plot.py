@@ -16,10 +16,10 @@ pytest.importorskip("matplotlib", reason="needs the plot extra: pip install -e '
 from matplotlib.backends.backend_agg import FigureCanvasAgg  # noqa: E402
 
 from armctl.lint.engine import lint_lines  # noqa: E402
-from armctl.motion import MotionModel  # noqa: E402
+from armctl.core.motion import MotionModel  # noqa: E402
 from armctl.plot.path import build_path  # noqa: E402
 from armctl.plot.static import figure  # noqa: E402
-from armctl.profile import default_profile  # noqa: E402
+from armctl.host.profile import default_profile  # noqa: E402
 from armctl.script import compile_file, compile_text  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]

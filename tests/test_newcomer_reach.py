@@ -12,9 +12,9 @@ from pathlib import Path
 import pytest
 
 from armctl import Arm, ScriptError
-from armctl.checked import check
+from armctl.core.checked import check
 from armctl.lint.rules import IMPLAUSIBLE_REACH_FACTOR
-from armctl.profile import default_profile
+from armctl.host.profile import default_profile
 from armctl.script import ScriptSnapshot
 
 ARMCTL = Path(sys.executable).with_name("armctl")

@@ -17,8 +17,6 @@ import armctl
 ROOT = Path(__file__).resolve().parents[1]
 USER_PROGRAM = '''
 from armctl import Arm, ArmTimeout, JobFailed, RunResult, ScriptError
-
-
 def lift(port: str) -> RunResult | None:
     with Arm.open(port) as arm:
         result = arm.move(z=200)

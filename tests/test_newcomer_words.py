@@ -108,7 +108,7 @@ def test_status_watch_json_starts_complete_and_carries_time(tmp_path):
 def test_the_text_summary_prints_the_explanation_under_the_arm_time(capsys):
     from types import SimpleNamespace
 
-    from armctl.api import RunResult
+    from armctl.host.api import RunResult
     from armctl.ui.run_job import JobOptions, _summary
 
     result = RunResult("finished", 8, 8, 8, 8, 31.2, 18.1, None)

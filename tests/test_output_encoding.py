@@ -14,7 +14,7 @@ import sys
 
 import pytest
 
-from armctl.protocol import AccelLinearMove
+from armctl.core.protocol import AccelLinearMove
 
 # A comment with characters no 8-bit code page holds, a finding whose message has …,
 # and (through decode/dry-run) units with µ and ².

@@ -155,7 +155,7 @@ def test_the_wheel_is_armctl_serial_with_the_armctl_command_and_package(wheel):
     headers, entry_points = _metadata(wheel_file)
     assert headers["Name"] == [DISTRIBUTION]
     assert headers["Version"] == ["0.1.0"]
-    assert "[console_scripts]\narmctl = armctl.cli:main" in entry_points  # the command keeps its name
+    assert "[console_scripts]\narmctl = armctl.ui.cli:main" in entry_points  # the command keeps its name
     assert headers.get("License-Expression") == ["MIT"]  # SPDX (PEP 639), not the deprecated table
     assert headers["Requires-Python"] == [">=3.11"]
     classifiers = headers["Classifier"]
@@ -176,7 +176,7 @@ def test_the_pyproject_names_no_invented_urls():
     users (and the index page) somewhere that is not this project."""
     project = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
     assert project["name"] == DISTRIBUTION
-    assert project["scripts"] == {"armctl": "armctl.cli:main"}
+    assert project["scripts"] == {"armctl": "armctl.ui.cli:main"}
     for url in project.get("urls", {}).values():
         assert "<" not in url and "example" not in url, url
 
@@ -198,7 +198,7 @@ def test_the_wheels_command_line_compiles_outside_the_repository(wheel, tmp_path
     script = tmp_path / "job.txt"
     script.write_text(SMALL_SCRIPT)
     code = ("import sys; sys.meta_path[:] = [f for f in sys.meta_path if '__editable__' not in "
-            "getattr(f, '__module__', '')]; from armctl.cli import main; main()")
+            "getattr(f, '__module__', '')]; from armctl.ui.cli import main; main()")
     done = subprocess.run([PYTHON, "-c", code, "compile", "job.txt"], capture_output=True, text=True, cwd=tmp_path,
                           env={**os.environ, "PYTHONPATH": str(target)}, timeout=60)
     assert done.returncode == 0, done.stderr
@@ -219,7 +219,7 @@ HEAVY = ("lark", "rich", "serial")
 def test_help_does_not_import_lark_rich_or_serial(tmp_path):
     code = (
         "import sys\n"
-        "from armctl.cli import main\n"
+        "from armctl.ui.cli import main\n"
         "main(['--help'], standalone_mode=False)\n"
         f"heavy = sorted(m for m in sys.modules if m.split('.')[0] in {HEAVY!r})\n"
         "print('HEAVY', heavy)\n"

@@ -8,12 +8,12 @@ from __future__ import annotations
 
 from rich.console import Console
 
-from armctl.armstate import STALE_AFTER_S, ArmState
-from armctl.protocol import (
+from armctl.core.armstate import STALE_AFTER_S, ArmState
+from armctl.core.protocol import (
     FileLengthStatus, FileStatus, JointsHighStatus, JointsLowStatus, PauseStatus, PositionStatus, RunPositionStatus,
     WorktableStatus, WristStatus,
 )
-from armctl.runner import RunView
+from armctl.host.runner import RunView
 from armctl.script import compile_text
 from armctl.ui.run_panel import progress_line, render_run
 from armctl.ui.status_panel import LinkHealth, render_status, status_line

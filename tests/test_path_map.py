@@ -24,9 +24,9 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from rich.console import Console
 
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
-from armctl.runner import RunView
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
+from armctl.host.runner import RunView
 from armctl.script import compile_text
 from armctl.ui.path_map import (
     ARM, ARM_GLYPH, DONE, EMPTY, MAP_HEIGHT_ROWS, MAP_WIDTH_CHARS, QUEUED, TODO, job_grid, rasterise,
@@ -288,7 +288,7 @@ def test_armctl_run_on_a_terminal_shows_the_map_and_hides_it_when_narrow_or_not_
 def test_armctl_run_in_process_without_a_terminal_draws_no_map():
     from click.testing import CliRunner
 
-    from armctl.cli import main
+    from armctl.ui.cli import main
 
     result = CliRunner().invoke(main, ["run", str(ROOT / "scripts" / "draw_square_circle.txt"),
                                        "--port", "sim://?clock=virtual"], env={"ARMCTL_PORT": None})

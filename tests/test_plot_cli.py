@@ -21,7 +21,7 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
+from armctl.ui.cli import main
 
 ROOT = Path(__file__).resolve().parents[1]
 SQUARE = ROOT / "scripts" / "draw_square_circle.txt"
@@ -85,7 +85,7 @@ def traces_of(traces, what):
 def test_help_lists_plot_and_imports_no_plotting_library():
     done = subprocess.run(
         [sys.executable, "-c",
-         "import sys\nfrom armctl.cli import main\n"
+         "import sys\nfrom armctl.ui.cli import main\n"
          "try:\n    main(['--help'])\nexcept SystemExit:\n    pass\n"
          "print('LOADED', sorted(m for m in ('plotly', 'matplotlib') if m in sys.modules))"],
         capture_output=True, text=True, timeout=60)

@@ -18,12 +18,12 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from armctl.lint.engine import lint_lines
-from armctl.motion import MotionModel
+from armctl.core.motion import MotionModel
 from armctl.plot.path import (
     APPROXIMATE_NOTE, ARC_STEP_DEG, JOINT_MIN_STEPS, JOINT_STEP_DEG, KINDS, build_path, place_findings,
 )
 from armctl.plot.style import KIND_COLORS
-from armctl.profile import default_profile
+from armctl.host.profile import default_profile
 from armctl.script import compile_file, compile_text
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -14,12 +14,12 @@ import sys
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.posix_terminal import NeedsPosixTerminal, require_posix_terminal
+from armctl.ui.cli import main
+from armctl.host.posix_terminal import NeedsPosixTerminal, require_posix_terminal
 
 NO_TERMIOS = ("import sys, armctl, serial  # armctl first: it hooks the sim:// scheme into pyserial\n"
               "sys.modules['termios'] = None; sys.modules['tty'] = None\n")
-CLI = NO_TERMIOS + "from armctl.cli import main; main(prog_name='armctl')\n"
+CLI = NO_TERMIOS + "from armctl.ui.cli import main; main(prog_name='armctl')\n"
 
 
 def without_termios(code: str, *args: str, tmp_path) -> subprocess.CompletedProcess:

@@ -19,13 +19,13 @@ import pytest
 from click.testing import CliRunner
 from hypothesis import given, settings, strategies as st
 
-from armctl.cli import main
-from armctl.link import Link
+from armctl.ui.cli import main
+from armctl.host.link import Link
 from armctl.probe import SETTINGS, build_probe
 from armctl.probe.host import FrameInbox, drive
 from armctl.probe.toml_edit import updated
-from armctl.profile import load_profile
-from armctl.protocol import JointMove, decode_command
+from armctl.host.profile import load_profile
+from armctl.core.protocol import JointMove, decode_command
 
 VIRTUAL = "sim://?clock=virtual"
 ARM_TIME_LIMIT_S = 180.0
@@ -216,7 +216,7 @@ def test_a_moving_arm_is_left_alone():
 
 
 def test_a_paused_arm_is_left_alone():
-    from armctl.protocol import PauseToggle
+    from armctl.core.protocol import PauseToggle
 
     probe, model, port = probe_sim(before=[PauseToggle().encode()])
     assert probe.stopped is not None and "paused" in str(probe.stopped)

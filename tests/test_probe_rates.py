@@ -26,13 +26,13 @@ import pytest
 import serial
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.link import Link
+from armctl.ui.cli import main
+from armctl.host.link import Link
 from armctl.probe import build_probe
 from armctl.probe.host import FrameInbox, drive
-from armctl.profile import load_profile
+from armctl.host.profile import load_profile
 from armctl.probe.motion import JOINT_SPEED_DEG_S
-from armctl.protocol import STATUS_PERIOD_S, Delay, JointMove, decode_command
+from armctl.core.protocol import STATUS_PERIOD_S, Delay, JointMove, decode_command
 from test_probe import assert_as_found
 
 RATES = (9600, 38400, 57600, 115200)

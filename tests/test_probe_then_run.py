@@ -12,7 +12,7 @@ import tomllib
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
+from armctl.ui.cli import main
 from test_resume_exactly_once import STOP_AFTER_FRAMES, _job, _job_targets, _open_one_arm, _stop_after, _targets_done
 
 ARMS = ["fifo_frames=50&control_frames=arrival&status_xyz_frame=robot&speed_factor=1.3",

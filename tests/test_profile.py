@@ -6,7 +6,7 @@ from importlib import resources
 import pytest
 
 from armctl.errors import ConfigError, ProfileError
-from armctl.profile import (
+from armctl.host.profile import (
     Profile, default_profile, find_config, load_profile, parse_profile, read_toml,
 )
 

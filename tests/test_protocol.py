@@ -17,7 +17,7 @@ from hypothesis import HealthCheck, example, given, settings
 from hypothesis import strategies as st
 
 from armctl.errors import ArmctlError, FieldError, FrameError
-from armctl.protocol import (
+from armctl.core.protocol import (
     CONTROL_COMMANDS,
     MOTION_COMMANDS,
     STATUS_KINDS,

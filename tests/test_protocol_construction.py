@@ -12,7 +12,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from armctl.errors import FieldError
-from armctl.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove
+from armctl.core.protocol import AccelLinearMove, ArcEnd, ArcStart, Delay, JointMove, LinearMove
 
 
 class _Slow(float):
@@ -98,7 +98,7 @@ def test_from_fields_with_every_float_field_a_float(cls, data):
 
 
 def test_shared_eq_hash_repr_are_the_dataclass_ones(all_command_vectors):
-    """Commands are records (armctl/records.py: __eq__, __hash__ and __repr__ shared; the dataclass module
+    """Commands are records (armctl/core/records.py: __eq__, __hash__ and __repr__ shared; the dataclass module
     compiles each generated method separately); they answer as the generated ones would, on
     every golden command, against a frozen dataclass with the same fields."""
     import dataclasses

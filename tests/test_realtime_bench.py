@@ -15,9 +15,9 @@ from click.testing import CliRunner
 
 from armctl.bench.realtime import _job_figures, abort_figures, moving_frames
 from armctl.bench.scenarios import tiny_moves, true_durations_s
-from armctl.cli import main
-from armctl.link import Link
-from armctl.protocol import frame_seconds
+from armctl.ui.cli import main
+from armctl.host.link import Link
+from armctl.core.protocol import frame_seconds
 from armctl.sim.model import SimOptions
 
 

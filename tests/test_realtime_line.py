@@ -11,14 +11,14 @@ import pytest
 import serial
 
 import armctl  # noqa: F401  (registers sim://)
-from armctl.link import Link
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
-from armctl.protocol import FRAME_SIZE, LinearMove, frame_seconds
+from armctl.host.link import Link
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
+from armctl.core.protocol import FRAME_SIZE, LinearMove, frame_seconds
 from armctl.sim.model import SimOptions, SimulatedArm
 from armctl.sim.protocol_sim import SimOptionError, parse_sim_url
 from armctl.sim.realtime import RealtimeArm
-from armctl.streamer import Streamer, WaitReason
+from armctl.core.streamer import Streamer, WaitReason
 
 
 def test_the_two_options_parse_with_their_units_and_ranges():

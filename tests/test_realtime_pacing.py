@@ -13,9 +13,9 @@ import sys
 import pytest
 
 from armctl import Arm
-from armctl.clock import Clock
-from armctl.link import READ_TIMEOUT_S, Link
-from armctl.protocol import frame_seconds
+from armctl.host.clock import Clock
+from armctl.host.link import READ_TIMEOUT_S, Link
+from armctl.core.protocol import frame_seconds
 
 TINY_200 = "\n".join(["G90", "G1 X250 Y0 Z250 A180 B0 C0 S1500 F6000"] + [f"G1 X{250 + i % 2}" for i in range(1, 200)])
 

@@ -13,9 +13,9 @@ import pytest
 
 from armctl.bench.realtime import abort_figures, drive_on, moving_frames
 from armctl.bench.scenarios import mixed_job, true_durations_s
-from armctl.link import Link, plausible_state
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
+from armctl.host.link import Link, plausible_state
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
 from armctl.sim.protocol_sim import parse_sim_url
 from armctl.sim.stats import sim_stats
 

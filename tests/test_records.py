@@ -1,4 +1,4 @@
-"""armctl/records.py: ``record`` builds a dataclass without compiling its methods at import
+"""armctl/core/records.py: ``record`` builds a dataclass without compiling its methods at import
 (start-up) — checked here against twins made by ``dataclass`` itself: construction, equality,
 hashing, repr, frozenness, pickling, ``replace`` and subclassing."""
 
@@ -14,7 +14,7 @@ import pytest
 from hypothesis import given
 from hypothesis import strategies as st
 
-from armctl.records import record
+from armctl.core.records import record
 from armctl.script.nodes import CodeLine
 from armctl.script.source import SourceSpan
 

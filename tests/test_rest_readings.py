@@ -9,14 +9,14 @@ frame the arm was still running."""
 
 import copy
 
-from armctl.armstate import ArmState
-from armctl.job import REST_CHECK_S, Finished, Job, Outcome, RunView, Write
-from armctl.jobflow import wait_for_rest
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
-from armctl.protocol import JointsHighStatus, JointsLowStatus, PauseStatus, PositionStatus
+from armctl.core.armstate import ArmState
+from armctl.core.job import REST_CHECK_S, Finished, Job, Outcome, RunView, Write
+from armctl.host.jobflow import wait_for_rest
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
+from armctl.core.protocol import JointsHighStatus, JointsLowStatus, PauseStatus, PositionStatus
 from armctl.script import InitialState, compile_text
-from armctl.streamer import Streamer
+from armctl.core.streamer import Streamer
 
 MODEL = MotionModel(load_profile())
 START = MODEL.initial_pose()

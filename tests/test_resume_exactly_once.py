@@ -3,7 +3,7 @@ across the two ``armctl run``s, execute every line of the job exactly once — i
 modes (``control_frames`` queued = H5, or arrival) and both abort sequences (pause,
 reset-connector).  Virtual time.
 
-One arm across two runs: ``armctl.link.open_port`` is wrapped so the second open of the same
+One arm across two runs: ``armctl.host.link.open_port`` is wrapped so the second open of the same
 ``sim://`` URL returns the same port (reopened: the simulated arm, its FIFO, its pause state and
 its virtual clock carry on), the way the same cable reaches the same arm.
 
@@ -24,10 +24,10 @@ from click.testing import CliRunner
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-import armctl.link
-import armctl.runner
-from armctl.cli import main
-from armctl.protocol import JointMove, LinearMove, PauseToggle, ResetConnector
+import armctl.host.link
+import armctl.host.runner
+from armctl.ui.cli import main
+from armctl.core.protocol import JointMove, LinearMove, PauseToggle, ResetConnector
 from armctl.sim.executor import DONE
 
 STOP_AFTER_FRAMES = 14
@@ -51,7 +51,7 @@ def one_arm(tmp_path, monkeypatch):
 
 def _open_one_arm(monkeypatch) -> dict:
     ports: dict = {}
-    real_open = armctl.link.open_port
+    real_open = armctl.host.link.open_port
 
     def open_port(url, *args, **kwargs):
         port = ports.get(url)
@@ -61,13 +61,13 @@ def _open_one_arm(monkeypatch) -> dict:
             port.is_open = True  # the same arm, still where the first run left it
         return port
 
-    monkeypatch.setattr(armctl.link, "open_port", open_port)
+    monkeypatch.setattr(armctl.host.link, "open_port", open_port)
     return ports
 
 
 def _stop_after(monkeypatch, frames: int) -> None:
     """Ctrl-C (the runner's request_stop) once ``frames`` frames are sent — in the first run only."""
-    real_drain = armctl.runner.JobRunner._drain
+    real_drain = armctl.host.runner.JobRunner._drain
     asked = []
 
     def drain(self):
@@ -76,7 +76,7 @@ def _stop_after(monkeypatch, frames: int) -> None:
             self.request_stop()
         real_drain(self)
 
-    monkeypatch.setattr(armctl.runner.JobRunner, "_drain", drain)
+    monkeypatch.setattr(armctl.host.runner.JobRunner, "_drain", drain)
 
 
 def _targets_done(arm) -> list[tuple]:
@@ -142,11 +142,11 @@ def test_the_arm_left_paused_with_a_queue_on_arrival_is_cleared_before_the_toggl
     """Today's failure (issue 9): an arrival arm paused with line 9 still queued; ``--from-line 8``
     sent the toggle (the arm ran its queued 9), then 8 and 9 again.  Now the start of the run
     clears the queue first (RESET CONNECTOR acts as it lands), then resumes."""
-    from armctl.protocol import LinearMove as Move
+    from armctl.core.protocol import LinearMove as Move
 
     (tmp_path / "armctl.toml").write_text('[connector]\ncontrol_frames = "arrival"\n', encoding="utf-8")
     url = "sim://?clock=virtual&control_frames=arrival"
-    port = armctl.link.open_port(url)
+    port = armctl.host.link.open_port(url)
     arm, clock = port.model, port.virtual_clock
     moves = [Move(200.0, 0.0, 250.0, 180.0, 0.0, 0.0, 1500.0, 3000.0),
              Move(230.0, 0.0, 250.0, 180.0, 0.0, 0.0, 1500.0, 600.0),

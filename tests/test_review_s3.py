@@ -27,7 +27,7 @@ from pathlib import Path
 
 import pytest
 
-from armctl.joblog import NotProven, read_resume_log
+from armctl.core.joblog import NotProven, read_resume_log
 from armctl.script.files import read_script
 
 ROOT = Path(__file__).resolve().parent.parent

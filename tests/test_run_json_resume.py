@@ -25,11 +25,11 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.api import RunResult
-from armctl.cli import main
+from armctl.host.api import RunResult
+from armctl.ui.cli import main
 from armctl.errors import ResumeRefused
-from armctl.joblog import FrameEntry, NotProven, ResumePoint, read_resume_log
-from armctl.protocol import decode_command
+from armctl.core.joblog import FrameEntry, NotProven, ResumePoint, read_resume_log
+from armctl.core.protocol import decode_command
 from armctl.sim.bridge import serve_pty
 from armctl.sim.model import SimOptions, SimulatedArm
 
@@ -80,7 +80,6 @@ def test_json_lines_in_process():
 def test_json_summary_is_the_api_result_of_the_same_job():
     """One engine, one result: the same job on the same simulator gives the same object."""
     from armctl import Arm
-
     cli = CliRunner().invoke(main, ["run", str(SHORT), "--port", FAST_SIM, "--json"])
     summary = _check_stream(_events(cli.stdout))
     del summary["event"]

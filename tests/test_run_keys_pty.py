@@ -16,7 +16,7 @@ from pathlib import Path
 
 import pytest
 
-from armctl.protocol import LinearMove, PauseToggle, decode_command, decode_status
+from armctl.core.protocol import LinearMove, PauseToggle, decode_command, decode_status
 from test_jog_pty import JogOnPty  # the pty plumbing
 
 pytestmark = pytest.mark.realtime  # ARMCTL_SKIP_REALTIME=1 skips these (tests/conftest.py)

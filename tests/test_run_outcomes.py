@@ -14,13 +14,13 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.estimate import JobEstimator
-from armctl.link import config_baud, plausible_state
-from armctl.motion import MotionModel
-from armctl.profile import load_profile
-from armctl.protocol import Delay
-from armctl.jobflow import outermost_block_start
+from armctl.ui.cli import main
+from armctl.core.estimate import JobEstimator
+from armctl.host.link import config_baud, plausible_state
+from armctl.core.motion import MotionModel
+from armctl.host.profile import load_profile
+from armctl.core.protocol import Delay
+from armctl.host.jobflow import outermost_block_start
 
 START = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F6000\n"
 
@@ -84,7 +84,7 @@ def test_the_summary_of_a_job_stopped_in_a_repeat_block_says_the_passes_done_run
     """The text summary reads the job's RunResult (the --json summary) and adds the note."""
     from types import SimpleNamespace
 
-    from armctl.api import RunResult
+    from armctl.host.api import RunResult
     from armctl.ui import run_job
 
     result = RunResult("interrupted", 3, 9, 4, 4, None, 2.0, 2, "armctl run loops.txt --from-line 2", ("stopped",), 130)
@@ -188,7 +188,7 @@ def test_an_sd_program_longer_than_the_estimate_is_waited_for_and_reported(tmp_p
 
 
 def test_jitter_in_the_readings_is_not_taken_for_motion():
-    from armctl.runner import _moved_clearly
+    from armctl.host.runner import _moved_clearly
 
     here = ((200.0, 0.0, 150.0), (0.0, 10.0, 20.0), (0.0, 90.0, 0.0))
     assert not _moved_clearly(here, ((200.3, -0.2, 150.1), (0.1, 10.0, 19.9), (0.0, 90.1, 0.0)))
@@ -213,7 +213,6 @@ def test_a_stopped_job_resumes_at_the_repeat_line_however_the_grammar_lets_it_be
     # resume line must move out of the block for them too (one rule for what a repeat line is:
     # lint/scan.py's, which follows the grammar): a line inside the block cannot start a job.
     from armctl import Arm, ArmTimeout
-
     script = START + f"{opening}\nG1 Y50 F600\nG1 Y-50\n{closing}\nG1 Z100\n"
     with Arm.open("sim://?clock=virtual") as arm:
         with pytest.raises(ArmTimeout) as stopped:

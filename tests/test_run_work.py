@@ -12,8 +12,8 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.motion import MotionModel, Planner
+from armctl.ui.cli import main
+from armctl.core.motion import MotionModel, Planner
 from armctl.script.execute import StatementExecution
 
 pytestmark = pytest.mark.timeout(60)

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from armctl.protocol import AccelLinearMove, ArcStart, GoToPose, JointMove, LinearMove, MCode
+from armctl.core.protocol import AccelLinearMove, ArcStart, GoToPose, JointMove, LinearMove, MCode
 from armctl.script import compile_file
 
 DATA = Path(__file__).parent / "data" / "scripts"

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import pytest
 
-from armctl.protocol import AccelLinearMove, JointMove, LinearMove
+from armctl.core.protocol import AccelLinearMove, JointMove, LinearMove
 from armctl.script import InitialState, compile_text
 
 POSE = "X1 Y2 Z3 A4 B5 C6"

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pytest
 
-from armctl.protocol import (
+from armctl.core.protocol import (
     AccelLinearMove, ArcEnd, ArcStart, Delay, GoToPose, JointMove, LinearMove, MCode, PauseToggle, ResetArm,
     ResetConnector, RunProgram, SetWorktableOrigin, StructureMode,
 )

@@ -180,7 +180,7 @@ def test_a_job_survives_a_crashed_server_and_the_next_one_resumes_it_from_its_jo
 
 
 def test_serve_without_the_extra_names_the_pip_command_and_exits_2():
-    code = "import sys; sys.modules['aiohttp'] = None; from armctl.cli import main; main(['serve'])"
+    code = "import sys; sys.modules['aiohttp'] = None; from armctl.ui.cli import main; main(['serve'])"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=30)
     assert done.returncode == 2
     assert "pip install 'armctl-serial[serve]'" in done.stderr
@@ -220,7 +220,7 @@ def test_requests_from_many_threads_at_once_all_answered(server):
 
 
 def test_a_body_over_the_script_size_limit_is_413(server):
-    from armctl.inputs import MAX_INPUT_BYTES
+    from armctl.host.inputs import MAX_INPUT_BYTES
 
     status, answer = server.request("POST", "/api/arms/a/lint", b"; " + bytes(MAX_INPUT_BYTES), timeout=60)
     assert status == 413 and answer["code"] == "too_large"

@@ -14,7 +14,7 @@ pytest.importorskip("aiohttp", reason="the serve extra (aiohttp) is not installe
 
 from serve_process import served  # noqa: E402
 
-from armctl.api import RunResult  # noqa: E402
+from armctl.host.api import RunResult  # noqa: E402
 
 pytestmark = [pytest.mark.realtime, pytest.mark.timeout(120)]
 

@@ -5,7 +5,7 @@ SIGHUP -1).  Now the program takes the three signals at its first line: exit 130
 The signal must land at a known point, on any machine however loaded, so the child sends it to
 itself: a ``sitecustomize`` module (on PYTHONPATH, imported by Python's start-up before any of
 armctl's code) puts a finder on ``sys.meta_path`` that calls ``os.kill(getpid(), SIGNAL)`` the
-moment a chosen module is first imported — ``click`` (armctl.cli's imports, before any command),
+moment a chosen module is first imported — ``click`` (armctl.ui.cli's imports, before any command),
 ``armctl.ui.run_job`` (inside ``run``, before the port opens) or ``serial`` (the port opening).
 The test runner's own signal handling plays no part: the signal is the child's, to itself.
 Through the installed command and ``python -m armctl``, each in a fresh process.
@@ -77,9 +77,9 @@ def test_the_trip_really_fires(tmp_path):
 
 
 def test_importing_the_cli_installs_no_handler():
-    """The library (a test, a user's script importing armctl.cli) keeps its own handlers."""
+    """The library (a test, a user's script importing armctl.ui.cli) keeps its own handlers."""
     code = ("import signal; before = {s: signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)}; "
-            "import armctl.cli, armctl; armctl.Arm; "
+            "import armctl.ui.cli, armctl; armctl.Arm; "
             "assert before == {s: signal.getsignal(s) for s in before}, 'changed'")
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=TIMEOUT_S)
     assert done.returncode == 0, done.stderr
@@ -88,13 +88,13 @@ def test_importing_the_cli_installs_no_handler():
 # A signal while `arm.run` checks the script (run's own handlers are in place, the job is not yet
 # registered): SIGTERM and SIGHUP called arm.stop(), which the API did not count before the job
 # existed — the job then ran to its end and exited 0.  The child sends the signal from inside
-# armctl.api.Arm._checked (run's check of the script it is handed), patched in when armctl.api loads.
+# armctl.host.api.Arm._checked (run's check of the script it is handed), patched in when armctl.host.api loads.
 CHECK_TRIP = '''
 import importlib.abc, importlib.util, os, signal, sys
 
 class _PatchCheck(importlib.abc.MetaPathFinder):
     def find_spec(self, name, path=None, target=None):
-        if name != "armctl.api":
+        if name != "armctl.host.api":
             return None
         sys.meta_path.remove(self)
         spec = importlib.util.find_spec(name)

@@ -7,9 +7,9 @@ import math
 
 import pytest
 
-from armctl.motion import MotionModel, arc_through
-from armctl.profile import default_profile
-from armctl.protocol import (
+from armctl.core.motion import MotionModel, arc_through
+from armctl.host.profile import default_profile
+from armctl.core.protocol import (
     ArcEnd,
     ArcStart,
     Delay,

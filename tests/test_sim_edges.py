@@ -16,7 +16,7 @@ import pytest
 import serial
 
 import armctl.sim  # noqa: F401 — registers sim:// with pyserial
-from armctl.protocol import FRAME_SIZE, STATUS_SIZE, Delay, MCode, PositionStatus, StatusReader
+from armctl.core.protocol import FRAME_SIZE, STATUS_SIZE, Delay, MCode, PositionStatus, StatusReader
 from armctl.sim.bridge import INTERRUPTED, PEER_CLOSED, STOPPED, serve_pty, serve_tcp
 from armctl.sim.model import SimOptions, SimulatedArm
 from armctl.sim.protocol_sim import parse_sim_url

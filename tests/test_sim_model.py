@@ -5,9 +5,9 @@ from __future__ import annotations
 
 import pytest
 
-from armctl.motion import MotionModel, Planner
-from armctl.profile import default_profile
-from armctl.protocol import (
+from armctl.core.motion import MotionModel, Planner
+from armctl.host.profile import default_profile
+from armctl.core.protocol import (
     STATUS_PERIOD_S,
     STATUS_ROTATION,
     AccelLinearMove,

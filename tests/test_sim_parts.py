@@ -11,7 +11,7 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from armctl.errors import FieldError
-from armctl.protocol import (
+from armctl.core.protocol import (
     STATUS_ROTATION,
     Delay,
     JointsHighStatus,

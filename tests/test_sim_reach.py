@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from armctl.protocol import JointMove, LinearMove
+from armctl.core.protocol import JointMove, LinearMove
 from armctl.sim.executor import DONE, REFUSED
 from armctl.sim.model import SimOptions, SimulatedArm
 

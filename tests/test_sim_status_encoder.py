@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from hypothesis import given, settings, strategies as st
 
-from armctl.protocol import (GoToPose, JointMove, LinearMove, PauseToggle, RunProgram, STATUS_ROTATION,
+from armctl.core.protocol import (GoToPose, JointMove, LinearMove, PauseToggle, RunProgram, STATUS_ROTATION,
                              SetWorktableOrigin)
 from armctl.sim.model import SimOptions, SimulatedArm
 from armctl.sim.status import StatusEncoder, status_bytes

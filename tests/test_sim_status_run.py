@@ -13,9 +13,9 @@ import math
 
 from hypothesis import given, settings, strategies as st
 
-from armctl.motion import MotionModel
-from armctl.profile import default_profile
-from armctl.protocol import ArcEnd, ArcStart, Delay, JointMove, LinearMove, StatusReader
+from armctl.core.motion import MotionModel
+from armctl.host.profile import default_profile
+from armctl.core.protocol import ArcEnd, ArcStart, Delay, JointMove, LinearMove, StatusReader
 from armctl.sim.model import SimOptions, SimulatedArm
 
 MIN_STEP_S = 1e-6
@@ -142,7 +142,7 @@ def _link_reads(raise_at: int | None, until_s: float, as_run: bool = False) -> l
     or (``as_run``) a wait's ``news`` that takes the frames of runs a batch at a time and raises
     after taking the batch that holds frame ``raise_at`` — in the middle of a run (all its
     frames count as read)."""
-    from armctl.link import Link
+    from armctl.host.link import Link
 
     seen: list[tuple[int, float]] = []
     batches = []

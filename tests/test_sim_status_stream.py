@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import hashlib
 
-from armctl.protocol import (
+from armctl.core.protocol import (
     ArcEnd, ArcStart, Delay, JointMove, LinearMove, PauseToggle, StatusReader,
 )
 from armctl.sim.model import SimOptions, SimulatedArm

@@ -17,12 +17,12 @@ from armctl.bench.harness import run_job
 from armctl.bench.probed import probed_profile, unprobed_profile
 from armctl.bench.scenarios import SHAPE_RATIO, build_scenarios
 from armctl.bench.strategies import StreamerStrategy
-from armctl.motion import MotionModel
-from armctl.protocol import Delay, LinearMove
+from armctl.core.motion import MotionModel
+from armctl.core.protocol import Delay, LinearMove
 from armctl.probe.motion import SPEED_TOLERANCE_MARGIN, tolerance_finding
-from armctl.profile import ProfileError, default_profile, parse_profile
+from armctl.host.profile import ProfileError, default_profile, parse_profile
 from armctl.sim.model import SimOptions, SimulatedArm
-from armctl.streamer import FRAME_SLACK_S, SLOWEST_ARM_FACTOR, Streamer, frame_slack_s
+from armctl.core.streamer import FRAME_SLACK_S, SLOWEST_ARM_FACTOR, Streamer, frame_slack_s
 
 SHAPES = ("backforth", "periodic")
 

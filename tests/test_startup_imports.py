@@ -1,6 +1,6 @@
 """Start-up (issue 13): a command loads only what it uses.  ``armctl lint`` and ``armctl
 compile`` of a script whose lines the fast paths read never import Lark, the status frames
-(armctl/status_frames.py) or the streamer; a line only Lark reads loads Lark, and reading the
+(armctl/core/status_frames.py) or the streamer; a line only Lark reads loads Lark, and reading the
 arm's status loads the status frames.  Checked in fresh processes (what a user's start costs),
 by module names, not by timing."""
 
@@ -15,12 +15,12 @@ import pytest
 # Runs armctl's CLI in this fresh process, then prints which of the watched modules it imported.
 PROBE = """
 import json, sys
-from armctl.cli import main
+from armctl.ui.cli import main
 try:
     main(sys.argv[1:], standalone_mode=False)
 except SystemExit:
     pass
-watched = ("lark", "armctl.status_frames", "armctl.streamer", "platformdirs", "importlib.resources")
+watched = ("lark", "armctl.core.status_frames", "armctl.core.streamer", "platformdirs", "importlib.resources")
 print(json.dumps({name: name in sys.modules for name in watched}), file=sys.stderr)
 """
 
@@ -49,4 +49,4 @@ def test_a_line_only_lark_reads_loads_it(tmp_path):
 
 def test_decode_loads_the_status_frames(tmp_path):
     (tmp_path / "frames.bin").write_bytes(bytes.fromhex("ce000000000000" + "00cf"))
-    assert loaded(tmp_path, "decode", "frames.bin")["armctl.status_frames"]
+    assert loaded(tmp_path, "decode", "frames.bin")["armctl.core.status_frames"]

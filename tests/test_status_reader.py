@@ -16,7 +16,7 @@ from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from armctl.errors import FieldError, FrameError
-from armctl.protocol import (
+from armctl.core.protocol import (
     STATUS_KINDS,
     Chunk,
     Delay,

@@ -9,7 +9,7 @@ from dataclasses import fields
 from hypothesis import given, settings, strategies as st
 
 from armctl.errors import FieldError, FrameError
-from armctl.protocol import STATUS_KINDS, StatusReader, decode_status
+from armctl.core.protocol import STATUS_KINDS, StatusReader, decode_status
 
 frame_shaped = st.tuples(st.binary(min_size=6, max_size=6), st.sampled_from(sorted(STATUS_KINDS)) | st.integers(0, 255),
                          st.sampled_from([0xCF, 0xCF, 0xCF, 0x00]), st.sampled_from([0xCE, 0xCE, 0xCE, 0x01])).map(

@@ -9,13 +9,13 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from armctl.motion import MotionModel, distance_to_path
-from armctl.profile import load_profile, parse_profile
-from armctl.protocol import (
+from armctl.core.motion import MotionModel, distance_to_path
+from armctl.host.profile import load_profile, parse_profile
+from armctl.core.protocol import (
     ArcEnd, ArcStart, Delay, JointMove, JointsLowStatus, LinearMove, MCode, PauseStatus,
     PositionStatus,
 )
-from armctl.streamer import (
+from armctl.core.streamer import (
     ARRIVAL_SLACK_S, CAPACITY_MARGIN_FRAMES, FEED_AHEAD_S, FRAME_SLACK_S, SCAN_WINDOW_FRAMES, SLOWEST_ARM_FACTOR,
     Streamer,
 )

@@ -5,10 +5,10 @@ pending path, are the sign; one report (a corrupted frame) is not."""
 
 from __future__ import annotations
 
-from armctl.motion import MotionModel
-from armctl.profile import parse_profile
-from armctl.protocol import LinearMove, PositionStatus
-from armctl.streamer import Streamer
+from armctl.core.motion import MotionModel
+from armctl.host.profile import parse_profile
+from armctl.core.protocol import LinearMove, PositionStatus
+from armctl.core.streamer import Streamer
 
 PATH = [(250.0, 0.0, 150.0), (250.0, 80.0, 150.0), (250.0, 80.0, 90.0), (190.0, 80.0, 90.0)]
 

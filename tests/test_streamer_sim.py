@@ -11,9 +11,9 @@ from hypothesis import strategies as st
 from armctl.bench.harness import job_frames_finished, run_job
 from armctl.bench.scenarios import SCENARIO_NAMES, build_scenarios, planned_seconds
 from armctl.bench.strategies import StreamerStrategy
-from armctl.kinematics import CartesianPose
-from armctl.motion import MotionModel
-from armctl.protocol import (
+from armctl.core.kinematics import CartesianPose
+from armctl.core.motion import MotionModel
+from armctl.core.protocol import (
     AccelLinearMove, ArcEnd, ArcStart, Delay, GoToPose, JointMove, LinearMove, MCode, StatusReader,
 )
 from armctl.sim.model import SimOptions, SimulatedArm

@@ -17,8 +17,8 @@ import sys
 
 import pytest
 
-from armctl.profile import parse_profile
-from armctl.protocol import ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode, SetWorktableOrigin
+from armctl.host.profile import parse_profile
+from armctl.core.protocol import ArcEnd, ArcStart, Delay, JointMove, LinearMove, MCode, SetWorktableOrigin
 from tests.test_connector_settings import check_job, check_random_job
 from tests.test_streamer_sim import POINTS, _joints
 

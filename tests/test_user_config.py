@@ -18,10 +18,10 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
+from armctl.ui.cli import main
 from armctl.errors import ConfigError, ProfileError
-from armctl.link import PortChoice, resolve_port
-from armctl.profile import CONNECTOR_KEYS, find_config, load_config, load_profile, user_config_path
+from armctl.host.link import PortChoice, resolve_port
+from armctl.host.profile import CONNECTOR_KEYS, find_config, load_config, load_profile, user_config_path
 
 
 @pytest.fixture

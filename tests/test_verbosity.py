@@ -16,12 +16,12 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-import armctl.streamer as streamer_module
-from armctl.cli import main
-from armctl.motion import MotionModel
-from armctl.profile import find_config, load_profile
-from armctl.protocol import Delay, LinearMove, MCode, PauseStatus
-from armctl.streamer import CAPACITY_MARGIN_FRAMES, Evidence, Streamer, WaitReason
+import armctl.core.streamer as streamer_module
+from armctl.ui.cli import main
+from armctl.core.motion import MotionModel
+from armctl.host.profile import find_config, load_profile
+from armctl.core.protocol import Delay, LinearMove, MCode, PauseStatus
+from armctl.core.streamer import CAPACITY_MARGIN_FRAMES, Evidence, Streamer, WaitReason
 
 MODEL = MotionModel(load_profile())
 JOB = str(Path(__file__).parent.parent / "scripts" / "pick_and_place.txt")

@@ -16,9 +16,9 @@ import serial
 from click.testing import CliRunner
 
 import armctl  # noqa: F401  (registers sim://)
-from armctl.cli import main
-from armctl.link import Link
-from armctl.protocol import STATUS_SIZE, Delay, StatusReader
+from armctl.ui.cli import main
+from armctl.host.link import Link
+from armctl.core.protocol import STATUS_SIZE, Delay, StatusReader
 from armctl.sim.protocol_sim import parse_sim_url
 from armctl.sim.realtime import VirtualClock
 

@@ -21,9 +21,9 @@ from pathlib import Path
 import pytest
 from click.testing import CliRunner
 
-from armctl.cli import main
-from armctl.job import Job
-from armctl.link import Link
+from armctl.ui.cli import main
+from armctl.core.job import Job
+from armctl.host.link import Link
 
 SCRIPTS = Path(__file__).resolve().parent.parent / "scripts"
 
@@ -52,7 +52,7 @@ EXPECTED = {  # (the engine's frames read and written with their model times, th
     # The log re-recorded when a joint move from a Cartesian end got its time allowance (armctl/
     # streamer/time_bound.py, TimeBound.allowance_s): the same frames read and written; the closing POSE 0, confirmed by time at
     # 44.16 s before, is confirmed by the arm's reports at 44.37 s (15 by reports, 1 by time).
-    # The log re-recorded for the write-ahead journal (armctl/joblog.py format 2): each record
+    # The log re-recorded for the write-ahead journal (armctl/core/joblog.py format 2): each record
     # sealed (seq, crc), a frame's record (with n, at, next, target) before the frame, progress
     # records counting frames written and done; the frames read and written are the same.
     # Merged with the real-time branch (the arm time from the window of the end): the run with --log

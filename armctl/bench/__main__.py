@@ -1,5 +1,5 @@
-"""``python -m armctl.bench``: the same command as ``armctl bench`` (options in armctl/cli.py)."""
+"""``python -m armctl.bench``: the same command as ``armctl bench`` (options in armctl/ui/cli.py)."""
 
-from ..cli import bench
+from ..ui.cli import bench
 
 bench(prog_name="python -m armctl.bench")

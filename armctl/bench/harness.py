@@ -1,11 +1,11 @@
 """Run one job through one pacing strategy against the simulated arm, in virtual time.
 
-Strategy: the same job engine ``armctl run`` drives (armctl/job.py) — it feeds the strategy the
+Strategy: the same job engine ``armctl run`` drives (armctl/core/job.py) — it feeds the strategy the
 status frames, writes when the strategy allows, and ends the job by the same rules (at rest at
 the last target, the deadline, the abort sequence) — with this module as its host: the clock
 jumps from event to event (the next status byte, the next moment the strategy may write, the
 engine's own next time), so an hour of arm time costs seconds.  The loop is the one host driver
-(armctl/driver.py) with the simulated arm as its link (``_ArmLink``) and this module's hooks
+(armctl/host/driver.py) with the simulated arm as its link (``_ArmLink``) and this module's hooks
 (``_BenchHost``).  Every strategy row goes through
 the engine; for the baselines armctl's streamer only watches (what is known done, the end of
 the job), the baseline paces.  The simulator's true state (FIFO, drops, what executed when) is
@@ -20,15 +20,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable, NamedTuple, Sequence
 
-from ..actions import Wait, Write
-from ..driver import Host, drive
-from ..job import Job, RunView, agreed_pause, resume_frames
-from ..jobflow import READ_ROTATIONS, RESUME_SETTLE_S
-from ..motion import MotionModel
-from ..protocol import Command, PauseStatus, PauseToggle, StatusReader, STATUS_PERIOD_S, STATUS_ROTATION
+from ..core.actions import Wait, Write
+from ..host.driver import Host, drive
+from ..core.job import Job, RunView, agreed_pause, resume_frames
+from ..host.jobflow import READ_ROTATIONS, RESUME_SETTLE_S
+from ..core.motion import MotionModel
+from ..core.protocol import Command, PauseStatus, PauseToggle, StatusReader, STATUS_PERIOD_S, STATUS_ROTATION
 from ..sim.connector import HISTORY_FRAMES
 from ..sim.model import SimulatedArm
-from ..streamer import Streamer
+from ..core.streamer import Streamer
 
 EPSILON_S = 1e-9
 STILL_SAMPLE_S = 0.01  # how finely motion after an abort is measured
@@ -45,7 +45,7 @@ class RunResult:
     moving_after_abort_s: float | None = None
     timed_out: bool = False
     aborted_at_s: float | None = None  # when the abort sequence was written
-    outcome: str = "running"  # the engine's (armctl/job.py Outcome), as ``armctl run`` would end
+    outcome: str = "running"  # the engine's (armctl/core/job.py Outcome), as ``armctl run`` would end
     arm_time_s: float | None = None  # the engine's arm time, as ``armctl run`` prints it (finished jobs)
     resume_line: int | None = None  # the engine's resume line (1-based job frame), as the summary prints it
 

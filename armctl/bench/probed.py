@@ -18,8 +18,8 @@ from functools import lru_cache
 from ..probe import build_probe
 from ..probe.plan import Write
 from ..probe.report import to_write
-from ..profile import Profile, with_connector
-from ..protocol import StatusReader
+from ..host.profile import Profile, with_connector
+from ..core.protocol import StatusReader
 from ..sim.model import SimOptions, SimulatedArm, _load_profile
 
 PROBE_SOURCE = "armctl probe (bench, virtual time)"

@@ -39,9 +39,9 @@ import time
 from dataclasses import dataclass, field, replace
 from types import SimpleNamespace
 
-from ..protocol import PauseToggle, frame_seconds
+from ..core.protocol import PauseToggle, frame_seconds
 from ..sim.model import SimOptions
-from ..streamer import DEFAULT_LEAD_S
+from ..core.streamer import DEFAULT_LEAD_S
 from .harness import Frame
 from .scenarios import Scenario, long_moves, mixed_job, physical_bound_s, tiny_moves, true_durations_s
 
@@ -114,7 +114,7 @@ def _stop_sim(process: subprocess.Popen, stats_path: str) -> dict:
 def _host_model(options: SimOptions):
     """The model armctl's host plans with: the virtual bench's (``table.make_strategy``) — the
     arm's own profile, kinematics checked, its speed_factor not known."""
-    from ..motion import MotionModel
+    from ..core.motion import MotionModel
     from ..sim.model import _arm_profile
 
     profile = _arm_profile(options)
@@ -124,7 +124,7 @@ def _host_model(options: SimOptions):
 def drive(path: str, commands, baud: int, lead_s: float, abort_after: int | None) -> float | None:
     """Run ``commands`` on the arm at ``path`` as ``armctl run`` does (``drive_on``), planning
     with the virtual bench's host model."""
-    from ..link import Link, plausible_state
+    from ..host.link import Link, plausible_state
 
     model = _host_model(SimOptions(baud=baud))
     with Link.open(path, baud, state=plausible_state(model.profile)) as link:
@@ -136,10 +136,10 @@ def drive_on(link, model, commands, baud: int, lead_s: float, abort_after: int |
     on the link's clock), planning with ``model``; with ``abort_after``, stop once that many
     frames are written, as Ctrl-C does (the abort sequence: one pause frame).  The link's clock
     when the stop was asked (None without one)."""
-    from ..job import RunView
-    from ..jobflow import read_arm, start_from_state
-    from ..runner import JobRunner
-    from ..streamer import Streamer
+    from ..core.job import RunView
+    from ..host.jobflow import read_arm, start_from_state
+    from ..host.runner import JobRunner
+    from ..core.streamer import Streamer
 
     stopped_at: list[float] = []
     start, _initial = start_from_state(model, read_arm(link, START_TIMEOUT_S))
@@ -176,8 +176,8 @@ def _job_figures(stats: dict, frames: int, baud: int) -> tuple[float, float, flo
 
 def moving_frames(commands, options: SimOptions) -> list[bool]:
     """Which job frames move the arm (its position or joints: what the virtual bench samples)."""
-    from ..job import _moves_arm
-    from ..motion import MotionModel, Planner
+    from ..core.job import _moves_arm
+    from ..core.motion import MotionModel, Planner
     from ..sim.model import _arm_profile
 
     model = MotionModel(_arm_profile(options), options.speed_factor)
@@ -278,7 +278,7 @@ def format_rows(rows: list[RealtimeRow]) -> str:
 
 def main(lead_s: float = DEFAULT_LEAD_S, as_json: bool = False, rates=RATES) -> int:
     """Run the table, print it (or JSON); 1 when a target is missed."""
-    from ..posix_terminal import require_posix_terminal
+    from ..host.posix_terminal import require_posix_terminal
 
     require_posix_terminal("armctl bench --realtime", "run the virtual benchmark (armctl bench) instead")
     started = time.monotonic()

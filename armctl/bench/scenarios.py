@@ -60,13 +60,13 @@ import math
 import random
 from dataclasses import dataclass, field
 
-from ..motion import MotionModel, Planner, circle_through
-from ..profile import default_profile
-from ..protocol import (
+from ..core.motion import MotionModel, Planner, circle_through
+from ..host.profile import default_profile
+from ..core.protocol import (
     AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, MCode, PauseToggle, SetWorktableOrigin,
     frame_seconds,
 )
-from ..kinematics import CartesianPose
+from ..core.kinematics import CartesianPose
 from ..sim.model import SimOptions, _arm_profile
 from . import SCENARIO_NAMES  # noqa: F401  (re-exported: the names of build_scenarios' list)
 from .harness import Event

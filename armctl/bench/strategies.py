@@ -16,9 +16,9 @@ them all against the same simulated arm.  The baselines show why they are not us
 
 from __future__ import annotations
 
-from ..motion import ArmPose, MotionModel, Planner
-from ..protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, FRAME_SIZE, PositionStatus, frame_seconds
-from ..streamer import Streamer
+from ..core.motion import ArmPose, MotionModel, Planner
+from ..core.protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, FRAME_SIZE, PositionStatus, frame_seconds
+from ..core.streamer import Streamer
 
 # Times this close are the same instant (the virtual-time driver writes at ``when`` if it is
 # within this of ``now``); the omniscient check must not be skipped on a rounding difference.

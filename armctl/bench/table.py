@@ -29,7 +29,7 @@ confirmation": the engine's outcomes that claim no more than the arm's reports p
 The abort run leaves out a scenario's outside events (the pause scenario's pause and resume):
 they are pause toggles too, and would toggle against the abort's pause.
 
-``main`` runs and prints the table for ``armctl bench`` (whose options live in armctl/cli.py;
+``main`` runs and prints the table for ``armctl bench`` (whose options live in armctl/ui/cli.py;
 ``python -m armctl.bench`` is the same click command); it returns 1 when armctl misses a target
 anywhere.
 """
@@ -44,11 +44,11 @@ from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass, field, replace
 
-from ..job import Outcome
-from ..motion import MotionModel
+from ..core.job import Outcome
+from ..core.motion import MotionModel
 from ..sim.executor import DONE
 from ..sim.model import SimulatedArm
-from ..streamer import DEFAULT_LEAD_S
+from ..core.streamer import DEFAULT_LEAD_S
 from .harness import EPSILON_S, RunResult, run_job, start_run
 from .scenarios import Scenario, build_scenarios, physical_bound_s, promise_bound_s, true_durations_s
 from .strategies import (
@@ -383,7 +383,7 @@ def summary(cells: list[Cell], scenarios: list[Scenario], lead_s: float, wall_s:
 def main(size: str = "full", scenario_names=(), lead_s: float = DEFAULT_LEAD_S, as_json: bool = False,
          jobs: int | None = None) -> int:
     """Run the table and print it (or its cells as JSON); 1 when armctl misses a target anywhere.
-    The command line is ``armctl bench`` (armctl/cli.py); ``python -m armctl.bench`` runs it too."""
+    The command line is ``armctl bench`` (armctl/ui/cli.py); ``python -m armctl.bench`` runs it too."""
     if not lead_s > 0:
         raise ValueError("the lead must be greater than 0")
     scenarios = [s for s in build_scenarios(size) if not scenario_names or s.name in scenario_names]

@@ -15,8 +15,8 @@ import sys
 
 import click
 
-from ..cli_types import OutputFile, number
-from ..limits import BAUD_RANGE, REPEAT_DELAY_RANGE_MS, START_TIMEOUT_RANGE_S
+from ..ui.cli_types import OutputFile, number
+from ..core.limits import BAUD_RANGE, REPEAT_DELAY_RANGE_MS, START_TIMEOUT_RANGE_S
 
 from ..errors import EXIT_PROBLEMS as EXIT_FAILED, EXIT_USAGE
 
@@ -52,7 +52,7 @@ def jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, 
     screen; see docs/jog.md.
     """
     from ..errors import ArmctlError, ConfigError
-    from ..posix_terminal import NeedsPosixTerminal, require_posix_terminal
+    from ..host.posix_terminal import NeedsPosixTerminal, require_posix_terminal
 
     try:  # first: on Windows this, not a redirected stdin, is why jog cannot run
         require_posix_terminal("armctl jog", "run it under WSL, or on Linux or macOS")
@@ -75,8 +75,8 @@ def _setup(profile_path, repeat_delay_ms, port=None):
     from dataclasses import replace
 
     from ..errors import ProfileError
-    from ..calibration import arm_profile
-    from ..profile import load_config
+    from ..host.calibration import arm_profile
+    from ..host.profile import load_config
     from .keymap import JogConfigError, keymap_from_config
     from .settings import settings_from_config
 
@@ -113,8 +113,8 @@ def _open_files(record_path, log_path):
 
 
 def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, timeout_s) -> int:
-    from ..link import choose_port, connect, require_wall_clock
-    from ..protocol import frame_seconds
+    from ..host.link import choose_port, connect, require_wall_clock
+    from ..core.protocol import frame_seconds
     from .edge import JogLoop, wait_for_pose
     from .keys import KeyDecoder
     from .session import JogSession
@@ -123,7 +123,7 @@ def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms,
     settings, keymap, profile = _setup(profile_path, repeat_delay_ms, choice.url)
     teach, log = _open_files(record_path, log_path)
     try:
-        from ..output import announce
+        from ..ui.output import announce
 
         link, baud = connect(choice, baud, announce=announce, profile=profile, on_status=log.rx if log else None)
         with link:

@@ -34,7 +34,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..protocol import JOYSTICK_LINEAR_AXIS, JOYSTICK_NEUTRAL, Joystick
+from ..core.protocol import JOYSTICK_LINEAR_AXIS, JOYSTICK_NEUTRAL, Joystick
 
 NEVER = float("-inf")
 

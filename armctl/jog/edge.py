@@ -1,6 +1,6 @@
 """``armctl jog``'s edge: the one loop where keys, the port, the clock and the screen meet.
 
-Strategy: a thin loop around the pure parts, on the one host driver (armctl/driver.py).  Each
+Strategy: a thin loop around the pure parts, on the one host driver (armctl/host/driver.py).  Each
 wait is on stdin with ``select`` for at most a few tens of milliseconds (less when the session
 or the key decoder has a deadline sooner: ``_Terminal``); then the bytes become keys
 (``KeyDecoder``), the keys and a snapshot of the arm's state go to the ``JogSession``, and the
@@ -22,10 +22,10 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Callable
 
-from ..actions import Done, Wait, Write
-from ..driver import Host, drive
+from ..core.actions import Done, Wait, Write
+from ..host.driver import Host, drive
 from ..errors import ArmctlError, PortError
-from ..protocol import describe
+from ..core.protocol import describe
 from .keys import KeyDecoder
 from .moves import POSE_KINDS, reported_pose
 from ..errors import EXIT_INTERRUPTED, EXIT_PROBLEMS as EXIT_FAILED
@@ -111,7 +111,7 @@ class Outcome:
 
 
 class JogLoop(Host):
-    """The jog session on the host driver (armctl/driver.py): the engine's side answers the
+    """The jog session on the host driver (armctl/host/driver.py): the engine's side answers the
     session's effects as actions (``next_action``), the host's side waits on the terminal
     (``_Terminal``) and redraws the panel."""
 

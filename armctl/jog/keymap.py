@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from typing import Mapping
 
 from ..errors import ArmctlError
-from ..protocol import JOYSTICK_LINEAR_AXIS
+from ..core.protocol import JOYSTICK_LINEAR_AXIS
 
 JOINT, LINEAR = "joint", "linear"
 MODES = (JOINT, LINEAR)

@@ -15,9 +15,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..armstate import ArmState
-from ..kinematics import reach_problem
-from ..protocol import (
+from ..core.armstate import ArmState
+from ..core.kinematics import reach_problem
+from ..core.protocol import (
     PWM_RANGE_US, JointMove, JointsHighStatus, JointsLowStatus, LinearMove, PauseStatus, PositionStatus,
 )
 from .keymap import JogAxis

@@ -29,9 +29,9 @@ from __future__ import annotations
 from collections import deque
 from dataclasses import dataclass
 
-from ..armstate import ROTATION_S
-from ..motion import MotionModel
-from ..protocol import JOYSTICK_NEUTRAL, STATUS_PERIOD_S, Command, Joystick, PauseStatus, PauseToggle
+from ..core.armstate import ROTATION_S
+from ..core.motion import MotionModel
+from ..core.protocol import JOYSTICK_NEUTRAL, STATUS_PERIOD_S, Command, Joystick, PauseStatus, PauseToggle
 from .deadman import NEVER, Deadman, DeadmanTiming
 from .keymap import JOG_ACTIONS, JOINT, LINEAR, JogAxis, KeyMap
 from .moves import Refused, Reported, Target, fresh, gripper_move, reported_pose, step_move

@@ -20,9 +20,9 @@ import math
 from dataclasses import dataclass, fields, replace
 from typing import Mapping
 
-from ..limits import REPEAT_DELAY_RANGE_MS
-from ..profile import unknown_key_hint
-from ..protocol import JOYSTICK_NEUTRAL, JOYSTICK_STILL_RANGE
+from ..core.limits import REPEAT_DELAY_RANGE_MS
+from ..host.profile import unknown_key_hint
+from ..core.protocol import JOYSTICK_NEUTRAL, JOYSTICK_STILL_RANGE
 from .keymap import JogConfigError
 
 REPEAT_GAP_LIMIT_MS = 140.0  # the 150 ms bound, less the edge loop's wake-up slack

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from datetime import datetime
 
-from ..protocol import PWM_RANGE_US
+from ..core.protocol import PWM_RANGE_US
 from .keymap import JOINT
 from .moves import Reported
 

@@ -13,12 +13,12 @@ Modules, one job each:
   engine.py      one script → FileReport (streaming; bounded memory)
   paths.py       files, directories (recursive, by pattern), - for stdin
   formatters.py  text (ruff-like), json, github workflow commands; summary and statistics
-  command.py     the click command ``lint`` (registered by armctl/cli.py)
+  command.py     the click command ``lint`` (registered by armctl/ui/cli.py)
 
 Usage::
 
     from armctl.lint import lint_lines, Selection
-    from armctl.profile import load_profile
+    from armctl.host.profile import load_profile
 
     report = lint_lines(open("job.txt"), "job.txt", load_profile(), Selection.of(ignore=["L203"]))
     for diagnostic in report.diagnostics:

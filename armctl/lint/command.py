@@ -4,7 +4,7 @@ Strategy: parse the options and the ``[lint]`` table of armctl.toml, load the pr
 each target from armctl/lint/paths.py lint it (armctl/lint/engine.py) and write what its
 formatter returns straight away, so output streams file by file.  Only click is imported at
 module level; everything heavy is imported inside the command, keeping ``armctl --help`` fast.
-armctl/cli.py registers the command object ``lint`` with ``main.add_command(lint)``.
+armctl/ui/cli.py registers the command object ``lint`` with ``main.add_command(lint)``.
 
 Exit codes: 0 no errors (warnings allowed unless --strict); 1 problems found; 2 a usage error,
 a bad profile or armctl.toml, or a path that cannot be read (missing, unreadable, a directory
@@ -64,7 +64,7 @@ def lint(ctx: click.Context, paths, fmt, as_json, select, ignore, strict, statis
     try:
         config = _config()
         selection = _selection(select, ignore, config)
-        from ..calibration import arm_profile
+        from ..host.calibration import arm_profile
 
         profile = arm_profile(profile_path)  # the configured port's arm
     except (ConfigError, ProfileError, UnknownCode, ValueError) as error:
@@ -75,7 +75,7 @@ def lint(ctx: click.Context, paths, fmt, as_json, select, ignore, strict, statis
 def _run(paths, fmt, selection, strict, statistics, profile, stdin_filename, config) -> int:
     from dataclasses import replace
 
-    from ..output import quiet
+    from ..ui.output import quiet
     from .formatters import FORMATTERS, Summary, statistics_lines, summary_line
     from .paths import DEFAULT_INCLUDE, expand
 
@@ -108,7 +108,7 @@ def _run(paths, fmt, selection, strict, statistics, profile, stdin_filename, con
 def _lint_target(target, profile, selection, stdin_filename):
     """The FileReport for one target, or None (reported on stderr) when it cannot be read.
 
-    Read once and bounded (armctl/inputs.py).  A regular file streams line by line, so lint's
+    Read once and bounded (armctl/host/inputs.py).  A regular file streams line by line, so lint's
     memory stays flat however long the script (its size is checked first, and the stream is
     bounded too, in case it grows); stdin, a pipe or a device is read whole into a snapshot,
     which stops at the first NUL (``/dev/zero``) or at the limit (``yes |``) at once.
@@ -117,7 +117,7 @@ def _lint_target(target, profile, selection, stdin_filename):
     import stat
     import sys
 
-    from ..inputs import MAX_INPUT_BYTES, InputTooLarge, read_bounded
+    from ..host.inputs import MAX_INPUT_BYTES, InputTooLarge, read_bounded
     from ..script import ScriptSnapshot, iter_lines, read_script
     from .engine import lint_lines
 
@@ -144,7 +144,7 @@ def _lint_target(target, profile, selection, stdin_filename):
 
 def _config() -> dict:
     """The ``[lint]`` table of the nearest armctl.toml (else the user's), checked: lists of strings only."""
-    from ..profile import load_config, unknown_key_hint
+    from ..host.profile import load_config, unknown_key_hint
 
     config = load_config()
     path = config.path_of("lint")

@@ -10,7 +10,7 @@ per file and the compiler as many of its own — so memory stays flat for a scri
 length and any number of findings; ``FileReport.hidden`` says how many were not kept.
 
 A finding's severity is its code's, except that an error resting on a number the packaged
-profile only illustrates (a rule's ``rests_on``, armctl/profile.py's provenance) is a warning
+profile only illustrates (a rule's ``rests_on``, armctl/host/profile.py's provenance) is a warning
 that names those numbers: a finding is only as true as the numbers it rests on, and a warning
 never blocks ``run``.  So ``FileReport`` counts errors and warnings per finding, not per code.
 
@@ -117,8 +117,8 @@ class _MotionClock:
     segment and an end pose per line (issue 13)."""
 
     def __init__(self, profile, compilation) -> None:
-        from ..estimate import motion_time_overrun
-        from ..motion import MotionModel, Planner
+        from ..core.estimate import motion_time_overrun
+        from ..core.motion import MotionModel, Planner
         from ..script.source import MAX_JOB_MOTION_S
 
         self._overrun = motion_time_overrun  # imported once, not once a statement
@@ -165,7 +165,7 @@ class _MotionClock:
 
     def _pass_s(self, commands) -> float:
         """One more run of a pass that ends where it starts: planned from here, the planner left as it was."""
-        from ..motion import Planner
+        from ..core.motion import Planner
 
         planner = Planner(self._planner.model, self._planner.pose)
         return sum(planner.feed_s(command) for command in commands)

@@ -14,7 +14,7 @@ it finds nothing, which costs no generator per line: issue 13),
 where is a ``SourceSpan`` or a ``WordAt`` (a word's span, computed only if the finding is kept)
 and ``rests_on`` names the profile numbers the finding depends on ("section.key" or a whole
 "section"): the engine reports a finding on an error code as a warning when any of them is an
-illustrative number of the packaged default (armctl/profile.py's provenance) — a finding is
+illustrative number of the packaged default (armctl/host/profile.py's provenance) — a finding is
 only as true as the numbers it rests on.  A finding without ``rests_on`` rests on geometry or
 on the protocol alone.  It runs before ``arm`` (armctl/lint/tracker.py) advances past the
 statement, so ``arm`` describes the arm as the statement finds it.  An END rule is ``check(arm)``.  Rules read the profile through
@@ -28,11 +28,11 @@ import math
 import re
 from typing import Iterable, Iterator, NamedTuple, Optional
 
-from ..kinematics import Unreachable, box_problem, has_solution, inverse
-from ..motion import arc_through, circle_through
-from ..protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove, as_f32
+from ..core.kinematics import Unreachable, box_problem, has_solution, inverse
+from ..core.motion import arc_through, circle_through
+from ..core.protocol import AccelLinearMove, ArcEnd, ArcStart, JointMove, LinearMove, as_f32
 from ..script import SourceSpan
-from ..speed_limits import CARTESIAN_MOVES, speed_limit  # L201's limit, which the feed override clamps to
+from ..core.speed_limits import CARTESIAN_MOVES, speed_limit  # L201's limit, which the feed override clamps to
 from .registry import END, check
 from .tracker import cartesian_target, pwm_channel_of
 

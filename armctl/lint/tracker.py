@@ -15,8 +15,8 @@ from __future__ import annotations
 
 from typing import Optional
 
-from ..kinematics import SolvableCells
-from ..protocol import (
+from ..core.kinematics import SolvableCells
+from ..core.protocol import (
     AccelLinearMove, ArcEnd, ArcStart, GoToPose, JointMove, LinearMove, PauseToggle, ResetArm, RunProgram,
     SetWorktableOrigin,
 )

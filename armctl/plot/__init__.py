@@ -5,7 +5,7 @@ Modules, one job each:
   style.py    colours and legend names shared by both renderers
   html.py     plotly: one self-contained interactive HTML file (needs the plot extra)
   static.py   matplotlib: SVG/PNG, three orthographic views or one (needs the plot extra)
-  command.py  the click command, registered by armctl/cli.py
+  command.py  the click command, registered by armctl/ui/cli.py
 
 Only path.py and style.py may be imported without the plot extra.
 """

@@ -2,7 +2,7 @@
 
 Strategy: the order a user needs.  Usage problems first (an output format we cannot write,
 a script that cannot be read, a missing plot extra, a bad profile: exit 2, nothing linted),
-then the same checks as ``armctl lint`` (armctl/checked.py's ``check``, lint's engine) with the
+then the same checks as ``armctl lint`` (armctl/core/checked.py's ``check``, lint's engine) with the
 same located diagnostics on stderr — a script with errors is not drawn (exit 1) unless
 ``--force``, which draws it with its findings and still exits 1.  Then the job is compiled
 and sampled by the pure armctl/plot/path.py and handed to a renderer: plotly for .html
@@ -21,9 +21,9 @@ import sys
 
 import click
 
-from ..cli_types import number
+from ..ui.cli_types import number
 from ..errors import EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE
-from ..limits import LINE_RANGE
+from ..core.limits import LINE_RANGE
 
 FORMATS = {".html": "html", ".htm": "html", ".svg": "svg", ".png": "png"}
 LIBRARY_OF = {"html": "plotly", "svg": "matplotlib", "png": "matplotlib"}
@@ -73,7 +73,7 @@ def plot(script, output, view, from_line, profile_path, force):
 
 def _read(script: str):
     """The script read once (``ScriptSnapshot``): the check and the drawing see the same bytes."""
-    from ..inputs import InputTooLarge
+    from ..host.inputs import InputTooLarge
     from ..script import read_script
 
     if script == "-":
@@ -98,7 +98,7 @@ def _require_extra(fmt: str) -> None:
 
 def _profile(profile_path):
     from ..errors import ConfigError, ProfileError
-    from ..calibration import arm_profile
+    from ..host.calibration import arm_profile
 
     try:
         return arm_profile(profile_path)  # the configured port's arm
@@ -110,7 +110,7 @@ def _profile(profile_path):
 
 def _check(snapshot, profile, from_line: int, force: bool) -> list:
     """Lint's findings (and a bad --from-line) on stderr; exit 1 on errors unless ``force``."""
-    from ..checked import check
+    from ..core.checked import check
     from ..lint.formatters import TextFormatter
 
     report = check(snapshot, profile).report  # the check run and estimate make (the from-line check is plot's own, below)
@@ -126,7 +126,7 @@ def _check(snapshot, profile, from_line: int, force: bool) -> list:
 
 
 def _build(snapshot, profile, from_line: int, diagnostics):
-    from ..motion import MotionModel
+    from ..core.motion import MotionModel
     from .path import build_path
 
     statements = snapshot.compile(from_line=from_line)

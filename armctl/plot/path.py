@@ -22,8 +22,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Iterable, NamedTuple, Optional, Sequence
 
-from ..motion import ArmPose, MotionModel, Planner, Segment, arc_through
-from ..protocol import AccelLinearMove, ArcEnd, ArcStart, GoToPose, JointMove, LinearMove
+from ..core.motion import ArmPose, MotionModel, Planner, Segment, arc_through
+from ..core.protocol import AccelLinearMove, ArcEnd, ArcStart, GoToPose, JointMove, LinearMove
 
 Point = tuple[float, float, float]
 

@@ -13,8 +13,8 @@ import sys
 
 import click
 
-from ..cli_types import number
-from ..limits import BAUD_RANGE
+from ..ui.cli_types import number
+from ..core.limits import BAUD_RANGE
 
 MOTION_ANNOUNCEMENT = (
     "With your consent the probe moves the arm a little, slowly, and back: joint 5 by 5° at 2°/s, "

@@ -29,7 +29,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from ..protocol import PWM_RANGE_US, Delay, PauseStatus
+from ..core.protocol import PWM_RANGE_US, Delay, PauseStatus
 from .plan import AGREEING_FRAMES, LIKELY, SURE, UNSURE, Finding, Send, Wait
 from .steps import DOCUMENTED, QUIET_S, pwm_frame, settle
 

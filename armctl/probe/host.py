@@ -2,7 +2,7 @@
 
 Strategy: a thin edge.  The link's reader (a thread, or the virtual clock's waits) hands each
 status frame to ``on_status``, which only appends it to a deque; the one host driver
-(armctl/driver.py) runs the pure ``Probe`` — asks for the next action, writes or waits — and
+(armctl/host/driver.py) runs the pure ``Probe`` — asks for the next action, writes or waits — and
 ``ProbeHost`` drains the deque into it before each action.  Ctrl-C, SIGTERM and SIGHUP
 only set a flag (``deferred_stop``): the loop, between two actions, switches the probe to
 restoring and runs on until the arm is as it was; a second signal leaves at once
@@ -16,8 +16,8 @@ from __future__ import annotations
 import threading
 from collections import deque
 
-from ..actions import Wait, Write
-from ..driver import Host, drive as run
+from ..core.actions import Wait, Write
+from ..host.driver import Host, drive as run
 from .plan import Probe
 
 MIN_WAIT_S = 0.001
@@ -87,7 +87,7 @@ class ProbeHost(Host):
 
 
 def drive(link, probe: Probe, inbox: FrameInbox, progress=None, stop: threading.Event | None = None) -> None:
-    """Run ``probe`` on ``link`` to its end (the host driver, armctl/driver.py).  ``stop`` set
+    """Run ``probe`` on ``link`` to its end (the host driver, armctl/host/driver.py).  ``stop`` set
     (a signal): restore, then end with ``probe.interrupted`` true; the caller exits 130.  After
     each write and each wait the probe hears what the port still holds (``Probe.port_report``),
     when the port can say."""
@@ -99,7 +99,7 @@ def drive(link, probe: Probe, inbox: FrameInbox, progress=None, stop: threading.
 def deferred_stop(stop: threading.Event):
     """Ctrl-C, SIGTERM, SIGHUP set ``stop`` (the probe restores the arm, then exits 130); a
     second one raises KeyboardInterrupt at once."""
-    from ..stop_signals import stop_signals
+    from ..host.stop_signals import stop_signals
 
     def on_stop(_signum: int) -> None:
         if stop.is_set():

@@ -1,4 +1,4 @@
-"""What ``armctl probe`` keeps: the measured values stored with the arm (armctl/calibration.py),
+"""What ``armctl probe`` keeps: the measured values stored with the arm (armctl/host/calibration.py),
 ``--write``'s ``[connector]`` naming the arm it was measured on, and ``--list`` / ``--forget``.
 
 Strategy: the probe's findings go through ``report.to_write`` — the one choice of what is stated
@@ -12,7 +12,7 @@ from datetime import datetime, timezone
 
 import click
 
-from .. import calibration
+from ..host import calibration
 
 
 def today() -> str:
@@ -36,7 +36,7 @@ def keep(port: str, arm: str, probe, say) -> None:
 
 def written(arm: str, values: dict) -> dict:
     """``--write``'s ``[connector]``: the values and the arm they were measured on."""
-    from ..profile import MEASURED_ON
+    from ..host.profile import MEASURED_ON
 
     return {MEASURED_ON: arm, **values}
 
@@ -63,7 +63,7 @@ def list_stored(as_json: bool) -> int:
 def forget_arm(arm_or_port: str | None, port: str | None) -> int:
     """``--forget [ARM]``: ARM is an identity or a port; none given: the arm on ``--port`` (or
     the configured port)."""
-    from ..link import choose_port
+    from ..host.link import choose_port
 
     target = arm_or_port or choose_port(port).url
     arm = calibration.arm_identity(target)

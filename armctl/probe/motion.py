@@ -24,9 +24,9 @@ from __future__ import annotations
 
 import math
 
-from ..kinematics import reach_problem
-from ..motion import PWM_CHANNEL_COUNT, ArmPose, MotionModel
-from ..protocol import JointMove, JointsHighStatus, LinearMove, PositionStatus
+from ..core.kinematics import reach_problem
+from ..core.motion import PWM_CHANNEL_COUNT, ArmPose, MotionModel
+from ..core.protocol import JointMove, JointsHighStatus, LinearMove, PositionStatus
 from .plan import LIKELY, SURE, UNSURE, Finding, ProbeStop, Send
 from .steps import (  # JOINT_SPEED_DEG_S, ARRIVED_DEG: shared with the restore step's return move
     ARRIVED_DEG, DOCUMENTED, JOINT_SPEED_DEG_S, READBACK_TIMEOUT_S, agreed_joints, settle, wait_until,
@@ -286,7 +286,7 @@ def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding
     (twice over), the moves' mean start delay (the time bound's slack per frame is
     ``(t − 1) × FRAME_SLACK_S / (SLOWEST_ARM_FACTOR − 1)``, so t must give it room) and at least
     ``SPEED_TOLERANCE_MARGIN`` for what two small moves do not exercise; rounded up to 0.01."""
-    from ..streamer import FRAME_SLACK_S, SLOWEST_ARM_FACTOR
+    from ..core.streamer import FRAME_SLACK_S, SLOWEST_ARM_FACTOR
 
     delay_s = max(0.0, sum(start_delays_s) / len(start_delays_s))
     excess = max(SPEED_TOLERANCE_MARGIN, 2 * precision / value, delay_s * (SLOWEST_ARM_FACTOR - 1) / FRAME_SLACK_S)

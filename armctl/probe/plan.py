@@ -22,15 +22,15 @@ from dataclasses import dataclass, field
 from itertools import takewhile
 from typing import Callable, Iterator
 
-from ..actions import Wait, Write  # a step's wish Wait(until_s, ready), and the host's actions (the probe's Command as Write.statement)
-from ..line import STATUS_SIZE
-from ..protocol import Command, PauseStatus, StatusFrame, byte_seconds, frame_seconds
-from ..evidence import AGREEING_REPORTS, agreeing_runs
+from ..core.actions import Wait, Write  # a step's wish Wait(until_s, ready), and the host's actions (the probe's Command as Write.statement)
+from ..core.line import STATUS_SIZE
+from ..core.protocol import Command, PauseStatus, StatusFrame, byte_seconds, frame_seconds
+from ..core.evidence import AGREEING_REPORTS, agreeing_runs
 from .landing import WireLog
 
 SURE, LIKELY, UNSURE, NOT_MEASURED = "sure", "likely", "unsure", "not measured"
 # Readings from the arm are trusted once two frames of a kind in a row agree: one status byte
-# flipped on the line (H9: no checksum) cannot then make the probe claim a value (armctl/evidence.py).
+# flipped on the line (H9: no checksum) cannot then make the probe claim a value (armctl/core/evidence.py).
 AGREEING_FRAMES = AGREEING_REPORTS
 # A port that holds written bytes and sends none for this long is stuck (at 9600 a byte leaves
 # every 1.04 ms while it works): the probe stops rather than wait for ever.
@@ -94,7 +94,7 @@ class Seen:
 
     def agreed_runs(self, kind: int, since_s: float, key=lambda f: f) -> list[tuple[float, object]]:
         """(start time, value) of every run of ``AGREEING_FRAMES``+ equal readings since ``since_s``
-        (armctl/evidence.py ``agreeing_runs``)."""
+        (armctl/core/evidence.py ``agreeing_runs``)."""
         readings = ((t, key(frame)) for t, frame in self.since(kind, since_s))
         return [(start_s, value) for start_s, _, value in agreeing_runs(readings)]
 

@@ -54,8 +54,8 @@ def progress_display(as_json: bool, say):
 
 
 def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> int:
-    from ..link import SIMULATOR_URL, choose_port, connect
-    from ..calibration import arm_profile
+    from ..host.link import SIMULATOR_URL, choose_port, connect
+    from ..host.calibration import arm_profile
     from . import ADAPTER_FIFO_BYTES, build_probe
     from .host import FrameInbox, deferred_stop, drive
     from .report import as_json as json_object, print_lines, print_table, to_write

@@ -17,8 +17,8 @@ import math
 import struct
 from dataclasses import dataclass, field
 
-from ..evidence import agreeing_runs
-from ..protocol import (
+from ..core.evidence import agreeing_runs
+from ..core.protocol import (
     PWM_RANGE_US,
     STATUS_PERIOD_S,
     STATUS_ROTATION,
@@ -55,7 +55,7 @@ ARRIVED_DEG = 0.02
 
 def _documented() -> dict:
     """The document's readings: the packaged profile's [connector] table (one place)."""
-    from ..profile import CONNECTOR_KEYS, default_profile
+    from ..host.profile import CONNECTOR_KEYS, default_profile
 
     connector = default_profile().connector
     return {key: getattr(connector, key) for key in CONNECTOR_KEYS}
@@ -280,7 +280,7 @@ def _note(probe, text: str) -> None:
 
 def _paused_since(probe, since_s: float):
     """(time of the first paused frame, time the second one confirmed it) of the first run of
-    ``AGREEING_FRAMES`` paused kind-4 frames since ``since_s``, or None (armctl/evidence.py
+    ``AGREEING_FRAMES`` paused kind-4 frames since ``since_s``, or None (armctl/core/evidence.py
     ``agreeing_runs``).  The confirmation time is what the control test judges by: one corrupted
     frame can make a run begin early, never confirm it."""
     readings = ((t, frame.paused) for t, frame in probe.seen.since(PauseStatus.KIND, since_s))

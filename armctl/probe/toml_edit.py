@@ -105,7 +105,7 @@ def check_writable(path: Path) -> None:
 def _existing_text(path: Path) -> str:
     """The file's text, "" if there is none; read bounded, as every armctl.toml is (an endless
     input is an error, not a hang)."""
-    from ..inputs import MAX_TOML_BYTES, read_file_bounded
+    from ..host.inputs import MAX_TOML_BYTES, read_file_bounded
 
     if not path.exists():
         return ""

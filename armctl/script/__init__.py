@@ -2,7 +2,7 @@
 
 Strategy: each line is parsed alone (a regex fast path for the plain shape, else one Lark LALR
 parser built from grammars/armctl.lark), then executed against the modal state into the frozen
-command dataclasses of armctl/protocol.py.  Everything streams: a million-line script compiles
+command dataclasses of armctl/core/protocol.py.  Everything streams: a million-line script compiles
 in flat memory.  Errors never raise: they are collected as located ``Diagnostic``s, all of them.
 
 Modules, one job each:

@@ -19,7 +19,7 @@ from __future__ import annotations
 from dataclasses import field
 from typing import NamedTuple, Optional, Union
 
-from ..records import record
+from ..core.records import record
 from .nodes import BlockLine, Node
 
 

@@ -28,7 +28,7 @@ import math
 from typing import Optional
 
 from ..errors import FieldError
-from ..protocol import GoToPose, MCode, PauseToggle, ResetArm, ResetConnector, RunProgram, StructureMode
+from ..core.protocol import GoToPose, MCode, PauseToggle, ResetArm, ResetConnector, RunProgram, StructureMode
 from . import messages
 from .expressions import POISONED, ExpressionError, Unavailable, evaluate, format_value
 from .grammar import LETTERS, parse_line

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from typing import Mapping, Union
 
-from ..records import record
+from ..core.records import record
 
 
 class _Poisoned:

@@ -1,7 +1,7 @@
 """Read a script safely and once: one immutable snapshot that every pass compiles.
 
 Strategy: ``read_script`` reads the whole input (a file or stdin) once, with the bounded read
-of armctl/inputs.py, into a ``ScriptSnapshot`` — an immutable ``bytes`` and the name to report.
+of armctl/host/inputs.py, into a ``ScriptSnapshot`` — an immutable ``bytes`` and the name to report.
 Every pass a command makes (lint, the ``--from-line`` check, the estimate, the stream, the
 written output, the resume-line computation) iterates ``snapshot.lines()``, and compiling is
 a pure function of those lines and the initial state; so a file edited or replaced while
@@ -24,8 +24,8 @@ import os
 import sys
 from typing import BinaryIO, Iterator, Union
 
-from ..inputs import MAX_INPUT_BYTES, InputTooLarge, read_bounded, read_file_bounded
-from ..records import record
+from ..host.inputs import MAX_INPUT_BYTES, InputTooLarge, read_bounded, read_file_bounded
+from ..core.records import record
 from .compiler import MAX_LINE_LENGTH, Compilation, compile_lines
 from .modal import InitialState
 

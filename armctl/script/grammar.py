@@ -191,7 +191,7 @@ def _register_source_checkout_grammars() -> None:
 def cache_path() -> str | bool:
     """Where Lark caches the built parser tables, or False for no cache.
 
-    platformdirs' ``user_cache_dir`` (armctl/folders.py): ``$XDG_CACHE_HOME/armctl/`` (default
+    platformdirs' ``user_cache_dir`` (armctl/host/folders.py): ``$XDG_CACHE_HOME/armctl/`` (default
     ``~/.cache/armctl/``) on Linux, ``~/Library/Caches/armctl`` on macOS, ``%LOCALAPPDATA%\\armctl\\Cache``
     on Windows.  Building the LALR tables costs
     28 ms at every start, loading them 2.2 ms (measured here).  Built on first use rather than
@@ -203,7 +203,7 @@ def cache_path() -> str | bool:
     cache folder, not Lark's default of a shared temporary folder, since the file is a pickle."""
     from lark import __version__ as lark_version
 
-    from ..folders import user_folder
+    from ..host.folders import user_folder
 
     try:
         folder = user_folder("cache")

@@ -25,7 +25,7 @@ from __future__ import annotations
 from dataclasses import field
 from typing import Mapping, Optional, Sequence
 
-from ..records import record
+from ..core.records import record
 from .expressions import POISONED  # noqa: F401 - re-exported: the state's "error already reported"
 
 POSE_KEYS = ("X", "Y", "Z", "A", "B", "C")

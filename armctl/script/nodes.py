@@ -17,7 +17,7 @@ from __future__ import annotations
 from dataclasses import field
 from typing import Optional, Union
 
-from ..records import record
+from ..core.records import record
 from .expressions import Value
 
 Span = tuple[int, int]  # (column, end_column)

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from typing import Iterator, Optional
 
-from ..protocol import PauseToggle
+from ..core.protocol import PauseToggle
 from .blocks import Block, Line, Problem
 from .expressions import ExpressionError, Unavailable, evaluate, format_value
 from .nodes import BlockLine

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import NamedTuple
 
-from ..records import record
+from ..core.records import record
 
 ERROR = "error"
 WARNING = "warning"
@@ -29,7 +29,7 @@ class Rule(NamedTuple):
 
 # What one script may expand to (E012).  Lines run, every pass of a repeat block counted
 # (a line sends at most one frame): twice the 1,000,000-line benchmark script, more than a day
-# of frames at the line's 20 frames/s.  Motion time, by the profile's model (armctl/estimate.py):
+# of frames at the line's 20 frames/s.  Motion time, by the profile's model (armctl/core/estimate.py):
 # a job longer than a day is surely a mistake (G4 P is milliseconds; U/V are degrees).
 MAX_LINES_RUN = 2_000_000
 MAX_JOB_MOTION_S = 24 * 3600.0

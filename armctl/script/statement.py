@@ -13,7 +13,7 @@ from __future__ import annotations
 from types import MappingProxyType
 from typing import Mapping, NamedTuple, Optional
 
-from ..protocol import Command
+from ..core.protocol import Command
 from .grammar import parse_line
 from .source import SourceSpan
 

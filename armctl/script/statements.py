@@ -23,11 +23,11 @@ from dataclasses import fields as dataclass_fields
 from typing import Callable, NamedTuple, Optional
 
 from ..errors import FieldError
-from ..protocol import (
+from ..core.protocol import (
     PWM_CHANNELS, AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, SetWorktableOrigin, f32_repr,
 )
-from ..records import record
-from ..records import record
+from ..core.records import record
+from ..core.records import record
 from .modal import (
     CARTESIAN, CARTESIAN_SPEED, JOINT_KEYS, JOINT_SPEED, JOINTS, POISONED, POSE_KEYS, PWM_KEYS, ModalState,
 )

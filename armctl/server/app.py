@@ -5,7 +5,7 @@ client can cause is a 4xx JSON ``{"error": message, "code": word}`` (a script's 
 ``diagnostics``), never a traceback.  One middleware does, before any handler: the Host check
 (without a token), the token (``/api`` only), the Origin check (POST and WebSockets), and the
 mapping of armctl's errors to status codes.  Bodies are bounded by the script size limit
-(armctl/inputs.py), so no request can make the server hold more than one script's bytes.
+(armctl/host/inputs.py), so no request can make the server hold more than one script's bytes.
 """
 from __future__ import annotations
 
@@ -18,7 +18,7 @@ from importlib import resources
 from aiohttp import WSMsgType, web
 
 from ..errors import ArmctlError, ScriptError
-from ..inputs import MAX_INPUT_BYTES
+from ..host.inputs import MAX_INPUT_BYTES
 from . import auth
 from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob
 from .hub import Viewer
@@ -149,7 +149,7 @@ async def lint(request: web.Request) -> web.Response:
 async def preview(request: web.Request) -> web.Response:
     """The path the job will take (``armctl plot``'s data), from the profile's fixed pose."""
     from ..lint.formatters import as_record
-    from ..motion import MotionModel
+    from ..core.motion import MotionModel
     from ..plot.path import build_path
 
     service = _service(request)
@@ -206,7 +206,7 @@ async def control_job(request: web.Request) -> web.Response:
 
 
 async def move(request: web.Request) -> web.Response:
-    from ..api import move_line
+    from ..host.api import move_line
 
     service = _service(request)
     words = await _json_object(request)

@@ -128,7 +128,7 @@ class ArmService:
     def check(self, snapshot, *, errors_raise: bool = True):
         """``snapshot`` checked for this arm's profile (``Arm.run``'s check, made once: the
         ``CheckedScript`` is what the job runs): ``errors`` and ``diagnostics`` are ``armctl lint``'s."""
-        from ..checked import check
+        from ..core.checked import check
 
         checked = check(snapshot, self.arm.profile)
         if errors_raise and checked.refusal() is not None:
@@ -155,7 +155,7 @@ class ArmService:
     def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
         """A job of the journal (this server's or an earlier one's), continued from the line its
         log and the arm's report prove (``Arm.run(resume=)``)."""
-        from ..jobflow import read_resume_point
+        from ..host.jobflow import read_resume_point
         from ..script.files import ScriptSnapshot
 
         if not NAME_PATTERN.fullmatch(job_id.replace("T", "")) or not (self.journal_dir / f"{job_id}.txt").is_file():
@@ -168,7 +168,7 @@ class ArmService:
 
     async def _run(self, job: Job, checked, resume) -> None:
         from ..aio import EventObserver
-        from ..jobflow import JobFailed
+        from ..host.jobflow import JobFailed
 
         loop = asyncio.get_running_loop()
 
@@ -321,6 +321,6 @@ def _journal_name(log: Path, default: str) -> str:
 
 
 def _failed(message: str) -> dict:
-    from ..api import RunResult
+    from ..host.api import RunResult
 
     return RunResult.nothing_sent("failed", message=message).to_json()

@@ -47,7 +47,7 @@ def parse_listen(text: str) -> tuple[str, int]:
 
 def token_path() -> Path:
     """Where the generated token is kept: beside the user armctl.toml."""
-    from ..profile import user_config_path
+    from ..host.profile import user_config_path
 
     return user_config_path().parent / TOKEN_NAME
 

@@ -27,8 +27,8 @@ import socket
 import threading
 from typing import Callable
 
-from ..posix_terminal import require_posix_terminal
-from ..protocol import FRAME_SIZE
+from ..host.posix_terminal import require_posix_terminal
+from ..core.protocol import FRAME_SIZE
 from .model import SimOptions, SimulatedArm
 from .realtime import RealtimeArm
 

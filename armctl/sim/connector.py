@@ -27,7 +27,7 @@ from collections import deque
 from dataclasses import dataclass, field
 
 from ..errors import ArmctlError
-from ..protocol import (
+from ..core.protocol import (
     CONNECTOR_BUFFER_FRAMES,
     CONTROL_HEAD,
     CONTROL_TAIL,

@@ -1,7 +1,7 @@
 """The arm's executor: takes frames from the connector's FIFO and carries them out.
 
 Strategy: at most one segment runs at a time; its timing and path come from the shared
-motion-time model (``armctl.motion.MotionModel``, with the simulator's ``speed_factor``), so the
+motion-time model (``armctl.core.motion.MotionModel``, with the simulator's ``speed_factor``), so the
 simulator, ``estimate`` and the streamer agree by construction.  The executor is a small state
 machine driven by three calls from the model's event loop — ``land`` (a frame arrived),
 ``run_until`` (time passed) and ``pose_at`` (a status frame samples the real path) — and it
@@ -47,8 +47,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from ..motion import MotionModel
-from ..protocol import (
+from ..core.motion import MotionModel
+from ..core.protocol import (
     CONTROL_COMMANDS,
     ArcEnd,
     ArcStart,

@@ -13,8 +13,8 @@ Values inside the still band 108…148 mean rate 0: the axis stops at once.  Ful
 
 from __future__ import annotations
 
-from ..kinematics import Unreachable
-from ..protocol import JOYSTICK_LINEAR_AXIS, JOYSTICK_NEUTRAL, JOYSTICK_STILL_RANGE
+from ..core.kinematics import Unreachable
+from ..core.protocol import JOYSTICK_LINEAR_AXIS, JOYSTICK_NEUTRAL, JOYSTICK_STILL_RANGE
 
 FULL_DEFLECTION = 127  # |value − 128| at which an axis reaches the profile's speed cap
 BISECTION_STEPS = 20  # locating where a linear jog leaves the reachable space

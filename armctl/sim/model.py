@@ -11,7 +11,7 @@ one status frame per 30 ms of arm time.  Its records of what happened (frames re
 keep the most recent ``connector.HISTORY_FRAMES`` entries (or up to twice that) plus counters, so memory stays flat
 however long a virtual run is.
 
-A virtual-time host that reads on past frames that are no news to it (armctl/link.py) asks for
+A virtual-time host that reads on past frames that are no news to it (armctl/host/link.py) asks for
 the quiet stretches between events as runs (``status_run``): the timing of each step it would
 take, one status frame each, computed ahead without changing anything; it builds a step's frame
 only when it reads it (``status_frame``) and commits the steps it read (``commit_status_run``),
@@ -31,7 +31,7 @@ import math
 from collections import deque
 from dataclasses import dataclass
 
-from ..protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, STATUS_PERIOD_S, STATUS_SIZE
+from ..core.protocol import CONNECTOR_BUFFER_FRAMES, DEFAULT_BAUD, STATUS_PERIOD_S, STATUS_SIZE
 from .connector import Connector, Framer, ReceivedFrame, decode_received
 from .executor import Execution, Executor, LiveSnapshot
 from .faults import StatusFaults
@@ -96,7 +96,7 @@ class SimOptions:
 
 
 def _load_profile(profile):
-    from ..profile import Profile, chosen_profile
+    from ..host.profile import Profile, chosen_profile
 
     if isinstance(profile, Profile):
         return profile

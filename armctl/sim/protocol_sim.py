@@ -35,7 +35,7 @@ The first four after ``clock`` are the arm profile's ``[connector]`` settings un
 names: the simulated arm impersonates any arm a profile may describe (its profile's own
 ``[connector]`` table is the host's belief and is not read here).
 
-Each number has a finite range (armctl/limits.py, also in the README); an unknown option, a
+Each number has a finite range (armctl/core/limits.py, also in the README); an unknown option, a
 bad or out-of-range value is a ``SimOptionError`` naming the option: a ``ConfigError`` for
 armctl (exit 2 on every command) and a ``SerialException`` for any other pyserial program.
 ``parse_sim_url`` is the one parse of the URL, into one ``SimOptions`` (time scale and clock
@@ -47,7 +47,7 @@ the virtual-time interface: ``next_event_s`` (when the next status burst has rea
 ``advance_to(t)`` (the clock there, the bytes that arrived), ``virtual_burst`` (the two in one
 call, as a wait reads each burst) and, for the quiet stretches where
 nothing happens but status frames, ``virtual_status_run`` / ``status_frames`` /
-``commit_status_run`` (armctl/virtual_wait.py drives them).  Otherwise:  ``write`` hands the bytes to the model at the current model time and
+``commit_status_run`` (armctl/host/virtual_wait.py drives them).  Otherwise:  ``write`` hands the bytes to the model at the current model time and
 returns at once (they queue on the simulated wire; ``out_waiting`` counts those not yet sent);
 ``read`` runs the model up to now and, while it lacks bytes, sleeps until the next status byte
 is due — on an ``Event``, so ``close``/``cancel_read`` wake it — never busy-waiting.  All model
@@ -69,7 +69,7 @@ from typing import Callable
 from serial.serialutil import PortNotOpenError, SerialBase, SerialException, SerialTimeoutException, to_bytes
 
 from ..errors import ConfigError
-from ..limits import (BAUD_RANGE, SIM_FIFO_RANGE_FRAMES, SIM_LINK_SCALE_RANGE, SIM_RATE_RANGE,
+from ..core.limits import (BAUD_RANGE, SIM_FIFO_RANGE_FRAMES, SIM_LINK_SCALE_RANGE, SIM_RATE_RANGE,
                       SIM_READ_GRANULARITY_RANGE_MS, SIM_SEED_RANGE, SIM_SLOWDOWN_RANGE, SIM_TIME_SCALE_RANGE,
                       SIM_WRITE_BUFFER_RANGE_BYTES)
 from .model import SimOptions, SimulatedArm
@@ -148,7 +148,7 @@ _FIFO = _int_in(*SIM_FIFO_RANGE_FRAMES)
 _CONTROL = _one_of("queued", "arrival")
 _SPEED_FACTOR = _float_in(*SIM_SLOWDOWN_RANGE)
 # URL option → (SimOptions field, parser), the one table of options (the docstring's table says
-# what each means); ranges from armctl/limits.py.  An alias names the same field as the option
+# what each means); ranges from armctl/core/limits.py.  An alias names the same field as the option
 # it stands for (the old short names, kept working).
 _OPTIONS: dict[str, tuple[str, Callable[[str, str], object]]] = {
     "speed": ("time_scale", _float_in(*SIM_TIME_SCALE_RANGE)),
@@ -324,7 +324,7 @@ class Serial(SerialBase):
         """Model seconds until the next status burst has reached the host (None: never)."""
         return self._check_open().wall_seconds_until_output() if self.virtual_clock else None
 
-    # --- virtual time: the interface armctl/virtual_wait.py drives (``clock=virtual`` only) ------
+    # --- virtual time: the interface armctl/host/virtual_wait.py drives (``clock=virtual`` only) ------
 
     def next_event_s(self) -> float | None:
         """The clock's reading when the next status burst has fully reached the host (None:

@@ -25,7 +25,7 @@ import threading
 import time
 from typing import Callable
 
-from ..clock import VirtualClock  # noqa: F401  (the clock=virtual port's clock; imported from here)
+from ..host.clock import VirtualClock  # noqa: F401  (the clock=virtual port's clock; imported from here)
 from .model import SimulatedArm
 from .wire import TIME_EPSILON_S
 

@@ -5,7 +5,7 @@ Strategy: ``StatusSchedule`` knows *when* (frame ``n`` is built at ``n · STATUS
 ``ArmSnapshot`` (or any object with its attributes — the executor's is lazy, so a frame
 reading only the pause state samples no pose) taken at that very moment.  Values are clamped to what a status word
 can carry (a 16-bit word overflows at ±3276.7 mm or ±327.67°), so a wild pose never raises.
-The frames are built with the codec in ``armctl.protocol``: the simulator and the reader share
+The frames are built with the codec in ``armctl.core.protocol``: the simulator and the reader share
 one byte map.  Pure: no clock, no I/O.
 """
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 import struct
 from dataclasses import dataclass
 
-from ..protocol import (
+from ..core.protocol import (
     DEG_SCALE,
     MM_SCALE,
     STATUS_PERIOD_S,

@@ -13,7 +13,7 @@ from __future__ import annotations
 import math
 from collections import deque
 
-from ..protocol import DEFAULT_BAUD, byte_seconds
+from ..core.protocol import DEFAULT_BAUD, byte_seconds
 
 # Arrival times are sums of many byte times; a frame whose last bit lands at exactly ``t`` must
 # count as arrived at ``t`` despite rounding, so comparisons allow this much slack.

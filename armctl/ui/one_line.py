@@ -18,8 +18,8 @@ from ..errors import EXIT_PROBLEMS
 def move_words(texts: tuple[str, ...]) -> dict:
     """``("z=200", "f=3000")`` → ``{"z": 200.0, "f": 3000.0}``: ``Arm.move``'s keywords, each
     once; a word that is not one (or not a number) is a usage error, nothing sent."""
-    from ..api import MOVE_KEYWORDS
-    from ..profile import unknown_key_hint
+    from ..host.api import MOVE_KEYWORDS
+    from ..host.profile import unknown_key_hint
 
     words: dict = {}
     for text in texts:
@@ -46,9 +46,9 @@ def one_line_job(port, baud, profile_path, timeout_s, as_json, act, connect) -> 
     """``armctl move``/``home``: open the arm, ``act(arm)`` (one line run as a job, proven at
     rest), print where the arm ended (text, or the ``RunResult`` as JSON), exit with its code.
     ``connect``: how the port is opened (``Arm.open``'s; the CLI's prints the simulator's banner)."""
-    from ..api import Arm
+    from ..host.api import Arm
     from ..errors import ScriptError
-    from ..jobflow import JobFailed
+    from ..host.jobflow import JobFailed
     from .run_job import one_line_summary
 
     with Arm.open(port, baud, profile_path, status_timeout_s=timeout_s, connect=connect) as arm:

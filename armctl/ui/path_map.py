@@ -188,7 +188,7 @@ def job_grid(statements: Iterable, model, start, *, max_frames: int = MAP_MAX_FR
     ``start`` (the streamer's start pose): ``armctl plot``'s sampling of its first
     ``max_frames`` frames, rasterised.  None for a job with nothing to see from above."""
     from ..plot.path import STILL, build_path
-    from ..protocol import ArcStart
+    from ..core.protocol import ArcStart
 
     # build_path makes one PathSegment for every statement but a G300 (drawn with its G301):
     # so segment k belongs to the k-th such frame, whose ordinal is recorded here.

@@ -1,6 +1,6 @@
 """``armctl run`` and ``armctl estimate``: check, then a client of the Python API; report.
 
-Strategy: ``armctl run`` is the Python API (``armctl.Arm``, armctl/api.py) plus presentation.
+Strategy: ``armctl run`` is the Python API (``armctl.Arm``, armctl/host/api.py) plus presentation.
 It checks the whole script first (``checked.check``), printing every finding (nothing is opened
 before it passes), then ``Arm.open`` and ``Arm.run`` — handed that ``CheckedScript``, which they
 do not check again — do the job — read the arm, plan, stream through the one job
@@ -31,9 +31,9 @@ import click
 
 from ..errors import ArmctlError, ScriptError
 from ..errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS, UsageFailure, exit_code_for
-from ..jobflow import JobFailed
-from ..protocol import describe
-from ..streamer import DEFAULT_LEAD_S
+from ..host.jobflow import JobFailed
+from ..core.protocol import describe
+from ..core.streamer import DEFAULT_LEAD_S
 
 LIVE_REFRESH_S = 0.1
 PLAIN_PROGRESS_S = 2.0
@@ -63,8 +63,8 @@ def check_script(script, profile, from_line: int = 1):
     """The same checks as ``armctl lint`` over the whole script (a ``ScriptSnapshot``) before
     anything is sent, and then whether ``from_line`` can start it: any error prints every finding
     and exits 1; warnings are shown and the job goes on.  The ``CheckedScript``, for ``Arm.run``."""
-    from ..checked import check
-    from ..output import quiet
+    from ..core.checked import check
+    from .output import quiet
 
     checked = check(script, profile, from_line=from_line)
     report = checked.report
@@ -94,7 +94,7 @@ def _refuse_on_errors(diagnostics, errors: int) -> None:
 def plan_job(checked, model, lead_s: float, baud: int):
     """``checked`` planned from the profile's fixed pose 0 (a ``CheckedJob``); a job whose motion
     time passes ``MAX_JOB_MOTION_S`` is refused (E012 at the line where it does; exit 1)."""
-    from ..checked import plan
+    from ..core.checked import plan
 
     try:
         return plan(checked, model, model.initial_pose(), None, lead_s, baud)
@@ -125,8 +125,8 @@ def dry_run(options: JobOptions, checked, model) -> int:
 
 
 def _config_baud() -> int:
-    from ..link import config_baud
-    from ..profile import load_config
+    from ..host.link import config_baud
+    from ..host.profile import load_config
 
     config = load_config()
     return config_baud(config.values, config.path_of("baud"))
@@ -203,11 +203,11 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     """Check (printing every finding), then the job through the Python API: ``Arm.open`` and
     ``Arm.run``; this keeps the presentation — the panel or the JSON events, the notes, the
     keys and Ctrl-C as calls on the arm, the summary and the exit code."""
-    from ..api import Arm
-    from ..jobflow import read_resume_point
-    from ..link import choose_port
-    from ..calibration import arm_profile
-    from ..motion import MotionModel
+    from ..host.api import Arm
+    from ..host.jobflow import read_resume_point
+    from ..host.link import choose_port
+    from ..host.calibration import arm_profile
+    from ..core.motion import MotionModel
 
     # once: the profile carries the stored calibration of the arm on the port (a dry run opens
     # none: the port given, else the configured one, as estimate)
@@ -308,7 +308,7 @@ class _RunObserver:
     the plain progress lines or the --json events, and the notes on stderr above the panel."""
 
     def __init__(self, options: JobOptions, model, events) -> None:
-        from ..output import quiet
+        from .output import quiet
         from .run_keys import FOOTER, keys_available
 
         self.options, self.model, self.events = options, model, events
@@ -342,14 +342,14 @@ class _RunObserver:
 
 
 def _stop_signals(arm, watch):
-    """Ctrl-C (or SIGTERM, SIGHUP: armctl/stop_signals.py) is ``arm.stop()``: the job stops at
+    """Ctrl-C (or SIGTERM, SIGHUP: armctl/host/stop_signals.py) is ``arm.stop()``: the job stops at
     its next safe point (between writes), sends the abort sequence and waits for the arm; a
     second one cuts the wait short.  Before the first frame, any of the three stops at once, as
     outside a job: ``arm.stop()`` alone would be lost while ``arm.run`` is still checking the
     script (the API counts a stop from when it registers the job), and the job would run to its end."""
     import signal
 
-    from ..stop_signals import stop_signals
+    from ..host.stop_signals import stop_signals
 
     def on_stop(signum: int) -> None:
         why = None if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}"
@@ -369,7 +369,7 @@ def _keys(arm):
 
 def _live(options: JobOptions) -> bool:
     """The rich panel, rather than plain progress lines: asked for, stdout is a terminal, not -q."""
-    from ..output import quiet
+    from .output import quiet
 
     return options.live and sys.stdout.isatty() and not quiet()
 

@@ -87,7 +87,7 @@ def failure_result(outcome: str, exit_code: int, *, message: str | None = None, 
     """The summary of a run that sent nothing (``RunResult.nothing_sent``): refused (the
     script's errors, which it adds as ``diagnostics``: lint's JSON records), failed before the
     first frame (no arm, a bad --resume LOG), interrupted while starting, or nothing to send."""
-    from ..api import RunResult
+    from ..host.api import RunResult
     from ..lint.formatters import as_record
 
     result = RunResult.nothing_sent(outcome, exit_code=exit_code, message=message).to_json()

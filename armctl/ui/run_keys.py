@@ -18,7 +18,7 @@ import threading
 import time
 from contextlib import contextmanager
 
-from ..feed import FEED_STEP_PERCENT
+from ..core.feed import FEED_STEP_PERCENT
 
 
 def _toggle(arm) -> None:

@@ -15,8 +15,8 @@ from rich.progress_bar import ProgressBar
 from rich.table import Table
 from rich.text import Text
 
-from ..armstate import STALE_AFTER_S, ArmState
-from ..protocol import STATUS_KINDS, STATUS_ROTATION
+from ..core.armstate import STALE_AFTER_S, ArmState
+from ..core.protocol import STATUS_KINDS, STATUS_ROTATION
 
 
 @dataclass(frozen=True)

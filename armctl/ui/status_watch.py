@@ -47,7 +47,7 @@ def _silence_message(url, baud, timeout_s, state, received, skipped, frames) -> 
             f"{where}: received {received} bytes that never formed a status frame "
             f"({skipped} skipped; is the baud rate right?)"
         )
-    from ..protocol import STATUS_KINDS, STATUS_ROTATION
+    from ..core.protocol import STATUS_KINDS, STATUS_ROTATION
 
     missing = [STATUS_KINDS[k].NAME for k in STATUS_ROTATION if k not in state.last_seen]
     return f"{where}: {frames} status frames read, never saw: {', '.join(missing)}"

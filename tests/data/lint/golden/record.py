@@ -25,7 +25,7 @@ GOLDEN = HERE / "diagnostics.json"
 def diagnostics(script: str, profile_path) -> dict:
     """What lint reports on ``script`` (every finding kept), as plain data."""
     from armctl.lint.engine import lint_lines
-    from armctl.profile import default_profile, load_profile
+    from armctl.host.profile import default_profile, load_profile
     from armctl.script.files import iter_lines
 
     profile = default_profile() if profile_path is None else load_profile(ROOT / profile_path)

@@ -1,0 +1,184 @@
+"""What the job engine keeps of the arm's reports, and of the frames it wrote: the record the
+end of a job (armctl/core/job_end.py) and the arm's arrival (armctl/core/job_arrival.py) judge from.
+
+Strategy: pure state, fed one reading at a time (``Readings.take``: the engine's
+``receive_statuses`` calls it for every position, joints and pause-and-PWM report, the kinds
+whose readings say whether the arm is at rest); nothing here decides what to write.  From it:
+
+- **At rest** is armctl/core/evidence.py's rule (``known_still_s``): every kind — position, joints
+  1-3, joints 4-6, pause and PWM — unchanged since their last change *and* re-read since, from
+  the later of that change and the arrival of the last frame written (a frame that came while
+  the arm stood still may set it going, its own IK elsewhere, after the readings were taken).
+  Until each kind was read once, nothing is known still (``rest_s`` is 0).
+- **Paused** is two agreeing pause reports (armctl/core/evidence.py ``agreed``): one corrupted byte
+  must never make armctl toggle the arm.
+- **Active** (``active_s``): when the arm last visibly worked — position or joints moved by more
+  than a reading's jitter (``TARGET_MM``, ``TARGET_DEG``: a reading's resolution, so the arm
+  counts as at a target within them), or an SD program's run position advanced while the arm
+  stood still.
+- **Motion** (``motion``): the position and joints alone (no PWM), with when they last changed
+  and the latest reading before that which still differed from them — the window in which the
+  arm stopped (``Arrival.done_at``).
+
+``Written`` is the other half of the record: the last ``RECENT_FRAMES`` frames written (the
+trailing frames that move nothing are judged on them), the last that moves the arm, and the
+job's own PAUSE frames.
+"""
+
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import fields
+from operator import attrgetter
+
+from .evidence import AGREEING_REPORTS, agreed, known_still_s
+from .protocol import JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus
+from .streamer import ARRIVAL_SLACK_S
+
+TARGET_MM = 0.5  # how close the reported position must be to the last target (0.1 mm resolution)
+TARGET_DEG = 0.2
+# The kinds whose readings say whether the arm is at rest — position, joints 1-3, joints 4-6,
+# pause and PWM — and their fields, read directly (this runs for every status frame).
+REST_VALUES = {cls.KIND: attrgetter(*(f.name for f in fields(cls)))
+               for cls in (PositionStatus, JointsLowStatus, JointsHighStatus, PauseStatus)}
+RUN_POSITION_KIND = RunPositionStatus.KIND
+PAUSE_KIND = PauseStatus.KIND
+RECENT_FRAMES = 64  # frames written kept for the end of the job (the trailing frames that move nothing)
+
+
+class Written:
+    """The frames the job wrote, as the end of the job needs them (each a ``SentFrame``)."""
+
+    def __init__(self) -> None:
+        self.recent: deque = deque(maxlen=RECENT_FRAMES)  # the last frames written
+        self.last_move = None  # the last frame written that moves the arm
+        self.script_toggles: list = []  # the job's own PAUSE frames written, in order
+        self.script_paused = False  # the job's own PAUSE lines left the arm to pause: an odd number written
+
+    def note(self, sent) -> None:
+        self.recent.append(sent)
+        if isinstance(sent.command, PauseToggle):
+            self.script_toggles.append(sent)
+            self.script_paused = len(self.script_toggles) % 2 == 1  # (a plain attribute: read for every frame)
+        if sent.segment.moves_reported:  # (``moves_arm``)
+            self.last_move = sent
+
+    def script_pause_line(self):
+        return getattr(self.script_toggles[-1].tag, "line", None)
+
+
+class Readings:
+    """The arm's last reports, with when each kind was read and when the readings changed."""
+
+    def __init__(self, written: Written) -> None:
+        self.written = written
+        # (position, joints 1-3, joints 4-6, pause and PWM as last reported, since when): the
+        # arm is at rest when none of them changed for REST_CHECK_S — a wrist turning in place
+        # changes only joints.
+        self.rest: tuple | None = None
+        self.read_at: dict[int, float] = {}  # kind → when it was last read (``known_still_s``)
+        self.motion: tuple | None = None  # (position and joints, since when, the latest reading that differed)
+        self.moved_from: tuple | None = None  # the readings when they last changed by more than jitter
+        self.run_position: float | None = None  # the SD program's run position last reported
+        self.active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
+        self.reported: dict = {}  # kind → its readings (position: in the worktable, ``worktable_xyz``)
+        self.pause_reports: deque = deque(maxlen=AGREEING_REPORTS)  # the last pause states reported
+        self.pause_read_s: deque = deque(maxlen=AGREEING_REPORTS)  # ... and when they were read
+
+    def take(self, kind: int, values: tuple, now: float) -> bool:
+        """One kind's readings read at ``now``; True when they changed (or are the first read)."""
+        reported, read_at = self.reported, self.read_at
+        changed = reported.get(kind) != values  # else so are the readings: ``rest`` and ``motion`` hold them
+        reported[kind] = values
+        before_s = read_at.get(kind) if changed else None  # the last reading of this kind that differed
+        read_at[kind] = now
+        if not changed and self.rest is not None:
+            return False
+        # One kind's values changed (or these are the first readings): the readings differ from
+        # the last ``rest`` (it always holds the readings before this frame), and so does the
+        # motion unless only the pause and PWM changed.
+        rest = self.rest = ((reported.get(0), reported.get(1), reported.get(2), reported.get(4)), now)
+        motion = self.motion
+        if kind != PAUSE_KIND or motion is None:
+            moving_s = motion[2] if motion is not None else None
+            if kind != PAUSE_KIND and before_s is not None and (moving_s is None or before_s > moving_s):
+                moving_s = before_s
+            readings = rest[0][:3]
+            self.motion = (readings, now, moving_s)
+            moved_from = self.moved_from
+            # Every other kind's readings are within jitter of ``moved_from`` (checked when they
+            # changed, or equal since it was taken): only this kind's can have moved.
+            if moved_from is None or (kind != PAUSE_KIND and slot_moved(kind, moved_from[kind], values)):
+                self.moved_from = readings
+                self.active_s = now
+        return True
+
+    def take_pause(self, paused: bool, now: float) -> bool | None:
+        """A pause report read at ``now``; the pause state the reports now agree on (``paused``)."""
+        self.pause_reports.append(paused)
+        self.pause_read_s.append(now)
+        return agreed(self.pause_reports)
+
+    def take_run_position(self, value: float, now: float) -> bool:
+        """An SD program's run position; True when it advanced (the arm works, even standing still)."""
+        advanced = self.run_position is not None and value != self.run_position
+        if advanced:
+            self.active_s = now
+        self.run_position = value
+        return advanced
+
+    @property
+    def paused(self) -> bool | None:
+        """The pause state when the last two pause reports agree (armctl/core/evidence.py ``agreed``)."""
+        return agreed(self.pause_reports)
+
+    def rest_s(self) -> float:
+        """How long the readings of every kind (position, joints 1-3, joints 4-6, pause and PWM)
+        are known unchanged (``known_still_s``; 0 until each kind was read once)."""
+        if self.rest is None or len(self.read_at) < len(REST_VALUES):
+            return 0.0
+        return known_still_s(self.rest_since_s(), self.read_at.values())
+
+    def rest_since_s(self) -> float:
+        """Since when the readings prove a rest: their last change, or the arrival of the last
+        frame written if later — a frame that came while the arm stood still may set it going
+        (its own IK elsewhere) after the readings were taken."""
+        since = self.rest[1]
+        recent = self.written.recent
+        if recent:
+            since = max(since, recent[-1].wire_end_s + ARRIVAL_SLACK_S)
+        return since
+
+    @property
+    def position(self) -> tuple | None:
+        return self.reported.get(0)
+
+    @property
+    def joints(self) -> tuple:
+        """The six joints as last reported (fewer while a half was never read)."""
+        return (self.reported.get(1) or ()) + (self.reported.get(2) or ())
+
+
+def values_text(values) -> str:
+    return ", ".join(f"{v:.1f}" for v in values or ())
+
+
+def moves_arm(segment) -> bool:
+    """Whether a frame's motion changes the reported position or joints (the motion model's
+    ``Segment.moves_reported``: not a move of E0/E1 alone, which no status kind reports)."""
+    return segment.moves_reported
+
+
+def moved_clearly(before: tuple, after: tuple) -> bool:
+    """Position (kind 0) or joints (kinds 1, 2) changed by more than a reading's jitter."""
+    return any(slot_moved(kind, old, new) for kind, (old, new) in enumerate(zip(before, after)))
+
+
+def slot_moved(kind: int, old: tuple | None, new: tuple | None) -> bool:
+    """One kind's readings (0 position, 1 and 2 the joint halves) changed by more than jitter."""
+    if old is None or new is None:
+        return old is not new
+    limit = TARGET_MM if kind == 0 else TARGET_DEG  # unrolled (three readings a kind): every moving status frame
+    a, b, c = old
+    x, y, z = new
+    return abs(a - x) > limit or abs(b - y) > limit or abs(c - z) > limit

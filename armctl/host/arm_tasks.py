@@ -1,0 +1,181 @@
+"""The order of an arm's tasks: one worker thread, the moves queued on it, the running job.
+
+Strategy: ``Tasks`` is what makes ``Arm`` thread-safe.  Public calls put a task on the worker's
+queue (``Worker``, the only thread that touches the link); a blocking call waits for its task
+(``call``), a move with ``wait=False`` is queued (``queue``) and returns at once.  A queued move
+that fails cancels the moves queued after it — the arm is no longer where they assume — and
+its error is raised by the next blocking call (``raise_deferred``).  ``stop`` counts the stops
+(a job whose call began before one sends nothing), cancels the queue and asks the running job
+(``attach``/``detach`` make it reachable) to stop; ``ask_job`` hands a request to its engine.
+"""
+from __future__ import annotations
+
+import queue
+import threading
+from concurrent.futures import Future
+from typing import Any, Callable
+
+from .arm_worker import JOB_ENDED, JobControl
+from ..errors import ArmctlError
+from .jobflow import JobFailed
+
+SKIPPED = object()  # a task not run: a queued move before it failed (its error is raised instead)
+
+
+class Worker:
+    """One thread that runs tasks in order: the only one that touches the arm's link."""
+
+    def __init__(self, name: str) -> None:
+        self._tasks: queue.SimpleQueue = queue.SimpleQueue()
+        self._thread = threading.Thread(target=self._loop, name=name, daemon=True)
+        self._thread.start()
+
+    def submit(self, task: Callable[[], Any]) -> Future:
+        future: Future = Future()
+        self._tasks.put((task, future))
+        return future
+
+    def call(self, task: Callable[[], Any]) -> Any:
+        """Run ``task`` on the worker and return its result (at once when already on it)."""
+        if self.is_current():
+            return task()
+        return self.submit(task).result()
+
+    def is_current(self) -> bool:
+        return threading.current_thread() is self._thread
+
+    def stop(self) -> None:
+        self._tasks.put(None)
+        if not self.is_current():
+            self._thread.join()
+
+    def _loop(self) -> None:
+        while True:
+            item = self._tasks.get()
+            if item is None:
+                return
+            task, future = item
+            if not future.set_running_or_notify_cancel():
+                continue  # cancelled while queued (stop, or a queued move before it failed)
+            try:
+                future.set_result(task())
+            except BaseException as error:  # handed to whoever waits; the worker goes on
+                future.set_exception(error)
+
+
+class Tasks:
+    """The worker of the arm on ``url``, the moves queued on it and the job it runs."""
+
+    def __init__(self, url: str) -> None:
+        self.url = url
+        self.lock = threading.Lock()
+        self.worker = Worker(f"armctl-arm {url}")
+        self.queued: list[Future] = []  # moves queued with wait=False, not yet finished
+        self.deferred: BaseException | None = None  # the error of a queued move, for the next blocking call
+        self.job: JobControl | None = None
+        self.stops = 0  # how many times stop() was called: a queued move from before it is not sent
+        self.closed = False
+
+    def call(self, task: Callable[[], Any]) -> Any:
+        """Run ``task`` on the worker after everything queued — unless a queued move failed:
+        then its error is raised and ``task`` does not run."""
+        if self.closed:
+            raise ArmctlError(f"the arm on {self.url} is closed")
+
+        def unless_failed():
+            return SKIPPED if self.deferred is not None else task()
+
+        try:
+            result = self.worker.call(unless_failed)
+        finally:
+            self.raise_deferred()
+        if result is SKIPPED:  # another thread took the queued move's error first
+            raise JobFailed("not run: a move queued before it failed")
+        return result
+
+    def queue(self, task: Callable[[], Any], stops: int) -> None:
+        """``task`` queued on the worker, not waited for: not run if ``stop()`` came since
+        ``stops``, nor if a move queued before it failed (its error is kept, the rest cancelled)."""
+        if self.closed:
+            raise ArmctlError(f"the arm on {self.url} is closed")
+
+        def queued() -> Any:
+            if stops != self.stops:
+                return None  # stop() came after this move was queued (it cancels the queue)
+            if self.deferred is not None:
+                raise JobFailed("not sent: a move queued before it failed")
+            return task()
+
+        with self.lock:
+            future = self.worker.submit(queued)
+            self.queued.append(future)
+        future.add_done_callback(self._queued_done)
+
+    def raise_deferred(self) -> None:
+        with self.lock:
+            error, self.deferred = self.deferred, None
+        if error is not None:
+            raise error
+
+    def _queued_done(self, future: Future) -> None:
+        """A queued move ended (on the worker): keep its error; a failure cancels the rest."""
+        error = None if future.cancelled() else future.exception()
+        with self.lock:
+            if future in self.queued:
+                self.queued.remove(future)
+            if error is None:
+                return
+            self.deferred = self.deferred or error
+            later, self.queued = self.queued, []
+        for queued in later:  # outside the lock: cancel() calls this method again at once
+            queued.cancel()
+
+    def attach(self, control: JobControl, stops: int) -> bool:
+        """``control`` is the running job (``pause``, ``stop`` reach it); True when a ``stop()``
+        came since the call began (``stops``)."""
+        with self.lock:
+            self.job = control
+            return stops != self.stops
+
+    def detach(self, control: JobControl) -> None:
+        with self.lock:
+            self.job = None
+            control.end()
+
+    def ask_job(self, action: Callable[[Any], Any]) -> Any:
+        """``action(job)`` carried out by the running job's engine at the runner's next turn
+        (at once when called on the worker, from ``on_progress``: that is between two turns);
+        ``JOB_ENDED`` when no job is running or it ended first."""
+        with self.lock:
+            job = self.job if self.job is not None and not self.job.stop_asked else None
+            if job is None:
+                return JOB_ENDED
+            if self.worker.is_current():
+                return action(job.runner.job)
+            future = job.request(action)
+        return future.result()
+
+    def stop(self, why: str | None = None) -> None:
+        """Count the stop, cancel the queued moves, ask the running job to stop (see ``Arm.stop``)."""
+        with self.lock:
+            self.stops += 1
+            queued, self.queued = self.queued, []
+            job = self.job
+        for future in queued:  # outside the lock: cancel() calls _queued_done at once
+            future.cancel()
+        if job is not None:
+            job.request_stop(why)
+
+    def close(self, link, raise_deferred: bool = True) -> None:
+        """Wait for the queued tasks (each run exactly once), stop the worker, close ``link``."""
+        with self.lock:
+            if self.closed:
+                return
+            self.closed = True
+        try:
+            self.worker.call(lambda: None)  # every task queued before has run
+        finally:
+            self.worker.stop()
+            link.close()
+        if raise_deferred:
+            self.raise_deferred()

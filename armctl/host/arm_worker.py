@@ -1,0 +1,288 @@
+"""The arm's worker: one thread that owns the link, and one job on it from the arm's report to
+its ``RunResult`` (``run_job``).
+
+Strategy: every write, every wait and the virtual clock of a ``sim://?clock=virtual`` port
+belong to one thread (armctl/host/arm_tasks.py), which runs the API's tasks in order.  A job on it goes down,
+never back up: read the arm (``jobflow.read_arm``; with a resume, the line the log and the
+arm's report prove), plan the ``CheckedScript`` it was handed from the arm's report
+(``checked.prepare``: a ``CheckedJob``), build the runner (``jobflow.start_job``), plug it into
+the link and drive it (``jobflow.drive``), then the result.  Control of a running job from
+other threads is a request to its engine (``JobControl``), carried out between two writes.
+"""
+from __future__ import annotations
+
+import logging
+from concurrent.futures import Future
+from dataclasses import dataclass
+from typing import IO, Any, Callable
+
+from .jobflow import JobFailed
+from .results import Progress, RunResult
+
+_logger = logging.getLogger("armctl.host.api")  # the API's logger: JobObserver's default goes there
+
+PROGRESS_EVERY_S = 0.25  # on_progress is called at least this often (arm clock), even when nothing moved on
+JOB_ENDED = object()  # a request the job ended before carrying out
+PAUSE_READ_TIMEOUT_S = 3.0  # how long two agreeing pause reports are waited for (one comes every 0.27 s)
+
+
+class ArmTimeout(JobFailed):
+    """``timeout=`` passed before the arm proved the job done: the job was stopped as by
+    ``Arm.stop`` (no more frames, the abort sequence) and ``result`` says how far it went."""
+
+
+class JobObserver:
+    """Follows one job as ``Arm.run(..., observer=)`` runs it — what ``armctl run`` builds its
+    live panel, its ``--json`` events and its stderr notes from.  Subclass it and override what
+    you need; every method is called from the arm's worker thread, and none may block for long
+    (the job waits for it).  An exception raised by one stops the job, as ``on_progress``'s does.
+
+    ``view`` is the job engine's live ``RunView`` (armctl/core/job.py): frames sent and known done,
+    the last line sent and known executed, the pause state and the feed override, the arm's
+    position, the ETA.  It changes while the job runs: read it in the call, do not keep it.
+    """
+
+    def started(self, view, plan) -> None:
+        """Before the first frame: the job's ``view``, and its ``plan`` (``armctl.core.checked.CheckedJob``:
+        ``start``, the arm's reported pose; ``initial``, the compiler's initial state — the
+        panel's map is drawn from them and ``statements()``; ``estimate``; ``from_line``, after
+        a ``resume`` the line the log proved)."""
+
+    def update(self, view) -> None:
+        """After every turn of the engine that wrote a frame, waited or ended (often: throttle)."""
+
+    def note(self, text: str) -> None:
+        """A message for people (resuming an arm found paused, the line a resume starts at,
+        why a job is stopping).  Default: the ``armctl.host.api`` logger at INFO."""
+        _logger.info("%s", text)
+
+    def warning(self, diagnostic: Any) -> None:
+        """A lint warning of the script (``Diagnostic``; errors raise ``ScriptError`` instead).
+        Default: the ``armctl.host.api`` logger at INFO."""
+        _logger.info("%s", diagnostic.render())
+
+
+
+@dataclass(frozen=True)
+class JobSpec:
+    """What a call asked of one job, besides the script: its hooks, log, abort and resume."""
+
+    observer: JobObserver
+    on_progress: Callable[[Progress], None] | None = None
+    timeout_s: float | None = None
+    log: IO[str] | None = None
+    abort: str = "pause"
+    resume: Any = None  # a joblog.ResumePoint
+
+
+class JobControl:
+    """The job the worker is running, as the API's calls reach it: pause, resume and the feed
+    override are requests to the job engine (``JobRunner.control``, carried out by the worker
+    between two writes — the engine holds the feed while paused, in either control-frame mode);
+    the timeout and ``on_progress`` are looked at whenever the runner reports (``on_update``)."""
+
+    def __init__(self, runner, on_progress, timeout_s: float | None, observer: JobObserver | None = None,
+                 journal: Callable[[Any], None] | None = None) -> None:
+        self.runner = runner
+        self.on_progress, self.timeout_s = on_progress, timeout_s
+        self.observer, self.journal = observer, journal
+        self.stop_asked = False  # stop() or the timeout: the runner was asked to stop
+        self.timed_out = False
+        self.callback_error: Exception | None = None  # what on_progress raised
+        self._asked: list[Future] = []  # requests handed to the runner (answered JOB_ENDED if it ends first)
+        self._shown: tuple = ()
+        self._shown_s = float("-inf")
+
+    def request(self, action: Callable[[Any], Any]) -> Future:
+        """``action(job)`` on the worker at the runner's next turn; its answer in the Future.
+        Called with ``Arm._lock`` held while this is the running job (``end`` runs under the
+        lock too: a request is either carried out or answered ``JOB_ENDED``)."""
+        future: Future = Future()
+        self._asked.append(future)
+        self.runner.control(lambda job: future.done() or future.set_result(action(job)))
+        return future
+
+    def request_stop(self, why: str | None = None) -> None:
+        """The Ctrl-C path (``jobflow.drive`` sends the abort sequence); ``why`` goes into the
+        result's messages.  Asked again while stopping: stop waiting for the arm (a second Ctrl-C)."""
+        if why is not None and why not in self.runner.view.messages:  # two SIGTERMs: one note
+            self.runner.view.messages.append(why)
+        first = not self.stop_asked and not self.runner.stop_requested
+        self.stop_asked = True
+        if first:
+            try:
+                self.runner.request_stop()
+                return
+            except KeyboardInterrupt:  # the runner began stopping on its own meanwhile (a failure)
+                pass
+        self.runner.cut_short()  # stopping already (asked, the timeout, a failure): a second Ctrl-C
+
+    def on_update(self, view) -> None:
+        """The runner's hook, on the worker between two of its turns: the timeout, then
+        ``on_progress`` (none once the job is stopping)."""
+        if self.journal is not None:
+            self.journal(view)  # --log's progress records, to the end (the abort included)
+        if self.observer is not None:
+            self.observer.update(view)  # the live view follows the abort too
+        if self.stop_asked:
+            return
+        now_s = view.now_s
+        if self.timeout_s is not None and now_s - view.started_s > self.timeout_s:
+            self.timed_out = True
+            self.request_stop()
+            return
+        if self.on_progress is not None:
+            shown = (view.frames_sent, getattr(view.last_done, "line", None))
+            if shown != self._shown or now_s - self._shown_s >= PROGRESS_EVERY_S:
+                self._shown, self._shown_s = shown, now_s
+                try:
+                    self.on_progress(Progress.of(view, self.runner.job.arm_paused, now_s))
+                except Exception as error:  # stops the job (jobflow.drive); raised as the cause
+                    self.callback_error, self.stop_asked = error, True  # no callback while it aborts
+                    raise
+
+    def end(self) -> None:
+        """The job is over: a request it did not carry out is done on the idle arm instead."""
+        for future in self._asked:
+            if not future.done():
+                future.set_result(JOB_ENDED)
+        self._asked = []
+
+
+def toggle_idle_arm(link, want_paused: bool) -> bool:
+    """On the worker, no job running: one pause toggle when two agreeing reports say the arm is
+    not yet as wanted (armctl/core/job_control.py's pause rule: a toggle on a guess could undo it),
+    then wait for it to report so.  True when a toggle went; ``JobFailed`` when the reports do
+    not agree or the arm does not follow."""
+    from ..core.job_control import pause_toggle_needed
+    from .jobflow import reported_pause
+    from ..core.protocol import PauseToggle
+
+    sent = pause_toggle_needed(want_paused, reported_pause(link, PAUSE_READ_TIMEOUT_S))
+    if sent:
+        link.write(PauseToggle().encode())
+    if sent is None:
+        raise JobFailed("the arm's pause reports did not agree twice in a row: no pause toggle sent")
+    if sent and not link.wait_until(lambda s: s.paused is want_paused, PAUSE_READ_TIMEOUT_S):
+        raise JobFailed(f"the arm did not report it {'paused' if want_paused else 'resumed'} after a pause toggle")
+    return sent
+
+
+
+@dataclass(frozen=True)
+class ArmLine:
+    """What a job needs of its arm: the link (the worker's), the profile and its motion model,
+    the baud rate, the lead and how long to wait for the arm's status."""
+
+    link: Any
+    profile: Any
+    model: Any
+    baud: int
+    lead_s: float
+    status_timeout_s: float
+
+
+def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Callable[[], bool],
+            attach: Callable[[JobControl], bool], detach: Callable[[JobControl], None]) -> RunResult:
+    """On the worker: read the arm, plan ``checked`` (a ``CheckedScript``) from its report, drive
+    the runner, report.  ``from_arm``: a move's one line, checked again from the arm's report (the
+    words it leaves out are the arm's).  ``stopped()``: a ``stop()`` came since the call — before
+    the first frame it ends the job with nothing sent.  ``attach(control)`` makes the job
+    reachable by ``pause``/``stop`` (True: a stop came meanwhile); ``detach`` when it ended."""
+    from ..core import checked as checking
+    from .calibration import stale_notes
+    from .jobflow import JournalFile, drive, journal_for, read_arm, start_job
+    from .runner import abort_frames
+
+    link, observer = arm.link, spec.observer
+    arrival = arm.profile.connector.control_on_arrival
+    journal = None if spec.log is None else JournalFile(spec.log, sync=not getattr(link.clock, "virtual", False))
+    # a resume decides from the arm as it is, paused or not: it continues or refuses before it sends anything
+    state = read_arm(link, arm.status_timeout_s, journal, note=observer.note, control_on_arrival=arrival,
+                     unpause=spec.resume is None)
+    if spec.resume is not None:
+        resumed = _resume(arm, checked, spec, journal, stopped)
+        if isinstance(resumed, RunResult):
+            return resumed
+        state, checked = resumed
+    if from_arm:  # the move's words left out are the arm's: checked from its report
+        checked = checking.check(checked.snapshot, arm.profile, checking.start_from_state(arm.model, state)[1])
+        if checked.refusal() is not None:
+            raise checked.refusal()
+    for diagnostic in checked.diagnostics:  # for people, not the result (armctl run prints its own, before)
+        if diagnostic.severity != "error":
+            observer.warning(diagnostic)
+    job = checking.prepare(checked, arm.model, state, arm.lead_s, arm.baud)
+    if job.estimate.frames == 0:
+        where = f" from line {job.from_line}" if job.from_line > 1 else ""
+        return RunResult.nothing_sent("finished", message=f"nothing to send: the script has no frames{where}")
+    if stopped():  # stop() (Ctrl-C) while the arm was read: no frame goes
+        return RunResult.nothing_sent("interrupted")
+    runner = start_job(link, arm.model, job, journal)
+    if journal is not None:  # which script it records (resume= checks it); a failed write stops the job like any
+        _journal_job(runner, job, state, arrival)
+    control = JobControl(runner, spec.on_progress, spec.timeout_s, observer, journal_for(runner, job.snapshot, journal))
+    runner.on_update = control.on_update
+    link.on_status = runner.on_status  # the link's status frames go to this job's engine while it runs
+    try:
+        if attach(control):  # a stop() between the check above and here
+            control.request_stop()
+        observer.started(runner.view, job)
+        outcome = drive(runner, abort_frames(spec.abort, arrival), on_stopping=lambda why: observer.note(
+            f"\narmctl: {why}: no more frames are sent; sending the abort sequence ({spec.abort}) and waiting for "
+            "the arm to come to rest …"))
+    finally:
+        detach(control)
+        link.on_status = None
+    runner.view.messages.extend(stale_notes(arm.profile, link.url, runner.streamer.slowest_proven,
+                                            outcome == "frames may have been lost"))
+    return _result(runner, outcome, job, control, spec)
+
+
+def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[], bool]):
+    """Wait for the arm to come to rest, then (its state, ``checked`` from the line the log and
+    its report prove); a ``RunResult`` with nothing sent when a stop came or nothing is left."""
+    from .jobflow import resume_paused, resume_start
+
+    observer = spec.observer
+    for told in spec.resume.notes:  # e.g. the torn last line a crash left, ignored
+        observer.note(f"armctl: --resume: {told}")
+    started = resume_start(arm.link, spec.resume, arm.status_timeout_s, arm.lead_s, stopped=stopped)
+    if started is None:  # stop() (Ctrl-C) while the arm ran out its queue: no frame goes
+        return RunResult.nothing_sent("interrupted")
+    state, from_line = started
+    if from_line is None:
+        return RunResult.nothing_sent("finished", message="nothing to resume: every line of the job is proven executed")
+    checked = checked.starting_at(from_line)
+    if checked.from_line_error is not None:
+        raise checked.from_line_error
+    observer.note(f"armctl: resuming {checked.name} at line {from_line}: the log and the arm's report prove every line "
+                  "before it ran")
+    resume_paused(arm.link, arm.status_timeout_s, journal, observer.note, arm.profile.connector.control_on_arrival)
+    return arm.link.snapshot()[0], checked
+
+
+def _journal_job(runner, job, state, arrival: bool) -> None:
+    """The job's first record in ``--log``: which script, from which line and pose."""
+    from ..core.joblog import job_record, target_of
+
+    known = state.position_mm is not None and None not in state.joints_deg
+    start = target_of("line", state.position_mm, state.joints_deg) if known else None
+    runner.log_record(job_record(job.snapshot.name, job.snapshot.data, job.from_line, job.lead_s, job.estimate.frames,
+                                 arrival, start), durable=True)
+
+
+def _result(runner, outcome: str, job, control: JobControl, spec: JobSpec) -> RunResult:
+    """The ``RunResult``, returned for a job that finished or was interrupted, else raised."""
+    result = RunResult.of(runner.view, outcome, job.snapshot.lines(), estimated_job_s=job.estimate.job_s)
+    if control.timed_out:
+        raise ArmTimeout(f"the arm did not prove the job done within {spec.timeout_s:g} s: it was stopped "
+                         f"(last line known executed: {result.last_line_executed})", result)
+    # "finished, unproven": the arm's reports say it ended, but the FIFO size was never probed
+    # and some frames rest on time alone — returned, not raised (the arm did what it was told
+    # as far as anyone can tell), with ``finished`` False and ``exit_code`` 1: the exit code
+    # ``armctl run`` takes from this same result (one rule: ``exit_code_of``)
+    if outcome not in ("finished", "finished, unproven", "interrupted"):
+        detail = "; ".join(result.messages)
+        raise JobFailed(f"the job ended {outcome}" + (f": {detail}" if detail else ""), result) from control.callback_error
+    return result

@@ -1,0 +1,356 @@
+"""The calibration store: what ``armctl probe`` measured, kept with the arm it measured.
+
+Strategy: an arm is known by its identity, never by the directory a command runs in.
+``arm_identity`` turns a port into one: a USB device's VID:PID and serial number (or, without
+a serial number, the USB location it is plugged into) as pyserial's ``list_ports`` reports them
+for the port's device, ``host:port`` for ``socket://`` and ``rfc2217://``, the arm's own options
+for ``sim://`` (what the simulated arm does — FIFO, control frames, status frame, speed factor,
+links, baud, profile — in one canonical spelling, defaults left out; not the clock, the time
+scale, the seed or the faults, which are the line's and the test's, not the arm's), and the
+device path itself for a device pyserial knows nothing more of.  Two spellings of one arm
+(``sim://?speed_factor=1.3&fifo=50&clock=virtual`` and ``sim://?fifo_frames=50&speed_factor=1.3``)
+are one identity; an identity is a port too (``arm_identity`` of it is itself).
+
+A ``Calibration`` is one arm's measured ``[connector]`` settings, each with the date it was
+probed, its evidence and how sure the probe was.  A later probe replaces the values it measured
+and keeps the others (a ``--no-motion`` probe does not forget a speed factor measured before).
+The store is one JSON file per arm in the user data directory (``$XDG_DATA_HOME/armctl/arms/``,
+platformdirs' ``user_data_dir("armctl")`` elsewhere), named by the identity (quoted), written
+atomically (a temporary file, fsync, rename): a crash leaves the old record or the new one.
+
+Pure apart from the edges: ``list_ports`` (``port_infos``, only for a device path) and the
+store's files (``load``, ``save``, ``stored``, ``forget``).  Who reads the store: ``arm_profile``
+(the profile of the arm on a port), once, where the port is resolved; everything after it reads
+the profile.  ``stale_notes`` reads a finished job's evidence against the values.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+import urllib.parse
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from ..errors import ConfigError
+
+STORE_FOLDER = "arms"
+FORMAT = 1  # the record's "format": a later armctl that changes it reads this one or refuses it by name
+# sim:// options that describe the arm (SimOptions fields), in the identity's order; the rest
+# (clock, speed, seed, loss, corrupt, noise) are the line's or the test's
+SIM_ARM_FIELDS = ("baud", "control_frames", "fifo_frames", "link_scale", "profile", "speed_factor", "status_xyz_frame")
+_NETWORK_SCHEMES = ("socket", "rfc2217")
+_USB, _DEVICE = "usb ", "device "
+
+
+# --- identity -------------------------------------------------------------------------------------
+
+
+def arm_identity(port: str, ports=None) -> str:
+    """The identity of the arm on ``port`` (a device path, a pyserial URL or an identity).
+    ``ports``: pyserial ``ListPortInfo`` records (default: ``list_ports.comports()``, read
+    only for a device path)."""
+    if port.startswith((_USB, _DEVICE)):
+        return port
+    scheme = urllib.parse.urlsplit(port).scheme if "://" in port else ""
+    if scheme == "sim":
+        return _sim_identity(port)
+    if scheme in _NETWORK_SCHEMES:
+        parts = urllib.parse.urlsplit(port)
+        return f"{scheme}://{(parts.hostname or '').lower()}:{parts.port or ''}"
+    if scheme:  # loop://, spy://…: the URL without its options
+        parts = urllib.parse.urlsplit(port)
+        return f"{scheme}://{parts.netloc}{parts.path}"
+    return _device_identity(port, port_infos() if ports is None else ports)
+
+
+def _sim_identity(url: str) -> str:
+    if url in ("sim://", "sim:///", "sim://?"):  # the default arm, without loading the simulator (lint, estimate)
+        return "sim://"
+    from ..sim.model import SimOptions
+    from ..sim.protocol_sim import parse_sim_url
+
+    options, default = parse_sim_url(url), SimOptions()
+    words = []
+    for name in SIM_ARM_FIELDS:
+        value = getattr(options, name)
+        if value == getattr(default, name):
+            continue
+        if name == "profile":
+            value = os.path.abspath(value)
+        elif isinstance(value, float):
+            value = format(value, "g")
+        words.append(f"{name}={urllib.parse.quote(str(value), safe='/')}")
+    return "sim://" + ("?" + "&".join(words) if words else "")
+
+
+def _device_identity(path: str, ports) -> str:
+    """A USB adapter by VID:PID and serial number (or its USB location); any other device by path."""
+    real = os.path.realpath(path) if os.path.lexists(path) else path  # COM3 is no file: kept as named
+    for info in ports:
+        if info.device not in (path, real) and os.path.realpath(info.device) != real:
+            continue
+        if info.vid is None or info.pid is None:
+            break
+        usb = f"{_USB}{info.vid:04x}:{info.pid:04x}"
+        if info.serial_number:
+            return f"{usb} serial {info.serial_number}"
+        if info.location:
+            return f"{usb} at {info.location}"
+        break
+    return f"{_DEVICE}{real}"
+
+
+def port_infos():
+    """The serial ports pyserial finds (the edge ``arm_identity`` reads for a device path)."""
+    from serial.tools import list_ports
+
+    return list_ports.comports()
+
+
+# --- one arm's record ----------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Measured:
+    value: object  # as armctl.toml's [connector] spells it: a number, a word or a boolean
+    probed_on: str  # the date, YYYY-MM-DD (UTC)
+    evidence: str = ""
+    confidence: str = ""
+
+
+@dataclass(frozen=True)
+class Calibration:
+    arm: str  # arm_identity
+    port: str  # the port it was last probed through, as given
+    settings: dict[str, Measured] = field(default_factory=dict)
+
+    def values(self) -> dict:
+        return {name: measured.value for name, measured in self.settings.items()}
+
+    def source_of(self, name: str) -> str:
+        """The source a profile names for ``name`` (``Profile.sources``, ``armctl config``)."""
+        return f"probed on {self.settings[name].probed_on} for {self.arm}"
+
+    def updated(self, newer: "Calibration") -> "Calibration":
+        """This record with ``newer``'s values laid over it (what a later probe measured wins)."""
+        return Calibration(self.arm, newer.port, {**self.settings, **newer.settings})
+
+    def to_json(self) -> dict:
+        return {"format": FORMAT, "arm": self.arm, "port": self.port,
+                "settings": {name: vars(measured) for name, measured in self.settings.items()}}
+
+    @classmethod
+    def from_json(cls, data, where: str) -> "Calibration":
+        try:
+            if data.get("format") != FORMAT:
+                raise ValueError(f"format {data.get('format')!r}, not {FORMAT}")
+            settings = {str(name): Measured(**record) for name, record in data["settings"].items()}
+            return cls(str(data["arm"]), str(data["port"]), settings)
+        except (AttributeError, KeyError, TypeError, ValueError) as error:
+            raise ConfigError(f"{where}: not a calibration this armctl reads ({error}): delete the file, "
+                              "or `armctl probe --forget ARM`, and probe again") from None
+
+
+def calibration_of(port: str, arm: str, findings, probed_on: str) -> Calibration:
+    """A record from a probe's findings (``(name, value, evidence, confidence)``: the values the
+    probe states, as ``--write`` writes them)."""
+    settings = {name: Measured(value, probed_on, evidence, confidence) for name, value, evidence, confidence in findings}
+    return Calibration(arm, port, settings)
+
+
+# --- the profile of the arm on a port --------------------------------------------------------------
+
+
+def arm_profile(path=None, port: str | None = None, start=None):
+    """``armctl.host.profile.load_profile`` for the arm on ``port`` (a device path or URL, as resolved;
+    None: the configured port — ARMCTL_PORT, armctl.toml, the simulator — for the commands that
+    open none: lint, estimate, plot, a dry run): the chosen profile with that arm's ``[connector]``
+    laid over its own, key by key — what ``armctl probe`` stored for the arm, then armctl.toml's
+    top-level ``[connector]`` if it names no arm or its ``measured_on`` is this arm.  The one
+    lookup of the store: everything after it reads the profile (``Profile.sources`` says where
+    each value came from)."""
+    from .profile import chosen_profile, load_config, with_connector, with_file_connector
+
+    config = load_config(start)
+    profile = chosen_profile(path, config=config)
+    arm = _configured_arm(config) if port is None else arm_identity(port)
+    stored = None if arm is None else load(arm)
+    for name in () if stored is None else stored.settings:
+        profile = with_connector(profile, {name: stored.settings[name].value}, stored.source_of(name))
+    return with_file_connector(profile, config, lambda measured_on, where: _identity_in(measured_on, where) == arm)
+
+
+def _configured_arm(config) -> str | None:
+    """The arm on the configured port, for a command that opens none; None when no port can be
+    resolved (ARMCTL_PORT set empty, a bad sim:// URL): such a command does not talk to the arm,
+    so a port it would not use does not stop it — then no stored calibration applies, and no
+    [connector] that names an arm."""
+    from .port_choice import choose_port
+
+    try:
+        return arm_identity(choose_port(None, config).url)
+    except ConfigError:
+        return None
+
+
+def _identity_in(measured_on: str, where: str) -> str:
+    from .profile import MEASURED_ON
+
+    try:
+        return arm_identity(measured_on)
+    except ConfigError as error:  # a bad sim:// URL
+        raise ConfigError(f"{where}: connector.{MEASURED_ON}: {error}") from None
+
+
+# --- the store (the file edge) -------------------------------------------------------------------
+
+
+def data_dir() -> Path:
+    """armctl's user data directory: ``$XDG_DATA_HOME/armctl`` (``~/.local/share/armctl`` when
+    unset) on Linux and the BSDs, platformdirs' ``user_data_dir`` on macOS and Windows."""
+    if sys.platform.startswith(("linux", "freebsd", "openbsd", "netbsd")):
+        # platformdirs' own rule, without importing it at every start (as profile.user_config_path)
+        base = os.environ.get("XDG_DATA_HOME", "")
+        return Path(base if os.path.isabs(base) else os.path.expanduser("~/.local/share")) / "armctl"
+    import platformdirs
+
+    return Path(platformdirs.user_data_dir("armctl", appauthor=False))
+
+
+def store_dir() -> Path:
+    return data_dir() / STORE_FOLDER
+
+
+def record_path(arm: str, directory: Path | None = None) -> Path:
+    """``arm``'s file: the identity, quoted (one name per identity, readable in a listing), or a
+    hash of it when that would be too long a file name."""
+    name = urllib.parse.quote(arm, safe="")
+    if len(name) > 200:
+        import hashlib
+
+        name = "sha256-" + hashlib.sha256(arm.encode("utf-8")).hexdigest()
+    return (store_dir() if directory is None else directory) / f"{name}.json"
+
+
+def _read(path: Path) -> Calibration:
+    import json
+
+    try:
+        data = json.loads(path.read_bytes())
+    except OSError as error:
+        raise ConfigError(f"cannot read {path}: {error.strerror or error}") from None
+    except ValueError as error:  # not JSON, not UTF-8
+        raise ConfigError(f"{path}: not a calibration this armctl reads ({error}): delete it and probe again") from None
+    return Calibration.from_json(data, str(path))
+
+
+def load(arm: str, directory: Path | None = None) -> Calibration | None:
+    """The stored calibration of ``arm`` (an identity), or None."""
+    path = record_path(arm, directory)
+    if not path.is_file():
+        return None
+    found = _read(path)
+    return found if found.arm == arm else None  # a hash collision: not this arm
+
+
+def save(calibration: Calibration, directory: Path | None = None) -> Path:
+    """Keep ``calibration``, laid over what was stored for that arm; atomically."""
+    import json
+    import tempfile
+
+    directory = store_dir() if directory is None else directory
+    earlier = load(calibration.arm, directory)
+    record = calibration if earlier is None else earlier.updated(calibration)
+    path = record_path(calibration.arm, directory)
+    text = json.dumps(record.to_json(), indent=2, ensure_ascii=False) + "\n"
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        handle, temporary = tempfile.mkstemp(prefix=".", suffix=".tmp", dir=directory)
+        try:
+            with os.fdopen(handle, "w", encoding="utf-8") as file:
+                file.write(text)
+                file.flush()
+                os.fsync(file.fileno())
+            os.replace(temporary, path)
+        except BaseException:
+            os.unlink(temporary)
+            raise
+        _sync_directory(directory)
+    except OSError as error:
+        raise ConfigError(f"cannot keep the calibration in {directory}: {error.strerror or error}") from None
+    return path
+
+
+def _sync_directory(directory: Path) -> None:
+    """The rename made durable (POSIX: fsync the directory); where that cannot be done, skipped."""
+    try:
+        descriptor = os.open(directory, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(descriptor)
+    except OSError:
+        pass
+    finally:
+        os.close(descriptor)
+
+
+def stored(directory: Path | None = None) -> list[Calibration]:
+    """Every stored calibration, by identity."""
+    directory = store_dir() if directory is None else directory
+    if not directory.is_dir():
+        return []
+    return sorted((_read(path) for path in directory.glob("*.json")), key=lambda c: c.arm)
+
+
+def forget(arm: str, directory: Path | None = None) -> bool:
+    """Remove ``arm``'s calibration; False if none was stored."""
+    path = record_path(arm, directory)
+    try:
+        path.unlink()
+    except FileNotFoundError:
+        return False
+    except OSError as error:
+        raise ConfigError(f"cannot remove {path}: {error.strerror or error}") from None
+    return True
+
+
+# --- evidence against the values a job ran with ----------------------------------------------------
+
+
+def stale_notes(profile, port: str, slowest: float, frames_lost: bool) -> list[str]:
+    """What a finished job says about the ``[connector]`` values it ran with (``profile``'s, for the
+    arm on ``port``): the arm proven slower than ``speed_tolerance`` allows (``slowest``: the arm's
+    seconds ÷ the model's on a frame, a lower bound from two pairs of its reports —
+    ``Streamer.slowest_proven``, 0 when never) means its ``speed_factor`` is wrong; frames that
+    may have been lost at an ordinary pace mean the FIFO holds fewer than ``fifo_frames`` (or the
+    arm runs faster than its ``speed_factor``).  Each note names the value, where it came from
+    (probed on DATE, a file, the document's default) and the probe to run; none when nothing
+    speaks against them."""
+    import shlex
+
+    connector = profile.connector
+    tolerance = connector.speed_tolerance
+    if slowest > tolerance:
+        named = ["speed_factor"]
+        said = (f"{_setting(profile, 'speed_factor')} looks wrong: the arm ran at least {slowest:.2f}x slower than it says "
+                f"(more than speed_tolerance {tolerance:g} allows: speed_factor at least {connector.speed_factor * slowest:.2f})")
+    elif frames_lost:
+        named = ["fifo_frames", "speed_factor"]
+        said = (f"{_setting(profile, 'fifo_frames')} looks wrong: frames may have been lost, so the FIFO may hold "
+                f"fewer (or the arm runs faster than {_setting(profile, 'speed_factor')})")
+    else:
+        return []
+    probed = any(profile.source_of(f"connector.{name}").startswith("probed on ") for name in named)
+    return [f"{said}: {'probe it again' if probed else 'probe it'}: armctl probe --port {shlex.quote(port)}"]
+
+
+def _setting(profile, name: str) -> str:
+    """``name = value (where it came from)``."""
+    from .profile import DOCUMENT
+
+    value = getattr(profile.connector, name)
+    shown = str(value).lower() if isinstance(value, bool) else format(value, "g") if isinstance(value, float) else str(value)
+    source = profile.source_of(f"connector.{name}")
+    return f"{name} = {shown} ({'the document default, never measured on this arm' if source == DOCUMENT else source})"

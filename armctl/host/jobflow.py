@@ -1,0 +1,388 @@
+"""A job's steps around the runner, once, for ``armctl run`` and the Python API (armctl/host/api.py).
+
+Strategy: the steps a careful operator takes on the arm, each a function that says what it
+found and prints nothing — the caller decides how a finding is shown (``armctl run``: on
+stderr, then exit 1; ``armctl.Arm``: an exception or a log record).  The script was checked
+before (armctl/core/checked.py: ``check``, then ``prepare`` from the arm's report, a ``CheckedJob``);
+here: read the arm (``read_arm``: every status kind, two more rotations, an arm that twice
+reports it is paused resumed), build the runner of a ``CheckedJob`` (``start_job``) and drive it
+(``drive``: one path for every way a job stops early — stop feeding, send the abort sequence,
+wait for the arm — whoever asked).
+A ``--log`` is a write-ahead journal (``JournalFile`` seals each of armctl/core/joblog.py's records
+and fsyncs a frame's before the frame goes out; ``journal_for`` gives the records their fields)
+that ``read_resume_point`` reads back and ``resume_start`` turns into the line to continue at,
+from the arm's report — before anything is sent (``read_arm(unpause=False)``, then ``resume_paused``).
+The pause rule — toggle only when two agreeing reports say the arm is in the other state — is
+armctl/core/job_control.py's (the engine's); this module reads the reports it needs from the link.
+
+Errors are ``JobFailed`` (the arm did not answer, or the job did not finish).
+"""
+
+from __future__ import annotations
+
+import json
+from typing import Any, Callable, Iterable
+
+from ..core.checked import start_from_state  # noqa: F401 - re-exported (bench/realtime.py)
+from ..errors import ArmctlError
+from ..core.job_control import agreed_pause, pause_toggle_needed
+
+READ_ROTATIONS = 2  # after all nine status kinds: two more rotations (a corrupted first frame of a kind replaced, H9)
+
+
+class JobFailed(ArmctlError):
+    """The job could not start or did not finish; ``result`` (an ``armctl.RunResult``, or None
+    when nothing was sent) says how far it went."""
+
+    def __init__(self, message: str, result: Any = None) -> None:
+        super().__init__(message)
+        self.result = result
+
+
+def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
+             control_on_arrival: bool = False, unpause: bool = True):
+    """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
+    kind has been replaced or held back, H9); with ``unpause``, resume an arm that twice
+    reports it is paused (``resume_paused``).  The arm's state; ``JobFailed`` when it does not
+    answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to."""
+    if not link.wait_until(lambda s: s.complete, timeout_s):
+        _, received, _, frames = link.snapshot()
+        heard = "nothing" if received == 0 else f"{received} bytes, {frames} status frames"
+        raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
+    wait_rotations(link, READ_ROTATIONS, timeout_s)
+    if unpause:
+        resume_paused(link, timeout_s, log, note, control_on_arrival)
+    return link.snapshot()[0]
+
+
+def resume_paused(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
+                  control_on_arrival: bool = False) -> None:
+    """Resume an arm that twice reports it is paused, as its control mode needs
+    (``job.resume_frames``: on an arm that acts on control frames as they land, a RESET
+    CONNECTOR first, so nothing left queued runs twice), and let a move the pause froze finish,
+    so the start pose is where the arm rests (``note`` is told).  Each frame's record is durable
+    before the frame is written."""
+    from ..core.job import resume_frames
+
+    if not _paused_twice(link, timeout_s):
+        return
+    commands = resume_frames(control_on_arrival)
+    note("armctl: the arm reports it is paused: sending " + (
+        "a reset host connector (it acts on control frames as they land: nothing left queued runs twice) and "
+        if len(commands) > 1 else "") + "one pause toggle to resume it")
+    for command in commands:
+        frame = command.encode()
+        if log is not None:
+            record = {"t": 0.0, "dir": "tx", "hex": frame.hex(), "resume": True}
+            if hasattr(log, "append"):
+                log.append(record, durable=True)
+            else:
+                log.write(json.dumps(record) + "\n")
+        link.write(frame)
+    if not link.wait_until(lambda s: s.paused is False, max(timeout_s, 1.0)):
+        raise JobFailed("the arm stayed paused after a pause toggle; nothing else was sent")
+    wait_rotations(link, 1, timeout_s)
+    if control_on_arrival:
+        _wait_still(link, timeout_s)
+
+
+class JournalFile:
+    """``--log`` as the journal writes it (armctl/core/joblog.py): each record sealed (its place and
+    CRC-32) on a line of its own; ``append(record, durable=True)`` returns once the line is
+    flushed and fsynced (a frame's record, before the frame goes to the port).  A file object
+    without a descriptor (``io.StringIO``) is flushed only, and so is every record when ``sync``
+    is False: an arm on a virtual clock (``sim://?clock=virtual``) lives in the host's process
+    and its time moves only with the host, so nothing of it runs on after a crash — and an
+    fsync a frame would cost a virtual job more wall time than the job itself."""
+
+    def __init__(self, file, sync: bool = True) -> None:
+        self.file = file
+        self.name = getattr(file, "name", "the log")
+        self.seq = 0
+        self.sync_each = sync
+
+    def append(self, record: dict, durable: bool = False) -> None:
+        from ..core.joblog import seal
+
+        self.file.write(seal(record, self.seq) + "\n")
+        self.seq += 1
+        if durable:
+            self.sync()
+
+    def sync(self) -> None:
+        """Flushed, and fsynced when that is owed (``sync``)."""
+        flush = getattr(self.file, "flush", None)  # any object with ``write`` may stand for the file
+        if flush is not None:
+            flush()
+        if self.sync_each:
+            self._fsync()
+
+    def _fsync(self) -> None:
+        import os
+
+        try:
+            descriptor = self.file.fileno()
+        except (AttributeError, OSError, ValueError):  # no descriptor (io.StringIO): flushed is all there is
+            return
+        os.fsync(descriptor)
+
+
+RESUME_SETTLE_S = 120.0  # the longest a move frozen by a pause may take to finish after the resume
+
+
+def _wait_still(link, timeout_s: float) -> None:
+    """Until the move a pause froze has finished (the arm at rest), at most ``RESUME_SETTLE_S``."""
+    try:
+        wait_for_rest(link, RESUME_SETTLE_S)
+    except JobFailed:
+        raise JobFailed(f"the arm did not come to rest within {RESUME_SETTLE_S:g} s of the resume; "
+                        "nothing else was sent") from None
+
+
+def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = None):
+    """The arm's state once its position and joints stayed the same for ``REST_CHECK_S``, each
+    kind re-read in that time (armctl/core/evidence.py's rule of rest, the engine's own:
+    ``still_long_enough``); ``JobFailed`` after ``timeout_s``; None as soon as ``stopped()`` says a
+    stop was asked (Ctrl-C while a resume waits: nothing was sent, nothing is owed)."""
+    from ..core.evidence import still_long_enough
+    from ..core.protocol import JointsHighStatus, JointsLowStatus, PositionStatus
+
+    kinds = (PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND)
+    deadline = link.clock() + timeout_s
+    reading, since = None, link.clock()
+    while True:
+        if stopped is not None and stopped():
+            return None
+        state = link.snapshot()[0]
+        now = link.clock()
+        read_s = [state.last_seen.get(kind, float("-inf")) for kind in kinds]  # -inf: never read
+        if (state.position_mm, tuple(state.joints_deg)) != reading:
+            reading, since = (state.position_mm, tuple(state.joints_deg)), now
+        elif still_long_enough(since, read_s):
+            return state
+        if now >= deadline:
+            raise JobFailed(f"the arm did not come to rest within {timeout_s:g} s; nothing was sent")
+        link.wait_until(lambda _state: False, 0.05)
+
+
+def wait_rotations(link, rotations: int, timeout_s: float) -> None:
+    frames = link.snapshot()[3]
+    link.wait_until(lambda s: s.frames >= frames + 9 * rotations, timeout_s)
+
+
+def reported_pause(link, timeout_s: float, reports: int = 3) -> bool | None:
+    """The arm's pause state as two consecutive pause reports agree on it (the reader's state,
+    so a held-back corrupt frame never counts), starting with the last one read; None when no
+    two agree within ``reports`` reports, or the next does not come within ``timeout_s``."""
+    read: list = []
+    now = link.snapshot()[0]
+    seen = now.last_seen.get(4)
+    if seen is not None:
+        read.append(now.paused)
+    for _ in range(reports):
+        if agreed_pause(read) is not None:
+            break
+        if not link.wait_until(lambda s: s.last_seen.get(4) != seen, timeout_s):
+            break
+        now = link.snapshot()[0]
+        seen = now.last_seen.get(4)
+        read.append(now.paused)
+    return agreed_pause(read)
+
+
+def _paused_twice(link, timeout_s: float) -> bool:
+    """Paused in two consecutive pause reports: one flipped byte must not make armctl toggle.
+    An arm whose last report says it runs needs no toggle to run: no second report is waited for."""
+    if not link.snapshot()[0].paused:
+        return False
+    return pause_toggle_needed(want_paused=False, agreed=reported_pause(link, timeout_s)) is True
+
+
+def start_job(link, model, job, log=None):
+    """The runner that streams ``job`` (a ``checked.CheckedJob``; not started: call ``run``)."""
+    from .link import fifo_proven
+    from .runner import JobRunner, RunView
+    from ..core.streamer import Streamer
+
+    estimate = job.estimate
+    streamer = Streamer(model, job.start, lead_s=job.lead_s, baud=job.baud)
+    view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=job.total_lines,
+                   lead_s=job.lead_s, capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
+    # ``done`` needs a FIFO size that is proven (probed, or a simulator known to hold it): link.fifo_proven
+    return JobRunner(link, streamer, Lookahead(job.statements()), view, log=log,
+                     fifo_proven=fifo_proven(link.url, model.profile.connector))
+
+
+def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = lambda why: None) -> str:
+    """Run the job to its end, and make every other ending take one path: Ctrl-C (the runner's
+    ``request_stop``), a failure the runner met (``runner.failure``) or any error mid-job stops
+    the feeding, tells ``on_stopping`` why, sends ``abort_sequence`` and waits for the arm to
+    come to rest.  Only a lost port skips the abort (there is nothing to send it through).
+    The outcome: "finished", "interrupted", "failed", "port lost" or "no confirmation"."""
+    from ..errors import PortError
+
+    view = runner.view
+    try:
+        runner.run()
+        return view.outcome
+    except KeyboardInterrupt:
+        pass  # Ctrl-C, or a failure the runner met (runner.failure) that asked it to stop
+    except PortError as error:
+        view.messages.append(str(error))
+        return "port lost"
+    except Exception as error:  # anything else mid-job: the same path as Ctrl-C
+        runner.fail(f"{type(error).__name__}: {error}")
+    on_stopping(runner.failure or "interrupted")
+    try:
+        runner.abort(abort_sequence)
+    except KeyboardInterrupt:
+        pass
+    except Exception as error:  # the abort itself failed: say so, the summary still follows
+        view.messages.append(f"the abort did not complete: {type(error).__name__}: {error}")
+    if runner.job.outcome is None and runner.failure:  # the abort was cut short: the engine did not end it
+        view.outcome = "failed"
+        view.messages.append(runner.failure)
+    return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
+
+
+def read_resume_point(log, script, from_line: int = 1):
+    """The resume point a ``--log`` (a path, or a ``joblog.ResumePoint`` already read) records
+    for this very ``script`` — read bounded, as every input; ``ResumeRefused`` (exit 2) for
+    another script, an edited one, a file that is no log, or a ``from_line`` given as well."""
+    from ..errors import ResumeRefused
+    from .inputs import read_file_bounded
+    from ..core.joblog import ResumePoint, read_resume_log
+
+    if from_line != 1:
+        raise ResumeRefused("--resume LOG decides the line to continue at: drop --from-line")
+    if isinstance(log, ResumePoint):
+        return log
+    name = str(log)
+    try:  # bounded: an endless file (/dev/zero) is an error, not a hang
+        text = read_file_bounded(name, f"--resume {name}").decode("utf-8", errors="replace")
+        return read_resume_log(text, script.name, script.data)
+    except ResumeRefused as error:
+        raise ResumeRefused(f"--resume {name}: {error}") from None
+    except OSError as error:
+        raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
+
+
+def same_journal(log, resume) -> bool:
+    """``log`` (an open file) is the file ``resume`` (a path; anything else: no) names."""
+    import os
+
+    if not isinstance(resume, (str, os.PathLike)):
+        return False
+    try:
+        return os.path.samestat(os.fstat(log.fileno()), os.stat(resume))
+    except (AttributeError, OSError, ValueError):
+        return False
+
+
+def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable[[], bool] | None = None):
+    """Wait for the arm to come to rest (it runs out what was queued when the host died), then
+    the line its report proves: (the state to start from, the line), or (state, None) when
+    every line ran; ``joblog.NotProven`` when the report proves neither; None when ``stopped()``
+    came first (see ``wait_for_rest``)."""
+    from ..core.job import SETTLE_SLACK_S
+
+    state = wait_for_rest(link, timeout_s + 2 * max(point.lead_s, lead_s) + SETTLE_SLACK_S, stopped)
+    if state is None:
+        return None
+    return state, point.line_for(state.position_mm, tuple(state.joints_deg))
+
+
+def journal_for(runner, script, log) -> Callable[[Any], None] | None:
+    """``--log``'s journal (armctl/core/joblog.py) on ``runner``: the fields of each job frame's
+    record (written ahead of the frame by the runner) and the progress records, as a runner's
+    ``on_update``; None without a log."""
+    if log is None:
+        return None
+    from ..core.joblog import Journal
+
+    blocks = BlockIndex(script.lines())
+
+    def resume_at(statement) -> int:
+        return (blocks.outermost_start(statement.line) or statement.line) if getattr(statement, "loop", ()) else statement.line
+
+    statements = runner.job.statements
+    journal = Journal(runner.log_record, resume_at, statements.peek if isinstance(statements, Lookahead) else lambda: None)
+    runner.frame_fields = journal.frame
+    return journal.update
+
+
+class Lookahead:
+    """An iterator that can tell its next item without taking it (``peek``): the journal's
+    record of a frame, written before the frame, names the line that follows it."""
+
+    _NONE, _END = object(), object()
+
+    def __init__(self, items) -> None:
+        self._items = iter(items)
+        self._next = self._NONE
+
+    def __iter__(self):
+        return self
+
+    def __next__(self):
+        item = self._next
+        if item is self._NONE:
+            return next(self._items)
+        self._next = self._NONE
+        if item is self._END:
+            raise StopIteration
+        return item
+
+    def peek(self):
+        """The next item, or None at the end."""
+        if self._next is self._NONE:
+            self._next = next(self._items, self._END)
+        return None if self._next is self._END else self._next
+
+
+def resume_line(view, lines: Iterable[str]) -> int | None:
+    """The line ``--from-line`` (or ``Arm.run(from_line=)``) should name to continue: the first
+    line not known executed, or — as no job can start inside a repeat block — the opening line
+    of the outermost block around it (its passes already done then run again)."""
+    resume = view.resume_line()
+    loop = getattr(view.first_not_done, "loop", None)
+    if resume is not None and loop:
+        return outermost_block_start(lines, resume) or resume
+    return resume
+
+
+class BlockIndex:
+    """The outermost repeat blocks of a script, found in one pass (``lines``: the script's
+    lines, e.g. ``ScriptSnapshot.lines()`` — the same text that was sent)."""
+
+    def __init__(self, lines: Iterable[str]) -> None:
+        self.blocks: list[tuple[int, int]] = []  # (first line, last line) of each outermost block, in order
+        from ..lint.scan import block_line
+
+        depth, start = 0, None
+        for number, text in enumerate(lines, 1):
+            match = block_line(text)
+            if match is None:
+                continue
+            if match.group(1).lower() == "repeat":
+                if depth == 0:
+                    start = number
+                depth += 1
+            elif depth:
+                depth -= 1
+                if depth == 0 and start is not None:
+                    self.blocks.append((start, number))
+
+    def outermost_start(self, line: int) -> int | None:
+        """The first line of the outermost block around ``line``, if any."""
+        from bisect import bisect_right
+
+        index = bisect_right(self.blocks, (line, float("inf"))) - 1
+        if index >= 0 and self.blocks[index][0] <= line <= self.blocks[index][1]:
+            return self.blocks[index][0]
+        return None
+
+
+def outermost_block_start(lines, line: int) -> int | None:
+    """The opening line of the outermost repeat block around ``line``, if any."""
+    return BlockIndex(lines).outermost_start(line)

@@ -1,0 +1,382 @@
+"""The port edge: choose a port, open it, read status frames in a thread, write frames.
+
+Strategy (after pyserial and python-can): every port is a pyserial URL — a device path,
+``socket://``, ``rfc2217://`` or armctl's own ``sim://`` — opened with ``serial_for_url``, so
+nothing above this module knows whether a real arm is attached.  A reader thread feeds bytes
+to the pure ``StatusReader`` and merges frames into an ``ArmState`` under a lock; callers take
+snapshots or wait on a condition.  OS failures become ``PortError`` with a sentence a user can
+act on (no such device, permission denied with the dialout hint, busy, vanished).
+
+The link owns the port's one ``Clock`` (armctl/host/clock.py: model seconds, on the wall — scaled
+for ``sim://?speed=N`` — or virtual).  A ``sim://?clock=virtual`` port has no reader thread: its
+clock moves only when a caller waits (``wait``, ``wait_until``, ``idle``), which jumps to the
+next status burst through the simulator's virtual-time interface (armctl/host/virtual_wait.py); a
+caller that says which frames are news (``wait``'s ``news``: the host driver's, for the job
+engine) is woken only by those.  Callers that wait through the link work unchanged on either
+kind of port.
+"""
+
+from __future__ import annotations
+
+import copy
+import errno
+import threading
+from typing import Callable
+
+from ..core.armstate import ArmState
+from .clock import Clock, as_clock
+from ..errors import ConfigError, PortError
+from .port_choice import PORT_ENV, SIMULATOR_URL, PortChoice, check_sim_url, choose_port, resolve_port  # noqa: F401  (re-exported)
+from .profile import check_config_value
+from ..core.protocol import DEFAULT_BAUD, STATUS_SIZE, StatusFrame, StatusReader, byte_seconds
+from .virtual_wait import UNMERGED_FRAMES_MAX, News, VirtualWaits
+
+READ_CHUNK = 256
+READ_TIMEOUT_S = 0.02  # the reader thread wakes this often to notice close()
+# On a wall clock the next frame may be handed to the port this long (model seconds) before the
+# line is free (``Streamer.write_ahead_s``): a host thread woken late by the OS then still finds the
+# line busy, not idle — three frames at 9600 baud, 36 at 115200 (1.7 KB, inside a tty's 4 KB).  At
+# 50 ms (one frame at 9600) a machine at load average 8 on 2 cores left one gap of 153 ms in 400
+# frames (50.30 ms a frame on average).
+WRITE_AHEAD_S = 0.15
+
+
+def connect(port: "str | PortChoice | None", baud: int | None, announce: Callable[[str], None] | None = None,
+            profile=None, **link_options):
+    """What every port-using command does first: resolve the port (``--port``, ARMCTL_PORT,
+    armctl.toml, the simulator; a ``PortChoice`` is already resolved: ``choose_port``), tell
+    ``announce`` (a command's stderr note; None for a library caller, which prints nothing) when
+    it is the simulator, open it with a reader thread whose state judges jumps against the arm's
+    top speeds (H9). ``profile``: the arm's (``calibration.arm_profile(port=…)``; None: loaded here for the
+    port). Returns the link and the baud rate."""
+    from .profile import load_config
+
+    config = load_config()
+    choice = choose_port(port, config)
+    banner = choice.banner()
+    if banner and announce is not None:
+        announce(banner)
+    baud = baud or config_baud(config.values, config.path_of("baud"))
+    if profile is None:
+        from .calibration import arm_profile
+
+        profile = arm_profile(port=choice.url)
+    link_options.setdefault("state", plausible_state(profile))
+    return Link.open(choice.url, baud, **link_options), baud
+
+
+def fifo_proven(url: str, connector) -> bool:
+    """``connector.fifo_proven`` for the port at ``url``: a ``sim://`` port says its own FIFO size."""
+    port_fifo_frames = None
+    if url.startswith("sim://"):
+        from ..sim.protocol_sim import parse_sim_url
+
+        try:
+            port_fifo_frames = parse_sim_url(url).fifo_frames
+        except ConfigError:
+            pass
+    return connector.fifo_proven(port_fifo_frames)
+
+
+def require_wall_clock(link: "Link", command: str) -> None:
+    """Commands that follow the arm as it moves (a live view, jogging) need time to pass by
+    itself; a ``clock=virtual`` simulator only moves when waited on."""
+    if link.is_virtual:
+        raise ConfigError(f"{command} runs in real time, but {link.url} has a virtual clock: "
+                          "use sim:// without clock=virtual")
+
+
+def config_baud(config: dict, path) -> int:
+    return check_config_value(path, "baud", config.get("baud", DEFAULT_BAUD))
+
+
+def plausible_state(profile) -> ArmState:
+    """An ArmState that holds back a value moving faster than twice the profile's top speeds
+    (a corrupted byte; the profile's numbers are illustrative, hence the factor), the arm's
+    ``[connector] speed_factor`` included (0.5: it moves twice as fast as the model)."""
+    speed, factor = profile.speed, 2 / min(1.0, profile.connector.speed_factor)
+    return ArmState(max_speed_mm_s=factor * speed.max_linear_mm_min / 60,
+                    max_joint_speed_deg_s=factor * speed.max_joint_deg_s)
+
+
+def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_S, write_timeout: float | None = 2.0):
+    """Open any pyserial URL or device path, mapping failures to PortError."""
+    import serial  # armctl/__init__.py adds the sim:// scheme as pyserial loads
+
+    kwargs = {"baudrate": baud, "timeout": timeout, "write_timeout": write_timeout}
+    if "://" not in url:
+        kwargs["exclusive"] = True  # a second armctl on the same arm would interleave frames
+    try:
+        return serial.serial_for_url(url, **kwargs)
+    except ConfigError:  # a bad sim:// option: the user's configuration, not the port
+        raise
+    except (serial.SerialException, OSError, ValueError) as error:
+        raise PortError(describe_open_error(url, error)) from None
+
+
+def describe_open_error(url: str, error: Exception) -> str:
+    code = getattr(error, "errno", None)
+    text = str(error)
+    if code == errno.ENOENT or "No such file" in text:
+        return f"no such device: {url} (is the arm plugged in? `armctl ports` lists the ports found)"
+    if code == errno.EACCES or "Permission denied" in text:
+        return (
+            f"permission denied opening {url}: add yourself to the group that owns it "
+            f"(usually `sudo usermod -aG dialout $USER`, then log in again)"
+        )
+    if code in (errno.EBUSY, errno.EAGAIN) or "exclusively lock" in text:
+        return f"{url} is busy: another program (another armctl, a serial monitor) has it open"
+    if code == errno.ECONNREFUSED or "Connection refused" in text or "ConnectionRefused" in text:
+        return f"connection refused by {url}: is the bridge (e.g. `armctl sim --tcp`) running?"
+    return f"cannot open {url}: {text}"
+
+
+class Link:
+    """An open port with a reader thread that keeps ``state`` current.
+
+    ``on_status(frame, now)`` is called from the reader thread (for logs and for the
+    streamer); ``error`` is set when the port went away.
+    """
+
+    def __init__(
+        self,
+        port,
+        url: str,
+        state: ArmState | None = None,
+        clock: Callable[[], float] | None = None,
+        on_status: Callable[[StatusFrame, float], None] | None = None,
+    ) -> None:
+        self.port = port
+        self.url = url
+        # The port's one clock (armctl/host/clock.py); a simulated port on a virtual clock keeps its
+        # own, which only waiting moves, whatever clock is passed.
+        virtual = getattr(port, "virtual_clock", None)
+        self.clock: Clock = virtual or (port_clock(port, url) if clock is None else as_clock(clock))
+        self.reader = StatusReader()
+        self._state = state or ArmState()
+        # Frames read by virtual waits, merged into the state when it is read (``state``): nothing
+        # reads it while a job runs, and the kinds taken as read then cost one merge, not one a
+        # frame (``ArmState.update_many``); at most ``UNMERGED_FRAMES_MAX`` held (a long job).
+        self.unmerged: list = []
+        self.on_status = on_status
+        self.bytes_received = 0
+        self.error: PortError | None = None
+        self.lock = self._changed = threading.Condition()
+        self._virtual = VirtualWaits(self) if self.clock.virtual else None
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._read_loop, name="armctl-reader", daemon=True)
+
+    @classmethod
+    def open(cls, url: str, baud: int = DEFAULT_BAUD, **kwargs) -> "Link":
+        link = cls(open_port(url, baud), url, **kwargs)
+        link.start()
+        return link
+
+    def start(self) -> None:
+        if not self.clock.virtual:
+            self._thread.start()
+
+    @property
+    def state(self) -> ArmState:
+        """What the arm last told us (the frames of virtual runs merged first)."""
+        if self.unmerged:
+            self._merge()
+        return self._state
+
+    @state.setter
+    def state(self, state: ArmState) -> None:
+        with self._changed:
+            self.unmerged.clear()
+            self._state = state
+
+    def _merge(self) -> None:
+        with self._changed:
+            self._state.update_many(self.unmerged)
+            self.unmerged.clear()  # (in place: a run in progress keeps appending to it)
+
+    @property
+    def is_virtual(self) -> bool:
+        return self.clock.virtual
+
+    def close(self) -> None:
+        self._stop.set()
+        if self._thread.is_alive() and threading.current_thread() is not self._thread:
+            self._thread.join(timeout=1.0)
+        try:
+            self.port.close()
+        except Exception:  # closing a port that vanished may fail again; nothing to do
+            pass
+
+    def __enter__(self) -> "Link":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def _read_loop(self) -> None:
+        port = self.port
+        while not self._stop.is_set():
+            try:
+                # A status frame's bytes, then whatever else is waiting: each frame is taken (and
+                # timed) as it completes, not when a bigger read's timeout runs out (a read of 256
+                # bytes timed the frames up to READ_TIMEOUT_S late, two at a time).
+                data = port.read(STATUS_SIZE)
+                waiting = getattr(port, "in_waiting", 0) if data else 0
+                if waiting:
+                    data += port.read(min(waiting, READ_CHUNK))
+            except Exception as error:  # pyserial raises SerialException, OSError or TypeError on unplug
+                if not self._stop.is_set():
+                    self._set_error(PortError(f"the port {self.url} went away: {error}"))
+                return
+            if data:
+                self.take(data)
+
+    def take(self, data: bytes, news: News | None = None) -> bool:
+        """Feed bytes read to the status reader and the state; whether a frame was found — with
+        ``news`` (a virtual wait), whether one of them was news to it (it takes every frame
+        found: it is asked again with those after the one it named; the state merges them when
+        it is read, as a run's)."""
+        now = self.clock()
+        frames = self.reader.feed(data)
+        if news is not None:
+            return self._take_news(frames, now, len(data), news)
+        with self._changed:
+            self.bytes_received += len(data)
+            update, on_status = self.state.update, self.on_status
+            for frame in frames:
+                update(frame, now)
+                if on_status is not None:
+                    on_status(frame, now)
+            if not self.clock.virtual:  # a virtual link's waits run the simulator: nobody sleeps on it
+                self._changed.notify_all()
+        return bool(frames)
+
+    def _take_news(self, frames: list, now: float, received_bytes: int, news: News) -> bool:
+        """``take``'s frames of a virtual wait: held for the state, every one handed to ``news``."""
+        with self._changed:
+            self.bytes_received += received_bytes
+            if not frames:
+                return False
+            self.unmerged += [(frame, now) for frame in frames]
+            if len(self.unmerged) >= UNMERGED_FRAMES_MAX:
+                self._merge()
+        if len(frames) == 1:
+            return news(frames, [now]) is not None
+        found, start = False, 0
+        while start < len(frames):
+            rest = frames[start:]
+            place = news(rest, [now] * len(rest))
+            if place is None:
+                break
+            found, start = True, start + place + 1
+        return found
+
+    def counted(self, frames: int, received_bytes: int) -> None:
+        """Frames read by a virtual run (``unmerged``, lock held): the counts, the merge when many."""
+        self.reader.frames += frames
+        self.bytes_received += received_bytes
+        if len(self.unmerged) >= UNMERGED_FRAMES_MAX:
+            self._merge()
+
+    def idle(self, seconds: float) -> None:
+        """Wait up to ``seconds`` of the link's clock; returns early once a status frame has
+        been read.  (On a real port the reader thread reads meanwhile; this only waits.)"""
+        self.wait(self.clock.now() + seconds)
+
+    def wait(self, until_s: float | None, news: News | None = None) -> None:
+        """Wait until the clock reads ``until_s`` (None: no limit) or a status frame has been
+        read, whichever comes first.  On a virtual clock this jumps: straight to the next
+        status burst or to ``until_s`` (armctl/host/virtual_wait.py); ``news(frames, times)`` (the
+        place of the first frame that is news, or None) then takes the frames instead of
+        ``on_status``, and a frame that is not news does not end the wait — the link drives the
+        simulator on, burst after burst, without returning to a caller that has nothing new to
+        decide (the host driver).  On a wall clock the reader thread hands frames to
+        ``on_status`` and ``news`` is not used."""
+        if self._virtual is not None:
+            self._virtual.wait(until_s, news)
+            return
+        # A timer for ``until_s`` itself (the reader thread's notify ends it sooner): a write
+        # due then goes then, not at the next status frame or poll (a 20 ms poll made every
+        # frame of a line-bound job 11 ms late on average: 61 ms a frame at 9600 baud).
+        clock = self.clock
+        with self._changed:
+            frames = self.reader.frames
+            while self.reader.frames == frames and self.error is None:
+                if until_s is None:
+                    self._changed.wait(READ_TIMEOUT_S)
+                    continue
+                left_s = until_s - clock.now()
+                if left_s <= 0:
+                    break
+                self._changed.wait(clock.wall_seconds(left_s))
+
+    def _set_error(self, error: PortError) -> None:
+        with self._changed:
+            self.error = error
+            self._changed.notify_all()
+
+    def write(self, frame: bytes) -> None:
+        if self._virtual is not None:
+            self._virtual.forget()  # the simulator's next steps change
+        if self.error is not None:
+            raise self.error
+        try:
+            self.port.write(frame)
+        except Exception as error:
+            raise PortError(f"writing to {self.url} failed: {error}") from None
+
+    def unsent_s(self) -> float | None:
+        """Model seconds until the bytes the port still holds have left it (its ``out_waiting``
+        at its baud rate), or None where the port cannot say (a socket, a fake)."""
+        port = self.port
+        try:
+            waiting = port.out_waiting
+            baud = port.baudrate
+        except Exception:  # (AttributeError, NotImplementedError, OSError: no such ioctl)
+            return None
+        if not isinstance(waiting, int) or not isinstance(baud, int) or baud <= 0:
+            return None
+        return waiting * byte_seconds(baud)
+
+    def snapshot(self) -> tuple[ArmState, int, int, int]:
+        """A copy of the state with bytes received, bytes skipped and frames read so far."""
+        with self._changed:
+            return copy.deepcopy(self.state), self.bytes_received, self.reader.skipped_bytes, self.reader.frames
+
+    def wait_until(self, predicate: Callable[[ArmState], bool], timeout_s: float) -> bool:
+        """Block until ``predicate(state)`` holds, the port fails (raises) or time runs out."""
+        deadline = self.clock() + timeout_s
+        if self.clock.virtual:
+            while not predicate(self.state):
+                if self.clock() >= deadline:
+                    return False
+                self.idle(deadline - self.clock())
+            return True
+        with self._changed:
+            while not predicate(self.state):
+                if self.error is not None:
+                    raise self.error
+                remaining = deadline - self.clock()
+                if remaining <= 0:
+                    return False
+                self._changed.wait(min(remaining, 0.05))
+            return True
+
+
+
+def port_clock(port, url: str) -> Clock:
+    """The clock of an opened port: the simulator's virtual clock, else the wall × the
+    ``sim://`` speed (1 for any other port)."""
+    virtual = getattr(port, "virtual_clock", None)
+    if virtual is not None:
+        return virtual
+    return Clock(sim_time_scale(url))
+
+
+def sim_time_scale(url: str) -> float:
+    """``sim://?speed=N``'s N (1 for any other port); the one parse is protocol_sim's."""
+    if not url.startswith("sim://"):
+        return 1.0
+    from ..sim.protocol_sim import parse_sim_url
+
+    return parse_sim_url(url).time_scale

@@ -1,0 +1,91 @@
+"""The port a command will use, chosen once: ``--port``, ``ARMCTL_PORT``, ``port`` in armctl.toml, or
+the built-in simulator.
+
+Strategy: a few pure lines, apart from the port edge (armctl/host/link.py, which re-exports them), so
+the commands that open no port — ``lint``, ``estimate``, ``plot``, a dry run — can name the arm
+they would talk to (its kept calibration: armctl/host/calibration.py) without loading the status
+reader, the link's thread machinery or the simulator.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+from ..errors import ConfigError
+from .profile import CONFIG_NAME, check_config_value
+
+SIMULATOR_URL = "sim://"
+PORT_ENV = "ARMCTL_PORT"
+
+
+@dataclass(frozen=True)
+class PortChoice:
+    url: str
+    origin: str  # "--port", "ARMCTL_PORT", the armctl.toml it came from (project or user) or "default"
+
+    @property
+    def from_file(self) -> bool:
+        return self.origin not in ("--port", PORT_ENV, "default")
+
+    @property
+    def is_simulator(self) -> bool:
+        return self.url.startswith("sim://")
+
+    def banner(self) -> str | None:
+        """The first line a command prints when no real port was chosen."""
+        if self.origin == "default":
+            return "armctl: no port configured (--port, ARMCTL_PORT or armctl.toml): using the built-in simulator (sim://)"
+        if self.is_simulator:
+            return f"armctl: using the built-in simulator ({self.url})"
+        return None
+
+
+def resolve_port(option: str | None, environ=os.environ, config: dict | None = None, config_path=CONFIG_NAME) -> PortChoice:
+    """``--port``, else ``ARMCTL_PORT``, else ``port`` in armctl.toml (``config``: the project
+    file laid over the user file, ``config_path``: the one ``port`` came from), else the simulator.
+
+    The simulator is the default only when no port is given anywhere: a port given empty (or,
+    in armctl.toml, of the wrong type) is a ConfigError, never a quiet fallback to the simulator.
+    """
+    if option is not None:
+        if not option.strip():
+            raise ConfigError("--port is empty: give a device or URL (`armctl ports` lists the devices found), "
+                              "or leave --port out")
+        return PortChoice(option, "--port")
+    if PORT_ENV in environ:
+        if not environ[PORT_ENV].strip():
+            raise ConfigError(f"{PORT_ENV} is set but empty: give a device or URL, or unset it "
+                              f"(`unset {PORT_ENV}`)")
+        return PortChoice(environ[PORT_ENV], PORT_ENV)
+    if config and "port" in config:
+        return PortChoice(check_config_value(config_path, "port", config["port"]), str(config_path))
+    return PortChoice(SIMULATOR_URL, "default")
+
+
+def choose_port(port: "str | PortChoice | None", config=None) -> PortChoice:
+    """``resolve_port`` with the armctl.toml files, a ``sim://`` URL checked: the port a command
+    will open, resolved once (its arm's profile is loaded for it: ``calibration.arm_profile(port=…)``)."""
+    if isinstance(port, PortChoice):
+        return port
+    from .profile import load_config
+
+    config = config or load_config()
+    choice = resolve_port(port, config=config.values, config_path=config.path_of("port"))
+    if choice.is_simulator:
+        check_sim_url(choice)
+    return choice
+
+
+def check_sim_url(choice: PortChoice) -> None:
+    """A bad ``sim://`` option is a usage error (exit 2) naming where the URL came from, raised
+    before anything opens: the one parse is armctl/sim/protocol_sim.py's."""
+    if choice.url in ("sim://", "sim:///", "sim://?"):
+        return  # the default arm: nothing to parse, and lint or estimate need not load the simulator
+    from ..sim.protocol_sim import parse_sim_url
+
+    try:
+        parse_sim_url(choice.url)
+    except ConfigError as error:
+        where = f"{choice.origin}: port" if choice.from_file else choice.origin
+        raise ConfigError(f"{where}: {error}") from None
