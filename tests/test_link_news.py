@@ -92,14 +92,14 @@ def test_the_steps_of_a_run_past_the_news_are_read_by_the_next_wait_as_a_new_run
             return status_frames(steps)
 
         link.port.status_frames = building
-        burst, by_bursts = link.port.virtual_burst, []
+        advance_to, by_bursts = link.port.advance_to, []
 
-        def bursting(*args):
-            data = burst(*args)
+        def bursting(*args):  # every burst is read by advance_to (the runs are not)
+            data = advance_to(*args)
             by_bursts.append(len(data) // STATUS_SIZE)
             return data
 
-        link.port.virtual_burst = bursting
+        link.port.advance_to = bursting
         if not keep_tails:
             waits = link._virtual
             take_run = waits._take_run

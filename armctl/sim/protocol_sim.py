@@ -44,8 +44,7 @@ included); everything else calls it.
 Strategy: a thin edge.  With ``clock=virtual`` nothing blocks: ``read`` returns what has
 arrived by the current model time, and the host moves the clock instead of sleeping, through
 the virtual-time interface: ``next_event_s`` (when the next status burst has reached the host),
-``advance_to(t)`` (the clock there, the bytes that arrived), ``virtual_burst`` (the two in one
-call, as a wait reads each burst) and, for the quiet stretches where
+``advance_to(t)`` (the clock there, the bytes that arrived) and, for the quiet stretches where
 nothing happens but status frames, ``virtual_status_run`` / ``status_frames`` /
 ``commit_status_run`` (armctl/host/virtual_wait.py drives them).  Otherwise:  ``write`` hands the bytes to the model at the current model time and
 returns at once (they queue on the simulated wire; ``out_waiting`` counts those not yet sent);
@@ -348,25 +347,6 @@ class Serial(SerialBase):
         received = self._received
         with arm.lock:
             self.virtual_clock.advance_to(t_s)
-            data = self.model.advance(arm.model_now_s())
-            if received:  # bytes left from before (a ``read`` of fewer than arrived)
-                data = bytes(received + data)
-                received.clear()
-        return data
-
-    def virtual_burst(self, min_step_s: float, end_s: float | None) -> bytes:
-        """``next_event_s`` then ``advance_to`` in one call, under one lock: the clock moved to
-        when the next status burst has reached the host — at least ``min_step_s`` on, never past
-        ``end_s`` — and the bytes read by then (``VirtualWaits`` reads a burst this way; the same
-        arithmetic, operation by operation, as the two calls)."""
-        arm = self._check_open()
-        clock, received = self.virtual_clock, self._received
-        with arm.lock:
-            now_s, next_s = clock.now_s, self._next_event_s(arm)
-            step_to = now_s + min_step_s if next_s is None else max(next_s, now_s + min_step_s)
-            if end_s is not None and end_s < step_to:
-                step_to = end_s
-            clock.advance_to(step_to)
             data = self.model.advance(arm.model_now_s())
             if received:  # bytes left from before (a ``read`` of fewer than arrived)
                 data = bytes(received + data)
