@@ -273,7 +273,7 @@ def ran_at_rest(last: SentFrame, recent_sent, kinematics_verified: bool) -> bool
     segment = last.segment
     if not (segment.moves_reported and last.path_known):
         return False
-    by_joints = segment.kind == "joint" or segment.end.xyz_derived  # what ``Job._at_end_of`` compares
+    by_joints = segment.kind == "joint" or segment.end.xyz_derived  # as job_arrival's at_end_of compares
     tolerance = 2 * (JOINT_TOLERANCE_DEG if by_joints else POSITION_TOLERANCE_MM)
     target = segment.end.joints if by_joints else segment.end.xyz
     for sent in recent_sent:  # (``last`` among them: its own start, then no further)
