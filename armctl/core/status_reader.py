@@ -81,8 +81,7 @@ class StatusReader:
     def decode_frame(self, data: bytes) -> StatusFrame | None:
         """The frame of a burst that is one whole status frame and nothing else (the simulator's
         quiet stretches, armctl/host/virtual_wait.py's ``_take_run``): what ``feed`` finds in it,
-        without counting it
-        (the caller counts what it reads), or None if it is not one valid frame.  Bytes seen
+        without counting it (the caller counts what it reads), or None if it is not one valid frame.  Bytes seen
         before give the same (immutable) frame again for the kinds that repeat for minutes
         (worktable, pause and PWM, SD program): no decode at all for half the frames."""
         if self._buffer:
@@ -116,8 +115,8 @@ class StatusReader:
 
     def decode_frames(self, bursts: list) -> list[StatusFrame]:
         """``decode_frame`` of each burst in order, up to the first that is not one valid frame
-        (the list is then shorter): a batch of a virtual run's frames (armctl/host/virtual_wait.py's ``_take_run``), the
-        kinds that change all the time (position, joints) decoded here without a call each."""
+        (the list is then shorter): a batch of a virtual run's frames (armctl/host/virtual_wait.py's
+        ``_take_run``), the kinds that change all the time (position, joints) decoded here without a call each."""
         if self._buffer:
             return []
         seen, decoders, decode_frame = self._seen, _WORD_DECODERS, self.decode_frame
