@@ -210,9 +210,8 @@ class Job:
     def receive_statuses(self, frames, times) -> int | None:
         """``receive_status`` for each frame of ``frames`` read at the time of ``times`` at the same
         place, in order, up to the first that is news: its place (the frames after it are not
-        taken), or None when none was (all taken).  A virtual-time host hands over the frames of
-        a simulator's quiet stretch this way (``JobRunner.take_statuses``, the news receiver of a
-        virtual wait): one call, not one a frame."""
+        taken), or None when none was (all taken).  A virtual wait's news receiver
+        (``JobRunner.take_statuses``) hands over a quiet stretch this way: one call, not one a frame."""
         self._fresh_s = None
         streamer, view, control, readings = self.streamer, self.view, self.control, self.readings
         streamer_receive, take = streamer.receive_status, readings.take
