@@ -38,6 +38,11 @@ class ScriptError(ArmctlError):
         tail = f" (and {more} more error{'s' if more != 1 else ''}: .diagnostics)" if first and more > 0 else ""
         super().__init__(f"{first}{tail}" if first else "script error")
 
+    @classmethod
+    def of(cls, diagnostics, errors: int) -> ScriptError:
+        """The errors among ``diagnostics`` (warnings left out), ``errors`` counted in all."""
+        return cls([d for d in diagnostics if d.is_error], errors=errors)
+
 
 # E004 (a value nobody wrote) is often what a bad word on the same line leaves behind: a word
 # that is wrong as written is the real diagnostic and leads the message

@@ -137,7 +137,8 @@ def drive_on(link, model, commands, baud: int, lead_s: float, abort_after: int |
     frames are written, as Ctrl-C does (the abort sequence: one pause frame).  The link's clock
     when the stop was asked (None without one)."""
     from ..core.job import RunView
-    from ..host.jobflow import read_arm, start_from_state
+    from ..core.checked import start_from_state
+    from ..host.jobflow import read_arm
     from ..host.runner import JobRunner
     from ..core.streamer import Streamer
 

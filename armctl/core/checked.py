@@ -65,7 +65,7 @@ class CheckedScript:
         report = self.report
         if not report.errors:
             return None
-        return ScriptError([d for d in report.diagnostics if d.severity == "error"], errors=report.errors)
+        return ScriptError.of(report.diagnostics, report.errors)
 
     def refusal(self) -> ScriptError | None:
         """Why this script cannot run: its lint errors, else a ``from_line`` it cannot start at."""
@@ -111,7 +111,7 @@ def from_line_errors(snapshot, from_line: int) -> ScriptError | None:
     compilation.finish()
     if not compilation.error_count:
         return None
-    return ScriptError([d for d in compilation.diagnostics if d.severity == "error"], errors=compilation.error_count)
+    return ScriptError.of(compilation.diagnostics, compilation.error_count)
 
 
 @dataclass(frozen=True)
@@ -162,7 +162,7 @@ def plan(checked: CheckedScript, model, start, initial, lead_s: float, baud: int
     # the arm's reported state can make a line fail that passed the check (a G91 offset from the
     # real pose): then it is refused here, and nothing goes
     if compilation.error_count:
-        raise ScriptError([d for d in compilation.diagnostics if d.is_error], errors=compilation.error_count)
+        raise ScriptError.of(compilation.diagnostics, compilation.error_count)
     return CheckedJob(checked, start, initial, estimator.result, lead_s, baud)
 
 

@@ -23,7 +23,6 @@ from __future__ import annotations
 import json
 from typing import Any, Callable, Iterable
 
-from ..core.checked import start_from_state  # noqa: F401 - re-exported (bench/realtime.py)
 from ..errors import ArmctlError
 from ..core.job_control import agreed_pause, pause_toggle_needed
 

@@ -18,7 +18,7 @@ import click
 from ..ui.cli_types import OutputFile, number
 from ..core.limits import BAUD_RANGE, REPEAT_DELAY_RANGE_MS, START_TIMEOUT_RANGE_S
 
-from ..errors import EXIT_PROBLEMS as EXIT_FAILED, EXIT_USAGE
+from ..errors import EXIT_PROBLEMS, EXIT_USAGE
 
 
 def _fail(message: str, code: int):
@@ -66,7 +66,7 @@ def jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms, 
     except ConfigError as error:  # armctl.toml, or a port jog cannot use: like any usage error
         _fail(str(error), EXIT_USAGE)
     except ArmctlError as error:
-        _fail(str(error), EXIT_FAILED)
+        _fail(str(error), EXIT_PROBLEMS)
     except KeyboardInterrupt:
         _fail("interrupted", 130)
 
@@ -131,7 +131,7 @@ def _jog(port, baud, mode, record_path, profile_path, log_path, repeat_delay_ms,
             problem = wait_for_pose(link, timeout_s)
             if problem is not None:
                 click.echo(f"armctl: {problem}", err=True)
-                return EXIT_FAILED
+                return EXIT_PROBLEMS
             scale = link.clock.scale  # sim://?speed=N: the arm lives N× faster than the wall
             session = JogSession(settings, keymap, profile, mode, line_s=frame_seconds(baud) / scale,
                                  time_scale=scale, recording=teach is not None)

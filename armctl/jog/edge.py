@@ -28,7 +28,7 @@ from ..errors import ArmctlError, PortError
 from ..core.protocol import describe
 from .keys import KeyDecoder
 from .moves import POSE_KINDS, reported_pose
-from ..errors import EXIT_INTERRUPTED, EXIT_PROBLEMS as EXIT_FAILED
+from ..errors import EXIT_INTERRUPTED, EXIT_PROBLEMS
 from .session import JogSession, Record, Send
 from .teach import FILE_HEADER, taught_line
 from .terminal import TerminalGone, Terminated, raw_terminal, read_input
@@ -281,9 +281,9 @@ def _reason_of(error: BaseException) -> tuple[str, int]:
         return "interrupted", EXIT_INTERRUPTED
     if isinstance(error, OSError) and not isinstance(error, ArmctlError):
         if error.errno == errno.EIO:  # writing the panel to a terminal that hung up
-            return "the terminal went away", EXIT_FAILED
-        return (error.strerror or str(error)), EXIT_FAILED
-    return (str(error) or type(error).__name__), EXIT_FAILED
+            return "the terminal went away", EXIT_PROBLEMS
+        return (error.strerror or str(error)), EXIT_PROBLEMS
+    return (str(error) or type(error).__name__), EXIT_PROBLEMS
 
 
 def wait_for_pose(link, timeout_s: float) -> str | None:

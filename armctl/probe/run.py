@@ -15,7 +15,7 @@ from pathlib import Path
 
 import click
 
-from ..errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS as EXIT_STOPPED
+from ..errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS
 
 
 def decide_motion(no_motion: bool, yes: bool, say, announcement: str) -> bool:
@@ -102,7 +102,7 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
         return EXIT_INTERRUPTED
     if probe.stopped is not None:
         click.echo(f"armctl: probe stopped: {probe.stopped}", err=True)
-        return EXIT_STOPPED
+        return EXIT_PROBLEMS
     from .keep import arm_identity, keep, written
 
     arm = arm_identity(choice.url)
