@@ -269,7 +269,7 @@ class Job:
             return self.stop.wrote()
         if write is not None and write.control is not None:  # a pause toggle the user asked for
             self.control.take_toggle()
-            streamer.wire_free_s = max(streamer.wire_free_s, now) + streamer.frame_s
+            streamer.wrote_control(now)
             self._refresh(now)
             return
         view = self.view

@@ -134,6 +134,11 @@ class Streamer:
     def waiting_seconds(self, now: float) -> float:
         return self._estimate.waiting_seconds(now)
 
+    def wrote_control(self, now: float) -> None:
+        """A frame that is not the job's (a pause toggle) went on the wire at ``now``: it holds
+        the line for one frame time, as the job's frames do."""
+        self._gate.occupy_wire(now)
+
     def wrote(self, command: Command, now: float, tag: object = None) -> SentFrame:
         """Record that the next frame's first byte went on the wire at ``now``."""
         ledger, bound = self._ledger, self._bound

@@ -62,10 +62,15 @@ class Gate:
         planner = self.planner
         planner.pending_arc = command if isinstance(command, ArcStart) else None
         planner.pose = segment.end
+        return segment, self.occupy_wire(now)
+
+    def occupy_wire(self, now: float) -> float:
+        """A frame starts on the wire at ``now`` or when the frame before has left, whichever is
+        later: when its last byte leaves (every frame, the job's and a control toggle, takes its turn)."""
         start_s = max(now, self.wire_free_s)
         wire_end = start_s + self.frame_s
         self.wire_free_s = wire_end
-        return segment, wire_end
+        return wire_end
 
     def line_busy_until(self, until_s: float) -> None:
         """The port says bytes written before are still leaving until ``until_s`` (its
