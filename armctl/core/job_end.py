@@ -212,13 +212,11 @@ class JobEnd:
         least_s = streamer.sure_motion_sent_s * streamer.fastest_factor
         if arm_s + ROTATION_S + LOSS_SLACK_S >= least_s:
             return
-        streamer.losses.append(
+        streamer.loss_found(
             f"the arm was at rest at the last target {arm_s:.1f} s after the first frame, but the frames sent take "
             f"{streamer.sure_motion_sent_s:.1f} s of motion (at least {least_s:.1f} s on an arm "
-            f"{1 / streamer.fastest_factor:g}x faster than the model): some were not run (dropped by a full FIFO?)")
-        suspect = streamer.first_time_only_index or 0
-        if streamer.first_suspect_index is None or suspect < streamer.first_suspect_index:
-            streamer.first_suspect_index = suspect
+            f"{1 / streamer.fastest_factor:g}x faster than the model): some were not run (dropped by a full FIFO?)",
+            streamer.first_time_only_index or 0)
 
     def finished_outcome(self) -> Outcome:
         """FINISHED only when nothing says a frame was lost and the claim rests on proof."""

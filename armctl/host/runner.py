@@ -284,7 +284,7 @@ class JobRunner(Host):
             extra = {"line": action.statement.line}
             if self.frame_fields is not None:
                 command = getattr(self.job, "_command", None)
-                segment = self.streamer._plan(command) if command is not None else None  # the planner's, kept for wrote
+                segment = self.streamer.plan(command) if command is not None else None  # the planner's, kept for wrote
                 extra.update(self.frame_fields(self.view.frames_sent + 1, action.statement, segment))
         self.log_record({"t": round(now, 4), "dir": "tx", "hex": action.frame.hex(), **extra}, durable=True)
         return self.log is not None

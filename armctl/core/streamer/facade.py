@@ -118,7 +118,7 @@ class Streamer:
         when = self._gate.next_write_time(now, command)
         return when is not None and when <= now
 
-    def _plan(self, command: Command) -> Segment:
+    def plan(self, command: Command) -> Segment:
         """The segment ``command`` would make if written next (kept for ``wrote``)."""
         return self._gate.plan(command)
 
@@ -133,6 +133,10 @@ class Streamer:
 
     def waiting_seconds(self, now: float) -> float:
         return self._estimate.waiting_seconds(now)
+
+    def loss_found(self, sentence: str, suspect: int) -> None:
+        """The caller (the job's end) found a sign of loss: it joins the streamer's own."""
+        self._losses.found(sentence, suspect)
 
     def wrote_control(self, now: float) -> None:
         """A frame that is not the job's (a pause toggle) went on the wire at ``now``: it holds

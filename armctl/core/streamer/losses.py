@@ -47,6 +47,12 @@ class Losses:
         self.too_slow: tuple[float, object] | None = None  # the arm seen slower than the tolerance on a frame
         self.slowest_proven = 0.0  # the most ``too_slow`` was in this job (a stale speed_factor: armctl/host/calibration.py)
 
+    def found(self, sentence: str, suspect: int) -> None:
+        """A sign of loss the caller concluded (``sentence``, for the summary); frame ``suspect``
+        may not have run."""
+        self.losses.append(sentence)
+        self.suspect(suspect)
+
     def suspect(self, index: int) -> None:
         """Frame ``index`` may not have run."""
         if self.first_suspect_index is None or index < self.first_suspect_index:
