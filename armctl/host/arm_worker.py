@@ -192,7 +192,7 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     from ..core import checked as checking
     from .calibration import stale_notes
     from .jobflow import JournalFile, drive, journal_for, read_arm, start_job
-    from .runner import abort_frames
+    from ..core.job import abort_frames
 
     link, observer = arm.link, spec.observer
     arrival = arm.profile.connector.control_on_arrival

@@ -20,7 +20,7 @@ from __future__ import annotations
 from collections import defaultdict
 from dataclasses import dataclass, field
 from itertools import takewhile
-from typing import Callable, Iterator
+from typing import Iterator
 
 from ..core.actions import Wait, Write  # a step's wish Wait(until_s, ready), and the host's actions (the probe's Command as Write.statement)
 from ..core.line import STATUS_SIZE

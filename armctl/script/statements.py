@@ -27,7 +27,6 @@ from ..core.protocol import (
     PWM_CHANNELS, AccelLinearMove, ArcEnd, ArcStart, Command, Delay, JointMove, LinearMove, SetWorktableOrigin, f32_repr,
 )
 from ..core.records import record
-from ..core.records import record
 from .modal import (
     CARTESIAN, CARTESIAN_SPEED, JOINT_KEYS, JOINT_SPEED, JOINTS, POISONED, POSE_KEYS, PWM_KEYS, ModalState,
 )
