@@ -76,7 +76,8 @@ class JobEnd:
         than the frames after the last motion can surely be done (a long run of delays leaves
         no trace: only time tells, and an arm twice slower needs twice theirs)."""
         streamer = self.streamer
-        return max(now + streamer.queued_seconds(now) * streamer.slowest_factor, self.trailing_done_s()) + SETTLE_SLACK_S
+        # (the queue's motion at the slowest pace, without each frame's handling: a wait, not a proof)
+        return max(streamer.done_by_s(now, streamer.queued_seconds(now), frames=0), self.trailing_done_s()) + SETTLE_SLACK_S
 
     def restart(self, now: float) -> None:
         """The end is waited for from ``now`` (all written, aborted, or resumed from a pause)."""
@@ -176,19 +177,19 @@ class JobEnd:
                     break
                 continue
             run.append(sent)
-            hold_s += sent.segment.duration_s * streamer.slowest_factor + streamer.frame_slack_s + streamer.frame_s
+            hold_s = streamer.done_by_s(hold_s, sent.segment.duration_s) + streamer.frame_s
         return resting
 
     def trailing_done_s(self) -> float:
         motion = self.readings.motion
         motion_end_s = motion[1] if motion is not None else 0.0
-        streamer, slowest = self.streamer, self.streamer.slowest_factor
+        streamer = self.streamer
         # every frame after the last one that moves, however many (the recent ones are only the
         # last RECENT_FRAMES): their model time at the slowest pace, from the end of that motion …
         last = self.written.last_move
         moved_until_s = 0.0 if last is None else last.motion_before_s + last.segment.duration_s
         count = streamer.sent - (0 if last is None else last.index + 1)
-        all_s = motion_end_s + (streamer.motion_sent_s - moved_until_s) * slowest + count * streamer.frame_slack_s
+        all_s = streamer.done_by_s(motion_end_s, streamer.motion_sent_s - moved_until_s, frames=count)
         # … and no earlier than the chain over the recent ones, each begun no earlier than it arrived
         trailing = []
         for sent in reversed(self.written.recent):
@@ -197,8 +198,7 @@ class JobEnd:
             trailing.append(sent)
         done_s = motion_end_s
         for sent in reversed(trailing):
-            done_s = (max(done_s, sent.wire_end_s + ARRIVAL_SLACK_S) + sent.segment.duration_s * slowest
-                      + streamer.frame_slack_s)
+            done_s = streamer.done_by_s(streamer.begun_by_s(sent.wire_end_s, done_s), sent.segment.duration_s)
         return max(done_s, all_s)
 
     def check_job_time(self, done_s: float) -> None:

@@ -138,6 +138,13 @@ class Streamer:
         """The caller (the job's end) found a sign of loss: it joins the streamer's own."""
         self._losses.found(sentence, suspect)
 
+    def done_by_s(self, begun_s: float, duration_s: float, frames: int = 1) -> float:
+        """When ``frames`` frames with ``duration_s`` of model motion in all, begun by ``begun_s``,
+        have surely finished, even on the slowest arm allowed for (``TimeBound.done_by_s``)."""
+        return self._bound.done_by_s(begun_s, duration_s, frames)
+
+    begun_by_s = staticmethod(TimeBound.begun_by_s)
+
     def wrote_control(self, now: float) -> None:
         """A frame that is not the job's (a pause toggle) went on the wire at ``now``: it holds
         the line for one frame time, as the job's frames do."""

@@ -50,10 +50,21 @@ class TimeBound:
 
     # --- a frame written ----------------------------------------------------------------------
 
+    @staticmethod
+    def begun_by_s(wire_end_s: float, before_end_s: float) -> float:
+        """When a frame has surely begun: it has landed (``ARRIVAL_SLACK_S`` after its last byte
+        left the wire at ``wire_end_s``) and the frame before it finished (by ``before_end_s``)."""
+        return max(wire_end_s + ARRIVAL_SLACK_S, before_end_s)
+
+    def done_by_s(self, begun_s: float, duration_s: float, frames: int = 1) -> float:
+        """When ``frames`` frames with ``duration_s`` of model motion in all, begun by
+        ``begun_s``, have surely finished: their motion at the slowest pace and each frame's
+        handling (``frame_slack_s``).  The one statement of the rule; the job's end asks it too."""
+        return begun_s + duration_s * self.slowest_factor + frames * self.frame_slack_s
+
     def chain(self, wire_end_s: float, duration_s: float, allowance_s: float) -> float:
         """The deadline of a frame written now, whose last byte leaves the wire at ``wire_end_s``."""
-        certain_start = max(wire_end_s + ARRIVAL_SLACK_S, self.certain_tail_s)
-        self.certain_tail_s = certain_start + (duration_s + allowance_s) * self.slowest_factor + self.frame_slack_s
+        self.certain_tail_s = self.done_by_s(self.begun_by_s(wire_end_s, self.certain_tail_s), duration_s + allowance_s)
         return self.certain_tail_s
 
     @staticmethod
@@ -159,17 +170,16 @@ class TimeBound:
         if not pending:
             return
         chain = None
-        slowest, slack_s = self.slowest_factor, self.frame_slack_s
+        done_by_s, begun_by_s = self.done_by_s, self.begun_by_s
         for k in range(index - pending[0].index, len(pending)):
             if k < 0:
                 return  # that frame is already known finished: nothing about the next ones
             sent = pending[k]
             if chain is None:  # the rest of it, from the least fraction the evidence allows
                 left_s = sent.segment.duration_s - time_window(sent.segment, fraction, 1.0, self.memo.time_at)[0]
-                chain = now + (left_s + sent.unknown_start_s) * slowest + slack_s
+                chain = done_by_s(now, left_s + sent.unknown_start_s)
             else:
-                start = max(sent.wire_end_s + ARRIVAL_SLACK_S, chain)
-                chain = start + (sent.segment.duration_s + sent.unknown_start_s) * slowest + slack_s
+                chain = done_by_s(begun_by_s(sent.wire_end_s, chain), sent.segment.duration_s + sent.unknown_start_s)
             if chain >= sent.chain_end_s:
                 return  # no tighter than before, and neither are the frames after it
             sent.chain_end_s = chain
