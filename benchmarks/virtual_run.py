@@ -28,6 +28,16 @@ system) — against the bare simulator replaying the same frames (``baseline``, 
 figure is the median of ``--pairs`` runs, taken in alternating order.
 
     .venv/bin/python benchmarks/virtual_run.py --cost --pairs 3
+
+``--split`` says where the run's CPU goes, in this process: the same 24,000-frame job with a
+counter around the job engine's three entry points (``Job.receive_statuses``, ``next_action``,
+``wrote``) and the simulated port's (``advance_to``, ``virtual_status_run``, ``status_frames``,
+``write``); the rest is the host's edge (the driver, the virtual waits, the link, the runner,
+reading and checking the script).  The counters cost a little themselves (timed, and printed).
+What it answers: the run's CPU less its engine's, against the bare simulator — the ratio the
+run would reach if the engine cost nothing.
+
+    .venv/bin/python benchmarks/virtual_run.py --split
 """
 
 from __future__ import annotations
@@ -172,12 +182,89 @@ def cost(pairs: int) -> int:
     return 0 if met else 1
 
 
+SPLIT_ENGINE = ("armctl.core.job", "Job", ("receive_statuses", "next_action", "wrote"))
+SPLIT_SIMULATOR = ("armctl.sim.protocol_sim", "Serial", ("advance_to", "virtual_status_run", "status_frames", "write"))
+
+
+def _counted(spent: dict, part: str, function):
+    """``function`` with its CPU added to ``spent[part]`` (outermost calls only: none of these
+    calls another, but a counted call inside a counted call must not count twice)."""
+    clock = time.process_time
+
+    def counted(*args, **kwargs):
+        if spent["depth"]:
+            return function(*args, **kwargs)
+        spent["depth"] = 1
+        start = clock()
+        try:
+            return function(*args, **kwargs)
+        finally:
+            spent[part] += clock() - start
+            spent["calls"] += 1
+            spent["depth"] = 0
+    return counted
+
+
+@contextlib.contextmanager
+def _counters(spent: dict):
+    """The engine's and the simulated port's entry points counted into ``spent`` meanwhile."""
+    import importlib
+    originals = []
+    try:
+        for part, (module, name, methods) in (("engine", SPLIT_ENGINE), ("simulator", SPLIT_SIMULATOR)):
+            owner = getattr(importlib.import_module(module), name)
+            for method in methods:
+                originals.append((owner, method, owner.__dict__[method]))
+                setattr(owner, method, _counted(spent, part, owner.__dict__[method]))
+        yield
+    finally:
+        for owner, method, function in originals:
+            setattr(owner, method, function)
+
+
+def split(pairs: int) -> tuple[float, float, float, float]:
+    """``--split`` (see the module docstring): prints the split; returns the medians (run, engine,
+    simulated port, bare simulator) in CPU seconds."""
+    spent = {"engine": 0.0, "simulator": 0.0, "calls": 0, "depth": 0}
+    # what one counter costs: a counted call of a function that does nothing
+    probe = {"nothing": 0.0, "calls": 0, "depth": 0}
+    nothing = _counted(probe, "nothing", lambda: None)
+    start = time.process_time()
+    for _ in range(100_000):
+        nothing()
+    per_call_s = (time.process_time() - start) / 100_000
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp, _counters(spent):
+        script = Path(tmp) / "job24k.txt"
+        write_cost_job(script)
+        one_run(script)  # warm-up: imports, the grammar cache
+        for _ in range(pairs):
+            spent.update(engine=0.0, simulator=0.0, calls=0)
+            (_, run_s), written, end_s, _ = one_run(script)
+            counters_s = spent["calls"] * per_call_s
+            rows.append((run_s, spent["engine"], spent["simulator"], counters_s, baseline(written, end_s)[1]))
+    run_s, engine_s, simulator_s, counters_s, base_s = (statistics.median(column) for column in zip(*rows))
+    edge_s = run_s - engine_s - simulator_s - counters_s
+    print(f"job: {len(written)} frames, model time simulated {end_s:.1f} s; medians of {pairs} in-process runs")
+    print(f"run CPU {run_s:.2f} s = job engine {engine_s:.2f} s + simulated port {simulator_s:.2f} s "
+          f"+ host edge {edge_s:.2f} s + counters about {counters_s:.2f} s ({spent['calls']} calls)")
+    print(f"bare simulator (same frames) CPU {base_s:.2f} s; run / bare {run_s / base_s:.2f}; "
+          f"without the engine's share {(run_s - engine_s - counters_s) / base_s:.2f}; "
+          f"the edge's share alone {edge_s / base_s:.2f} of the bare simulator")
+    return run_s, engine_s, simulator_s, base_s
+
+
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--pairs", type=int, default=5)
     parser.add_argument("--cost", action="store_true", help="issue 23's measure: a 24,000-frame run against the "
                         "bare simulator and against armctl compile, each in a fresh process")
+    parser.add_argument("--split", action="store_true", help="where the 24,000-frame run's CPU goes: the job "
+                        "engine, the simulated port and the host's edge (in this process)")
     args = parser.parse_args()
+    if args.split:
+        split(args.pairs)
+        return 0
     if args.cost:
         return cost(args.pairs)
     with tempfile.TemporaryDirectory() as tmp:

@@ -72,6 +72,20 @@ def test_virtual_run_cost_times_the_installed_command_in_a_fresh_process(tmp_pat
         module.child_cpu_s("compile", str(tmp_path / "missing.txt"))
 
 
+def test_virtual_run_split_counts_the_engine_and_the_port_and_puts_them_back(monkeypatch, capsys):
+    # virtual_run.py --split on a job of 2 passes: every part counted, the methods restored after
+    from armctl.core.job import Job
+    from armctl.sim.protocol_sim import Serial
+
+    module = _load("virtual_run.py")
+    monkeypatch.setattr(module, "COST_PASSES", 2)
+    before = [Job.next_action, Job.receive_statuses, Job.wrote, Serial.advance_to, Serial.write]
+    run_s, engine_s, simulator_s, base_s = module.split(1)
+    assert 0 < engine_s < run_s and 0 < simulator_s < run_s and base_s > 0
+    assert "job: 5 frames" in capsys.readouterr().out
+    assert [Job.next_action, Job.receive_statuses, Job.wrote, Serial.advance_to, Serial.write] == before
+
+
 def test_streamer_cost_builds_its_streamers_and_times_a_batch():
     # benchmarks/streamer_cost.py (issue 13's flat-cost row) called a private streamer method
     # whose signature had changed, and ended in a TypeError unnoticed: its code runs here.
