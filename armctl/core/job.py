@@ -8,7 +8,7 @@ run``'s runner over a port, the benchmark's harness over a simulated arm, the Py
     ask ``next_action(now)``:
         ``Write(frame, statement)`` → write the frame, then ``wrote(now)``
         ``Wait(until_s)``           → wait until ``until_s`` or the next status frame (None: the frame)
-        ``Done(outcome)``       → stop; ``view`` says what ran and where to resume
+        ``Done(outcome)``           → stop; ``view`` says what ran and where to resume
 
 so the rules that end a job live here once, whoever drives it, and a virtual-time host can jump
 straight to the next event: nothing here changes between status frames except at the times a
