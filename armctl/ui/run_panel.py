@@ -17,7 +17,7 @@ from rich.progress_bar import ProgressBar
 from rich.table import Table
 from rich.text import Text
 
-from ..host.runner import RunView
+from ..core.job import RunView
 from .path_map import ARM, ARM_GLYPH as ARM_MARK, DONE, QUEUED, TODO, PathGrid
 
 MAP_STYLES = {DONE: "green", QUEUED: "bold yellow", TODO: "dim", ARM: "bold red"}
