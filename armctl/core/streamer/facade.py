@@ -98,6 +98,7 @@ class Streamer:
     write_ahead_s = _part("_gate", "write_ahead_s")
     write_reason = _part("_gate", "write_reason", False)
     next_frame_motion_s = _part("_gate", "next_frame_motion_s", False)
+    capacity_held = _part("_gate", "capacity_held", False)
     slowest_factor = _part("_bound", "slowest_factor", False)
     frame_slack_s = _part("_bound", "frame_slack_s", False)
     pace = _part("_estimate", "pace", False)
