@@ -67,7 +67,7 @@ Rules of the façade:
   estimate follow it.  A stop sends its pause toggle only when the arm would otherwise run on.
 - A summary claims only what evidence proves.  Each frame counts as confirmed by the arm's
   reports, by time alone, or as gone from the FIFO without a proof that it ran
-  (``RunView.frames_by_reports`` / ``frames_by_time`` / ``frames_unseen``: armctl/core/streamer.py).  Any sign of loss
+  (``RunView.frames_by_reports`` / ``frames_by_time`` / ``frames_unseen``: armctl/core/streamer/ledger.py).  Any sign of loss
   — the streamer saw the arm skip frames (``Streamer.losses``), or the arm at rest at the end
   sooner than the frames sent could take at the fastest plausible pace — ends FRAMES_LOST with
   the evidence, and nothing from the first frame that may be lost on is claimed executed.

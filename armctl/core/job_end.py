@@ -128,8 +128,8 @@ class JobEnd:
         """Every frame written has finished (``rest_proves_done_before`` leaves none unproven).
         The end of a job rests on it, and so does a job held mid-way (the FIFO bound, or rule
         (c), with only evidence to let the next frame go): it is what confirms an arc from an
-        unverified joint end when no later frame's sighting can (armctl/core/streamer.py
-        ``_unknown_start_s``: time cannot) — the arm has drained its FIFO by then, which costs
+        unverified joint end when no later frame's sighting can (armctl/core/streamer/time_bound.py
+        ``allowance_s``: time cannot) — the arm has drained its FIFO by then, which costs
         the job that wait, never a frame."""
         return self.rest_proves_done_before(now) == self.streamer.sent
 
