@@ -111,3 +111,16 @@ def test_move_says_at_once_that_ctrl_c_stops_it_and_a_second_press_ends_the_wait
     assert code == 130, (code, seen)
     assert out.startswith("interrupted"), out
     assert not any("Traceback" in line for line in seen), seen
+
+
+def test_e010_names_only_commands_that_take_from_line():
+    # README's and docs/lint.md's E010 rows said "--from-line of compile/run"; compile has no --from-line
+    from armctl.ui.cli import main
+
+    for document in (ROOT / "README.md", ROOT / "docs" / "lint.md"):
+        row = next(line for line in document.read_text(encoding="utf-8").splitlines() if line.startswith("| E010 |"))
+        named = re.findall(r"`(\w+)`", row.split("`--from-line` of ", 1)[1].split(" must", 1)[0])
+        assert named, row
+        for name in named:
+            options = {option for param in main.commands[name].params for option in param.opts}
+            assert "--from-line" in options, (document.name, name)
