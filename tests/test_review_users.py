@@ -10,6 +10,7 @@ once and a second press cuts the wait short (README: Stopping a job; docs/api.md
 
 from __future__ import annotations
 
+import json
 import os
 import queue
 import re
@@ -124,3 +125,39 @@ def test_e010_names_only_commands_that_take_from_line():
         for name in named:
             options = {option for param in main.commands[name].params for option in param.opts}
             assert "--from-line" in options, (document.name, name)
+
+
+@pytest.mark.realtime
+@pytest.mark.timeout(60)
+def test_sim_tcp_serves_one_program_after_another_the_same_arm():
+    # README (Platforms): "On Windows serve the simulator with `armctl sim --tcp 5555` and use
+    # `--port socket://127.0.0.1:5555`" — it ended, exit 0, when the first program closed its socket,
+    # so the second command was refused; `sim --pty` keeps serving the same arm (keep_serving)
+    import socket
+
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        port = probe.getsockname()[1]
+    sim = subprocess.Popen([*ARMCTL, "sim", "--tcp", str(port)], cwd=ROOT, env=ENV,
+                           stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                           preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    url = f"socket://127.0.0.1:{port}"
+    try:
+        assert "(Ctrl-C to stop)" in sim.stdout.readline()
+        def armctl(*arguments):
+            return subprocess.run([*ARMCTL, *arguments, "--port", url], cwd=ROOT, env=ENV, capture_output=True,
+                                  text=True, timeout=30)
+
+        first = armctl("status", "--once", "--json")
+        assert first.returncode == 0, first.stderr
+        moved = armctl("move", "z=250", "--json")  # exit 1: "finished, unproven" on a socket (FIFO not probed)
+        assert moved.stdout, moved.stderr  # before: "connection refused", the simulator gone
+        assert json.loads(moved.stdout)["outcome"].startswith("finished"), (moved.stdout, moved.stderr)
+        third = armctl("status", "--once", "--json")
+        assert third.returncode == 0, third.stderr
+        assert abs(json.loads(third.stdout)["z"] - 250) < 0.5, third.stdout  # the same arm, moved
+        assert sim.poll() is None
+        sim.send_signal(signal.SIGINT)
+        assert sim.wait(timeout=10) == 130
+    finally:
+        sim.kill()
