@@ -161,3 +161,21 @@ def test_sim_tcp_serves_one_program_after_another_the_same_arm():
         assert sim.wait(timeout=10) == 130
     finally:
         sim.kill()
+
+
+def test_run_result_outcome_is_the_plain_text_docs_api_prints(tmp_path):
+    # docs/api.md, "Several arms": print(results)  # {'left': 'finished', 'right': 'finished'} —
+    # it printed {'left': <Outcome.FINISHED: 'finished'>, …}: the job engine's enum leaked into the result
+    import armctl
+
+    job = tmp_path / "job.txt"
+    job.write_text("G1 X210 Y0 Z290 A180 B0 C0 S1500 F6000\nG1 Z280\n", encoding="utf-8")
+    with armctl.Arm.open(port="sim://?clock=virtual") as arm:
+        results = {"left": arm.run(job).outcome, "moved": arm.move(z=250).outcome}
+
+        def stop_at_once(progress):
+            arm.stop()
+
+        results["stopped"] = arm.run(job, on_progress=stop_at_once).outcome
+    assert repr(results) == "{'left': 'finished', 'moved': 'finished', 'stopped': 'interrupted'}"
+    assert all(type(outcome) is str for outcome in results.values())

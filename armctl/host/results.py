@@ -69,7 +69,8 @@ class RunResult:
 
         resume = resume_line(view, lines) if outcome != "finished" else None
         arm_time_s = view.arm_time_s
-        return cls(outcome, view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
+        # the outcome as plain text (the engine's Outcome is a StrEnum): it prints and compares as documented
+        return cls(str(outcome), view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
                    getattr(view.last_done, "line", None), None if arm_time_s is None else round(arm_time_s, 3),
                    estimated_job_s, resume, None if resume is None or resume_command is None else resume_command(resume),
                    tuple(view.messages), exit_code_of(outcome), view.frames_by_reports, view.frames_by_time,
