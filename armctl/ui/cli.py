@@ -482,7 +482,8 @@ def home(port, baud, profile_path, timeout_s, as_json):
 
 @main.command()
 @click.option("--pty", "use_pty", is_flag=True, help="Serve the simulated arm on a new pseudo-terminal and print its path.")
-@click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True), help="Serve one client on 127.0.0.1:PORT (socket://127.0.0.1:PORT).")
+@click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True),
+              help="Serve on 127.0.0.1:PORT (socket://127.0.0.1:PORT): one client at a time, the same arm.")
 @click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?speed_factor=1.3&loss=0.05.")
 @click.option("--stats", "stats_path", type=click.Path(dir_okay=False, writable=True), default=None,
               help="On exit, write what the arm saw (frames landed, dropped, run) as JSON to this file (--pty).")
@@ -521,7 +522,7 @@ def sim(use_pty, tcp_port, sim_url, stats_path):
 
                 write_stats(stats_path, model, arms[0].clock_start_s, arms[0].time_scale)
     else:
-        ended = serve_tcp(tcp_port, options, ready)
+        ended = serve_tcp(tcp_port, options, ready, keep_serving=True)
     if ended == INTERRUPTED:  # the bridge closed what it opened; Ctrl-C exits 130 like every command
         raise KeyboardInterrupt
 
