@@ -256,7 +256,7 @@ def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[],
         return RunResult.nothing_sent("interrupted")
     state, from_line = started
     if from_line is None:
-        return RunResult.nothing_sent("finished", message="nothing to resume: every line of the job is proven executed")
+        return _nothing_to_resume(arm)
     checked = checked.starting_at(from_line)
     if checked.from_line_error is not None:
         raise checked.from_line_error
@@ -264,6 +264,20 @@ def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[],
                   "before it ran")
     resume_paused(arm.link, arm.status_timeout_s, journal, observer.note, arm.profile.connector.control_on_arrival)
     return arm.link.snapshot()[0], checked
+
+
+def _nothing_to_resume(arm: ArmLine) -> RunResult:
+    """The arm rests where the log's last frame leaves it: the log's every line ran — proven only
+    where the FIFO size is (``link.fifo_proven``), as at a job's end (core/job_end.py): else a frame
+    a full FIFO dropped before the crash would look the same, and the resume ends unproven (exit 1)."""
+    from .link import fifo_proven
+
+    if fifo_proven(arm.link.url, arm.profile.connector):
+        return RunResult.nothing_sent("finished", message="nothing to resume: every line of the job is proven executed")
+    return RunResult.nothing_sent("finished, unproven", message=(
+        "nothing to resume: the arm is at rest where the log's last frame leaves it, but the FIFO size is the "
+        "document's, not measured on this arm: a frame it dropped before the crash would look the same; "
+        "run `armctl probe` once"))
 
 
 def _journal_job(runner, job, state, arrival: bool) -> None:

@@ -52,16 +52,27 @@ def arm_identity(port: str, ports=None) -> str:
     only for a device path)."""
     if port.startswith((_USB, _DEVICE)):
         return port
-    scheme = urllib.parse.urlsplit(port).scheme if "://" in port else ""
+    parts = _url_parts(port) if "://" in port else None
+    scheme = parts.scheme if parts is not None else ""
     if scheme == "sim":
         return _sim_identity(port)
     if scheme in _NETWORK_SCHEMES:
-        parts = urllib.parse.urlsplit(port)
         return f"{scheme}://{(parts.hostname or '').lower()}:{parts.port or ''}"
     if scheme:  # loop://, spy://…: the URL without its options
-        parts = urllib.parse.urlsplit(port)
         return f"{scheme}://{parts.netloc}{parts.path}"
     return _device_identity(port, port_infos() if ports is None else ports)
+
+
+def _url_parts(url: str) -> urllib.parse.SplitResult:
+    """``url`` split, its port number read: a URL urllib cannot split (``socket://[::1``) or whose
+    port is no number 0…65535 (``socket://host:99999``) is a ConfigError naming it (exit 2), not
+    the ValueError urllib raises on reading it."""
+    try:
+        parts = urllib.parse.urlsplit(url)
+        parts.port  # (read for its ValueError)
+    except ValueError as error:
+        raise ConfigError(f"{url!r} is not a port URL armctl can use: {error}") from None
+    return parts
 
 
 def _sim_identity(url: str) -> str:

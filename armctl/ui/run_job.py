@@ -251,8 +251,8 @@ def _report(result, watch, options: JobOptions, events) -> int:
         for message in result.messages:
             click.echo(message)
         if events is not None:
-            events.summary(_nothing_to_run())
-        return EXIT_OK
+            events.summary(result.to_json())
+        return result.exit_code
     from dataclasses import replace
 
     wall_s = time.monotonic() - watch.wall_start
@@ -262,12 +262,6 @@ def _report(result, watch, options: JobOptions, events) -> int:
     if events is not None:
         events.summary(result.to_json())
     return code
-
-
-def _nothing_to_run() -> dict:
-    from .run_json import failure_result
-
-    return failure_result("finished", EXIT_OK)  # nothing was left to send: the job is done
 
 
 class Departures:

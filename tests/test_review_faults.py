@@ -1,0 +1,100 @@
+"""Review of trust at the edges (crashes, resumes, hostile inputs, arm variants): each fault found,
+through the installed command in a fresh process and the API.
+
+1. A network port URL urllib cannot read (``socket://127.0.0.1:99999``, ``socket://host:abc``,
+   ``socket://[::1``) gave a ValueError traceback (exit 1) on ``status``, ``config``, ``run``,
+   ``move`` and ``probe``: now one line naming the URL, exit 2, nothing opened.
+2. ``run --resume LOG`` that finds nothing left to run (the arm rests where the log's last frame
+   leaves it) said ``finished``, exit 0 — "every line of the job is proven executed" — on an arm
+   whose FIFO size is not proven, where the job's own end says ``finished, unproven``: on
+   ``sim://?fifo_frames=1`` the arm had dropped 2 of pick_and_place's 14 frames.  Now it ends
+   ``finished, unproven`` (exit 1) there, as the job's end does, and ``finished`` where the FIFO
+   size is proven.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from armctl import Arm
+
+from journal_crash import ran, job_commands
+
+ROOT = Path(__file__).resolve().parent.parent
+PICK = ROOT / "scripts" / "pick_and_place.txt"
+SMALL_FIFO = "sim://?clock=virtual&fifo_frames=1"  # the profile says 200: the FIFO size is not proven
+PROVEN_FIFO = "sim://?clock=virtual"
+
+
+def _armctl(*args: str, cwd: Path, timeout: float = 30.0) -> subprocess.CompletedProcess:
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    return subprocess.run([sys.executable, "-m", "armctl", *args], capture_output=True, text=True, timeout=timeout,
+                          cwd=cwd, env=env, stdin=subprocess.DEVNULL)
+
+
+def _summary(done: subprocess.CompletedProcess) -> dict:
+    return [json.loads(line) for line in done.stdout.splitlines() if '"summary"' in line][-1]
+
+
+# --- 1. a network port URL urllib cannot read --------------------------------------------------
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("url, why", [
+    ("socket://127.0.0.1:99999", "Port out of range"),
+    ("socket://host:abc", "Port could not be cast"),
+    ("rfc2217://127.0.0.1:-1", "Port could not be cast"),
+    ("socket://[::1", "Invalid IPv6 URL"),
+])
+@pytest.mark.parametrize("command", [["status", "--once"], ["config"], ["move", "z=200"],
+                                     ["run", str(PICK), "--no-live"], ["run", str(PICK), "--dry-run"]])
+def test_bad_network_port_url_is_a_usage_error(tmp_path, url, why, command):
+    done = _armctl(*command, "--port", url, cwd=tmp_path)
+    assert "Traceback" not in done.stderr, done.stderr
+    assert done.returncode == 2, (done.returncode, done.stderr)
+    assert url in done.stderr and why in done.stderr, done.stderr
+
+
+# --- 2. --resume with nothing left claims only what is proven ----------------------------------
+
+@pytest.mark.timeout(60)
+def test_resume_with_nothing_left_on_an_unproven_fifo_is_not_finished(tmp_path):
+    """The same arm (the API, in-process): the job's end said ``finished, unproven`` and the arm
+    really dropped frames; the resume of its log must not turn that into ``finished``."""
+    log = tmp_path / "job.log"
+    with Arm.open(port=SMALL_FIFO) as arm:
+        with log.open("w", encoding="utf-8") as file:
+            first = arm.run(PICK, log=file)
+        model = arm._link.port.model
+        assert model.frames_dropped > 0 and ran(arm) != job_commands(PICK)  # lines the arm never ran
+        assert first.outcome == "finished, unproven" and first.exit_code == 1
+        again = arm.run(PICK, resume=log)
+    assert again.frames_sent == 0
+    assert again.outcome == "finished, unproven" and again.exit_code == 1 and not again.finished, again
+    assert "probe" in " ".join(again.messages)
+
+
+@pytest.mark.timeout(60)
+def test_resume_with_nothing_left_through_the_command(tmp_path):
+    """Fresh processes: a job that ends where the simulator starts (its joints' home), journalled;
+    then ``--resume`` on a simulated arm at rest there.  With the FIFO size unproven the summary is
+    ``finished, unproven``, exit 1; with it proven (the simulator's FIFO is the profile's), ``finished``."""
+    script = tmp_path / "home_end.txt"
+    script.write_text("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X255\nG1 X260\nG1 X265\nG1 X270\n"
+                      "G6 J1=0 J2=0 J3=0 J4=0 J5=90 J6=0 S1000 F30\n")
+    log = tmp_path / "job.log"
+    _armctl("run", str(script), "--port", SMALL_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
+    assert '"job"' in log.read_text()
+    unproven = _armctl("run", str(script), "--port", SMALL_FIFO, "--resume", str(log), "--json", cwd=tmp_path)
+    assert "Traceback" not in unproven.stderr
+    assert unproven.returncode == 1, (unproven.stdout, unproven.stderr)
+    summary = _summary(unproven)
+    assert summary["outcome"] == "finished, unproven" and summary["exit_code"] == 1 and summary["frames_sent"] == 0
+    proven = _armctl("run", str(script), "--port", PROVEN_FIFO, "--resume", str(log), "--json", cwd=tmp_path)
+    assert proven.returncode == 0, (proven.stdout, proven.stderr)
+    assert _summary(proven)["outcome"] == "finished"
