@@ -196,3 +196,13 @@ def test_estimate_takes_the_line_rate_of_armctl_toml_as_run_does(tmp_path):
     configured = job_s("estimate", "tiny.txt")
     assert configured == job_s("estimate", "tiny.txt", "--baud", "115200") == job_s("run", "tiny.txt", "--dry-run")
     assert configured < job_s("estimate", "tiny.txt", "--baud", "9600") / 2  # the option still wins
+
+
+def test_serve_without_its_extra_names_a_pip_command_that_installs_it():
+    # README (Install): "`armctl-serial` is not on the index; install it from a checkout" — the
+    # message said pip install 'armctl-serial[serve]', which the index cannot satisfy
+    code = "import sys; sys.modules['aiohttp'] = None; from armctl.ui.cli import main; main(['serve'])"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=30, cwd=ROOT)
+    assert done.returncode == 2, done.stderr
+    assert "pip install -e '.[serve]'" in done.stderr and "checkout" in done.stderr, done.stderr
+    assert "armctl-serial[" not in done.stderr, done.stderr
