@@ -179,3 +179,30 @@ def test_run_result_outcome_is_the_plain_text_docs_api_prints(tmp_path):
         results["stopped"] = arm.run(job, on_progress=stop_at_once).outcome
     assert repr(results) == "{'left': 'finished', 'moved': 'finished', 'stopped': 'interrupted'}"
     assert all(type(outcome) is str for outcome in results.values())
+
+
+def test_estimate_takes_the_line_rate_of_armctl_toml_as_run_does(tmp_path):
+    # `baud = 115200` in armctl.toml: `armctl config` and `run --dry-run` said 115200, `estimate`
+    # planned at 9600 — 10.1 s for a job of 200 tiny moves that runs in 1.1 s
+    lines = ["G1 X210 Y0 Z290 A180 B0 C0 S1500 F6000"] + [f"G1 Z{290 - (i % 2) * 0.5}" for i in range(200)]
+    (tmp_path / "tiny.txt").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    (tmp_path / "armctl.toml").write_text("baud = 115200\n", encoding="utf-8")
+
+    def job_s(*arguments):
+        done = subprocess.run([*ARMCTL, *arguments], cwd=tmp_path, env=ENV, capture_output=True, text=True, timeout=60)
+        assert done.returncode == 0, done.stderr
+        return float(re.search(r"job time\s+([\d.]+) s", done.stdout).group(1))
+
+    configured = job_s("estimate", "tiny.txt")
+    assert configured == job_s("estimate", "tiny.txt", "--baud", "115200") == job_s("run", "tiny.txt", "--dry-run")
+    assert configured < job_s("estimate", "tiny.txt", "--baud", "9600") / 2  # the option still wins
+
+
+def test_serve_without_its_extra_names_a_pip_command_that_installs_it():
+    # README (Install): "`armctl-serial` is not on the index; install it from a checkout" — the
+    # message said pip install 'armctl-serial[serve]', which the index cannot satisfy
+    code = "import sys; sys.modules['aiohttp'] = None; from armctl.ui.cli import main; main(['serve'])"
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=30, cwd=ROOT)
+    assert done.returncode == 2, done.stderr
+    assert "pip install -e '.[serve]'" in done.stderr and "checkout" in done.stderr, done.stderr
+    assert "armctl-serial[" not in done.stderr, done.stderr

@@ -414,7 +414,7 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
 @main.command()
 @click.argument("script", metavar="SCRIPT")
 @click.option("--lead", "lead_s", type=number(*LEAD_RANGE_S), default=2.0, show_default=True, help="The lead run would use.")
-@click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=9600, show_default=True)
+@baud_option
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object.")
 def estimate(script, lead_s, baud, profile_path, as_json):
@@ -424,12 +424,12 @@ def estimate(script, lead_s, baud, profile_path, as_json):
     """
     from ..host.calibration import arm_profile
     from ..core.motion import MotionModel
-    from .run_job import check_script, plan_job, print_estimate
+    from .run_job import check_script, configured_baud, plan_job, print_estimate
 
     snapshot = _read_script(script)
     profile = arm_profile(profile_path)  # the configured port's arm
     checked = check_script(snapshot, profile)
-    result = plan_job(checked, MotionModel(profile), lead_s, baud).estimate
+    result = plan_job(checked, MotionModel(profile), lead_s, baud or configured_baud()).estimate
     if as_json:
         click.echo(json.dumps(result.to_json()))
     else:

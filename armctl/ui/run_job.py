@@ -116,7 +116,7 @@ def print_estimate(result, header: str) -> None:
 
 def dry_run(options: JobOptions, checked, model) -> int:
     # the estimate first: it refuses a job too long to run (E012) before a frame is printed
-    job = plan_job(checked, model, options.lead_s, options.baud or _config_baud())
+    job = plan_job(checked, model, options.lead_s, options.baud or configured_baud())
     for statement in job.statements():
         frame = statement.command.encode()
         click.echo(f"{statement.line:>6}  {frame.hex()}  {describe(statement.command)}")
@@ -124,7 +124,9 @@ def dry_run(options: JobOptions, checked, model) -> int:
     return EXIT_OK
 
 
-def _config_baud() -> int:
+def configured_baud() -> int:
+    """The line rate of armctl.toml (the project's, else yours), else 9600: what ``run`` opens a
+    port at without ``--baud``, and what ``--dry-run`` and ``estimate`` plan with."""
     from ..host.link import config_baud
     from ..host.profile import load_config
 
