@@ -312,7 +312,8 @@ def _frames_not_seen(streamer) -> str:
     """The frames the arm's reports did not see run, as the summary says it."""
     parts = []
     if streamer.confirmed_by_time:
-        parts.append(f"{streamer.confirmed_by_time} frames were confirmed by time alone")
+        count = streamer.confirmed_by_time
+        parts.append(f"{count} {'frame was' if count == 1 else 'frames were'} confirmed by time alone")
     if streamer.confirmed_unseen:
         parts.append(f"{streamer.confirmed_unseen} only by a report on a later frame (gone from the FIFO, "
                      "never seen running)")
