@@ -467,7 +467,7 @@ def one_line_summary(result, position_mm) -> str:
     """What ``armctl move``/``home`` print: the outcome, the arm time and (finished) where the
     arm reports it is at rest."""
     time_s = "" if result.arm_time_s is None else f" in {result.arm_time_s:.1f} s of arm time"
-    where = "" if position_mm is None else " at X{:.1f} Y{:.1f} Z{:.1f}".format(*position_mm)
+    where = "" if position_mm is None else " at X{:z.1f} Y{:z.1f} Z{:z.1f}".format(*position_mm)
     if result.finished:
         return f"finished: the arm is at rest{where}{time_s}"
     messages = "".join(f"; {message}" for message in result.messages)
