@@ -98,3 +98,17 @@ def test_resume_with_nothing_left_through_the_command(tmp_path):
     proven = _armctl("run", str(script), "--port", PROVEN_FIFO, "--resume", str(log), "--json", cwd=tmp_path)
     assert proven.returncode == 0, (proven.stdout, proven.stderr)
     assert _summary(proven)["outcome"] == "finished"
+
+
+# --- 3. --resume with --dry-run -------------------------------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_resume_with_dry_run_is_refused_not_ignored(tmp_path):
+    """A dry run printed the whole job from its first line, exit 0, as if --resume were not given:
+    what the resume would send depends on the arm's report, which a dry run never reads."""
+    log = tmp_path / "job.log"
+    _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
+    done = _armctl("run", str(PICK), "--dry-run", "--resume", str(log), cwd=tmp_path)
+    assert "Traceback" not in done.stderr
+    assert done.returncode == 2, (done.returncode, done.stdout[:500], done.stderr)
+    assert "--resume" in done.stderr and "--dry-run" in done.stderr and done.stdout == ""
