@@ -112,3 +112,26 @@ def test_resume_with_dry_run_is_refused_not_ignored(tmp_path):
     assert "Traceback" not in done.stderr
     assert done.returncode == 2, (done.returncode, done.stdout[:500], done.stderr)
     assert "--resume" in done.stderr and "--dry-run" in done.stderr and done.stdout == ""
+
+
+# --- 4. two runs given one --log ------------------------------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_a_log_another_run_writes_is_not_truncated(tmp_path):
+    """A second ``run --log LOG`` while a job journals to LOG emptied the file under it (the first
+    job's records then went on at their old offsets: NUL bytes, and its resume refused as damaged).
+    The running job holds a lock on its log; a second run is refused, exit 2, nothing sent."""
+    fcntl = pytest.importorskip("fcntl")
+    log = tmp_path / "job.log"
+    first = _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    journal = log.read_bytes()
+    with log.open("a") as held:  # the lock the running job holds (armctl run --log, in another process)
+        fcntl.flock(held.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        second = _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
+    assert "Traceback" not in second.stderr
+    assert second.returncode == 2, (second.returncode, second.stdout, second.stderr)
+    assert "another armctl" in second.stderr and "frames:" not in second.stdout
+    assert log.read_bytes() == journal  # the running job's journal, untouched
+    again = _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
+    assert again.returncode == 0 and log.read_bytes().count(b'"dir": "job"') == 1  # once free, emptied and written
