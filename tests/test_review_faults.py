@@ -10,6 +10,10 @@ through the installed command in a fresh process and the API.
    ``sim://?fifo_frames=1`` the arm had dropped 2 of pick_and_place's 14 frames.  Now it ends
    ``finished, unproven`` (exit 1) there, as the job's end does, and ``finished`` where the FIFO
    size is proven.
+3. ``run --dry-run --resume LOG`` printed the whole job from line 1, exit 0, ignoring --resume.
+4. A second ``run --log LOG`` emptied the journal of the job still writing LOG.
+5. A ``--resume`` while a queued long move still runs refused ("did not come to rest within
+   9 s; nothing was sent") without saying how to go on.
 """
 
 from __future__ import annotations
@@ -18,13 +22,14 @@ import json
 import os
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 
 from armctl import Arm
 
-from journal_crash import ran, job_commands
+from journal_crash import job_commands, ran
 
 ROOT = Path(__file__).resolve().parent.parent
 PICK = ROOT / "scripts" / "pick_and_place.txt"
@@ -98,3 +103,91 @@ def test_resume_with_nothing_left_through_the_command(tmp_path):
     proven = _armctl("run", str(script), "--port", PROVEN_FIFO, "--resume", str(log), "--json", cwd=tmp_path)
     assert proven.returncode == 0, (proven.stdout, proven.stderr)
     assert _summary(proven)["outcome"] == "finished"
+
+
+# --- 3. --resume with --dry-run -------------------------------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_resume_with_dry_run_is_refused_not_ignored(tmp_path):
+    """A dry run printed the whole job from its first line, exit 0, as if --resume were not given:
+    what the resume would send depends on the arm's report, which a dry run never reads."""
+    log = tmp_path / "job.log"
+    _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
+    done = _armctl("run", str(PICK), "--dry-run", "--resume", str(log), cwd=tmp_path)
+    assert "Traceback" not in done.stderr
+    assert done.returncode == 2, (done.returncode, done.stdout[:500], done.stderr)
+    assert "--resume" in done.stderr and "--dry-run" in done.stderr and done.stdout == ""
+
+
+# --- 4. two runs given one --log ------------------------------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_a_log_another_run_writes_is_not_truncated(tmp_path):
+    """A second ``run --log LOG`` while a job journals to LOG emptied the file under it (the first
+    job's records then went on at their old offsets: NUL bytes, and its resume refused as damaged).
+    The running job holds a lock on its log; a second run is refused, exit 2, nothing sent."""
+    fcntl = pytest.importorskip("fcntl")
+    log = tmp_path / "job.log"
+    first = _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
+    assert first.returncode == 0, first.stderr
+    journal = log.read_bytes()
+    with log.open("a") as held:  # the lock the running job holds (armctl run --log, in another process)
+        fcntl.flock(held.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        second = _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
+    assert "Traceback" not in second.stderr
+    assert second.returncode == 2, (second.returncode, second.stdout, second.stderr)
+    assert "another armctl" in second.stderr and "frames:" not in second.stdout
+    assert log.read_bytes() == journal  # the running job's journal, untouched
+    again = _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
+    assert again.returncode == 0 and log.read_bytes().count(b'"dir": "job"') == 1  # once free, emptied and written
+
+
+# --- 5. --resume while a long move still runs -----------------------------------------------------
+
+JOB = """\
+G1 X250 Y0 Z150 A180 B0 C0 S1000 F6000
+G1 X250 Y100 Z250 F600
+G1 X250 Y-100 Z150 F6000
+"""
+
+
+def _served_arm(stats: Path) -> tuple[subprocess.Popen, str]:
+    """``armctl sim --pty --stats`` in its own process: an arm that outlives the host's processes."""
+    sim = subprocess.Popen([sys.executable, "-m", "armctl", "sim", "--pty", "--stats", str(stats)],
+                           stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    line = sim.stdout.readline()  # "simulated arm on /dev/pts/N (Ctrl-C to stop)"
+    return sim, line.split(" on ", 1)[1].split(" ", 1)[0]
+
+
+@pytest.mark.realtime
+@pytest.mark.timeout(90)
+def test_a_resume_while_the_arm_still_moves_says_how_to_go_on(tmp_path):
+    """kill -9 of ``armctl run --log`` while a 14-second move runs (the arm in another process,
+    ``armctl sim --pty``), then ``--resume`` at once: it waits a fixed time for the arm to come to
+    rest (--timeout + 2 x lead + slack: 9 s by default), and refused with "did not come to rest within 9 s;
+    nothing was sent" and nothing more.  It still refuses with nothing sent, and says how to go on."""
+    signal = pytest.importorskip("signal")
+    pytest.importorskip("termios")
+    script = tmp_path / "job.txt"
+    script.write_text(JOB)
+    log, stats = tmp_path / "job.log", tmp_path / "stats.json"
+    sim, pty = _served_arm(stats)
+    try:
+        env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+        host = subprocess.Popen([sys.executable, "-m", "armctl", "run", str(script), "--port", pty, "--log", str(log),
+                                 "--no-live"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, cwd=tmp_path)
+        deadline = time.monotonic() + 30
+        while (not log.exists() or log.read_text().count('"dir": "tx"') < 2) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        time.sleep(0.3)  # the second frame's bytes on the wire (50 ms at 9600 baud)
+        host.send_signal(signal.SIGKILL)
+        host.wait()
+        assert log.read_text().count('"dir": "tx"') == 2
+        done = _armctl("run", str(script), "--port", pty, "--resume", str(log), cwd=tmp_path)
+    finally:
+        sim.send_signal(signal.SIGINT)
+        sim.wait(timeout=30)
+    assert "Traceback" not in done.stderr
+    assert done.returncode == 1, (done.returncode, done.stdout, done.stderr)
+    assert "did not come to rest" in done.stderr and "run the resume again" in done.stderr, done.stderr
+    assert len(json.loads(stats.read_text())["frames"]) == 2  # nothing sent by the resume

@@ -286,7 +286,12 @@ def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable
     came first (see ``wait_for_rest``)."""
     from ..core.job import SETTLE_SLACK_S
 
-    state = wait_for_rest(link, timeout_s + 2 * max(point.lead_s, lead_s) + SETTLE_SLACK_S, stopped)
+    wait_s = timeout_s + 2 * max(point.lead_s, lead_s) + SETTLE_SLACK_S
+    try:
+        state = wait_for_rest(link, wait_s, stopped)
+    except JobFailed:  # a move longer than the wait was in progress: safe to try again once it ends
+        raise JobFailed(f"the arm did not come to rest within {wait_s:g} s; nothing was sent (a long move may still "
+                        f"be running: once the arm is still, run the resume again, or give it a longer --timeout)") from None
     if state is None:
         return None
     return state, point.line_for(state.position_mm, tuple(state.joints_deg))

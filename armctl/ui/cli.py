@@ -405,6 +405,9 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
         _refuse_same_file(log_path, script, "--log")
     if as_json and dry_run:
         raise UsageFailure("--json with --dry-run: `armctl compile --json` gives the frames, `armctl estimate --json` the estimate")
+    if resume_log is not None and dry_run:  # the line to continue at is the arm's report's, and a dry run opens no port
+        raise UsageFailure("--resume with --dry-run: the line to continue at needs the arm's report, and a dry run "
+                           "opens no port (`armctl run JOB --dry-run --from-line N` shows what a resume at N sends)")
     snapshot = _read_script(script)
     options = JobOptions(script, port, baud, lead_s, from_line, dry_run, log_path, not no_live, abort, profile_path, timeout_s,
                          as_json, resume_log)

@@ -146,11 +146,46 @@ def _same_file(first: str, second: str) -> bool:
 
 def _open_log(path: str):
     """The --log file, line-buffered: a write failure (disk full) shows at the line that failed.
-    One that cannot be opened is a usage error (exit 2, and with --json its summary object)."""
+    One that cannot be opened is a usage error (exit 2, and with --json its summary object).
+    A regular file is locked for this run before it is emptied: a second run given the same
+    --log while one writes it would otherwise truncate that job's journal under it (its resume
+    then refused as damaged) — it is refused instead, exit 2, before the arm is touched."""
+    import os
+    import stat
+
     try:
-        return open(path, "w", encoding="utf-8", buffering=1)
+        log = open(path, "a", encoding="utf-8", buffering=1)  # emptied below, once it is this run's
+        regular = stat.S_ISREG(os.fstat(log.fileno()).st_mode)
     except OSError as error:
         raise UsageFailure(f"cannot write --log {path}: {error.strerror or error}") from None
+    try:
+        if regular and not _locked(log):
+            raise UsageFailure(f"--log {path} is the journal of a job another armctl is running: it is not "
+                               "written over; give this job a --log of its own")
+        if regular:
+            log.truncate(0)
+    except OSError as error:
+        log.close()
+        raise UsageFailure(f"cannot write --log {path}: {error.strerror or error}") from None
+    except UsageFailure:
+        log.close()
+        raise
+    return log
+
+
+def _locked(log) -> bool:
+    """An exclusive lock on ``log`` for as long as it is open (the kernel drops it when the
+    process ends, kill -9 included); False when another process holds it.  Where there is no
+    fcntl (Windows), True: nothing is locked."""
+    try:
+        import fcntl
+    except ImportError:
+        return True
+    try:
+        fcntl.flock(log.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return False
+    return True
 
 
 @contextmanager
