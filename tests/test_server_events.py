@@ -69,6 +69,23 @@ def test_events_are_the_run_json_events_and_status_updates(server):
     asyncio.run(main())
 
 
+def test_every_message_is_answered_an_unusable_one_with_an_error(server):
+    # a JSON list, an object with neither "jog" nor "ping", or not JSON at all: each gets an error
+    # event (a list and an unknown object were silently dropped), and a ping its pong
+    async def main():
+        async with aiohttp.ClientSession() as session, session.ws_connect(ws_url(server, "a")) as socket:
+            await receive_until(socket, lambda e: e["event"] == "hello")
+            for sent in ("[1, 2]", '{"jgo": "j1_plus"}', '"jog"', "{jog"):
+                await socket.send_str(sent)
+                answer = await receive_until(socket, lambda e: e["event"] in ("error", "pong"))
+                assert answer[-1]["event"] == "error", (sent, answer[-1])
+            await socket.send_str('{"ping": 7}')
+            answer = await receive_until(socket, lambda e: e["event"] in ("error", "pong"))
+            assert answer[-1]["event"] == "pong" and answer[-1]["ping"] == 7, answer[-1]
+
+    asyncio.run(main())
+
+
 def test_one_controlling_client_at_a_time_the_others_read_only(server):
     async def main():
         async with aiohttp.ClientSession() as session:

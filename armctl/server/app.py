@@ -258,7 +258,10 @@ async def _on_message(service, client: str, socket, text: str) -> None:
     except json.JSONDecodeError:
         await socket.send_json({"event": "error", "error": "not JSON"})
         return
-    if not isinstance(message, dict):
+    if not isinstance(message, dict) or not ("jog" in message or "ping" in message):
+        # (a client's mistake is answered, never silently dropped: it would wait for an answer)
+        await socket.send_json({"event": "error", "error": 'expected an object with "jog" or "ping", '
+                                'e.g. {"jog": "j1_plus"}, {"jog": null} or {"ping": 1}'})
         return
     try:
         if "jog" in message:
@@ -267,7 +270,7 @@ async def _on_message(service, client: str, socket, text: str) -> None:
                     await service.jog_stop()
             else:
                 await service.jog(str(message["jog"]), client)
-        elif "ping" in message:
+        else:
             await socket.send_json({"event": "pong", "ping": message["ping"]})
     except ArmctlError as error:
         await socket.send_json({"event": "error", "error": str(error)})
