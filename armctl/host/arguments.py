@@ -161,7 +161,7 @@ def open_port(port, baud, profile, connect, lead_s: float, status_timeout_s: flo
     in_range("status_timeout_s", status_timeout_s, "STATUS_TIMEOUT_RANGE_S")
     if baud is not None:
         in_range("baud", baud, "BAUD_RANGE", whole=True)
-    choice = choose_port(port)  # once: the arm's stored calibration is loaded for this port
+    choice = choose_port(port, origin="port")  # once: the arm's stored calibration is loaded for this port
     loaded = profile if isinstance(profile, Profile) else \
         arm_profile(None if profile is None else os.fspath(profile), port=choice.url)
     link, line_baud = check_connected((open_link if connect is None else connect)(choice, baud, profile=loaded))

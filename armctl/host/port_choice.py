@@ -26,7 +26,7 @@ class PortChoice:
 
     @property
     def from_file(self) -> bool:
-        return self.origin not in ("--port", PORT_ENV, "default")
+        return self.origin.endswith(CONFIG_NAME)  # (every armctl.toml, the project's or the user's)
 
     @property
     def is_simulator(self) -> bool:
@@ -41,18 +41,20 @@ class PortChoice:
         return None
 
 
-def resolve_port(option: str | None, environ=os.environ, config: dict | None = None, config_path=CONFIG_NAME) -> PortChoice:
+def resolve_port(option: str | None, environ=os.environ, config: dict | None = None, config_path=CONFIG_NAME,
+                 origin: str = "--port") -> PortChoice:
     """``--port``, else ``ARMCTL_PORT``, else ``port`` in armctl.toml (``config``: the project
     file laid over the user file, ``config_path``: the one ``port`` came from), else the simulator.
+    ``origin``: what the caller calls ``option`` in its messages (``Arm.open``'s ``port``, serve's ``--arm``).
 
     The simulator is the default only when no port is given anywhere: a port given empty (or,
     in armctl.toml, of the wrong type) is a ConfigError, never a quiet fallback to the simulator.
     """
     if option is not None:
         if not option.strip():
-            raise ConfigError("--port is empty: give a device or URL (`armctl ports` lists the devices found), "
-                              "or leave --port out")
-        return PortChoice(option, "--port")
+            raise ConfigError(f"{origin} is empty: give a device or URL (`armctl ports` lists the devices found), "
+                              f"or leave {origin} out")
+        return PortChoice(option, origin)
     if PORT_ENV in environ:
         if not environ[PORT_ENV].strip():
             raise ConfigError(f"{PORT_ENV} is set but empty: give a device or URL, or unset it "
@@ -63,7 +65,7 @@ def resolve_port(option: str | None, environ=os.environ, config: dict | None = N
     return PortChoice(SIMULATOR_URL, "default")
 
 
-def choose_port(port: "str | PortChoice | None", config=None) -> PortChoice:
+def choose_port(port: "str | PortChoice | None", config=None, origin: str = "--port") -> PortChoice:
     """``resolve_port`` with the armctl.toml files, a ``sim://`` URL checked: the port a command
     will open, resolved once (its arm's profile is loaded for it: ``calibration.arm_profile(port=…)``)."""
     if isinstance(port, PortChoice):
@@ -71,7 +73,7 @@ def choose_port(port: "str | PortChoice | None", config=None) -> PortChoice:
     from .profile import load_config
 
     config = config or load_config()
-    choice = resolve_port(port, config=config.values, config_path=config.path_of("port"))
+    choice = resolve_port(port, config=config.values, config_path=config.path_of("port"), origin=origin)
     if choice.is_simulator:
         check_sim_url(choice)
     return choice

@@ -69,8 +69,10 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
 
     services: dict[str, ArmService] = {}
     try:
-        for name, url in arms:
-            arm = await AsyncArm.open(url, profile=profile, lead_s=lead_s)
+        from ..host.port_choice import choose_port
+
+        for name, url in arms:  # (resolved here: a bad URL is named as the --arm that gave it)
+            arm = await AsyncArm.open(choose_port(url, origin=f"--arm {name}"), profile=profile, lead_s=lead_s)
             services[name] = ArmService(name, url or arm.url, arm, journal / name)
         app = build_app(services, token=token, host=host)
         runner = web.AppRunner(app, handle_signals=False, access_log=None)
