@@ -55,6 +55,15 @@ def wait(driver, condition, timeout_s: float = 20.0):
     return WebDriverWait(driver, timeout_s, poll_frequency=0.05).until(lambda d: condition(d))
 
 
+@pytest.fixture(autouse=True)
+def page_loaded(browser, server):
+    """The page at ``/``, loaded once per browser: each test runs alone too (``-k``, or pytest-xdist
+    handing this module's tests to two workers), not only after the first one loaded it."""
+    if not browser.current_url.startswith(server.base):
+        browser.get(server.base + "/")
+        wait(browser, lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-ready") == "1")
+
+
 def card(driver, arm: str):
     return driver.find_element(By.CSS_SELECTOR, f'section[data-arm="{arm}"]')
 
