@@ -14,6 +14,7 @@ through the installed command in a fresh process and the API.
 4. A second ``run --log LOG`` emptied the journal of the job still writing LOG.
 5. A ``--resume`` while a queued long move still runs refused ("did not come to rest within
    9 s; nothing was sent") without saying how to go on.
+6. A ``--resume`` of a run killed before its job began called the log an old one.
 """
 
 from __future__ import annotations
@@ -191,3 +192,18 @@ def test_a_resume_while_the_arm_still_moves_says_how_to_go_on(tmp_path):
     assert done.returncode == 1, (done.returncode, done.stdout, done.stderr)
     assert "did not come to rest" in done.stderr and "run the resume again" in done.stderr, done.stderr
     assert len(json.loads(stats.read_text())["frames"]) == 2  # nothing sent by the resume
+
+
+# --- 6. --resume of a run killed before its job began ---------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_a_log_of_a_run_killed_before_its_job_began_says_nothing_was_sent(tmp_path):
+    """kill -9 in the first second of ``armctl run --log`` leaves the log empty (or only status
+    reads): the refusal said "it has no job record (written by `armctl run --log` since --resume
+    exists)", which reads as an old log; it now says no frame of the job was sent and to start over."""
+    log = tmp_path / "job.log"
+    log.write_text("")
+    done = _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--resume", str(log), cwd=tmp_path)
+    assert "Traceback" not in done.stderr
+    assert done.returncode == 2, (done.returncode, done.stderr)
+    assert "no frame of the job was sent" in done.stderr and "from its start" in done.stderr, done.stderr
