@@ -14,7 +14,7 @@ _API = {
     "Arm": "armctl.host.api", "ArmStatus": "armctl.host.api", "ArmTimeout": "armctl.host.api", "Progress": "armctl.host.api",
     "RunResult": "armctl.host.api", "JobObserver": "armctl.host.api", "JobFailed": "armctl.host.jobflow",
     "ArmctlError": "armctl.errors", "ConfigError": "armctl.errors", "PortError": "armctl.errors",
-    "ProfileError": "armctl.errors", "ScriptError": "armctl.errors",
+    "ProfileError": "armctl.errors", "ScriptError": "armctl.errors", "ResumeRefused": "armctl.errors",
     # the values docs/api.md names, here so that user code does not depend on the package's layout
     "CheckedScript": "armctl.core.checked", "CheckedJob": "armctl.core.checked", "check": "armctl.core.checked",
     "ScriptSnapshot": "armctl.script", "PortChoice": "armctl.host.link", "ResumePoint": "armctl.core.joblog",
@@ -26,7 +26,7 @@ _API = {
 __all__ = [
     "Arm", "ArmStatus", "ArmTimeout", "ArmctlError", "CheckedJob", "CheckedScript", "ConfigError", "JobFailed",
     "JobObserver", "JournalDamaged", "NotProven", "PortChoice", "PortError", "ProfileError", "Progress", "ResumePoint",
-    "RunResult", "ScriptError", "ScriptSnapshot", "check", "read_resume_point",
+    "ResumeRefused", "RunResult", "ScriptError", "ScriptSnapshot", "check", "read_resume_point",
 ]
 
 TYPE_CHECKING = False  # true for type checkers; not typing's, whose import costs milliseconds here
@@ -34,7 +34,7 @@ if TYPE_CHECKING:  # what type checkers and IDEs see; at run time __getattr__ im
     from .host.api import Arm, ArmStatus, ArmTimeout, JobObserver, Progress, RunResult
     from .core.checked import CheckedJob, CheckedScript, check
     from .core.joblog import JournalDamaged, NotProven, ResumePoint
-    from .errors import ArmctlError, ConfigError, PortError, ProfileError, ScriptError
+    from .errors import ArmctlError, ConfigError, PortError, ProfileError, ResumeRefused, ScriptError
     from .host.jobflow import JobFailed, read_resume_point
     from .host.link import PortChoice
     from .script import ScriptSnapshot

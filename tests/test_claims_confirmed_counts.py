@@ -15,6 +15,7 @@ command in a fresh process gives the same summary.
 
 from __future__ import annotations
 
+import json
 import re
 
 import pytest
@@ -48,7 +49,16 @@ def claimed(monkeypatch):
         if self.confirmed_by_reports > before:
             seen.append(head.index)
 
+    real_proven = armctl.core.streamer.ledger.Ledger.proven_run
+
+    def proven_run(self, sent):  # a frame time counted, recounted as seen: the arm at rest at its target
+        before = self.confirmed_by_reports
+        real_proven(self, sent)
+        if self.confirmed_by_reports > before:
+            seen.append(sent.index)
+
     monkeypatch.setattr(armctl.core.streamer.ledger.Ledger, "consume_one", consume_one)
+    monkeypatch.setattr(armctl.core.streamer.ledger.Ledger, "proven_run", proven_run)
     return seen
 
 
@@ -102,3 +112,21 @@ def test_frames_a_reset_connector_cleared_are_not_claimed_executed(tmp_path):
     assert result.returncode == 1, (result.stdout, result.stderr)
     assert "last line known executed: 3" in result.stdout  # not 6: lines 4-6 were cleared
     assert re.search(r"^resume with: armctl run job.txt --from-line 4 ", result.stdout, re.M)
+
+
+def test_a_single_move_at_rest_at_its_target_is_proven_run_even_after_time_counted_it(tmp_path):
+    # A move's last sighting lets the time bound count it consumed before the arm has been still
+    # long enough to prove its rest: on a FIFO whose size is not proven it ended "finished,
+    # unproven", exit 1 ("1 frames were confirmed by time alone"), though the arm at rest at a
+    # target it was not at before proves the move ran.  Found by a review through sim --tcp.
+    url = "sim://?clock=virtual&fifo_frames=199"  # the simulator's FIFO below the profile's 200: not proven
+    moved = fresh(["-m", "armctl", "move", "z=200", "--json", "--port", url], tmp_path)
+    result = json.loads(moved.stdout.splitlines()[-1])
+    assert (result["outcome"], result["exit_code"], moved.returncode) == ("finished", 0, 0), moved.stdout + moved.stderr
+    assert (result["frames_by_reports"], result["frames_by_time"]) == (1, 0)
+    # a repeated target proves nothing of the frames before the last: those stay time's, and unproven
+    (tmp_path / "back.txt").write_text("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\n"
+                                       + "".join(f"G1 Z{150 - 40 * (k % 2)}\nG1 Z150\n" for k in range(1, 4)))
+    run = fresh(["-m", "armctl", "run", "back.txt", "--no-live", "--json", "--port", url], tmp_path)
+    summary = json.loads(run.stdout.splitlines()[-1])
+    assert summary["frames_by_time"] > 0 and summary["outcome"] == "finished, unproven", run.stdout

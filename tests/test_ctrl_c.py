@@ -26,7 +26,7 @@ from pathlib import Path
 import pytest
 from rich.console import Console
 
-from armctl.host.runner import RunView
+from armctl.core.job import RunView
 from armctl.script import compile_text
 from armctl.ui.run_job import _Display
 

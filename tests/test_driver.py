@@ -9,7 +9,7 @@ import pytest
 from armctl.core.actions import Done, Wait, Write
 from armctl.host.driver import Host, drive
 from armctl.errors import PortError
-from armctl.core.job import Finished, Job
+from armctl.core.job import Job
 from armctl.core.protocol import PauseStatus
 
 pytestmark = pytest.mark.timeout(30)
@@ -46,7 +46,6 @@ def test_the_driver_writes_waits_and_returns_the_engines_last_action():
     assert drive(engine, link) == Done("over")
     assert link.calls == [("write", b"a"), ("wait", 2.5, None), ("wait", None, None), ("write", b"b")]
     assert engine.asked == [0.0, 0.0, 2.5, 3.5, 3.5]
-    assert Finished is Done  # the job engine's older name
 
 
 def test_the_hosts_hooks_come_around_each_action_and_a_refused_write_does_not_go():

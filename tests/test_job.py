@@ -11,7 +11,7 @@ from __future__ import annotations
 import pytest
 
 from armctl.core.job import (
-    REST_CHECK_S, SETTLE_SLACK_S, Finished, Job, Outcome, RunView, Wait, Write, agreed_pause,
+    REST_CHECK_S, SETTLE_SLACK_S, Done, Job, Outcome, RunView, Wait, Write, agreed_pause,
 )
 from armctl.core.motion import MotionModel
 from armctl.host.profile import load_profile
@@ -75,14 +75,14 @@ class FakeArm:
 
 
 def drive(job: Job, arm: FakeArm, stop_at_s: float | None = None, why: str | None = None,
-          limit_s: float = 600.0) -> tuple[Finished, float]:
+          limit_s: float = 600.0) -> tuple[Done, float]:
     """The host loop, in virtual time: jump to the next status rotation or the engine's time."""
     now = 0.0
     while now < limit_s:
         if stop_at_s is not None and now >= stop_at_s and not job.stop_requested:
             job.request_stop(why)
         action = job.next_action(now)
-        if isinstance(action, Finished):
+        if isinstance(action, Done):
             return action, now
         if isinstance(action, Write):
             job.wrote(now)
@@ -109,7 +109,7 @@ def test_a_job_finishes_when_the_arm_rests_at_its_last_target():
     job = make_job()
     arm = FakeArm(job)
     action, now = drive(job, arm)
-    assert action == Finished(Outcome.FINISHED) and job.view.outcome == "finished"
+    assert action == Done(Outcome.FINISHED) and job.view.outcome == "finished"
     assert len(job_frames(arm)) == 3
     motion_end_s = arm.moves[-1][1]
     # the arm time is the end of the last motion, as seen one status period late at most
@@ -122,7 +122,7 @@ def test_ctrl_c_mid_job_sends_the_abort_sequence_then_ends_interrupted():
     job = make_job()
     arm = FakeArm(job)
     action, _ = drive(job, arm, stop_at_s=1.0)
-    assert action == Finished(Outcome.INTERRUPTED)
+    assert action == Done(Outcome.INTERRUPTED)
     aborts = [w for w in arm.written if w.statement is None]
     assert aborts == [Write(PauseToggle().encode(), None)]
     assert arm.written[-1] == aborts[0]  # nothing of the job after it
@@ -136,7 +136,7 @@ def test_an_arm_already_paused_is_sent_no_pause_toggle():
     arm = FakeArm(job)
     arm.paused = True  # the arm reports it is paused (two agreeing reports before the stop)
     action, _ = drive(job, arm, stop_at_s=0.5)
-    assert action == Finished(Outcome.INTERRUPTED)
+    assert action == Done(Outcome.INTERRUPTED)
     assert [w for w in arm.written if w.statement is None] == []
     assert "already paused: no pause toggle sent" in job.view.messages[0]
 
@@ -162,7 +162,7 @@ def test_a_failure_stops_the_job_like_ctrl_c_and_ends_failed_with_its_reason():
     job = make_job()
     arm = FakeArm(job)
     action, _ = drive(job, arm, stop_at_s=1.0, why="the log job.log could not be written (disk full)")
-    assert action == Finished(Outcome.FAILED) and job.view.outcome == "failed"
+    assert action == Done(Outcome.FAILED) and job.view.outcome == "failed"
     assert [w.frame for w in arm.written if w.statement is None] == [PauseToggle().encode()]
     assert job.view.messages == ["the log job.log could not be written (disk full)"]
 
@@ -171,7 +171,7 @@ def test_no_confirmation_when_the_status_frames_stop():
     job = make_job()
     arm = FakeArm(job, silent_after_s=0.0)  # not one status frame
     action, now = drive(job, arm)
-    assert action == Finished(Outcome.NO_CONFIRMATION)
+    assert action == Done(Outcome.NO_CONFIRMATION)
     assert "did not confirm the end of the job in time" in job.view.messages[-1]
     assert job.view.arm_done_s is None
     # it waited for the estimate (× the slowest factor) and the slack, not longer
@@ -184,7 +184,7 @@ def test_a_lost_port_ends_the_job_at_once():
     assert isinstance(job.next_action(0.0), Write)
     job.wrote(0.0)
     job.port_lost("the port went away")
-    assert job.next_action(0.1) == Finished(Outcome.PORT_LOST)
+    assert job.next_action(0.1) == Done(Outcome.PORT_LOST)
     assert job.view.outcome == "port lost" and job.view.messages == ["the port went away"]
 
 
@@ -310,7 +310,7 @@ def test_frames_after_the_last_motion_are_done_only_when_even_a_slow_arm_has_run
     job = make_job("G4 P300\nG4 P300\nG4 P300\n")
     arm = FakeArm(job)
     action, now = drive(job, arm)
-    assert action == Finished(Outcome.FINISHED)
+    assert action == Done(Outcome.FINISHED)
     assert now >= 3 * 0.3 * job.streamer.slowest_factor
     assert job.view.arm_time_s == pytest.approx(0.9, abs=0.1)  # the arm time is still the model's
 

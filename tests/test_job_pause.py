@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import pytest
 
-from armctl.core.job import Finished, Job, Outcome, RunView, Write
+from armctl.core.job import Done, Job, Outcome, RunView, Write
 from armctl.core.motion import MotionModel
 from armctl.host.profile import load_profile
 from armctl.core.protocol import LinearMove, PauseToggle, StatusReader, decode_command
@@ -56,7 +56,7 @@ def drive(job, arm, at=(), limit_s=200.0):
             job.wrote(now)
             writes.append((now, action))
             continue
-        if type(action) is Finished:
+        if type(action) is Done:
             return action.outcome, writes, pauses
         times = [arm.next_output_time()]
         if action.until_s is not None:

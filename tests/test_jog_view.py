@@ -90,3 +90,11 @@ def test_the_panel_shows_the_configured_keys():
 def test_the_panel_fits_a_narrow_terminal_without_crashing():
     text = _text(render_jog(_view(), POSE, 1000, default_keymap(), GRIPPER), width=40)
     assert "armctl jog" in text and "J1+" in text
+
+
+def test_a_reading_that_rounds_to_zero_shows_no_minus_sign():
+    # the arm reported B = -0.001 (a wrist at zero, within its noise): the panel showed B -0.00
+    pose = Reported((182.2, -0.004, 265.2), (180.0, -0.001, 24.71), (-0.003, 0.0, 11.34, 0.0, 90.0, 0.0), 1000.0, (0, 0, 0))
+    text = _text(render_jog(_view(), pose, 1000, default_keymap(), GRIPPER))
+    assert "-0.00" not in text and "-0.0 " not in text, text
+    assert "0.00" in text

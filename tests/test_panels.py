@@ -13,7 +13,7 @@ from armctl.core.protocol import (
     FileLengthStatus, FileStatus, JointsHighStatus, JointsLowStatus, PauseStatus, PositionStatus, RunPositionStatus,
     WorktableStatus, WristStatus,
 )
-from armctl.host.runner import RunView
+from armctl.core.job import RunView
 from armctl.script import compile_text
 from armctl.ui.run_panel import progress_line, render_run
 from armctl.ui.status_panel import LinkHealth, render_status, status_line

@@ -26,7 +26,7 @@ from rich.console import Console
 
 from armctl.core.motion import MotionModel
 from armctl.host.profile import load_profile
-from armctl.host.runner import RunView
+from armctl.core.job import RunView
 from armctl.script import compile_text
 from armctl.ui.path_map import (
     ARM, ARM_GLYPH, DONE, EMPTY, MAP_HEIGHT_ROWS, MAP_WIDTH_CHARS, QUEUED, TODO, job_grid, rasterise,

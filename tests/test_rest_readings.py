@@ -10,7 +10,7 @@ frame the arm was still running."""
 import copy
 
 from armctl.core.armstate import ArmState
-from armctl.core.job import REST_CHECK_S, Finished, Job, Outcome, RunView, Write
+from armctl.core.job import REST_CHECK_S, Done, Job, Outcome, RunView, Write
 from armctl.host.jobflow import wait_for_rest
 from armctl.core.motion import MotionModel
 from armctl.host.profile import load_profile
@@ -61,7 +61,7 @@ def test_a_kind_not_reported_since_the_last_change_is_no_rest():
         now += 0.03
         report(job, now)
         assert not job.arm_at_rest(now)
-        assert not isinstance(job.next_action(now), Finished)
+        assert not isinstance(job.next_action(now), Done)
     assert job.streamer.consumed_lower_bound == 0
     # Joints 4-6 read again, at the end of the turn: the readings changed there; once every kind
     # was re-read REST_CHECK_S later, unchanged, the arm is at rest at its last target.
@@ -72,7 +72,7 @@ def test_a_kind_not_reported_since_the_last_change_is_no_rest():
         report(job, now, joints_high=after if now >= changed_s + REST_CHECK_S else None)
         assert now >= changed_s + REST_CHECK_S or not job.arm_at_rest(now)
     assert job.arm_at_rest(now)
-    assert job.next_action(now) == Finished(Outcome.FINISHED)
+    assert job.next_action(now) == Done(Outcome.FINISHED)
     assert job.streamer.all_consumed
 
 
@@ -85,7 +85,7 @@ def test_past_the_deadline_a_still_arm_is_waited_for_until_every_kind_is_read_ag
     before = tuple(round(v, 2) for v in segment.start.joints[3:])
     after = tuple(round(v, 2) for v in segment.end.joints[3:])
     report(job, 0.1, joints_high=before)
-    assert not isinstance(job.next_action(0.1), Finished)
+    assert not isinstance(job.next_action(0.1), Done)
     deadline_s = job.end.deadline_s
     changed_s = 1.9 * segment.duration_s  # the turn ends; every kind read then
     report(job, changed_s, joints_high=after)
@@ -96,10 +96,10 @@ def test_past_the_deadline_a_still_arm_is_waited_for_until_every_kind_is_read_ag
         now += 0.03
         for frame in (PositionStatus(x, y, z), JointsHighStatus(*after), PauseStatus(0, 1500)):  # joints 1-3 lost
             job.receive_status(frame, now)
-        assert not isinstance(job.next_action(now), Finished)
+        assert not isinstance(job.next_action(now), Done)
     now += 0.03
     report(job, now, joints_high=after)
-    assert job.next_action(now) == Finished(Outcome.FINISHED)
+    assert job.next_action(now) == Done(Outcome.FINISHED)
 
 
 class ScriptedLink:
@@ -174,7 +174,7 @@ def test_at_rest_in_a_delay_before_a_wrist_turn_is_not_the_end():
         high = tuple(round(a + (b - a) * share, 2) for a, b in zip(before, after))
         job.receive_status((PositionStatus(*xyz), JointsLowStatus(*low), JointsHighStatus(*high),
                             PauseStatus(0, 1500))[step % 4], now)
-        if isinstance(job.next_action(now), Finished):
+        if isinstance(job.next_action(now), Done):
             finished_at = now
     assert finished_at is not None and finished_at >= turn_ends_s + REST_CHECK_S
     assert job.outcome == Outcome.FINISHED and streamer.all_consumed

@@ -188,7 +188,7 @@ def test_an_sd_program_longer_than_the_estimate_is_waited_for_and_reported(tmp_p
 
 
 def test_jitter_in_the_readings_is_not_taken_for_motion():
-    from armctl.host.runner import _moved_clearly
+    from armctl.core.job import _moved_clearly
 
     here = ((200.0, 0.0, 150.0), (0.0, 10.0, 20.0), (0.0, 90.0, 0.0))
     assert not _moved_clearly(here, ((200.3, -0.2, 150.1), (0.1, 10.0, 19.9), (0.0, 90.1, 0.0)))

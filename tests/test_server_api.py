@@ -183,7 +183,7 @@ def test_serve_without_the_extra_names_the_pip_command_and_exits_2():
     code = "import sys; sys.modules['aiohttp'] = None; from armctl.ui.cli import main; main(['serve'])"
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=30)
     assert done.returncode == 2
-    assert "pip install 'armctl-serial[serve]'" in done.stderr
+    assert "pip install -e '.[serve]'" in done.stderr
 
 
 @pytest.mark.parametrize("arguments, message", [

@@ -37,5 +37,3 @@ class Done:
 
     outcome: object = None
 
-
-Finished = Done  # the job engine's older name for it

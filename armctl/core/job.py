@@ -8,7 +8,7 @@ run``'s runner over a port, the benchmark's harness over a simulated arm, the Py
     ask ``next_action(now)``:
         ``Write(frame, statement)`` → write the frame, then ``wrote(now)``
         ``Wait(until_s)``           → wait until ``until_s`` or the next status frame (None: the frame)
-        ``Finished(outcome)``       → stop; ``view`` says what ran and where to resume
+        ``Done(outcome)``           → stop; ``view`` says what ran and where to resume
 
 so the rules that end a job live here once, whoever drives it, and a virtual-time host can jump
 straight to the next event: nothing here changes between status frames except at the times a
@@ -67,7 +67,7 @@ Rules of the façade:
   estimate follow it.  A stop sends its pause toggle only when the arm would otherwise run on.
 - A summary claims only what evidence proves.  Each frame counts as confirmed by the arm's
   reports, by time alone, or as gone from the FIFO without a proof that it ran
-  (``RunView.frames_by_reports`` / ``frames_by_time`` / ``frames_unseen``: armctl/core/streamer.py).  Any sign of loss
+  (``RunView.frames_by_reports`` / ``frames_by_time`` / ``frames_unseen``: armctl/core/streamer/ledger.py).  Any sign of loss
   — the streamer saw the arm skip frames (``Streamer.losses``), or the arm at rest at the end
   sooner than the frames sent could take at the fastest plausible pace — ends FRAMES_LOST with
   the evidence, and nothing from the first frame that may be lost on is claimed executed.
@@ -101,8 +101,8 @@ class _Phase(Enum):
 
 
 # The host's actions: the one vocabulary of the host driver (armctl/core/actions.py), imported here
-# where they were defined (``from armctl.core.job import Write, Wait, Finished`` keeps working).
-from .actions import Done, Finished, Wait, Write  # noqa: E402,F401
+# where they were defined (``from armctl.core.job import Write, Wait, Done`` keeps working).
+from .actions import Done, Wait, Write  # noqa: E402,F401
 
 
 @dataclass
@@ -324,10 +324,10 @@ class Job:
 
     # --- output -----------------------------------------------------------------------------
 
-    def next_action(self, now: float) -> Write | Wait | Finished:
+    def next_action(self, now: float) -> Write | Wait | Done:
         """What the host does next; asking again without news gives the same answer."""
         if self.outcome is not None:
-            return Finished(self.outcome)
+            return Done(self.outcome)
         phase = self.phase
         if phase is _Phase.START:
             self.view.started_s = now
@@ -391,7 +391,7 @@ class Job:
             self.end.restart(now)
         return self._settling(now)
 
-    def _ended_or_wait(self, answer: Outcome | float, now: float) -> Wait | Finished:
+    def _ended_or_wait(self, answer: Outcome | float, now: float) -> Wait | Done:
         """A part's answer (armctl/core/job_end.py): how the job ended, or the time to wait until."""
         return self._finish(answer, now) if isinstance(answer, Outcome) else Wait(answer)
 
@@ -407,7 +407,7 @@ class Job:
 
     # --- the end ----------------------------------------------------------------------------
 
-    def _settling(self, now: float) -> Wait | Finished:
+    def _settling(self, now: float) -> Wait | Done:
         """After the abort sequence: until the arm is at rest or the deadline (``Stop.settle``)."""
         answer = self.stop.settle(now, self.failure)
         if answer is None:  # a RESET CONNECTOR to clear what is still queued goes first
@@ -415,7 +415,7 @@ class Job:
             return self.next_action(now)
         return self._ended_or_wait(answer, now)
 
-    def _finish(self, outcome: Outcome, now: float) -> Finished:
+    def _finish(self, outcome: Outcome, now: float) -> Done:
         view = self.view
         if outcome in (Outcome.FAILED,) and self.failure:
             view.messages.append(self.failure)
@@ -424,7 +424,7 @@ class Job:
         self.phase = _Phase.DONE
         view.outcome = outcome
         self._refresh(now)
-        return Finished(outcome)
+        return Done(outcome)
 
     def _begin_abort(self) -> None:
         """Nothing more of the job is written; the abort sequence goes instead (``Stop.begin``)."""

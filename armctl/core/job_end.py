@@ -128,8 +128,8 @@ class JobEnd:
         """Every frame written has finished (``rest_proves_done_before`` leaves none unproven).
         The end of a job rests on it, and so does a job held mid-way (the FIFO bound, or rule
         (c), with only evidence to let the next frame go): it is what confirms an arc from an
-        unverified joint end when no later frame's sighting can (armctl/core/streamer.py
-        ``_unknown_start_s``: time cannot) — the arm has drained its FIFO by then, which costs
+        unverified joint end when no later frame's sighting can (armctl/core/streamer/time_bound.py
+        ``allowance_s``: time cannot) — the arm has drained its FIFO by then, which costs
         the job that wait, never a frame."""
         return self.rest_proves_done_before(now) == self.streamer.sent
 
@@ -312,7 +312,8 @@ def _frames_not_seen(streamer) -> str:
     """The frames the arm's reports did not see run, as the summary says it."""
     parts = []
     if streamer.confirmed_by_time:
-        parts.append(f"{streamer.confirmed_by_time} frames were confirmed by time alone")
+        count = streamer.confirmed_by_time
+        parts.append(f"{count} {'frame was' if count == 1 else 'frames were'} confirmed by time alone")
     if streamer.confirmed_unseen:
         parts.append(f"{streamer.confirmed_unseen} only by a report on a later frame (gone from the FIFO, "
                      "never seen running)")

@@ -124,8 +124,8 @@ class Arm:
         return self
 
     def __exit__(self, kind, error, traceback) -> None:
-        if error is not None:
-            self.stop()  # the block failed (or Ctrl-C): stop the arm rather than finish its queue
+        if error is not None:  # the block failed (or Ctrl-C): stop the arm rather than finish its queue
+            self._tasks.stop_once()  # (a stop under way already is not asked twice: that cuts its wait short)
         self.close(_raise=error is None)
 
     def close(self, *, _raise: bool = True) -> None:
@@ -349,6 +349,12 @@ class Arm:
                            lambda control: tasks.attach(control, stops), tasks.detach)
 
         if wait:
-            return tasks.call(job)
+            try:
+                return tasks.call(job)
+            except KeyboardInterrupt:
+                # Ctrl-C while the call waits: the job it started stops, as armctl run's does,
+                # rather than run on behind a program that catches the exception and goes on
+                tasks.stop_once()
+                raise
         tasks.queue(job, stops)
         return None

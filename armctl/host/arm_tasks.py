@@ -166,6 +166,15 @@ class Tasks:
         if job is not None:
             job.request_stop(why)
 
+    def stop_once(self, why: str | None = None) -> None:
+        """``stop``, unless the running job is stopping already: a Ctrl-C that leaves a waiting
+        call or a ``with`` block after a stop was asked is that stop's, not a second one (which
+        would cut the wait for the arm to come to rest short)."""
+        with self.lock:
+            stopping = self.job is not None and self.job.stop_asked
+        if not stopping:
+            self.stop(why)
+
     def close(self, link, raise_deferred: bool = True) -> None:
         """Wait for the queued tasks (each run exactly once), stop the worker, close ``link``."""
         with self.lock:

@@ -234,8 +234,12 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     finally:
         detach(control)
         link.on_status = None
-    runner.view.messages.extend(stale_notes(arm.profile, link.url, runner.streamer.slowest_proven,
-                                            outcome == "frames may have been lost"))
+    view = runner.view
+    time_held_overrun = None  # (see calibration.SLOWED_OVERRUN)
+    if view.arm_time_s is not None and job.estimate.job_s > 0 and runner.streamer.capacity_held and view.frames_by_time:
+        time_held_overrun = view.arm_time_s / job.estimate.job_s - 1
+    view.messages.extend(stale_notes(arm.profile, link.url, runner.streamer.slowest_proven,
+                                     outcome == "frames may have been lost", time_held_overrun))
     return _result(runner, outcome, job, control, spec)
 
 

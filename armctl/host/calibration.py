@@ -330,7 +330,13 @@ def forget(arm: str, directory: Path | None = None) -> bool:
 # --- evidence against the values a job ran with ----------------------------------------------------
 
 
-def stale_notes(profile, port: str, slowest: float, frames_lost: bool) -> list[str]:
+# A job this much over its estimate, held back by the FIFO's bound with frames only time could
+# confirm, names an unmeasured speed_tolerance: on a probed arm the arm time is within a few
+# percent of the estimate (README, "armctl bench": <= 1.02x omniscient), so 10 % is no noise.
+SLOWED_OVERRUN = 0.10
+
+
+def stale_notes(profile, port: str, slowest: float, frames_lost: bool, time_held_overrun: float | None = None) -> list[str]:
     """What a finished job says about the ``[connector]`` values it ran with (``profile``'s, for the
     arm on ``port``): the arm proven slower than ``speed_tolerance`` allows (``slowest``: the arm's
     seconds ÷ the model's on a frame, a lower bound from two pairs of its reports —
@@ -338,7 +344,10 @@ def stale_notes(profile, port: str, slowest: float, frames_lost: bool) -> list[s
     may have been lost at an ordinary pace mean the FIFO holds fewer than ``fifo_frames`` (or the
     arm runs faster than its ``speed_factor``).  Each note names the value, where it came from
     (probed on DATE, a file, the document's default) and the probe to run; none when nothing
-    speaks against them."""
+    speaks against them.  And one that speaks for measuring: ``time_held_overrun`` (how far the
+    arm time ran over the estimate, as a share, when the job finished after the FIFO's bound held
+    frames back that only time could confirm) past ``SLOWED_OVERRUN`` with a ``speed_tolerance``
+    never probed: the time bound allows for an arm that much slower, and a probe measures it."""
     import shlex
 
     connector = profile.connector
@@ -351,6 +360,12 @@ def stale_notes(profile, port: str, slowest: float, frames_lost: bool) -> list[s
         named = ["fifo_frames", "speed_factor"]
         said = (f"{_setting(profile, 'fifo_frames')} looks wrong: frames may have been lost, so the FIFO may hold "
                 f"fewer (or the arm runs faster than {_setting(profile, 'speed_factor')})")
+    elif (time_held_overrun is not None and time_held_overrun > SLOWED_OVERRUN
+          and not profile.source_of("connector.speed_tolerance").startswith("probed on ")):
+        named = ["speed_tolerance"]
+        said = (f"{_setting(profile, 'speed_tolerance')} may have slowed this job: its arm time ran "
+                f"{time_held_overrun:.1%} over the estimate while the FIFO's bound held back frames that only time "
+                f"could confirm, allowing for an arm {tolerance:g}x slower")
     else:
         return []
     probed = any(profile.source_of(f"connector.{name}").startswith("probed on ") for name in named)

@@ -202,7 +202,8 @@ def _paused_twice(link, timeout_s: float) -> bool:
 def start_job(link, model, job, log=None):
     """The runner that streams ``job`` (a ``checked.CheckedJob``; not started: call ``run``)."""
     from .link import fifo_proven
-    from .runner import JobRunner, RunView
+    from .runner import JobRunner
+    from ..core.job import RunView
     from ..core.streamer import Streamer
 
     estimate = job.estimate

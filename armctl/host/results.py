@@ -34,10 +34,10 @@ class RunResult:
     full FIFO dropped would look the same).  Lines are the script's line numbers; the move of
     ``Arm.move`` is line 1.  ``last_line_executed``: the last line the arm's reports prove
     executed.  ``arm_time_s``: from the first frame to the arm at rest, in the arm's clock, to
-    the millisecond (None when it did not come to rest at the end).  ``resume_line``: where
-    ``run(..., from_line=)`` / ``--from-line`` continues the job (None when nothing is left);
-    ``resume_command``: the ``armctl run`` command line that does it (None from the API: it
-    knows no command line).  ``exit_code``: what ``armctl run`` exits with for this outcome.
+    the millisecond (None when it did not come to rest at the job's last target: an interrupted
+    job).  ``resume_line``: where ``run(..., from_line=)`` / ``--from-line`` continues the job
+    (None when nothing is left); ``resume_command``: the ``armctl run`` command line that does it
+    (None from the API: it knows no command line).  ``exit_code``: what ``armctl run`` exits with for this outcome.
     """
 
     outcome: str
@@ -69,7 +69,8 @@ class RunResult:
 
         resume = resume_line(view, lines) if outcome != "finished" else None
         arm_time_s = view.arm_time_s
-        return cls(outcome, view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
+        # the outcome as plain text (the engine's Outcome is a StrEnum): it prints and compares as documented
+        return cls(str(outcome), view.frames_sent, view.total_frames, getattr(view.last_sent, "line", None),
                    getattr(view.last_done, "line", None), None if arm_time_s is None else round(arm_time_s, 3),
                    estimated_job_s, resume, None if resume is None or resume_command is None else resume_command(resume),
                    tuple(view.messages), exit_code_of(outcome), view.frames_by_reports, view.frames_by_time,

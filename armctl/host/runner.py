@@ -32,7 +32,7 @@ from typing import Callable, Iterator
 from .driver import Host, drive
 from ..errors import ArmctlError, PortError
 from .link import WRITE_AHEAD_S
-from ..core.job import ABORT_SEQUENCES, abort_frames, resume_frames, Finished, Job, RunView, Wait, Write, _moved_clearly  # noqa: F401  (the runner's surface)
+from ..core.job import Job, RunView, Wait, Write
 from .pacing_story import PacingStory, telling
 from ..core.protocol import Command, StatusFrame
 from ..core.streamer import Streamer

@@ -35,7 +35,8 @@ def _keys(keymap: KeyMap, action: str) -> str:
 
 
 def _num(value, digits: int) -> str:
-    return "—" if value is None else f"{value:.{digits}f}"
+    # ("z": a reading that rounds to zero shows 0.00, not -0.00 — the arm at B=-0.001 is at 0)
+    return "—" if value is None else f"{value:z.{digits}f}"
 
 
 def _gripper(pwm_us, gripper_us: tuple[float, float]) -> str:

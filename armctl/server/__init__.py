@@ -16,7 +16,7 @@ web stack is aiohttp (the ``serve`` extra), imported only by ``armctl serve``:
 from __future__ import annotations
 
 EXTRA_MISSING = ("armctl serve needs the web server extra, not installed here: "
-                 "pip install 'armctl-serial[serve]'")
+                 "pip install -e '.[serve]' (in armctl's checkout; installs aiohttp)")
 
 
 def extra_installed() -> bool:

@@ -4,9 +4,9 @@ Strategy: one loop per transport, both thin: wait (``poll``/``select``) until ho
 in or the next status byte is due, hand what came in to the ``RealtimeArm``, send what it
 produced.  The loop ends, closing everything it opened, when
 
-- the peer goes away — the pty's slave is closed again after a program had it open (POLLHUP;
-  unless ``keep_serving``, which waits for the next program instead), or the TCP client
-  disconnects;
+- the peer goes away — the pty's slave is closed again after a program had it open (POLLHUP),
+  or the TCP client disconnects; unless ``keep_serving``, which waits for the next program
+  instead (the same arm, running meanwhile, its output discarded);
 - ``stop`` (a ``threading.Event``) is set — tests and embedding callers use it;
 - the user presses Ctrl-C (KeyboardInterrupt is caught here, not re-raised).
 
@@ -34,7 +34,7 @@ from .realtime import RealtimeArm
 
 PEER_CLOSED, STOPPED, INTERRUPTED = "peer closed", "stopped", "interrupted"
 IDLE_WAIT_S = 0.05  # longest wait between checks of ``stop`` and the peer
-NO_PEER_WAIT_S = 0.01  # how often to look for a program opening the pty (keeps the first
+NO_PEER_WAIT_S = 0.01  # how often to look for a program opening the pty, or the next TCP client (keeps the first
 # status bytes it gets fresh: output made while nobody listened is discarded)
 READ_CHUNK = 4096
 ROOM_WAIT_S = 0.001  # the shortest wait for room in the write buffer (a byte at 9600 baud)
@@ -142,35 +142,45 @@ def serve_tcp(
     stop: threading.Event | None = None,
     time_scale: float | None = None,  # None: the options' (speed=)
     model: SimulatedArm | None = None,
+    keep_serving: bool = False,
 ) -> str:
     """Serve one client on 127.0.0.1:``port`` (0 = any free port); ``on_ready`` gets the
-    pyserial URL to open, ``socket://127.0.0.1:PORT``.  The arm's clock starts when the client
-    connects.  ``model`` as for ``serve_pty``."""
+    pyserial URL to open, ``socket://127.0.0.1:PORT``.  The arm's clock starts when the first
+    client connects.  ``model`` as for ``serve_pty``.  ``keep_serving``: when the client
+    disconnects, serve the next one, one at a time, the same arm (``armctl sim --tcp``)."""
     server = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
     try:
         server.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         server.bind((TCP_HOST, port))
         server.listen(1)
         on_ready(f"socket://{TCP_HOST}:{server.getsockname()[1]}")
-        client = _accept(server, stop)
-        if client is None:
-            return STOPPED
-        with client:
-            client.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-            arm = RealtimeArm(model or SimulatedArm(options), options.time_scale if time_scale is None else time_scale)
-            return _pump_tcp(client, arm, stop)
+        arm = None
+        while True:
+            client = _accept(server, stop, arm)
+            if client is None:
+                return STOPPED
+            with client:
+                client.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+                if arm is None:
+                    arm = RealtimeArm(model or SimulatedArm(options), options.time_scale if time_scale is None else time_scale)
+                ended = _pump_tcp(client, arm, stop)
+            if ended != PEER_CLOSED or not keep_serving:
+                return ended
     except KeyboardInterrupt:
         return INTERRUPTED
     finally:
         server.close()
 
 
-def _accept(server: socket.socket, stop: threading.Event | None) -> socket.socket | None:
+def _accept(server: socket.socket, stop: threading.Event | None, arm: RealtimeArm | None = None) -> socket.socket | None:
+    """The next client; meanwhile ``arm`` (once a client had it) runs, its output discarded."""
     while not _stopped(stop):
-        readable, _, _ = select.select([server], [], [], IDLE_WAIT_S)
+        readable, _, _ = select.select([server], [], [], IDLE_WAIT_S if arm is None else NO_PEER_WAIT_S)
         if readable:
             client, _address = server.accept()
             return client
+        if arm is not None:
+            arm.poll()
     return None
 
 

@@ -417,7 +417,7 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
 @main.command()
 @click.argument("script", metavar="SCRIPT")
 @click.option("--lead", "lead_s", type=number(*LEAD_RANGE_S), default=2.0, show_default=True, help="The lead run would use.")
-@click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=9600, show_default=True)
+@baud_option
 @click.option("--profile", "profile_path", type=click.Path(exists=True, dir_okay=False), help="Arm profile (TOML).")
 @click.option("--json", "as_json", is_flag=True, help="One JSON object.")
 def estimate(script, lead_s, baud, profile_path, as_json):
@@ -427,12 +427,12 @@ def estimate(script, lead_s, baud, profile_path, as_json):
     """
     from ..host.calibration import arm_profile
     from ..core.motion import MotionModel
-    from .run_job import check_script, plan_job, print_estimate
+    from .run_job import check_script, configured_baud, plan_job, print_estimate
 
     snapshot = _read_script(script)
     profile = arm_profile(profile_path)  # the configured port's arm
     checked = check_script(snapshot, profile)
-    result = plan_job(checked, MotionModel(profile), lead_s, baud).estimate
+    result = plan_job(checked, MotionModel(profile), lead_s, baud or configured_baud()).estimate
     if as_json:
         click.echo(json.dumps(result.to_json()))
     else:
@@ -485,7 +485,8 @@ def home(port, baud, profile_path, timeout_s, as_json):
 
 @main.command()
 @click.option("--pty", "use_pty", is_flag=True, help="Serve the simulated arm on a new pseudo-terminal and print its path.")
-@click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True), help="Serve one client on 127.0.0.1:PORT (socket://127.0.0.1:PORT).")
+@click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True),
+              help="Serve on 127.0.0.1:PORT (socket://127.0.0.1:PORT): one client at a time, the same arm.")
 @click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?speed_factor=1.3&loss=0.05.")
 @click.option("--stats", "stats_path", type=click.Path(dir_okay=False, writable=True), default=None,
               help="On exit, write what the arm saw (frames landed, dropped, run) as JSON to this file (--pty).")
@@ -524,7 +525,7 @@ def sim(use_pty, tcp_port, sim_url, stats_path):
 
                 write_stats(stats_path, model, arms[0].clock_start_s, arms[0].time_scale)
     else:
-        ended = serve_tcp(tcp_port, options, ready)
+        ended = serve_tcp(tcp_port, options, ready, keep_serving=True)
     if ended == INTERRUPTED:  # the bridge closed what it opened; Ctrl-C exits 130 like every command
         raise KeyboardInterrupt
 

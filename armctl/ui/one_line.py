@@ -3,7 +3,8 @@
 Strategy: the command line's ``WORD=VALUE`` words become ``Arm.move``'s keywords (``move_words``:
 a word that is not one is a usage error, nothing opened); ``Arm.open`` and the one call do the
 job — the same checks, streamer and proof of rest as ``armctl run`` — and this module prints
-where the arm ended, or the ``RunResult`` as JSON, and exits with the result's code.
+where the arm ended, or the ``RunResult`` as JSON, and exits with the result's code.  Ctrl-C
+(SIGTERM, SIGHUP) during the move is ``Arm.stop()``, as ``run``'s: said at once, the result printed.
 """
 from __future__ import annotations
 
@@ -53,7 +54,8 @@ def one_line_job(port, baud, profile_path, timeout_s, as_json, act, connect) -> 
 
     with Arm.open(port, baud, profile_path, status_timeout_s=timeout_s, connect=connect) as arm:
         try:
-            result = act(arm)
+            with _stop_signals(arm):
+                result = act(arm)
         except ScriptError as error:
             for diagnostic in error.diagnostics:
                 click.echo(diagnostic.render(), err=True)
@@ -69,3 +71,24 @@ def one_line_job(port, baud, profile_path, timeout_s, as_json, act, connect) -> 
     else:
         click.echo(one_line_summary(result, None if status is None else status.position_mm))
     sys.exit(result.exit_code)
+
+
+def _stop_signals(arm):
+    """Ctrl-C (or SIGTERM, SIGHUP) is ``arm.stop()``, as in ``armctl run``: the move stops feeding,
+    the abort sequence goes, the arm is waited for and the result ("interrupted", exit 130) is
+    printed; a second press cuts the wait short.  Said at once: with control frames queued (H5)
+    the pause acts only after the move in progress, which may last a minute."""
+    import signal
+
+    from ..host.stop_signals import stop_signals
+
+    presses: list[int] = []
+
+    def on_stop(signum: int) -> None:
+        if not presses:
+            click.echo("\narmctl: interrupted: stopping the move and waiting for the arm to come to rest … "
+                       "(Ctrl-C again: stop waiting)", err=True)
+        presses.append(signum)
+        arm.stop(None if signum == signal.SIGINT else f"stopped by {signal.Signals(signum).name}")
+
+    return stop_signals(on_stop)

@@ -116,7 +116,7 @@ def print_estimate(result, header: str) -> None:
 
 def dry_run(options: JobOptions, checked, model) -> int:
     # the estimate first: it refuses a job too long to run (E012) before a frame is printed
-    job = plan_job(checked, model, options.lead_s, options.baud or _config_baud())
+    job = plan_job(checked, model, options.lead_s, options.baud or configured_baud())
     for statement in job.statements():
         frame = statement.command.encode()
         click.echo(f"{statement.line:>6}  {frame.hex()}  {describe(statement.command)}")
@@ -124,7 +124,9 @@ def dry_run(options: JobOptions, checked, model) -> int:
     return EXIT_OK
 
 
-def _config_baud() -> int:
+def configured_baud() -> int:
+    """The line rate of armctl.toml (the project's, else yours), else 9600: what ``run`` opens a
+    port at without ``--baud``, and what ``--dry-run`` and ``estimate`` plan with."""
     from ..host.link import config_baud
     from ..host.profile import load_config
 
@@ -502,7 +504,7 @@ def one_line_summary(result, position_mm) -> str:
     """What ``armctl move``/``home`` print: the outcome, the arm time and (finished) where the
     arm reports it is at rest."""
     time_s = "" if result.arm_time_s is None else f" in {result.arm_time_s:.1f} s of arm time"
-    where = "" if position_mm is None else " at X{:.1f} Y{:.1f} Z{:.1f}".format(*position_mm)
+    where = "" if position_mm is None else " at X{:z.1f} Y{:z.1f} Z{:z.1f}".format(*position_mm)
     if result.finished:
         return f"finished: the arm is at rest{where}{time_s}"
     messages = "".join(f"; {message}" for message in result.messages)

@@ -17,7 +17,7 @@ from rich.progress_bar import ProgressBar
 from rich.table import Table
 from rich.text import Text
 
-from ..host.runner import RunView
+from ..core.job import RunView
 from .path_map import ARM, ARM_GLYPH as ARM_MARK, DONE, QUEUED, TODO, PathGrid
 
 MAP_STYLES = {DONE: "green", QUEUED: "bold yellow", TODO: "dim", ARM: "bold red"}
@@ -92,7 +92,7 @@ def render_run(view: RunView, title: str, grid: PathGrid | None = None, footer: 
         f"≤ {view.queued_frames_bound} frames (limit {view.capacity}) · {view.queued_s:.1f} s of motion ahead "
         f"(next frame when ≤ {view.lead_s:g} s)",
     )
-    position = "—" if view.position_mm is None else "  ".join(f"{v:.1f}" for v in view.position_mm)
+    position = "—" if view.position_mm is None else "  ".join(f"{v:z.1f}" for v in view.position_mm)
     facts.add_row("feed · state", _control(view))
     facts.add_row("position X Y Z", position)
     facts.add_row("last line sent", _line(view.last_sent))

@@ -98,6 +98,7 @@ class Streamer:
     write_ahead_s = _part("_gate", "write_ahead_s")
     write_reason = _part("_gate", "write_reason", False)
     next_frame_motion_s = _part("_gate", "next_frame_motion_s", False)
+    capacity_held = _part("_gate", "capacity_held", False)
     slowest_factor = _part("_bound", "slowest_factor", False)
     frame_slack_s = _part("_bound", "frame_slack_s", False)
     pace = _part("_estimate", "pace", False)
@@ -272,6 +273,10 @@ class Streamer:
             pending[-1].seen = True
             if pending[-1].group_index != pending[-1].index and len(pending) > 1:
                 pending[-2].seen = True  # its G300
+        elif not pending and ledger.recent_sent:  # time counted the last frame consumed first: the rest proves it ran
+            last = ledger.recent_sent[-1]
+            if last.by_time and (before is None or last.index < before) and self.ran_at_rest(last):
+                ledger.proven_run(last)
         while pending and (before is None or pending[0].index < before) and not (
                 len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             # a frame that leaves no trace (unless seen): the caller's proof of it is time

@@ -70,6 +70,7 @@ class SentFrame:
     sure_s: float = 0.0  # its own share of ``sure_before_s`` for the frames after it (0 with an allowance)
     timing_known: bool = True  # False: its time may be any (``TimeBound.moves_e_from_the_start``): no pace from it
     seen: bool = False  # the arm at rest at its target proved it ran (``evidence.ran_at_rest``)
+    by_time: bool = False  # counted consumed by time alone (``Ledger.consume_one``; ``Ledger.proven_run`` recounts it)
     may_be_cleared: bool = False  # queued when a RESET CONNECTOR may have cleared it (``Streamer.cleared``)
 
 

@@ -42,6 +42,7 @@ class Gate:
         self.peeked: tuple[Command, Segment] | None = None
         self.write_reason = WaitReason.READY  # why next_write_time answered as it did
         self.next_frame_motion_s = 0.0  # the motion of the frame next_write_time was asked about
+        self.capacity_held = False  # the FIFO's bound held a frame back at least once (the job's end tells why it may have been slow)
 
     @property
     def lead_model_s(self) -> float:
@@ -98,6 +99,7 @@ class Gate:
         pending = ledger.pending
         if ledger.sent - ledger.consumed_lower_bound + 1 > self.limit_frames:  # (frames_in_flight_bound)
             self.write_reason = WaitReason.CAPACITY
+            self.capacity_held = True
             return None
         wire_ok_at = self.wire_free_s - self.write_ahead_s  # handed over early, it still starts when the line is free
         if not pending:

@@ -86,10 +86,26 @@ class Ledger:
                 self.confirmed_unseen += 1
         elif at_rest:
             self.confirmed_by_time += 1
+            sent.by_time = True
         else:
             if self.confirmed_by_time == 0:
                 self.first_time_only_index = self.consumed_lower_bound - 1
             self.confirmed_by_time += 1
+            sent.by_time = True
+
+    def proven_run(self, sent: SentFrame) -> None:
+        """The arm at rest at the very target of ``sent``, a frame time had already counted
+        consumed, proves it ran: it counts as confirmed by the arm's reports from now on (the
+        time bound is often first on a job's last move: a sighting late in the move lets it
+        confirm the frame before the arm has been still long enough to prove its rest).  The
+        first frame confirmed by time alone is forgotten only once no such frame is left."""
+        if not sent.by_time:
+            return
+        sent.by_time, sent.seen = False, True
+        self.confirmed_by_time -= 1
+        self.confirmed_by_reports += 1
+        if self.confirmed_by_time == 0:
+            self.first_time_only_index = None
 
     def consume_before(self, index: int) -> None:
         """Every frame before ``index`` is known finished — except the rest of its group (a G300
