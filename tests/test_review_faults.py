@@ -14,6 +14,8 @@ through the installed command in a fresh process and the API.
 4. A second ``run --log LOG`` emptied the journal of the job still writing LOG.
 5. A ``--resume`` while a queued long move still runs refused ("did not come to rest within
    9 s; nothing was sent") without saying how to go on.
+6. A ``--resume`` of a run killed before its job began called the log an old one.
+7. A ``--resume`` while an SD program held the arm still took it as at rest, and refused.
 """
 
 from __future__ import annotations
@@ -159,6 +161,23 @@ def _served_arm(stats: Path) -> tuple[subprocess.Popen, str]:
     return sim, line.split(" on ", 1)[1].split(" ", 1)[0]
 
 
+def _killed_after(script: Path, pty: str, log: Path, frames: int) -> None:
+    """``armctl run SCRIPT --log LOG`` on the served arm, killed (SIGKILL) just after its
+    ``frames``-th frame left: the host dies, the arm runs out its queue."""
+    import signal
+
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    host = subprocess.Popen([sys.executable, "-m", "armctl", "run", str(script), "--port", pty, "--log", str(log),
+                             "--no-live"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, cwd=log.parent)
+    deadline = time.monotonic() + 30
+    while (not log.exists() or log.read_text().count('"dir": "tx"') < frames) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(0.3)  # the last frame's bytes on the wire (50 ms at 9600 baud)
+    host.send_signal(signal.SIGKILL)
+    host.wait()
+    assert log.read_text().count('"dir": "tx"') == frames
+
+
 @pytest.mark.realtime
 @pytest.mark.timeout(90)
 def test_a_resume_while_the_arm_still_moves_says_how_to_go_on(tmp_path):
@@ -173,16 +192,7 @@ def test_a_resume_while_the_arm_still_moves_says_how_to_go_on(tmp_path):
     log, stats = tmp_path / "job.log", tmp_path / "stats.json"
     sim, pty = _served_arm(stats)
     try:
-        env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
-        host = subprocess.Popen([sys.executable, "-m", "armctl", "run", str(script), "--port", pty, "--log", str(log),
-                                 "--no-live"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, cwd=tmp_path)
-        deadline = time.monotonic() + 30
-        while (not log.exists() or log.read_text().count('"dir": "tx"') < 2) and time.monotonic() < deadline:
-            time.sleep(0.05)
-        time.sleep(0.3)  # the second frame's bytes on the wire (50 ms at 9600 baud)
-        host.send_signal(signal.SIGKILL)
-        host.wait()
-        assert log.read_text().count('"dir": "tx"') == 2
+        _killed_after(script, pty, log, 2)
         done = _armctl("run", str(script), "--port", pty, "--resume", str(log), cwd=tmp_path)
     finally:
         sim.send_signal(signal.SIGINT)
@@ -191,3 +201,47 @@ def test_a_resume_while_the_arm_still_moves_says_how_to_go_on(tmp_path):
     assert done.returncode == 1, (done.returncode, done.stdout, done.stderr)
     assert "did not come to rest" in done.stderr and "run the resume again" in done.stderr, done.stderr
     assert len(json.loads(stats.read_text())["frames"]) == 2  # nothing sent by the resume
+
+
+# --- 6. --resume of a run killed before its job began ---------------------------------------------
+
+@pytest.mark.timeout(60)
+def test_a_log_of_a_run_killed_before_its_job_began_says_nothing_was_sent(tmp_path):
+    """kill -9 in the first second of ``armctl run --log`` leaves the log empty (or only status
+    reads): the refusal said "it has no job record (written by `armctl run --log` since --resume
+    exists)", which reads as an old log; it now says no frame of the job was sent and to start over."""
+    log = tmp_path / "job.log"
+    log.write_text("")
+    done = _armctl("run", str(PICK), "--port", PROVEN_FIFO, "--resume", str(log), cwd=tmp_path)
+    assert "Traceback" not in done.stderr
+    assert done.returncode == 2, (done.returncode, done.stderr)
+    assert "no frame of the job was sent" in done.stderr and "from its start" in done.stderr, done.stderr
+
+
+# --- 7. --resume while an SD program runs ---------------------------------------------------------
+
+@pytest.mark.realtime
+@pytest.mark.timeout(90)
+def test_a_resume_waits_for_an_sd_program_to_end(tmp_path):
+    """kill -9 of ``armctl run scripts/sd_program.txt --log`` once its 5 frames are written (the
+    arm in ``armctl sim --pty``: it runs out its queue, PROGRAM 1 holding it 4 s), then
+    ``--resume`` at once: the resume took the arm, standing still while the program ran, as at
+    rest, found it at no frame's end and refused ("not at rest where the log's last frame (15)
+    leaves it … continue by hand with --from-line").  An SD program's advancing run position is
+    work, as at a job's end: the resume waits it out and finds the job done, sending nothing."""
+    signal = pytest.importorskip("signal")
+    pytest.importorskip("termios")
+    script = ROOT / "scripts" / "sd_program.txt"
+    log, stats = tmp_path / "job.log", tmp_path / "stats.json"
+    sim, pty = _served_arm(stats)
+    try:
+        _killed_after(script, pty, log, 5)
+        done = _armctl("run", str(script), "--port", pty, "--resume", str(log), "--json", cwd=tmp_path)
+    finally:
+        sim.send_signal(signal.SIGINT)
+        sim.wait(timeout=30)
+    assert "Traceback" not in done.stderr
+    assert "nothing to resume" in done.stderr, (done.returncode, done.stderr)
+    assert _summary(done)["frames_sent"] == 0
+    stats_data = json.loads(stats.read_text())
+    assert len(stats_data["frames"]) == 5 and [e[3] for e in stats_data["executions"]].count("done") == 5

@@ -291,7 +291,8 @@ class _Reader:
     def point(self, notes: tuple) -> ResumePoint:
         header = self.header
         if header is None:
-            raise ResumeRefused("it has no job record (written by `armctl run --log` since --resume exists)")
+            raise ResumeRefused("it has no job record: its run stopped before the job began, so no frame of the job "
+                                "was sent (run the job from its start), or an armctl without --resume wrote it")
         if header.get("sha256") != script_digest(self.data):  # the last job it records (runs may be appended)
             logged = header.get("script")
             same = "the same name" if logged == self.name else f"{logged!r}"

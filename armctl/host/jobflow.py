@@ -141,8 +141,10 @@ def _wait_still(link, timeout_s: float) -> None:
 def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = None):
     """The arm's state once its position and joints stayed the same for ``REST_CHECK_S``, each
     kind re-read in that time (armctl/core/evidence.py's rule of rest, the engine's own:
-    ``still_long_enough``); ``JobFailed`` after ``timeout_s``; None as soon as ``stopped()`` says a
-    stop was asked (Ctrl-C while a resume waits: nothing was sent, nothing is owed)."""
+    ``still_long_enough``), and no SD program's run position advanced in it (an arm standing
+    still in a program is at work, as at a job's end: ``Arrival.arm_at_rest``); ``JobFailed`` after
+    ``timeout_s``; None as soon as ``stopped()`` says a stop was asked (Ctrl-C while a resume
+    waits: nothing was sent, nothing is owed)."""
     from ..core.evidence import still_long_enough
     from ..core.protocol import JointsHighStatus, JointsLowStatus, PositionStatus
 
@@ -155,8 +157,8 @@ def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = N
         state = link.snapshot()[0]
         now = link.clock()
         read_s = [state.last_seen.get(kind, float("-inf")) for kind in kinds]  # -inf: never read
-        if (state.position_mm, tuple(state.joints_deg)) != reading:
-            reading, since = (state.position_mm, tuple(state.joints_deg)), now
+        if (state.position_mm, tuple(state.joints_deg), state.run_position) != reading:
+            reading, since = (state.position_mm, tuple(state.joints_deg), state.run_position), now
         elif still_long_enough(since, read_s):
             return state
         if now >= deadline:

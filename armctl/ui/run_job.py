@@ -175,8 +175,8 @@ def _open_log(path: str):
 
 def _locked(log) -> bool:
     """An exclusive lock on ``log`` for as long as it is open (the kernel drops it when the
-    process ends, kill -9 included); False when another process holds it.  Where there is no
-    fcntl (Windows), True: nothing is locked."""
+    process ends, kill -9 included); False when another process holds it.  Where nothing can be
+    locked (no fcntl on Windows, a file system without locks), True: the log is written unlocked."""
     try:
         import fcntl
     except ImportError:
@@ -185,6 +185,8 @@ def _locked(log) -> bool:
         fcntl.flock(log.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
     except BlockingIOError:
         return False
+    except OSError:  # ENOLCK, EOPNOTSUPP…: a log without a lock, as before locks
+        return True
     return True
 
 
