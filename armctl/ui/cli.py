@@ -399,15 +399,12 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
 
     SCRIPT (a file, or - for standard input) is read once: what was checked is what is sent.
     """
-    from .run_job import JobOptions, run_job
+    from .run_job import JobOptions, refuse_with_dry_run, run_job
 
     if log_path is not None:
         _refuse_same_file(log_path, script, "--log")
-    if as_json and dry_run:
-        raise UsageFailure("--json with --dry-run: `armctl compile --json` gives the frames, `armctl estimate --json` the estimate")
-    if resume_log is not None and dry_run:  # the line to continue at is the arm's report's, and a dry run opens no port
-        raise UsageFailure("--resume with --dry-run: the line to continue at needs the arm's report, and a dry run "
-                           "opens no port (`armctl run JOB --dry-run --from-line N` shows what a resume at N sends)")
+    if dry_run:
+        refuse_with_dry_run(as_json, resume_log)
     snapshot = _read_script(script)
     options = JobOptions(script, port, baud, lead_s, from_line, dry_run, log_path, not no_live, abort, profile_path, timeout_s,
                          as_json, resume_log)

@@ -238,6 +238,15 @@ def _run_json(options: JobOptions, script, connect) -> int:
             raise
 
 
+def refuse_with_dry_run(as_json: bool, resume_log) -> None:
+    """The options a dry run cannot honour, each a usage error before the script is read."""
+    if as_json:
+        raise UsageFailure("--json with --dry-run: `armctl compile --json` gives the frames, `armctl estimate --json` the estimate")
+    if resume_log is not None:  # the line to continue at is the arm's report's, and a dry run opens no port
+        raise UsageFailure("--resume with --dry-run: the line to continue at needs the arm's report, and a dry run "
+                           "opens no port (`armctl run JOB --dry-run --from-line N` shows what a resume at N sends)")
+
+
 def _run_job(options: JobOptions, script, connect, events=None) -> int:
     """Check (printing every finding), then the job through the Python API: ``Arm.open`` and
     ``Arm.run``; this keeps the presentation — the panel or the JSON events, the notes, the
@@ -540,8 +549,8 @@ def _summary(result, view, wall_s: float, estimate, options: JobOptions, departu
         click.echo("finished: the arm finished the job")
         return result.exit_code
     if result.outcome == "finished, unproven":
-        click.echo("finished, unproven: the arm is at rest at the last target, but the FIFO size is not proven; "
-                   "run `armctl probe` once")
+        click.echo("finished, unproven: the arm is at rest at the last target, but what proves the job ran rests on "
+                   "settings not measured on this arm (the note above); run `armctl probe` once")
         return result.exit_code
     sent, done = result.last_line_sent, result.last_line_executed
     click.echo(f"last line sent: {sent if sent is not None else 'none'}")
