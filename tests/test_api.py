@@ -214,7 +214,12 @@ def test_pause_and_resume_a_running_job_it_finishes_every_frame_once(control):
         elif len(events) == 1 and progress.elapsed_s - events[0][2] >= 3.0:
             events.append(("resume", arm.resume(), progress.elapsed_s))
 
-    with Arm.open(port=f"{VIRTUAL}&control={control}") as arm:
+    # the profile says how the arm takes control frames, as a probe would have found (else a job with
+    # a POSE on an arrival arm ends "finished, unproven")
+    from armctl.host.profile import default_profile, with_connector
+
+    profile = with_connector(default_profile(), {"control_frames": control}, "the test's arm")
+    with Arm.open(port=f"{VIRTUAL}&control={control}", profile=profile) as arm:
         result = arm.run(TIMED, on_progress=on_progress)
         assert [(name, sent) for name, sent, _ in events] == [("pause", True), ("resume", True)]
         assert result.finished

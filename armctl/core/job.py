@@ -169,9 +169,9 @@ class Job:
 
     def __init__(self, streamer, statements: Iterable, view: RunView, *, pacing=None,
                  abort_sequence: tuple = ABORT_SEQUENCES["pause"], control_frames: str | None = None,
-                 fifo_proven: bool = True) -> None:
-        """``fifo_proven``: the connector's FIFO is known to hold at least the profile's
-        ``fifo_frames`` (``armctl.host.link.fifo_proven`` decides for ``armctl run``)."""
+                 fifo_proven: bool = True, control_frames_proven: bool = True) -> None:
+        """``fifo_proven``, ``control_frames_proven``: the connector is known to hold the profile's
+        ``fifo_frames``, to take control frames as it says (``armctl.host.link`` decides both)."""
         self.streamer = streamer
         self.fifo_proven = fifo_proven
         streamer.fifo_holds_all = fifo_proven  # else a frame gone from the FIFO may have been dropped, not run
@@ -190,7 +190,7 @@ class Job:
         self.written = Written()  # the record (armctl/core/job_readings.py): the frames written ...
         self.readings = Readings(self.written)  # ... and the arm's reports
         self.arrival = Arrival(self.readings, self.written, streamer)  # armctl/core/job_arrival.py
-        self.end = JobEnd(view, streamer, self.arrival, fifo_proven)  # armctl/core/job_end.py
+        self.end = JobEnd(view, streamer, self.arrival, fifo_proven, control_frames_proven)  # armctl/core/job_end.py
         self.stop = Stop(view, self.control, self.end)  # armctl/core/job_stop.py: the abort and the settling
         self._write: Write | None = None  # the Write asked for and not yet done
         self._command = None  # the command that Write carries (the feed override applied)

@@ -60,13 +60,14 @@ class Outcome(StrEnum):
 class JobEnd:
     """The end of one job: its deadlines and the proofs that end it."""
 
-    def __init__(self, view, streamer, arrival, fifo_proven: bool) -> None:
+    def __init__(self, view, streamer, arrival, fifo_proven: bool, control_frames_proven: bool = True) -> None:
         self.view = view
         self.streamer = streamer
         self.arrival = arrival
         self.readings = arrival.readings
         self.written = arrival.written
         self.fifo_proven = fifo_proven
+        self.control_frames_proven = control_frames_proven
         self.deadline_s = 0.0
         self.overran = False
         self.script_pause_deadline_s: float | None = None  # held behind one: how long its pause is waited for
@@ -223,10 +224,18 @@ class JobEnd:
         streamer = self.streamer
         if streamer.losses:
             return Outcome.FRAMES_LOST
+        unproven = []
         if not self.fifo_proven and (streamer.confirmed_by_time or streamer.confirmed_unseen):
-            self.view.messages.append(
-                f"finished, unproven: {_frames_not_seen(streamer)}, and the FIFO size is the document's, not "
-                "measured on this arm: a frame it dropped would look the same; run `armctl probe` once")
+            unproven.append(f"{_frames_not_seen(streamer)}, and the FIFO size is the document's, not measured on "
+                            "this arm: a frame it dropped would look the same")
+        control_sent = self.written.control_sent
+        if not self.control_frames_proven and control_sent:
+            unproven.append(f"the job sent {control_sent} control {'frame' if control_sent == 1 else 'frames'} "
+                            "(POSE, PROGRAM, G54 …), and how the arm takes them is the document's guess (queued), "
+                            "not measured on this arm: one that acts on them as they land cuts short the move "
+                            "before each, and rests at the last target all the same")
+        if unproven:
+            self.view.messages.append(f"finished, unproven: {'; '.join(unproven)}; run `armctl probe` once")
             return Outcome.UNPROVEN
         return Outcome.FINISHED
 

@@ -32,7 +32,9 @@ from dataclasses import fields
 from operator import attrgetter
 
 from .evidence import AGREEING_REPORTS, agreed, known_still_s
-from .protocol import JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus
+from .protocol import (
+    CONTROL_COMMANDS, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus,
+)
 from .streamer import ARRIVAL_SLACK_S
 
 TARGET_MM = 0.5  # how close the reported position must be to the last target (0.1 mm resolution)
@@ -54,12 +56,16 @@ class Written:
         self.last_move = None  # the last frame written that moves the arm
         self.script_toggles: list = []  # the job's own PAUSE frames written, in order
         self.script_paused = False  # the job's own PAUSE lines left the arm to pause: an odd number written
+        self.control_sent = 0  # the other control frames written (POSE, PROGRAM, G54…: H5 says when they act)
 
     def note(self, sent) -> None:
         self.recent.append(sent)
-        if isinstance(sent.command, PauseToggle):
+        command = sent.command
+        if isinstance(command, PauseToggle):
             self.script_toggles.append(sent)
             self.script_paused = len(self.script_toggles) % 2 == 1  # (a plain attribute: read for every frame)
+        elif isinstance(command, CONTROL_COMMANDS):
+            self.control_sent += 1
         if sent.segment.moves_reported:  # (``moves_arm``)
             self.last_move = sent
 

@@ -123,6 +123,15 @@ class Connector:
             return True
         return port_fifo_frames is not None and port_fifo_frames >= self.fifo_frames
 
+    def control_frames_proven(self, port_control_frames: str | None = None) -> bool:
+        """Whether the connector is known to treat control frames as ``control_frames`` says:
+        the value was measured or set, or the port says its own (a simulator's option) and it is
+        the same.  Otherwise an arm that acts on a POSE or a PROGRAM as it lands (H5) cuts short
+        the move before it, and rests at the job's last target all the same."""
+        if not self.is_default("control_frames"):
+            return True
+        return port_control_frames == self.control_frames
+
     @property
     def control_on_arrival(self) -> bool:
         return self.control_frames == "arrival"

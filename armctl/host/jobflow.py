@@ -201,7 +201,7 @@ def _paused_twice(link, timeout_s: float) -> bool:
 
 def start_job(link, model, job, log=None):
     """The runner that streams ``job`` (a ``checked.CheckedJob``; not started: call ``run``)."""
-    from .link import fifo_proven
+    from .link import control_frames_proven, fifo_proven
     from .runner import JobRunner
     from ..core.job import RunView
     from ..core.streamer import Streamer
@@ -210,9 +210,12 @@ def start_job(link, model, job, log=None):
     streamer = Streamer(model, job.start, lead_s=job.lead_s, baud=job.baud)
     view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=job.total_lines,
                    lead_s=job.lead_s, capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
-    # ``done`` needs a FIFO size that is proven (probed, or a simulator known to hold it): link.fifo_proven
+    # ``done`` needs a FIFO size that is proven (probed, or a simulator known to hold it): link.fifo_proven;
+    # and, for a job that sends control frames, how the arm takes them: link.control_frames_proven
+    connector = model.profile.connector
     return JobRunner(link, streamer, Lookahead(job.statements()), view, log=log,
-                     fifo_proven=fifo_proven(link.url, model.profile.connector))
+                     fifo_proven=fifo_proven(link.url, connector),
+                     control_frames_proven=control_frames_proven(link.url, connector))
 
 
 def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = lambda why: None) -> str:

@@ -67,15 +67,26 @@ def connect(port: "str | PortChoice | None", baud: int | None, announce: Callabl
 
 def fifo_proven(url: str, connector) -> bool:
     """``connector.fifo_proven`` for the port at ``url``: a ``sim://`` port says its own FIFO size."""
-    port_fifo_frames = None
-    if url.startswith("sim://"):
-        from ..sim.protocol_sim import parse_sim_url
+    options = _sim_options(url)
+    return connector.fifo_proven(None if options is None else options.fifo_frames)
 
-        try:
-            port_fifo_frames = parse_sim_url(url).fifo_frames
-        except ConfigError:
-            pass
-    return connector.fifo_proven(port_fifo_frames)
+
+def control_frames_proven(url: str, connector) -> bool:
+    """``connector.control_frames_proven`` for the port at ``url``: a ``sim://`` port says its own."""
+    options = _sim_options(url)
+    return connector.control_frames_proven(None if options is None else options.control_frames)
+
+
+def _sim_options(url: str):
+    """What a ``sim://`` port at ``url`` says of itself (None: another port, or options it refuses)."""
+    if not url.startswith("sim://"):
+        return None
+    from ..sim.protocol_sim import parse_sim_url
+
+    try:
+        return parse_sim_url(url)
+    except ConfigError:
+        return None
 
 
 def require_wall_clock(link: "Link", command: str) -> None:

@@ -61,6 +61,7 @@ class JobRunner(Host):
         durations: Callable[[Command], float] | None = None,
         pacing=None,
         fifo_proven: bool = True,
+        control_frames_proven: bool = True,
     ) -> None:
         # ``time_scale`` and ``durations`` are accepted for older callers: the link's clock is
         # model time already (scaled for sim://?speed=N), and the streamer plans durations.
@@ -68,7 +69,8 @@ class JobRunner(Host):
         self.link = link
         self.streamer = streamer
         self.view = view
-        self.job = Job(streamer, statements, view, pacing=pacing, fifo_proven=fifo_proven)
+        self.job = Job(streamer, statements, view, pacing=pacing, fifo_proven=fifo_proven,
+                       control_frames_proven=control_frames_proven)
         self.clock = link.clock if clock is None else clock
         self._virtual = getattr(self.clock, "virtual", False)
         self._origin_s = self.clock()  # model seconds count from here (the log's t)
