@@ -63,6 +63,14 @@ def test_a_profile_that_says_arrival_or_a_simulator_that_says_queued_proves_it(t
     assert (summary["outcome"], done.returncode) == ("finished", 0), done.stdout + done.stderr
 
 
+def test_a_lone_control_frame_has_no_move_before_it_to_cut_short(tmp_path):
+    # armctl home is one POSE 0: acted on as it lands or queued, it is the same
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    done = subprocess.run([sys.executable, "-m", "armctl", "home", "--json", "--port", ARRIVAL], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=50)
+    assert json.loads(done.stdout.splitlines()[-1])["outcome"] == "finished", done.stdout + done.stderr
+
+
 def test_control_frames_proven_by_measure_or_by_the_port():
     document = default_profile().connector
     assert document.control_frames_proven("queued") and not document.control_frames_proven("arrival")

@@ -56,7 +56,7 @@ class Written:
         self.last_move = None  # the last frame written that moves the arm
         self.script_toggles: list = []  # the job's own PAUSE frames written, in order
         self.script_paused = False  # the job's own PAUSE lines left the arm to pause: an odd number written
-        self.control_sent = 0  # the other control frames written (POSE, PROGRAM, G54…: H5 says when they act)
+        self.control_sent = 0  # the other control frames written after a first frame (POSE, PROGRAM, G54…: H5 says when they act)
 
     def note(self, sent) -> None:
         self.recent.append(sent)
@@ -64,7 +64,7 @@ class Written:
         if isinstance(command, PauseToggle):
             self.script_toggles.append(sent)
             self.script_paused = len(self.script_toggles) % 2 == 1  # (a plain attribute: read for every frame)
-        elif isinstance(command, CONTROL_COMMANDS):
+        elif sent.index and isinstance(command, CONTROL_COMMANDS):  # (the first frame has no move before it to cut short)
             self.control_sent += 1
         if sent.segment.moves_reported:  # (``moves_arm``)
             self.last_move = sent
