@@ -161,14 +161,14 @@ def _served_arm(stats: Path) -> tuple[subprocess.Popen, str]:
     return sim, line.split(" on ", 1)[1].split(" ", 1)[0]
 
 
-def _killed_after(script: Path, pty: str, log: Path, frames: int) -> None:
-    """``armctl run SCRIPT --log LOG`` on the served arm, killed (SIGKILL) just after its
+def _killed_after(script: Path, pty: str, log: Path, frames: int, *options: str) -> None:
+    """``armctl run SCRIPT --log LOG [OPTIONS]`` on the served arm, killed (SIGKILL) just after its
     ``frames``-th frame left: the host dies, the arm runs out its queue."""
     import signal
 
     env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
     host = subprocess.Popen([sys.executable, "-m", "armctl", "run", str(script), "--port", pty, "--log", str(log),
-                             "--no-live"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, cwd=log.parent)
+                             "--no-live", *options], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env, cwd=log.parent)
     deadline = time.monotonic() + 30
     while (not log.exists() or log.read_text().count('"dir": "tx"') < frames) and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -192,8 +192,10 @@ def test_a_resume_while_the_arm_still_moves_says_how_to_go_on(tmp_path):
     log, stats = tmp_path / "job.log", tmp_path / "stats.json"
     sim, pty = _served_arm(stats)
     try:
-        _killed_after(script, pty, log, 2)
-        done = _armctl("run", str(script), "--port", pty, "--resume", str(log), cwd=tmp_path)
+        # a short lead and --timeout: the resume waits 1 + 2 x 0.5 + 2 s for rest while the move runs on for 12 s
+        _killed_after(script, pty, log, 2, "--lead", "0.5")
+        done = _armctl("run", str(script), "--port", pty, "--resume", str(log), "--timeout", "1", "--lead", "0.5",
+                       cwd=tmp_path)
     finally:
         sim.send_signal(signal.SIGINT)
         sim.wait(timeout=30)
