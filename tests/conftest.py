@@ -171,6 +171,10 @@ LONG_FIRST = (
     "test_journal_property.py::", "test_probe_rates.py::test_installed_command_through_armctl_sim_pty_at_115200",
     "test_server_api.py::test_a_job_survives_a_crashed_server", "test_calibration_cli.py::test_bench_reads_no_configuration",
     "test_journal_wal.py::test_the_installed_command_resumes_after_ctrl_c",
+    # 5-9 s, mostly waiting on a wall clock (a served arm's moves): overlapped with the rest, not a tail
+    "test_review_faults.py::test_a_resume_", "test_run_json_resume.py::test_kill_9_mid_job",
+    "test_review_users.py::test_sim_tcp_serves", "test_api_client.py::test_an_unprobed_arm_ends",
+    "test_api.py::test_the_example_against_armctl_sim_pty", "test_probe_rates.py::test_installed_command_at_115200",
 )
 
 
