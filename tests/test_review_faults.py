@@ -60,11 +60,23 @@ def _summary(done: subprocess.CompletedProcess) -> dict:
 ])
 @pytest.mark.parametrize("command", [["status", "--once"], ["config"], ["move", "z=200"],
                                      ["run", str(PICK), "--no-live"], ["run", str(PICK), "--dry-run"]])
-def test_bad_network_port_url_is_a_usage_error(tmp_path, url, why, command):
-    done = _armctl(*command, "--port", url, cwd=tmp_path)
+def test_bad_network_port_url_is_a_usage_error(tmp_path, monkeypatch, url, why, command):
+    from click.testing import CliRunner
+
+    from armctl.ui.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    done = CliRunner().invoke(main, [*command, "--port", url], env={"ARMCTL_PORT": None})
+    assert done.exception is None or isinstance(done.exception, SystemExit), done.exception  # no traceback
+    assert done.exit_code == 2, (done.exit_code, done.output)
+    assert url in done.output and why in done.output, done.output
+
+
+def test_bad_network_port_url_through_the_command(tmp_path):
+    # one of the cases above in a fresh process, as users meet it
+    done = _armctl("status", "--once", "--port", "socket://127.0.0.1:99999", cwd=tmp_path)
     assert "Traceback" not in done.stderr, done.stderr
-    assert done.returncode == 2, (done.returncode, done.stderr)
-    assert url in done.stderr and why in done.stderr, done.stderr
+    assert done.returncode == 2 and "Port out of range" in done.stderr, (done.returncode, done.stderr)
 
 
 # --- 2. --resume with nothing left claims only what is proven ----------------------------------
