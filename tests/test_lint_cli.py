@@ -190,6 +190,21 @@ def test_unknown_code_is_a_usage_error(tmp_path):
     assert result.exit_code == 2 and "unknown rule code or prefix 'Z9'" in result.stderr
 
 
+@pytest.mark.parametrize("option, value", [("--select", ""), ("--select", ","), ("--ignore", " , ")])
+def test_an_option_that_names_no_code_is_a_usage_error(tmp_path, option, value):
+    # `--select ''` ran every rule, exit 0 (found by a review): a mistake taken for "all"
+    result = run(write(tmp_path / "a.txt", CLEAN), option, value)
+    assert result.exit_code == 2 and f"{option} names no rule code" in result.stderr, result.stderr
+
+
+def test_an_unknown_code_in_armctl_toml_names_the_file(tmp_path, monkeypatch):
+    monkeypatch.chdir(tmp_path)
+    write(tmp_path / "armctl.toml", '[lint]\nselect = ["X9"]\n')
+    result = run(write(tmp_path / "a.txt", CLEAN))
+    assert result.exit_code == 2 and "armctl.toml: lint.select: unknown rule code or prefix 'X9'" in result.stderr, \
+        result.stderr
+
+
 def test_armctl_toml_sets_patterns_and_codes(tmp_path):
     write(tmp_path / "armctl.toml", '[lint]\ninclude = ["*.job"]\nexclude = ["old/*"]\nignore = ["L203"]\n')
     write(tmp_path / "jobs" / "a.job", WARNING)

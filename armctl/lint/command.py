@@ -154,13 +154,23 @@ def _config() -> dict:
             raise ValueError(f"{path}: unknown key 'lint.{key}'{unknown_key_hint(key, CONFIG_KEYS)}")
         if not isinstance(value, list) or not all(isinstance(v, str) for v in value):
             raise ValueError(f"{path}: lint.{key} must be a list of strings")
+        if key in ("select", "ignore"):
+            from .registry import UnknownCode, check_prefixes
+
+            try:
+                check_prefixes(value)
+            except UnknownCode as error:  # named where it is written: the file, not the command line
+                raise ValueError(f"{path}: lint.{key}: {error}") from None
     return table
 
 
 def _selection(select, ignore, config):
     """CLI --select replaces armctl.toml's select; --ignore adds to its ignore."""
-    from .registry import Selection
+    from .registry import Selection, UnknownCode
 
+    for option, given in (("--select", select), ("--ignore", ignore)):
+        if given and not _codes(given):  # `--select ''` read as "every rule" would hide a mistake
+            raise UnknownCode(f"{option} names no rule code: give codes or prefixes (E004, L1, ALL), or leave it out")
     chosen = _codes(select) if select else config.get("select", [])
     return Selection.of(chosen, [*config.get("ignore", []), *_codes(ignore)])
 
