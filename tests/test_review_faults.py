@@ -259,3 +259,16 @@ def test_a_resume_waits_for_an_sd_program_to_end(tmp_path):
     assert _summary(done)["frames_sent"] == 0
     stats_data = json.loads(stats.read_text())
     assert len(stats_data["frames"]) == 5 and [e[3] for e in stats_data["executions"]].count("done") == 5
+
+
+@pytest.mark.timeout(60)
+@pytest.mark.parametrize("url", ["socket://127.0.0.1", "socket://:5555", "rfc2217://localhost"])
+def test_a_network_port_url_without_host_or_port_says_so(tmp_path, monkeypatch, url):
+    # socket://127.0.0.1 gave pyserial's "'<=' not supported between instances of 'int' and 'NoneType'"
+    from click.testing import CliRunner
+
+    from armctl.ui.cli import main
+
+    monkeypatch.chdir(tmp_path)
+    done = CliRunner().invoke(main, ["status", "--once", "--port", url], env={"ARMCTL_PORT": None})
+    assert done.exit_code == 2 and "needs a host and a port number" in done.output, done.output

@@ -57,7 +57,9 @@ def arm_identity(port: str, ports=None) -> str:
     if scheme == "sim":
         return _sim_identity(port)
     if scheme in _NETWORK_SCHEMES:
-        return f"{scheme}://{(parts.hostname or '').lower()}:{parts.port or ''}"
+        if parts.port is None or not parts.hostname:  # (pyserial's own words for it: "'<=' not supported …")
+            raise ConfigError(f"{port!r} needs a host and a port number: {scheme}://HOST:PORT")
+        return f"{scheme}://{parts.hostname.lower()}:{parts.port}"
     if scheme:  # loop://, spy://…: the URL without its options
         return f"{scheme}://{parts.netloc}{parts.path}"
     return _device_identity(port, port_infos() if ports is None else ports)
