@@ -121,3 +121,25 @@ def test_taught_files_compile_without_diagnostics_in_any_order(modes):
     compilation = compile_text(text, "taught.txt")
     assert len(list(compilation)) == len(modes)
     assert compilation.finish() == []
+
+
+def test_armctl_config_checks_the_jog_table_as_jog_reads_it(tmp_path):
+    # `armctl config` listed {"step_mm": -1} as a setting, exit 0, while `armctl jog` refuses it
+    # (found by a review): both read the table with jog.settings.jog_from_config
+    import os
+    import subprocess
+    import sys
+
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    (tmp_path / "armctl.toml").write_text("[jog]\nstep_mm = -1\n")
+    bad = subprocess.run([sys.executable, "-m", "armctl", "config"], cwd=tmp_path, env=env, capture_output=True,
+                         text=True, timeout=50)
+    assert bad.returncode == 2 and "jog.step_mm must be a non-empty list" in bad.stderr, bad.stderr
+    (tmp_path / "armctl.toml").write_text('[jog]\ninitial_delay_ms = 400\n\n[jog.keys]\nquit = ["Q"]\n')
+    good = subprocess.run([sys.executable, "-m", "armctl", "config"], cwd=tmp_path, env=env, capture_output=True,
+                          text=True, timeout=50)
+    assert good.returncode == 0 and '"initial_delay_ms": 400' in good.stdout, good.stdout + good.stderr
+    (tmp_path / "armctl.toml").write_text('[lint]\nselect = ["X9"]\n')  # and [lint] as armctl lint reads it
+    bad = subprocess.run([sys.executable, "-m", "armctl", "config"], cwd=tmp_path, env=env, capture_output=True,
+                         text=True, timeout=50)
+    assert bad.returncode == 2 and "lint.select: unknown rule code or prefix 'X9'" in bad.stderr, bad.stderr

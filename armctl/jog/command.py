@@ -77,19 +77,13 @@ def _setup(profile_path, repeat_delay_ms, port=None):
     from ..errors import ProfileError
     from ..host.calibration import arm_profile
     from ..host.profile import load_config
-    from .keymap import JogConfigError, keymap_from_config
-    from .settings import settings_from_config
+    from .keymap import JogConfigError
+    from .settings import jog_from_config
 
     try:
         config = load_config()
         config_path = config.path_of("jog")
-        table = config.values.get("jog", {})
-        source = str(config_path) if config_path else "armctl.toml"
-        settings = settings_from_config(table, source)
-        keys = table.get("keys", {})
-        if not isinstance(keys, dict):
-            raise JogConfigError(f"{source}: jog.keys must be a table ([jog.keys]), not {keys!r}")
-        keymap = keymap_from_config(keys, source)
+        settings, keymap = jog_from_config(config.values.get("jog", {}), str(config_path) if config_path else "armctl.toml")
         profile = arm_profile(profile_path, port=port)  # the arm's: its stored calibration laid over
     except (JogConfigError, ProfileError) as error:
         _fail(str(error), EXIT_USAGE)

@@ -23,7 +23,7 @@ from typing import Mapping
 from ..core.limits import REPEAT_DELAY_RANGE_MS
 from ..host.profile import unknown_key_hint
 from ..core.protocol import JOYSTICK_NEUTRAL, JOYSTICK_STILL_RANGE
-from .keymap import JogConfigError
+from .keymap import JogConfigError, KeyMap, keymap_from_config
 
 REPEAT_GAP_LIMIT_MS = 140.0  # the issue's 150 ms bound, less the edge loop's wake-up slack
 
@@ -76,6 +76,16 @@ def _number(value) -> float | None:
 def _offset_ok(value: float) -> bool:
     low, high = JOYSTICK_STILL_RANGE
     return value == int(value) and JOYSTICK_NEUTRAL + value > high and JOYSTICK_NEUTRAL - value < low and value <= 127
+
+
+def jog_from_config(table: Mapping | None, source: str = "armctl.toml") -> tuple[JogSettings, KeyMap]:
+    """A ``[jog]`` table read whole: its settings and its ``[jog.keys]`` (``JogConfigError`` naming
+    ``source``).  ``armctl jog`` reads it so, and ``armctl config`` checks it so."""
+    settings = settings_from_config(table, source)
+    keys = (table or {}).get("keys", {})
+    if not isinstance(keys, dict):
+        raise JogConfigError(f"{source}: jog.keys must be a table ([jog.keys]), not {keys!r}")
+    return settings, keymap_from_config(keys, source)
 
 
 def settings_from_config(table: Mapping | None, source: str = "armctl.toml") -> JogSettings:

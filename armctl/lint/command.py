@@ -143,12 +143,20 @@ def _lint_target(target, profile, selection, stdin_filename):
 
 
 def _config() -> dict:
-    """The ``[lint]`` table of the nearest armctl.toml (else the user's), checked: lists of strings only."""
-    from ..host.profile import load_config, unknown_key_hint
+    """The ``[lint]`` table of the nearest armctl.toml (else the user's), checked (``check_lint_table``)."""
+    from ..host.profile import load_config
 
     config = load_config()
-    path = config.path_of("lint")
     table = config.values.get("lint", {})
+    check_lint_table(table, config.path_of("lint"))
+    return table
+
+
+def check_lint_table(table: dict, path) -> None:
+    """A ``[lint]`` table's keys and codes checked (ValueError naming ``path``): lint reads it so,
+    and ``armctl config`` checks it so."""
+    from ..host.profile import unknown_key_hint
+
     for key, value in table.items():
         if key not in CONFIG_KEYS:
             raise ValueError(f"{path}: unknown key 'lint.{key}'{unknown_key_hint(key, CONFIG_KEYS)}")
@@ -161,7 +169,6 @@ def _config() -> dict:
                 check_prefixes(value)
             except UnknownCode as error:  # named where it is written: the file, not the command line
                 raise ValueError(f"{path}: lint.{key}: {error}") from None
-    return table
 
 
 def _selection(select, ignore, config):

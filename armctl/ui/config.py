@@ -79,9 +79,27 @@ def effective_settings(port: str | None = None, baud: int | None = None, environ
     settings.append(Setting("profile", shown, *_file_source(config, "profile")))
 
     settings += connector_settings(profile, config)
+    _check_tables(config)
     for table in ("lint", "jog"):
         settings.append(Setting(table, config.values.get(table, {}), *_file_source(config, table)))
     return settings, config
+
+
+def _check_tables(config) -> None:
+    """The ``[lint]`` and ``[jog]`` tables checked as ``armctl lint`` and ``armctl jog`` read them
+    (a bad value: exit 2, as there), so what this lists is what they would take."""
+    from ..errors import ConfigError
+    from ..jog.keymap import JogConfigError
+    from ..jog.settings import jog_from_config
+    from ..lint.command import check_lint_table
+
+    try:
+        if "lint" in config.values:
+            check_lint_table(config.values["lint"], config.path_of("lint"))
+        if "jog" in config.values:
+            jog_from_config(config.values["jog"], str(config.path_of("jog")))
+    except (JogConfigError, ValueError) as error:
+        raise ConfigError(str(error)) from None
 
 
 def connector_settings(profile, config) -> list[Setting]:
