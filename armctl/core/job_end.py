@@ -39,6 +39,10 @@ from .job_readings import moves_arm, values_text
 from .protocol import ArcStart, PauseToggle
 from .streamer import ARRIVAL_SLACK_S, LOSS_SLACK_S, ROTATION_S
 
+# Why a job whose frames only time (or a later frame's report) confirmed proves nothing on an
+# arm whose FIFO size nobody measured; the resume of its log says it too (host/arm_worker.py)
+FIFO_UNMEASURED = "the FIFO size is the document's, not measured on this arm: a frame it dropped would look the same"
+
 SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to come to rest
 OVERRUN_MIN_S = 60.0  # the least time waited past the estimate for an arm still working
 
@@ -226,8 +230,7 @@ class JobEnd:
             return Outcome.FRAMES_LOST
         unproven = []
         if not self.fifo_proven and (streamer.confirmed_by_time or streamer.confirmed_unseen):
-            unproven.append(f"{_frames_not_seen(streamer)}, and the FIFO size is the document's, not measured on "
-                            "this arm: a frame it dropped would look the same")
+            unproven.append(f"{_frames_not_seen(streamer)}, and {FIFO_UNMEASURED}")
         control_sent = self.written.control_sent
         if not self.control_frames_proven and control_sent:
             unproven.append(f"the job sent {control_sent} control {'frame' if control_sent == 1 else 'frames'} "

@@ -271,13 +271,13 @@ def _nothing_to_resume(arm: ArmLine) -> RunResult:
     where the FIFO size is (``link.fifo_proven``), as at a job's end (core/job_end.py): else a frame
     a full FIFO dropped before the crash would look the same, and the resume ends unproven (exit 1)."""
     from .link import fifo_proven
+    from ..core.job_end import FIFO_UNMEASURED
 
     if fifo_proven(arm.link.url, arm.profile.connector):
         return RunResult.nothing_sent("finished", message="nothing to resume: every line of the job is proven executed")
     return RunResult.nothing_sent("finished, unproven", message=(
-        "nothing to resume: the arm is at rest where the log's last frame leaves it, but the FIFO size is the "
-        "document's, not measured on this arm: a frame it dropped before the crash would look the same; "
-        "run `armctl probe` once"))
+        f"nothing to resume: the arm is at rest where the log's last frame leaves it, but {FIFO_UNMEASURED} "
+        "(dropped before the crash); run `armctl probe` once"))
 
 
 def _journal_job(runner, job, state, arrival: bool) -> None:

@@ -34,7 +34,7 @@ from ..errors import ArmctlError, PortError
 from .link import WRITE_AHEAD_S
 from ..core.job import Job, RunView, Wait, Write
 from .pacing_story import PacingStory, telling
-from ..core.protocol import Command, StatusFrame
+from ..core.protocol import StatusFrame
 from ..core.streamer import Streamer
 
 POLL_S = 0.05  # the longest wait on a wall clock (model seconds): Ctrl-C and the panel stay prompt
@@ -55,17 +55,12 @@ class JobRunner(Host):
         view: RunView,
         *,
         clock: Callable[[], float] | None = None,
-        time_scale: float = 1.0,
         log=None,
         on_update: Callable[[RunView], None] | None = None,
-        durations: Callable[[Command], float] | None = None,
         pacing=None,
         fifo_proven: bool = True,
         control_frames_proven: bool = True,
     ) -> None:
-        # ``time_scale`` and ``durations`` are accepted for older callers: the link's clock is
-        # model time already (scaled for sim://?speed=N), and the streamer plans durations.
-        del time_scale, durations
         self.link = link
         self.streamer = streamer
         self.view = view

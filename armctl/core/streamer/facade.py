@@ -269,14 +269,11 @@ class Streamer:
         (mid-job too: the arm rests in that frame or later) only the frames before it."""
         ledger = self._ledger
         pending = ledger.pending
-        if pending and (before is None or pending[-1].index < before) and self.ran_at_rest(pending[-1]):
-            pending[-1].seen = True
-            if pending[-1].group_index != pending[-1].index and len(pending) > 1:
+        last = ledger.recent_sent[-1] if ledger.recent_sent else None  # the last frame written, pending or not
+        if last is not None and (before is None or last.index < before) and self.ran_at_rest(last):
+            ledger.proven_run(last)
+            if last.group_index != last.index and len(pending) > 1:
                 pending[-2].seen = True  # its G300
-        elif not pending and ledger.recent_sent:  # time counted the last frame consumed first: the rest proves it ran
-            last = ledger.recent_sent[-1]
-            if last.by_time and (before is None or last.index < before) and self.ran_at_rest(last):
-                ledger.proven_run(last)
         while pending and (before is None or pending[0].index < before) and not (
                 len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             # a frame that leaves no trace (unless seen): the caller's proof of it is time

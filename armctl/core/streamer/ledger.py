@@ -94,14 +94,15 @@ class Ledger:
             sent.by_time = True
 
     def proven_run(self, sent: SentFrame) -> None:
-        """The arm at rest at the very target of ``sent``, a frame time had already counted
-        consumed, proves it ran: it counts as confirmed by the arm's reports from now on (the
-        time bound is often first on a job's last move: a sighting late in the move lets it
+        """The arm at rest at the very target of ``sent`` proves it ran: seen, so counted by the
+        arm's reports when it is consumed — or counted again if time counted it consumed first
+        (the time bound is often first on a job's last move: a sighting late in the move lets it
         confirm the frame before the arm has been still long enough to prove its rest).  The
         first frame confirmed by time alone is forgotten only once no such frame is left."""
+        sent.seen = True
         if not sent.by_time:
             return
-        sent.by_time, sent.seen = False, True
+        sent.by_time = False
         self.confirmed_by_time -= 1
         self.confirmed_by_reports += 1
         if self.confirmed_by_time == 0:
