@@ -1,0 +1,114 @@
+"""An SD program (PROGRAM n) on an arm whose control frames act as they land (H5 "arrival").
+
+Found by a review: with ``[connector] control_frames = "arrival"`` and the simulator acting so,
+scripts/sd_program.txt (POSE 0, POSE 1, PROGRAM 1, POSE 0, POSE 3) ended ``finished``, exit 0,
+while its second POSE 0 had cut PROGRAM 1 short 0.27 s in: the motion model gives a program no
+time (the host cannot see inside it), so the time bound confirmed the PROGRAM frame at once and
+rule (c) let the next control frame go.  Now time never confirms a PROGRAM on such an arm: the
+arm's reports do — it worked after the frame landed (its run position advanced, or it moved)
+and rests since — and the control frame after it waits for that.  An arm whose reports never
+show the program at work holds the job no longer than the engine waits for an SD program at
+the end of a job (``JobEnd.overrun_limit_s``); the job then goes on and ends ``finished,
+unproven``, saying which PROGRAM no report showed running.
+
+Judged by the simulator's own record (armctl/sim/program.py: a program holds the arm for
+``PROGRAM_RUN_S`` without moving it, its run position advancing), in this process and through
+the installed command in a fresh one, for both control-frame modes.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+from click.testing import CliRunner
+
+import armctl.sim.program
+from armctl.core.protocol import GoToPose, RunProgram
+from armctl.sim.executor import DONE
+from armctl.sim.program import PROGRAM_RUN_S
+from armctl.ui.cli import main
+from test_resume_exactly_once import _open_one_arm
+
+pytestmark = pytest.mark.timeout(60)
+
+JOB = Path(__file__).resolve().parents[1] / "scripts" / "sd_program.txt"
+ARMCTL = Path(sys.executable).with_name("armctl")  # the installed command
+MODES = ("queued", "arrival")
+
+
+def _url(mode: str) -> str:
+    return f"sim://?clock=virtual&control_frames={mode}"
+
+
+def _profile_says(mode: str, where: Path) -> None:
+    """The arm's control-frame mode, as a project armctl.toml states it (measured, not the guess)."""
+    (where / "armctl.toml").write_text(f'[connector]\ncontrol_frames = "{mode}"\n')
+
+
+def _run_here(mode: str, script: Path, tmp_path: Path, monkeypatch):
+    """``armctl run`` in this process on the simulated arm: (the result, the arm's execution log)."""
+    _profile_says(mode, tmp_path)
+    monkeypatch.chdir(tmp_path)
+    ports = _open_one_arm(monkeypatch)
+    result = CliRunner().invoke(main, ["run", str(script), "--no-live", "--port", _url(mode)],
+                                env={"ARMCTL_PORT": None})
+    return result, ports[_url(mode)].model.execution_log
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_the_frames_after_a_program_wait_for_it_to_end(mode, tmp_path, monkeypatch):
+    result, log = _run_here(mode, JOB, tmp_path, monkeypatch)
+    (program,) = [e for e in log if isinstance(e.command, RunProgram)]
+    # the arm ran the program to its end: no control frame after it cut it short
+    assert program.outcome == DONE and program.duration_s >= PROGRAM_RUN_S - 1e-9, (program, result.output)
+    assert [e.outcome for e in log] == [DONE] * 5, log
+    poses_after = [e for e in log if isinstance(e.command, GoToPose) and e.start_s >= program.end_s]
+    assert [e.command.pose for e in poses_after] == [0, 3]
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
+
+
+@pytest.mark.parametrize("mode", MODES)
+def test_through_the_installed_command(mode, tmp_path):
+    _profile_says(mode, tmp_path)
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    log = tmp_path / "run.jsonl"
+    done = subprocess.run([str(ARMCTL), "run", str(JOB), "--json", "--port", _url(mode), "--log", str(log)],
+                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=50)
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert (summary["outcome"], done.returncode) == ("finished", 0), done.stdout + done.stderr
+    # the arm's time covers the whole program (4 s of it), not a program cut short
+    assert summary["arm_time_s"] >= PROGRAM_RUN_S, summary
+    # and the arm's own reports say so: the SD file status (kind 102, the simulator's 2 = finished,
+    # 3 = stopped) never reads "stopped"
+    decoded = subprocess.run([str(ARMCTL), "decode", "--json", str(log)], cwd=tmp_path, env=env,
+                             capture_output=True, text=True, timeout=50)
+    statuses = [json.loads(line) for line in decoded.stdout.splitlines()]
+    file_status = [d["fields"]["raw"] for d in statuses if d.get("kind") == 102]
+    assert 2 in file_status and 3 not in file_status, file_status
+
+
+def test_a_program_no_report_shows_holds_the_job_only_a_bounded_time(tmp_path, monkeypatch):
+    # An arm whose reports never show its program at work (the run position stays where it was,
+    # the arm does not move): the job must not wait for ever, nor claim what no report proved.
+    monkeypatch.setattr(armctl.sim.program.SdProgram, "position_at", lambda self, now_s: 0.0)
+    result, log = _run_here("arrival", JOB, tmp_path, monkeypatch)
+    (program,) = [e for e in log if isinstance(e.command, RunProgram)]
+    assert program.outcome == DONE, program  # (waited for longer than the program's 4 s)
+    assert [e.outcome for e in log] == [DONE] * 5, log
+    assert result.exit_code == 1, result.output
+    assert result.stdout.splitlines()[-1].startswith("finished, unproven"), result.stdout
+    assert "PROGRAM 1 (line 13)" in result.output and "no report showed it running" in result.output
+
+
+def test_a_queued_arm_runs_the_job_as_before(tmp_path, monkeypatch):
+    # Nothing changes on the document's arm: the PROGRAM frame's time is still the model's (0),
+    # the frames behind it wait in the FIFO, and the job ends as it did (arm time 6.4 s)
+    result, log = _run_here("queued", JOB, tmp_path, monkeypatch)
+    assert result.exit_code == 0, result.output
+    assert "arm time: 6.4 s" in result.stdout, result.stdout
