@@ -103,7 +103,7 @@ def test_a_program_no_report_shows_holds_the_job_only_a_bounded_time(tmp_path, m
     assert [e.outcome for e in log] == [DONE] * 5, log
     assert result.exit_code == 1, result.output
     assert result.stdout.splitlines()[-1].startswith("finished, unproven"), result.stdout
-    assert "PROGRAM 1 (line 13)" in result.output and "no report showed it running" in result.output
+    assert "no report showed PROGRAM 1 at frame 3 (line 13) running" in result.output, result.output
 
 
 def test_a_queued_arm_runs_the_job_as_before(tmp_path, monkeypatch):
@@ -112,3 +112,46 @@ def test_a_queued_arm_runs_the_job_as_before(tmp_path, monkeypatch):
     result, log = _run_here("queued", JOB, tmp_path, monkeypatch)
     assert result.exit_code == 0, result.output
     assert "arm time: 6.4 s" in result.stdout, result.stdout
+
+
+def test_a_program_shorter_than_a_status_rotation_is_seen_by_its_run_position(tmp_path, monkeypatch):
+    # 50 ms: over before a second report of any kind; its run position, changed, still shows it ran
+    monkeypatch.setattr(armctl.sim.program, "PROGRAM_RUN_S", 0.05)
+    result, log = _run_here("arrival", JOB, tmp_path, monkeypatch)
+    assert [e.outcome for e in log] == [DONE] * 5, log
+    assert result.exit_code == 0, result.output
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
+    assert float(result.stdout.split("arm time: ")[1].split(" s")[0]) < 10.0, result.stdout  # no long wait
+
+
+def test_a_program_still_working_past_the_limit_ends_the_job_without_cutting_it_short(tmp_path, monkeypatch):
+    # 100 s of visible work: past the 60 s an SD program is waited for, the job ends "no
+    # confirmation" and sends nothing more (on this arm the next POSE would cut the program short)
+    monkeypatch.setattr(armctl.sim.program, "PROGRAM_RUN_S", 100.0)
+    result, log = _run_here("arrival", JOB, tmp_path, monkeypatch)
+    assert [type(e.command) for e in log] == [GoToPose, GoToPose, RunProgram], log
+    assert log[-1].outcome != "interrupted", log
+    assert result.exit_code == 1, result.output
+    assert "no confirmation" in result.output and "PROGRAM 1 at frame 3 (line 13) did not end" in result.output
+    assert "last line known executed: 12" in result.stdout, result.stdout
+
+
+def test_work_is_judged_on_two_readings_taken_after_the_frame_landed():
+    # The kinds come in turn, a rotation (270 ms) apart: a joints report read just after a PROGRAM
+    # landed may still show the move before it, from a reading taken before.  That proves no work.
+    from armctl.core.job_readings import Readings, Written
+
+    readings = Readings(Written())
+    here, there = (0.0, 10.0, 20.0), (0.0, 30.0, 20.0)
+    readings.take(1, here, 1.00)  # joints 1-3, mid-move, before the frame landed (at 1.10)
+    readings.take(1, there, 1.27)  # the move's end, first read after it landed
+    assert not readings.worked_after(1.10)
+    readings.take(1, there, 1.54)
+    assert not readings.worked_after(1.10)  # still: nothing worked after the landing
+    readings.take(1, here, 1.81)
+    assert readings.worked_after(1.10)  # two readings after the landing, apart
+    readings.take_run_position(0.0, 2.0)
+    readings.take_run_position(0.0, 2.27)
+    assert not readings.worked_after(2.0)
+    readings.take_run_position(110.0, 2.54)  # only a program moves it
+    assert readings.worked_after(2.5)

@@ -16,6 +16,11 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
   than a reading's jitter (``TARGET_MM``, ``TARGET_DEG``: a reading's resolution, so the arm
   counts as at a target within them), or an SD program's run position advanced while the arm
   stood still.
+- **Worked** (``worked_after``): the reports prove the arm worked after a time — two readings of
+  one kind (position, joints 1-3, joints 4-6), both read after it, differ by more than a
+  reading's jitter (an earlier reading may be stale: the kinds come in turn, a rotation apart),
+  or an SD program's run position read after it changed (nothing else changes it).  What shows
+  that an SD program ran (armctl/core/job_arrival.py ``program_ended``).
 - **Motion** (``motion``): the position and joints alone (no PWM), with when they last changed
   and the latest reading before that which still differed from them — the window in which the
   arm stopped (``Arrival.done_at``).
@@ -27,6 +32,7 @@ job's own PAUSE frames.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import fields
 from operator import attrgetter
@@ -87,6 +93,7 @@ class Readings:
         self.moved_from: tuple | None = None  # the readings when they last changed by more than jitter
         self.run_position: float | None = None  # the SD program's run position last reported
         self.active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
+        self.work_s = -math.inf  # the arm worked after this time, by two of its reports (``worked_after``)
         self.reported: dict = {}  # kind → its readings (position: in the worktable, ``worktable_xyz``)
         self.pause_reports: deque = deque(maxlen=AGREEING_REPORTS)  # the last pause states reported
         self.pause_read_s: deque = deque(maxlen=AGREEING_REPORTS)  # ... and when they were read
@@ -94,12 +101,15 @@ class Readings:
     def take(self, kind: int, values: tuple, now: float) -> bool:
         """One kind's readings read at ``now``; True when they changed (or are the first read)."""
         reported, read_at = self.reported, self.read_at
-        changed = reported.get(kind) != values  # else so are the readings: ``rest`` and ``motion`` hold them
+        old = reported.get(kind)
+        changed = old != values  # else so are the readings: ``rest`` and ``motion`` hold them
         reported[kind] = values
         before_s = read_at.get(kind) if changed else None  # the last reading of this kind that differed
         read_at[kind] = now
         if not changed and self.rest is not None:
             return False
+        if before_s is not None and before_s > self.work_s and kind != PAUSE_KIND and slot_moved(kind, old, values):
+            self.work_s = before_s  # it moved between two readings of one kind (``worked_after``)
         # One kind's values changed (or these are the first readings): the readings differ from
         # the last ``rest`` (it always holds the readings before this frame), and so does the
         # motion unless only the pause and PWM changed.
@@ -130,8 +140,13 @@ class Readings:
         advanced = self.run_position is not None and value != self.run_position
         if advanced:
             self.active_s = now
+            self.work_s = now  # only a program moves it (``worked_after``)
         self.run_position = value
         return advanced
+
+    def worked_after(self, since_s: float) -> bool:
+        """The reports prove the arm worked after ``since_s`` (see "Worked" in the module docstring)."""
+        return self.work_s >= since_s
 
     @property
     def paused(self) -> bool | None:
@@ -152,7 +167,7 @@ class Readings:
         since = self.rest[1]
         recent = self.written.recent
         if recent:
-            since = max(since, recent[-1].wire_end_s + ARRIVAL_SLACK_S)
+            since = max(since, landed_s(recent[-1]))
         return since
 
     @property
@@ -163,6 +178,11 @@ class Readings:
     def joints(self) -> tuple:
         """The six joints as last reported (fewer while a half was never read)."""
         return (self.reported.get(1) or ()) + (self.reported.get(2) or ())
+
+
+def landed_s(sent) -> float:
+    """When a frame written has surely landed: its last byte left the wire, plus ``ARRIVAL_SLACK_S``."""
+    return sent.wire_end_s + ARRIVAL_SLACK_S
 
 
 def values_text(values) -> str:

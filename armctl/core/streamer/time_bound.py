@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 
 from ..motion import MotionModel, Segment
-from ..protocol import ArcEnd, ArcStart, Command
+from ..protocol import ArcEnd, ArcStart, Command, RunProgram
 from .constants import ARRIVAL_SLACK_S, UNVERIFIED_FK_SHARE, frame_slack_s
 from .frames import Evidence, SentFrame
 from .geometry import TimeMemo, start_unknown, time_window
@@ -35,6 +35,7 @@ class TimeBound:
                  now: float) -> None:
         self.ledger, self.model, self.memo = ledger, model, memo
         self.kinematics_verified = model.profile.connector.kinematics_verified
+        self.control_on_arrival = model.profile.connector.control_on_arrival
         self.unknown_start_mm = UNVERIFIED_FK_SHARE * model.profile.workspace.reach_mm
         self.slowest_factor = slowest_factor
         self.tolerance = slowest_factor  # relative to the measured pace (``allow_pace``)
@@ -123,6 +124,16 @@ class TimeBound:
         self.e_known = True
         start = segment.start
         return (start.e0_deg, start.e1_deg) != (command.e0_deg, command.e1_deg)
+
+    def program_time_unknown(self, command: Command) -> bool:
+        """Whether ``command`` runs an SD program (PROGRAM n) on an arm whose control frames act
+        as they land: the program runs for as long as it says, which armctl cannot see (the motion
+        model gives it none), and the next control frame would cut it short as it lands — so its
+        time is not known (``SentFrame.timing_known``) and time never confirms it.  The arm's
+        reports do: it worked after the frame landed and rests since (armctl/core/job_end.py
+        ``JobEnd.program_held``), or a later frame's sighting (the arm runs its frames in order).
+        On an arm whose control frames queue (H5) the model's time stands, as before."""
+        return self.control_on_arrival and isinstance(command, RunProgram)
 
     # --- the running clock ----------------------------------------------------------------------
 
