@@ -155,3 +155,38 @@ def test_work_is_judged_on_two_readings_taken_after_the_frame_landed():
     assert not readings.worked_after(2.0)
     readings.take_run_position(110.0, 2.54)  # only a program moves it
     assert readings.worked_after(2.5)
+
+
+def test_a_users_pause_during_the_program_does_not_count_towards_its_wait():
+    # Paused 90 s mid-program (longer than the 60 s an SD program is waited for), then resumed:
+    # the program finishes, and only then does the POSE after it go.
+    from armctl.core.job import Job, Outcome, RunView
+    from armctl.core.motion import MotionModel
+    from armctl.core.streamer import Streamer
+    from armctl.host.profile import default_profile, with_connector
+    from armctl.script import InitialState, compile_text
+    from armctl.sim.model import SimOptions, SimulatedArm
+    from test_job_pause import drive
+
+    profile = with_connector(default_profile(), {"control_frames": "arrival"}, "the test")
+    model = MotionModel(profile)
+    start = model.initial_pose()
+    initial = InitialState(pose=tuple(start.cartesian), joints_deg=tuple(start.joints), pwm_us={1: start.pwm_us[0]})
+    statements = list(compile_text("POSE 1\nPROGRAM 1\nPOSE 0\n", initial=initial))
+    streamer = Streamer(model, start)
+    view = RunView(total_frames=3, estimated_job_s=3.0, lead_s=streamer.lead_s, capacity=streamer.limit_frames)
+    job = Job(streamer, statements, view, control_frames="arrival")
+    arm = SimulatedArm(SimOptions(profile=profile, control_frames="arrival"))
+    log = arm.execution_log
+
+    def pause(job, now):
+        (program,) = [e for e in log if isinstance(e.command, RunProgram)]  # running since it landed
+        assert now - program.start_s < PROGRAM_RUN_S
+        assert job.pause()
+
+    outcome, _, _ = drive(job, arm, at=[(3.0, pause), (93.0, lambda job, now: job.resume())])
+    assert outcome == Outcome.FINISHED, view.messages
+    program = [e for e in log if isinstance(e.command, RunProgram)][0]
+    assert program.outcome == DONE and program.duration_s >= PROGRAM_RUN_S + 89.0, program
+    (pose_after,) = [e for e in log if isinstance(e.command, GoToPose) and e.start_s >= program.end_s]
+    assert pose_after.outcome == DONE and pose_after.command.pose == 0

@@ -487,5 +487,6 @@ def _control_action(job: Job, now: float) -> Write | Wait | None:
     if control.holds_feed:
         if job.phase is _Phase.DRAINING:
             job.end.restart(now)
+        job.end.held_by_pause_s = now  # an SD program's wait starts again from the resume
         return Wait(None)  # until the arm reports (pausing → paused) or the user resumes
     return None

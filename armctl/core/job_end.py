@@ -26,7 +26,7 @@ concluded, from what evidence:
   ran and ended once the arm worked after the frame landed and rests since
   (``Arrival.program_ended``, wherever it rests); the frames after it wait for that.  No report
   showing it at work holds the job no longer than an SD program is waited for at the end of a
-  job (``overrun_limit_s``, from its landing): at rest then, the job goes on and can end only
+  job (``overrun_limit_s``, from its landing or the user's resume): at rest then, the job goes on and can end only
   ``finished, unproven``, naming the PROGRAM; still working then, it ends "no confirmation".
 - **The script's own PAUSE**: nothing is written behind it; once two agreeing reports read
   after it landed say the arm is paused, every frame written ran and the job ends PAUSED; an
@@ -39,6 +39,7 @@ concluded, from what evidence:
 
 from __future__ import annotations
 
+import math
 from enum import StrEnum
 
 from .evidence import REST_CHECK_S
@@ -87,6 +88,7 @@ class JobEnd:
         self.overran = False
         self.script_pause_deadline_s: float | None = None  # held behind one: how long its pause is waited for
         self.programs_unseen: list = []  # PROGRAM frames the job went on after with no report of their work
+        self.held_by_pause_s = -math.inf  # the last time the user's pause held the job (``program_held``)
 
     def settle_deadline(self, now: float) -> float:
         """How long the end is waited for: the motion queued at the slowest pace, and no earlier
@@ -171,7 +173,7 @@ class JobEnd:
             program.seen = True  # its reports: it ran
             self.streamer.confirm_all_done(now, program.index + 1, Evidence.PROGRAM_ENDED)
             return None
-        limit_s = landed_s(program) + self.overrun_limit_s()
+        limit_s = max(landed_s(program), self.held_by_pause_s) + self.overrun_limit_s()  # (a pause's time not counted)
         if now < limit_s:
             return limit_s
         name = f"PROGRAM {program.command.program} at {where(program)}"
