@@ -125,36 +125,46 @@ def test_a_program_shorter_than_a_status_rotation_is_seen_by_its_run_position(tm
 
 
 def test_a_program_still_working_past_the_limit_ends_the_job_without_cutting_it_short(tmp_path, monkeypatch):
-    # 100 s of visible work: past the 60 s an SD program is waited for, the job ends "no
+    # 300 s of visible work: past twice the 60 s an SD program is waited for, the job ends "no
     # confirmation" and sends nothing more (on this arm the next POSE would cut the program short)
-    monkeypatch.setattr(armctl.sim.program, "PROGRAM_RUN_S", 100.0)
+    monkeypatch.setattr(armctl.sim.program, "PROGRAM_RUN_S", 300.0)
     result, log = _run_here("arrival", JOB, tmp_path, monkeypatch)
     assert [type(e.command) for e in log] == [GoToPose, GoToPose, RunProgram], log
     assert log[-1].outcome != "interrupted", log
     assert result.exit_code == 1, result.output
-    assert "no confirmation" in result.output and "PROGRAM 1 at frame 3 (line 13) did not end" in result.output
+    assert "no confirmation" in result.output and "PROGRAM 1 at frame 3 (line 13) did not end in the 120 s" in result.output
     assert "last line known executed: 12" in result.stdout, result.stdout
 
 
-def test_work_is_judged_on_two_readings_taken_after_the_frame_landed():
+def test_work_is_judged_on_values_agreed_after_the_frame_landed():
     # The kinds come in turn, a rotation (270 ms) apart: a joints report read just after a PROGRAM
-    # landed may still show the move before it, from a reading taken before.  That proves no work.
+    # landed may still show the move before it, from a reading taken before.  That proves no work;
+    # nor do corrupted reports, which never agree (two reports in a row on one value).
     from armctl.core.job_readings import Readings, Written
 
     readings = Readings(Written())
     here, there = (0.0, 10.0, 20.0), (0.0, 30.0, 20.0)
-    readings.take(1, here, 1.00)  # joints 1-3, mid-move, before the frame landed (at 1.10)
-    readings.take(1, there, 1.27)  # the move's end, first read after it landed
-    assert not readings.worked_after(1.10)
+    readings.take(1, here, 0.73)
+    readings.take(1, here, 1.00)  # joints 1-3 at rest before the move, agreed
+    readings.take(1, there, 1.27)  # the move's end, first read after the PROGRAM landed (at 1.10)
     readings.take(1, there, 1.54)
-    assert not readings.worked_after(1.10)  # still: nothing worked after the landing
-    readings.take(1, here, 1.81)
-    assert readings.worked_after(1.10)  # two readings after the landing, apart
-    readings.take_run_position(0.0, 2.0)
-    readings.take_run_position(0.0, 2.27)
-    assert not readings.worked_after(2.0)
-    readings.take_run_position(110.0, 2.54)  # only a program moves it
-    assert readings.worked_after(2.5)
+    assert not readings.worked_after(1.10)  # agreed anew, but on a value first read before the landing
+    readings.take(1, (0.0, 90.0, 20.0), 1.81)  # two corrupted reports in a row ...
+    readings.take(1, (0.0, 30.0, 99.0), 2.08)
+    readings.take(1, there, 2.35)  # ... then where it was
+    readings.take(1, there, 2.62)
+    assert not readings.worked_after(1.10)
+    readings.take(1, here, 2.89)
+    assert not readings.worked_after(1.10)  # moved, not yet agreed
+    readings.take(1, here, 3.16)
+    assert readings.worked_after(1.10) and not readings.worked_after(1.28)  # from ``there`` first read at 1.27
+    readings.take_run_position(0.0, 4.0)
+    readings.take_run_position(0.0, 4.27)  # agreed before the next PROGRAM lands (at 4.3)
+    readings.take_run_position(110.0, 4.54)  # only a program moves it: advancing ...
+    readings.take_run_position(220.0, 4.81)
+    assert not readings.worked_after(4.3)
+    readings.take_run_position(220.0, 5.08)  # ... and stopped, agreed
+    assert readings.worked_after(4.3) and readings.worked_after(4.81) and not readings.worked_after(4.82)
 
 
 def test_a_users_pause_during_the_program_does_not_count_towards_its_wait():
@@ -190,3 +200,29 @@ def test_a_users_pause_during_the_program_does_not_count_towards_its_wait():
     assert program.outcome == DONE and program.duration_s >= PROGRAM_RUN_S + 89.0, program
     (pose_after,) = [e for e in log if isinstance(e.command, GoToPose) and e.start_s >= program.end_s]
     assert pose_after.outcome == DONE and pose_after.command.pose == 0
+
+
+FAULTS = "&noise=0.05&loss=0.05&corrupt=0.05&seed={seed}"
+
+
+@pytest.mark.parametrize("seed", [1, 3, 5])
+def test_lost_and_corrupted_reports_neither_cut_the_program_short_nor_prove_an_unseen_one(seed, tmp_path,
+                                                                                          monkeypatch):
+    def run(tag):
+        where = tmp_path / tag
+        where.mkdir()
+        _profile_says("arrival", where)
+        monkeypatch.chdir(where)
+        url = _url("arrival") + FAULTS.format(seed=seed) + f"&fifo_frames={200 + len(tag)}"  # a fresh arm each run
+        ports = _open_one_arm(monkeypatch)
+        result = CliRunner().invoke(main, ["run", str(JOB), "--no-live", "--port", url], env={"ARMCTL_PORT": None})
+        return result, ports[url].model.execution_log
+
+    result, log = run("seen")
+    assert [e.outcome for e in log] == [DONE] * 5, (log, result.output)
+    assert result.stdout.splitlines()[-1] == "finished: the arm finished the job", result.output
+    # a program no report shows: one corrupted report is no sign of its work
+    monkeypatch.setattr(armctl.sim.program.SdProgram, "position_at", lambda self, now_s: 0.0)
+    result, log = run("unseen")
+    assert [e.outcome for e in log] == [DONE] * 5, (log, result.output)
+    assert "no report showed PROGRAM 1 at frame 3 (line 13) running" in result.output, result.output

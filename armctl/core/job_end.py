@@ -26,8 +26,9 @@ concluded, from what evidence:
   ran and ended once the arm worked after the frame landed and rests since
   (``Arrival.program_ended``, wherever it rests); the frames after it wait for that.  No report
   showing it at work holds the job no longer than an SD program is waited for at the end of a
-  job (``overrun_limit_s``, from its landing or the user's resume): at rest then, the job goes on and can end only
-  ``finished, unproven``, naming the PROGRAM; still working then, it ends "no confirmation".
+  job (``overrun_limit_s``, from its landing or the user's resume): at rest by then or later,
+  the job goes on and can end only ``finished, unproven``, naming the PROGRAM; neither proof
+  nor such a rest within as long again, it ends "no confirmation" (a program still working).
 - **The script's own PAUSE**: nothing is written behind it; once two agreeing reports read
   after it landed say the arm is paused, every frame written ran and the job ends PAUSED; an
   arm that does not report the pause in the time its queue takes ends "no confirmation".
@@ -165,9 +166,9 @@ class JobEnd:
     def program_held(self, program, now: float) -> Outcome | float | None:
         """The job held behind the SD program of ``program`` (a PROGRAM frame at the head): confirmed
         once the arm's reports show it ran and ended (``Arrival.program_ended``); with no report of
-        its work by ``overrun_limit_s`` after it landed and the arm at rest, confirmed unproven
-        (``programs_unseen``) — the job goes on rather than wait for ever; still working then, the
-        job ends "no confirmation".  Else the time of that limit."""
+        its work ``overrun_limit_s`` after it landed (or the user resumed), once the arm is at rest,
+        confirmed unproven (``programs_unseen``) — the job goes on rather than wait for ever;
+        neither by as long again, the job ends "no confirmation".  Else the time to look again."""
         arrival, readings = self.arrival, self.readings
         if arrival.program_ended(program, now):
             program.seen = True  # its reports: it ran
@@ -181,9 +182,12 @@ class JobEnd:
             self.programs_unseen.append((name, self.overrun_limit_s()))
             self.streamer.confirm_all_done(now, program.index + 1)
             return None
+        final_s = limit_s + self.overrun_limit_s()  # (a rest corrupted reports keep interrupting, a long program)
+        if now < final_s:
+            return final_s
         self.view.messages.append(
-            f"{name} did not end in the {self.overrun_limit_s():.0f} s armctl waits for an SD program (the arm "
-            "still working, or paused): the rest of the job was not sent, since on this arm a control frame "
+            f"{name} did not end in the {final_s - landed_s(program):.0f} s armctl waited for it (the arm still "
+            "working, or paused): the rest of the job was not sent, since on this arm a control frame "
             "would cut the program short as it lands"
             + (f"; once it has ended, --from-line {line} runs the rest"
                if (line := getattr(self.view.next_statement, "line", None)) is not None else ""))
