@@ -138,8 +138,9 @@ def test_a_program_still_working_past_the_limit_ends_the_job_without_cutting_it_
 
 def test_work_is_judged_on_values_agreed_after_the_frame_landed():
     # The kinds come in turn, a rotation (270 ms) apart: a joints report read just after a PROGRAM
-    # landed may still show the move before it, from a reading taken before.  That proves no work;
-    # nor do corrupted reports, which never agree (two reports in a row on one value).
+    # landed may show the end of the move before it, which a reading taken before did not.  That
+    # proves no work; nor do corrupted reports, which never agree (two reports in a row on one value).
+    # A value agreed anew proves work after the arm was last read at the one agreed before.
     from armctl.core.job_readings import Readings, Written
 
     readings = Readings(Written())
@@ -157,7 +158,7 @@ def test_work_is_judged_on_values_agreed_after_the_frame_landed():
     readings.take(1, here, 2.89)
     assert not readings.worked_after(1.10)  # moved, not yet agreed
     readings.take(1, here, 3.16)
-    assert readings.worked_after(1.10) and not readings.worked_after(1.28)  # from ``there`` first read at 1.27
+    assert readings.worked_after(2.62) and not readings.worked_after(2.63)  # from ``there``, last read at 2.62
     readings.take_run_position(0.0, 4.0)
     readings.take_run_position(0.0, 4.27)  # agreed before the next PROGRAM lands (at 4.3)
     readings.take_run_position(110.0, 4.54)  # only a program moves it: advancing ...

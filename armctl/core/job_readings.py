@@ -19,11 +19,12 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
 - **Worked** (``worked_after``): the reports prove the arm worked after a time — one kind's
   readings (position, joints 1-3, joints 4-6), agreed by two reports in a row (armctl/core/evidence.py's
   rule: corrupted reports never agree), came to a value more than a reading's jitter from the
-  one they agreed on before, and that earlier value was first read after that time (a reading
-  taken before may be stale: the kinds come in turn, a rotation apart); or the SD program's run
-  position, agreed so after that time, is not the one agreed before (nothing but a program
-  moves it).  What shows that an SD program ran and ended (armctl/core/job_arrival.py
-  ``program_ended``): a value agreed on is one the arm stopped at.
+  one they agreed on before, and the arm was last read at that earlier value after that time (a
+  reading taken before it may be stale: the kinds come in turn, a rotation apart, and a move
+  that ended before may be read only after); or the SD program's run position, agreed so after
+  that time, is not the one agreed before (nothing but a program moves it).  What shows that an
+  SD program ran and ended (armctl/core/job_arrival.py ``program_ended``): a value agreed on is
+  one the arm stopped at.  A program that moves the arm at once shows by its run position alone.
 - **Motion** (``motion``): the position and joints alone (no PWM), with when they last changed
   and the latest reading before that which still differed from them — the window in which the
   arm stopped (``Arrival.done_at``).
@@ -97,7 +98,9 @@ class Readings:
         self.run_position: float | None = None  # the SD program's run position last reported
         self.active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
         self.work_s = -math.inf  # the arm worked after this time, by its reports (``worked_after``)
-        self.agreed_values: dict = {}  # kind → (the value two reports in a row last agreed on, the first's time)
+        # kind → [the value two reports in a row last agreed on, when it was last read there before it
+        # changed (else its agreement's first report)]: ``_agreed``
+        self.agreed_values: dict = {}
         self.run_position_read_s = 0.0  # when ``run_position`` was read
         self.reported: dict = {}  # kind → its readings (position: in the worktable, ``worktable_xyz``)
         self.pause_reports: deque = deque(maxlen=AGREEING_REPORTS)  # the last pause states reported
@@ -106,16 +109,20 @@ class Readings:
     def take(self, kind: int, values: tuple, now: float) -> bool:
         """One kind's readings read at ``now``; True when they changed (or are the first read)."""
         reported, read_at = self.reported, self.read_at
-        changed = reported.get(kind) != values  # else so are the readings: ``rest`` and ``motion`` hold them
+        old = reported.get(kind)
+        changed = old != values  # else so are the readings: ``rest`` and ``motion`` hold them
         reported[kind] = values
         before_s = read_at.get(kind)  # the last reading of this kind
         read_at[kind] = now
+        agreed = self.agreed_values.get(kind) if kind != PAUSE_KIND else None
         if not changed:  # two reports in a row agree: a new value agreed on may show work (``_agreed``)
-            if kind != PAUSE_KIND and (self.agreed_values.get(kind) or (None,))[0] != values:
+            if kind != PAUSE_KIND and (agreed is None or agreed[0] != values):
                 self._agreed(kind, values, before_s, slot_moved)
             if self.rest is not None:
                 return False
             before_s = None  # (the last reading of this kind that differed: none)
+        elif agreed is not None and old == agreed[0]:
+            agreed[1] = before_s  # it leaves the value agreed on: last read there then
         # One kind's values changed (or these are the first readings): the readings differ from
         # the last ``rest`` (it always holds the readings before this frame), and so does the
         # motion unless only the pause and PWM changed.
@@ -154,13 +161,13 @@ class Readings:
 
     def _agreed(self, kind: int, values, first_s: float, moved) -> None:
         """Two reports of ``kind`` in a row agree on ``values``, the first read at ``first_s``: if
-        that is a new value, the arm worked (``worked_after``) — after the value agreed before it was
-        first read (position, joints: a reading taken before may be stale), or, for the run
-        position, which only a program moves, after this one was."""
+        that is a new value, the arm worked (``worked_after``) — after it was last read at the value
+        agreed before (position, joints), or, for the run position, which only a program moves,
+        after this one was first read."""
         last = self.agreed_values.get(kind)
         if last is not None and last[0] == values:
             return  # (the same value, agreed again)
-        self.agreed_values[kind] = (values, first_s)  # (its first report: the one before this)
+        self.agreed_values[kind] = [values, first_s]  # (its first report: the one before this)
         if last is not None and moved(kind, last[0], values):
             since_s = first_s if kind == RUN_POSITION_KIND else last[1]
             if since_s > self.work_s:

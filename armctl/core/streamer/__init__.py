@@ -190,8 +190,9 @@ FIFO.  Each part may conclude only what its evidence says; this is the whole lis
       every status kind re-read unchanged at the last frame's target), every frame written, or
       those before ``before`` — never a trailing G300.  Held behind a PROGRAM whose time is
       unknown, the caller's proof is its own (armctl/core/job_end.py ``program_held``): the arm
-      worked after the frame landed — two reports of one kind, both read after it, apart, or its
-      run position changed — and is at rest since, wherever; that confirms the frames through it.
+      worked after the frame landed — a kind's reports agreed on a new value, two in a row
+      (armctl/core/job_readings.py ``worked_after``) — and is at rest since, wherever; that
+      confirms the frames through it.
 
    Left the FIFO is not *ran*: a report on a later frame counts a frame ``confirmed_by_reports``
    only when the caller says the FIFO holds every frame the capacity rule lets in
