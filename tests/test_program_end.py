@@ -227,3 +227,24 @@ def test_lost_and_corrupted_reports_neither_cut_the_program_short_nor_prove_an_u
     result, log = run("unseen")
     assert [e.outcome for e in log] == [DONE] * 5, (log, result.output)
     assert "no report showed PROGRAM 1 at frame 3 (line 13) running" in result.output, result.output
+
+
+@pytest.mark.parametrize("reports", ["run position", "motion only"])
+def test_a_program_that_moves_the_arm_is_waited_for_and_so_is_the_move_after_it(reports, tmp_path, monkeypatch):
+    # An SD program that takes the arm to fixed pose 2 (the simulator's own programs stand still):
+    # the POSE 0 after it starts there, not where the plan left the arm (pose 1), so its time is
+    # not the plan's either, and the POSE 3 after it must not cut it short.
+    import armctl.sim.executor
+
+    def start_program(self, frame, now_s):
+        segment = self.motion.plan(GoToPose(2), self._start_pose())
+        self.program.start(frame.command.program, now_s, segment.duration_s / PROGRAM_RUN_S)  # as long as its move
+        self._run(segment, [frame], now_s)
+
+    monkeypatch.setattr(armctl.sim.executor.Executor, "_start_program", start_program)
+    if reports == "motion only":
+        monkeypatch.setattr(armctl.sim.program.SdProgram, "position_at", lambda self, now_s: 0.0)
+    result, log = _run_here("arrival", JOB, tmp_path, monkeypatch)
+    assert [e.outcome for e in log] == [DONE] * 5, (log, result.output)
+    if reports == "run position":
+        assert result.stdout.splitlines()[-1] == "finished: the arm finished the job", result.output

@@ -46,7 +46,9 @@ left the wire, and two views of the arm:
     nor the first move that sets E0/E1, which no status reports: from where they stood, its time
     may be any (``TimeBound.moves_e_from_the_start``; no pace is measured on it either); nor, on
     an arm whose control frames act as they land, a PROGRAM frame, whose SD program runs as long
-    as it says (``TimeBound.program_time_unknown``).
+    as it says (``TimeBound.program_time_unknown``), and the first move after it starts where
+    the program left the arm (``TimeBound.starts_where_a_program_left``: a joint move from
+    anywhere, a Cartesian one never by time; its path is not the planned one).
   Lost or corrupted status frames can only hold the bound back, i.e. make it more careful.
 * an **estimate** of when each frame ends, from the model, re-anchored on every observation:
   each candidate segment says the arm is now within a window of that segment's time (a short
@@ -184,7 +186,7 @@ FIFO.  Each part may conclude only what its evidence says; this is the whole lis
       the least fraction of k's path both reports allow (``restart``), or on the arm seen at
       rest mid-job (``at_rest``).  Never on time: a frame whose time may be any (an arc from an
       unverified start, the first move of E0/E1, a PROGRAM on an arm whose control frames act
-      as they land: deadline infinite), a G300 before its G301 lands, a frame a RESET CONNECTOR
+      as they land and a Cartesian move after it: deadline infinite), a G300 before its G301 lands, a frame a RESET CONNECTOR
       may have cleared, and nothing at all once the FIFO may have been cleared (``cleared``).
    c. **The arm at rest** (``Streamer.confirm_all_done``): on the caller's proof (armctl/core/job.py:
       every status kind re-read unchanged at the last frame's target), every frame written, or

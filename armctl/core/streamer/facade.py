@@ -160,8 +160,9 @@ class Streamer:
         ledger, bound = self._ledger, self._bound
         index = ledger.sent
         segment, wire_end = self._gate.take(command, now)
+        anywhere = bound.starts_where_a_program_left(command, segment)
         time_unknown = bound.moves_e_from_the_start(command, segment) or bound.program_time_unknown(command)
-        allowance_s = math.inf if time_unknown else bound.allowance_s(segment, index)
+        allowance_s = math.inf if time_unknown else bound.allowance_s(segment, index, anywhere)
         previous = ledger.pending[-1] if ledger.pending else None
         certain_end_s = bound.chain(wire_end, segment.duration_s, allowance_s)
         frame = SentFrame(
@@ -170,7 +171,7 @@ class Streamer:
             motion_before_s=ledger.motion_sent_s, unknown_start_s=allowance_s,
             sure_before_s=ledger.sure_motion_sent_s, sure_s=0.0 if allowance_s else segment.duration_s,
             timing_known=not time_unknown,  # (every path_known False frame has an allowance)
-            path_known=not (index > 0 and start_unknown(segment, self.kinematics_verified)),
+            path_known=not (index > 0 and (anywhere or start_unknown(segment, self.kinematics_verified))),
         )
         self._estimate.written(frame, previous)
         bound.group_arc(frame, previous)
