@@ -362,13 +362,16 @@ class Job:
                 pacing, streamer = self.pacing, self.streamer
                 when = pacing.next_write_time(now, command)
                 self._held = when is None and pacing is streamer
+                look_s = None  # held: when to look again without news (an SD program's limit)
                 if self._held and streamer.pending:
                     if deferred:  # (before the rest is judged and confirms frames)
                         self._refresh(now)
                         deferred = False
-                    before = self.end.rest_proves_done_before(now)
-                    if before is not None and before > streamer.pending[0].index:
-                        streamer.confirm_all_done(now, before)  # (the time bound's chain restarts at now)
+                    consumed = streamer.consumed_lower_bound
+                    look_s = self.end.prove_held(now)
+                    if isinstance(look_s, Outcome):
+                        return self._finish(look_s, now)
+                    if streamer.consumed_lower_bound != consumed:
                         when = pacing.next_write_time(now, command)
                 if when is not None and when <= now:
                     if self._write is None:
@@ -376,7 +379,7 @@ class Job:
                     return self._write
                 if deferred:
                     self._refresh(now)
-                return Wait(when)
+                return Wait(look_s if when is None else when)
             self.phase = _Phase.DRAINING
             self.end.restart(now)
             return self._ended_or_wait(self.end.drain(now), now)
@@ -484,5 +487,6 @@ def _control_action(job: Job, now: float) -> Write | Wait | None:
     if control.holds_feed:
         if job.phase is _Phase.DRAINING:
             job.end.restart(now)
+        job.end.held_by_pause_s = now  # an SD program's wait starts again from the resume
         return Wait(None)  # until the arm reports (pausing → paused) or the user resumes
     return None

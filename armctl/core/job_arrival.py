@@ -14,6 +14,10 @@ each may conclude, from what evidence:
   kinematics), in the same worktable, and more than twice the tolerance apart.
 - ``arm_at_rest(now)``: at rest by armctl/core/evidence.py's rule, no SD program advancing, and the
   estimate over.
+- ``program_ended``: an SD program (a PROGRAM frame whose time only the arm's reports can end,
+  ``Streamer.program_time_unknown``) ran and ended: the arm worked after the frame landed
+  (``Readings.worked_after``) and is at rest now (``arm_at_rest``), not paused.  Wherever it
+  rests: the program moves the arm as it says.
 - ``frozen_mid_move``: paused and still strictly inside the path of a frame still pending, at
   no frame's end: only a pause that acts as it lands (H5 "arrival") freezes a move there — a
   queued pause, or an arm that dropped frames, leaves it at some frame's end.  The proof that
@@ -28,7 +32,7 @@ each may conclude, from what evidence:
 
 from __future__ import annotations
 
-from .job_readings import TARGET_DEG, TARGET_MM, moves_arm, values_text
+from .job_readings import TARGET_DEG, TARGET_MM, landed_s, moves_arm, values_text
 from .evidence import REST_CHECK_S
 from .motion import distance_to_path
 from .protocol import CONTROL_COMMANDS, ArcEnd, GoToPose, RunProgram
@@ -60,6 +64,13 @@ class Arrival:
         if readings.active_s is not None and now - readings.active_s < REST_CHECK_S:
             return False  # an SD program still advancing, even with the arm standing still
         return readings.rest_s() >= REST_CHECK_S
+
+    def program_ended(self, sent, now: float) -> bool:
+        """The arm's reports show the SD program of ``sent`` (a PROGRAM frame) ran and ended: the
+        arm worked after the frame landed and rests since, not paused (module docstring)."""
+        readings = self.readings
+        return (readings.worked_after(landed_s(sent)) and self.arm_at_rest(now)
+                and readings.paused is False)
 
     def at_last_target(self) -> bool:
         """The arm reports the end of the last frame written (joints for a joint move)."""

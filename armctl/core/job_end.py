@@ -21,6 +21,14 @@ concluded, from what evidence:
   joint end) never holds a job for ever.  Where a run of frames before the last move may hold
   the arm at that same target (``resting_before_last_move``), the rest proves the frames before
   the first such run (``rest_proves_done_before``) and time the rest.
+- **An SD program held mid-job** (``program_held``; an arm whose control frames act as they
+  land: time never confirms its PROGRAM frame, ``Streamer.program_time_unknown``): the program
+  ran and ended once the arm worked after the frame landed and rests since
+  (``Arrival.program_ended``, wherever it rests); the frames after it wait for that.  No report
+  showing it at work holds the job no longer than an SD program is waited for at the end of a
+  job (``overrun_limit_s``, from its landing or the user's resume): at rest by then or later,
+  the job goes on and can end only ``finished, unproven``, naming the PROGRAM; neither proof
+  nor such a rest within as long again, it ends "no confirmation" (a program still working).
 - **The script's own PAUSE**: nothing is written behind it; once two agreeing reports read
   after it landed say the arm is paused, every frame written ran and the job ends PAUSED; an
   arm that does not report the pause in the time its queue takes ends "no confirmation".
@@ -32,16 +40,21 @@ concluded, from what evidence:
 
 from __future__ import annotations
 
+import math
 from enum import StrEnum
 
 from .evidence import REST_CHECK_S
-from .job_readings import moves_arm, values_text
+from .job_readings import landed_s, moves_arm, values_text
 from .protocol import ArcStart, PauseToggle
 from .streamer import ARRIVAL_SLACK_S, LOSS_SLACK_S, ROTATION_S
+from .streamer.frames import Evidence, where
 
 # Why a job whose frames only time (or a later frame's report) confirmed proves nothing on an
 # arm whose FIFO size nobody measured; the resume of its log says it too (host/arm_worker.py)
 FIFO_UNMEASURED = "the FIFO size is the document's, not measured on this arm: a frame it dropped would look the same"
+
+# What an unproven finish says when measuring the arm would make it proof (``finished_outcome``)
+PROBE_HINT = "run `armctl probe` once"
 
 SETTLE_SLACK_S = 2.0  # beyond the estimate, how long to wait for the arm to come to rest
 OVERRUN_MIN_S = 60.0  # the least time waited past the estimate for an arm still working
@@ -75,6 +88,8 @@ class JobEnd:
         self.deadline_s = 0.0
         self.overran = False
         self.script_pause_deadline_s: float | None = None  # held behind one: how long its pause is waited for
+        self.programs_unseen: list = []  # PROGRAM frames the job went on after with no report of their work
+        self.held_by_pause_s = -math.inf  # the last time the user's pause held the job (``program_held``)
 
     def settle_deadline(self, now: float) -> float:
         """How long the end is waited for: the motion queued at the slowest pace, and no earlier
@@ -128,6 +143,55 @@ class JobEnd:
                 view.messages.append(self.why_not_finished())
                 return Outcome.FRAMES_LOST if self.streamer.losses else Outcome.NO_CONFIRMATION
         return self.next_change_s(now, limit_s)
+
+    def prove_held(self, now: float) -> Outcome | float | None:
+        """Held mid-job (only evidence lets the next frame go): confirm what the arm's rest proves —
+        an SD program at the head by its own proof (``program_held``), else the frames written
+        (``rest_proves_done_before``), up to such a program.  The job's outcome when it ends here,
+        a time to look again at (the program's limit), or None."""
+        streamer = self.streamer
+        head = streamer.pending[0]
+        if streamer.program_time_unknown(head.command):
+            return self.program_held(head, now)
+        before = self.rest_proves_done_before(now)
+        if before is None:
+            return None
+        program = next((sent for sent in streamer.pending if streamer.program_time_unknown(sent.command)), None)
+        if program is not None:
+            before = min(before, program.index)  # the rest there says nothing of its program's end
+        if before > head.index:
+            streamer.confirm_all_done(now, before)  # (the time bound's chain restarts at now)
+        return None
+
+    def program_held(self, program, now: float) -> Outcome | float | None:
+        """The job held behind the SD program of ``program`` (a PROGRAM frame at the head): confirmed
+        once the arm's reports show it ran and ended (``Arrival.program_ended``); with no report of
+        its work ``overrun_limit_s`` after it landed (or the user resumed), once the arm is at rest,
+        confirmed unproven (``programs_unseen``) — the job goes on rather than wait for ever;
+        neither by as long again, the job ends "no confirmation".  Else the time to look again."""
+        arrival, readings = self.arrival, self.readings
+        if arrival.program_ended(program, now):
+            program.seen = True  # its reports: it ran
+            self.streamer.confirm_all_done(now, program.index + 1, Evidence.PROGRAM_ENDED)
+            return None
+        limit_s = max(landed_s(program), self.held_by_pause_s) + self.overrun_limit_s()  # (a pause's time not counted)
+        if now < limit_s:
+            return limit_s
+        name = f"PROGRAM {program.command.program} at {where(program)}"
+        if not readings.worked_after(landed_s(program)) and arrival.arm_at_rest(now) and readings.paused is False:
+            self.programs_unseen.append((name, self.overrun_limit_s()))
+            self.streamer.confirm_all_done(now, program.index + 1)
+            return None
+        final_s = limit_s + self.overrun_limit_s()  # (a rest corrupted reports keep interrupting, a long program)
+        if now < final_s:
+            return final_s
+        self.view.messages.append(
+            f"{name} did not end in the {final_s - landed_s(program):.0f} s armctl waited for it (the arm still "
+            "working, or paused): the rest of the job was not sent, since on this arm a control frame "
+            "would cut the program short as it lands"
+            + (f"; once it has ended, --from-line {line} runs the rest"
+               if (line := getattr(self.view.next_statement, "line", None)) is not None else ""))
+        return Outcome.FRAMES_LOST if self.streamer.losses else Outcome.NO_CONFIRMATION
 
     def rest_proves_all_written(self, now: float) -> bool:
         """Every frame written has finished (``rest_proves_done_before`` leaves none unproven).
@@ -228,7 +292,10 @@ class JobEnd:
         streamer = self.streamer
         if streamer.losses:
             return Outcome.FRAMES_LOST
-        unproven = []
+        unproven = [f"no report showed {name} running (its run position never moved, nor the arm) in the "
+                    f"{limit_s:.0f} s armctl waits for an SD program: the job went on, and had it still been "
+                    "running, the control frame after it cut it short" for name, limit_s in self.programs_unseen]
+        probe = len(unproven)  # the reasons `armctl probe` answers come after these
         if not self.fifo_proven and (streamer.confirmed_by_time or streamer.confirmed_unseen):
             unproven.append(f"{_frames_not_seen(streamer)}, and {FIFO_UNMEASURED}")
         control_sent = self.written.control_sent
@@ -238,7 +305,8 @@ class JobEnd:
                             "not measured on this arm: one that acts on them as they land cuts short the move "
                             "before each, and rests at the last target all the same")
         if unproven:
-            self.view.messages.append(f"finished, unproven: {'; '.join(unproven)}; run `armctl probe` once")
+            hint = f"; {PROBE_HINT}" if len(unproven) > probe else ""
+            self.view.messages.append(f"finished, unproven: {'; '.join(unproven)}{hint}")
             return Outcome.UNPROVEN
         return Outcome.FINISHED
 
@@ -294,7 +362,7 @@ class JobEnd:
         written, readings = self.written, self.readings
         if not written.script_paused or readings.paused is not True or len(readings.pause_read_s) < 2:
             return False
-        return readings.pause_read_s[0] >= written.script_toggles[-1].wire_end_s + ARRIVAL_SLACK_S
+        return readings.pause_read_s[0] >= landed_s(written.script_toggles[-1])
 
     def held_by_script_pause(self, now: float) -> Outcome | float:
         """Held behind the script's own PAUSE: once the arm reports the pause, every frame written

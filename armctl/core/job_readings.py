@@ -16,6 +16,15 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
   than a reading's jitter (``TARGET_MM``, ``TARGET_DEG``: a reading's resolution, so the arm
   counts as at a target within them), or an SD program's run position advanced while the arm
   stood still.
+- **Worked** (``worked_after``): the reports prove the arm worked after a time — one kind's
+  readings (position, joints 1-3, joints 4-6), agreed by two reports in a row (armctl/core/evidence.py's
+  rule: corrupted reports never agree), came to a value more than a reading's jitter from the
+  one they agreed on before, and the arm was last read at that earlier value after that time (a
+  reading taken before it may be stale: the kinds come in turn, a rotation apart, and a move
+  that ended before may be read only after); or the SD program's run position, agreed so after
+  that time, is not the one agreed before (nothing but a program moves it).  What shows that an
+  SD program ran and ended (armctl/core/job_arrival.py ``program_ended``): a value agreed on is
+  one the arm stopped at.  A program that moves the arm at once shows by its run position alone.
 - **Motion** (``motion``): the position and joints alone (no PWM), with when they last changed
   and the latest reading before that which still differed from them — the window in which the
   arm stopped (``Arrival.done_at``).
@@ -27,6 +36,7 @@ job's own PAUSE frames.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import fields
 from operator import attrgetter
@@ -87,6 +97,11 @@ class Readings:
         self.moved_from: tuple | None = None  # the readings when they last changed by more than jitter
         self.run_position: float | None = None  # the SD program's run position last reported
         self.active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
+        self.work_s = -math.inf  # the arm worked after this time, by its reports (``worked_after``)
+        # kind → [the value two reports in a row last agreed on, when it was last read there before it
+        # changed (else its agreement's first report)]: ``_agreed``
+        self.agreed_values: dict = {}
+        self.run_position_read_s = 0.0  # when ``run_position`` was read
         self.reported: dict = {}  # kind → its readings (position: in the worktable, ``worktable_xyz``)
         self.pause_reports: deque = deque(maxlen=AGREEING_REPORTS)  # the last pause states reported
         self.pause_read_s: deque = deque(maxlen=AGREEING_REPORTS)  # ... and when they were read
@@ -94,12 +109,20 @@ class Readings:
     def take(self, kind: int, values: tuple, now: float) -> bool:
         """One kind's readings read at ``now``; True when they changed (or are the first read)."""
         reported, read_at = self.reported, self.read_at
-        changed = reported.get(kind) != values  # else so are the readings: ``rest`` and ``motion`` hold them
+        old = reported.get(kind)
+        changed = old != values  # else so are the readings: ``rest`` and ``motion`` hold them
         reported[kind] = values
-        before_s = read_at.get(kind) if changed else None  # the last reading of this kind that differed
+        before_s = read_at.get(kind)  # the last reading of this kind
         read_at[kind] = now
-        if not changed and self.rest is not None:
-            return False
+        agreed = self.agreed_values.get(kind) if kind != PAUSE_KIND else None
+        if not changed:  # two reports in a row agree: a new value agreed on may show work (``_agreed``)
+            if kind != PAUSE_KIND and (agreed is None or agreed[0] != values):
+                self._agreed(kind, values, before_s, slot_moved)
+            if self.rest is not None:
+                return False
+            before_s = None  # (the last reading of this kind that differed: none)
+        elif agreed is not None and old == agreed[0]:
+            agreed[1] = before_s  # it leaves the value agreed on: last read there then
         # One kind's values changed (or these are the first readings): the readings differ from
         # the last ``rest`` (it always holds the readings before this frame), and so does the
         # motion unless only the pause and PWM changed.
@@ -127,11 +150,32 @@ class Readings:
 
     def take_run_position(self, value: float, now: float) -> bool:
         """An SD program's run position; True when it advanced (the arm works, even standing still)."""
-        advanced = self.run_position is not None and value != self.run_position
+        before, before_s = self.run_position, self.run_position_read_s
+        advanced = before is not None and value != before
         if advanced:
             self.active_s = now
-        self.run_position = value
+        elif before is not None:
+            self._agreed(RUN_POSITION_KIND, value, before_s, _run_position_moved)
+        self.run_position, self.run_position_read_s = value, now
         return advanced
+
+    def _agreed(self, kind: int, values, first_s: float, moved) -> None:
+        """Two reports of ``kind`` in a row agree on ``values``, the first read at ``first_s``: if
+        that is a new value, the arm worked (``worked_after``) — after it was last read at the value
+        agreed before (position, joints), or, for the run position, which only a program moves,
+        after this one was first read."""
+        last = self.agreed_values.get(kind)
+        if last is not None and last[0] == values:
+            return  # (the same value, agreed again)
+        self.agreed_values[kind] = [values, first_s]  # (its first report: the one before this)
+        if last is not None and moved(kind, last[0], values):
+            since_s = first_s if kind == RUN_POSITION_KIND else last[1]
+            if since_s > self.work_s:
+                self.work_s = since_s
+
+    def worked_after(self, since_s: float) -> bool:
+        """The reports prove the arm worked after ``since_s`` (see "Worked" in the module docstring)."""
+        return self.work_s >= since_s
 
     @property
     def paused(self) -> bool | None:
@@ -152,7 +196,7 @@ class Readings:
         since = self.rest[1]
         recent = self.written.recent
         if recent:
-            since = max(since, recent[-1].wire_end_s + ARRIVAL_SLACK_S)
+            since = max(since, landed_s(recent[-1]))
         return since
 
     @property
@@ -163,6 +207,16 @@ class Readings:
     def joints(self) -> tuple:
         """The six joints as last reported (fewer while a half was never read)."""
         return (self.reported.get(1) or ()) + (self.reported.get(2) or ())
+
+
+def landed_s(sent) -> float:
+    """When a frame written has surely landed: its last byte left the wire, plus ``ARRIVAL_SLACK_S``."""
+    return sent.wire_end_s + ARRIVAL_SLACK_S
+
+
+def _run_position_moved(kind: int, old: float, new: float) -> bool:
+    """The run position changed (``_agreed``'s test for it; a program's position has no jitter)."""
+    return old != new
 
 
 def values_text(values) -> str:

@@ -78,6 +78,7 @@ class PacingStory:
             Evidence.TIME: f"even an arm {streamer.slowest_factor:g}x slower than the model has finished them "
                            "(time the arm was seen running)",
             Evidence.AT_REST: "the arm is at rest at the last target",
+            Evidence.PROGRAM_ENDED: "the arm worked after the SD program's frame landed, and rests since",
         }[evidence]
         _logger.info("t=%.2f s: evidence (%s): %s; frames known consumed: %d, through line %s",
                      now - self.view.started_s, evidence, how, streamer.consumed_lower_bound,

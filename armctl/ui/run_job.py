@@ -32,6 +32,7 @@ import click
 from ..errors import ArmctlError, ScriptError
 from ..errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS, UsageFailure, exit_code_for
 from ..host.jobflow import JobFailed
+from ..core.job_end import PROBE_HINT
 from ..core.protocol import describe
 from ..core.streamer import DEFAULT_LEAD_S
 
@@ -549,8 +550,12 @@ def _summary(result, view, wall_s: float, estimate, options: JobOptions, departu
         click.echo("finished: the arm finished the job")
         return result.exit_code
     if result.outcome == "finished, unproven":
-        click.echo("finished, unproven: the arm is at rest at the last target, but what proves the job ran rests on "
-                   "settings not measured on this arm (the note above); run `armctl probe` once")
+        if any(PROBE_HINT in message for message in result.messages):
+            click.echo("finished, unproven: the arm is at rest at the last target, but what proves the job ran rests on "
+                       f"settings not measured on this arm (the note above); {PROBE_HINT}")
+        else:
+            click.echo("finished, unproven: the arm is at rest at the last target, but its reports do not prove "
+                       "every frame ran (the note above)")
         return result.exit_code
     sent, done = result.last_line_sent, result.last_line_executed
     click.echo(f"last line sent: {sent if sent is not None else 'none'}")

@@ -146,6 +146,10 @@ class Streamer:
 
     begun_by_s = staticmethod(TimeBound.begun_by_s)
 
+    def program_time_unknown(self, command: Command) -> bool:
+        """Only the arm's reports can say when this SD program ended (``TimeBound.program_time_unknown``)."""
+        return self._bound.program_time_unknown(command)
+
     def wrote_control(self, now: float) -> None:
         """A frame that is not the job's (a pause toggle) went on the wire at ``now``: it holds
         the line for one frame time, as the job's frames do."""
@@ -156,8 +160,9 @@ class Streamer:
         ledger, bound = self._ledger, self._bound
         index = ledger.sent
         segment, wire_end = self._gate.take(command, now)
-        e_unknown = bound.moves_e_from_the_start(command, segment)
-        allowance_s = math.inf if e_unknown else bound.allowance_s(segment, index)
+        anywhere = bound.starts_where_a_program_left(command, segment)
+        time_unknown = bound.moves_e_from_the_start(command, segment) or bound.program_time_unknown(command)
+        allowance_s = math.inf if time_unknown else bound.allowance_s(segment, index, anywhere)
         previous = ledger.pending[-1] if ledger.pending else None
         certain_end_s = bound.chain(wire_end, segment.duration_s, allowance_s)
         frame = SentFrame(
@@ -165,8 +170,8 @@ class Streamer:
             certain_end_s=certain_end_s, chain_end_s=certain_end_s, group_index=index,
             motion_before_s=ledger.motion_sent_s, unknown_start_s=allowance_s,
             sure_before_s=ledger.sure_motion_sent_s, sure_s=0.0 if allowance_s else segment.duration_s,
-            timing_known=not e_unknown,  # (every path_known False frame has an allowance)
-            path_known=not (index > 0 and start_unknown(segment, self.kinematics_verified)),
+            timing_known=not time_unknown,  # (every path_known False frame has an allowance)
+            path_known=not (index > 0 and (anywhere or start_unknown(segment, self.kinematics_verified))),
         )
         self._estimate.written(frame, previous)
         bound.group_arc(frame, previous)
@@ -259,14 +264,16 @@ class Streamer:
         """Every frame written is known to have finished."""
         return not self._ledger.pending
 
-    def confirm_all_done(self, now: float | None = None, before: int | None = None) -> None:
+    def confirm_all_done(self, now: float | None = None, before: int | None = None,
+                         evidence: Evidence = Evidence.AT_REST) -> None:
         """The caller saw the arm at rest at the last frame's target: every frame written has
         run — except a trailing G300, which the arm holds until its G301 comes.  Sound only on
         the caller's proof (armctl/core/job.py): every status kind re-read unchanged, and no frame
         that moves nothing (where the arm rests too) left before the last motion unproven.
         With ``now`` (the proof taken mid-job, more to be written) the time bound's chain starts
         again there: it may have run to infinity behind an arc it cannot bound.  With ``before``
-        (mid-job too: the arm rests in that frame or later) only the frames before it."""
+        (mid-job too: the arm rests in that frame or later) only the frames before it.  ``evidence``:
+        the caller's proof, as the bound's evidence tells it (an SD program seen to end, ``PROGRAM_ENDED``)."""
         ledger = self._ledger
         pending = ledger.pending
         last = ledger.recent_sent[-1] if ledger.recent_sent else None  # the last frame written, pending or not
@@ -278,7 +285,7 @@ class Streamer:
                 len(pending) == 1 and isinstance(pending[0].command, ArcStart)):
             # a frame that leaves no trace (unless seen): the caller's proof of it is time
             ledger.consume_one(by_reports=pending[0].seen or pending[0].segment.moves_reported, at_rest=True)
-            ledger.bound_evidence = Evidence.AT_REST
+            ledger.bound_evidence = evidence
         if now is not None:
             self._bound.at_rest(now)
 

@@ -21,7 +21,7 @@ from __future__ import annotations
 import math
 
 from ..motion import MotionModel, Segment
-from ..protocol import ArcEnd, ArcStart, Command
+from ..protocol import ArcEnd, ArcStart, Command, RunProgram
 from .constants import ARRIVAL_SLACK_S, UNVERIFIED_FK_SHARE, frame_slack_s
 from .frames import Evidence, SentFrame
 from .geometry import TimeMemo, start_unknown, time_window
@@ -35,6 +35,8 @@ class TimeBound:
                  now: float) -> None:
         self.ledger, self.model, self.memo = ledger, model, memo
         self.kinematics_verified = model.profile.connector.kinematics_verified
+        self.control_on_arrival = model.profile.connector.control_on_arrival
+        self.program_left_arm = False  # a PROGRAM whose time is unknown was written, and no move since
         self.unknown_start_mm = UNVERIFIED_FK_SHARE * model.profile.workspace.reach_mm
         self.slowest_factor = slowest_factor
         self.tolerance = slowest_factor  # relative to the measured pace (``allow_pace``)
@@ -81,7 +83,7 @@ class TimeBound:
             else:
                 previous.certain_end_s = previous.chain_end_s  # the arm skips a G300 left alone
 
-    def allowance_s(self, segment: Segment, sent: int) -> float:
+    def allowance_s(self, segment: Segment, sent: int, anywhere: bool = False) -> float:
         """The time bound's allowance for a Cartesian move that starts where only the profile's
         kinematics say (the end of a joint move): with kinematics not verified on this arm, its
         true start may lie ``UNVERIFIED_FK_SHARE`` of the reach away, so the move may be that much
@@ -97,7 +99,11 @@ class TimeBound:
         the arm's own IK knows, anywhere within the joint limits (``joint_move_from_anywhere_s``);
         its end is exact, so its sightings hold (found: an arm 2x slower, links 5 % short, the
         probe's speed_tolerance 1.05 — a joint move the plan made 0 s long claimed done by time).
-        ``sent``: the frames written before this one."""
+        ``sent``: the frames written before this one; ``anywhere``: the move starts where an SD
+        program left the arm (``starts_where_a_program_left``): a joint move from anywhere, and a
+        Cartesian one with no bound at all, as an arc above."""
+        if anywhere:
+            return self.model.joint_move_from_anywhere_s(segment) if segment.kind == "joint" else math.inf
         if not start_unknown(segment, self.kinematics_verified):
             return 0.0
         if segment.kind == "joint":  # (and a fixed pose) from the end of a Cartesian move
@@ -123,6 +129,29 @@ class TimeBound:
         self.e_known = True
         start = segment.start
         return (start.e0_deg, start.e1_deg) != (command.e0_deg, command.e1_deg)
+
+    def program_time_unknown(self, command: Command) -> bool:
+        """Whether ``command`` runs an SD program (PROGRAM n) on an arm whose control frames act
+        as they land: the program runs for as long as it says, which armctl cannot see (the motion
+        model gives it none), and the next control frame would cut it short as it lands — so its
+        time is not known (``SentFrame.timing_known``) and time never confirms it.  The arm's
+        reports do: it worked after the frame landed and rests since (armctl/core/job_end.py
+        ``JobEnd.program_held``), or a later frame's sighting (the arm runs its frames in order).
+        On an arm whose control frames queue (H5) the model's time stands, as before."""
+        return self.control_on_arrival and isinstance(command, RunProgram)
+
+    def starts_where_a_program_left(self, command: Command, segment: Segment) -> bool:
+        """Whether this is the first move written after such a PROGRAM: it starts wherever the SD
+        program left the arm, which the plan cannot know (it has the arm where it was), so its path
+        is not the planned one and its time bound allows a start anywhere (``allowance_s``) — on
+        this arm the control frame after it would otherwise cut it short."""
+        if self.program_time_unknown(command):
+            self.program_left_arm = True
+            return False
+        if not self.program_left_arm or segment.kind not in ("joint", "line", "arc"):
+            return False
+        self.program_left_arm = False
+        return True
 
     # --- the running clock ----------------------------------------------------------------------
 
