@@ -60,7 +60,7 @@ def test_a_kind_not_reported_since_the_last_change_is_no_rest():
     while now < 1.5 * turn_s:
         now += 0.03
         report(job, now)
-        assert not job.arm_at_rest(now)
+        assert not job.arrival.arm_at_rest(now)
         assert not isinstance(job.next_action(now), Done)
     assert job.streamer.consumed_lower_bound == 0
     # Joints 4-6 read again, at the end of the turn: the readings changed there; once every kind
@@ -70,8 +70,8 @@ def test_a_kind_not_reported_since_the_last_change_is_no_rest():
     while now < changed_s + REST_CHECK_S:
         now += 0.03
         report(job, now, joints_high=after if now >= changed_s + REST_CHECK_S else None)
-        assert now >= changed_s + REST_CHECK_S or not job.arm_at_rest(now)
-    assert job.arm_at_rest(now)
+        assert now >= changed_s + REST_CHECK_S or not job.arrival.arm_at_rest(now)
+    assert job.arrival.arm_at_rest(now)
     assert job.next_action(now) == Done(Outcome.FINISHED)
     assert job.streamer.all_consumed
 

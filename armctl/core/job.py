@@ -435,11 +435,6 @@ class Job:
         self._write = None
         self.phase = _Phase.ABORTING
 
-    def arm_at_rest(self, now: float) -> bool:
-        """The arm reported the same position, joints and PWM for REST_CHECK_S and the estimate
-        says the job is over (``Arrival.arm_at_rest``)."""
-        return self.arrival.arm_at_rest(now)
-
     @property
     def arm_paused(self) -> bool | None:
         """The pause state when the last two pause reports agree (armctl/core/evidence.py ``agreed``)."""
@@ -487,6 +482,6 @@ def _control_action(job: Job, now: float) -> Write | Wait | None:
     if control.holds_feed:
         if job.phase is _Phase.DRAINING:
             job.end.restart(now)
-        job.end.held_by_pause_s = now  # an SD program's wait starts again from the resume
+        job.end.program.held_by_pause_s = now  # an SD program's wait starts again from the resume
         return Wait(None)  # until the arm reports (pausing → paused) or the user resumes
     return None

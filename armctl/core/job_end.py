@@ -21,14 +21,9 @@ concluded, from what evidence:
   joint end) never holds a job for ever.  Where a run of frames before the last move may hold
   the arm at that same target (``resting_before_last_move``), the rest proves the frames before
   the first such run (``rest_proves_done_before``) and time the rest.
-- **An SD program held mid-job** (``program_held``; an arm whose control frames act as they
-  land: time never confirms its PROGRAM frame, ``Streamer.program_time_unknown``): the program
-  ran and ended once the arm worked after the frame landed and rests since
-  (``Arrival.program_ended``, wherever it rests); the frames after it wait for that.  No report
-  showing it at work holds the job no longer than an SD program is waited for at the end of a
-  job (``overrun_limit_s``, from its landing or the user's resume): at rest by then or later,
-  the job goes on and can end only ``finished, unproven``, naming the PROGRAM; neither proof
-  nor such a rest within as long again, it ends "no confirmation" (a program still working).
+- **An SD program held mid-job** (an arm whose control frames act as they land): its own part,
+  armctl/core/job_program.py; a program no report showed running leaves the job only
+  ``finished, unproven``.
 - **The script's own PAUSE**: nothing is written behind it; once two agreeing reports read
   after it landed say the arm is paused, every frame written ran and the job ends PAUSED; an
   arm that does not report the pause in the time its queue takes ends "no confirmation".
@@ -40,14 +35,13 @@ concluded, from what evidence:
 
 from __future__ import annotations
 
-import math
 from enum import StrEnum
 
 from .evidence import REST_CHECK_S
+from .job_program import ProgramWait
 from .job_readings import landed_s, moves_arm, values_text
 from .protocol import ArcStart, PauseToggle
 from .streamer import ARRIVAL_SLACK_S, LOSS_SLACK_S, ROTATION_S
-from .streamer.frames import Evidence, where
 
 # Why a job whose frames only time (or a later frame's report) confirmed proves nothing on an
 # arm whose FIFO size nobody measured; the resume of its log says it too (host/arm_worker.py)
@@ -88,8 +82,7 @@ class JobEnd:
         self.deadline_s = 0.0
         self.overran = False
         self.script_pause_deadline_s: float | None = None  # held behind one: how long its pause is waited for
-        self.programs_unseen: list = []  # PROGRAM frames the job went on after with no report of their work
-        self.held_by_pause_s = -math.inf  # the last time the user's pause held the job (``program_held``)
+        self.program = ProgramWait(view, streamer, arrival, self.overrun_limit_s)  # armctl/core/job_program.py
 
     def settle_deadline(self, now: float) -> float:
         """How long the end is waited for: the motion queued at the slowest pace, and no earlier
@@ -140,19 +133,24 @@ class JobEnd:
                 settle_until.append(max(sent.certain_end_s for sent in resting) + SETTLE_SLACK_S)
             limit_s = min(self.deadline_s + self.overrun_limit_s(), max(settle_until, default=now))
             if now >= limit_s:
-                view.messages.append(self.why_not_finished())
-                return Outcome.FRAMES_LOST if self.streamer.losses else Outcome.NO_CONFIRMATION
+                return self.unconfirmed(self.why_not_finished())
         return self.next_change_s(now, limit_s)
+
+    def unconfirmed(self, why: str) -> Outcome:
+        """The job ends without the proof it waited for, saying ``why``."""
+        self.view.messages.append(why)
+        return Outcome.FRAMES_LOST if self.streamer.losses else Outcome.NO_CONFIRMATION
 
     def prove_held(self, now: float) -> Outcome | float | None:
         """Held mid-job (only evidence lets the next frame go): confirm what the arm's rest proves —
-        an SD program at the head by its own proof (``program_held``), else the frames written
+        an SD program at the head by its own proof (armctl/core/job_program.py), else the frames written
         (``rest_proves_done_before``), up to such a program.  The job's outcome when it ends here,
         a time to look again at (the program's limit), or None."""
         streamer = self.streamer
         head = streamer.pending[0]
         if streamer.program_time_unknown(head.command):
-            return self.program_held(head, now)
+            answer = self.program.held(head, now)
+            return self.unconfirmed(answer) if isinstance(answer, str) else answer
         before = self.rest_proves_done_before(now)
         if before is None:
             return None
@@ -162,36 +160,6 @@ class JobEnd:
         if before > head.index:
             streamer.confirm_all_done(now, before)  # (the time bound's chain restarts at now)
         return None
-
-    def program_held(self, program, now: float) -> Outcome | float | None:
-        """The job held behind the SD program of ``program`` (a PROGRAM frame at the head): confirmed
-        once the arm's reports show it ran and ended (``Arrival.program_ended``); with no report of
-        its work ``overrun_limit_s`` after it landed (or the user resumed), once the arm is at rest,
-        confirmed unproven (``programs_unseen``) — the job goes on rather than wait for ever;
-        neither by as long again, the job ends "no confirmation".  Else the time to look again."""
-        arrival, readings = self.arrival, self.readings
-        if arrival.program_ended(program, now):
-            program.seen = True  # its reports: it ran
-            self.streamer.confirm_all_done(now, program.index + 1, Evidence.PROGRAM_ENDED)
-            return None
-        limit_s = max(landed_s(program), self.held_by_pause_s) + self.overrun_limit_s()  # (a pause's time not counted)
-        if now < limit_s:
-            return limit_s
-        name = f"PROGRAM {program.command.program} at {where(program)}"
-        if not readings.worked_after(landed_s(program)) and arrival.arm_at_rest(now) and readings.paused is False:
-            self.programs_unseen.append((name, self.overrun_limit_s()))
-            self.streamer.confirm_all_done(now, program.index + 1)
-            return None
-        final_s = limit_s + self.overrun_limit_s()  # (a rest corrupted reports keep interrupting, a long program)
-        if now < final_s:
-            return final_s
-        self.view.messages.append(
-            f"{name} did not end in the {final_s - landed_s(program):.0f} s armctl waited for it (the arm still "
-            "working, or paused): the rest of the job was not sent, since on this arm a control frame "
-            "would cut the program short as it lands"
-            + (f"; once it has ended, --from-line {line} runs the rest"
-               if (line := getattr(self.view.next_statement, "line", None)) is not None else ""))
-        return Outcome.FRAMES_LOST if self.streamer.losses else Outcome.NO_CONFIRMATION
 
     def rest_proves_all_written(self, now: float) -> bool:
         """Every frame written has finished (``rest_proves_done_before`` leaves none unproven).
@@ -292,9 +260,7 @@ class JobEnd:
         streamer = self.streamer
         if streamer.losses:
             return Outcome.FRAMES_LOST
-        unproven = [f"no report showed {name} running (its run position never moved, nor the arm) in the "
-                    f"{limit_s:.0f} s armctl waits for an SD program: the job went on, and had it still been "
-                    "running, the control frame after it cut it short" for name, limit_s in self.programs_unseen]
+        unproven = self.program.unproven()
         probe = len(unproven)  # the reasons `armctl probe` answers come after these
         if not self.fifo_proven and (streamer.confirmed_by_time or streamer.confirmed_unseen):
             unproven.append(f"{_frames_not_seen(streamer)}, and {FIFO_UNMEASURED}")

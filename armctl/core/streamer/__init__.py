@@ -191,7 +191,7 @@ FIFO.  Each part may conclude only what its evidence says; this is the whole lis
    c. **The arm at rest** (``Streamer.confirm_all_done``): on the caller's proof (armctl/core/job.py:
       every status kind re-read unchanged at the last frame's target), every frame written, or
       those before ``before`` — never a trailing G300.  Held behind a PROGRAM whose time is
-      unknown, the caller's proof is its own (armctl/core/job_end.py ``program_held``): the arm
+      unknown, the caller's proof is its own (armctl/core/job_program.py): the arm
       worked after the frame landed — a kind's reports agreed on a new value, two in a row
       (armctl/core/job_readings.py ``worked_after``) — and is at rest since, wherever; that
       confirms the frames through it.

@@ -34,7 +34,7 @@ class Evidence(StrEnum):
     JOINTS = "joints"  # two agreeing joint-half reports on a later joint or still frame
     TIME = "time"  # even an arm slowest_factor times slower than the model has finished them
     AT_REST = "at rest"  # the caller saw the arm at rest at the last target (confirm_all_done)
-    PROGRAM_ENDED = "program ended"  # the caller saw the arm work after a PROGRAM landed, then rest (job_end.program_held)
+    PROGRAM_ENDED = "program ended"  # the caller saw the arm work after a PROGRAM landed, then rest (job_program.ProgramWait)
 
 
 @dataclass(slots=True)

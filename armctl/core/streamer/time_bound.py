@@ -136,7 +136,7 @@ class TimeBound:
         model gives it none), and the next control frame would cut it short as it lands — so its
         time is not known (``SentFrame.timing_known``) and time never confirms it.  The arm's
         reports do: it worked after the frame landed and rests since (armctl/core/job_end.py
-        ``JobEnd.program_held``), or a later frame's sighting (the arm runs its frames in order).
+        ``ProgramWait.held``), or a later frame's sighting (the arm runs its frames in order).
         On an arm whose control frames queue (H5) the model's time stands, as before."""
         return self.control_on_arrival and isinstance(command, RunProgram)
 
