@@ -11,6 +11,10 @@ show the program at work holds the job no longer than the engine waits for an SD
 the end of a job (``JobEnd.overrun_limit_s``); the job then goes on and ends ``finished,
 unproven``, saying which PROGRAM no report showed running.
 
+Found next: on the document's arm (control frames queue) a long program held the FIFO while
+time took it for 0 s, and the host wrote on into a full FIFO.  So time never confirms a PROGRAM
+on any arm (armctl/core/job_program.py).
+
 Judged by the simulator's own record (armctl/sim/program.py: a program holds the arm for
 ``PROGRAM_RUN_S`` without moving it, its run position advancing), in this process and through
 the installed command in a fresh one, for both control-frame modes.
@@ -107,8 +111,8 @@ def test_a_program_no_report_shows_holds_the_job_only_a_bounded_time(tmp_path, m
 
 
 def test_a_queued_arm_runs_the_job_as_before(tmp_path, monkeypatch):
-    # Nothing changes on the document's arm: the PROGRAM frame's time is still the model's (0),
-    # the frames behind it wait in the FIFO, and the job ends as it did (arm time 6.4 s)
+    # On the document's arm the frames behind the PROGRAM wait in the FIFO: a job that cannot
+    # fill it runs as it did (arm time 6.4 s), time confirming nothing it did not before
     result, log = _run_here("queued", JOB, tmp_path, monkeypatch)
     assert result.exit_code == 0, result.output
     assert "arm time: 6.4 s" in result.stdout, result.stdout
@@ -270,3 +274,6 @@ def test_a_long_program_on_a_queued_arm_never_lets_the_fifo_overflow(tmp_path, m
     assert [e.outcome for e in arm.execution_log] == [DONE] * 404
     assert result.exit_code == 0, result.output
     assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
+    # the arm time ran far over the estimate, which cannot know the program's 30 s: no note blames
+    # an unmeasured speed_tolerance for it
+    assert "may have slowed" not in result.output, result.output

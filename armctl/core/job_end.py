@@ -21,7 +21,7 @@ concluded, from what evidence:
   joint end) never holds a job for ever.  Where a run of frames before the last move may hold
   the arm at that same target (``resting_before_last_move``), the rest proves the frames before
   the first such run (``rest_proves_done_before``) and time the rest.
-- **An SD program held mid-job** (an arm whose control frames act as they land): its own part,
+- **An SD program held mid-job** (time never confirms a PROGRAM): its own part,
   armctl/core/job_program.py; a program no report showed running leaves the job only
   ``finished, unproven``.
 - **The script's own PAUSE**: nothing is written behind it; once two agreeing reports read

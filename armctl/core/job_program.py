@@ -1,10 +1,13 @@
-"""An SD program held mid-job: when the frames after its PROGRAM frame may go, on an arm whose
-control frames act as they land (H5 "arrival"), and what the job may claim of it.
+"""An SD program held mid-job: when the frames after its PROGRAM frame may go, and what the job
+may claim of it.
 
 Strategy: the host cannot see inside an SD program, so time never confirms its PROGRAM frame
-(``Streamer.program_time_unknown``), and rule (c) of the streamer (armctl/core/streamer/__init__.py)
-holds the next control frame, which would cut the program short as it lands, until this part
-says the program is over.  What may be concluded, from what evidence:
+(``Streamer.program_time_unknown``).  On an arm whose control frames queue (H5) the program holds
+the FIFO while it runs, so the FIFO's bound holds the host once the frames behind it fill it; on
+one where they act as they land (``control_frames = "arrival"``), rule (c) of the streamer
+(armctl/core/streamer/__init__.py) holds the next control frame, which would cut the program
+short.  Either way, unless a later frame's sighting confirms the program first, the job waits
+for this part to say it is over.  What may be concluded, from what evidence:
 
 - **Ran and ended** (``Arrival.program_ended``): the arm worked after the frame landed — a kind's
   reports agreed on a new value, two in a row (armctl/core/job_readings.py ``worked_after``), or
@@ -62,9 +65,10 @@ class ProgramWait:
         if now < final_s:
             return final_s
         line = getattr(self.view.next_statement, "line", None)
+        why = ("on this arm a control frame would cut the program short as it lands" if self.streamer.control_on_arrival
+               else "the frames written after it fill the arm's FIFO until it ends")
         return (f"{name} did not end in the {final_s - landed:.0f} s armctl waited for it (the arm still "
-                "working, or paused): the rest of the job was not sent, since on this arm a control frame "
-                "would cut the program short as it lands"
+                f"working, or paused): the rest of the job was not sent, since {why}"
                 + (f"; once it has ended, --from-line {line} runs the rest" if line is not None else ""))
 
     def unproven(self) -> list[str]:

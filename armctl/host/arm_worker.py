@@ -16,6 +16,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import IO, Any, Callable
 
+from ..core.estimate import SD_PROGRAM_NOTE
 from .jobflow import JobFailed
 from .results import Progress, RunResult
 
@@ -235,8 +236,9 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
         detach(control)
         link.on_status = None
     view = runner.view
-    time_held_overrun = None  # (see calibration.SLOWED_OVERRUN)
-    if view.arm_time_s is not None and job.estimate.job_s > 0 and runner.streamer.capacity_held and view.frames_by_time:
+    time_held_overrun = None  # (see calibration.SLOWED_OVERRUN; an SD program's own time is not in the estimate)
+    if (view.arm_time_s is not None and job.estimate.job_s > 0 and runner.streamer.capacity_held and view.frames_by_time
+            and SD_PROGRAM_NOTE not in job.estimate.notes):
         time_held_overrun = view.arm_time_s / job.estimate.job_s - 1
     view.messages.extend(stale_notes(arm.profile, link.url, runner.streamer.slowest_proven,
                                      outcome == "frames may have been lost", time_held_overrun))

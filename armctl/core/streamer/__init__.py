@@ -44,9 +44,9 @@ left the wire, and two views of the arm:
     planned: a line by at most its start's error, allowed for; an arc without bound, so time
     never confirms it (``TimeBound.allowance_s``) — a later frame's sighting or the arm at rest does;
     nor the first move that sets E0/E1, which no status reports: from where they stood, its time
-    may be any (``TimeBound.moves_e_from_the_start``; no pace is measured on it either); nor, on
-    an arm whose control frames act as they land, a PROGRAM frame, whose SD program runs as long
-    as it says (``TimeBound.program_time_unknown``), and the first move after it starts where
+    may be any (``TimeBound.moves_e_from_the_start``; no pace is measured on it either); nor a
+    PROGRAM frame, whose SD program runs as long as it says while the frames behind it wait in
+    the FIFO (``TimeBound.program_time_unknown``), and the first move after it starts where
     the program left the arm (``TimeBound.starts_where_a_program_left``: a joint move from
     anywhere, a Cartesian one never by time; its path is not the planned one).
   Lost or corrupted status frames can only hold the bound back, i.e. make it more careful.
@@ -185,13 +185,13 @@ FIFO.  Each part may conclude only what its evidence says; this is the whole lis
       pace (``allow_pace``); it tightens only on an agreed sighting that frame k has begun, from
       the least fraction of k's path both reports allow (``restart``), or on the arm seen at
       rest mid-job (``at_rest``).  Never on time: a frame whose time may be any (an arc from an
-      unverified start, the first move of E0/E1, a PROGRAM on an arm whose control frames act
-      as they land and a Cartesian move after it: deadline infinite), a G300 before its G301 lands, a frame a RESET CONNECTOR
+      unverified start, the first move of E0/E1, a PROGRAM and a Cartesian move
+      after it: deadline infinite), a G300 before its G301 lands, a frame a RESET CONNECTOR
       may have cleared, and nothing at all once the FIFO may have been cleared (``cleared``).
    c. **The arm at rest** (``Streamer.confirm_all_done``): on the caller's proof (armctl/core/job.py:
       every status kind re-read unchanged at the last frame's target), every frame written, or
-      those before ``before`` — never a trailing G300.  Held behind a PROGRAM whose time is
-      unknown, the caller's proof is its own (armctl/core/job_program.py): the arm
+      those before ``before`` — never a trailing G300.  Held behind a PROGRAM (its time
+      unknown), the caller's proof is its own (armctl/core/job_program.py): the arm
       worked after the frame landed — a kind's reports agreed on a new value, two in a row
       (armctl/core/job_readings.py ``worked_after``) — and is at rest since, wherever; that
       confirms the frames through it.

@@ -35,8 +35,7 @@ class TimeBound:
                  now: float) -> None:
         self.ledger, self.model, self.memo = ledger, model, memo
         self.kinematics_verified = model.profile.connector.kinematics_verified
-        self.control_on_arrival = model.profile.connector.control_on_arrival
-        self.program_left_arm = False  # a PROGRAM whose time is unknown was written, and no move since
+        self.program_left_arm = False  # a PROGRAM was written, and no move since
         self.unknown_start_mm = UNVERIFIED_FK_SHARE * model.profile.workspace.reach_mm
         self.slowest_factor = slowest_factor
         self.tolerance = slowest_factor  # relative to the measured pace (``allow_pace``)
@@ -131,20 +130,22 @@ class TimeBound:
         return (start.e0_deg, start.e1_deg) != (command.e0_deg, command.e1_deg)
 
     def program_time_unknown(self, command: Command) -> bool:
-        """Whether ``command`` runs an SD program (PROGRAM n) on an arm whose control frames act
-        as they land: the program runs for as long as it says, which armctl cannot see (the motion
-        model gives it none), and the next control frame would cut it short as it lands — so its
-        time is not known (``SentFrame.timing_known``) and time never confirms it.  The arm's
-        reports do: it worked after the frame landed and rests since (armctl/core/job_end.py
-        ``ProgramWait.held``), or a later frame's sighting (the arm runs its frames in order).
-        On an arm whose control frames queue (H5) the model's time stands, as before."""
-        return self.control_on_arrival and isinstance(command, RunProgram)
+        """Whether ``command`` runs an SD program (PROGRAM n): the program runs for as long as it
+        says, which armctl cannot see (the motion model gives it none), so its time is not known
+        (``SentFrame.timing_known``) and time never confirms it — on an arm whose control frames
+        queue (H5) the program holds the FIFO meanwhile (a bound that took it for 0 s let the host
+        write on into a full FIFO), and on one where they act as they land the next control frame
+        would cut it short.  The arm's reports confirm it: a later frame's sighting (the arm runs
+        its frames in order), or it worked after the frame landed and rests since
+        (armctl/core/job_program.py)."""
+        return isinstance(command, RunProgram)
 
     def starts_where_a_program_left(self, command: Command, segment: Segment) -> bool:
-        """Whether this is the first move written after such a PROGRAM: it starts wherever the SD
+        """Whether this is the first move written after a PROGRAM: it starts wherever the SD
         program left the arm, which the plan cannot know (it has the arm where it was), so its path
-        is not the planned one and its time bound allows a start anywhere (``allowance_s``) — on
-        this arm the control frame after it would otherwise cut it short."""
+        is not the planned one and its time bound allows a start anywhere (``allowance_s``): a
+        bound from the planned start could count it done while it still runs (and, on an arm
+        whose control frames act as they land, let the control frame after it cut it short)."""
         if self.program_time_unknown(command):
             self.program_left_arm = True
             return False
