@@ -254,8 +254,9 @@ def test_a_program_that_moves_the_arm_is_waited_for_and_so_is_the_move_after_it(
         assert result.stdout.splitlines()[-1] == "finished: the arm finished the job", result.output
 
 
-def test_a_long_program_on_a_queued_arm_never_lets_the_fifo_overflow(tmp_path, monkeypatch):
-    # The document's arm (H5: control frames queue): a 30 s SD program, then 400 short moves.
+@pytest.mark.parametrize("mode", MODES)
+def test_a_long_program_never_lets_the_fifo_overflow(mode, tmp_path, monkeypatch):
+    # Found on the document's arm (H5: control frames queue): a 30 s SD program, then 400 short moves.
     # The program holds the FIFO; time said it took the model's 0 s, so the host counted the
     # moves behind it done and wrote on: 201 frames dropped, "last line known executed: 405" of 404 frames.
     # Now time never confirms a PROGRAM on any arm: the FIFO bound holds the host until the
@@ -264,12 +265,12 @@ def test_a_long_program_on_a_queued_arm_never_lets_the_fifo_overflow(tmp_path, m
     script = tmp_path / "program_then_moves.txt"
     script.write_text("\n".join(["POSE 0", "POSE 1", "PROGRAM 1", "G90", "G1 X250 Y-50 Z150 A180 B0 C0 F3000 S1000"]
                                 + [f"G1 Y{-49 if k % 2 == 0 else -50} F3000" for k in range(400)]) + "\n")
-    _profile_says("queued", tmp_path)
+    _profile_says(mode, tmp_path)
     monkeypatch.chdir(tmp_path)
     ports = _open_one_arm(monkeypatch)
-    result = CliRunner().invoke(main, ["run", str(script), "--no-live", "--port", _url("queued")],
+    result = CliRunner().invoke(main, ["run", str(script), "--no-live", "--port", _url(mode)],
                                 env={"ARMCTL_PORT": None})
-    arm = ports[_url("queued")].model
+    arm = ports[_url(mode)].model
     assert arm.frames_dropped == 0, result.output
     assert [e.outcome for e in arm.execution_log] == [DONE] * 404
     assert result.exit_code == 0, result.output
