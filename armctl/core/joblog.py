@@ -21,8 +21,9 @@ pure data out, no I/O here:
 
 ``read_resume_log`` trusts only the longest intact prefix: a damaged last line without its
 line break is the tear a crash leaves (a record made durable before its frame always ends with
-one); any other damaged record — a complete line, or one followed by intact records — is not a
-crash cut and the resume is refused (``JournalDamaged``, exit 1).  Records are checked for type
+one); any other damaged record — a complete line, one followed by intact records, or a whole
+record followed by bytes other than its line break (a flipped bit there: its frame was written) —
+is not a crash cut and the resume is refused (``JournalDamaged``, exit 1).  Records are checked for type
 and consistency before use (each frame's ``next`` is the following frame's ``at``; no progress
 claims a frame the log has no record of).  Logs without checksums (written before format 2)
 are refused: nothing in them tells a cut from a corrupted record.
@@ -291,8 +292,12 @@ class _Reader:
     def point(self, notes: tuple) -> ResumePoint:
         header = self.header
         if header is None:
-            raise ResumeRefused("it has no job record: its run stopped before the job began, so no frame of the job "
-                                "was sent (run the job from its start), or an armctl without --resume wrote it")
+            # that run may itself have been a resume, or have started at a --from-line: "from the
+            # start" would run again the lines an earlier run executed
+            raise ResumeRefused("it has no job record: the run that wrote it stopped before its first frame, so no "
+                                "frame of the job was sent (or an armctl without --resume wrote it): start again the "
+                                "way that run started — from its start, at its --from-line, or with --resume and the "
+                                "log that run resumed")
         if header.get("sha256") != script_digest(self.data):  # the last job it records (runs may be appended)
             logged = header.get("script")
             same = "the same name" if logged == self.name else f"{logged!r}"
@@ -348,10 +353,25 @@ def _damaged(reader: _Reader, line: str, number: int, last: bool) -> ResumePoint
                                 "in it tells a crash's cut from a corrupted record; check the arm and continue by "
                                 "hand with --from-line")
         raise ResumeRefused(f"line {number} is not an intact journal record: not a `run --log` file")
-    if last:
+    if last and not _sealed_then_more(line):
         return reader.point(("the log's last line is torn (the crash's cut): ignored",))
+    if last:
+        raise reader.bad(number, "a whole record followed by other bytes where its line break belongs: the line "
+                                 "break is damaged, not the crash's cut")
     raise reader.bad(number, "the record is damaged (its checksum does not match) and is not the crash's cut "
                              "(a complete line)")
+
+
+def _sealed_then_more(line: str) -> bool:
+    """An intact record followed by something other than its line break: a cut leaves a strict
+    prefix of a record (never a whole one with a byte after it), or a whole one followed only by
+    NUL bytes (blocks the file system allocated and never wrote).  A flipped bit in the line
+    break of the log's last record reads so — and that record's frame was written."""
+    try:
+        _, end = json.JSONDecoder().raw_decode(line)
+    except (ValueError, RecursionError):
+        return False
+    return unseal(line[:end]) is not None and line[end:].strip("\0") != ""
 
 
 def _old_record(line: str) -> bool:
