@@ -10,6 +10,11 @@ users meet it: each fault found, its reproduction kept as a test, and the sweeps
    by the arm — was resumed again (a PWM-only line, or the first line, ran twice).  A torn line
    is a strict prefix of a record: an intact record followed by anything but the NUL bytes a
    file system may leave after a cut is damage, refused (exit 1).
+3. ``--resume LOG`` of a job still running (the log locked by the armctl writing it) read a
+   log that was still growing: through a port that serves one client after another
+   (``armctl sim --tcp``, a network serial server) it waited for the job to end, then resumed
+   at a line the still-running job had already sent: lines ran twice.  Now refused, exit 2,
+   nothing sent.
 4. Sweeps that found nothing: a crash log cut at every byte offset and with one bit flipped in
    every byte is refused (an ``ArmctlError``) or resumed at exactly the right line.
 """
@@ -110,6 +115,49 @@ def test_the_crashs_cut_after_a_whole_record_still_resumes(pwm_crashes):
     # a record whose own line break never reached the disk: not durable, so its frame was not written
     assert _sound(crash, durable + rest[:rest.index(b"\n")]) == "resumed"
     assert _sound(crash, durable + rest[:rest.index(b"\n")] + b"\0\0") == "resumed"
+
+
+# --- 3. a log another armctl is still writing ---------------------------------------------------
+
+
+def _hold_lock(log: Path):
+    """A process that holds ``log``'s lock as ``armctl run --log`` does while its job runs."""
+    holder = subprocess.Popen([sys.executable, "-c", (
+        "import fcntl, sys, time\n"
+        f"log = open({str(log)!r}, 'a')\n"
+        "fcntl.flock(log.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)\n"
+        "print('locked', flush=True)\n"
+        "time.sleep(60)\n")], stdout=subprocess.PIPE, text=True)
+    assert holder.stdout.readline() == "locked\n"
+    return holder
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="no flock")
+def test_resuming_a_log_whose_job_still_runs_is_refused_before_the_port(tmp_path, pwm_crashes):
+    crash = pwm_crashes[2]
+    log = tmp_path / "running.log"
+    log.write_bytes(crash.log)
+    holder = _hold_lock(log)
+    try:
+        done = subprocess.run([*ARMCTL, "run", str(crash.script), "--port", "sim://?clock=virtual", "--no-live",
+                               "--resume", str(log)], capture_output=True, text=True, timeout=60, cwd=tmp_path,
+                              env=_env())
+        from armctl import Arm
+
+        with Arm.open(port="sim://?clock=virtual") as arm:  # the API reads the resume log the same way
+            with pytest.raises(ResumeRefused, match="still running"):
+                arm.run(crash.script, resume=log)
+            assert len(arm._link.port.model.frames_received) == 0
+    finally:
+        holder.kill()
+        holder.wait()
+    assert done.returncode == 2, done.stderr
+    assert "Traceback" not in done.stderr
+    assert "still running" in done.stderr and "using the built-in simulator" not in done.stderr, done.stderr
+    # once that job ended (its lock gone), the same resume goes on
+    again = subprocess.run([*ARMCTL, "run", str(crash.script), "--port", "sim://?clock=virtual", "--no-live",
+                            "--resume", str(log)], capture_output=True, text=True, timeout=60, cwd=tmp_path, env=_env())
+    assert "still running" not in again.stderr and "Traceback" not in again.stderr, again.stderr
 
 
 # --- 4. sweeps: every byte offset, every byte flipped -------------------------------------------

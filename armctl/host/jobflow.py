@@ -265,11 +265,33 @@ def read_resume_point(log, script, from_line: int = 1):
     name = str(log)
     try:  # bounded: an endless file (/dev/zero) is an error, not a hang
         text = read_file_bounded(name, f"--resume {name}").decode("utf-8", errors="replace")
+        if journal_in_use(name):  # (a regular file: read_file_bounded refuses anything else)
+            raise ResumeRefused("the job it records is still running: another armctl holds the lock a run keeps on "
+                                "its --log, and the log is still growing; let that job end, or stop it (Ctrl-C), "
+                                "then resume")
         return read_resume_log(text, script.name, script.data)
     except ResumeRefused as error:
         raise ResumeRefused(f"--resume {name}: {error}") from None
     except OSError as error:
         raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
+
+
+def journal_in_use(path: str) -> bool:
+    """Another process holds the lock ``armctl run --log`` keeps on its log while its job runs
+    (armctl/ui/run_job.py, ``_locked``): that job is not over, whatever its log says yet.  False
+    where nothing can be locked (no fcntl, a file system without locks)."""
+    try:
+        import fcntl
+    except ImportError:
+        return False
+    try:
+        with open(path, "rb") as probe:
+            fcntl.flock(probe.fileno(), fcntl.LOCK_SH | fcntl.LOCK_NB)  # released as the file closes
+    except BlockingIOError:
+        return True
+    except OSError:  # ENOLCK, EOPNOTSUPP…: as a run that could not lock its log
+        return False
+    return False
 
 
 def same_journal(log, resume) -> bool:
