@@ -15,6 +15,10 @@ users meet it: each fault found, its reproduction kept as a test, and the sweeps
    (``armctl sim --tcp``, a network serial server) it waited for the job to end, then resumed
    at a line the still-running job had already sent: lines ran twice.  Now refused, exit 2,
    nothing sent.
+5. A resume that continues at the first line of a repeat block (no job starts inside one, as
+   ``--from-line``: documented) said only "the log and the arm's report prove every line before
+   it ran", while the passes already done ran again (9 frames of a 26-frame job, through
+   ``armctl sim --pty``): it now names the lines that run again.
 4. Sweeps that found nothing: a crash log cut at every byte offset and with one bit flipped in
    every byte is refused (an ``ArmctlError``) or resumed at exactly the right line.
 """
@@ -158,6 +162,53 @@ def test_resuming_a_log_whose_job_still_runs_is_refused_before_the_port(tmp_path
     again = subprocess.run([*ARMCTL, "run", str(crash.script), "--port", "sim://?clock=virtual", "--no-live",
                             "--resume", str(log)], capture_output=True, text=True, timeout=60, cwd=tmp_path, env=_env())
     assert "still running" not in again.stderr and "Traceback" not in again.stderr, again.stderr
+
+
+# --- 5. a resume that starts a repeat block again says so -------------------------------------
+
+LOOP = """\
+G1 X220 Y0 Z200 A180 B0 C0 S1000 F3000
+O<a> repeat [6]
+  G1 X240 Y0
+  G1 X240 Y20
+  G1 X220 Y20
+  G1 X220 Y0
+O<a> endrepeat
+G1 X260 Y0
+"""
+
+
+@pytest.mark.parametrize("n", [1, 2, 10, 13])
+def test_a_resume_that_starts_a_repeat_block_again_says_which_lines_run_again(tmp_path, n):
+    """The job killed in pass 3 of its block (after 10 frames): the resume continued at line 2,
+    the block's first line — as documented — but said only "the log and the arm's report prove
+    every line before it ran"; 9 frames of lines 3-6 then ran a second time, unsaid."""
+    from armctl import Arm
+    from armctl.host.arm_worker import JobObserver
+
+    from journal_crash import crash_into, job_commands, ran
+
+    script, log = tmp_path / "loop.txt", tmp_path / "crash.log"
+    script.write_text(LOOP)
+    notes: list[str] = []
+
+    class Notes(JobObserver):
+        def note(self, text: str) -> None:
+            notes.append(text)
+
+    with Arm.open(port="sim://?clock=virtual") as arm:
+        crash_into(arm, script, n, log)
+        before = ran(arm)
+        result = arm.run(script, resume=log, observer=Notes())
+        after = ran(arm)
+    line = int(re.search(r"resuming \S+ at line (\d+)", " ".join(notes)).group(1))
+    assert after == before + job_commands(script, line) and result.frames_sent == len(job_commands(script, line))
+    said = " ".join(notes)
+    assert line == 2
+    if n == 1:  # before the block: nothing runs twice, nothing said
+        assert "run again" not in said, said
+    else:
+        assert f"lines 2–{3 if n == 2 else 6} of the passes already done run again" in said, said
 
 
 # --- 4. sweeps: every byte offset, every byte flipped -------------------------------------------

@@ -145,11 +145,16 @@ class ResumePoint:
     def line_for(self, position_mm, joints_deg) -> int | None:
         """The line to continue at, given where the arm reports it rests now; None when every
         line already ran; ``NotProven`` when the report and the log prove no single line."""
+        return self.after(self.frames_run(position_mm, joints_deg))
+
+    def frames_run(self, position_mm, joints_deg) -> int:
+        """How many of the log's frames ran, given where the arm reports it rests now;
+        ``NotProven`` when the report and the log prove no single count."""
         written = len(self.frames)
         if written == 0:
-            return self.from_line  # nothing was written: a frame is written only after its record
+            return 0  # nothing was written: a frame is written only after its record
         if self.done == written:
-            return self.frames[-1].next  # the arm's reports proved every frame written done
+            return written  # the arm's reports proved every frame written done
         if self.cleared is not None:
             raise NotProven(f"{self.cleared}, so the frames after the last one the arm's reports proved done "
                             f"({self.done} of {written} written) may or may not have run: armctl cannot prove "
@@ -157,7 +162,7 @@ class ResumePoint:
         first = max(self.confirmed, self.done)
         candidates = [e for e in range(first, written + 1) if _at(self._target(e), position_mm, joints_deg)]
         if len(candidates) == 1:
-            return self._after(candidates[0])
+            return candidates[0]
         lines = ", ".join(str(self.frames[e - 1].line) if e else "the start" for e in range(first, written + 1))
         if not candidates:
             raise NotProven(f"the arm is not at rest where the log's last frame{'s' if written > first else ''} "
@@ -168,11 +173,25 @@ class ResumePoint:
                         "armctl cannot prove the line to continue at; nothing was sent (check the arm and continue "
                         "by hand with --from-line)")
 
+    def after(self, ran: int) -> int | None:
+        """The line to continue at once the first ``ran`` frames ran (None: every line did)."""
+        if ran == 0:
+            return self.frames[0].at if self.frames else self.from_line
+        return self.frames[ran - 1].next
+
+    def repeated(self, ran: int) -> int | None:
+        """The last line, among the first ``ran`` frames, at or past the line to continue at: the
+        resume starts again the repeat block the job stopped in (no job starts inside one, as
+        ``--from-line``), so its passes already done run again up to that line.  None: no line
+        runs twice."""
+        line = self.after(ran)
+        if line is None:
+            return None
+        return max((entry.line for entry in self.frames[:ran] if entry.line >= line), default=None)
+
     def _target(self, e: int) -> dict | None:
         return self.start if e == 0 else self.frames[e - 1].target
 
-    def _after(self, e: int) -> int | None:
-        return self.frames[0].at if e == 0 else self.frames[e - 1].next
 
 
 def _at(target, position_mm, joints_deg) -> bool:

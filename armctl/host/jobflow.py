@@ -308,9 +308,10 @@ def same_journal(log, resume) -> bool:
 
 def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable[[], bool] | None = None):
     """Wait for the arm to come to rest (it runs out what was queued when the host died), then
-    the line its report proves: (the state to start from, the line), or (state, None) when
-    every line ran; ``joblog.NotProven`` when the report proves neither; None when ``stopped()``
-    came first (see ``wait_for_rest``)."""
+    the line its report proves: (the state to start from, the line, the last line that runs a
+    second time — ``ResumePoint.repeated``: a repeat block started again — or None), or
+    (state, None, None) when every line ran; ``joblog.NotProven`` when the report proves
+    neither; None when ``stopped()`` came first (see ``wait_for_rest``)."""
     from ..core.job import SETTLE_SLACK_S
 
     wait_s = timeout_s + 2 * max(point.lead_s, lead_s) + SETTLE_SLACK_S
@@ -321,7 +322,8 @@ def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable
                         f"be running: once the arm is still, run the resume again, or give it a longer --timeout)") from None
     if state is None:
         return None
-    return state, point.line_for(state.position_mm, tuple(state.joints_deg))
+    ran = point.frames_run(state.position_mm, tuple(state.joints_deg))
+    return state, point.after(ran), point.repeated(ran)
 
 
 def journal_for(runner, script, log) -> Callable[[Any], None] | None:
