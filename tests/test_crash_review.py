@@ -15,12 +15,14 @@ users meet it: each fault found, its reproduction kept as a test, and the sweeps
    (``armctl sim --tcp``, a network serial server) it waited for the job to end, then resumed
    at a line the still-running job had already sent: lines ran twice.  Now refused, exit 2,
    nothing sent.
-5. A resume that continues at the first line of a repeat block (no job starts inside one, as
+4. A resume that continues at the first line of a repeat block (no job starts inside one, as
    ``--from-line``: documented) said only "the log and the arm's report prove every line before
    it ran", while the passes already done ran again (9 frames of a 26-frame job, through
    ``armctl sim --pty``): it now names the lines that run again.
-4. Sweeps that found nothing: a crash log cut at every byte offset and with one bit flipped in
-   every byte is refused (an ``ArmctlError``) or resumed at exactly the right line.
+5. The log's directory entry was never fsynced: a power cut could leave no log at all for
+   --resume, though every record in it was.  Now fsynced once, with the first durable record.
+6. Sweeps that found nothing: a crash log cut at every byte offset, and with each of the 8 bits
+   of every byte flipped (but 2's), is refused (an ``ArmctlError``) or resumed at exactly the right line.
 """
 
 from __future__ import annotations
@@ -164,7 +166,7 @@ def test_resuming_a_log_whose_job_still_runs_is_refused_before_the_port(tmp_path
     assert "still running" not in again.stderr and "Traceback" not in again.stderr, again.stderr
 
 
-# --- 5. a resume that starts a repeat block again says so -------------------------------------
+# --- 4. a resume that starts a repeat block again says so -------------------------------------
 
 LOOP = """\
 G1 X220 Y0 Z200 A180 B0 C0 S1000 F3000
@@ -211,7 +213,41 @@ def test_a_resume_that_starts_a_repeat_block_again_says_which_lines_run_again(tm
         assert f"lines 2–{3 if n == 2 else 6} of the passes already done run again" in said, said
 
 
-# --- 4. sweeps: every byte offset, every byte flipped -------------------------------------------
+# --- 5. the log's own directory entry is durable before the first frame --------------------------
+
+
+def test_a_new_logs_directory_is_fsynced_before_its_first_durable_record(tmp_path, monkeypatch):
+    """A log the run creates exists after a power cut only once its directory entry is durable
+    (POSIX: fsync the directory; SQLite and PostgreSQL do): the records were fsynced, the
+    directory never was, so the crash could leave no log at all — or the empty file of an earlier
+    run — for --resume to read.  The directory is now fsynced once, with the first durable record."""
+    import stat
+
+    from armctl.host.jobflow import JournalFile
+
+    synced: list[str] = []
+    real_fsync = os.fsync
+
+    def fsync(descriptor):
+        synced.append("dir" if stat.S_ISDIR(os.fstat(descriptor).st_mode) else "file")
+        real_fsync(descriptor)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    with open(tmp_path / "new.log", "w", encoding="utf-8") as file:
+        journal = JournalFile(file, sync=True)
+        journal.append({"dir": "rx", "hex": "00"})
+        assert synced == []  # a status record is not made durable by itself
+        journal.append({"dir": "job"}, durable=True)
+        assert sorted(synced) == ["dir", "file"]
+        journal.append({"dir": "tx", "hex": "00"}, durable=True)
+        assert sorted(synced) == ["dir", "file", "file"]  # once: the entry does not change again
+    synced.clear()
+    with open(tmp_path / "virtual.log", "w", encoding="utf-8") as file:  # a virtual clock: flushed only
+        JournalFile(file, sync=False).append({"dir": "job"}, durable=True)
+    assert synced == []
+
+
+# --- 6. sweeps: every byte offset, every byte flipped -------------------------------------------
 
 
 def test_a_crash_log_cut_at_every_byte_offset_is_refused_or_resumed_exactly(pwm_crashes):
