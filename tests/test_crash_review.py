@@ -5,6 +5,7 @@ users meet it: each fault found, its reproduction kept as a test, and the sweeps
    user to "run the job from its start" — wrong when that run was itself a resume (or started
    at a --from-line): the lines the earlier run executed would run twice.  Now it names the way
    the run was started (the log it resumed, its --from-line).  Fresh process, real SIGKILL.
+   The job record itself torn by the crash was "not a `run --log` file": now the same refusal.
 2. A bit flipped in the line break of the log's last record made a complete, intact record
    look like the crash's torn last line: ignored, so the frame it records — written, and run
    by the arm — was resumed again (a PWM-only line, or the first line, ran twice).  A torn line
@@ -93,6 +94,24 @@ def test_a_log_without_a_job_record_does_not_send_the_user_back_to_line_1():
     message = str(refused.value)
     assert "run the job from its start" not in message
     assert "--resume" in message and "--from-line" in message  # the ways that run may have been started
+
+
+def test_a_job_record_torn_by_the_crash_is_no_job_record_not_another_file(pwm_crashes):
+    """The crash's cut inside the job record (written and fsynced before the first frame): the
+    refusal said "line 1 is not an intact journal record: not a `run --log` file" — and so
+    after an intact record (the pause toggle a run sends to an arm it finds paused)."""
+    from armctl.core.joblog import seal
+
+    crash = pwm_crashes[0]
+    job = crash.log[:crash.log.index(b"\n")]
+    toggle = (seal({"t": 0.0, "dir": "tx", "hex": "ee" + "00" * 46 + "ef", "resume": True}, 0) + "\n").encode()
+    for before in (b"", toggle):
+        for end in range(1, len(job)):
+            with pytest.raises(ResumeRefused, match="it has no job record") as refused:
+                _decide(crash, before + job[:end])
+            assert "not a `run --log` file" not in str(refused.value)
+    with pytest.raises(ResumeRefused, match="not a `run --log` file"):  # a file that is no log still says so
+        _decide(crash, b"G1 X200")
 
 
 # --- 2. the line break of the last record flipped -----------------------------------------------

@@ -371,6 +371,8 @@ def _damaged(reader: _Reader, line: str, number: int, last: bool) -> ResumePoint
             raise ResumeRefused("it was written by an armctl before the checksummed journal (format 1): nothing "
                                 "in it tells a crash's cut from a corrupted record; check the arm and continue by "
                                 "hand with --from-line")
+        if last and (number > 1 or line.startswith(_RECORD_START) or _RECORD_START.startswith(line)):
+            return reader.point(())  # the job record torn by the crash: no job record, no frame sent
         raise ResumeRefused(f"line {number} is not an intact journal record: not a `run --log` file")
     if last and not _sealed_then_more(line):
         return reader.point(("the log's last line is torn (the crash's cut): ignored",))
@@ -379,6 +381,9 @@ def _damaged(reader: _Reader, line: str, number: int, last: bool) -> ResumePoint
                                  "break is damaged, not the crash's cut")
     raise reader.bad(number, "the record is damaged (its checksum does not match) and is not the crash's cut "
                              "(a complete line)")
+
+
+_RECORD_START = '{"t": '  # how every record of a log begins (its time first)
 
 
 def _sealed_then_more(line: str) -> bool:
