@@ -294,8 +294,7 @@ def read_resume_point(log, script, from_line: int = 1):
         text = read_file_bounded(name, f"--resume {name}").decode("utf-8", errors="replace")
         if journal_in_use(name):  # (a regular file: read_file_bounded refuses anything else)
             raise ResumeRefused("the job it records is still running: another armctl holds the lock a run keeps on "
-                                "its --log, and the log is still growing; let that job end, or stop it (Ctrl-C), "
-                                "then resume")
+                                "its --log while its job runs; let that job end, or stop it (Ctrl-C), then resume")
         return read_resume_log(text, script.name, script.data)
     except ResumeRefused as error:
         raise ResumeRefused(f"--resume {name}: {error}") from None
