@@ -15,7 +15,8 @@ users meet it: each fault found, its reproduction kept as a test, and the sweeps
    log that was still growing: through a port that serves one client after another
    (``armctl sim --tcp``, a network serial server) it waited for the job to end, then resumed
    at a line the still-running job had already sent: lines ran twice.  Now refused, exit 2,
-   nothing sent.
+   nothing sent.  And two resumes of one log at once (each with a --log of its own) both
+   resumed at the same line, through ``armctl sim --tcp``: a resume now locks the log it reads.
 4. A resume that continues at the first line of a repeat block (no job starts inside one, as
    ``--from-line``: documented) said only "the log and the arm's report prove every line before
    it ran", while the passes already done ran again (9 frames of a 26-frame job, through
@@ -183,6 +184,44 @@ def test_resuming_a_log_whose_job_still_runs_is_refused_before_the_port(tmp_path
     again = subprocess.run([*ARMCTL, "run", str(crash.script), "--port", "sim://?clock=virtual", "--no-live",
                             "--resume", str(log)], capture_output=True, text=True, timeout=60, cwd=tmp_path, env=_env())
     assert "still running" not in again.stderr and "Traceback" not in again.stderr, again.stderr
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="no flock")
+def test_a_log_being_resumed_cannot_be_resumed_again_at_the_same_time(tmp_path, pwm_crashes):
+    """Two ``--resume LOG`` at once (each with a --log of its own) both read LOG and decided
+    alike: through ``armctl sim --tcp`` (one client after another) the second waited for the
+    first to finish, found the arm where LOG's last frame leaves it again (a job that comes back
+    to a point), and sent the same lines a second time.  A resume now holds LOG locked while it
+    runs, as a run holds its --log: the second is refused, exit 2, nothing sent."""
+    from armctl import Arm
+    from armctl.host.jobflow import journal_in_use
+
+    crash = pwm_crashes[0]
+    log = tmp_path / "crash.log"
+    log.write_bytes(crash.log)
+    seen: list[bool] = []
+    with Arm.open(port="sim://?clock=virtual") as arm:  # the arm where crash 1 left its: the resume runs
+        arm.move(x=220, y=0, z=200, a=180, b=0, c=0, f=6000)
+        arm.run(crash.script, resume=log, on_progress=lambda progress: seen.append(journal_in_use(str(log))))
+    assert seen and all(seen), seen  # locked while the resume ran
+    assert not journal_in_use(str(log))
+    # the installed command: a second resume while one holds the log
+    holder = subprocess.Popen([sys.executable, "-c", (
+        "import sys, time\n"
+        "from armctl.host.jobflow import resume_claim\n"
+        f"with resume_claim({str(log)!r}):\n"
+        "    print('claimed', flush=True)\n"
+        "    time.sleep(60)\n")], stdout=subprocess.PIPE, text=True)
+    try:
+        assert holder.stdout.readline() == "claimed\n"
+        done = subprocess.run([*ARMCTL, "run", str(crash.script), "--port", "sim://?clock=virtual", "--no-live",
+                               "--resume", str(log), "--log", str(tmp_path / "second.log")], capture_output=True,
+                              text=True, timeout=60, cwd=tmp_path, env=_env())
+    finally:
+        holder.kill()
+        holder.wait()
+    assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
+    assert "resuming it" in done.stderr and "using the built-in simulator" not in done.stderr, done.stderr
 
 
 # --- 4. a resume that starts a repeat block again says so -------------------------------------

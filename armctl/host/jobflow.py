@@ -21,6 +21,7 @@ Errors are ``JobFailed`` (the arm did not answer, or the job did not finish).
 from __future__ import annotations
 
 import json
+from contextlib import contextmanager
 from typing import Any, Callable, Iterable
 
 from ..errors import ArmctlError
@@ -293,13 +294,49 @@ def read_resume_point(log, script, from_line: int = 1):
     try:  # bounded: an endless file (/dev/zero) is an error, not a hang
         text = read_file_bounded(name, f"--resume {name}").decode("utf-8", errors="replace")
         if journal_in_use(name):  # (a regular file: read_file_bounded refuses anything else)
-            raise ResumeRefused("the job it records is still running: another armctl holds the lock a run keeps on "
-                                "its --log while its job runs; let that job end, or stop it (Ctrl-C), then resume")
+            raise ResumeRefused(IN_USE)
         return read_resume_log(text, script.name, script.data)
     except ResumeRefused as error:
         raise ResumeRefused(f"--resume {name}: {error}") from None
     except OSError as error:
         raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
+
+
+IN_USE = ("the job it records is still running, or another armctl is resuming it: it holds the lock a run keeps on "
+          "its --log, and a resume on the log it resumes, while its job runs; let that job end, or stop it (Ctrl-C), "
+          "then resume")
+
+
+@contextmanager
+def resume_claim(log):
+    """``log`` (the path a resume reads, after ``read_resume_point``) locked while the resumed
+    job runs, as a run locks its --log: another resume of it at the same time — it would decide
+    from the same records and send the same lines again — is refused (``ResumeRefused``, exit 2,
+    nothing sent).  Nothing to lock for a ``ResumePoint``, or where nothing can be locked."""
+    import os
+
+    try:
+        import fcntl
+    except ImportError:
+        fcntl = None
+    if fcntl is None or not isinstance(log, (str, os.PathLike)):
+        yield
+        return
+    from ..errors import ResumeRefused
+
+    try:
+        held = open(log, "rb")  # a regular file: read_resume_point read it
+    except OSError:
+        yield
+        return
+    with held:
+        try:
+            fcntl.flock(held.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ResumeRefused(f"--resume {os.fspath(log)}: {IN_USE}") from None
+        except OSError:  # ENOLCK, EOPNOTSUPP…: resumed unlocked, as a run's log without a lock
+            pass
+        yield
 
 
 def journal_in_use(path: str) -> bool:
