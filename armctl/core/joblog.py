@@ -21,8 +21,9 @@ pure data out, no I/O here:
 
 ``read_resume_log`` trusts only the longest intact prefix: a damaged last line without its
 line break is the tear a crash leaves (a record made durable before its frame always ends with
-one); any other damaged record — a complete line, or one followed by intact records — is not a
-crash cut and the resume is refused (``JournalDamaged``, exit 1).  Records are checked for type
+one); any other damaged record — a complete line, one followed by intact records, or a whole
+record followed by bytes other than its line break (a flipped bit there: its frame was written) —
+is not a crash cut and the resume is refused (``JournalDamaged``, exit 1).  Records are checked for type
 and consistency before use (each frame's ``next`` is the following frame's ``at``; no progress
 claims a frame the log has no record of).  Logs without checksums (written before format 2)
 are refused: nothing in them tells a cut from a corrupted record.
@@ -144,11 +145,16 @@ class ResumePoint:
     def line_for(self, position_mm, joints_deg) -> int | None:
         """The line to continue at, given where the arm reports it rests now; None when every
         line already ran; ``NotProven`` when the report and the log prove no single line."""
+        return self.after(self.frames_run(position_mm, joints_deg))
+
+    def frames_run(self, position_mm, joints_deg) -> int:
+        """How many of the log's frames ran, given where the arm reports it rests now;
+        ``NotProven`` when the report and the log prove no single count."""
         written = len(self.frames)
         if written == 0:
-            return self.from_line  # nothing was written: a frame is written only after its record
+            return 0  # nothing was written: a frame is written only after its record
         if self.done == written:
-            return self.frames[-1].next  # the arm's reports proved every frame written done
+            return written  # the arm's reports proved every frame written done
         if self.cleared is not None:
             raise NotProven(f"{self.cleared}, so the frames after the last one the arm's reports proved done "
                             f"({self.done} of {written} written) may or may not have run: armctl cannot prove "
@@ -156,7 +162,7 @@ class ResumePoint:
         first = max(self.confirmed, self.done)
         candidates = [e for e in range(first, written + 1) if _at(self._target(e), position_mm, joints_deg)]
         if len(candidates) == 1:
-            return self._after(candidates[0])
+            return candidates[0]
         lines = ", ".join(str(self.frames[e - 1].line) if e else "the start" for e in range(first, written + 1))
         if not candidates:
             raise NotProven(f"the arm is not at rest where the log's last frame{'s' if written > first else ''} "
@@ -167,11 +173,25 @@ class ResumePoint:
                         "armctl cannot prove the line to continue at; nothing was sent (check the arm and continue "
                         "by hand with --from-line)")
 
+    def after(self, ran: int) -> int | None:
+        """The line to continue at once the first ``ran`` frames ran (None: every line did)."""
+        if ran == 0:
+            return self.frames[0].at if self.frames else self.from_line
+        return self.frames[ran - 1].next
+
+    def repeated(self, ran: int) -> int | None:
+        """The last line, among the first ``ran`` frames, at or past the line to continue at: the
+        resume starts again the repeat block the job stopped in (no job starts inside one, as
+        ``--from-line``), so its passes already done run again up to that line.  None: no line
+        runs twice."""
+        line = self.after(ran)
+        if line is None:
+            return None
+        return max((entry.line for entry in self.frames[:ran] if entry.line >= line), default=None)
+
     def _target(self, e: int) -> dict | None:
         return self.start if e == 0 else self.frames[e - 1].target
 
-    def _after(self, e: int) -> int | None:
-        return self.frames[0].at if e == 0 else self.frames[e - 1].next
 
 
 def _at(target, position_mm, joints_deg) -> bool:
@@ -291,8 +311,12 @@ class _Reader:
     def point(self, notes: tuple) -> ResumePoint:
         header = self.header
         if header is None:
-            raise ResumeRefused("it has no job record: its run stopped before the job began, so no frame of the job "
-                                "was sent (run the job from its start), or an armctl without --resume wrote it")
+            # that run may itself have been a resume, or have started at a --from-line: "from the
+            # start" would run again the lines an earlier run executed
+            raise ResumeRefused("it has no job record: the run that wrote it stopped before its first frame, so no "
+                                "frame of the job was sent (or an armctl without --resume wrote it): start again the "
+                                "way that run started — from its start, at its --from-line, or with --resume and the "
+                                "log that run resumed")
         if header.get("sha256") != script_digest(self.data):  # the last job it records (runs may be appended)
             logged = header.get("script")
             same = "the same name" if logged == self.name else f"{logged!r}"
@@ -347,11 +371,31 @@ def _damaged(reader: _Reader, line: str, number: int, last: bool) -> ResumePoint
             raise ResumeRefused("it was written by an armctl before the checksummed journal (format 1): nothing "
                                 "in it tells a crash's cut from a corrupted record; check the arm and continue by "
                                 "hand with --from-line")
+        if last and (number > 1 or line.startswith(_RECORD_START) or _RECORD_START.startswith(line)):
+            return reader.point(())  # the job record torn by the crash: no job record, no frame sent
         raise ResumeRefused(f"line {number} is not an intact journal record: not a `run --log` file")
-    if last:
+    if last and not _sealed_then_more(line):
         return reader.point(("the log's last line is torn (the crash's cut): ignored",))
+    if last:
+        raise reader.bad(number, "a whole record followed by other bytes where its line break belongs: the line "
+                                 "break is damaged, not the crash's cut")
     raise reader.bad(number, "the record is damaged (its checksum does not match) and is not the crash's cut "
                              "(a complete line)")
+
+
+_RECORD_START = '{"t": '  # how every record of a log begins (its time first)
+
+
+def _sealed_then_more(line: str) -> bool:
+    """An intact record followed by something other than its line break: a cut leaves a strict
+    prefix of a record (never a whole one with a byte after it), or a whole one followed only by
+    NUL bytes (blocks the file system allocated and never wrote).  A flipped bit in the line
+    break of the log's last record reads so — and that record's frame was written."""
+    try:
+        _, end = json.JSONDecoder().raw_decode(line)
+    except (ValueError, RecursionError):
+        return False
+    return unseal(line[:end]) is not None and line[end:].strip("\0") != ""
 
 
 def _old_record(line: str) -> bool:

@@ -32,6 +32,7 @@ No signal handler is installed (``armctl run`` installs its own, in the main thr
 """
 from __future__ import annotations
 
+import contextlib
 import os
 from typing import IO, TYPE_CHECKING, Any, Callable, Union
 
@@ -205,15 +206,18 @@ class Arm:
         resume = args.path_or_none("resume", resume, also=(ResumePoint,))
         source = args.job_snapshot(script)  # read once: a snapshot, or a script checked already
         snapshot = getattr(source, "snapshot", source)
+        claim = contextlib.nullcontext()
         if resume is not None:
-            from .jobflow import read_resume_point, same_journal
+            from .jobflow import read_resume_point, resume_claim, same_journal
 
             if log is not None and same_journal(log, resume):
                 raise ResumeRefused(f"log= is the journal resume= reads ({os.fspath(resume)}): give the resumed job a "
                                     "log of its own; nothing was sent")
+            claim = resume_claim(resume)  # no second resume of it while this one runs
             resume = read_resume_point(resume, snapshot, from_line)  # before anything: ResumeRefused, nothing sent
         job = JobSpec(observer or JobObserver(), on_progress, timeout, log, abort, resume)
-        result = self._submit(source, from_line, job, wait=True, from_arm=False, stops=stops)
+        with claim:
+            result = self._submit(source, from_line, job, wait=True, from_arm=False, stops=stops)
         assert result is not None
         return result
 

@@ -256,14 +256,16 @@ def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[],
     started = resume_start(arm.link, spec.resume, arm.status_timeout_s, arm.lead_s, stopped=stopped)
     if started is None:  # stop() (Ctrl-C) while the arm ran out its queue: no frame goes
         return RunResult.nothing_sent("interrupted")
-    state, from_line = started
+    state, from_line, again = started
     if from_line is None:
         return _nothing_to_resume(arm)
     checked = checked.starting_at(from_line)
     if checked.from_line_error is not None:
         raise checked.from_line_error
     observer.note(f"armctl: resuming {checked.name} at line {from_line}: the log and the arm's report prove every line "
-                  "before it ran")
+                  "before it ran" + ("" if again is None else
+                                     f"; it opens the repeat block the job stopped in (no job starts inside one), so "
+                                     f"lines {from_line}–{again} of the passes already done run again"))
     resume_paused(arm.link, arm.status_timeout_s, journal, observer.note, arm.profile.connector.control_on_arrival)
     return arm.link.snapshot()[0], checked
 

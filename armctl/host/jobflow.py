@@ -21,6 +21,7 @@ Errors are ``JobFailed`` (the arm did not answer, or the job did not finish).
 from __future__ import annotations
 
 import json
+from contextlib import contextmanager
 from typing import Any, Callable, Iterable
 
 from ..errors import ArmctlError
@@ -92,13 +93,16 @@ class JournalFile:
     without a descriptor (``io.StringIO``) is flushed only, and so is every record when ``sync``
     is False: an arm on a virtual clock (``sim://?clock=virtual``) lives in the host's process
     and its time moves only with the host, so nothing of it runs on after a crash — and an
-    fsync a frame would cost a virtual job more wall time than the job itself."""
+    fsync a frame would cost a virtual job more wall time than the job itself.  The first fsync
+    also fsyncs the log's directory, once: a file the run created survives a power cut only
+    with its directory entry (POSIX; SQLite and PostgreSQL do the same)."""
 
     def __init__(self, file, sync: bool = True) -> None:
         self.file = file
         self.name = getattr(file, "name", "the log")
         self.seq = 0
         self.sync_each = sync
+        self._directory_synced = False
 
     def append(self, record: dict, durable: bool = False) -> None:
         from ..core.joblog import seal
@@ -124,6 +128,30 @@ class JournalFile:
         except (AttributeError, OSError, ValueError):  # no descriptor (io.StringIO): flushed is all there is
             return
         os.fsync(descriptor)
+        if not self._directory_synced:
+            self._directory_synced = True
+            _fsync_directory_of(descriptor, self.name)
+
+
+def _fsync_directory_of(descriptor: int, name) -> None:
+    """fsync the directory holding the regular file open on ``descriptor`` (named ``name``);
+    where a directory cannot be opened or fsynced (Windows, some file systems), the file's own
+    fsync is all there is."""
+    import os
+    import stat
+
+    if not isinstance(name, str) or not stat.S_ISREG(os.fstat(descriptor).st_mode):
+        return  # a device (/dev/null), or a file object with no path
+    try:
+        directory = os.open(os.path.dirname(os.path.abspath(name)), os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(directory)
+    except OSError:
+        pass
+    finally:
+        os.close(directory)
 
 
 RESUME_SETTLE_S = 120.0  # the longest a move frozen by a pause may take to finish after the resume
@@ -265,11 +293,68 @@ def read_resume_point(log, script, from_line: int = 1):
     name = str(log)
     try:  # bounded: an endless file (/dev/zero) is an error, not a hang
         text = read_file_bounded(name, f"--resume {name}").decode("utf-8", errors="replace")
+        if journal_in_use(name):  # (a regular file: read_file_bounded refuses anything else)
+            raise ResumeRefused(IN_USE)
         return read_resume_log(text, script.name, script.data)
     except ResumeRefused as error:
         raise ResumeRefused(f"--resume {name}: {error}") from None
     except OSError as error:
         raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
+
+
+IN_USE = ("the job it records is still running, or another armctl is resuming it: it holds the lock a run keeps on "
+          "its --log, and a resume on the log it resumes, while its job runs; let that job end, or stop it (Ctrl-C), "
+          "then resume")
+
+
+@contextmanager
+def resume_claim(log):
+    """``log`` (the path a resume reads, after ``read_resume_point``) locked while the resumed
+    job runs, as a run locks its --log: another resume of it at the same time — it would decide
+    from the same records and send the same lines again — is refused (``ResumeRefused``, exit 2,
+    nothing sent).  Nothing to lock for a ``ResumePoint``, or where nothing can be locked."""
+    import os
+
+    try:
+        import fcntl
+    except ImportError:
+        fcntl = None
+    if fcntl is None or not isinstance(log, (str, os.PathLike)):
+        yield
+        return
+    from ..errors import ResumeRefused
+
+    try:
+        held = open(log, "rb")  # a regular file: read_resume_point read it
+    except OSError:
+        yield
+        return
+    with held:
+        try:
+            fcntl.flock(held.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            raise ResumeRefused(f"--resume {os.fspath(log)}: {IN_USE}") from None
+        except OSError:  # ENOLCK, EOPNOTSUPP…: resumed unlocked, as a run's log without a lock
+            pass
+        yield
+
+
+def journal_in_use(path: str) -> bool:
+    """Another process holds the lock ``armctl run --log`` keeps on its log while its job runs
+    (armctl/ui/run_job.py, ``_locked``): that job is not over, whatever its log says yet.  False
+    where nothing can be locked (no fcntl, a file system without locks)."""
+    try:
+        import fcntl
+    except ImportError:
+        return False
+    try:
+        with open(path, "rb") as probe:
+            fcntl.flock(probe.fileno(), fcntl.LOCK_SH | fcntl.LOCK_NB)  # released as the file closes
+    except BlockingIOError:
+        return True
+    except OSError:  # ENOLCK, EOPNOTSUPP…: as a run that could not lock its log
+        return False
+    return False
 
 
 def same_journal(log, resume) -> bool:
@@ -286,9 +371,10 @@ def same_journal(log, resume) -> bool:
 
 def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable[[], bool] | None = None):
     """Wait for the arm to come to rest (it runs out what was queued when the host died), then
-    the line its report proves: (the state to start from, the line), or (state, None) when
-    every line ran; ``joblog.NotProven`` when the report proves neither; None when ``stopped()``
-    came first (see ``wait_for_rest``)."""
+    the line its report proves: (the state to start from, the line, the last line that runs a
+    second time — ``ResumePoint.repeated``: a repeat block started again — or None), or
+    (state, None, None) when every line ran; ``joblog.NotProven`` when the report proves
+    neither; None when ``stopped()`` came first (see ``wait_for_rest``)."""
     from ..core.job import SETTLE_SLACK_S
 
     wait_s = timeout_s + 2 * max(point.lead_s, lead_s) + SETTLE_SLACK_S
@@ -299,7 +385,8 @@ def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable
                         f"be running: once the arm is still, run the resume again, or give it a longer --timeout)") from None
     if state is None:
         return None
-    return state, point.line_for(state.position_mm, tuple(state.joints_deg))
+    ran = point.frames_run(state.position_mm, tuple(state.joints_deg))
+    return state, point.after(ran), point.repeated(ran)
 
 
 def journal_for(runner, script, log) -> Callable[[Any], None] | None:

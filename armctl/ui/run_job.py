@@ -253,7 +253,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     ``Arm.run``; this keeps the presentation — the panel or the JSON events, the notes, the
     keys and Ctrl-C as calls on the arm, the summary and the exit code."""
     from ..host.api import Arm
-    from ..host.jobflow import read_resume_point
+    from ..host.jobflow import read_resume_point, resume_claim
     from ..host.link import choose_port
     from ..host.calibration import arm_profile
     from ..core.motion import MotionModel
@@ -272,7 +272,8 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
                            "give the resumed job a --log of its own")
     watch = _RunObserver(options, MotionModel(profile), events)
     # the log before the port: one that cannot be written refuses the job before the arm is touched
-    with (_log_file(options.log_path) if options.log_path else nullcontext()) as log, \
+    with (resume_claim(options.resume_log) if options.resume_log else nullcontext()), \
+            (_log_file(options.log_path) if options.log_path else nullcontext()) as log, \
             Arm.open(port, options.baud, profile, lead_s=options.lead_s, status_timeout_s=options.timeout_s,
                      connect=connect) as arm:
         if events is not None:  # `| head -1`: the reader went away — the job stops as Ctrl-C stops it
