@@ -1,0 +1,65 @@
+"""A log is resumed once: a second ``--resume`` of the same log would run again every line the
+first resume ran.  Found by the crash review: through ``armctl sim --pty``, a job killed after 2
+frames, ``--resume j1`` finished it, then ``--resume j1`` again said "resuming at line 3" and
+the arm ran lines 3 and 4 twice — the arm stood where j1's last frame leaves it, which is all a
+log can check.  Now a resume marks the log it continues, durably, before its first frame goes
+(a sealed ``resumed`` record: where it continued and the log it wrote), and a marked log is
+refused (exit 2, nothing sent), naming the log to resume instead.
+
+One simulated arm across the runs (tests/test_resume_exactly_once.py's ``_open_one_arm``),
+virtual time; and one fresh-process case through the installed command.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from armctl.ui.cli import main
+from test_resume_exactly_once import _job, _open_one_arm, _stop_after
+
+pytestmark = pytest.mark.timeout(60)
+
+URL = "sim://?clock=virtual"
+
+
+def _invoke(*args):
+    return CliRunner().invoke(main, list(args), env={"ARMCTL_PORT": None})
+
+
+def _run_then_resume(tmp_path, monkeypatch, second_log: bool = True):
+    """The job stopped after 14 frames (--log j1), then resumed to its end (--log j2, or none);
+    the arm is then moved back to where j1 left it.  The ports opened (one arm)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "job.txt").write_text(_job(), encoding="utf-8")
+    ports = _open_one_arm(monkeypatch)
+    _stop_after(monkeypatch, 14)
+    first = _invoke("run", "job.txt", "--no-live", "--port", URL, "--log", "j1.log")
+    assert first.exit_code == 130, first.output
+    where = json.loads(_invoke("status", "--json", "--port", URL).stdout)
+    resumed = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j1.log",
+                      *(("--log", "j2.log") if second_log else ()))
+    assert resumed.exit_code == 0 and "resuming job.txt at line" in resumed.output, resumed.output
+    back = tmp_path / "back.txt"  # the arm back where j1 left it, as a person might jog it
+    back.write_text(f"G1 X{where['x']} Y{where['y']} Z{where['z']} A180 B0 C0 S1500 F3000\n", encoding="utf-8")
+    moved = _invoke("run", str(back), "--no-live", "--port", URL)
+    assert moved.exit_code == 0, moved.output
+    return ports
+
+
+@pytest.mark.parametrize("second_log", [True, False], ids=["with --log", "without --log"])
+def test_a_log_resumed_once_is_refused_the_second_time(second_log, tmp_path, monkeypatch):
+    ports = _run_then_resume(tmp_path, monkeypatch, second_log)
+    arm = ports[URL].model
+    ran = len(arm.execution_log)
+    again = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j1.log")
+    assert again.exit_code == 2, again.output
+    assert "was resumed already" in again.output, again.output
+    assert ("resume j2.log instead" in again.output) if second_log else ("--from-line" in again.output)
+    assert len(arm.execution_log) == ran  # nothing sent
+    if second_log:  # the log the first resume wrote is the one to go on from: it says nothing is left
+        last = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j2.log")
+        assert "resumed already" not in last.output, last.output
+        assert len(arm.execution_log) == ran
