@@ -13,6 +13,10 @@ virtual time; and one fresh-process case through the installed command.
 from __future__ import annotations
 
 import json
+import os
+import subprocess
+import sys
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -23,6 +27,7 @@ from test_resume_exactly_once import _job, _open_one_arm, _stop_after
 pytestmark = pytest.mark.timeout(60)
 
 URL = "sim://?clock=virtual"
+ARMCTL = Path(sys.executable).with_name("armctl")  # the installed command
 
 
 def _invoke(*args):
@@ -63,3 +68,36 @@ def test_a_log_resumed_once_is_refused_the_second_time(second_log, tmp_path, mon
         last = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j2.log")
         assert "resumed already" not in last.output, last.output
         assert len(arm.execution_log) == ran
+
+
+def test_the_installed_command_refuses_a_log_resumed_already(tmp_path, monkeypatch):
+    # the marked log, then the installed command in a fresh process: refused before any port opens
+    _run_then_resume(tmp_path, monkeypatch)
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    again = subprocess.run([str(ARMCTL), "run", "job.txt", "--no-live", "--port", URL, "--resume", "j1.log"],
+                           cwd=tmp_path, env=env, capture_output=True, text=True, timeout=50)
+    assert again.returncode == 2, again.stdout + again.stderr
+    assert "j1.log: it was resumed already, at line" in again.stderr and "resume j2.log instead" in again.stderr
+    assert "Traceback" not in again.stderr and "using the built-in simulator" not in again.stderr, again.stderr
+
+
+def test_the_mark_keeps_the_intact_prefix_and_follows_a_whole_line(tmp_path):
+    # a torn last line (the crash's cut: its frame never went) is cut off before the mark, so the
+    # mark follows a whole line and the log stays readable; a log with no whole line is not marked
+    from armctl.core.joblog import job_record, read_resume_log, seal
+    from armctl.host.jobflow import mark_resumed
+
+    data = b"G1 X1\n"
+    whole = seal(job_record("a.txt", data, 1, 2.0), 0) + "\n"
+    log = tmp_path / "j.log"
+    log.write_text(whole + '{"t": 1.0, "dir": "tx", "he')
+    mark_resumed(str(log), 1, None)
+    text = log.read_text()
+    assert text.startswith(whole) and text.count("\n") == 2 and '"dir": "resumed"' in text.splitlines()[1]
+    with pytest.raises(Exception, match="resumed already, at line 1"):
+        read_resume_log(text, "a.txt", data)
+    bare = tmp_path / "torn.log"
+    bare.write_text('{"t": 0.0, "dir": "jo')
+    with pytest.raises(OSError):
+        mark_resumed(str(bare), 1, None)
+    assert bare.read_text() == '{"t": 0.0, "dir": "jo'

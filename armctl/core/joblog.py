@@ -18,6 +18,11 @@ pure data out, no I/O here:
   continue if it ran; null: it is the job's last frame) and ``target`` (where it leaves the arm).
 - ``progress``, each time what is known changes: frames written (``frames_sent``: a write that
   returned) and frames the arm's reports prove done (``done_n``), with the lines for people.
+- ``resumed`` (``resumed_record``), appended by a ``--resume`` of this log, durable before that
+  resume's first frame goes: where it continued and the log it wrote.  A log is resumed once:
+  the arm can stand where the log's last frame leaves it again later (jogged back, a job that
+  returns there), and a second resume would run again every line the first one ran; it is
+  refused (exit 2), naming the log to resume instead.
 
 ``read_resume_log`` trusts only the longest intact prefix: a damaged last line without its
 line break is the tear a crash leaves (a record made durable before its frame always ends with
@@ -87,6 +92,12 @@ def unseal(line: str) -> dict | None:
         return None
 
 
+def resumed_record(at_line: int, into: str | None) -> dict:
+    """The record a resume appends to the log it continues, durable before its first frame goes:
+    it continued at ``at_line``, journalled to ``into`` (None: no --log).  The log is resumed once."""
+    return {"t": 0.0, "dir": "resumed", "at": at_line, "into": into}
+
+
 def target_of(segment_end_kind: str, xyz, joints) -> dict:
     return {"kind": segment_end_kind, "xyz_mm": [round(v, 4) for v in xyz], "joints_deg": [round(v, 4) for v in joints]}
 
@@ -137,6 +148,7 @@ class ResumePoint:
     start: dict | None = None  # where the arm stood when the job began
     cleared: str | None = None  # why "every frame written ran" does not hold (None: it does)
     notes: tuple = field(default_factory=tuple)
+    log_path: str | None = None  # the log it was read from: the resume marks it (``resumed_record``)
 
     @property
     def sent_line(self) -> int | None:
@@ -243,6 +255,7 @@ class _Reader:
         self.frames: list[FrameEntry] = []
         self.confirmed = self.done = 0
         self.cleared: str | None = None
+        self.resumed: dict | None = None  # the resume that continued this job already (``resumed_record``)
 
     def bad(self, number: int, why: str):
         return JournalDamaged(f"line {number}: {why}: the log cannot prove which lines ran; nothing was sent")
@@ -257,6 +270,11 @@ class _Reader:
             self.tx(number, record)
         elif kind == "progress":
             self.progress(number, record)
+        elif kind == "resumed":
+            at, into = record.get("at"), record.get("into")
+            if not (_is_int(at) and at >= 1 and (into is None or isinstance(into, str))):
+                raise self.bad(number, "a resumed record's fields are not what armctl writes")
+            self.resumed = record
         elif kind == "rx":
             if not _is_hex_frame(record.get("hex")):
                 raise self.bad(number, "a status record without its frame")
@@ -272,6 +290,7 @@ class _Reader:
             raise self.bad(number, "the job record's fields are not what armctl writes")
         # a later job record (a log resumed into itself) starts the job it records afresh
         self.header, self.frames, self.confirmed, self.done, self.cleared = record, [], 0, 0, None
+        self.resumed = None
 
     def tx(self, number: int, record: dict) -> None:
         frame = record.get("hex")
@@ -322,6 +341,12 @@ class _Reader:
             same = "the same name" if logged == self.name else f"{logged!r}"
             raise ResumeRefused(f"it records {same} with other contents (sha256 {str(header.get('sha256'))[:12]}…, "
                                 f"{self.name} is {script_digest(self.data)[:12]}…): the script was edited or is another one")
+        if self.resumed is not None:  # the lines that resume ran would run a second time
+            at, into = self.resumed["at"], self.resumed["into"]
+            instead = (f"resume {into} instead (the log that resume wrote)" if into is not None else
+                       "that resume kept no --log: check the arm and continue by hand with --from-line")
+            raise ResumeRefused(f"it was resumed already, at line {at}: resuming it again would run the lines that "
+                                f"resume ran a second time; {instead}")
         return ResumePoint(header["from_line"], float(header["lead_s"]), tuple(self.frames), self.confirmed,
                            self.done, header["start"], self.cleared, notes)
 

@@ -206,15 +206,7 @@ class Arm:
         resume = args.path_or_none("resume", resume, also=(ResumePoint,))
         source = args.job_snapshot(script)  # read once: a snapshot, or a script checked already
         snapshot = getattr(source, "snapshot", source)
-        claim = contextlib.nullcontext()
-        if resume is not None:
-            from .jobflow import read_resume_point, resume_claim, same_journal
-
-            if log is not None and same_journal(log, resume):
-                raise ResumeRefused(f"log= is the journal resume= reads ({os.fspath(resume)}): give the resumed job a "
-                                    "log of its own; nothing was sent")
-            claim = resume_claim(resume)  # no second resume of it while this one runs
-            resume = read_resume_point(resume, snapshot, from_line)  # before anything: ResumeRefused, nothing sent
+        claim, resume = _claimed_resume(resume, log, snapshot, from_line)
         job = JobSpec(observer or JobObserver(), on_progress, timeout, log, abort, resume)
         with claim:
             result = self._submit(source, from_line, job, wait=True, from_arm=False, stops=stops)
@@ -362,3 +354,17 @@ class Arm:
                 raise
         tasks.queue(job, stops)
         return None
+
+
+def _claimed_resume(resume, log, snapshot, from_line: int):
+    """``Arm.run``'s ``resume=``: (the claim held while the job runs — no second resume of that log
+    meanwhile, ``jobflow.resume_claim`` — and the ``ResumePoint``, read before anything is sent:
+    ``ResumeRefused``, nothing sent); (a null claim, None) without one."""
+    if resume is None:
+        return contextlib.nullcontext(), None
+    from .jobflow import read_resume_point, resume_claim, same_journal
+
+    if log is not None and same_journal(log, resume):
+        raise ResumeRefused(f"log= is the journal resume= reads ({os.fspath(resume)}): give the resumed job a "
+                            "log of its own; nothing was sent")
+    return resume_claim(resume), read_resume_point(resume, snapshot, from_line)

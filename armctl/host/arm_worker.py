@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import logging
 from concurrent.futures import Future
+from functools import partial
 from dataclasses import dataclass
 from typing import IO, Any, Callable
 
@@ -192,7 +193,7 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     reachable by ``pause``/``stop`` (True: a stop came meanwhile); ``detach`` when it ended."""
     from ..core import checked as checking
     from .calibration import stale_notes
-    from .jobflow import JournalFile, drive, journal_for, read_arm, start_job
+    from .jobflow import JournalFile, drive, journal_for, mark_resumed, read_arm, start_job
     from ..core.job import abort_frames
 
     link, observer = arm.link, spec.observer
@@ -222,6 +223,10 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     runner = start_job(link, arm.model, job, journal)
     if journal is not None:  # which script it records (resume= checks it); a failed write stops the job like any
         _journal_job(runner, job, state, arrival)
+    if spec.resume is not None and spec.resume.log_path is not None:  # a log is resumed once (jobflow.mark_resumed)
+        into = getattr(spec.log, "name", None)
+        runner.before_first_frame = partial(mark_resumed, spec.resume.log_path, job.from_line,
+                                            into if isinstance(into, str) else None)
     control = JobControl(runner, spec.on_progress, spec.timeout_s, observer, journal_for(runner, job.snapshot, journal))
     runner.on_update = control.on_update
     link.on_status = runner.on_status  # the link's status frames go to this job's engine while it runs

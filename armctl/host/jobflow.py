@@ -282,6 +282,9 @@ def read_resume_point(log, script, from_line: int = 1):
     """The resume point a ``--log`` (a path, or a ``joblog.ResumePoint`` already read) records
     for this very ``script`` — read bounded, as every input; ``ResumeRefused`` (exit 2) for
     another script, an edited one, a file that is no log, or a ``from_line`` given as well."""
+    import os
+    from dataclasses import replace
+
     from ..errors import ResumeRefused
     from .inputs import read_file_bounded
     from ..core.joblog import ResumePoint, read_resume_log
@@ -295,11 +298,45 @@ def read_resume_point(log, script, from_line: int = 1):
         text = read_file_bounded(name, f"--resume {name}").decode("utf-8", errors="replace")
         if journal_in_use(name):  # (a regular file: read_file_bounded refuses anything else)
             raise ResumeRefused(IN_USE)
-        return read_resume_log(text, script.name, script.data)
+        point = read_resume_log(text, script.name, script.data)
+        if not os.access(name, os.W_OK):
+            raise ResumeRefused("it cannot be written, and a resume marks the log it continues so that it is never "
+                                "resumed twice (mark_resumed): make it writable, or resume a writable copy")
+        return replace(point, log_path=name)
     except ResumeRefused as error:
         raise ResumeRefused(f"--resume {name}: {error}") from None
     except OSError as error:
         raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
+
+
+def mark_resumed(path: str, at_line: int, into: str | None) -> None:
+    """Append ``joblog.resumed_record`` to the log at ``path`` a resume continues (at ``at_line``,
+    journalled to ``into``), durable — flushed and fsynced — before the resume's first frame goes,
+    as a frame's record before the frame: a log is resumed once.  Only the intact prefix is kept:
+    a torn last line (the crash's cut, or NUL bytes a file system allocated) is cut off first —
+    its frame never went, its record was never durable — so the record follows a whole line."""
+    import os
+
+    from ..core.joblog import resumed_record, seal
+
+    with open(path, "r+b") as log:
+        end = keep = log.seek(0, os.SEEK_END)
+        while keep > 0:  # back to the last line break, a block at a time (a log may be large)
+            start = max(0, keep - 65536)
+            log.seek(start)
+            found = log.read(keep - start).rfind(b"\n")
+            if found >= 0:
+                keep = start + found + 1
+                break
+            keep = start
+        if keep == 0:  # (no whole line: read_resume_point refuses such a log before this)
+            raise OSError(f"{path} holds no whole record")
+        if keep < end:
+            log.truncate(keep)
+        log.seek(keep)
+        log.write((seal(resumed_record(at_line, into), 0) + "\n").encode())
+        log.flush()
+        os.fsync(log.fileno())
 
 
 IN_USE = ("the job it records is still running, or another armctl is resuming it: it holds the lock a run keeps on "

@@ -72,6 +72,8 @@ class JobRunner(Host):
         self.log = log
         # the journal's fields of a job frame's record: (n, statement, planned segment) → dict
         self.frame_fields: Callable[[int, object, object], dict] | None = None
+        # called once, durable before the job's first frame goes (a resume marks the log it continues)
+        self.before_first_frame: Callable[[], None] | None = None
         self.on_update = on_update or (lambda view: None)
         self.status_queue: queue.SimpleQueue = queue.SimpleQueue()
         self.requests: queue.SimpleQueue = queue.SimpleQueue()  # ``control``: calls for the engine, from any thread
@@ -192,6 +194,13 @@ class JobRunner(Host):
     def writing(self, action: Write, now: float) -> bool:
         if self.log is not None and not self._log_write(action, now):
             return False  # no durable record, no frame: the failure stops the job (``fail``)
+        if self.before_first_frame is not None and action.statement is not None:
+            mark, self.before_first_frame = self.before_first_frame, None
+            try:
+                mark()
+            except OSError as error:  # as a log that cannot be written: the frame must not go
+                self.fail(f"the log --resume continues could not be marked resumed ({error}): nothing of the job was sent")
+                return False
         if not self._virtual:
             self._note_unsent(now)
         return True
