@@ -49,7 +49,9 @@ import hashlib
 import json
 import math
 import zlib
+from array import array
 from dataclasses import dataclass, field
+from typing import Any, Iterable
 
 from ..errors import ArmctlError, ResumeRefused
 from .protocol import ArcEnd
@@ -136,19 +138,56 @@ class FrameEntry:
     target: dict | None
 
 
+class Frames:
+    """The job frames a log records, compact enough for a 24-hour job's (up to the 2,000,000-line
+    limit): each frame's line, ``at`` and ``next`` in arrays (a ``next`` of None as 0: lines count
+    from 1), its target kept only while it may still decide the resume (``forget_targets_before``:
+    the candidates are the frames the log does not prove written, ``ResumePoint.frames_run``).
+    A sequence of ``FrameEntry`` as a tuple of them is (an int index; a forgotten target reads None)."""
+
+    def __init__(self, entries=()) -> None:
+        self.lines, self.ats, self.nexts = array("q"), array("q"), array("q")
+        self.targets: dict[int, dict | None] = {}  # index → target, for the frames not forgotten
+        for entry in entries:
+            self.append(entry.line, entry.at, entry.next, entry.target)
+
+    def append(self, line: int, at: int, after: int | None, target: dict | None) -> None:
+        self.targets[len(self.lines)] = target
+        self.lines.append(line)
+        self.ats.append(at)
+        self.nexts.append(0 if after is None else after)
+
+    def forget_targets_before(self, index: int) -> None:
+        """Targets of the frames before ``index`` are not needed any more (the log proves them written)."""
+        for old in [k for k in self.targets if k < index]:
+            del self.targets[old]
+
+    def __len__(self) -> int:
+        return len(self.lines)
+
+    def __getitem__(self, index: int) -> FrameEntry:
+        index = range(len(self.lines))[index]  # (negative indexes; IndexError past the end)
+        after = self.nexts[index]
+        return FrameEntry(index + 1, self.lines[index], self.ats[index], after or None, self.targets.get(index))
+
+
 @dataclass(frozen=True)
 class ResumePoint:
     """What the intact prefix of a log proves about the job it records."""
 
     from_line: int  # where the logged run started
     lead_s: float
-    frames: tuple = ()  # FrameEntry of every job frame whose record is durable, in order
+    frames: Any = ()  # every job frame whose record is durable, in order: a Frames (or FrameEntry tuple)
     confirmed: int = 0  # frames the log proves written (a later record, or a progress record)
     done: int = 0  # frames the arm's reports proved done
     start: dict | None = None  # where the arm stood when the job began
     cleared: str | None = None  # why "every frame written ran" does not hold (None: it does)
     notes: tuple = field(default_factory=tuple)
     log_path: str | None = None  # the log it was read from: the resume marks it (``resumed_record``)
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.frames, Frames):
+            object.__setattr__(self, "frames", Frames(self.frames))
 
     @property
     def sent_line(self) -> int | None:
@@ -199,7 +238,7 @@ class ResumePoint:
         line = self.after(ran)
         if line is None:
             return None
-        return max((entry.line for entry in self.frames[:ran] if entry.line >= line), default=None)
+        return max((ran_line for ran_line in self.frames.lines[:ran] if ran_line >= line), default=None)
 
     def _target(self, e: int) -> dict | None:
         return self.start if e == 0 else self.frames[e - 1].target
@@ -252,7 +291,7 @@ class _Reader:
     def __init__(self, name: str, data: bytes) -> None:
         self.name, self.data = name, data
         self.header: dict | None = None
-        self.frames: list[FrameEntry] = []
+        self.frames = Frames()
         self.confirmed = self.done = 0
         self.cleared: str | None = None
         self.resumed: dict | None = None  # the resume that continued this job already (``resumed_record``)
@@ -289,7 +328,7 @@ class _Reader:
                 and frames >= 0 and isinstance(arrival, bool) and (start is None or _valid_target(start))):
             raise self.bad(number, "the job record's fields are not what armctl writes")
         # a later job record (a log resumed into itself) starts the job it records afresh
-        self.header, self.frames, self.confirmed, self.done, self.cleared = record, [], 0, 0, None
+        self.header, self.frames, self.confirmed, self.done, self.cleared = record, Frames(), 0, 0, None
         self.resumed = None
 
     def tx(self, number: int, record: dict) -> None:
@@ -311,10 +350,12 @@ class _Reader:
             raise self.bad(number, f"frame {n} where frame {len(self.frames) + 1} was due")
         if not from_line <= at <= line or (after is not None and after < from_line):
             raise self.bad(number, f"frame {n} of line {line} says it continues at line {at} and after it at {after}")
-        if self.frames and self.frames[-1].next != at:  # (a frame after the one that said it was the last too)
-            raise self.bad(number, f"frame {n} starts at line {at} where the frame before it said {self.frames[-1].next}")
-        self.confirmed = len(self.frames)  # its record follows the write of the frame before
-        self.frames.append(FrameEntry(n, line, at, after, target))
+        frames = self.frames
+        if frames and (frames.nexts[-1] or None) != at:  # (a frame after the one that said it was the last too)
+            raise self.bad(number, f"frame {n} starts at line {at} where the frame before it said {frames.nexts[-1] or None}")
+        self.confirmed = len(frames)  # its record follows the write of the frame before
+        frames.forget_targets_before(self.confirmed - 1)  # (the resume's candidates start at the frames confirmed)
+        frames.append(line, at, after, target)
         if self.cleared is None:
             self.cleared = _clears(frame, header["control_on_arrival"], f"line {line}")
 
@@ -347,7 +388,7 @@ class _Reader:
                        "that resume kept no --log: check the arm and continue by hand with --from-line")
             raise ResumeRefused(f"it was resumed already, at line {at}: resuming it again would run the lines that "
                                 f"resume ran a second time; {instead}")
-        return ResumePoint(header["from_line"], float(header["lead_s"]), tuple(self.frames), self.confirmed,
+        return ResumePoint(header["from_line"], float(header["lead_s"]), self.frames, self.confirmed,
                            self.done, header["start"], self.cleared, notes)
 
 
@@ -371,21 +412,38 @@ def read_resume_log(text, name: str, data: bytes) -> ResumePoint:
     the script ``name`` whose snapshot is ``data``."""
     if not isinstance(text, str):
         text = "".join(line + "\n" for line in text)
-    lines = text.split("\n")  # the last is what follows the last line break ("" when the text ends with one)
+    return read_resume_lines(_lines_of(text), name, data)
+
+
+def read_resume_lines(lines: Iterable[str], name: str, data: bytes) -> ResumePoint:
+    """``read_resume_log`` of a log given line by line (each with its line break, the last
+    without one if the log does not end with one): a day's log is read as it streams by."""
     reader = _Reader(name, data)
     expected = 0  # each run's records count from 0 (a log may hold several runs, appended)
     for number, line in enumerate(lines, 1):
+        complete = line.endswith("\n")
+        line = line[:-1] if complete else line
         if not line.strip():
             continue
         record = unseal(line)
         if record is None:
-            return _damaged(reader, line, number, number == len(lines))
+            return _damaged(reader, line, number, not complete)
         seq = record.pop("seq", None)
         if not _is_int(seq) or seq not in (0, expected):
             raise reader.bad(number, "a record out of its place (one dropped, moved or added)")
         expected = seq + 1
         reader.take(number, record)
     return reader.point(())
+
+
+def _lines_of(text: str):
+    """``text``'s lines, each with its line break (the last without one if it has none)."""
+    start = 0
+    while (end := text.find("\n", start)) >= 0:
+        yield text[start:end + 1]
+        start = end + 1
+    if start < len(text):
+        yield text[start:]
 
 
 def _damaged(reader: _Reader, line: str, number: int, last: bool) -> ResumePoint:

@@ -15,6 +15,10 @@ Limits (documented in the README):
   MAX_INPUT_BYTES  128 MiB — a script, ``decode`` input, a log.  The 1,000,000-line benchmark
                    script of benchmarks/compile_speed.py is about 72 MB.
   MAX_TOML_BYTES   1 MiB — an arm profile or armctl.toml (a real one is a few kB).
+  MAX_LOG_BYTES    2 GiB — a ``--resume`` log, read line by line (``read_lines_bounded``, each
+                   line at most ``MAX_LINE_BYTES``): a 24-hour job's journal — its frames (the
+                   2,000,000-line limit bounds them at any baud rate), a status record every 30 ms
+                   and the progress records — about 7 KB/s at 9600 baud, 0.6 GB a day.
 """
 
 from __future__ import annotations
@@ -27,6 +31,8 @@ from ..errors import UnusableInput
 
 MAX_INPUT_BYTES = 128 * 1024 * 1024
 MAX_TOML_BYTES = 1024 * 1024
+MAX_LOG_BYTES = 2 * 1024 * 1024 * 1024
+MAX_LINE_BYTES = 1024 * 1024  # a journal record is under 1 KB: a longer line is no log's
 _CHUNK_BYTES = 1024 * 1024
 
 
@@ -68,6 +74,26 @@ def read_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES
         if total > limit_bytes:
             raise InputTooLarge.beyond(name, limit_bytes)
     return b"".join(chunks)
+
+
+def read_lines_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_LOG_BYTES) -> Iterator[bytes]:
+    """``read_blocks_bounded`` as lines, each with its line break (the last without one if the
+    input has none); ``InputTooLarge`` for a line longer than ``MAX_LINE_BYTES`` (memory stays
+    bounded by a line, not the input) — but a longer run of NUL bytes alone reads as one NUL."""
+    tail = b""
+    for block in read_blocks_bounded(stream, name, limit_bytes):
+        lines = (tail + block).split(b"\n")
+        tail = lines.pop()
+        for line in lines:
+            yield line + b"\n"
+        if len(tail) > MAX_LINE_BYTES:
+            if not tail.strip(b"\0"):  # blocks a file system allocated and never wrote: one NUL means the same
+                tail = b"\0"
+                continue
+            raise InputTooLarge(f"{name}: a line longer than {describe_limit(MAX_LINE_BYTES)}: armctl reads no longer "
+                                "line there (is this the file you meant?)")
+    if tail:
+        yield tail
 
 
 def read_blocks_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES,

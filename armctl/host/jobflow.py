@@ -286,19 +286,21 @@ def read_resume_point(log, script, from_line: int = 1):
     from dataclasses import replace
 
     from ..errors import ResumeRefused
-    from .inputs import read_file_bounded
-    from ..core.joblog import ResumePoint, read_resume_log
+    from .inputs import MAX_LOG_BYTES, open_regular, read_lines_bounded
+    from ..core.joblog import ResumePoint, read_resume_lines
 
     if from_line != 1:
         raise ResumeRefused("--resume LOG decides the line to continue at: drop --from-line")
     if isinstance(log, ResumePoint):
         return log
     name = str(log)
-    try:  # bounded: an endless file (/dev/zero) is an error, not a hang
-        text = read_file_bounded(name, f"--resume {name}").decode("utf-8", errors="replace")
-        if journal_in_use(name):  # (a regular file: read_file_bounded refuses anything else)
-            raise ResumeRefused(IN_USE)
-        point = read_resume_log(text, script.name, script.data)
+    try:  # bounded: an endless file is an error, not a hang; a device (/dev/zero) is no log (open_regular)
+        with open_regular(name, f"--resume {name}") as stream:
+            if journal_in_use(name):
+                raise ResumeRefused(IN_USE)
+            lines = (raw.decode("utf-8", errors="replace")
+                     for raw in read_lines_bounded(stream, f"--resume {name}", MAX_LOG_BYTES))
+            point = read_resume_lines(lines, script.name, script.data)
         if not os.access(name, os.W_OK):
             raise ResumeRefused("it cannot be written, and a resume marks the log it continues so that it is never "
                                 "resumed twice (mark_resumed): make it writable, or resume a writable copy")
