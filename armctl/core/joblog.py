@@ -87,11 +87,16 @@ def unseal(line: str) -> dict | None:
         return None
     if not isinstance(record, dict) or not isinstance(record.get("crc"), str):
         return None
-    crc = record.pop("crc")
+    return record if intact(record) else None
+
+
+def intact(record: dict) -> bool:
+    """A parsed sealed record's CRC-32 matches the rest of it (its ``crc`` is taken out)."""
+    crc = record.pop("crc", None)
     try:
-        return record if _crc(record) == crc else None
-    except (ValueError, RecursionError):
-        return None
+        return isinstance(crc, str) and _crc(record) == crc
+    except (ValueError, RecursionError, TypeError):
+        return False
 
 
 def resumed_record(at_line: int, into: str | None) -> dict:

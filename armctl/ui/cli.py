@@ -19,7 +19,6 @@ if is_the_program():  # the armctl command (not a test or a script importing thi
 
 import json  # noqa: E402  (the handlers first: a signal in the first instant is exit 130, no traceback)
 import sys  # noqa: E402
-from contextlib import contextmanager  # noqa: E402
 from itertools import islice  # noqa: E402
 
 import click  # noqa: E402
@@ -196,44 +195,9 @@ def decode(source: str, as_json: bool):
     belong to no frame.  A run --log's frames come with their time and direction
     (host→arm, arm→host), in the log's order.  The input is read as it is decoded.
     """
-    from .decode import NotHex, decode_stream
-    from .formats import ChunkTally, decoded_record, describe_decoded
+    from .decode_output import print_decoded
 
-    tally = ChunkTally()
-    out = sys.stdout
-    with _open_input(source) as stream:
-        lines: list[str] = []
-        try:
-            for item in decode_stream(stream, "<stdin>" if source == "-" else source):
-                tally.add(item.chunk)
-                lines.append(json.dumps(decoded_record(item)) if as_json else describe_decoded(item))
-                if len(lines) >= 1024:  # a write per line costs more than the decoding
-                    out.write("\n".join(lines) + "\n")
-                    lines = []
-        except NotHex as error:
-            raise UsageFailure(f"{source}: {error}") from None
-        finally:
-            if lines:
-                out.write("\n".join(lines) + "\n")
-    click.echo(tally.line(), err=True)
-
-
-@contextmanager
-def _open_input(path: str):
-    """``path`` opened for binary reading (``-``: stdin, left open); unreadable: exit 2.  Only a
-    regular file (``inputs.open_regular``): a named pipe, device or directory is refused before
-    it is opened (``UnusableInput``: exit 2) — stdin is the way to give a stream."""
-    from ..host.inputs import open_regular
-
-    if path == "-":
-        yield sys.stdin.buffer
-        return
-    try:
-        stream = open_regular(path)
-    except OSError as error:
-        raise UsageFailure(f"cannot read {path}: {error.strerror or error}") from None
-    with stream:
-        yield stream
+    sys.exit(print_decoded(source, as_json))
 
 
 def _read_script(path: str):

@@ -14,7 +14,9 @@ A log's records carry a time (``t``, the arm's clock) and a direction (``tx``: h
 spans the two), and each frame is given the time of the record its first byte came in.  Frames
 come out in the log's order, so the two directions interleave by time, not by byte offset;
 a chunk's ``offset`` counts the bytes of its own direction.  A log line that is no JSON object
-with a ``hex`` string carries no bytes (a note, a progress record, a torn line).
+with a ``hex`` string carries no bytes (a note, a progress record, a torn line), and neither
+does a sealed record (``run --log``'s: place and CRC-32) whose checksum does not match: its
+bytes may not be the ones written, so the CLI names its line and exits 1.
 
 Pure but for reading the stream it is given: no printing (the CLI formats each ``Decoded``).
 """
@@ -32,6 +34,7 @@ from .formats import (  # noqa: F401 - DIRECTIONS: the log's words, offered here
     DIRECTIONS, HEX_DIGIT_BYTES, WHITESPACE_BYTES, looks_like_hex, looks_like_log,
 )
 from ..host.inputs import MAX_INPUT_BYTES, read_blocks_bounded
+from ..core.joblog import intact
 from ..core.protocol import CONTROL_HEAD, FRAME_SIZE, MOTION_HEAD, STATUS_HEAD, STATUS_SIZE
 from ..core.status_frames import Chunk, chunk_at
 
@@ -106,9 +109,11 @@ class FrameScanner:
         return out
 
 
-def decode_stream(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES) -> Iterator[Decoded]:
+def decode_stream(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES,
+                  damaged: list[int] | None = None) -> Iterator[Decoded]:
     """Every chunk of ``stream`` in order (``InputTooLarge`` past ``limit_bytes``, ``NotHex``
-    for hex text that stops being hex beyond its first block)."""
+    for hex text that stops being hex beyond its first block); a log's sealed records whose
+    checksum does not match give no bytes, their line numbers appended to ``damaged``."""
     blocks = read_blocks_bounded(stream, name, limit_bytes, BLOCK_BYTES)
     first = b""
     for block in blocks:  # the probe: up to PROBE_BYTES, or the whole input
@@ -118,7 +123,7 @@ def decode_stream(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTE
     ended = len(first) < PROBE_BYTES
     rest = iter(()) if ended else blocks
     if _looks_like_log(first, ended):
-        yield from _log_chunks(first, rest)
+        yield from _log_chunks(first, rest, [] if damaged is None else damaged)
     elif _looks_like_hex(first, ended):
         yield from (Decoded(chunk) for chunk in _scan_all(_hex_bytes(first, rest)))
     else:
@@ -180,12 +185,16 @@ def _log_lines(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:
         yield tail
 
 
-def _log_chunks(first: bytes, rest: Iterator[bytes]) -> Iterator[Decoded]:
+def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list[int]) -> Iterator[Decoded]:
     """Each record's bytes into its direction's scanner; each chunk with the time of the
-    record its first byte came in."""
+    record its first byte came in.  A sealed record (``run --log``'s: its ``crc``) whose
+    checksum does not match gives no bytes: its line number goes to ``damaged``."""
     scanners: dict[str | None, tuple[FrameScanner, deque]] = {}
-    for line in _log_lines(first, rest):
+    for number, line in enumerate(_log_lines(first, rest), 1):
         record = _record(line)
+        if record is _DAMAGED:
+            damaged.append(number)
+            continue
         if record is None:
             continue
         data, t_s, direction = record
@@ -196,7 +205,11 @@ def _log_chunks(first: bytes, rest: Iterator[bytes]) -> Iterator[Decoded]:
         yield from _timed(scanner.finish(), marks, direction)
 
 
-def _record(line: bytes) -> tuple[bytes, float | None, str | None] | None:
+_DAMAGED = object()  # ``_record``'s answer for a sealed record whose checksum does not match
+
+
+def _record(line: bytes):
+    """A record's (bytes, time, direction); None for a line that carries none; ``_DAMAGED``."""
     if not line.strip():
         return None
     try:
@@ -204,6 +217,8 @@ def _record(line: bytes) -> tuple[bytes, float | None, str | None] | None:
         data = bytes.fromhex(record["hex"])
     except (ValueError, KeyError, TypeError, RecursionError):
         return None  # a note, a summary, no JSON object, nested too deep: no bytes
+    if "crc" in record and not intact(record):
+        return _DAMAGED  # its bytes may not be the ones written (a flipped bit)
     t_s = record.get("t")
     direction = record.get("dir")
     return (data, float(t_s) if isinstance(t_s, (int, float)) and not isinstance(t_s, bool) else None,

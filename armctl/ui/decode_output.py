@@ -1,0 +1,61 @@
+"""``armctl decode``'s output: each ``Decoded`` of the input (armctl/ui/decode.py) printed as a
+line (or a JSON line), a write per 1,024 lines; the tally and every damaged log record on
+stderr; the exit code (1 when a sealed record's checksum did not match: its bytes were not
+shown).  The input is a regular file or stdin (``open_input``)."""
+
+from __future__ import annotations
+
+import json
+import sys
+from contextlib import contextmanager
+
+import click
+
+from ..errors import EXIT_PROBLEMS, UsageFailure
+
+
+def print_decoded(source: str, as_json: bool) -> int:
+    """Decode ``source`` (a path, ``-``: stdin) to stdout; the exit code."""
+    from .decode import NotHex, decode_stream
+    from .formats import ChunkTally, decoded_record, describe_decoded
+
+    tally = ChunkTally()
+    out = sys.stdout
+    damaged: list[int] = []
+    name = "<stdin>" if source == "-" else source
+    with open_input(source) as stream:
+        lines: list[str] = []
+        try:
+            for item in decode_stream(stream, name, damaged=damaged):
+                tally.add(item.chunk)
+                lines.append(json.dumps(decoded_record(item)) if as_json else describe_decoded(item))
+                if len(lines) >= 1024:  # a write per line costs more than the decoding
+                    out.write("\n".join(lines) + "\n")
+                    lines = []
+        except NotHex as error:
+            raise UsageFailure(f"{source}: {error}") from None
+        finally:
+            if lines:
+                out.write("\n".join(lines) + "\n")
+    for number in damaged:
+        click.echo(f"{name}:{number}: a damaged record (its checksum does not match): its bytes are not shown", err=True)
+    click.echo(tally.line(), err=True)
+    return EXIT_PROBLEMS if damaged else 0
+
+
+@contextmanager
+def open_input(path: str):
+    """``path`` opened for binary reading (``-``: stdin, left open); unreadable: exit 2.  Only a
+    regular file (``inputs.open_regular``): a named pipe, device or directory is refused before
+    it is opened (``UnusableInput``: exit 2) — stdin is the way to give a stream."""
+    from ..host.inputs import open_regular
+
+    if path == "-":
+        yield sys.stdin.buffer
+        return
+    try:
+        stream = open_regular(path)
+    except OSError as error:
+        raise UsageFailure(f"cannot read {path}: {error.strerror or error}") from None
+    with stream:
+        yield stream
