@@ -142,7 +142,7 @@ async def lint(request: web.Request) -> web.Response:
     from ..lint.formatters import as_record
 
     service = _service(request)
-    report = service.check(await _script(request), errors_raise=False)
+    report = await service.check(await _script(request), errors_raise=False)
     return web.json_response({"errors": report.errors, "diagnostics": [as_record(d) for d in report.diagnostics]})
 
 
@@ -154,8 +154,9 @@ async def preview(request: web.Request) -> web.Response:
 
     service = _service(request)
     snapshot = await _script(request)
-    report = service.check(snapshot)
-    path = build_path(snapshot.compile(), MotionModel(service.arm.profile), snapshot.name, report.diagnostics)
+    report = await service.check(snapshot)
+    path = await asyncio.to_thread(  # (off the event loop, as the check: seconds for a big script)
+        lambda: build_path(snapshot.compile(), MotionModel(service.arm.profile), snapshot.name, report.diagnostics))
     return web.json_response({
         "start": list(path.start), "omitted": path.omitted,
         "segments": [{"line": s.line, "first_line": s.first_line, "kind": s.kind, "points": [list(p) for p in s.points]}
@@ -169,9 +170,9 @@ async def create_job(request: web.Request) -> web.Response:
     service = _service(request)
     resume = request.query.get("resume")
     if resume is not None:
-        job, report = service.resume_job(resume, _client(request))
+        job, report = await service.resume_job(resume, _client(request))
     else:
-        job, report = service.start_job(await _script(request), _client(request))
+        job, report = await service.start_job(await _script(request), _client(request))
     return web.json_response({"id": job.id, "journal": str(job.log_path),
                               "diagnostics": [as_record(d) for d in report.diagnostics]}, status=201)
 

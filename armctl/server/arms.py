@@ -125,25 +125,32 @@ class ArmService:
 
     # --- jobs --------------------------------------------------------------------------------
 
-    def check(self, snapshot, *, errors_raise: bool = True):
+    async def check(self, snapshot, *, errors_raise: bool = True):
         """``snapshot`` checked for this arm's profile (``Arm.run``'s check, made once: the
-        ``CheckedScript`` is what the job runs): ``errors`` and ``diagnostics`` are ``armctl lint``'s."""
+        ``CheckedScript`` is what the job runs): ``errors`` and ``diagnostics`` are ``armctl lint``'s.
+        In a thread: a big script takes seconds of CPU (a 128 MiB one minutes), and the event loop
+        carries every viewer's events and the jog dead-man meanwhile."""
         from ..core.checked import check
 
-        checked = check(snapshot, self.arm.profile)
+        checked = await asyncio.to_thread(check, snapshot, self.arm.profile)
         if errors_raise and checked.refusal() is not None:
             raise checked.refusal()
         return checked
 
-    def start_job(self, snapshot, client: str | None, resume=None) -> tuple[Job, Any]:
-        """Check, journal and start ``snapshot`` (``ScriptError``: nothing sent; ``Busy``);
-        ``resume``: the ``joblog.ResumePoint`` of an earlier job of this script."""
+    def check_free(self, client: str | None) -> None:
+        """``client`` may start a job or a move now (``NotController``, ``Busy`` otherwise)."""
         self.check_control(client)
         if self.busy:
             raise Busy(f"arm {self.name!r} is running job {self.running.id if self.running else '(a move)'}: "
                        "wait for it to end or stop it")
         self.check_not_jogging()
-        checked = self.check(snapshot)
+
+    async def start_job(self, snapshot, client: str | None, resume=None) -> tuple[Job, Any]:
+        """Check, journal and start ``snapshot`` (``ScriptError``: nothing sent; ``Busy``);
+        ``resume``: the ``joblog.ResumePoint`` of an earlier job of this script."""
+        self.check_free(client)  # before the check's work, and again after it (another job may have begun)
+        checked = await self.check(snapshot)
+        self.check_free(client)
         job_id = time.strftime("%Y%m%dT%H%M%S") + "-" + uuid.uuid4().hex[:6]
         self.journal_dir.mkdir(parents=True, exist_ok=True)
         job = Job(job_id, snapshot.name, self.journal_dir / f"{job_id}.txt", self.journal_dir / f"{job_id}.log")
@@ -152,7 +159,7 @@ class ArmService:
         job.task = asyncio.ensure_future(self._run(job, checked, resume))
         return job, checked
 
-    def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
+    async def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
         """A job of the journal (this server's or an earlier one's), continued from the line its
         log and the arm's report prove (``Arm.run(resume=)``)."""
         from ..host.jobflow import read_resume_point
@@ -164,7 +171,8 @@ class ArmService:
         snapshot = ScriptSnapshot(_journal_name(log, job_id), (self.journal_dir / f"{job_id}.txt").read_bytes())
         self.check_control(client)
         # before the 201: a log that is no log of this script is refused (422), nothing sent
-        return self.start_job(snapshot, client, resume=read_resume_point(log, snapshot))
+        resume = await asyncio.to_thread(read_resume_point, log, snapshot)  # (reads the whole journal)
+        return await self.start_job(snapshot, client, resume=resume)
 
     async def _run(self, job: Job, checked, resume) -> None:
         from ..aio import EventObserver
@@ -224,10 +232,7 @@ class ArmService:
         return job
 
     async def move(self, words: dict, client: str | None) -> dict:
-        self.check_control(client)
-        if self.busy:
-            raise Busy(f"arm {self.name!r} is busy: wait for its job to end or stop it")
-        self.check_not_jogging()
+        self.check_free(client)
         self.moving = True
         try:
             result = await self.arm.move(**words)
