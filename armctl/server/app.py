@@ -135,7 +135,7 @@ async def list_arms(request: web.Request) -> web.Response:
 
 async def status(request: web.Request) -> web.Response:
     service = _service(request)
-    return web.json_response(await service.arm.status_json())
+    return web.json_response(await service.read_status())
 
 
 async def lint(request: web.Request) -> web.Response:

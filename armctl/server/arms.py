@@ -84,6 +84,7 @@ class ArmService:
         self.controller: str | None = None
         self.status: dict | None = None
         self._status_task: asyncio.Task | None = None
+        self._status_read = asyncio.Lock()  # one status read at a time (``read_status``)
         self._jog = None  # the Deadman, once a jog started
         self._jog_task: asyncio.Task | None = None
 
@@ -242,6 +243,13 @@ class ArmService:
 
     # --- status ------------------------------------------------------------------------------
 
+    async def read_status(self, timeout: float | None = None) -> dict:
+        """The arm's report (``status_json``), one read at a time: on a virtual-clock arm a read
+        waits for the running job, and readers in every thread of the arm's pool (four) would leave
+        a pause or a feed waiting for the job's end — then pausing the idle arm."""
+        async with self._status_read:
+            return await self.arm.status_json(timeout)
+
     def start(self) -> None:
         self._status_task = asyncio.ensure_future(self._poll_status())
 
@@ -253,7 +261,7 @@ class ArmService:
             if not self.hub.viewers or (self.arm.is_virtual and self.busy):
                 continue
             try:
-                self.status = await self.arm.status_json(timeout=1.0)
+                self.status = await self.read_status(timeout=1.0)
             except ArmctlError as error:
                 self.publish({"event": "status", "status": None, "error": str(error)})
                 continue
