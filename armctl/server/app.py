@@ -106,7 +106,11 @@ async def _script(request: web.Request):
 
 
 async def _json_object(request: web.Request) -> dict:
-    text = await request.text()
+    data = await request.read()
+    try:  # JSON is UTF-8 (RFC 8259), whatever charset a Content-Type names
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise _BadJson(f"the body is not JSON: byte {data[error.start]:#04x} at offset {error.start} is not UTF-8 text") from None
     try:
         value = json.loads(text) if text.strip() else {}
     except json.JSONDecodeError as error:
