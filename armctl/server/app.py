@@ -249,7 +249,7 @@ async def events(request: web.Request) -> web.WebSocketResponse:
     finally:
         sender.cancel()
         service.hub.remove(viewer)
-        if service.controller == client:
+        if control:  # (this socket's own control: a duplicated tab keeps it while its socket lives)
             await service.jog_stop()  # a closed tab: the neutral at once
             service.release_control(client)
     return socket

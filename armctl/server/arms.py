@@ -82,6 +82,7 @@ class ArmService:
         self.running: Job | None = None
         self.moving = False
         self.controller: str | None = None
+        self._control_sockets = 0  # the controller's WebSockets that asked for control (a duplicated tab: 2)
         self.status: dict | None = None
         self._status_task: asyncio.Task | None = None
         self._status_read = asyncio.Lock()  # one status read at a time (``read_status``)
@@ -110,15 +111,21 @@ class ArmService:
     # --- control -----------------------------------------------------------------------------
 
     def take_control(self, client: str) -> bool:
+        """A WebSocket of ``client`` asks for control: True when it has it (call
+        ``release_control`` when that socket closes)."""
         if self.controller in (None, client):
             self.controller = client
+            self._control_sockets += 1
             return True
         return False
 
     def release_control(self, client: str) -> None:
+        """A socket that took control closed: control is free once the client's last one did."""
         if self.controller == client:
-            self.controller = None
-            self.publish({"event": "control", "controller": None})
+            self._control_sockets -= 1
+            if self._control_sockets == 0:
+                self.controller = None
+                self.publish({"event": "control", "controller": None})
 
     def check_control(self, client: str | None) -> None:
         if self.controller is not None and client != self.controller:
