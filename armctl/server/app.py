@@ -15,7 +15,7 @@ import logging
 import uuid
 from importlib import resources
 
-from aiohttp import WSMsgType, web
+from aiohttp import WSCloseCode, WSMsgType, web
 
 from ..errors import ArmctlError, ScriptError
 from ..host.inputs import MAX_INPUT_BYTES
@@ -26,8 +26,10 @@ from .hub import Viewer
 _logger = logging.getLogger(__name__)
 CLIENT_HEADER = "X-Armctl-Client"  # which client a state-changing request comes from (the controller's id)
 WS_HEARTBEAT_S = 10.0  # aiohttp's ping on idle WebSockets (a dead peer is noticed)
+CLOSE_AT_SHUTDOWN_S = 1.0  # a WebSocket's time to answer the server's close when it stops (then dropped)
 SERVICES = web.AppKey("services", dict)
 SETTINGS = web.AppKey("settings", dict)
+SOCKETS = web.AppKey("sockets", set)  # the open WebSockets, closed at shutdown
 
 
 def _error(status: int, code: str, message: str, **extra) -> web.Response:
@@ -231,6 +233,7 @@ async def events(request: web.Request) -> web.WebSocketResponse:
     # a browser offering "armctl" and "bearer.TOKEN" gets "armctl" back (it must get one it offered)
     socket = web.WebSocketResponse(heartbeat=WS_HEARTBEAT_S, protocols=("armctl",), max_msg_size=64 * 1024)
     await socket.prepare(request)
+    request.app[SOCKETS].add(socket)
     client = request.query.get("client") or uuid.uuid4().hex
     control = request.query.get("control") in ("1", "true") and service.take_control(client)
     viewer = Viewer(client)
@@ -247,6 +250,7 @@ async def events(request: web.Request) -> web.WebSocketResponse:
                 continue
             await _on_message(service, client, socket, message.data)
     finally:
+        request.app[SOCKETS].discard(socket)
         sender.cancel()
         service.hub.remove(viewer)
         if control:  # (this socket's own control: a duplicated tab keeps it while its socket lives)
@@ -286,10 +290,25 @@ async def server_stats(request: web.Request) -> web.Response:
                               for name, service in request.app[SERVICES].items()})
 
 
+async def _close_sockets(app: web.Application) -> None:
+    """At shutdown, every WebSocket is closed "going away": an open one (a page) would hold
+    the server's exit for aiohttp's 15 s wait for its handler."""
+    async def close(socket) -> None:
+        try:  # (a client that never reads never answers: cancelled, its connection is dropped)
+            await asyncio.wait_for(socket.close(code=WSCloseCode.GOING_AWAY, message=b"the server is stopping"),
+                                   CLOSE_AT_SHUTDOWN_S)
+        except (asyncio.TimeoutError, ConnectionError):
+            pass
+
+    await asyncio.gather(*(close(socket) for socket in list(app[SOCKETS])))
+
+
 def build_app(services: dict, *, token: str | None, host: str) -> web.Application:
     app = web.Application(middlewares=[_guard], client_max_size=MAX_INPUT_BYTES)
     app[SERVICES] = services
     app[SETTINGS] = {"token": token, "host": host}
+    app[SOCKETS] = set()
+    app.on_shutdown.append(_close_sockets)
     app.router.add_get("/", page)
     app.router.add_get("/api/arms", list_arms)
     app.router.add_get("/api/server", server_stats)
