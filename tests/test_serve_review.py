@@ -183,3 +183,37 @@ def test_a_signal_mid_job_with_a_page_open_stops_the_job_and_exits_130_promptly(
     records = [json.loads(line) for line in Path(created["journal"]).read_text().splitlines()]
     assert any(r["dir"] == "tx" and r.get("abort") for r in records), "no abort sequence in the journal"
     assert "Traceback" not in "".join(server.stderr_lines)
+
+
+def test_big_scripts_sent_at_once_are_checked_one_at_a_time(tmp_path, monkeypatch):
+    """Checks run off the event loop, but two at once starve the arm's worker thread of the GIL:
+    three 12 MB lints at once made a 48.3 s job (sim://?speed=4) take 55.0 s of arm time (one
+    after another: 48.4 s).  Scripts sent together are checked one after another."""
+    import threading
+
+    import armctl.core.checked as checked
+
+    inside, most = [0], [0]
+    lock = threading.Lock()
+    real_check = checked.check
+
+    def counted(*args, **kwargs):
+        with lock:
+            inside[0] += 1
+            most[0] = max(most[0], inside[0])
+        try:
+            time.sleep(0.2)  # a big script's check, long enough to overlap
+            return real_check(*args, **kwargs)
+        finally:
+            with lock:
+                inside[0] -= 1
+
+    monkeypatch.setattr(checked, "check", counted)
+
+    async def test(client, services):
+        answers = await asyncio.gather(*(client.post(path, data=moves(10) + "G1 Z\n") for path in
+                                         ("/api/arms/a/lint", "/api/arms/a/preview", "/api/arms/b/jobs", "/api/arms/b/lint")))
+        assert sorted(answer.status for answer in answers) == [200, 200, 422, 422]
+        assert most[0] == 1, f"{most[0]} checks ran at once"
+
+    with_client(tmp_path, test, arms=("a", "b"))
