@@ -20,7 +20,7 @@ from aiohttp import WSCloseCode, WSMsgType, web
 from ..errors import ArmctlError, ScriptError
 from ..host.inputs import MAX_INPUT_BYTES
 from . import auth
-from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob
+from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob, off_loop
 from .hub import Viewer
 
 _logger = logging.getLogger(__name__)
@@ -161,8 +161,8 @@ async def preview(request: web.Request) -> web.Response:
     service = _service(request)
     snapshot = await _script(request)
     report = await service.check(snapshot)
-    path = await asyncio.to_thread(  # (off the event loop, as the check: seconds for a big script)
-        lambda: build_path(snapshot.compile(), MotionModel(service.arm.profile), snapshot.name, report.diagnostics))
+    path = await off_loop(lambda: build_path(snapshot.compile(), MotionModel(service.arm.profile), snapshot.name,
+                                             report.diagnostics))
     return web.json_response({
         "start": list(path.start), "omitted": path.omitted,
         "segments": [{"line": s.line, "first_line": s.first_line, "kind": s.kind, "points": [list(p) for p in s.points]}
