@@ -217,3 +217,48 @@ def test_big_scripts_sent_at_once_are_checked_one_at_a_time(tmp_path, monkeypatc
         assert most[0] == 1, f"{most[0]} checks ran at once"
 
     with_client(tmp_path, test, arms=("a", "b"))
+
+
+def test_a_binary_websocket_message_is_answered_with_an_error(tmp_path):
+    """docs/server.md: any message that is not a JSON object with "jog" or "ping" is answered
+    with an error event (a client waiting for an answer is never left waiting); a binary one
+    was dropped without a word."""
+
+    async def test(client, services):
+        socket = await client.ws_connect("/api/arms/a/events")
+        assert (await socket.receive_json())["event"] == "hello"
+        await socket.send_bytes(b'{"ping": 1}')
+        while True:
+            event = await asyncio.wait_for(socket.receive_json(), 5)
+            if event["event"] != "status":
+                break
+        assert event["event"] == "error" and "text" in event["error"], event
+        await socket.close()
+
+    with_client(tmp_path, test)
+
+
+@pytest.mark.realtime
+@pytest.mark.timeout(120)
+def test_a_read_only_page_takes_control_when_the_controlling_page_closes(tmp_path):
+    """In chromium: the first page controls the arm, a second is read-only.  When the first
+    closed, the server freed the arm (any client may drive it) but the second page went on
+    saying 'read-only' — and could in fact run jobs — until reloaded.  It takes control."""
+    from test_server_browser import By, headless_chromium, wait  # (skips this test where no browser is)
+
+    def badge(driver, expected: str) -> None:
+        wait(driver, lambda d: d.find_element(By.CSS_SELECTOR, 'section[data-arm="a"] .badge').text == expected)
+
+    with headless_chromium() as driver, served("--arm", "a=sim://?speed=20", journal=tmp_path) as server:
+        driver.get(server.base + "/")
+        badge(driver, "in control")
+        first = driver.current_window_handle
+        driver.switch_to.new_window("tab")  # a page of its own (its own sessionStorage: another client)
+        driver.get(server.base + "/")
+        badge(driver, "read-only")
+        second = driver.current_window_handle
+        driver.switch_to.window(first)
+        driver.close()
+        driver.switch_to.window(second)
+        badge(driver, "in control")
+        assert server.request("GET", "/api/arms")[1][0]["controlled"] is True
