@@ -246,9 +246,10 @@ async def events(request: web.Request) -> web.WebSocketResponse:
     sender = asyncio.ensure_future(viewer.send_all(socket.send_str))
     try:
         async for message in socket:
-            if message.type != WSMsgType.TEXT:
-                continue
-            await _on_message(service, client, socket, message.data)
+            if message.type == WSMsgType.TEXT:
+                await _on_message(service, client, socket, message.data)
+            elif message.type == WSMsgType.BINARY:  # answered too: the client would wait for an answer
+                await socket.send_json({"event": "error", "error": "expected a text message (JSON), not a binary one"})
     finally:
         request.app[SOCKETS].discard(socket)
         sender.cancel()
