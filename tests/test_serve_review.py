@@ -262,3 +262,32 @@ def test_a_read_only_page_takes_control_when_the_controlling_page_closes(tmp_pat
         driver.switch_to.window(second)
         badge(driver, "in control")
         assert server.request("GET", "/api/arms")[1][0]["controlled"] is True
+
+
+@pytest.mark.realtime
+def test_ctrl_c_while_big_scripts_are_being_checked_exits_at_once(tmp_path):
+    """The installed command, three 4.7 MB scripts sent to lint at once, then SIGINT: the server
+    waited for every check (each seconds of CPU; with three 12 MB ones it exited after 31.5 s,
+    77 s when they ran on the event loop).  A check has no effect to wait for: it is abandoned."""
+    import threading
+    import urllib.request
+
+    big = moves(400_000).encode()
+    with served("--arm", "a=sim://?speed=20", journal=tmp_path) as server:
+        def lint() -> None:
+            try:
+                urllib.request.urlopen(urllib.request.Request(server.base + "/api/arms/a/lint", data=big, method="POST"),
+                                       timeout=60).read()
+            except OSError:
+                pass  # the server stopped first
+
+        clients = [threading.Thread(target=lint, daemon=True) for _ in range(3)]
+        for client in clients:
+            client.start()
+        time.sleep(1.0)  # the bodies are in, the first check under way
+        started = time.monotonic()
+        server.process.send_signal(signal.SIGINT)
+        assert server.process.wait(60) == 130
+        took_s = time.monotonic() - started
+    assert took_s < 2.5, took_s  # the checks queued take 3 x 2.5 s or more
+    assert "Traceback" not in "".join(server.stderr_lines)
