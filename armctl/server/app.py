@@ -20,7 +20,7 @@ from aiohttp import WSCloseCode, WSMsgType, web
 from ..errors import ArmctlError, ScriptError
 from ..host.inputs import MAX_INPUT_BYTES
 from . import auth
-from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob, off_loop
+from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob, abandon_script_work, off_loop
 from .hub import Viewer
 
 _logger = logging.getLogger(__name__)
@@ -291,9 +291,12 @@ async def server_stats(request: web.Request) -> web.Response:
                               for name, service in request.app[SERVICES].items()})
 
 
-async def _close_sockets(app: web.Application) -> None:
-    """At shutdown, every WebSocket is closed "going away": an open one (a page) would hold
-    the server's exit for aiohttp's 15 s wait for its handler."""
+async def _on_shutdown(app: web.Application) -> None:
+    """At shutdown, nothing holds the server's exit: the requests waiting for a script's check
+    end (it is abandoned), every WebSocket is closed "going away" (an open one, a page, held it
+    for aiohttp's 15 s wait for its handler)."""
+    abandon_script_work()
+
     async def close(socket) -> None:
         try:  # (a client that never reads never answers: cancelled, its connection is dropped)
             await asyncio.wait_for(socket.close(code=WSCloseCode.GOING_AWAY, message=b"the server is stopping"),
@@ -309,7 +312,7 @@ def build_app(services: dict, *, token: str | None, host: str) -> web.Applicatio
     app[SERVICES] = services
     app[SETTINGS] = {"token": token, "host": host}
     app[SOCKETS] = set()
-    app.on_shutdown.append(_close_sockets)
+    app.on_shutdown.append(_on_shutdown)
     app.router.add_get("/", page)
     app.router.add_get("/api/arms", list_arms)
     app.router.add_get("/api/server", server_stats)

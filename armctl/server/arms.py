@@ -36,6 +36,7 @@ STATUS_EVERY_S = 0.25  # a status event this often while someone watches
 JOG_LEASE_S = 0.075  # the jog stops this long after the page's last heartbeat
 JOG_POLL_S = 0.01  # how often the dead-man's lease is looked at
 _SCRIPT_WORK = threading.Lock()  # one script's check or path at a time in the process (``off_loop``)
+_WAITING: set[asyncio.Future] = set()  # the answers script work owes (``abandon_script_work``)
 
 
 async def off_loop(function, *args):
@@ -43,12 +44,41 @@ async def off_loop(function, *args):
     one minutes) — in a thread, one at a time in the process.  Off the event loop, which carries
     every viewer's events and the jog dead-man; one at a time, because two at once starve the
     arms' worker threads of the GIL (three 12 MB lints at once made a 48.3 s job take 55.0 s of
-    arm time; one after another, 48.4 s)."""
-    def alone():
-        with _SCRIPT_WORK:
-            return function(*args)
+    arm time; one after another, 48.4 s).  A daemon thread: the work changes nothing, so a
+    stopping server abandons it (``abandon_script_work``) rather than wait for it."""
+    loop = asyncio.get_running_loop()
+    answer = loop.create_future()
 
-    return await asyncio.to_thread(alone)
+    def settle(done: bool, value) -> None:
+        if not answer.done():
+            answer.set_result(value) if done else answer.set_exception(value)
+
+    def work() -> None:
+        with _SCRIPT_WORK:
+            if answer.done():
+                return  # abandoned while it waited for its turn
+            try:
+                done, value = True, function(*args)
+            except BaseException as error:  # (handed to the request, as the call's own)
+                done, value = False, error
+        try:
+            loop.call_soon_threadsafe(settle, done, value)
+        except RuntimeError:
+            pass  # the loop is closed: the server stopped meanwhile
+
+    _WAITING.add(answer)
+    answer.add_done_callback(_WAITING.discard)
+    threading.Thread(target=work, name="armctl serve: script work", daemon=True).start()
+    return await answer
+
+
+def abandon_script_work() -> None:
+    """The requests of this loop waiting for script work end now (cancelled): a stopping server
+    does not wait for checks (with three 12 MB lints in flight it exited after 31.5 s)."""
+    loop = asyncio.get_running_loop()
+    for answer in list(_WAITING):
+        if answer.get_loop() is loop:
+            answer.cancel()
 
 
 class Busy(ArmctlError):
