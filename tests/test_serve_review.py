@@ -291,3 +291,17 @@ def test_ctrl_c_while_big_scripts_are_being_checked_exits_at_once(tmp_path):
         took_s = time.monotonic() - started
     assert took_s < 2.5, took_s  # the checks queued take 3 x 2.5 s or more
     assert "Traceback" not in "".join(server.stderr_lines)
+
+
+def test_a_plain_get_of_the_websocket_path_is_a_json_error(tmp_path):
+    """Every error is {"error", "code"} with a 4xx status (docs/server.md): a GET of the events
+    path without the WebSocket upgrade (a browser's address bar, curl) was 400 in plain text
+    ('No WebSocket UPGRADE hdr: None …')."""
+
+    async def test(client, services):
+        response = await client.get("/api/arms/a/events")
+        assert response.status == 400
+        answer = await response.json(content_type=None)
+        assert answer["code"] == "bad_request" and "WebSocket" in answer["error"], answer
+
+    with_client(tmp_path, test)
