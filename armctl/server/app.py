@@ -64,6 +64,8 @@ async def _guard(request: web.Request, handler):
             return _error(404, "not_found", f"no such resource: {request.path}")
         if error.status == 405:
             return _error(405, "method_not_allowed", f"{request.method} is not allowed on {request.path}")
+        if 400 <= error.status < 500:  # aiohttp's own refusals (a GET of the WebSocket path without its upgrade)
+            return _error(error.status, "bad_request", " ".join((error.text or error.reason).split()))
         raise
     except ScriptError as error:
         return _error(422, "script_errors", str(error), diagnostics=_diagnostics(error))
