@@ -305,3 +305,32 @@ def test_a_plain_get_of_the_websocket_path_is_a_json_error(tmp_path):
         assert answer["code"] == "bad_request" and "WebSocket" in answer["error"], answer
 
     with_client(tmp_path, test)
+
+
+def test_a_client_gone_before_its_hello_leaves_the_arm_uncontrolled(tmp_path, monkeypatch):
+    """A WebSocket that asks for control and is gone before its hello is written (a reload at
+    the wrong instant; 200 connections reset just after their upgrade request did it in a
+    fresh process) left the arm controlled by nobody there: every state-changing request of
+    every client was 409 read_only until the server restarted.  Here the hello's write fails."""
+    from aiohttp import web
+
+    real_send_json = web.WebSocketResponse.send_json
+
+    async def send_json(self, data, *args, **kwargs):
+        if isinstance(data, dict) and data.get("event") == "hello":
+            raise ConnectionResetError("Cannot write to closing transport")
+        return await real_send_json(self, data, *args, **kwargs)
+
+    monkeypatch.setattr(web.WebSocketResponse, "send_json", send_json)
+
+    async def test(client, services):
+        socket = await client.ws_connect("/api/arms/a/events?control=1&client=gone")
+        await socket.receive()  # the server ends it
+        await socket.close()
+        await asyncio.sleep(0.1)
+        assert services["a"].controller is None
+        assert not services["a"].hub.viewers
+        response = await client.post("/api/arms/a/jobs", data=FIRST + "\n", headers={"X-Armctl-Client": "another"})
+        assert response.status == 201, await response.json()  # not 409 read_only
+
+    with_client(tmp_path, test)
