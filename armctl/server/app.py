@@ -235,30 +235,35 @@ async def events(request: web.Request) -> web.WebSocketResponse:
     # a browser offering "armctl" and "bearer.TOKEN" gets "armctl" back (it must get one it offered)
     socket = web.WebSocketResponse(heartbeat=WS_HEARTBEAT_S, protocols=("armctl",), max_msg_size=64 * 1024)
     await socket.prepare(request)
-    request.app[SOCKETS].add(socket)
     client = request.query.get("client") or uuid.uuid4().hex
     control = request.query.get("control") in ("1", "true") and service.take_control(client)
-    viewer = Viewer(client)
-    await socket.send_json({"event": "hello", "arm": service.name, "client": client, "control": control,
-                            "controlled": service.controller is not None, "status": service.status,
-                            "job": None if service.running is None else service.running.to_json()})
-    if control:
-        service.publish({"event": "control", "controller": "another client"})
-    service.hub.add(viewer)
-    sender = asyncio.ensure_future(viewer.send_all(socket.send_str))
-    try:
+    viewer, sender = Viewer(client), None
+    request.app[SOCKETS].add(socket)
+    try:  # (from here on: a client gone before its hello was written held control for good)
+        await socket.send_json({"event": "hello", "arm": service.name, "client": client, "control": control,
+                                "controlled": service.controller is not None, "status": service.status,
+                                "job": None if service.running is None else service.running.to_json()})
+        if control:
+            service.publish({"event": "control", "controller": "another client"})
+        service.hub.add(viewer)
+        sender = asyncio.ensure_future(viewer.send_all(socket.send_str))
         async for message in socket:
             if message.type == WSMsgType.TEXT:
                 await _on_message(service, client, socket, message.data)
             elif message.type == WSMsgType.BINARY:  # answered too: the client would wait for an answer
                 await socket.send_json({"event": "error", "error": "expected a text message (JSON), not a binary one"})
+    except ConnectionError:
+        pass  # the client went away while we wrote to it: as if it closed
     finally:
         request.app[SOCKETS].discard(socket)
-        sender.cancel()
+        if sender is not None:
+            sender.cancel()
         service.hub.remove(viewer)
         if control:  # (this socket's own control: a duplicated tab keeps it while its socket lives)
-            await service.jog_stop()  # a closed tab: the neutral at once
-            service.release_control(client)
+            try:
+                await service.jog_stop()  # a closed tab: the neutral at once
+            finally:
+                service.release_control(client)
     return socket
 
 
