@@ -1,13 +1,14 @@
 """One served arm: its ``AsyncArm``, its jobs and their journals, its controller, its viewers.
 
 Strategy: the server's state of one arm, and nothing about HTTP.  A job is checked here
-(``checked.check``, once: errors → ``ScriptError``, nothing sent; ``Arm.run`` takes the ``CheckedScript``),
-given an id, its script kept and its journal opened (``run --log``'s journal, through
-``Arm.run``'s ``log=``: ``<journal dir>/<id>.txt`` and ``<id>.log``), then run as an asyncio
-task that no client owns: it survives its client going away, and a restarted server resumes
-it from its journal (``Arm.run(resume=)``).  One job (or move) at a time: another is
-``Busy``.  At most one client controls the arm (the first WebSocket that asks, until it
-closes); while one does, state-changing calls from any other client are ``NotController``.
+(``checked.check``, once, off the event loop and one script at a time: ``off_loop``; errors →
+``ScriptError``, nothing sent; ``Arm.run`` takes the ``CheckedScript``), given an id, its
+script kept and its journal opened (``run --log``'s journal, through ``Arm.run``'s ``log=``:
+``<journal dir>/<id>.txt`` and ``<id>.log``), then run as an asyncio task that no client owns:
+it survives its client going away, and a restarted server resumes it from its journal
+(``Arm.run(resume=)``).  One job (or move) at a time: another is ``Busy``.  At most one client
+controls the arm (the first WebSocket that asks, until its client's last such socket closes);
+while one does, state-changing calls from any other client are ``NotController``.
 
 Jog: continuous jog is ``armctl jog``'s dead-man (armctl/jog/deadman.py) with a lease the
 controlling page renews with a heartbeat: a ``jog`` message starts or renews an axis, the lease
@@ -43,8 +44,8 @@ async def off_loop(function, *args):
     """``function(*args)`` — a script's check or path, seconds of CPU for a big one (a 128 MiB
     one minutes) — in a thread, one at a time in the process.  Off the event loop, which carries
     every viewer's events and the jog dead-man; one at a time, because two at once starve the
-    arms' worker threads of the GIL (three 12 MB lints at once made a 48.3 s job take 55.0 s of
-    arm time; one after another, 48.4 s).  A daemon thread: the work changes nothing, so a
+    arms' worker threads of the GIL (three 12 MB lints at once made a 48.3 s job take 49.4 s and
+    85.1 s of arm time; one at a time, 48.3 s and 48.5 s).  A daemon thread: the work changes nothing, so a
     stopping server abandons it (``abandon_script_work``) rather than wait for it."""
     loop = asyncio.get_running_loop()
     answer = loop.create_future()
