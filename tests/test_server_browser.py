@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import os
 import shutil
+from contextlib import contextmanager
 from pathlib import Path
 
 import pytest
@@ -29,8 +30,9 @@ pytestmark = [pytest.mark.realtime, pytest.mark.timeout(120)]
 BAD = (Path(__file__).parent / "data" / "scripts_cli" / "compile_error_job.txt").read_text()
 
 
-@pytest.fixture(scope="module")
-def browser():
+@contextmanager
+def headless_chromium():
+    """A headless chromium driven by Selenium, quit at the end of the block."""
     options = webdriver.ChromeOptions()
     options.binary_location = CHROMIUM
     for argument in ("--headless", "--no-sandbox", "--disable-gpu", "--disable-background-networking",
@@ -42,6 +44,12 @@ def browser():
         yield driver
     finally:
         driver.quit()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with headless_chromium() as driver:
+        yield driver
 
 
 @pytest.fixture(scope="module")

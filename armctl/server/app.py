@@ -15,19 +15,21 @@ import logging
 import uuid
 from importlib import resources
 
-from aiohttp import WSMsgType, web
+from aiohttp import WSCloseCode, WSMsgType, web
 
 from ..errors import ArmctlError, ScriptError
 from ..host.inputs import MAX_INPUT_BYTES
 from . import auth
-from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob
+from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob, abandon_script_work, off_loop
 from .hub import Viewer
 
 _logger = logging.getLogger(__name__)
 CLIENT_HEADER = "X-Armctl-Client"  # which client a state-changing request comes from (the controller's id)
 WS_HEARTBEAT_S = 10.0  # aiohttp's ping on idle WebSockets (a dead peer is noticed)
+CLOSE_AT_SHUTDOWN_S = 1.0  # a WebSocket's time to answer the server's close when it stops (then dropped)
 SERVICES = web.AppKey("services", dict)
 SETTINGS = web.AppKey("settings", dict)
+SOCKETS = web.AppKey("sockets", set)  # the open WebSockets, closed at shutdown
 
 
 def _error(status: int, code: str, message: str, **extra) -> web.Response:
@@ -62,6 +64,8 @@ async def _guard(request: web.Request, handler):
             return _error(404, "not_found", f"no such resource: {request.path}")
         if error.status == 405:
             return _error(405, "method_not_allowed", f"{request.method} is not allowed on {request.path}")
+        if 400 <= error.status < 500:  # aiohttp's own refusals (a GET of the WebSocket path without its upgrade)
+            return _error(error.status, "bad_request", " ".join((error.text or error.reason).split()))
         raise
     except ScriptError as error:
         return _error(422, "script_errors", str(error), diagnostics=_diagnostics(error))
@@ -106,7 +110,11 @@ async def _script(request: web.Request):
 
 
 async def _json_object(request: web.Request) -> dict:
-    text = await request.text()
+    data = await request.read()
+    try:  # JSON is UTF-8 (RFC 8259), whatever charset a Content-Type names
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise _BadJson(f"the body is not JSON: byte {data[error.start]:#04x} at offset {error.start} is not UTF-8 text") from None
     try:
         value = json.loads(text) if text.strip() else {}
     except json.JSONDecodeError as error:
@@ -135,14 +143,14 @@ async def list_arms(request: web.Request) -> web.Response:
 
 async def status(request: web.Request) -> web.Response:
     service = _service(request)
-    return web.json_response(await service.arm.status_json())
+    return web.json_response(await service.read_status())
 
 
 async def lint(request: web.Request) -> web.Response:
     from ..lint.formatters import as_record
 
     service = _service(request)
-    report = service.check(await _script(request), errors_raise=False)
+    report = await service.check(await _script(request), errors_raise=False)
     return web.json_response({"errors": report.errors, "diagnostics": [as_record(d) for d in report.diagnostics]})
 
 
@@ -154,8 +162,9 @@ async def preview(request: web.Request) -> web.Response:
 
     service = _service(request)
     snapshot = await _script(request)
-    report = service.check(snapshot)
-    path = build_path(snapshot.compile(), MotionModel(service.arm.profile), snapshot.name, report.diagnostics)
+    report = await service.check(snapshot)
+    path = await off_loop(lambda: build_path(snapshot.compile(), MotionModel(service.arm.profile), snapshot.name,
+                                             report.diagnostics))
     return web.json_response({
         "start": list(path.start), "omitted": path.omitted,
         "segments": [{"line": s.line, "first_line": s.first_line, "kind": s.kind, "points": [list(p) for p in s.points]}
@@ -169,9 +178,9 @@ async def create_job(request: web.Request) -> web.Response:
     service = _service(request)
     resume = request.query.get("resume")
     if resume is not None:
-        job, report = service.resume_job(resume, _client(request))
+        job, report = await service.resume_job(resume, _client(request))
     else:
-        job, report = service.start_job(await _script(request), _client(request))
+        job, report = await service.start_job(await _script(request), _client(request))
     return web.json_response({"id": job.id, "journal": str(job.log_path),
                               "diagnostics": [as_record(d) for d in report.diagnostics]}, status=201)
 
@@ -228,25 +237,33 @@ async def events(request: web.Request) -> web.WebSocketResponse:
     await socket.prepare(request)
     client = request.query.get("client") or uuid.uuid4().hex
     control = request.query.get("control") in ("1", "true") and service.take_control(client)
-    viewer = Viewer(client)
-    await socket.send_json({"event": "hello", "arm": service.name, "client": client, "control": control,
-                            "controlled": service.controller is not None, "status": service.status,
-                            "job": None if service.running is None else service.running.to_json()})
-    if control:
-        service.publish({"event": "control", "controller": "another client"})
-    service.hub.add(viewer)
-    sender = asyncio.ensure_future(viewer.send_all(socket.send_str))
-    try:
+    viewer, sender = Viewer(client), None
+    request.app[SOCKETS].add(socket)
+    try:  # (from here on: a client gone before its hello was written held control for good)
+        await socket.send_json({"event": "hello", "arm": service.name, "client": client, "control": control,
+                                "controlled": service.controller is not None, "status": service.status,
+                                "job": None if service.running is None else service.running.to_json()})
+        if control:
+            service.publish({"event": "control", "controller": "another client"})
+        service.hub.add(viewer)
+        sender = asyncio.ensure_future(viewer.send_all(socket.send_str))
         async for message in socket:
-            if message.type != WSMsgType.TEXT:
-                continue
-            await _on_message(service, client, socket, message.data)
+            if message.type == WSMsgType.TEXT:
+                await _on_message(service, client, socket, message.data)
+            elif message.type == WSMsgType.BINARY:  # answered too: the client would wait for an answer
+                await socket.send_json({"event": "error", "error": "expected a text message (JSON), not a binary one"})
+    except ConnectionError:
+        pass  # the client went away while we wrote to it: as if it closed
     finally:
-        sender.cancel()
+        request.app[SOCKETS].discard(socket)
+        if sender is not None:
+            sender.cancel()
         service.hub.remove(viewer)
-        if service.controller == client:
-            await service.jog_stop()  # a closed tab: the neutral at once
-            service.release_control(client)
+        if control:  # (this socket's own control: a duplicated tab keeps it while its socket lives)
+            try:
+                await service.jog_stop()  # a closed tab: the neutral at once
+            finally:
+                service.release_control(client)
     return socket
 
 
@@ -281,10 +298,28 @@ async def server_stats(request: web.Request) -> web.Response:
                               for name, service in request.app[SERVICES].items()})
 
 
+async def _on_shutdown(app: web.Application) -> None:
+    """At shutdown, nothing holds the server's exit: the requests waiting for a script's check
+    end (it is abandoned), every WebSocket is closed "going away" (an open one, a page, held it
+    for aiohttp's 15 s wait for its handler)."""
+    abandon_script_work()
+
+    async def close(socket) -> None:
+        try:  # (a client that never reads never answers: cancelled, its connection is dropped)
+            await asyncio.wait_for(socket.close(code=WSCloseCode.GOING_AWAY, message=b"the server is stopping"),
+                                   CLOSE_AT_SHUTDOWN_S)
+        except (asyncio.TimeoutError, ConnectionError):
+            pass
+
+    await asyncio.gather(*(close(socket) for socket in list(app[SOCKETS])))
+
+
 def build_app(services: dict, *, token: str | None, host: str) -> web.Application:
     app = web.Application(middlewares=[_guard], client_max_size=MAX_INPUT_BYTES)
     app[SERVICES] = services
     app[SETTINGS] = {"token": token, "host": host}
+    app[SOCKETS] = set()
+    app.on_shutdown.append(_on_shutdown)
     app.router.add_get("/", page)
     app.router.add_get("/api/arms", list_arms)
     app.router.add_get("/api/server", server_stats)

@@ -1,13 +1,14 @@
 """One served arm: its ``AsyncArm``, its jobs and their journals, its controller, its viewers.
 
 Strategy: the server's state of one arm, and nothing about HTTP.  A job is checked here
-(``checked.check``, once: errors → ``ScriptError``, nothing sent; ``Arm.run`` takes the ``CheckedScript``),
-given an id, its script kept and its journal opened (``run --log``'s journal, through
-``Arm.run``'s ``log=``: ``<journal dir>/<id>.txt`` and ``<id>.log``), then run as an asyncio
-task that no client owns: it survives its client going away, and a restarted server resumes
-it from its journal (``Arm.run(resume=)``).  One job (or move) at a time: another is
-``Busy``.  At most one client controls the arm (the first WebSocket that asks, until it
-closes); while one does, state-changing calls from any other client are ``NotController``.
+(``checked.check``, once, off the event loop and one script at a time: ``off_loop``; errors →
+``ScriptError``, nothing sent; ``Arm.run`` takes the ``CheckedScript``), given an id, its
+script kept and its journal opened (``run --log``'s journal, through ``Arm.run``'s ``log=``:
+``<journal dir>/<id>.txt`` and ``<id>.log``), then run as an asyncio task that no client owns:
+it survives its client going away, and a restarted server resumes it from its journal
+(``Arm.run(resume=)``).  One job (or move) at a time: another is ``Busy``.  At most one client
+controls the arm (the first WebSocket that asks, until its client's last such socket closes);
+while one does, state-changing calls from any other client are ``NotController``.
 
 Jog: continuous jog is ``armctl jog``'s dead-man (armctl/jog/deadman.py) with a lease the
 controlling page renews with a heartbeat: a ``jog`` message starts or renews an axis, the lease
@@ -20,6 +21,7 @@ from __future__ import annotations
 import asyncio
 import json
 import re
+import threading
 import time
 import uuid
 from dataclasses import dataclass, field
@@ -34,6 +36,50 @@ MAX_VIEWERS = 200  # WebSockets on one arm (each holds at most its queue): more 
 STATUS_EVERY_S = 0.25  # a status event this often while someone watches
 JOG_LEASE_S = 0.075  # the jog stops this long after the page's last heartbeat
 JOG_POLL_S = 0.01  # how often the dead-man's lease is looked at
+_SCRIPT_WORK = threading.Lock()  # one script's check or path at a time in the process (``off_loop``)
+_WAITING: set[asyncio.Future] = set()  # the answers script work owes (``abandon_script_work``)
+
+
+async def off_loop(function, *args):
+    """``function(*args)`` — a script's check or path, seconds of CPU for a big one (a 128 MiB
+    one minutes) — in a thread, one at a time in the process.  Off the event loop, which carries
+    every viewer's events and the jog dead-man; one at a time, because two at once starve the
+    arms' worker threads of the GIL (three 12 MB lints at once made a 48.3 s job take 49.4 s and
+    85.1 s of arm time; one at a time, 48.3 s and 48.5 s).  A daemon thread: the work changes nothing, so a
+    stopping server abandons it (``abandon_script_work``) rather than wait for it."""
+    loop = asyncio.get_running_loop()
+    answer = loop.create_future()
+
+    def settle(done: bool, value) -> None:
+        if not answer.done():
+            answer.set_result(value) if done else answer.set_exception(value)
+
+    def work() -> None:
+        with _SCRIPT_WORK:
+            if answer.done():
+                return  # abandoned while it waited for its turn
+            try:
+                done, value = True, function(*args)
+            except BaseException as error:  # (handed to the request, as the call's own)
+                done, value = False, error
+        try:
+            loop.call_soon_threadsafe(settle, done, value)
+        except RuntimeError:
+            pass  # the loop is closed: the server stopped meanwhile
+
+    _WAITING.add(answer)
+    answer.add_done_callback(_WAITING.discard)
+    threading.Thread(target=work, name="armctl serve: script work", daemon=True).start()
+    return await answer
+
+
+def abandon_script_work() -> None:
+    """The requests of this loop waiting for script work end now (cancelled): a stopping server
+    does not wait for checks (with three 12 MB lints in flight it exited after 31.5 s)."""
+    loop = asyncio.get_running_loop()
+    for answer in list(_WAITING):
+        if answer.get_loop() is loop:
+            answer.cancel()
 
 
 class Busy(ArmctlError):
@@ -82,8 +128,10 @@ class ArmService:
         self.running: Job | None = None
         self.moving = False
         self.controller: str | None = None
+        self._control_sockets = 0  # the controller's WebSockets that asked for control (a duplicated tab: 2)
         self.status: dict | None = None
         self._status_task: asyncio.Task | None = None
+        self._status_read = asyncio.Lock()  # one status read at a time (``read_status``)
         self._jog = None  # the Deadman, once a jog started
         self._jog_task: asyncio.Task | None = None
 
@@ -109,15 +157,21 @@ class ArmService:
     # --- control -----------------------------------------------------------------------------
 
     def take_control(self, client: str) -> bool:
+        """A WebSocket of ``client`` asks for control: True when it has it (call
+        ``release_control`` when that socket closes)."""
         if self.controller in (None, client):
             self.controller = client
+            self._control_sockets += 1
             return True
         return False
 
     def release_control(self, client: str) -> None:
+        """A socket that took control closed: control is free once the client's last one did."""
         if self.controller == client:
-            self.controller = None
-            self.publish({"event": "control", "controller": None})
+            self._control_sockets -= 1
+            if self._control_sockets == 0:
+                self.controller = None
+                self.publish({"event": "control", "controller": None})
 
     def check_control(self, client: str | None) -> None:
         if self.controller is not None and client != self.controller:
@@ -125,25 +179,30 @@ class ArmService:
 
     # --- jobs --------------------------------------------------------------------------------
 
-    def check(self, snapshot, *, errors_raise: bool = True):
+    async def check(self, snapshot, *, errors_raise: bool = True):
         """``snapshot`` checked for this arm's profile (``Arm.run``'s check, made once: the
         ``CheckedScript`` is what the job runs): ``errors`` and ``diagnostics`` are ``armctl lint``'s."""
         from ..core.checked import check
 
-        checked = check(snapshot, self.arm.profile)
+        checked = await off_loop(check, snapshot, self.arm.profile)
         if errors_raise and checked.refusal() is not None:
             raise checked.refusal()
         return checked
 
-    def start_job(self, snapshot, client: str | None, resume=None) -> tuple[Job, Any]:
-        """Check, journal and start ``snapshot`` (``ScriptError``: nothing sent; ``Busy``);
-        ``resume``: the ``joblog.ResumePoint`` of an earlier job of this script."""
+    def check_free(self, client: str | None) -> None:
+        """``client`` may start a job or a move now (``NotController``, ``Busy`` otherwise)."""
         self.check_control(client)
         if self.busy:
             raise Busy(f"arm {self.name!r} is running job {self.running.id if self.running else '(a move)'}: "
                        "wait for it to end or stop it")
         self.check_not_jogging()
-        checked = self.check(snapshot)
+
+    async def start_job(self, snapshot, client: str | None, resume=None) -> tuple[Job, Any]:
+        """Check, journal and start ``snapshot`` (``ScriptError``: nothing sent; ``Busy``);
+        ``resume``: the ``joblog.ResumePoint`` of an earlier job of this script."""
+        self.check_free(client)  # before the check's work, and again after it (another job may have begun)
+        checked = await self.check(snapshot)
+        self.check_free(client)
         job_id = time.strftime("%Y%m%dT%H%M%S") + "-" + uuid.uuid4().hex[:6]
         self.journal_dir.mkdir(parents=True, exist_ok=True)
         job = Job(job_id, snapshot.name, self.journal_dir / f"{job_id}.txt", self.journal_dir / f"{job_id}.log")
@@ -152,7 +211,7 @@ class ArmService:
         job.task = asyncio.ensure_future(self._run(job, checked, resume))
         return job, checked
 
-    def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
+    async def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
         """A job of the journal (this server's or an earlier one's), continued from the line its
         log and the arm's report prove (``Arm.run(resume=)``)."""
         from ..host.jobflow import read_resume_point
@@ -164,7 +223,8 @@ class ArmService:
         snapshot = ScriptSnapshot(_journal_name(log, job_id), (self.journal_dir / f"{job_id}.txt").read_bytes())
         self.check_control(client)
         # before the 201: a log that is no log of this script is refused (422), nothing sent
-        return self.start_job(snapshot, client, resume=read_resume_point(log, snapshot))
+        resume = await off_loop(read_resume_point, log, snapshot)  # (reads the whole journal)
+        return await self.start_job(snapshot, client, resume=resume)
 
     async def _run(self, job: Job, checked, resume) -> None:
         from ..aio import EventObserver
@@ -224,10 +284,7 @@ class ArmService:
         return job
 
     async def move(self, words: dict, client: str | None) -> dict:
-        self.check_control(client)
-        if self.busy:
-            raise Busy(f"arm {self.name!r} is busy: wait for its job to end or stop it")
-        self.check_not_jogging()
+        self.check_free(client)
         self.moving = True
         try:
             result = await self.arm.move(**words)
@@ -236,6 +293,13 @@ class ArmService:
         return result.to_json()
 
     # --- status ------------------------------------------------------------------------------
+
+    async def read_status(self, timeout: float | None = None) -> dict:
+        """The arm's report (``status_json``), one read at a time: on a virtual-clock arm a read
+        waits for the running job, and readers in every thread of the arm's pool (four) would leave
+        a pause or a feed waiting for the job's end — then pausing the idle arm."""
+        async with self._status_read:
+            return await self.arm.status_json(timeout)
 
     def start(self) -> None:
         self._status_task = asyncio.ensure_future(self._poll_status())
@@ -248,7 +312,7 @@ class ArmService:
             if not self.hub.viewers or (self.arm.is_virtual and self.busy):
                 continue
             try:
-                self.status = await self.arm.status_json(timeout=1.0)
+                self.status = await self.read_status(timeout=1.0)
             except ArmctlError as error:
                 self.publish({"event": "status", "status": None, "error": str(error)})
                 continue

@@ -1,18 +1,19 @@
 """``armctl serve``'s process: open the arms, listen, stop cleanly.
 
 Strategy: everything on one asyncio loop (aiohttp's), the arms opened as ``AsyncArm`` before
-the first request; SIGINT and SIGTERM stop the server the way Ctrl-C stops ``armctl run``: a
-running job is stopped (the abort sequence, the arm waited for, the journal closed), the arms
-closed, then the process exits 130.
+the first request; SIGINT, SIGTERM and SIGHUP (the terminal closed: ``stop_signals``'s three)
+stop the server the way Ctrl-C stops ``armctl run``: a running job is stopped (the abort
+sequence, the arm waited for, the journal closed), the WebSockets closed, the arms closed,
+then the process exits 130.
 """
 from __future__ import annotations
 
 import asyncio
-import signal
 import sys
 from pathlib import Path
 
 from ..errors import ConfigError
+from ..host.stop_signals import STOP_SIGNALS
 from . import auth
 from .arms import NAME_PATTERN, ArmService
 
@@ -46,7 +47,7 @@ def journal_root(journal_dir: str | None) -> Path:
 
 def serve(arm_specs: tuple[str, ...], listen: str, token_file: str | None, journal_dir: str | None,
           profile: str | None = None, lead_s: float = 2.0, say=print) -> None:
-    """Serve until SIGINT/SIGTERM (then KeyboardInterrupt).  ConfigError/PortError: nothing served."""
+    """Serve until SIGINT/SIGTERM/SIGHUP (then KeyboardInterrupt).  ConfigError/PortError: nothing served."""
     host, port = auth.parse_listen(listen)
     arms = parse_arms(arm_specs)
     token = None
@@ -58,7 +59,7 @@ def serve(arm_specs: tuple[str, ...], listen: str, token_file: str | None, journ
         else:
             say(f"armctl serve: requests need the token in {token_file or auth.token_path()}")
     asyncio.run(_serve(arms, host, port, token, journal_root(journal_dir), profile, lead_s, say))
-    raise KeyboardInterrupt  # stopped by SIGINT/SIGTERM, cleanly: exit 130 like every command
+    raise KeyboardInterrupt  # stopped by a signal, cleanly: exit 130 like every command
 
 
 async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None:
@@ -89,7 +90,7 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
         sys.stdout.flush()
         stop = asyncio.Event()
         loop = asyncio.get_running_loop()
-        for number in (signal.SIGINT, signal.SIGTERM):
+        for number in STOP_SIGNALS:  # (SIGHUP too: a closed terminal ended the process with no abort sequence)
             loop.add_signal_handler(number, stop.set)
         await stop.wait()
         for service in services.values():  # a job or a move stops first: no handler waits for it
