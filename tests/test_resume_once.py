@@ -101,3 +101,25 @@ def test_the_mark_keeps_the_intact_prefix_and_follows_a_whole_line(tmp_path):
     with pytest.raises(OSError):
         mark_resumed(str(bare), 1, None)
     assert bare.read_text() == '{"t": 0.0, "dir": "jo'
+
+
+def test_a_log_whose_frames_all_ran_is_not_resumed_from_where_the_arm_was_moved_to(tmp_path, monkeypatch):
+    # Found by the serve review: every frame the log records proven done, the arm then moved
+    # elsewhere (a move, a jog, another job), and --resume said "resuming at line N: the log and
+    # the arm's report prove every line before it ran" and went on from there.  The arm's report
+    # is the resume's proof: it must stand where the log's last frame leaves it.
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "job.txt").write_text(_job(), encoding="utf-8")
+    ports = _open_one_arm(monkeypatch)
+    _stop_after(monkeypatch, 14)
+    first = _invoke("run", "job.txt", "--no-live", "--port", URL, "--log", "j1.log")
+    assert first.exit_code == 130, first.output
+    elsewhere = tmp_path / "elsewhere.txt"
+    elsewhere.write_text("G1 X230 Y-30 Z200 A180 B0 C0 S1500 F3000\n", encoding="utf-8")
+    assert _invoke("run", str(elsewhere), "--no-live", "--port", URL).exit_code == 0
+    arm = ports[URL].model
+    ran = len(arm.execution_log)
+    resumed = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j1.log")
+    assert resumed.exit_code == 1, resumed.output
+    assert "not at rest where the log's last frame" in resumed.output and "--from-line" in resumed.output
+    assert len(arm.execution_log) == ran  # nothing sent
