@@ -47,6 +47,7 @@ def _run_then_resume(tmp_path, monkeypatch, second_log: bool = True):
     resumed = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j1.log",
                       *(("--log", "j2.log") if second_log else ()))
     assert resumed.exit_code == 0 and "resuming job.txt at line" in resumed.output, resumed.output
+    assert "moved since" not in resumed.output  # the arm stood where j1 left it
     back = tmp_path / "back.txt"  # the arm back where j1 left it, as a person might jog it
     back.write_text(f"G1 X{where['x']} Y{where['y']} Z{where['z']} A180 B0 C0 S1500 F3000\n", encoding="utf-8")
     moved = _invoke("run", str(back), "--no-live", "--port", URL)
@@ -103,23 +104,24 @@ def test_the_mark_keeps_the_intact_prefix_and_follows_a_whole_line(tmp_path):
     assert bare.read_text() == '{"t": 0.0, "dir": "jo'
 
 
-def test_a_log_whose_frames_all_ran_is_not_resumed_from_where_the_arm_was_moved_to(tmp_path, monkeypatch):
+def test_a_resume_from_where_the_arm_was_moved_to_says_so(tmp_path, monkeypatch):
     # Found by the serve review: every frame the log records proven done, the arm then moved
-    # elsewhere (a move, a jog, another job), and --resume said "resuming at line N: the log and
-    # the arm's report prove every line before it ran" and went on from there.  The arm's report
-    # is the resume's proof: it must stand where the log's last frame leaves it.
+    # elsewhere (a move, a jog, another job), and --resume said only "resuming at line N: the log
+    # and the arm's report prove every line before it ran" and went on from there.  No line runs
+    # twice, so it still goes on (README: every frame written proven done, it continues after it),
+    # but the person resuming is told the next move starts from where the arm stands.
     monkeypatch.chdir(tmp_path)
     (tmp_path / "job.txt").write_text(_job(), encoding="utf-8")
     ports = _open_one_arm(monkeypatch)
     _stop_after(monkeypatch, 14)
     first = _invoke("run", "job.txt", "--no-live", "--port", URL, "--log", "j1.log")
     assert first.exit_code == 130, first.output
+    in_place = json.loads(_invoke("status", "--json", "--port", URL).stdout)
     elsewhere = tmp_path / "elsewhere.txt"
     elsewhere.write_text("G1 X230 Y-30 Z200 A180 B0 C0 S1500 F3000\n", encoding="utf-8")
     assert _invoke("run", str(elsewhere), "--no-live", "--port", URL).exit_code == 0
-    arm = ports[URL].model
-    ran = len(arm.execution_log)
     resumed = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j1.log")
-    assert resumed.exit_code == 1, resumed.output
-    assert "not at rest where the log's last frame" in resumed.output and "--from-line" in resumed.output
-    assert len(arm.execution_log) == ran  # nothing sent
+    assert resumed.exit_code == 0, resumed.output
+    assert "(moved since?): line 15 starts from where it stands" in resumed.output, resumed.output
+    assert "resuming job.txt at line 15" in resumed.output
+    assert in_place["x"] != 230.0  # (the arm had stood elsewhere: the note is about this move)

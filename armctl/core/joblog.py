@@ -210,7 +210,7 @@ class ResumePoint:
         if written == 0:
             return 0  # nothing was written: a frame is written only after its record
         if self.done == written:
-            return written  # the arm's reports proved every frame written done
+            return written  # the arm's reports proved every frame written done (wherever it stands now: ``moved_from``)
         if self.cleared is not None:
             raise NotProven(f"{self.cleared}, so the frames after the last one the arm's reports proved done "
                             f"({self.done} of {written} written) may or may not have run: armctl cannot prove "
@@ -228,6 +228,17 @@ class ResumePoint:
         raise NotProven(f"the arm rests where {ends} all leave it and the log cannot prove which of them ran last: "
                         "armctl cannot prove the line to continue at; nothing was sent (check the arm and continue "
                         "by hand with --from-line)")
+
+    def moved_from(self, position_mm, joints_deg) -> int | None:
+        """The line of the log's last frame when the arm's reports proved every frame written done
+        but the arm is not at rest at that frame's target (moved since: a jog, a move, another job);
+        else None.  The resume still continues after it — no line runs twice — but the next
+        move starts from where the arm is, which the person resuming must be told."""
+        written = len(self.frames)
+        if written == 0 or self.done != written:
+            return None
+        target = self._target(written)
+        return None if target is None or _at(target, position_mm, joints_deg) else self.frames[written - 1].line
 
     def after(self, ran: int) -> int | None:
         """The line to continue at once the first ``ran`` frames ran (None: every line did)."""

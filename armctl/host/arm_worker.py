@@ -267,10 +267,14 @@ def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[],
     checked = checked.starting_at(from_line)
     if checked.from_line_error is not None:
         raise checked.from_line_error
+    moved = spec.resume.moved_from(state.position_mm, tuple(state.joints_deg))
     observer.note(f"armctl: resuming {checked.name} at line {from_line}: the log and the arm's report prove every line "
                   "before it ran" + ("" if again is None else
                                      f"; it opens the repeat block the job stopped in (no job starts inside one), so "
-                                     f"lines {from_line}–{again} of the passes already done run again"))
+                                     f"lines {from_line}–{again} of the passes already done run again")
+                  + ("" if moved is None else
+                     f"; the arm is not where line {moved} left it (moved since?): line {from_line} starts from where "
+                     "it stands"))
     resume_paused(arm.link, arm.status_timeout_s, journal, observer.note, arm.profile.connector.control_on_arrival)
     return arm.link.snapshot()[0], checked
 
