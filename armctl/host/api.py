@@ -239,10 +239,13 @@ class Arm:
 
     def _complete_state(self, timeout_s: float):
         """A copy of the link's state once every status kind has been seen (``JobFailed`` after
-        ``timeout_s``): what ``status`` and ``status_json`` read."""
+        ``timeout_s``; the link's ``PortError`` once the port went away): what ``status`` and
+        ``status_json`` read."""
         link = self._link
         if not link.wait_until(lambda s: s.complete, timeout_s):
             raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s")
+        if link.error is not None:  # complete long ago, then the port went away: the last report is not live
+            raise link.error
         return link.snapshot()[0]
 
     def pause(self) -> bool:
