@@ -344,6 +344,7 @@ def control(probe):
 # --- the status stream ---------------------------------------------------------------------------
 
 SLOT_ANCHORS = 20  # frames a status frame's slot is counted from (``_slots``)
+SINGLE_GAP = 1.75  # spacings up to this many median spacings count as one step at first (``_slots``)
 
 
 def status_stream(probe):
@@ -370,15 +371,16 @@ def _slots(times: list[float], step_s: float) -> tuple[list[int], float]:
     Read on the wall clock a frame's time is late by the reader's wake-up or an adapter's latency
     timer (up to 16 ms), and the median spacing is off by as much as that jitter's grain (30.3 ms
     for 30.0 through armctl sim --pty): slots counted from the first frame at that step drift by
-    one every hundred frames, and a rotation read from them is garbage.  So the period is the
-    least-squares line of time over slot, with each spacing first counted in steps on its own (no
-    drift), then each frame's slot counted at that period from the frames just before it (the
-    median of what each of the last ``SLOT_ANCHORS`` says: one late frame moves nothing, and the
-    period's error cannot add up), again until the slots stay put."""
-    slots = [0]
-    for before, after in zip(times, times[1:]):
-        slots.append(slots[-1] + max(1, round((after - before) / step_s)))
-    period_s = _slope(slots, times)
+    one every hundred frames, and a rotation read from them is garbage.  So each frame's slot is
+    counted from the frames just before it (the median of what each of the last ``SLOT_ANCHORS``
+    says: one late frame moves nothing, and the period's error cannot add up) at a period first
+    the mean of the spacings of one step (up to ``SINGLE_GAP`` median spacings: two frames read at
+    once, 0 ms, then a 48 ms wait, are two such steps), then the least-squares line of time over
+    slot, until the slots stay put.  A lateness that spreads over a whole period may still leave
+    the rotation unclear: it is then not stated."""
+    single = [after - before for before, after in zip(times, times[1:]) if after - before <= SINGLE_GAP * step_s]
+    period_s = sum(single) / len(single)  # (two frames read at once, then a long wait: their mean is one step)
+    slots: list[int] = []
     for _ in range(8):
         again = [0]
         for i in range(1, len(times)):
