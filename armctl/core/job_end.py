@@ -12,7 +12,9 @@ concluded, from what evidence:
   deadline is the queued motion × the slowest arm factor + a slack; an arm still visibly
   working past it is waited for (up to ``max(OVERRUN_MIN_S, the job)``) and the summary says
   so, and so is one still but not re-read in every kind yet (a slack after its last change) or
-  with frames rest cannot prove still pending (a slack after their time bound); anything else
+  with frames rest cannot prove still pending (a slack after their time bound), or at the last
+  target before the frames after the last motion are past their time bound (counted from the
+  last change seen, which a corrupted report after the arm stopped moves on); anything else
   ends "no confirmation" with the likeliest reason (``why_not_finished``).
 - **Held mid-job** (the FIFO bound, or a control frame on arrival waiting for the frames
   before it, with only evidence to let the next frame go): the same proof — at rest, at the
@@ -131,6 +133,11 @@ class JobEnd:
             resting = self.resting_before_last_move()
             if resting:  # frames rest cannot prove: their time bound (widened by a slow pace) decides
                 settle_until.append(max(sent.certain_end_s for sent in resting) + SETTLE_SLACK_S)
+            if self.arrival.at_last_target():
+                # the frames after the last motion count from the last change seen, and one
+                # corrupted report after the arm stopped is such a change: their time bound moved
+                # past the deadline, and the rest that proves them is waited for
+                settle_until.append(self.trailing_done_s() + SETTLE_SLACK_S)
             limit_s = min(self.deadline_s + self.overrun_limit_s(), max(settle_until, default=now))
             if now >= limit_s:
                 return self.unconfirmed(self.why_not_finished())

@@ -343,19 +343,19 @@ def control(probe):
 
 # --- the status stream ---------------------------------------------------------------------------
 
+SLOT_ANCHORS = 20  # frames a status frame's slot is counted from (``_slots``)
+SINGLE_GAP = 1.75  # spacings up to this many median spacings count as one step at first (``_slots``)
+
 
 def status_stream(probe):
-    """The period (median spacing of frames, in time order) and the rotation of kinds."""
+    """The period (the line of the frames' times over their slots: ``_slots``) and the rotation of kinds."""
     frames = probe.seen.frames
     times = [t for t, _ in frames]
     gaps = sorted(b - a for a, b in zip(times, times[1:]) if b > a)
     if len(gaps) < 20:
         return Finding("status_stream", f"{STATUS_PERIOD_S * 1000:g} ms, {len(STATUS_ROTATION)} kinds", None,
                        f"only {len(frames)} status frames read", UNSURE)
-    step_s = gaps[len(gaps) // 2]
-    # Over the whole probe: frame count by elapsed time, robust to lost frames (their slots stay)
-    slots = [round((t - times[0]) / step_s) for t in times]
-    period_s = (times[-1] - times[0]) / max(1, slots[-1])
+    slots, period_s = _slots(times, gaps[len(gaps) // 2])
     kinds = [frame.KIND for _, frame in frames]
     rotation = _rotation(slots, kinds)
     documented = f"{STATUS_PERIOD_S * 1000:g} ms, {len(STATUS_ROTATION)} kinds {list(STATUS_ROTATION)}"
@@ -364,6 +364,39 @@ def status_stream(probe):
     confidence = SURE if rotation is not None else LIKELY
     shown = f"{period_s * 1000:.2f} ms, " + (f"{len(rotation)} kinds {rotation}" if rotation else "rotation unclear")
     return Finding("status_stream", documented, shown, evidence, confidence, value)
+
+
+def _slots(times: list[float], step_s: float) -> tuple[list[int], float]:
+    """Each frame's slot in the stream (a lost frame leaves its slot empty) and the period.
+    Read on the wall clock a frame's time is late by the reader's wake-up or an adapter's latency
+    timer (up to 16 ms), and the median spacing is off by as much as that jitter's grain (30.3 ms
+    for 30.0 through armctl sim --pty): slots counted from the first frame at that step drift by
+    one every hundred frames, and a rotation read from them is garbage.  So each frame's slot is
+    counted from the frames just before it (the median of what each of the last ``SLOT_ANCHORS``
+    says: one late frame moves nothing, and the period's error cannot add up) at a period first
+    the mean of the spacings of one step (up to ``SINGLE_GAP`` median spacings: two frames read at
+    once, 0 ms, then a 48 ms wait, are two such steps), then the least-squares line of time over
+    slot, until the slots stay put.  A lateness that spreads over a whole period may still leave
+    the rotation unclear: it is then not stated."""
+    single = [after - before for before, after in zip(times, times[1:]) if after - before <= SINGLE_GAP * step_s]
+    period_s = sum(single) / len(single)  # (two frames read at once, then a long wait: their mean is one step)
+    slots: list[int] = []
+    for _ in range(8):
+        again = [0]
+        for i in range(1, len(times)):
+            said = sorted(again[j] + (times[i] - times[j]) / period_s for j in range(max(0, i - SLOT_ANCHORS), i))
+            again.append(max(again[-1] + 1, round(said[len(said) // 2])))
+        if again == slots:
+            break
+        slots, period_s = again, _slope(again, times)
+    return slots, period_s
+
+
+def _slope(slots: list[int], times: list[float]) -> float:
+    """The least-squares slope of ``times`` over ``slots`` (both rising: it is positive)."""
+    mean_slot, mean_t = sum(slots) / len(slots), sum(times) / len(times)
+    spread = sum((slot - mean_slot) ** 2 for slot in slots)
+    return sum((slot - mean_slot) * (t - mean_t) for slot, t in zip(slots, times)) / spread
 
 
 def _rotation(slots, kinds) -> list[int] | None:
