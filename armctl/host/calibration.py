@@ -137,6 +137,8 @@ class Calibration:
     arm: str  # arm_identity
     port: str  # the port it was last probed through, as given
     settings: dict[str, Measured] = field(default_factory=dict)
+    baud: int | None = None  # the line rate the probe read the arm's status at (None: a record from before)
+    baud_on: str = ""  # ... on that date
 
     def values(self) -> dict:
         return {name: measured.value for name, measured in self.settings.items()}
@@ -147,10 +149,12 @@ class Calibration:
 
     def updated(self, newer: "Calibration") -> "Calibration":
         """This record with ``newer``'s values laid over it (what a later probe measured wins)."""
-        return Calibration(self.arm, newer.port, {**self.settings, **newer.settings})
+        baud, baud_on = (newer.baud, newer.baud_on) if newer.baud is not None else (self.baud, self.baud_on)
+        return Calibration(self.arm, newer.port, {**self.settings, **newer.settings}, baud, baud_on)
 
     def to_json(self) -> dict:
-        return {"format": FORMAT, "arm": self.arm, "port": self.port,
+        line = {} if self.baud is None else {"baud": self.baud, "baud_probed_on": self.baud_on}
+        return {"format": FORMAT, "arm": self.arm, "port": self.port, **line,
                 "settings": {name: vars(measured) for name, measured in self.settings.items()}}
 
     @classmethod
@@ -159,17 +163,30 @@ class Calibration:
             if data.get("format") != FORMAT:
                 raise ValueError(f"format {data.get('format')!r}, not {FORMAT}")
             settings = {str(name): Measured(**record) for name, record in data["settings"].items()}
-            return cls(str(data["arm"]), str(data["port"]), settings)
+            baud = data.get("baud")
+            if baud is not None and (not isinstance(baud, int) or isinstance(baud, bool) or baud <= 0):
+                raise ValueError(f"baud {baud!r}")
+            return cls(str(data["arm"]), str(data["port"]), settings, baud, str(data.get("baud_probed_on", "")))
         except (AttributeError, KeyError, TypeError, ValueError) as error:
             raise ConfigError(f"{where}: not a calibration this armctl reads ({error}): delete the file, "
                               "or `armctl probe --forget ARM`, and probe again") from None
 
 
-def calibration_of(port: str, arm: str, findings, probed_on: str) -> Calibration:
+def calibration_of(port: str, arm: str, findings, probed_on: str, baud: int | None = None) -> Calibration:
     """A record from a probe's findings (``(name, value, evidence, confidence)``: the values the
-    probe states, as ``--write`` writes them)."""
+    probe states, as ``--write`` writes them) and the line rate it read the arm's status at."""
     settings = {name: Measured(value, probed_on, evidence, confidence) for name, value, evidence, confidence in findings}
-    return Calibration(arm, port, settings)
+    return Calibration(arm, port, settings, baud, probed_on if baud is not None else "")
+
+
+def probed_baud(url: str) -> tuple[int, str] | None:
+    """The line rate ``armctl probe`` read the status of the arm on ``url`` at, and the source a
+    setting names for it (``probed on DATE for ARM``); None when no probe of it kept one."""
+    arm = arm_identity(url)
+    stored_record = None if arm is None else load(arm)
+    if stored_record is None or stored_record.baud is None:
+        return None
+    return stored_record.baud, f"probed on {stored_record.baud_on} for {stored_record.arm}"
 
 
 # --- the profile of the arm on a port --------------------------------------------------------------

@@ -56,7 +56,7 @@ def connect(port: "str | PortChoice | None", baud: int | None, announce: Callabl
     banner = choice.banner()
     if banner and announce is not None:
         announce(banner)
-    baud = baud or config_baud(config.values, config.path_of("baud"))
+    baud = line_baud(baud, config, choice.url)[0]
     if profile is None:
         from .calibration import arm_profile
 
@@ -99,6 +99,23 @@ def require_wall_clock(link: "Link", command: str) -> None:
 
 def config_baud(config: dict, path) -> int:
     return check_config_value(path, "baud", config.get("baud", DEFAULT_BAUD))
+
+
+def line_baud(baud: int | None, config, url: str | None) -> tuple[int, str | None]:
+    """The line rate a port-using command talks to the arm on ``url`` at, and where it came from
+    (None: the document's 9600): ``--baud``, else armctl.toml's ``baud``, else the rate ``armctl
+    probe`` read that arm's status at (so a probed 115200 arm needs only ``--port``), else 9600."""
+    if baud:
+        return baud, "--baud"
+    if "baud" in config.values:
+        return config_baud(config.values, config.path_of("baud")), str(config.path_of("baud"))
+    if url is not None:
+        from .calibration import probed_baud
+
+        probed = probed_baud(url)
+        if probed is not None:
+            return probed
+    return DEFAULT_BAUD, None
 
 
 def plausible_state(profile) -> ArmState:

@@ -30,7 +30,7 @@ def keep(port: str, arm: str, probe, say) -> None:
     findings = [(name, value, finding_for(probe, name).evidence, finding_for(probe, name).confidence)
                 for name, value in values.items()]
     if findings:
-        path = calibration.save(calibration.calibration_of(port, arm, findings, today()))
+        path = calibration.save(calibration.calibration_of(port, arm, findings, today(), probe.baud))
         say(f"kept for {arm} in {path}: every command on this arm uses it (armctl probe --list)")
 
 

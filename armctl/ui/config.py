@@ -32,7 +32,7 @@ from ..core.limits import BAUD_RANGE
 class Setting:
     name: str
     value: Any  # JSON-shaped
-    source: str  # "option", "environment", "project", "user" or "default"
+    source: str  # "option", "environment", "project", "user", "probe" or "default"
     where: str | None  # "--port", "ARMCTL_PORT", a file's path, or None for a built-in default
 
     def to_json(self) -> dict:
@@ -48,7 +48,7 @@ def _file_source(config, key: str) -> tuple[str, str | None]:
 
 def effective_settings(port: str | None = None, baud: int | None = None, environ=None) -> tuple[list[Setting], Any]:
     """The settings a port-using command would take with these options, and the ``Config``."""
-    from ..host.link import PORT_ENV, config_baud, resolve_port
+    from ..host.link import PORT_ENV, config_baud, line_baud, resolve_port
     from ..host.calibration import arm_profile
     from ..host.profile import DEFAULT_RESOURCE, load_config
 
@@ -65,8 +65,11 @@ def effective_settings(port: str | None = None, baud: int | None = None, environ
 
     if baud is not None:
         settings.append(Setting("baud", baud, "option", "--baud"))
-    else:
+    elif "baud" in config.values:
         settings.append(Setting("baud", config_baud(config.values, config.path_of("baud")), *_file_source(config, "baud")))
+    else:  # what armctl probe read the arm at (link.line_baud), else the document's
+        rate, probed = line_baud(None, config, choice.url)
+        settings.append(Setting("baud", rate, "probe", probed) if probed else Setting("baud", rate, *_file_source(config, "baud")))
 
     profile = arm_profile(port=choice.url)  # checks the profile the files name: a missing one fails here too
     entry = config.values.get("profile")

@@ -117,7 +117,7 @@ def print_estimate(result, header: str) -> None:
 
 def dry_run(options: JobOptions, checked, model) -> int:
     # the estimate first: it refuses a job too long to run (E012) before a frame is printed
-    job = plan_job(checked, model, options.lead_s, options.baud or configured_baud())
+    job = plan_job(checked, model, options.lead_s, options.baud or configured_baud(options.port))
     for statement in job.statements():
         frame = statement.command.encode()
         click.echo(f"{statement.line:>6}  {frame.hex()}  {describe(statement.command)}")
@@ -125,14 +125,21 @@ def dry_run(options: JobOptions, checked, model) -> int:
     return EXIT_OK
 
 
-def configured_baud() -> int:
-    """The line rate of armctl.toml (the project's, else yours), else 9600: what ``run`` opens a
-    port at without ``--baud``, and what ``--dry-run`` and ``estimate`` plan with."""
-    from ..host.link import config_baud
+def configured_baud(port: str | None = None) -> int:
+    """The line rate ``run`` opens ``port`` at without ``--baud`` (None: the configured port), and
+    what ``--dry-run`` and ``estimate`` plan with: armctl.toml's (the project's, else yours), else
+    what ``armctl probe`` read the arm there at, else 9600 (``link.line_baud``)."""
+    from ..errors import ConfigError
+    from ..host.link import line_baud
+    from ..host.port_choice import choose_port
     from ..host.profile import load_config
 
     config = load_config()
-    return config_baud(config.values, config.path_of("baud"))
+    try:
+        url = choose_port(port, config).url
+    except ConfigError:  # (a port it would not open does not stop a command that opens none)
+        url = None
+    return line_baud(None, config, url)[0]
 
 
 def _same_file(first: str, second: str) -> bool:
