@@ -125,3 +125,18 @@ def test_a_resume_from_where_the_arm_was_moved_to_says_so(tmp_path, monkeypatch)
     assert "(moved since?): line 15 starts from where it stands" in resumed.output, resumed.output
     assert "resuming job.txt at line 15" in resumed.output
     assert in_place["x"] != 230.0  # (the arm had stood elsewhere: the note is about this move)
+
+
+def test_nothing_to_resume_says_the_arm_is_still_paused(tmp_path, monkeypatch):
+    # Found by the crash review: a job stopped (Ctrl-C) once every frame was written ran them all
+    # and the abort's pause paused the arm; --resume said only "nothing to resume" and left the
+    # arm paused without a word, so the next move seemed not to work.
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "job.txt").write_text(_job(), encoding="utf-8")
+    _open_one_arm(monkeypatch)
+    _stop_after(monkeypatch, 31)
+    assert _invoke("run", "job.txt", "--no-live", "--port", URL, "--log", "j1.log").exit_code == 130
+    again = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j1.log")
+    assert again.exit_code == 0 and "nothing to resume" in again.output, again.output
+    assert "the arm is paused, as the stop left it" in again.output, again.output
+    assert json.loads(_invoke("status", "--json", "--port", URL).stdout)["paused"] is True  # (said, not changed)
