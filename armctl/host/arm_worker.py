@@ -263,7 +263,7 @@ def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[],
         return RunResult.nothing_sent("interrupted")
     state, from_line, again = started
     if from_line is None:
-        return _nothing_to_resume(arm)
+        return _nothing_to_resume(arm, state)
     checked = checked.starting_at(from_line)
     if checked.from_line_error is not None:
         raise checked.from_line_error
@@ -279,18 +279,20 @@ def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[],
     return arm.link.snapshot()[0], checked
 
 
-def _nothing_to_resume(arm: ArmLine) -> RunResult:
+def _nothing_to_resume(arm: ArmLine, state) -> RunResult:
     """The arm rests where the log's last frame leaves it: the log's every line ran — proven only
     where the FIFO size is (``link.fifo_proven``), as at a job's end (core/job_end.py): else a frame
-    a full FIFO dropped before the crash would look the same, and the resume ends unproven (exit 1)."""
+    a full FIFO dropped before the crash would look the same, and the resume ends unproven (exit 1).
+    An arm the stop's abort paused is left so (nothing is sent), and the message says so."""
     from .link import fifo_proven
     from ..core.job_end import FIFO_UNMEASURED
 
+    paused = ("; the arm is paused, as the stop left it: the next job resumes it first" if state.paused else "")
     if fifo_proven(arm.link.url, arm.profile.connector):
-        return RunResult.nothing_sent("finished", message="nothing to resume: every line of the job is proven executed")
+        return RunResult.nothing_sent("finished", message=f"nothing to resume: every line of the job is proven executed{paused}")
     return RunResult.nothing_sent("finished, unproven", message=(
         f"nothing to resume: the arm is at rest where the log's last frame leaves it, but {FIFO_UNMEASURED} "
-        "(dropped before the crash); run `armctl probe` once"))
+        f"(dropped before the crash); run `armctl probe` once{paused}"))
 
 
 def _journal_job(runner, job, state, arrival: bool) -> None:
