@@ -19,6 +19,7 @@ the page says ``jog_stop`` or when its WebSocket closes — so the arm gets the 
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import re
 import threading
@@ -197,9 +198,10 @@ class ArmService:
                        "wait for it to end or stop it")
         self.check_not_jogging()
 
-    async def start_job(self, snapshot, client: str | None, resume=None) -> tuple[Job, Any]:
+    async def start_job(self, snapshot, client: str | None, resume=None, claim=None) -> tuple[Job, Any]:
         """Check, journal and start ``snapshot`` (``ScriptError``: nothing sent; ``Busy``);
-        ``resume``: the ``joblog.ResumePoint`` of an earlier job of this script."""
+        ``resume``: the ``joblog.ResumePoint`` of an earlier job of this script; ``claim``: what
+        the job holds until it ends (a resume's lock on the log it continues), closed then."""
         self.check_free(client)  # before the check's work, and again after it (another job may have begun)
         checked = await self.check(snapshot)
         self.check_free(client)
@@ -208,13 +210,13 @@ class ArmService:
         job = Job(job_id, snapshot.name, self.journal_dir / f"{job_id}.txt", self.journal_dir / f"{job_id}.log")
         job.script_path.write_bytes(snapshot.data)
         self.jobs[job_id] = self.running = job
-        job.task = asyncio.ensure_future(self._run(job, checked, resume))
+        job.task = asyncio.ensure_future(self._run(job, checked, resume, claim))
         return job, checked
 
     async def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
         """A job of the journal (this server's or an earlier one's), continued from the line its
         log and the arm's report prove (``Arm.run(resume=)``)."""
-        from ..host.jobflow import read_resume_point
+        from ..host.jobflow import read_resume_point, resume_claim
         from ..script.files import ScriptSnapshot
 
         if not NAME_PATTERN.fullmatch(job_id.replace("T", "")) or not (self.journal_dir / f"{job_id}.txt").is_file():
@@ -224,9 +226,15 @@ class ArmService:
         self.check_control(client)
         # before the 201: a log that is no log of this script is refused (422), nothing sent
         resume = await off_loop(read_resume_point, log, snapshot)  # (reads the whole journal)
-        return await self.start_job(snapshot, client, resume=resume)
+        claim = contextlib.ExitStack()  # held until the job ends (``_run``): no second resume of the log meanwhile
+        try:  # (taken after the read, as armctl run --resume takes it: the read probes for it)
+            claim.enter_context(resume_claim(log))  # another resume of it running: refused (422), nothing sent
+            return await self.start_job(snapshot, client, resume=resume, claim=claim)
+        except BaseException:
+            claim.close()
+            raise
 
-    async def _run(self, job: Job, checked, resume) -> None:
+    async def _run(self, job: Job, checked, resume, claim=None) -> None:
         from ..aio import EventObserver
         from ..host.jobflow import JobFailed
 
@@ -257,6 +265,8 @@ class ArmService:
             job.error = f"{type(error).__name__}: {error}"
             job.result = job.result or _failed(job.error)
         finally:
+            if claim is not None:
+                claim.close()
             if job.result is None:
                 job.result = _failed("the server stopped before the job ended")
             self.running = None
