@@ -1,7 +1,10 @@
 """A move started over HTTP can be stopped over HTTP: ``POST /api/arms/NAME/stop`` stops whatever
 the arm is doing (a job, or a move), as Ctrl-C does.  Found by the serve review: stop existed
 only per job id, and a move kept running after its client disconnected; only Ctrl-C of the
-server stopped it.  Wall clock (a move takes time only there), in this process.
+server stopped it.  Wall clock (a move takes time only there), in this process, on an arm whose
+control frames act as they land: there the abort's pause freezes the move at once (on the
+document's arm it waits in the FIFO behind the move, which runs out: README, the bound on motion
+after an abort).
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ from armctl.server.arms import ArmService  # noqa: E402
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.realtime]
 
-ARM = "sim://?speed=1"
+ARM = "sim://?speed=1&control_frames=arrival"
 
 
 def test_a_move_is_stopped_by_the_arms_stop(tmp_path):

@@ -214,6 +214,12 @@ async def control_job(request: web.Request) -> web.Response:
     return web.json_response({"id": job.id, "feed_percent": await arm.feed_override(percent)})
 
 
+async def stop_arm(request: web.Request) -> web.Response:
+    """Stop whatever the arm is doing (a job, or a move a client started and may have left)."""
+    service = _service(request)
+    return web.json_response({"arm": service.name, "stopping": await service.stop(_client(request))})
+
+
 async def move(request: web.Request) -> web.Response:
     from ..host.api import move_line
 
@@ -331,5 +337,6 @@ def build_app(services: dict, *, token: str | None, host: str) -> web.Applicatio
     app.router.add_get("/api/arms/{name}/jobs/{id}", get_job)
     app.router.add_post("/api/arms/{name}/jobs/{id}/{action:pause|resume|stop|feed}", control_job)
     app.router.add_post("/api/arms/{name}/move", move)
+    app.router.add_post("/api/arms/{name}/stop", stop_arm)
     app.router.add_get("/api/arms/{name}/events", events)
     return app

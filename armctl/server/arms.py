@@ -293,6 +293,15 @@ class ArmService:
             raise Busy(f"job {job_id} is not running (outcome {job.result.get('outcome') if job.result else None})")
         return job
 
+    async def stop(self, client: str | None) -> bool:
+        """Stop whatever the arm is doing — a job or a move — as Ctrl-C does (``Arm.stop``); False
+        when nothing was running."""
+        self.check_control(client)
+        if not self.busy:
+            return False
+        await self.arm.stop("stopped from the API")
+        return True
+
     async def move(self, words: dict, client: str | None) -> dict:
         self.check_free(client)
         self.moving = True
