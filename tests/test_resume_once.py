@@ -34,15 +34,22 @@ def _invoke(*args):
     return CliRunner().invoke(main, list(args), env={"ARMCTL_PORT": None})
 
 
-def _run_then_resume(tmp_path, monkeypatch, second_log: bool = True):
-    """The job stopped after 14 frames (--log j1), then resumed to its end (--log j2, or none);
-    the arm is then moved back to where j1 left it.  The ports opened (one arm)."""
+def _stopped_job(tmp_path, monkeypatch, frames: int) -> dict:
+    """``armctl run job.txt --log j1.log`` on one simulated arm, stopped (Ctrl-C) once ``frames``
+    frames were sent; the ports opened (one arm, kept for the runs after)."""
     monkeypatch.chdir(tmp_path)
     (tmp_path / "job.txt").write_text(_job(), encoding="utf-8")
     ports = _open_one_arm(monkeypatch)
-    _stop_after(monkeypatch, 14)
+    _stop_after(monkeypatch, frames)
     first = _invoke("run", "job.txt", "--no-live", "--port", URL, "--log", "j1.log")
     assert first.exit_code == 130, first.output
+    return ports
+
+
+def _run_then_resume(tmp_path, monkeypatch, second_log: bool = True):
+    """The job stopped after 14 frames (--log j1), then resumed to its end (--log j2, or none);
+    the arm is then moved back to where j1 left it.  The ports opened (one arm)."""
+    ports = _stopped_job(tmp_path, monkeypatch, 14)
     where = json.loads(_invoke("status", "--json", "--port", URL).stdout)
     resumed = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j1.log",
                       *(("--log", "j2.log") if second_log else ()))
@@ -110,12 +117,7 @@ def test_a_resume_from_where_the_arm_was_moved_to_says_so(tmp_path, monkeypatch)
     # and the arm's report prove every line before it ran" and went on from there.  No line runs
     # twice, so it still goes on (README: every frame written proven done, it continues after it),
     # but the person resuming is told the next move starts from where the arm stands.
-    monkeypatch.chdir(tmp_path)
-    (tmp_path / "job.txt").write_text(_job(), encoding="utf-8")
-    ports = _open_one_arm(monkeypatch)
-    _stop_after(monkeypatch, 14)
-    first = _invoke("run", "job.txt", "--no-live", "--port", URL, "--log", "j1.log")
-    assert first.exit_code == 130, first.output
+    _stopped_job(tmp_path, monkeypatch, 14)
     in_place = json.loads(_invoke("status", "--json", "--port", URL).stdout)
     elsewhere = tmp_path / "elsewhere.txt"
     elsewhere.write_text("G1 X230 Y-30 Z200 A180 B0 C0 S1500 F3000\n", encoding="utf-8")
@@ -131,11 +133,7 @@ def test_nothing_to_resume_says_the_arm_is_still_paused(tmp_path, monkeypatch):
     # Found by the crash review: a job stopped (Ctrl-C) once every frame was written ran them all
     # and the abort's pause paused the arm; --resume said only "nothing to resume" and left the
     # arm paused without a word, so the next move seemed not to work.
-    monkeypatch.chdir(tmp_path)
-    (tmp_path / "job.txt").write_text(_job(), encoding="utf-8")
-    _open_one_arm(monkeypatch)
-    _stop_after(monkeypatch, 31)
-    assert _invoke("run", "job.txt", "--no-live", "--port", URL, "--log", "j1.log").exit_code == 130
+    _stopped_job(tmp_path, monkeypatch, 31)
     again = _invoke("run", "job.txt", "--no-live", "--port", URL, "--resume", "j1.log")
     assert again.exit_code == 0 and "nothing to resume" in again.output, again.output
     assert "the arm is paused, as the stop left it" in again.output, again.output

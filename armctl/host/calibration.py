@@ -182,8 +182,7 @@ def calibration_of(port: str, arm: str, findings, probed_on: str, baud: int | No
 def probed_baud(url: str) -> tuple[int, str] | None:
     """The line rate ``armctl probe`` read the status of the arm on ``url`` at, and the source a
     setting names for it (``probed on DATE for ARM``); None when no probe of it kept one."""
-    arm = arm_identity(url)
-    stored_record = None if arm is None else load(arm)
+    stored_record = load(arm_identity(url))
     if stored_record is None or stored_record.baud is None:
         return None
     return stored_record.baud, f"probed on {stored_record.baud_on} for {stored_record.arm}"

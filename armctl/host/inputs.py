@@ -25,7 +25,7 @@ from __future__ import annotations
 
 import os
 import stat
-from typing import BinaryIO, Iterator
+from typing import BinaryIO, Iterable, Iterator
 
 from ..errors import UnusableInput
 
@@ -77,20 +77,27 @@ def read_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES
 
 
 def read_lines_bounded(stream: BinaryIO, name: str, limit_bytes: int = MAX_LOG_BYTES) -> Iterator[bytes]:
-    """``read_blocks_bounded`` as lines, each with its line break (the last without one if the
-    input has none); ``InputTooLarge`` for a line longer than ``MAX_LINE_BYTES`` (memory stays
-    bounded by a line, not the input) — but a longer run of NUL bytes alone reads as one NUL."""
+    """``read_blocks_bounded`` as lines (``split_lines``), each at most ``MAX_LINE_BYTES``: memory
+    stays bounded by a line, not the input."""
+    return split_lines(read_blocks_bounded(stream, name, limit_bytes), name, MAX_LINE_BYTES)
+
+
+def split_lines(blocks: Iterable[bytes], name: str = "", max_line_bytes: int | None = None) -> Iterator[bytes]:
+    """``blocks`` (an input read in pieces) as lines, each with its line break (the last without
+    one if the input has none); with ``max_line_bytes``, ``InputTooLarge`` for a longer line —
+    but a longer run of NUL bytes alone (blocks a file system allocated and never wrote) reads
+    as one NUL, which means the same."""
     tail = b""
-    for block in read_blocks_bounded(stream, name, limit_bytes):
+    for block in blocks:
         lines = (tail + block).split(b"\n")
         tail = lines.pop()
         for line in lines:
             yield line + b"\n"
-        if len(tail) > MAX_LINE_BYTES:
-            if not tail.strip(b"\0"):  # blocks a file system allocated and never wrote: one NUL means the same
+        if max_line_bytes is not None and len(tail) > max_line_bytes:
+            if not tail.strip(b"\0"):
                 tail = b"\0"
                 continue
-            raise InputTooLarge(f"{name}: a line longer than {describe_limit(MAX_LINE_BYTES)}: armctl reads no longer "
+            raise InputTooLarge(f"{name}: a line longer than {describe_limit(max_line_bytes)}: armctl reads no longer "
                                 "line there (is this the file you meant?)")
     if tail:
         yield tail

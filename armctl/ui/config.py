@@ -2,7 +2,7 @@
 
 Strategy: no resolution of its own.  The settings are what the commands themselves compute —
 ``resolve_port`` for the port (``--port``, ``ARMCTL_PORT``, the project armctl.toml, the user
-armctl.toml, the simulator), ``config_baud`` for the line rate, ``calibration.arm_profile`` for the arm
+armctl.toml, the simulator), ``line_baud`` for the line rate, ``calibration.arm_profile`` for the arm
 profile, ``load_config`` for the files and the ``[lint]``/``[jog]`` tables — so what this
 command prints is what ``run`` would use.  A bad file fails here exactly as it fails there
 (a ConfigError/ProfileError naming the file and key, exit 2).
@@ -48,7 +48,7 @@ def _file_source(config, key: str) -> tuple[str, str | None]:
 
 def effective_settings(port: str | None = None, baud: int | None = None, environ=None) -> tuple[list[Setting], Any]:
     """The settings a port-using command would take with these options, and the ``Config``."""
-    from ..host.link import PORT_ENV, config_baud, line_baud, resolve_port
+    from ..host.link import PORT_ENV, line_baud, resolve_port
     from ..host.calibration import arm_profile
     from ..host.profile import DEFAULT_RESOURCE, load_config
 
@@ -63,13 +63,13 @@ def effective_settings(port: str | None = None, baud: int | None = None, environ
         source = _file_source(config, "port")
     settings.append(Setting("port", choice.url, *source))
 
+    rate, where = line_baud(baud, config, choice.url)  # --baud, armctl.toml, the arm's probe, the document's
     if baud is not None:
-        settings.append(Setting("baud", baud, "option", "--baud"))
-    elif "baud" in config.values:
-        settings.append(Setting("baud", config_baud(config.values, config.path_of("baud")), *_file_source(config, "baud")))
-    else:  # what armctl probe read the arm at (link.line_baud), else the document's
-        rate, probed = line_baud(None, config, choice.url)
-        settings.append(Setting("baud", rate, "probe", probed) if probed else Setting("baud", rate, *_file_source(config, "baud")))
+        settings.append(Setting("baud", rate, "option", "--baud"))
+    elif where is not None and where.startswith("probed on "):
+        settings.append(Setting("baud", rate, "probe", where))
+    else:
+        settings.append(Setting("baud", rate, *_file_source(config, "baud")))
 
     profile = arm_profile(port=choice.url)  # checks the profile the files name: a missing one fails here too
     entry = config.values.get("profile")

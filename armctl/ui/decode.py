@@ -33,7 +33,7 @@ from typing import BinaryIO, Iterator
 from .formats import (  # noqa: F401 - DIRECTIONS: the log's words, offered here too
     DIRECTIONS, HEX_DIGIT_BYTES, WHITESPACE_BYTES, looks_like_hex, looks_like_log,
 )
-from ..host.inputs import MAX_INPUT_BYTES, read_blocks_bounded
+from ..host.inputs import MAX_INPUT_BYTES, read_blocks_bounded, split_lines
 from ..core.joblog import intact
 from ..core.protocol import CONTROL_HEAD, FRAME_SIZE, MOTION_HEAD, STATUS_HEAD, STATUS_SIZE
 from ..core.status_frames import Chunk, chunk_at
@@ -176,13 +176,7 @@ def _looks_like_log(first: bytes, ended: bool) -> bool:
 
 
 def _log_lines(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:
-    tail = b""
-    for block in _chain(first, rest):
-        lines = (tail + block).split(b"\n")
-        tail = lines.pop()
-        yield from lines
-    if tail:
-        yield tail
+    return split_lines(_chain(first, rest))
 
 
 def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list[int]) -> Iterator[Decoded]:
