@@ -175,7 +175,7 @@ LONG_FIRST = (
     "test_review_faults.py::test_a_resume_", "test_run_json_resume.py::test_kill_9_mid_job",
     "test_review_users.py::test_sim_tcp_serves", "test_api_client.py::test_an_unprobed_arm_ends",
     "test_api.py::test_the_example_against_armctl_sim_pty", "test_probe_rates.py::test_installed_command_at_115200",
-    "test_crash_review.py::test_a_crash_log_cut_at_every_byte_offset", "test_crash_review.py::test_kill_9_twice",
+    "test_crash_review.py::test_kill_9_twice",
 )
 
 
