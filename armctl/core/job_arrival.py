@@ -116,7 +116,7 @@ class Arrival:
         moved_until_s = 0.0 if last is None else last.motion_before_s + last.segment.duration_s
         trailing_s = self.streamer.motion_sent_s - moved_until_s
         _, seen_s, moving_s = readings.motion
-        done = max(seen_s + trailing_s, readings.rest[1], readings.active_s or 0.0)
+        done = max(seen_s + trailing_s, readings.changed_s, readings.active_s or 0.0)
         if moving_s is not None and last is not None and done == seen_s + trailing_s:
             # Every kind of reading had its last value by ``seen_s``, and one still differed from
             # it at ``moving_s`` (the latest such reading): the arm stopped in between, up to a

@@ -28,6 +28,13 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
 - **Motion** (``motion``): the position and joints alone (no PWM), with when they last changed
   and the latest reading before that which still differed from them — the window in which the
   arm stopped (``Arrival.done_at``).
+- **Blips.**  A status frame has no checksum (H9): a corrupted one reads as the arm elsewhere.  A
+  kind's reading alone between two equal ones of that kind, with no other kind changed
+  meanwhile, is taken for such a blip once the second comes: the motion, the activity and the
+  last change (``changed_s``) are what they were before it, so the arm's time and a "kept
+  working" note never count from a blip.  (The arm cannot go somewhere and come back so fast
+  that the joints, read 30 ms after the position, still read as before.)  The rest proof stays
+  the careful one: ``rest`` dates from the blip's end, and a rest is proven REST_CHECK_S after it.
 
 ``Written`` is the other half of the record: the last ``RECENT_FRAMES`` frames written (the
 trailing frames that move nothing are judged on them), the last that moves the arm, and the
@@ -97,6 +104,10 @@ class Readings:
         self.moved_from: tuple | None = None  # the readings when they last changed by more than jitter
         self.run_position: float | None = None  # the SD program's run position last reported
         self.active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
+        self.changed_s = 0.0  # when any kind's readings last changed, blips left out ("Blips")
+        # the last change: (its kind, that kind's readings before it, and what it replaced of
+        # motion, moved_from, active_s and changed_s): undone if the next change returns it
+        self.last_change: tuple | None = None
         self.work_s = -math.inf  # the arm worked after this time, by its reports (``worked_after``)
         # kind → [the value two reports in a row last agreed on, when it was last read there before it
         # changed (else its agreement's first report)]: ``_agreed``
@@ -128,6 +139,15 @@ class Readings:
         # motion unless only the pause and PWM changed.
         rest = self.rest = ((reported.get(0), reported.get(1), reported.get(2), reported.get(4)), now)
         motion = self.motion
+        last_change = self.last_change
+        if last_change is not None and last_change[0] == kind and last_change[1] == values:
+            # this kind's last reading stood alone between two equal ones, and nothing else
+            # changed meanwhile: a blip ("Blips"), which dates nothing
+            _, _, self.motion, self.moved_from, self.active_s, self.changed_s = last_change
+            self.last_change = None
+            return True
+        self.last_change = (kind, old, motion, self.moved_from, self.active_s, self.changed_s)
+        self.changed_s = now
         if kind != PAUSE_KIND or motion is None:
             moving_s = motion[2] if motion is not None else None
             if kind != PAUSE_KIND and before_s is not None and (moving_s is None or before_s > moving_s):
