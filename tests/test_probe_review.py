@@ -33,7 +33,7 @@ from armctl.host.link import Link
 from armctl.host.profile import load_profile
 from armctl.probe import build_probe
 from armctl.probe.host import FrameInbox, drive
-from armctl.probe.steps import status_stream
+from armctl.probe.stream import status_stream
 from armctl.sim.executor import DONE
 from armctl.ui.cli import main
 from test_resume_exactly_once import _open_one_arm

@@ -1,10 +1,11 @@
 """``armctl probe``: find out, on the connected arm, what the vendor document leaves open.
 
 Map: plan.py (the engine: steps as generators over status frames and ``now``), steps.py
-(listen, H1/H8 and the status frame through G54, control-frame timing, status stream,
-restore), fifo.py (the connector's capacity), landing.py (when frames landed, as the port's
-reports prove it), motion.py (speed factor, kinematics), host.py (the loop over a Link),
-report.py (table, JSON, armctl.toml), command.py (the click command).
+(listen, H1/H8 and the status frame through G54, control-frame timing, restore), stream.py
+(the status stream: its period and rotation, when each frame read was built), fifo.py (the
+connector's capacity), landing.py (when frames landed, as the port's reports prove it),
+motion.py (speed factor, kinematics), host.py (the loop over a Link), report.py (table, JSON,
+armctl.toml), command.py (the click command).
 docs/probe.md explains each measurement.
 """
 
@@ -29,7 +30,7 @@ def build_probe(profile, baud: int, start_s: float, motion: bool, virtual_clock:
     """The probe's steps in order (motion only if allowed), ending with the restore step.
     ``virtual_clock``: status timestamps are exact (``sim://?clock=virtual``);
     ``after_sent_bytes``: bytes the port may hold after it reports them sent."""
-    from . import fifo, motion as motion_steps, steps
+    from . import fifo, motion as motion_steps, steps, stream
     from .plan import Probe
 
     plan = [("listening to the status", steps.listen), ("checking the encoding (G54)", steps.encoding),
@@ -37,7 +38,7 @@ def build_probe(profile, baud: int, start_s: float, motion: bool, virtual_clock:
             ("kinematics at rest", motion_steps.kinematics_at_rest)]
     if motion:
         plan += [("speed factor (small moves)", motion_steps.speed_factor)]
-    plan += [("kinematics", motion_steps.kinematics_finding), ("status stream", steps.status_stream)]
+    plan += [("kinematics", motion_steps.kinematics_finding), ("status stream", stream.status_stream)]
     probe = Probe(plan, steps.restore, baud, start_s, after_sent_bytes)
     probe.profile, probe.motion_allowed = profile, motion
     probe.timestamp_uncertainty_s = 0.0 if virtual_clock else REAL_PORT_TIMESTAMP_UNCERTAINTY_S
