@@ -3,7 +3,10 @@
 Strategy: the speed factor is the arm's time over the model's for the same move.  The move
 starts when its frame lands (the arm is idle: ``settle``), and every status frame during it is a
 sample of the real path: the joint (or the distance from the start) it reports is found on the
-model's path at model time τ by bisection, so that sample says ``factor = (t − landing) / τ``.
+model's path at model time τ by bisection, so that sample says ``factor = (t − landing) / τ``,
+with t the latest time the frame can have been built (armctl/probe/stream.py: a frame is read
+late — behind a USB adapter's 16 ms latency timer, 8 ms on average — and that lateness, taken
+for the arm's start delay, made the time bound's tolerance 1.42 where the arm's is 1.05).
 A least-squares fit over the samples of a move gives its factor; each move is timed there and
 back, joint and linear.  Resolution: a status step (0.01°, 0.1 mm) against the move's speed,
 plus ``probe.timestamp_uncertainty_s`` (a real port's reads: 0 on a virtual clock); the stated precision covers both and
@@ -28,6 +31,7 @@ from ..core.kinematics import reach_problem
 from ..core.motion import PWM_CHANNEL_COUNT, ArmPose, MotionModel
 from ..core.protocol import JointMove, JointsHighStatus, LinearMove, PositionStatus
 from .plan import LIKELY, SURE, UNSURE, Finding, ProbeStop, Send
+from .stream import latest_built_s
 from .steps import (  # JOINT_SPEED_DEG_S, ARRIVED_DEG: shared with the restore step's return move
     ARRIVED_DEG, DOCUMENTED, JOINT_SPEED_DEG_S, READBACK_TIMEOUT_S, agreed_joints, settle, wait_until,
 )
@@ -146,9 +150,12 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
     landed_s = min(max(landed_s, earliest_s), latest_s)
     total = progress_of(segment.end)
     samples = []
-    for t, frame in probe.seen.since(kind, landed_s):
+    built_s = latest_built_s(probe.seen.frames, landed_s)  # the reads' lateness taken out, where the stream proves it
+    for entry in probe.seen.since(kind, landed_s):
+        t, frame = entry
         if t > arrived_s:
             break
+        t = built_s.get(id(entry), t)
         progress = progress_of(reading(frame))
         if not SAMPLE_MARGIN * quantum < progress < total - SAMPLE_MARGIN * quantum:
             continue

@@ -4,14 +4,17 @@ frame read was built.
 Strategy: the arm builds a status frame every period, in a fixed rotation of kinds; the host
 reads each one late — by its reader's wake-up, or by a USB adapter's latency timer, which hands
 bytes over in ticks (16 ms by default on the common adapters) — and never early.  So each frame
-read gets its slot in the stream (``_slots``: counted from the frames just before it, which
-lateness cannot drift), the slots give the period (the least-squares line of time over slot)
-and the rotation (``_rotation``), and within a stretch whose every frame's kind fits the
-rotation at its slot — the slots proven right — the earliest frame against that line bounds
-them all: no frame was built later than the line through it (``latest_built_s``).  That bound
-removes the read's lateness from a timed move's samples (armctl/probe/motion.py) without ever
-putting a sample before the time its frame was built; a stretch whose kinds do not fit keeps
-its read times.
+read gets its slot in the stream: first by time (``_slots``: counted from the frames just
+before it, which lateness cannot drift), which gives the period and the rotation
+(``_rotation``); then by kind (``_kind_slots``), since lateness may spread over a whole period
+(frames read together, then none for 48 ms, through a pty behind 16 ms ticks) where a kind
+still tells its slot.  Through every run of frames so counted the period is a line, and no frame
+was built after the line through any frame near it (``latest_built_s``): taking the second
+earliest such line, widened by the period's possible tilt, bounds each frame's build time
+without ever putting it before the frame was built — but for the one case ``_kind_slots``
+names, a corrupted kind byte it cannot tell from lateness.  That bound takes the reads'
+lateness out of a timed move's samples (armctl/probe/motion.py), which had taken it for the
+arm's start delay; a stretch whose kinds do not count its slots keeps its read times.
 """
 
 from __future__ import annotations
@@ -21,6 +24,10 @@ from .plan import LIKELY, SURE, UNSURE, Finding
 
 SLOT_ANCHORS = 20  # frames a status frame's slot is counted from (``_slots``)
 SINGLE_GAP = 1.75  # spacings up to this many median spacings count as one step at first (``_slots``)
+MIN_STREAM_GAPS = 100  # frames read before a frame's build time is bounded (``latest_built_s``)
+ANCHOR_SLOTS = 18  # a frame's build time is bounded by the frames this many slots either side
+MIN_ANCHORS = 18  # ... when at least this many of them were counted (``latest_built_s``)
+STEP_SLACK = 1.3  # slots a frame's step may differ from the time since the frame before (``_kind_slots``)
 
 
 def status_stream(probe):
@@ -93,3 +100,93 @@ def _rotation(slots, kinds) -> list[int] | None:
             first = cycle.index(min(cycle))  # shown from its lowest kind, as the document lists them
             return cycle[first:] + cycle[:first]
     return None
+
+
+
+
+
+def latest_built_s(frames, first_s: float) -> dict[int, float]:
+    """The latest time each frame read from ``first_s`` on can have been built, by ``id`` of its
+    entry in ``frames`` (``Seen.frames``: the stream read so far, in order); a frame missing from
+    the answer keeps its read time (module docstring).  Each frame's slot is counted by its kind
+    (``_kind_slots``), the period is the line through every run of counted frames, and each frame
+    is bounded by the frames of its run within ``ANCHOR_SLOTS`` slots of it."""
+    times = [t for t, _ in frames]
+    gaps = sorted(b - a for a, b in zip(times, times[1:]) if b > a)
+    if len(gaps) < MIN_STREAM_GAPS:
+        return {}
+    slots, period_s = _slots(times, gaps[len(gaps) // 2])
+    kinds = [frame.KIND for _, frame in frames]
+    cycle = _rotation(slots, kinds)
+    if cycle is None or len(set(cycle)) < len(cycle):
+        return {}  # (a kind twice in the rotation: a kind does not tell its slot)
+    runs = [run for run in _kind_slots(times, kinds, cycle, period_s) if len(run) >= MIN_ANCHORS]
+    if sum(len(run) for run in runs) < MIN_STREAM_GAPS:
+        return {}
+    # The period: the slope of time over slot within the runs (each its own intercept) ...
+    spread = lean = 0.0
+    for run in runs:
+        mean_slot, mean_t = sum(s for _, s in run) / len(run), sum(times[i] for i, _ in run) / len(run)
+        spread += sum((s - mean_slot) ** 2 for _, s in run)
+        lean += sum((s - mean_slot) * (times[i] - mean_t) for i, s in run)
+    period_s = lean / spread
+    # ... known to within what the frames' lateness can tilt it: lateness within the residuals'
+    # range moves that slope by at most the range × Σ(slots above their run's mean − it) / spread,
+    # allowed twice over for every slot between two frames.
+    residual = {i: times[i] - s * period_s for run in runs for i, s in run}
+    late_range_s = max(max(residual[i] for i, _ in run) - min(residual[i] for i, _ in run) for run in runs)
+    above = sum(s - m for run in runs for m in [sum(s for _, s in run) / len(run)] for _, s in run if s > m)
+    margin_s = 2 * late_range_s * above / spread
+    built: dict[int, float] = {}
+    for run in runs:
+        low = high = 0
+        for k, (i, slot) in enumerate(run):
+            while run[low][1] < slot - ANCHOR_SLOTS:
+                low += 1
+            high = max(high, k)
+            while high + 1 < len(run) and run[high + 1][1] <= slot + ANCHOR_SLOTS:
+                high += 1
+            if times[i] < first_s or high - low + 1 < MIN_ANCHORS:
+                continue  # (too many frames around it lost or not counted: its read time stands)
+            # no frame was built after the line through any frame near it (reads are never early)
+            # but one: the second earliest, so one miscounted frame alone never moves the bound
+            line_s = sorted(residual[j] + abs(slot - s) * margin_s for j, s in run[low:high + 1])[1]
+            built[id(frames[i])] = min(times[i], line_s + slot * period_s)
+    return built
+
+
+
+def _kind_slots(times: list[float], kinds: list[int], cycle: list[int], period_s: float) -> list[list]:
+    """Runs of frames whose kinds count their slots, each a list of (index, slot).  A frame's
+    step from the one before is the one its kind says (the next place in ``cycle``, or further
+    on past lost frames) nearest the time between them: lateness cannot mislead a count mod the
+    rotation.  A step more than ``STEP_SLACK`` slots from its time ends the run and begins the
+    next (runs' slots are not comparable), and a frame belongs to a run only when both its
+    steps — from the frame before, to the frame after — were checked: a run's first and last
+    frames are left out.  So a corrupted kind byte (a known kind for another) leaves its frame
+    out, except where the slot it claims is one off and a frame next to it was lost: its steps
+    are then a slot off their times, as lateness alone may make them.  Such a frame's own bound
+    may then be up to a period early; as a bound for the others it moves nothing
+    (``latest_built_s`` never bounds a frame by one other alone)."""
+    place = {kind: i for i, kind in enumerate(cycle)}
+    length = len(cycle)
+
+    def step(j: int, j_slot: int, i: int):
+        elapsed = (times[i] - times[j]) / period_s
+        n = (place[kinds[i]] - j_slot) % length or length
+        n += length * max(0, round((elapsed - n) / length))
+        return j_slot + n if abs(n - elapsed) <= STEP_SLACK else None
+
+    runs: list[list] = []
+    run: list = []
+    for i, kind in enumerate(kinds):
+        if kind not in place:
+            continue
+        slot = step(*run[-1], i) if run else None
+        if slot is None:
+            runs.append(run[1:-1])  # (the first one's step before and the last one's after were not checked)
+            run = [(i, place[kind])]
+        else:
+            run.append((i, slot))
+    runs.append(run[1:-1])
+    return [run for run in runs if run]
