@@ -1,0 +1,51 @@
+"""``armctl serve``'s faults the second server review found (wt-serve2): each test failed
+before its fix.
+
+A listen address in use is refused before any arm's port is opened (the installed command, a
+pseudo-terminal standing in for the arm's serial port: its settings and its input show whether
+armctl opened it or wrote to it).
+"""
+from __future__ import annotations
+
+import os
+import socket
+import subprocess
+import sys
+
+import pytest
+
+pytest.importorskip("aiohttp", reason="the serve extra (aiohttp) is not installed: pip install -e '.[serve]'")
+
+from serve_process import ARMCTL  # noqa: E402
+
+pytestmark = pytest.mark.timeout(60)
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="a pseudo-terminal stands in for the arm's serial port")
+def test_a_listen_address_in_use_is_refused_before_any_arm_is_opened(tmp_path):
+    """The arms were opened first (a real arm's serial port configured, its link started) and
+    only then was the address found taken: a user was told the server cannot start after
+    armctl had taken their arm.  Now nothing touches the arm: exit 2, one line saying so."""
+    import select
+    import termios
+
+    master, arm_side = os.openpty()
+    try:
+        settings = termios.tcgetattr(arm_side)
+        with socket.socket() as taken:
+            taken.bind(("127.0.0.1", 0))
+            taken.listen()
+            port = taken.getsockname()[1]
+            result = subprocess.run([str(ARMCTL), "serve", "--arm", f"a={os.ttyname(arm_side)}", "--arm", "b=sim://",
+                                     "--listen", f"127.0.0.1:{port}", "--journal-dir", str(tmp_path)],
+                                    capture_output=True, text=True, timeout=30)
+        assert result.returncode == 2, result.stderr
+        assert result.stdout == ""
+        lines = result.stderr.splitlines()
+        assert len(lines) == 1 and lines[0].startswith(f"armctl: cannot listen on 127.0.0.1:{port}: "), result.stderr
+        assert "already in use" in lines[0].lower()
+        assert termios.tcgetattr(arm_side) == settings, "the arm's port was opened (its line settings changed)"
+        assert not select.select([master], [], [], 0)[0], "bytes were written to the arm"
+    finally:
+        os.close(master)
+        os.close(arm_side)
