@@ -3,20 +3,25 @@ before its fix.
 
 A listen address in use is refused before any arm's port is opened (the installed command, a
 pseudo-terminal standing in for the arm's serial port: its settings and its input show whether
-armctl opened it or wrote to it).
+armctl opened it or wrote to it).  A port lost under a running server is the server's
+condition, answered 503 ``port_lost`` with the way back, not a 422 for the client's request
+(the installed command, the simulator behind a TCP bridge that the test stops).
 """
 from __future__ import annotations
 
 import os
+import queue
 import socket
 import subprocess
 import sys
+import threading
+import time
 
 import pytest
 
 pytest.importorskip("aiohttp", reason="the serve extra (aiohttp) is not installed: pip install -e '.[serve]'")
 
-from serve_process import ARMCTL  # noqa: E402
+from serve_process import ARMCTL, served  # noqa: E402
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -49,3 +54,31 @@ def test_a_listen_address_in_use_is_refused_before_any_arm_is_opened(tmp_path):
     finally:
         os.close(master)
         os.close(arm_side)
+
+
+def test_a_lost_port_is_answered_503_port_lost_with_the_way_back(tmp_path):
+    """A status read after the arm's port went away (the cable pulled) was 422 'refused', as if
+    the client had asked for something wrong; it is the arm's condition: 503, its own code,
+    saying what was lost and how to come back."""
+    from armctl.sim.bridge import serve_tcp
+    from armctl.sim.model import SimOptions
+
+    ready: queue.Queue = queue.Queue()
+    pulled = threading.Event()
+    bridge = threading.Thread(target=serve_tcp, args=(0, SimOptions(), ready.put, pulled, 1.0), daemon=True)
+    bridge.start()
+    url = ready.get(timeout=10)
+    try:
+        with served("--arm", f"a={url}", journal=tmp_path) as server:
+            assert server.request("GET", "/api/arms/a/status")[0] == 200
+            pulled.set()
+            bridge.join(10)
+            deadline = time.monotonic() + 10
+            while (answer := server.request("GET", "/api/arms/a/status"))[0] == 200 and time.monotonic() < deadline:
+                time.sleep(0.05)
+            status, body = answer
+            assert (status, body["code"]) == (503, "port_lost"), answer
+            assert f"the port {url} went away" in body["error"] and "restart armctl serve" in body["error"], body
+    finally:
+        pulled.set()
+        bridge.join(10)

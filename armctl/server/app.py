@@ -17,7 +17,7 @@ from importlib import resources
 
 from aiohttp import WSCloseCode, WSMsgType, web
 
-from ..errors import ArmctlError, ScriptError
+from ..errors import ArmctlError, PortError, ScriptError
 from ..host.inputs import MAX_INPUT_BYTES
 from . import auth
 from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob, abandon_script_work, off_loop
@@ -75,6 +75,9 @@ async def _guard(request: web.Request, handler):
         return _error(404, "unknown_arm" if isinstance(error, _NotFound) else "unknown_job", str(error))
     except _BadJson as error:
         return _error(400, "bad_json", str(error))
+    except PortError as error:  # the arm's condition, not the request's: the server never reopens a port
+        return _error(503, "port_lost", f"{error}; reconnect the arm, then restart armctl serve (a job cut short "
+                      f"continues from its journal: POST /api/arms/{request.match_info.get('name', 'NAME')}/jobs?resume=ID)")
     except (ArmctlError, ValueError, TypeError) as error:
         return _error(422, "refused", str(error))
     except OSError as error:  # the journal directory, a full disk
