@@ -5,10 +5,13 @@ A listen address in use is refused before any arm's port is opened (the installe
 pseudo-terminal standing in for the arm's serial port: its settings and its input show whether
 armctl opened it or wrote to it).  A port lost under a running server is the server's
 condition, answered 503 ``port_lost`` with the way back, not a 422 for the client's request
-(the installed command, the simulator behind a TCP bridge that the test stops).
+(the installed command, the simulator behind a TCP bridge that the test stops).  Uploads
+waiting for their check are bounded: their bytes held at once, beyond which the server
+answers 503 at once instead of queueing minutes of checking and their bodies' memory.
 """
 from __future__ import annotations
 
+import asyncio
 import os
 import queue
 import socket
@@ -22,6 +25,7 @@ import pytest
 pytest.importorskip("aiohttp", reason="the serve extra (aiohttp) is not installed: pip install -e '.[serve]'")
 
 from serve_process import ARMCTL, served  # noqa: E402
+from test_serve_review import moves, with_client  # noqa: E402
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -82,3 +86,34 @@ def test_a_lost_port_is_answered_503_port_lost_with_the_way_back(tmp_path):
     finally:
         pulled.set()
         bridge.join(10)
+
+
+def test_uploads_waiting_for_their_check_are_bounded_and_the_rest_refused_at_once(tmp_path, monkeypatch):
+    """Script checks run one at a time; every upload waited its turn holding its body, so a
+    neighbour posting scripts kept a core busy for as long as they liked (a 128 MiB one is about
+    a minute of checking) and the server's memory grew by each body.  The bytes held at once
+    (read, waiting, being checked) are bounded: beyond, 503 ``too_busy`` at once, and the
+    uploads held are answered as before once the checks run."""
+    from armctl.server import app, arms
+
+    script = moves(6_000).encode()  # 130 kB: two fit under the bound set here, three do not
+    monkeypatch.setattr(app, "SCRIPTS_HELD_BYTES", 2 * len(script) + 1000, raising=False)
+
+    async def test(client, services):
+        arms._SCRIPT_WORK.acquire()  # the checker busy with a neighbour's script
+        try:
+            held = [asyncio.ensure_future(client.post("/api/arms/a/lint", data=script)) for _ in range(2)]
+            await asyncio.sleep(0.5)
+            refused = await asyncio.wait_for(client.post("/api/arms/a/lint", data=script), 10)
+            answer = await refused.json()
+            assert (refused.status, answer["code"]) == (503, "too_busy"), answer
+            assert not any(upload.done() for upload in held)
+        finally:
+            arms._SCRIPT_WORK.release()
+        for upload in held:
+            response = await asyncio.wait_for(upload, 30)
+            assert response.status == 200 and (await response.json())["errors"] == 0
+        again = await client.post("/api/arms/a/lint", data=script)
+        assert again.status == 200, "the bytes of the uploads answered are still counted"
+
+    with_client(tmp_path, test)
