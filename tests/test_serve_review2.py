@@ -7,7 +7,8 @@ armctl opened it or wrote to it).  A port lost under a running server is the ser
 condition, answered 503 ``port_lost`` with the way back, not a 422 for the client's request
 (the installed command, the simulator behind a TCP bridge that the test stops).  Uploads
 waiting for their check are bounded: their bytes held at once, beyond which the server
-answers 503 at once instead of queueing minutes of checking and their bodies' memory.
+answers 503 at once instead of queueing minutes of checking and their bodies' memory.  The
+viewers' limit is checked and taken in one step: connects arriving together cannot pass it.
 """
 from __future__ import annotations
 
@@ -115,5 +116,67 @@ def test_uploads_waiting_for_their_check_are_bounded_and_the_rest_refused_at_onc
             assert response.status == 200 and (await response.json())["errors"] == 0
         again = await client.post("/api/arms/a/lint", data=script)
         assert again.status == 200, "the bytes of the uploads answered are still counted"
+
+    with_client(tmp_path, test)
+
+
+def test_connects_arriving_together_cannot_pass_the_viewer_limit(tmp_path, monkeypatch):
+    """The limit was checked when a WebSocket connected and the viewer counted only after its
+    handshake and hello were written: every connect whose handshake waited (a slow client, a
+    response hook; here a hook that yields once) passed the check together.  40 connects at once
+    against a limit of 5: 5 viewers, the rest 503 ``too_many_viewers``."""
+    from armctl.server import app as server_app
+
+    monkeypatch.setattr(server_app, "MAX_VIEWERS", 5)
+
+    async def main():
+        from aiohttp import WSServerHandshakeError
+        from aiohttp.test_utils import TestClient, TestServer
+
+        from armctl.aio import AsyncArm
+        from armctl.server.arms import ArmService
+
+        service = ArmService("a", "sim://?clock=virtual", await AsyncArm.open("sim://?clock=virtual"), tmp_path / "a")
+        application = server_app.build_app({"a": service}, token=None, host="127.0.0.1")
+
+        async def handshake_waits(request, response) -> None:
+            await asyncio.sleep(0.01)
+
+        application.on_response_prepare.append(handshake_waits)
+        client = TestClient(TestServer(application))
+        await client.start_server()
+
+        async def connect():
+            try:
+                socket = await client.ws_connect("/api/arms/a/events")
+            except WSServerHandshakeError as error:
+                return error.status
+            assert (await socket.receive_json())["event"] == "hello"
+            return socket
+
+        try:
+            answers = await asyncio.wait_for(asyncio.gather(*(connect() for _ in range(40))), 30)
+            sockets = [answer for answer in answers if not isinstance(answer, int)]
+            assert len(sockets) == 5 and len(service.hub.viewers) == 5, (len(sockets), len(service.hub.viewers))
+            assert sorted(set(answers) - set(sockets)) == [503]
+            for socket in sockets:
+                await socket.close()
+        finally:
+            await client.close()
+            await service.close()
+
+    asyncio.run(main())
+
+
+def test_the_controlling_socket_is_not_told_that_another_client_controls(tmp_path):
+    """(The viewer now counts from before its hello: the control event its own connect publishes
+    for the others must not reach it.)"""
+
+    async def test(client, services):
+        socket = await client.ws_connect("/api/arms/a/events?control=1&client=me")
+        assert (await socket.receive_json())["control"] is True
+        await socket.send_json({"ping": 1})
+        assert (await asyncio.wait_for(socket.receive_json(), 10))["event"] == "pong"
+        await socket.close()
 
     with_client(tmp_path, test)

@@ -265,22 +265,25 @@ async def move(request: web.Request) -> web.Response:
 async def events(request: web.Request) -> web.WebSocketResponse:
     """The WebSocket: the arm's events; with ``?control=1`` the client asks to control it."""
     service = _service(request)
-    if len(service.hub.viewers) >= MAX_VIEWERS:
+    client = request.query.get("client") or uuid.uuid4().hex
+    viewer, sender = Viewer(client), None
+    if not service.hub.add(viewer, MAX_VIEWERS):  # (counted before the handshake's waits: its events queue meanwhile)
         return _error(503, "too_many_viewers", f"arm {service.name!r} has {MAX_VIEWERS} viewers already")
     # a browser offering "armctl" and "bearer.TOKEN" gets "armctl" back (it must get one it offered)
     socket = web.WebSocketResponse(heartbeat=WS_HEARTBEAT_S, protocols=("armctl",), max_msg_size=64 * 1024)
-    await socket.prepare(request)
-    client = request.query.get("client") or uuid.uuid4().hex
+    try:
+        await socket.prepare(request)
+    except BaseException:
+        service.hub.remove(viewer)
+        raise
     control = request.query.get("control") in ("1", "true") and service.take_control(client)
-    viewer, sender = Viewer(client), None
     request.app[SOCKETS].add(socket)
     try:  # (from here on: a client gone before its hello was written held control for good)
         await socket.send_json({"event": "hello", "arm": service.name, "client": client, "control": control,
                                 "controlled": service.controller is not None, "status": service.status,
                                 "job": None if service.running is None else service.running.to_json()})
         if control:
-            service.publish({"event": "control", "controller": "another client"})
-        service.hub.add(viewer)
+            service.publish({"event": "control", "controller": "another client"}, but=viewer)
         sender = asyncio.ensure_future(viewer.send_all(socket.send_str))
         async for message in socket:
             if message.type == WSMsgType.TEXT:
