@@ -68,9 +68,10 @@ def serve(arm_specs: tuple[str, ...], listen: str, token_file: str | None, journ
 
 
 def bind(host: str, port: int) -> list[socket.socket]:
-    """Sockets bound to every address of ``host`` (IPv4 and IPv6 for ``localhost``), as aiohttp's
-    ``TCPSite`` would bind them (SO_REUSEADDR on POSIX, IPv6 only on IPv6); they listen once
-    served.  ``ConfigError`` when an address cannot be had (taken, not this machine's)."""
+    """Sockets listening on every address of ``host`` (IPv4 and IPv6 for ``localhost``), bound as
+    aiohttp's ``TCPSite`` would bind them (SO_REUSEADDR on POSIX, IPv6 only on IPv6); a client
+    that connects waits until they are served.  ``ConfigError`` when an address cannot be had
+    (taken, not this machine's)."""
     sockets: list[socket.socket] = []
     try:
         for family, kind, protocol, _, address in dict.fromkeys(
@@ -81,6 +82,7 @@ def bind(host: str, port: int) -> list[socket.socket]:
             if family == socket.AF_INET6:
                 sockets[-1].setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 1)
             sockets[-1].bind(address)
+            sockets[-1].listen()  # (now: with SO_REUSEADDR another bind may succeed until one listens)
     except OSError as error:
         for bound in sockets:
             bound.close()
@@ -110,7 +112,7 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
         try:
             for bound in listening:
                 await web.SockSite(runner, bound).start()
-        except OSError as error:  # (bound, yet another program took the port first: it must listen to be served)
+        except OSError as error:
             raise ConfigError(f"cannot listen on {host}:{port}: {error.strerror or error}") from None
         for service in services.values():
             service.start()
