@@ -61,6 +61,7 @@ def test_a_listen_address_in_use_is_refused_before_any_arm_is_opened(tmp_path):
         os.close(arm_side)
 
 
+@pytest.mark.realtime  # the simulator behind a bridge, in real time
 def test_a_lost_port_is_answered_503_port_lost_with_the_way_back(tmp_path):
     """A status read after the arm's port went away (the cable pulled) was 422 'refused', as if
     the client had asked for something wrong; it is the arm's condition: 503, its own code,
