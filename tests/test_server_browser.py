@@ -3,8 +3,10 @@
 driver or no Selenium is installed (.ci/run installs all three and runs this)."""
 from __future__ import annotations
 
+import json
 import os
 import shutil
+import socket
 from contextlib import contextmanager
 from pathlib import Path
 
@@ -87,6 +89,8 @@ def test_the_page_renders_both_arms_with_live_status(browser, server):
     assert [s.get_attribute("data-arm") for s in browser.find_elements(By.CSS_SELECTOR, "section.arm")] == ["a", "b"]
     for arm in ("a", "b"):
         wait(browser, lambda d: card(d, arm).find_element(By.CSS_SELECTOR, '[data-role="status"]').text.startswith("X "))
+        wait(browser, lambda d: card(d, arm).find_element(By.CSS_SELECTOR, ".badge").text == "free")
+        card(browser, arm).find_element(By.CSS_SELECTOR, 'button[data-action="control"]').click()
         wait(browser, lambda d: card(d, arm).find_element(By.CSS_SELECTOR, ".badge").text == "in control")
 
 
@@ -182,3 +186,47 @@ def test_jog_buttons_move_the_arm_while_held_and_it_stops_on_release_and_on_a_cl
                 browser.get("about:blank")
             stopped = settled()
             assert abs(stopped - start) > 0.5 and abs(stopped) < 160, (ending, start, stopped)  # turned while held, then stood
+
+
+def another_users_socket(server, arm: str) -> tuple[socket.socket, dict]:
+    """A WebSocket of another client asking to control ``arm`` (kept open: control lasts while it
+    is), and its hello."""
+    host, port = server.base.removeprefix("http://").split(":")
+    raw = socket.create_connection((host, int(port)), timeout=10)
+    raw.sendall(f"GET /api/arms/{arm}/events?control=1&client=other HTTP/1.1\r\nHost: {host}:{port}\r\n"
+                "Upgrade: websocket\r\nConnection: Upgrade\r\nSec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\n"
+                "Sec-WebSocket-Version: 13\r\n\r\n".encode())
+    data = b""
+    while b"\r\n\r\n" not in data or len(data) < data.index(b"\r\n\r\n") + 8:
+        data += raw.recv(4096)
+    frame = data[data.index(b"\r\n\r\n") + 4:]
+    size, start = (frame[1], 2) if frame[1] < 126 else (int.from_bytes(frame[2:4], "big"), 4)  # (unmasked, under 64 kB)
+    while len(frame) < start + size:
+        frame += raw.recv(4096)
+    return raw, json.loads(frame[start:start + size])
+
+
+def test_a_page_controls_only_the_arms_its_user_takes(browser, tmp_path):
+    """The page asked to control every arm it showed: in a workshop the first page opened
+    controlled every arm and everyone else was read-only on all of them.  Now a page showing
+    several arms controls an arm once its user takes it (its button) and until they release it;
+    another user takes the other arm meanwhile."""
+    with served("--arm", "a=sim://?speed=20", "--arm", "b=sim://?speed=20", journal=tmp_path) as server:
+        browser.get(server.base + "/")
+        wait(browser, lambda d: d.find_element(By.TAG_NAME, "body").get_attribute("data-ready") == "1")
+        wait(browser, lambda d: [card(d, arm).find_element(By.CSS_SELECTOR, ".badge").text for arm in "ab"]
+             == ["free", "free"])
+        card(browser, "a").find_element(By.CSS_SELECTOR, 'button[data-action="control"]').click()
+        wait(browser, lambda d: card(d, "a").find_element(By.CSS_SELECTOR, ".badge").text == "in control")
+        other_b, hello_b = another_users_socket(server, "b")
+        other_a, hello_a = another_users_socket(server, "a")
+        try:
+            assert (hello_b["control"], hello_a["control"]) == (True, False)
+            wait(browser, lambda d: card(d, "b").find_element(By.CSS_SELECTOR, ".badge").text == "read-only")
+            other_a.close()
+            card(browser, "a").find_element(By.CSS_SELECTOR, 'button[data-action="control"]').click()  # Release
+            wait(browser, lambda d: card(d, "a").find_element(By.CSS_SELECTOR, ".badge").text == "free")
+            wait(browser, lambda d: server.request("GET", "/api/server")[1]["a"]["controlled"] is False)
+        finally:
+            other_b.close()
+            other_a.close()

@@ -5,11 +5,15 @@ client can cause is a 4xx JSON ``{"error": message, "code": word}`` (a script's 
 ``diagnostics``), never a traceback.  One middleware does, before any handler: the Host check
 (without a token), the token (``/api`` only), the Origin check (POST and WebSockets), and the
 mapping of armctl's errors to status codes.  Bodies are bounded by the script size limit
-(armctl/host/inputs.py), so no request can make the server hold more than one script's bytes.
+(armctl/host/inputs.py), and the script bodies held at once — read, waiting for their check
+(one at a time in the process: ``off_loop``), being checked — by ``SCRIPTS_HELD_BYTES``
+(``_script``): beyond, an upload is 503 at once, so a neighbour's uploads cannot queue more
+than two biggest scripts' checks nor hold more than their bytes.
 """
 from __future__ import annotations
 
 import asyncio
+import contextlib
 import json
 import logging
 import uuid
@@ -17,8 +21,8 @@ from importlib import resources
 
 from aiohttp import WSCloseCode, WSMsgType, web
 
-from ..errors import ArmctlError, ScriptError
-from ..host.inputs import MAX_INPUT_BYTES
+from ..errors import ArmctlError, PortError, ScriptError
+from ..host.inputs import MAX_INPUT_BYTES, describe_limit
 from . import auth
 from .arms import MAX_VIEWERS, Busy, NotController, UnknownJob, abandon_script_work, off_loop
 from .hub import Viewer
@@ -30,6 +34,8 @@ CLOSE_AT_SHUTDOWN_S = 1.0  # a WebSocket's time to answer the server's close whe
 SERVICES = web.AppKey("services", dict)
 SETTINGS = web.AppKey("settings", dict)
 SOCKETS = web.AppKey("sockets", set)  # the open WebSockets, closed at shutdown
+HELD = web.AppKey("held", dict)  # {"bytes": the script bodies held now (``_script``)}
+SCRIPTS_HELD_BYTES = 2 * MAX_INPUT_BYTES  # script bodies held at once, each counted from before its read
 
 
 def _error(status: int, code: str, message: str, **extra) -> web.Response:
@@ -75,6 +81,11 @@ async def _guard(request: web.Request, handler):
         return _error(404, "unknown_arm" if isinstance(error, _NotFound) else "unknown_job", str(error))
     except _BadJson as error:
         return _error(400, "bad_json", str(error))
+    except _TooBusy as error:
+        return _error(503, "too_busy", str(error))
+    except PortError as error:  # the arm's condition, not the request's: the server never reopens a port
+        return _error(503, "port_lost", f"{error}; reconnect the arm, then restart armctl serve (a job cut short "
+                      f"continues from its journal: POST /api/arms/{request.match_info.get('name', 'NAME')}/jobs?resume=ID)")
     except (ArmctlError, ValueError, TypeError) as error:
         return _error(422, "refused", str(error))
     except OSError as error:  # the journal directory, a full disk
@@ -100,13 +111,29 @@ class _BadJson(ValueError):
     pass
 
 
+class _TooBusy(ArmctlError):
+    pass
+
+
+@contextlib.asynccontextmanager
 async def _script(request: web.Request):
-    """The body as a script snapshot (read once; its name from ``?name=``)."""
+    """The body as a script snapshot (read once; its name from ``?name=``), its length (or, not
+    declared, the size limit) counted against ``SCRIPTS_HELD_BYTES`` from before the read until
+    the block (the check) ends; ``_TooBusy`` when it does not fit."""
     from ..script.files import ScriptSnapshot
 
-    data = await request.read()
-    name = request.query.get("name", "script")
-    return ScriptSnapshot(name[:200], data)
+    size = MAX_INPUT_BYTES if request.content_length is None else request.content_length
+    if size > MAX_INPUT_BYTES:  # (refused before it is read)
+        raise web.HTTPRequestEntityTooLarge(max_size=MAX_INPUT_BYTES, actual_size=size)
+    held = request.app[HELD]
+    if held["bytes"] + size > SCRIPTS_HELD_BYTES:
+        raise _TooBusy(f"other uploads fill the {describe_limit(SCRIPTS_HELD_BYTES)} of scripts the server holds "
+                       "for checking at once: try again once they are answered")
+    held["bytes"] += size
+    try:
+        yield ScriptSnapshot(request.query.get("name", "script")[:200], await request.read())
+    finally:
+        held["bytes"] -= size
 
 
 async def _json_object(request: web.Request) -> dict:
@@ -150,7 +177,8 @@ async def lint(request: web.Request) -> web.Response:
     from ..lint.formatters import as_record
 
     service = _service(request)
-    report = await service.check(await _script(request), errors_raise=False)
+    async with _script(request) as snapshot:
+        report = await service.check(snapshot, errors_raise=False)
     return web.json_response({"errors": report.errors, "diagnostics": [as_record(d) for d in report.diagnostics]})
 
 
@@ -161,10 +189,10 @@ async def preview(request: web.Request) -> web.Response:
     from ..plot.path import build_path
 
     service = _service(request)
-    snapshot = await _script(request)
-    report = await service.check(snapshot)
-    path = await off_loop(lambda: build_path(snapshot.compile(), MotionModel(service.arm.profile), snapshot.name,
-                                             report.diagnostics))
+    async with _script(request) as snapshot:
+        report = await service.check(snapshot)
+        path = await off_loop(lambda: build_path(snapshot.compile(), MotionModel(service.arm.profile), snapshot.name,
+                                                 report.diagnostics))
     return web.json_response({
         "start": list(path.start), "omitted": path.omitted,
         "segments": [{"line": s.line, "first_line": s.first_line, "kind": s.kind, "points": [list(p) for p in s.points]}
@@ -180,7 +208,8 @@ async def create_job(request: web.Request) -> web.Response:
     if resume is not None:
         job, report = await service.resume_job(resume, _client(request))
     else:
-        job, report = await service.start_job(await _script(request), _client(request))
+        async with _script(request) as snapshot:
+            job, report = await service.start_job(snapshot, _client(request))
     return web.json_response({"id": job.id, "journal": str(job.log_path),
                               "diagnostics": [as_record(d) for d in report.diagnostics]}, status=201)
 
@@ -236,22 +265,25 @@ async def move(request: web.Request) -> web.Response:
 async def events(request: web.Request) -> web.WebSocketResponse:
     """The WebSocket: the arm's events; with ``?control=1`` the client asks to control it."""
     service = _service(request)
-    if len(service.hub.viewers) >= MAX_VIEWERS:
+    client = request.query.get("client") or uuid.uuid4().hex
+    viewer, sender = Viewer(client), None
+    if not service.hub.add(viewer, MAX_VIEWERS):  # (counted before the handshake's waits: its events queue meanwhile)
         return _error(503, "too_many_viewers", f"arm {service.name!r} has {MAX_VIEWERS} viewers already")
     # a browser offering "armctl" and "bearer.TOKEN" gets "armctl" back (it must get one it offered)
     socket = web.WebSocketResponse(heartbeat=WS_HEARTBEAT_S, protocols=("armctl",), max_msg_size=64 * 1024)
-    await socket.prepare(request)
-    client = request.query.get("client") or uuid.uuid4().hex
+    try:
+        await socket.prepare(request)
+    except BaseException:
+        service.hub.remove(viewer)
+        raise
     control = request.query.get("control") in ("1", "true") and service.take_control(client)
-    viewer, sender = Viewer(client), None
     request.app[SOCKETS].add(socket)
     try:  # (from here on: a client gone before its hello was written held control for good)
         await socket.send_json({"event": "hello", "arm": service.name, "client": client, "control": control,
                                 "controlled": service.controller is not None, "status": service.status,
                                 "job": None if service.running is None else service.running.to_json()})
         if control:
-            service.publish({"event": "control", "controller": "another client"})
-        service.hub.add(viewer)
+            service.publish({"event": "control", "controller": "another client"}, but=viewer)
         sender = asyncio.ensure_future(viewer.send_all(socket.send_str))
         async for message in socket:
             if message.type == WSMsgType.TEXT:
@@ -325,6 +357,7 @@ def build_app(services: dict, *, token: str | None, host: str) -> web.Applicatio
     app[SERVICES] = services
     app[SETTINGS] = {"token": token, "host": host}
     app[SOCKETS] = set()
+    app[HELD] = {"bytes": 0}
     app.on_shutdown.append(_on_shutdown)
     app.router.add_get("/", page)
     app.router.add_get("/api/arms", list_arms)

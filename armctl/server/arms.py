@@ -152,8 +152,8 @@ class ArmService:
         if self._jog is not None and self._jog.active:
             raise Busy(f"arm {self.name!r} is jogging: release the jog button first")
 
-    def publish(self, event: dict) -> None:
-        self.hub.publish({"arm": self.name, **event})
+    def publish(self, event: dict, but=None) -> None:
+        self.hub.publish({"arm": self.name, **event}, but)
 
     # --- control -----------------------------------------------------------------------------
 

@@ -50,20 +50,26 @@ class Hub:
         self.viewers: set[Viewer] = set()
         self.published = 0
 
-    def add(self, viewer: Viewer) -> None:
+    def add(self, viewer: Viewer, limit: int | None = None) -> bool:
+        """Add ``viewer`` — unless ``limit`` viewers are here already (False): checked and
+        counted in one step, so connects arriving together cannot all pass the check."""
+        if limit is not None and len(self.viewers) >= limit:
+            return False
         self.viewers.add(viewer)
+        return True
 
     def remove(self, viewer: Viewer) -> None:
         self.viewers.discard(viewer)
 
-    def publish(self, event: dict[str, Any]) -> None:
-        """Give ``event`` to every viewer (on the event loop; never waits)."""
+    def publish(self, event: dict[str, Any], but: Viewer | None = None) -> None:
+        """Give ``event`` to every viewer (``but`` that one: it is about it) on the event loop; never waits."""
         self.published += 1
         if not self.viewers:
             return
         text = json.dumps(event, ensure_ascii=False)
         for viewer in self.viewers:
-            viewer.offer(text)
+            if viewer is not but:
+                viewer.offer(text)
 
     def stats(self) -> dict:
         return {"viewers": len(self.viewers), "published": self.published,

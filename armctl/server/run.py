@@ -1,7 +1,9 @@
 """``armctl serve``'s process: open the arms, listen, stop cleanly.
 
-Strategy: everything on one asyncio loop (aiohttp's), the arms opened as ``AsyncArm`` before
-the first request; SIGINT, SIGTERM and SIGHUP (the terminal closed: ``stop_signals``'s three)
+Strategy: everything on one asyncio loop (aiohttp's).  The listening address is bound first
+(``bind``: a taken address ends the command before any arm's port is opened), then the arms
+are opened as ``AsyncArm``, then the server accepts its first request on the sockets bound;
+SIGINT, SIGTERM and SIGHUP (the terminal closed: ``stop_signals``'s three)
 stop the server the way Ctrl-C stops ``armctl run``: a running job is stopped (the abort
 sequence, the arm waited for, the journal closed), the WebSockets closed, the arms closed,
 then the process exits 130.
@@ -9,6 +11,9 @@ then the process exits 130.
 from __future__ import annotations
 
 import asyncio
+import errno
+import os
+import socket
 import sys
 from pathlib import Path
 
@@ -62,6 +67,31 @@ def serve(arm_specs: tuple[str, ...], listen: str, token_file: str | None, journ
     raise KeyboardInterrupt  # stopped by a signal, cleanly: exit 130 like every command
 
 
+def bind(host: str, port: int) -> list[socket.socket]:
+    """Sockets listening on every address of ``host`` (IPv4 and IPv6 for ``localhost``), bound as
+    aiohttp's ``TCPSite`` would bind them (SO_REUSEADDR on POSIX, IPv6 only on IPv6); a client
+    that connects waits until they are served.  ``ConfigError`` when an address cannot be had
+    (taken, not this machine's)."""
+    sockets: list[socket.socket] = []
+    try:
+        for family, kind, protocol, _, address in dict.fromkeys(
+                socket.getaddrinfo(host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)):
+            sockets.append(socket.socket(family, kind, protocol))
+            if os.name == "posix":
+                sockets[-1].setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            if family == socket.AF_INET6:
+                sockets[-1].setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 1)
+            sockets[-1].bind(address)
+            sockets[-1].listen()  # (now: with SO_REUSEADDR another bind may succeed until one listens)
+    except OSError as error:
+        for bound in sockets:
+            bound.close()
+        taken = " (another program listens there: stop it, or give another --listen)" \
+            if error.errno == errno.EADDRINUSE else ""
+        raise ConfigError(f"cannot listen on {host}:{port}: {error.strerror or error}{taken}") from None
+    return sockets
+
+
 async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None:
     from aiohttp import web
 
@@ -69,6 +99,7 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
     from .app import build_app
 
     services: dict[str, ArmService] = {}
+    listening = bind(host, port)  # before any arm is opened: a taken address touches no arm
     try:
         from ..host.port_choice import choose_port
 
@@ -79,7 +110,8 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
         runner = web.AppRunner(app, handle_signals=False, access_log=None)
         await runner.setup()
         try:
-            await web.TCPSite(runner, host, port).start()
+            for bound in listening:
+                await web.SockSite(runner, bound).start()
         except OSError as error:
             raise ConfigError(f"cannot listen on {host}:{port}: {error.strerror or error}") from None
         for service in services.values():
@@ -99,3 +131,5 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
     finally:
         for service in services.values():
             await service.close()
+        for bound in listening:  # (the runner closed those it served; closing twice does nothing)
+            bound.close()
