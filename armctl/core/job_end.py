@@ -113,7 +113,8 @@ class JobEnd:
             if paused_at_end:
                 view.messages.append(f"the arm is paused, as the script's PAUSE at line "
                                      f"{self.written.script_pause_line()} leaves it")
-            if self.overran:
+            active_s = self.readings.active_s  # (blips left out: one read at the deadline proved nothing)
+            if self.overran and active_s is not None and active_s > self.deadline_s - REST_CHECK_S:
                 view.messages.append("the arm kept working past the estimate (moving, or running an SD program "
                                      "whose time armctl cannot know); armctl waited until it stopped")
             self.check_job_time(view.arm_done_s)
@@ -130,6 +131,10 @@ class JobEnd:
                 # Still for long enough, but some kind not re-read since (its reports lost): the
                 # next reports may yet prove the rest — waited for as for an arm that just stopped.
                 settle_until.append(readings.rest_since_s() + REST_CHECK_S + SETTLE_SLACK_S)
+            if readings.rest is not None and readings.rest[1] > readings.changed_s:
+                # a blip (armctl/core/job_readings.py) dates the rest proof, not the arm's work:
+                # the proof it put off is waited for, as for an arm that stopped then
+                settle_until.append(readings.rest[1] + REST_CHECK_S + SETTLE_SLACK_S)
             resting = self.resting_before_last_move()
             if resting:  # frames rest cannot prove: their time bound (widened by a slow pace) decides
                 settle_until.append(max(sent.certain_end_s for sent in resting) + SETTLE_SLACK_S)

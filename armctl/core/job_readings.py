@@ -28,13 +28,19 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
 - **Motion** (``motion``): the position and joints alone (no PWM), with when they last changed
   and the latest reading before that which still differed from them — the window in which the
   arm stopped (``Arrival.done_at``).
-- **Blips.**  A status frame has no checksum (H9): a corrupted one reads as the arm elsewhere.  A
-  kind's reading alone between two equal ones of that kind, with no other kind changed
-  meanwhile, is taken for such a blip once the second comes: the motion, the activity and the
-  last change (``changed_s``) are what they were before it, so the arm's time and a "kept
-  working" note never count from a blip.  (The arm cannot go somewhere and come back so fast
-  that the joints, read 30 ms after the position, still read as before.)  The rest proof stays
-  the careful one: ``rest`` dates from the blip's end, and a rest is proven REST_CHECK_S after it.
+- **Blips.**  A status frame has no checksum (H9): a corrupted one reads as the arm elsewhere.
+  Once the next report of its kind comes back to the value before it, a reading that stood alone
+  is taken for such a blip, and the motion, the arm's activity and the last change
+  (``changed_s``) are what they were before it, so the arm's time and a "kept working" note
+  never count from a blip.  Which readings: a position or joints reading, if neither of the other
+  two of those kinds changed meanwhile by more than a reading's jitter (the arm cannot go
+  somewhere and come back so fast that the joints, read 30 ms after the position, still read
+  as before; a change within jitter still dates the motion: the arm settling, read late); an SD
+  program's run position; a pause-and-PWM reading with the pause state of its neighbours and a
+  PWM no recent frame written sets (a job may toggle its gripper faster than the rotation reads
+  it).  What the other kinds showed meanwhile still counts.  The rest proof stays the careful
+  one: ``rest`` dates from the blip's end, a rest is proven REST_CHECK_S after it, and the end of
+  the job waits for that proof (armctl/core/job_end.py).
 
 ``Written`` is the other half of the record: the last ``RECENT_FRAMES`` frames written (the
 trailing frames that move nothing are judged on them), the last that moves the arm, and the
@@ -86,6 +92,10 @@ class Written:
         if sent.segment.moves_reported:  # (``moves_arm``)
             self.last_move = sent
 
+    def sets_pwm(self, pwm_us: int) -> bool:
+        """Some recent frame written sets a PWM channel to ``pwm_us`` (as the status reports it)."""
+        return any(round(value) == pwm_us for sent in self.recent for value in sent.segment.end.pwm_us)
+
     def script_pause_line(self):
         return getattr(self.script_toggles[-1].tag, "line", None)
 
@@ -105,9 +115,16 @@ class Readings:
         self.run_position: float | None = None  # the SD program's run position last reported
         self.active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
         self.changed_s = 0.0  # when any kind's readings last changed, blips left out ("Blips")
-        # the last change: (its kind, that kind's readings before it, and what it replaced of
-        # motion, moved_from, active_s and changed_s): undone if the next change returns it
+        self.other_changed_s = 0.0  # ... the pause-and-PWM kind's
+        self.motion_active_s: float | None = None  # ``active_s`` by the position and joints, blips left out
+        self.program_active_s: float | None = None  # ... by an SD program's run position, blips left out
+        self.last_run_change: tuple | None = None  # (the run position before its last change, program_active_s)
+        # the last change of position or joints: (its kind, that kind's readings before it, and
+        # what it replaced of motion, moved_from, active_s and changed_s): undone if the next
+        # change of those kinds returns it
         self.last_change: tuple | None = None
+        self.last_pause_change: tuple | None = None  # (the readings before, changed_s, other_changed_s)
+        self.settled: tuple | None = None  # since ``last_change``, the last change within jitter: (when, last read before)
         self.work_s = -math.inf  # the arm worked after this time, by its reports (``worked_after``)
         # kind → [the value two reports in a row last agreed on, when it was last read there before it
         # changed (else its agreement's first report)]: ``_agreed``
@@ -129,6 +146,11 @@ class Readings:
         if not changed:  # two reports in a row agree: a new value agreed on may show work (``_agreed``)
             if kind != PAUSE_KIND and (agreed is None or agreed[0] != values):
                 self._agreed(kind, values, before_s, slot_moved)
+            # (a value read twice is no blip: "Blips")
+            if kind == PAUSE_KIND:
+                self.last_pause_change = None
+            elif self.last_change is not None and self.last_change[0] == kind:
+                self.last_change = None
             if self.rest is not None:
                 return False
             before_s = None  # (the last reading of this kind that differed: none)
@@ -139,14 +161,36 @@ class Readings:
         # motion unless only the pause and PWM changed.
         rest = self.rest = ((reported.get(0), reported.get(1), reported.get(2), reported.get(4)), now)
         motion = self.motion
-        last_change = self.last_change
-        if last_change is not None and last_change[0] == kind and last_change[1] == values:
-            # this kind's last reading stood alone between two equal ones, and nothing else
-            # changed meanwhile: a blip ("Blips"), which dates nothing
-            _, _, self.motion, self.moved_from, self.active_s, self.changed_s = last_change
-            self.last_change = None
-            return True
-        self.last_change = (kind, old, motion, self.moved_from, self.active_s, self.changed_s)
+        if kind == PAUSE_KIND:
+            blip = self.last_pause_change
+            if blip is not None and blip[0] == values and old[0] == values[0] and not self.written.sets_pwm(old[1]):
+                # a PWM alone between two equal readings, one no frame written sets: a blip
+                self.changed_s, self.other_changed_s = blip[1], blip[2]
+                self.last_pause_change = None
+                return True
+            self.last_pause_change = (old, self.changed_s, self.other_changed_s)
+            self.other_changed_s = now
+        else:
+            last_change = self.last_change
+            if last_change is not None and last_change[0] == kind and last_change[1] == values:
+                # this kind's last reading stood alone between two equal ones, and no other
+                # position or joints changed meanwhile: a blip ("Blips"), which dates nothing
+                _, _, motion, self.moved_from, self.motion_active_s, changed_s = last_change
+                self.active_s = _latest(self.motion_active_s, self.program_active_s)
+                self.changed_s = max(changed_s, self.other_changed_s)
+                settled = self.settled
+                if settled is not None:  # another kind's change within jitter meanwhile still dates the motion
+                    moving_s = settled[1] if motion is None or motion[2] is None else max(settled[1], motion[2])
+                    motion = (rest[0][:3], settled[0], moving_s)
+                    self.changed_s = max(self.changed_s, settled[0])
+                self.motion, self.last_change, self.settled = motion, None, None
+                return True
+            if last_change is not None and old is not None and not slot_moved(kind, old, values):
+                # within a reading's jitter: no excursion, and the blip before it may still be one
+                self.settled = (now, before_s)
+            else:
+                self.last_change = (kind, old, motion, self.moved_from, self.motion_active_s, self.changed_s)
+                self.settled = None
         self.changed_s = now
         if kind != PAUSE_KIND or motion is None:
             moving_s = motion[2] if motion is not None else None
@@ -159,7 +203,7 @@ class Readings:
             # changed, or equal since it was taken): only this kind's can have moved.
             if moved_from is None or (kind != PAUSE_KIND and slot_moved(kind, moved_from[kind], values)):
                 self.moved_from = readings
-                self.active_s = now
+                self.active_s = self.motion_active_s = now
         return True
 
     def take_pause(self, paused: bool, now: float) -> bool | None:
@@ -173,8 +217,15 @@ class Readings:
         before, before_s = self.run_position, self.run_position_read_s
         advanced = before is not None and value != before
         if advanced:
-            self.active_s = now
+            last = self.last_run_change
+            if last is not None and last[0] == value:  # back where it was before one report: a blip
+                self.program_active_s, self.last_run_change = last[1], None
+                self.active_s = _latest(self.motion_active_s, self.program_active_s)
+            else:
+                self.last_run_change = (before, self.program_active_s)
+                self.active_s = self.program_active_s = now
         elif before is not None:
+            self.last_run_change = None  # (a value read twice is no blip)
             self._agreed(RUN_POSITION_KIND, value, before_s, _run_position_moved)
         self.run_position, self.run_position_read_s = value, now
         return advanced
@@ -227,6 +278,10 @@ class Readings:
     def joints(self) -> tuple:
         """The six joints as last reported (fewer while a half was never read)."""
         return (self.reported.get(1) or ()) + (self.reported.get(2) or ())
+
+
+def _latest(a_s: float | None, b_s: float | None) -> float | None:
+    return b_s if a_s is None else a_s if b_s is None else max(a_s, b_s)
 
 
 def landed_s(sent) -> float:
