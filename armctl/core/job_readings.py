@@ -30,7 +30,9 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
   arm stopped (``Arrival.done_at``).
 - **Blips.**  A status frame has no checksum (H9): a corrupted one reads as the arm elsewhere.
   Once the next report of its kind comes back to the value before it, a reading that stood alone
-  is taken for such a blip, and the motion, the arm's activity and the last change
+  and that no recent frame's motion explains (``Written.explains``: a wrist turned away and back
+  within one rotation is read once, alone, between two readings at its start) is taken for such
+  a blip, and the motion, the arm's activity and the last change
   (``changed_s``) are what they were before it, so the arm's time and a "kept working" note
   never count from a blip.  Which readings: a position or joints reading, if neither of the other
   two of those kinds changed meanwhile by more than a reading's jitter (the arm cannot go
@@ -91,6 +93,24 @@ class Written:
             self.control_sent += 1
         if sent.segment.moves_reported:  # (``moves_arm``)
             self.last_move = sent
+
+    def explains(self, kind: int, values: tuple, read_s: float) -> bool:
+        """Some recent frame the arm may still have been running at ``read_s`` (its time bound not
+        yet run out) passes within a reading's jitter of ``values`` (one kind's readings: 0
+        position, 1 and 2 the joint halves): each within the span of its start and end."""
+        limit = TARGET_MM if kind == 0 else TARGET_DEG
+        first = 3 * (kind - 1)
+        for sent in self.recent:
+            if sent.certain_end_s < read_s:
+                continue
+            start, end = sent.segment.start, sent.segment.end
+            if kind == 0:
+                a, b = start.xyz, end.xyz
+            else:
+                a, b = start.joints[first:first + 3], end.joints[first:first + 3]
+            if all(min(p, q) - limit <= v <= max(p, q) + limit for p, q, v in zip(a, b, values)):
+                return True
+        return False
 
     def sets_pwm(self, pwm_us: int) -> bool:
         """Some recent frame written sets a PWM channel to ``pwm_us`` (as the status reports it)."""
@@ -172,7 +192,8 @@ class Readings:
             self.other_changed_s = now
         else:
             last_change = self.last_change
-            if last_change is not None and last_change[0] == kind and last_change[1] == values:
+            if (last_change is not None and last_change[0] == kind and last_change[1] == values
+                    and not self.written.explains(kind, old, before_s)):
                 # this kind's last reading stood alone between two equal ones, and no other
                 # position or joints changed meanwhile: a blip ("Blips"), which dates nothing
                 _, _, motion, self.moved_from, self.motion_active_s, changed_s = last_change
