@@ -27,9 +27,10 @@ VIRTUAL = "sim://?clock=virtual"
 NOT_RUN = ("skipped", "ignored")
 
 
-def ran(arm: Arm) -> list:
-    """The commands the simulated arm executed, in order (its own record)."""
-    return [e.command for e in arm._link.port.model.execution_log if e.command is not None and e.outcome not in NOT_RUN]
+def ran(arm) -> list:
+    """The commands the simulated arm executed, in order (its own record); ``arm``: an ``Arm``, or its port."""
+    port = arm._link.port if isinstance(arm, Arm) else arm
+    return [e.command for e in port.model.execution_log if e.command is not None and e.outcome not in NOT_RUN]
 
 
 def sent(arm: Arm) -> int:

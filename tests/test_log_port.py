@@ -8,6 +8,13 @@
    ``--port`` that is another arm's is refused (exit 2, naming both, nothing opened) unless
    ``--other-port`` says it is the same arm on another port; a log from before says its port
    is unknown and resumes as before; ``armctl decode`` shows the port.
+2. ``--resume`` of a log of a job on ``sim://`` in a new process met a new simulated arm (the
+   simulator's state died with the old process): the "resume" ran on a fresh arm at its home
+   pose, from the line after the last one the dead arm's reports proved, or said "nothing to
+   resume: every line of the job is proven executed" — claims no report of this arm made.  The
+   job record of a ``sim://`` port now names the process its arm lives in (``sim_process``); a
+   resume in another process is refused (exit 2, nothing opened) and says why: a simulated arm
+   does not outlive its process (``armctl sim --pty`` keeps one in a process of its own).
 
 One arm across runs in-process, as tests/test_resume_exactly_once.py keeps it (``open_port``
 wrapped); the installed command in fresh processes against ``armctl sim --pty`` (an arm in a
@@ -64,16 +71,17 @@ def _job_record(log: Path) -> dict:
                 if (record := unseal(line)) is not None and record["dir"] == "job")
 
 
-def _with_port(log: Path, port: str | None, into: Path) -> Path:
-    """``log`` with its job record's port changed (None: taken out, as an armctl before wrote
-    it), sealed again: what that armctl, or a run on ``port``, would have written."""
+def _with_port(log: Path, port: str | None, into: Path, **fields) -> Path:
+    """``log`` with its job record's port (and ``fields``) changed — None: taken out, as an
+    armctl before wrote it — sealed again: what that armctl, or a run on ``port``, would have written."""
     lines = log.read_text(encoding="utf-8").splitlines()
     record = unseal(lines[0])  # (the job record: the run found the arm idle)
     assert record["dir"] == "job"
     seq = record.pop("seq")
-    record.pop("port", None)
-    if port is not None:
-        record["port"] = port
+    for key, value in {"port": port, **fields}.items():
+        record.pop(key, None)
+        if value is not None:
+            record[key] = value
     into.write_text("\n".join([seal(record, seq), *lines[1:]]) + "\n", encoding="utf-8")
     return into
 
@@ -128,7 +136,7 @@ def test_other_port_resumes_the_same_arm_moved_to_another_port(tmp_path, monkeyp
 
 def test_a_log_from_before_the_port_resumes_as_before_and_says_the_port_is_unknown(tmp_path, monkeypatch):
     ports = _stopped_job(tmp_path, monkeypatch)
-    old = _with_port(tmp_path / "j1.log", None, tmp_path / "old.log")
+    old = _with_port(tmp_path / "j1.log", None, tmp_path / "old.log", sim_process=None)
     resumed = _invoke("run", "job.txt", "--no-live", "--resume", "old.log", "--port", URL)
     assert resumed.exit_code == 0, resumed.output
     assert "old.log does not record the port its job ran on" in resumed.output
@@ -185,7 +193,7 @@ def test_the_installed_command_refuses_another_port_and_opens_the_logs(tmp_path,
     port — not to ARMCTL_PORT's simulator — and says so (it is not there: exit 2, nothing sent)."""
     _stopped_job(tmp_path, monkeypatch)
     device = "/dev/ttyACM97"
-    log = _with_port(tmp_path / "j1.log", device, tmp_path / "device.log")
+    log = _with_port(tmp_path / "j1.log", device, tmp_path / "device.log", sim_process=None)  # (no sim:// arm's)
     refused = subprocess.run([str(ARMCTL), "run", "job.txt", "--no-live", "--resume", str(log), "--port", URL],
                              capture_output=True, text=True, timeout=60, cwd=tmp_path, env=_env())
     assert refused.returncode == 2, refused.stderr
@@ -225,3 +233,52 @@ def test_the_installed_command_resumes_on_the_arm_the_log_ran_on(tmp_path):
         assert again.returncode == 0, again.stdout + again.stderr
         assert f"j1.log records, {pty}" in again.stderr, again.stderr
         assert "simulator" not in again.stderr and "nothing to resume" in again.stdout, again.stdout + again.stderr
+
+
+# --- 2. a simulated arm does not outlive its process --------------------------------------------
+
+
+GONE = "4242-another-process"  # the mark of a process that is no more
+
+
+def test_a_log_of_a_simulated_arm_of_another_process_is_refused(tmp_path, monkeypatch):
+    """In-process, the log as the armctl of another process wrote it (its job record's mark):
+    refused, exit 2, nothing opened or sent; the arm of this process resumes its own log."""
+    ports = _stopped_job(tmp_path, monkeypatch)
+    arm = ports[URL].model
+    received = len(arm.frames_received)
+    assert isinstance(_job_record(tmp_path / "j1.log").get("sim_process"), str)  # this process's mark
+    gone = _with_port(tmp_path / "j1.log", URL, tmp_path / "gone.log", sim_process=GONE)
+    refused = _invoke("run", "job.txt", "--no-live", "--resume", "gone.log")
+    assert refused.exit_code == 2, refused.output
+    assert "does not outlive its process" in refused.output and "armctl sim --pty" in refused.output
+    assert "Traceback" not in refused.output and "nothing to resume" not in refused.output
+    assert len(arm.frames_received) == received
+    with Arm.open(port=URL) as same:  # (the one arm of this test: open_port wrapped)
+        with pytest.raises(ResumeRefused, match="does not outlive its process"):
+            same.run(tmp_path / "job.txt", resume=tmp_path / "gone.log")
+    assert len(arm.frames_received) == received
+    own = _invoke("run", "job.txt", "--no-live", "--resume", "j1.log")  # the arm of this process: resumed
+    assert own.exit_code == 0 and "resuming job.txt at line" in own.output, own.output
+    assert _every_line_once(arm)
+
+
+@pytest.mark.parametrize("frames", [14, None], ids=["stopped mid-job", "finished"])
+def test_the_installed_command_refuses_a_simulated_arm_gone_with_its_process(tmp_path, monkeypatch, frames):
+    """A job on ``sim://`` in this process (stopped mid-job, or finished), resumed by the
+    installed command — another process, whose simulator is a new arm at its home pose.  It
+    resumed there "from where it stands" and ran the rest, or said every line was proven
+    executed; now it is refused, exit 2, before any port opens."""
+    if frames is None:
+        monkeypatch.chdir(tmp_path)
+        (tmp_path / "job.txt").write_text(_job(), encoding="utf-8")
+        assert _invoke("run", "job.txt", "--no-live", "--port", URL, "--log", "j1.log").exit_code == 0
+    else:
+        _stopped_job(tmp_path, monkeypatch)
+    for port in ((), ("--port", URL)):
+        done = subprocess.run([str(ARMCTL), "run", "job.txt", "--no-live", "--resume", "j1.log", *port],
+                              capture_output=True, text=True, timeout=60, cwd=tmp_path, env=_env())
+        assert done.returncode == 2, done.stdout + done.stderr
+        assert "does not outlive its process" in done.stderr and URL in done.stderr, done.stderr
+        assert "nothing to resume" not in done.stdout and "resuming" not in done.stderr
+        assert "using the built-in simulator" not in done.stderr and "Traceback" not in done.stderr

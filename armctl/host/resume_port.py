@@ -9,13 +9,46 @@ serial number, a ``sim://`` URL by the options that make its arm), or ``--other-
 is (the arm moved to another port); a log written before armctl recorded its port resumes on
 the port given or configured, as it did, with a note saying the port is unknown.
 ``refuse_another_arm`` is the rule itself, for ``Arm.run(resume=)`` too, before anything is sent.
+
+A ``sim://`` arm lives in the armctl process that opened it and dies with it: a resume in
+another process would meet a new arm at its home pose, whose reports prove nothing of the lines
+the old one ran (it "resumed" from where the new arm stands, or said every line was proven
+executed).  So the log of a ``sim://`` job names its process (``simulator_process``: the pid and
+a random mark, as a pid can come again), and ``refuse_gone_simulator`` refuses (exit 2) a resume
+from any other — ``--other-port`` or not: no port reaches that arm any more.
 """
 
 from __future__ import annotations
 
+import os
+import uuid
+
 from ..errors import ArmctlError, ResumeRefused, UsageFailure
+from .port_choice import SIMULATOR_URL
 
 OVERRIDE_FLAG = "--other-port"
+_PROCESS_MARK = uuid.uuid4().hex[:16]  # this process's, once: with the pid, what no later process has
+
+
+def simulator_process(url: str) -> str | None:
+    """The process the arm on ``url`` lives and dies in, for a ``sim://`` port (this one); None
+    for any other port (a device, a network port, ``armctl sim --pty``: the arm outlives us)."""
+    return f"{os.getpid()}-{_PROCESS_MARK}" if url.startswith(SIMULATOR_URL) else None
+
+
+def refuse_gone_simulator(point) -> None:
+    """``ResumeRefused`` (exit 2, nothing sent) when the log ``point`` was read from records a job
+    on a simulated arm of another process: that arm is gone, and no report of a new one proves
+    which lines ran."""
+    if point.sim_process is None or point.sim_process == simulator_process(SIMULATOR_URL):
+        return
+    name = point.log_path or "the log"
+    raise ResumeRefused(
+        f"--resume {name}: its job ran on a simulated arm ({point.port}) of another armctl process, which has "
+        "ended: a simulated arm does not outlive its process, and the one a resume would open now starts afresh "
+        "at its home pose, so none of its reports can prove which lines ran; nothing was sent (run the job "
+        "again; to try a resume, keep a simulated arm in a process of its own: `armctl sim --pty` or "
+        "`armctl sim --tcp PORT`, and its port as --port)")
 
 
 def same_arm(logged: str, url: str) -> bool:
