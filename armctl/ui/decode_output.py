@@ -1,7 +1,8 @@
 """``armctl decode``'s output: each ``Decoded`` of the input (armctl/ui/decode.py) printed as a
 line (or a JSON line), a write per 1,024 lines; the tally, a log's job records (script, first
-line, port) and every damaged log record on stderr; the exit code (1 when a sealed record's checksum did not match: its bytes were not
-shown).  The input is a regular file or stdin (``open_input``)."""
+line, port) and every damaged log record on stderr; the exit code (1 when a sealed record's
+checksum did not match: its bytes were not shown).  The input is a regular file or stdin
+(``open_input``)."""
 
 from __future__ import annotations
 
