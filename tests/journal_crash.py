@@ -11,6 +11,12 @@ the simulator's own record of what the arm executed (``SimulatedArm.execution_lo
 from __future__ import annotations
 
 import json
+import os
+import re
+import signal
+import subprocess
+import sys
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -21,9 +27,10 @@ VIRTUAL = "sim://?clock=virtual"
 NOT_RUN = ("skipped", "ignored")
 
 
-def ran(arm: Arm) -> list:
-    """The commands the simulated arm executed, in order (its own record)."""
-    return [e.command for e in arm._link.port.model.execution_log if e.command is not None and e.outcome not in NOT_RUN]
+def ran(arm) -> list:
+    """The commands the simulated arm executed, in order (its own record); ``arm``: an ``Arm``, or its port."""
+    port = arm._link.port if isinstance(arm, Arm) else arm
+    return [e.command for e in port.model.execution_log if e.command is not None and e.outcome not in NOT_RUN]
 
 
 def sent(arm: Arm) -> int:
@@ -95,3 +102,21 @@ def durable_end(data: bytes) -> int:
         if record.get("dir") in ("tx", "job"):
             end = offset
     return end
+
+
+@contextmanager
+def pty_arm(*options: str, env: dict | None = None):
+    """``armctl sim --pty OPTIONS`` in a process of its own — an arm that outlives the armctl
+    processes that drive it, as a real arm does (a ``sim://`` arm dies with its process): its
+    pseudo-terminal's path; stopped (SIGINT, as Ctrl-C: its ``--stats`` are written) at the end."""
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"} if env is None else env
+    sim = subprocess.Popen([sys.executable, "-m", "armctl", "sim", "--pty", *options], stdout=subprocess.PIPE,
+                           text=True, env=env, preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        yield re.search(r"(/dev/\S+)", sim.stdout.readline()).group(1)
+    finally:
+        sim.send_signal(signal.SIGINT)
+        try:
+            sim.wait(10)
+        finally:
+            sim.kill()

@@ -32,7 +32,6 @@ from __future__ import annotations
 import json
 import os
 import re
-import signal
 import subprocess
 import sys
 import time
@@ -43,7 +42,7 @@ import pytest
 from armctl.core.joblog import read_resume_log
 from armctl.errors import ArmctlError, ResumeRefused
 
-from journal_crash import make_crash
+from journal_crash import make_crash, pty_arm
 
 ARMCTL = [sys.executable, "-m", "armctl"]
 
@@ -392,11 +391,7 @@ def test_kill_9_twice_then_the_advised_resume_runs_every_line_once(tmp_path):
     profile = tmp_path / "arm.toml"  # the FIFO size as `armctl probe --write` keeps it: `finished` is proven
     profile.write_text("[connector]\nfifo_frames = 200\n")
     j1, j2, j3 = tmp_path / "j1.log", tmp_path / "j2.log", tmp_path / "j3.log"
-    sim = subprocess.Popen([*ARMCTL, "sim", "--pty", "--stats", str(stats)], stdout=subprocess.PIPE, text=True,
-                           env=_env(), preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
-    try:
-        pty = re.search(r"(/dev/\S+)", sim.stdout.readline()).group(1)
-
+    with pty_arm("--stats", str(stats), env=_env()) as pty:
         def run(*args, **kwargs):
             return [*ARMCTL, "run", str(script), "--port", pty, "--no-live", "--profile", str(profile), *args]
 
@@ -421,12 +416,6 @@ def test_kill_9_twice_then_the_advised_resume_runs_every_line_once(tmp_path):
                               timeout=90, cwd=tmp_path, env=_env())
         assert last.returncode == 0, last.stdout + last.stderr
         assert "finished" in last.stdout
-    finally:
-        sim.send_signal(signal.SIGINT)
-        try:
-            sim.wait(10)
-        finally:
-            sim.kill()
     seen = json.loads(stats.read_text())
     assert seen["complete"] and seen["dropped"] == 0
     later = _frames(j3)  # j2 holds no frame; j1's last record may be of a frame never written

@@ -219,18 +219,36 @@ def test_a_power_cut_leaves_every_written_frames_record_and_the_resume_runs_each
         assert before == job_commands(JOINT)[:14]
 
 
-def test_the_installed_command_resumes_a_power_cut_log_once(tmp_path):
-    """A fresh ``armctl run --resume`` of the log a power cut left (the host died after 14 frames
-    of joint_routine; its arm ran them and rests at home, where the built-in simulator starts)."""
+def test_the_command_resumes_a_power_cut_log_once(tmp_path, monkeypatch):
+    """``armctl run --resume`` of the log a power cut left (the host died after 14 frames of
+    joint_routine; its arm ran them and rests at home).  The installed command, a fresh process,
+    meets a new simulated arm (a ``sim://`` arm dies with its process; it happens to start at
+    home too, and was taken for the old one): refused, exit 2 (tests/test_log_port.py).  The
+    command on the arm that ran the 14 frames continues at line 33: lines 33 and 34, once."""
+    import armctl.host.link
+    from click.testing import CliRunner
+
+    from armctl.ui.cli import main
+
     arm, data, durable = _power_cut(tmp_path, JOINT, 14)
+    port = arm._link.port
     arm.close()
     end_of_next_progress = data.index(b"\n", data.index(b'"progress"', durable)) + 1
     cut = tmp_path / "cut.log"
     cut.write_bytes(data[:end_of_next_progress])
     done = _armctl("run", str(JOINT), "--port", VIRTUAL, "--json", "--resume", str(cut), cwd=tmp_path)
-    assert done.returncode == 0, done.stderr
-    summary = json.loads(done.stdout.splitlines()[-1])
-    assert "at line 33" in done.stderr and summary["frames_sent"] == 2  # lines 33 and 34, once
+    assert done.returncode == 2 and "does not outlive its process" in done.stderr, done.stderr
+
+    def the_same_arm(url, *args, **kwargs):
+        port.is_open = True  # reopened: the arm, its FIFO and its virtual clock carry on
+        return port
+
+    monkeypatch.setattr(armctl.host.link, "open_port", the_same_arm)
+    resumed = CliRunner().invoke(main, ["run", str(JOINT), "--json", "--resume", str(cut)], env={"ARMCTL_PORT": None})
+    assert resumed.exit_code == 0, resumed.output
+    summary = json.loads(resumed.stdout.splitlines()[-1])
+    assert "at line 33" in resumed.stderr and summary["frames_sent"] == 2  # lines 33 and 34, once
+    assert ran(port) == job_commands(JOINT)
 
 
 # --- 2. a damaged record in the middle -----------------------------------------------------------

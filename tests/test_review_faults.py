@@ -31,7 +31,7 @@ import pytest
 
 from armctl import Arm
 
-from journal_crash import job_commands, ran
+from journal_crash import job_commands, pty_arm, ran
 
 ROOT = Path(__file__).resolve().parent.parent
 PICK = ROOT / "scripts" / "pick_and_place.txt"
@@ -98,25 +98,32 @@ def test_resume_with_nothing_left_on_an_unproven_fifo_is_not_finished(tmp_path):
     assert "probe" in " ".join(again.messages)
 
 
-@pytest.mark.timeout(60)
+@pytest.mark.realtime
+@pytest.mark.timeout(90)
+@pytest.mark.skipif(sys.platform == "win32", reason="armctl sim --pty needs a POSIX terminal")
 def test_resume_with_nothing_left_through_the_command(tmp_path):
-    """Fresh processes: a job that ends where the simulator starts (its joints' home), journalled;
-    then ``--resume`` on a simulated arm at rest there.  With the FIFO size unproven the summary is
-    ``finished, unproven``, exit 1; with it proven (the simulator's FIFO is the profile's), ``finished``."""
+    """Fresh processes, one arm that outlives them (``armctl sim --pty``; a ``sim://`` arm dies
+    with its process, and a resume goes to the port its log records): a job journalled to its
+    end, then ``--resume`` with the arm at rest at its last target.  With the FIFO size unproven
+    (a pty is no ``sim://`` to the host) the summary is ``finished, unproven``, exit 1; with it
+    proven (the profile's ``[connector]`` measured), ``finished``."""
     script = tmp_path / "home_end.txt"
     script.write_text("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X255\nG1 X260\nG1 X265\nG1 X270\n"
                       "G6 J1=0 J2=0 J3=0 J4=0 J5=90 J6=0 S1000 F30\n")
+    measured = tmp_path / "arm.toml"  # the FIFO size as `armctl probe --write` keeps it
+    measured.write_text("[connector]\nfifo_frames = 200\n")
     log = tmp_path / "job.log"
-    _armctl("run", str(script), "--port", SMALL_FIFO, "--no-live", "--log", str(log), cwd=tmp_path)
-    assert '"job"' in log.read_text()
-    unproven = _armctl("run", str(script), "--port", SMALL_FIFO, "--resume", str(log), "--json", cwd=tmp_path)
-    assert "Traceback" not in unproven.stderr
-    assert unproven.returncode == 1, (unproven.stdout, unproven.stderr)
-    summary = _summary(unproven)
-    assert summary["outcome"] == "finished, unproven" and summary["exit_code"] == 1 and summary["frames_sent"] == 0
-    proven = _armctl("run", str(script), "--port", PROVEN_FIFO, "--resume", str(log), "--json", cwd=tmp_path)
-    assert proven.returncode == 0, (proven.stdout, proven.stderr)
-    assert _summary(proven)["outcome"] == "finished"
+    with pty_arm("--url", "sim://?speed=10") as pty:
+        _armctl("run", str(script), "--port", pty, "--no-live", "--log", str(log), cwd=tmp_path)
+        assert '"job"' in log.read_text()
+        unproven = _armctl("run", str(script), "--resume", str(log), "--json", cwd=tmp_path)
+        assert "Traceback" not in unproven.stderr
+        assert unproven.returncode == 1, (unproven.stdout, unproven.stderr)
+        summary = _summary(unproven)
+        assert summary["outcome"] == "finished, unproven" and summary["exit_code"] == 1 and summary["frames_sent"] == 0
+        proven = _armctl("run", str(script), "--resume", str(log), "--profile", str(measured), "--json", cwd=tmp_path)
+        assert proven.returncode == 0, (proven.stdout, proven.stderr)
+        assert _summary(proven)["outcome"] == "finished"
 
 
 # --- 3. --resume with --dry-run -------------------------------------------------------------------

@@ -10,8 +10,11 @@ pure data out, no I/O here:
 
 - ``job``, first: which script (its name and the SHA-256 of the snapshot that was checked and
   sent), from which line, with which lead, how many frames, whether control frames act on
-  arrival, and where the arm stood (``start``).  Another script, or the same file edited
-  since, is refused (``ResumeRefused``, exit 2): the lines would not mean the same.
+  arrival, where the arm stood (``start``) and the port it is on (``port``; absent in a log
+  written before armctl recorded it: the port is then unknown) — for a ``sim://`` port, the
+  process its simulated arm lives and dies in (``sim_process``: a resume in another process
+  meets a new arm, and is refused).  Another script, or the same
+  file edited since, is refused (``ResumeRefused``, exit 2): the lines would not mean the same.
 - a job frame's ``tx`` record (``frame_record``), before the frame is written: its number
   ``n`` in the job, its ``line``, ``at`` (where to continue if it did not run: ``--from-line``
   rules, never inside an arc, a repeat block from its outermost start), ``next`` (where to
@@ -110,10 +113,11 @@ def target_of(segment_end_kind: str, xyz, joints) -> dict:
 
 
 def job_record(name: str, data: bytes, from_line: int, lead_s: float, frames: int = 0,
-               control_on_arrival: bool = False, start: dict | None = None) -> dict:
+               control_on_arrival: bool = False, start: dict | None = None, port: str | None = None,
+               sim_process: str | None = None) -> dict:
     return {"t": 0.0, "dir": "job", "format": FORMAT, "script": name, "sha256": script_digest(data),
             "from_line": from_line, "lead_s": lead_s, "frames": frames, "control_on_arrival": control_on_arrival,
-            "start": start}
+            "start": start, "port": port, "sim_process": sim_process}
 
 
 def frame_record(n: int, line: int, at: int, next_line: int | None, target: dict | None) -> dict:
@@ -189,6 +193,8 @@ class ResumePoint:
     cleared: str | None = None  # why "every frame written ran" does not hold (None: it does)
     notes: tuple = field(default_factory=tuple)
     log_path: str | None = None  # the log it was read from: the resume marks it (``resumed_record``)
+    port: str | None = None  # the port the job ran on (None: a log written before armctl recorded it)
+    sim_process: str | None = None  # a sim:// port's: the process its simulated arm lived (and died) in
 
     def __post_init__(self) -> None:
         if not isinstance(self.frames, Frames):
@@ -339,9 +345,11 @@ class _Reader:
             raise ResumeRefused(f"line {number}: a job record of format {record.get('format')!r}; this armctl reads "
                                 f"format {FORMAT}")
         from_line, lead_s, frames = record.get("from_line"), record.get("lead_s"), record.get("frames")
-        start, arrival = record.get("start"), record.get("control_on_arrival")
+        start, arrival, port = record.get("start"), record.get("control_on_arrival"), record.get("port")
         if not (_is_int(from_line) and from_line >= 1 and _is_number(lead_s) and lead_s >= 0 and _is_int(frames)
-                and frames >= 0 and isinstance(arrival, bool) and (start is None or _valid_target(start))):
+                and frames >= 0 and isinstance(arrival, bool) and (start is None or _valid_target(start))
+                and all(value is None or isinstance(value, str) and 0 < len(value) <= 1024
+                        for value in (port, record.get("sim_process")))):
             raise self.bad(number, "the job record's fields are not what armctl writes")
         # a later job record (a log resumed into itself) starts the job it records afresh
         self.header, self.frames, self.confirmed, self.done, self.cleared = record, Frames(), 0, 0, None
@@ -405,7 +413,8 @@ class _Reader:
             raise ResumeRefused(f"it was resumed already, at line {at}: resuming it again would run the lines that "
                                 f"resume ran a second time; {instead}")
         return ResumePoint(header["from_line"], float(header["lead_s"]), self.frames, self.confirmed,
-                           self.done, header["start"], self.cleared, notes)
+                           self.done, header["start"], self.cleared, notes, port=header.get("port"),
+                           sim_process=header.get("sim_process"))
 
 
 def _clears(frame_hex: str, control_on_arrival: bool, who: str) -> str | None:

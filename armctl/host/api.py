@@ -206,7 +206,7 @@ class Arm:
         resume = args.path_or_none("resume", resume, also=(ResumePoint,))
         source = args.job_snapshot(script)  # read once: a snapshot, or a script checked already
         snapshot = getattr(source, "snapshot", source)
-        claim, resume = _claimed_resume(resume, log, snapshot, from_line)
+        claim, resume = _claimed_resume(resume, log, snapshot, from_line, self.url)
         job = JobSpec(observer or JobObserver(), on_progress, timeout, log, abort, resume)
         with claim:
             result = self._submit(source, from_line, job, wait=True, from_arm=False, stops=stops)
@@ -359,15 +359,19 @@ class Arm:
         return None
 
 
-def _claimed_resume(resume, log, snapshot, from_line: int):
+def _claimed_resume(resume, log, snapshot, from_line: int, url: str):
     """``Arm.run``'s ``resume=``: (the claim held while the job runs — no second resume of that log
     meanwhile, ``jobflow.resume_claim`` — and the ``ResumePoint``, read before anything is sent:
-    ``ResumeRefused``, nothing sent); (a null claim, None) without one."""
+    ``ResumeRefused``, nothing sent; a log of a job on another arm than the one on ``url`` too);
+    (a null claim, None) without one."""
     if resume is None:
         return contextlib.nullcontext(), None
     from .jobflow import read_resume_point, resume_claim, same_journal
+    from .resume_port import refuse_another_arm
 
     if log is not None and same_journal(log, resume):
         raise ResumeRefused(f"log= is the journal resume= reads ({os.fspath(resume)}): give the resumed job a "
                             "log of its own; nothing was sent")
-    return resume_claim(resume), read_resume_point(resume, snapshot, from_line)
+    point = read_resume_point(resume, snapshot, from_line)
+    refuse_another_arm(point, url, "resume dataclasses.replace(the ResumePoint, port=arm.url)")
+    return resume_claim(resume), point

@@ -222,7 +222,7 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
         return RunResult.nothing_sent("interrupted")
     runner = start_job(link, arm.model, job, journal)
     if journal is not None:  # which script it records (resume= checks it); a failed write stops the job like any
-        _journal_job(runner, job, state, arrival)
+        _journal_job(runner, job, state, arrival, link.url)
     if spec.resume is not None and spec.resume.log_path is not None:  # a log is resumed once (jobflow.mark_resumed)
         into = getattr(spec.log, "name", None)
         runner.before_first_frame = partial(mark_resumed, spec.resume.log_path, job.from_line,
@@ -295,14 +295,15 @@ def _nothing_to_resume(arm: ArmLine, state) -> RunResult:
         f"(dropped before the crash); run `armctl probe` once{paused}"))
 
 
-def _journal_job(runner, job, state, arrival: bool) -> None:
-    """The job's first record in ``--log``: which script, from which line and pose."""
+def _journal_job(runner, job, state, arrival: bool, port: str) -> None:
+    """The job's first record in ``--log``: which script, from which line and pose, on which port."""
     from ..core.joblog import job_record, target_of
+    from .resume_port import simulator_process
 
     known = state.position_mm is not None and None not in state.joints_deg
     start = target_of("line", state.position_mm, state.joints_deg) if known else None
     runner.log_record(job_record(job.snapshot.name, job.snapshot.data, job.from_line, job.lead_s, job.estimate.frames,
-                                 arrival, start), durable=True)
+                                 arrival, start, port, simulator_process(port)), durable=True)
 
 
 def _result(runner, outcome: str, job, control: JobControl, spec: JobSpec) -> RunResult:

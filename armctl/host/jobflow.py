@@ -281,17 +281,20 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
 def read_resume_point(log, script, from_line: int = 1):
     """The resume point a ``--log`` (a path, or a ``joblog.ResumePoint`` already read) records
     for this very ``script`` — read bounded, as every input; ``ResumeRefused`` (exit 2) for
-    another script, an edited one, a file that is no log, or a ``from_line`` given as well."""
+    another script, an edited one, a file that is no log, a ``from_line`` given as well, or a
+    job on a simulated arm of another process (``resume_port.refuse_gone_simulator``)."""
     import os
     from dataclasses import replace
 
     from ..errors import ResumeRefused
     from .inputs import MAX_LOG_BYTES, open_regular, read_lines_bounded
     from ..core.joblog import ResumePoint, read_resume_lines
+    from .resume_port import refuse_gone_simulator
 
     if from_line != 1:
         raise ResumeRefused("--resume LOG decides the line to continue at: drop --from-line")
     if isinstance(log, ResumePoint):
+        refuse_gone_simulator(log)
         return log
     name = str(log)
     try:  # bounded: an endless file is an error, not a hang; a device (/dev/zero) is no log (open_regular)
@@ -304,11 +307,13 @@ def read_resume_point(log, script, from_line: int = 1):
         if not os.access(name, os.W_OK):
             raise ResumeRefused("it cannot be written, and a resume marks the log it continues so that it is never "
                                 "resumed twice (mark_resumed): make it writable, or resume a writable copy")
-        return replace(point, log_path=name)
+        point = replace(point, log_path=name)
     except ResumeRefused as error:
         raise ResumeRefused(f"--resume {name}: {error}") from None
     except OSError as error:
         raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
+    refuse_gone_simulator(point)
+    return point
 
 
 def mark_resumed(path: str, at_line: int, into: str | None) -> None:

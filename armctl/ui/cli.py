@@ -358,7 +358,9 @@ def ports(as_json):
 @click.option("--json", "as_json", is_flag=True, help="JSON lines on stdout: progress events, then one summary object.")
 @click.option("--resume", "resume_log", type=click.Path(exists=True, dir_okay=False), metavar="LOG",
               help="Continue the job a --log of this script records, from the line the arm proves it reached.")
-def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort, profile_path, timeout_s, as_json, resume_log):
+@click.option("--other-port", is_flag=True, help="With --resume: --port is the arm LOG's job ran on, moved to another port.")
+def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort, profile_path, timeout_s, as_json, resume_log,
+        other_port):
     """Check a motion script, then stream it to the arm without overflowing its buffer.
 
     SCRIPT (a file, or - for standard input) is read once: what was checked is what is sent.
@@ -371,7 +373,7 @@ def run(script, port, baud, lead_s, from_line, dry_run, log_path, no_live, abort
         refuse_with_dry_run(as_json, resume_log)
     snapshot = _read_script(script)
     options = JobOptions(script, port, baud, lead_s, from_line, dry_run, log_path, not no_live, abort, profile_path, timeout_s,
-                         as_json, resume_log)
+                         as_json, resume_log, other_port)
     sys.exit(run_job(options, snapshot, _connect))
 
 

@@ -110,10 +110,12 @@ class FrameScanner:
 
 
 def decode_stream(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES,
-                  damaged: list[int] | None = None) -> Iterator[Decoded]:
+                  damaged: list[int] | None = None, jobs: list | None = None) -> Iterator[Decoded]:
     """Every chunk of ``stream`` in order (``InputTooLarge`` past ``limit_bytes``, ``NotHex``
     for hex text that stops being hex beyond its first block); a log's sealed records whose
-    checksum does not match give no bytes, their line numbers appended to ``damaged``."""
+    checksum does not match give no bytes, their line numbers appended to ``damaged``; its
+    intact job records (which script, from which line, on which port) go to ``jobs`` as
+    (line number, record)."""
     blocks = read_blocks_bounded(stream, name, limit_bytes, BLOCK_BYTES)
     first = b""
     for block in blocks:  # the probe: up to PROBE_BYTES, or the whole input
@@ -123,7 +125,7 @@ def decode_stream(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTE
     ended = len(first) < PROBE_BYTES
     rest = iter(()) if ended else blocks
     if _looks_like_log(first, ended):
-        yield from _log_chunks(first, rest, [] if damaged is None else damaged)
+        yield from _log_chunks(first, rest, [] if damaged is None else damaged, [] if jobs is None else jobs)
     elif _looks_like_hex(first, ended):
         yield from (Decoded(chunk) for chunk in _scan_all(_hex_bytes(first, rest)))
     else:
@@ -179,10 +181,11 @@ def _log_lines(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:
     return split_lines(_chain(first, rest))
 
 
-def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list[int]) -> Iterator[Decoded]:
+def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list[int], jobs: list) -> Iterator[Decoded]:
     """Each record's bytes into its direction's scanner; each chunk with the time of the
     record its first byte came in.  A sealed record (``run --log``'s: its ``crc``) whose
-    checksum does not match gives no bytes: its line number goes to ``damaged``."""
+    checksum does not match gives no bytes: its line number goes to ``damaged``; an intact job
+    record goes to ``jobs``."""
     scanners: dict[str | None, tuple[FrameScanner, deque]] = {}
     for number, line in enumerate(_log_lines(first, rest), 1):
         record = _record(line)
@@ -190,6 +193,8 @@ def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list[int]) -> Iter
             damaged.append(number)
             continue
         if record is None:
+            if b'"job"' in line and (job := _job(line)) is not None:
+                jobs.append((number, job))
             continue
         data, t_s, direction = record
         scanner, marks = scanners.setdefault(direction, (FrameScanner(), deque()))
@@ -217,6 +222,17 @@ def _record(line: bytes):
     direction = record.get("dir")
     return (data, float(t_s) if isinstance(t_s, (int, float)) and not isinstance(t_s, bool) else None,
             direction if direction in DIRECTIONS else None)
+
+
+def _job(line: bytes) -> dict | None:
+    """The job record on ``line`` (``run --log``'s first: script, from line, port), if intact."""
+    try:
+        record = json.loads(line)
+    except (ValueError, RecursionError):
+        return None
+    if not isinstance(record, dict) or record.get("dir") != "job" or ("crc" in record and not intact(record)):
+        return None
+    return record
 
 
 def _timed(chunks: list[Chunk], marks: deque, direction: str | None) -> Iterator[Decoded]:

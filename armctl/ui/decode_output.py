@@ -1,7 +1,8 @@
 """``armctl decode``'s output: each ``Decoded`` of the input (armctl/ui/decode.py) printed as a
-line (or a JSON line), a write per 1,024 lines; the tally and every damaged log record on
-stderr; the exit code (1 when a sealed record's checksum did not match: its bytes were not
-shown).  The input is a regular file or stdin (``open_input``)."""
+line (or a JSON line), a write per 1,024 lines; the tally, a log's job records (script, first
+line, port) and every damaged log record on stderr; the exit code (1 when a sealed record's
+checksum did not match: its bytes were not shown).  The input is a regular file or stdin
+(``open_input``)."""
 
 from __future__ import annotations
 
@@ -22,11 +23,12 @@ def print_decoded(source: str, as_json: bool) -> int:
     tally = ChunkTally()
     out = sys.stdout
     damaged: list[int] = []
+    jobs: list = []  # (line, record) of each job record of a log: its script and port
     name = "<stdin>" if source == "-" else source
     with open_input(source) as stream:
         lines: list[str] = []
         try:
-            for item in decode_stream(stream, name, damaged=damaged):
+            for item in decode_stream(stream, name, damaged=damaged, jobs=jobs):
                 tally.add(item.chunk)
                 lines.append(json.dumps(decoded_record(item)) if as_json else describe_decoded(item))
                 if len(lines) >= 1024:  # a write per line costs more than the decoding
@@ -37,10 +39,19 @@ def print_decoded(source: str, as_json: bool) -> int:
         finally:
             if lines:
                 out.write("\n".join(lines) + "\n")
+    for number, job in jobs:
+        click.echo(f"{name}:{number}: {describe_job(job)}", err=True)
     for number in damaged:
         click.echo(f"{name}:{number}: a damaged record (its checksum does not match): its bytes are not shown", err=True)
     click.echo(tally.line(), err=True)
     return EXIT_PROBLEMS if damaged else 0
+
+
+def describe_job(job: dict) -> str:
+    """A log's job record for people: ``job JOB.txt from line 1 on port /dev/ttyUSB0``."""
+    port = job.get("port")
+    where = f"on port {port}" if isinstance(port, str) else "port unknown (a log written before armctl recorded it)"
+    return f"job {job.get('script')} from line {job.get('from_line')} {where}"
 
 
 @contextmanager

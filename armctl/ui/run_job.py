@@ -58,6 +58,7 @@ class JobOptions:
     timeout_s: float
     json: bool = False  # --json: JSON lines on stdout (ui/run_json.py), everything else on stderr
     resume_log: str | None = None  # --resume LOG: continue the job that LOG records
+    other_port: bool = False  # --other-port: --port is the arm LOG's job ran on, moved to another port
 
 
 def check_script(script, profile, from_line: int = 1):
@@ -259,21 +260,31 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     """Check (printing every finding), then the job through the Python API: ``Arm.open`` and
     ``Arm.run``; this keeps the presentation — the panel or the JSON events, the notes, the
     keys and Ctrl-C as calls on the arm, the summary and the exit code."""
+    from dataclasses import replace
+
     from ..host.api import Arm
     from ..host.jobflow import read_resume_point, resume_claim
     from ..host.link import choose_port
+    from ..host.resume_port import resume_port
     from ..host.calibration import arm_profile
     from ..core.motion import MotionModel
 
-    # once: the profile carries the stored calibration of the arm on the port (a dry run opens
-    # none: the port given, else the configured one, as estimate)
-    port = None if options.dry_run else choose_port(options.port)
+    if options.other_port and not options.resume_log:
+        raise UsageFailure("--other-port is for --resume LOG: it says --port is the arm LOG's job ran on")
+    # read first (before --log is opened for writing, and before the port): its port is the one to open
+    resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
+    if resume is not None:  # the arm the log's job ran on (refused: another arm's --port)
+        port, told, resume = resume_port(resume, options.port, options.other_port)
+        options = replace(options, port=port.url)  # (the resume command a stop prints names that arm)
+        if told is not None:
+            click.echo(f"armctl: {told}", err=True)
+    else:  # once: the profile carries the stored calibration of the arm on the port (a dry run
+        # opens none: the port given, else the configured one, as estimate)
+        port = None if options.dry_run else choose_port(options.port)
     profile = arm_profile(options.profile_path, port=options.port if port is None else port.url)
     checked = check_script(script, profile, options.from_line)
     if options.dry_run:
         return dry_run(options, checked, MotionModel(profile))
-    # read before --log is opened for writing, and before the port
-    resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
     if options.resume_log and options.log_path and _same_file(options.resume_log, options.log_path):
         raise UsageFailure(f"--log {options.log_path} is the journal --resume reads: it is never written over; "
                            "give the resumed job a --log of its own")
