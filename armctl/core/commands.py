@@ -27,6 +27,9 @@ MOTION_COMMANDS = (LinearMove, AccelLinearMove, JointMove, ArcStart, ArcEnd, Del
 CONTROL_COMMANDS = (
     ResetArm, ResetConnector, SetWorktableOrigin, RunProgram, PauseToggle, GoToPose, Joystick, StructureMode,
 )
+# the frames whose motion is the arm's own, not the frame's: an SD program, a fixed pose the
+# profile only describes, a reset's homing, a joystick's jog — no model says where they pass
+OWN_MOTION_COMMANDS = (RunProgram, GoToPose, ResetArm, Joystick)
 _CONTROL_BY_CODE = {(c.A1, c.A2): c for c in CONTROL_COMMANDS}
 
 

@@ -56,6 +56,7 @@ from collections import deque
 from dataclasses import fields
 from operator import attrgetter
 
+from .commands import OWN_MOTION_COMMANDS
 from .evidence import AGREEING_REPORTS, agreed, known_still_s
 from .protocol import (
     CONTROL_COMMANDS, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus,
@@ -97,12 +98,15 @@ class Written:
     def explains(self, kind: int, values: tuple, read_s: float) -> bool:
         """Some recent frame the arm may still have been running at ``read_s`` (its time bound not
         yet run out) passes within a reading's jitter of ``values`` (one kind's readings: 0
-        position, 1 and 2 the joint halves): each within the span of its start and end."""
+        position, 1 and 2 the joint halves): each within the span of its start and end; or is
+        one whose motion no model knows (``OWN_MOTION_COMMANDS``, a start a program left)."""
         limit = TARGET_MM if kind == 0 else TARGET_DEG
         first = 3 * (kind - 1)
         for sent in self.recent:
             if sent.certain_end_s < read_s:
                 continue
+            if isinstance(sent.command, OWN_MOTION_COMMANDS) or not sent.path_known:
+                return True  # (the arm's own motion, or from where a program left it: it may pass anywhere)
             start, end = sent.segment.start, sent.segment.end
             if kind == 0:
                 a, b = start.xyz, end.xyz
