@@ -1,0 +1,69 @@
+"""Review of this morning's two changes: a corrupted report is a "blip" (armctl/core/job_readings.py,
+commit 168b911) and the probe times a status frame by when it was built (armctl/probe/stream.py,
+commit 8616c7a).  Each test here failed on the code it names.
+
+A blip is a kind's reading *alone* between two equal readings of its kind.  A turn of the flange
+(J6) changes joints 4-6 only (the tool point lies on its axis: the position and joints 1-3 read
+as before), so a real wrist excursion is one kind's change with no other kind changed meanwhile.
+"""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+from click.testing import CliRunner
+
+from armctl.ui.cli import main
+from test_resume_exactly_once import _open_one_arm
+
+pytestmark = pytest.mark.timeout(60)
+
+URL = "sim://?clock=virtual"
+# A probed arm: the FIFO measured, the time bound's tolerance the probe's 1.05 (README)
+PROBED_TOML = "[connector]\nfifo_frames = 200\nspeed_factor = 1.0\nspeed_tolerance = 1.05\n"
+
+
+def _wrist_excursion(hold_ms: int, before_ms: int = 500) -> str:
+    """Home, a rest, the flange turned 2 degrees and held ``hold_ms``, turned back, a 5 s delay."""
+    return (f"G6 J1=0 J2=0 J3=0 J4=0 J5=90 J6=0 S1000 F30 H0\nG4 P{before_ms}\nG6 J6=2 F120 H0\n"
+            f"G4 P{hold_ms}\nG6 J6=0\nG4 P5000\n")
+
+
+def _run(tmp_path, monkeypatch, script: str, probed: bool):
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "job.txt").write_text(script)
+    if probed:
+        (tmp_path / "armctl.toml").write_text(PROBED_TOML)
+    ports = _open_one_arm(monkeypatch)
+    result = CliRunner().invoke(main, ["run", "job.txt", "--json", "--port", URL], env={"ARMCTL_PORT": None})
+    summary = json.loads(result.stdout.splitlines()[-1])
+    executions = ports[URL].model.execution_log
+    assert ports[URL].model.frames_dropped == 0
+    return summary, executions[-1].end_s - executions[0].start_s
+
+
+@pytest.mark.parametrize("probed", [False, True], ids=["document", "probed"])
+def test_a_wrist_held_away_and_back_is_no_blip(tmp_path, monkeypatch, probed):
+    """J6 at 2 degrees, read there in a dozen agreeing reports over 3 s, then back: the return
+    was taken for the end of a blip (the reading before it was never re-read as the same kind's
+    *changed* value), so the arm's motion dated from before the excursion — arm time 5.09 s for
+    an arm the simulator's record shows working 8.83 s, and on a probed arm (speed_tolerance 1.05)
+    "frames may have been lost" and 'fifo_frames looks wrong' though none was.  Before 168b911:
+    finished, 8.885 s."""
+    summary, arm_s = _run(tmp_path, monkeypatch, _wrist_excursion(3000), probed)
+    assert summary["outcome"] == "finished", summary
+    assert arm_s - 0.1 <= summary["arm_time_s"] <= arm_s + 0.6, (arm_s, summary)
+
+
+def test_a_wrist_held_away_and_back_is_no_blip_installed(tmp_path):
+    """The same, through the installed command in a fresh process, on the probed arm."""
+    (tmp_path / "job.txt").write_text(_wrist_excursion(3000))
+    (tmp_path / "armctl.toml").write_text(PROBED_TOML)
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", URL],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert done.returncode == 0 and summary["outcome"] == "finished", (done.stderr, summary)
+    assert summary["arm_time_s"] >= 8.7, summary  # the simulator's record: 8.83 s (above)
