@@ -127,6 +127,8 @@ class Readings:
         read_at[kind] = now
         agreed = self.agreed_values.get(kind) if kind != PAUSE_KIND else None
         if not changed:  # two reports in a row agree: a new value agreed on may show work (``_agreed``)
+            if self.last_change is not None and self.last_change[0] == kind:
+                self.last_change = None  # its last change, read twice, is no reading alone ("Blips")
             if kind != PAUSE_KIND and (agreed is None or agreed[0] != values):
                 self._agreed(kind, values, before_s, slot_moved)
             if self.rest is not None:
