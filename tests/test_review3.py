@@ -67,3 +67,15 @@ def test_a_wrist_held_away_and_back_is_no_blip_installed(tmp_path):
     summary = json.loads(done.stdout.splitlines()[-1])
     assert done.returncode == 0 and summary["outcome"] == "finished", (done.stderr, summary)
     assert summary["arm_time_s"] >= 8.7, summary  # the simulator's record: 8.83 s (above)
+
+
+def test_a_wrist_turned_away_and_back_between_two_reports_is_no_blip(tmp_path, monkeypatch):
+    """J6 at 2 degrees for 160 ms: read there once (joints 4-6 come every 270 ms), alone between
+    two readings at 0 with no other kind changed — the blip rule's very picture of a corrupted
+    report, yet the arm did it.  The motion then dates from before the excursion: on a probed arm
+    'frames may have been lost' (arm time 5.09 s; the simulator's record 8.59 s).  Before 168b911:
+    finished, 8.643 s.  The readings alone cannot tell the two apart; the frames written can: the
+    reading came before the time bound of the last move written, which the arm may have been running."""
+    summary, arm_s = _run(tmp_path, monkeypatch, _wrist_excursion(160, before_ms=3100), probed=True)
+    assert summary["outcome"] == "finished", summary
+    assert arm_s - 0.1 <= summary["arm_time_s"] <= arm_s + 0.6, (arm_s, summary)
