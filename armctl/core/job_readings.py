@@ -32,9 +32,11 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
   kind's reading alone between two equal ones of that kind, with no other kind changed
   meanwhile, is taken for such a blip once the second comes: the motion, the activity and the
   last change (``changed_s``) are what they were before it, so the arm's time and a "kept
-  working" note never count from a blip.  (The arm cannot go somewhere and come back so fast
-  that the joints, read 30 ms after the position, still read as before.)  The rest proof stays
-  the careful one: ``rest`` dates from the blip's end, and a rest is proven REST_CHECK_S after it.
+  working" note never count from a blip.  Only one read after the time bound of the last frame
+  written that moves the arm (``certain_end_s``: even the slowest arm allowed for has finished it)
+  can be a blip: before it, the arm itself may go there and back between two reports of that kind
+  (a flange turned 2 degrees for 160 ms changes joints 4-6 alone).  The rest proof stays the
+  careful one: ``rest`` dates from the blip's end, and a rest is proven REST_CHECK_S after it.
 
 ``Written`` is the other half of the record: the last ``RECENT_FRAMES`` frames written (the
 trailing frames that move nothing are judged on them), the last that moves the arm, and the
@@ -142,9 +144,11 @@ class Readings:
         rest = self.rest = ((reported.get(0), reported.get(1), reported.get(2), reported.get(4)), now)
         motion = self.motion
         last_change = self.last_change
-        if last_change is not None and last_change[0] == kind and last_change[1] == values:
-            # this kind's last reading stood alone between two equal ones, and nothing else
-            # changed meanwhile: a blip ("Blips"), which dates nothing
+        last_move = self.written.last_move
+        if (last_change is not None and last_change[0] == kind and last_change[1] == values
+                and (last_move is None or self.changed_s > last_move.certain_end_s)):
+            # this kind's last reading stood alone between two equal ones, nothing else changed
+            # meanwhile, and no frame written could move the arm then: a blip ("Blips"), which dates nothing
             _, _, self.motion, self.moved_from, self.active_s, self.changed_s = last_change
             self.last_change = None
             return True
