@@ -79,3 +79,36 @@ def test_a_wrist_turned_away_and_back_between_two_reports_is_no_blip(tmp_path, m
     summary, arm_s = _run(tmp_path, monkeypatch, _wrist_excursion(160, before_ms=3100), probed=True)
     assert summary["outcome"] == "finished", summary
     assert arm_s - 0.1 <= summary["arm_time_s"] <= arm_s + 0.6, (arm_s, summary)
+
+
+# --- the probe's speed_tolerance (armctl/probe/motion.py tolerance_finding) ---------------------
+
+SLOW_HANDLING_ARM = "[timing]\ncommand_overhead_s = 0.050\n"  # the arm's own profile: 50 ms before every command
+
+
+def _back_and_forth(frames: int) -> str:
+    """1 mm moves back and forth, 10 ms each at 6000 mm/min (the bench's ``backforth``): every
+    target repeats, so only time can confirm most of them."""
+    moves = ["G1 X250 Y0 Z150 A180 B0 C0 S1500 F6000"]
+    moves += [f"G1 X{251 if k % 2 == 0 else 250}" for k in range(frames - 1)]
+    return "\n".join(moves) + "\n"
+
+
+def test_the_probe_writes_the_tolerance_its_arm_needs_beyond_the_documents(tmp_path, monkeypatch):
+    """An arm that takes 50 ms before every command: the probe measured that start delay (48.5 ms,
+    so t = 3.43 by its own rule) and wrote 2.0, the document's default, "never above" it — and a job
+    of 2000 repeated 10 ms moves on that probed arm then lost 141 frames to a full FIFO (time
+    confirmed each at 2 x 10 + 20 ms where the arm takes 60) and ended "finished".  The probe may
+    write up to the setting's own range (4)."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "arm.toml").write_text(SLOW_HANDLING_ARM)
+    (tmp_path / "job.txt").write_text(_back_and_forth(2000))
+    url = "sim://?clock=virtual&profile=arm.toml"
+    probed = subprocess.run([sys.executable, "-m", "armctl", "probe", "--port", url, "--yes", "--json"],
+                            capture_output=True, text=True, timeout=50)  # kept with the arm (XDG_DATA_HOME: this test's)
+    assert probed.returncode == 0, probed.stderr
+    ports = _open_one_arm(monkeypatch)
+    result = CliRunner().invoke(main, ["run", "job.txt", "--json", "--port", url], env={"ARMCTL_PORT": None})
+    summary = json.loads(result.stdout.splitlines()[-1])
+    assert (ports[url].model.frames_dropped, summary["outcome"]) == (0, "finished"), summary
+    assert json.loads(probed.stdout)["speed_tolerance"] >= 3.4, probed.stdout
