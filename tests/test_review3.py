@@ -114,8 +114,6 @@ def test_the_probe_writes_the_tolerance_its_arm_needs_beyond_the_documents(tmp_p
     assert json.loads(probed.stdout)["speed_tolerance"] >= 3.4, probed.stdout
 
 
-@pytest.mark.xfail(strict=True, reason="not fixed: the job's end proves nothing once the arm is slower than "
-                   "speed_tolerance on frames no sighting can time (report)")
 def test_an_arm_beyond_the_documents_tolerance_never_ends_finished_with_frames_lost(tmp_path, monkeypatch):
     """Never probed, the same arm as above (50 ms before every command, so 6x slower than the model
     on 10 ms moves, 2x by the document): time confirms each repeated move at 40 ms where the arm

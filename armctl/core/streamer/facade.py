@@ -135,6 +135,11 @@ class Streamer:
     def waiting_seconds(self, now: float) -> float:
         return self._estimate.waiting_seconds(now)
 
+    def moved_past_time_bound(self, moved_after_s: float | None, bound_s: float) -> None:
+        """The job's end: the arm moved after ``moved_after_s``, every frame written surely done by
+        ``bound_s`` (``Losses.moved_past_time_bound``)."""
+        self._losses.moved_past_time_bound(moved_after_s, bound_s)
+
     def loss_found(self, sentence: str, suspect: int) -> None:
         """The caller (the job's end) found a sign of loss: it joins the streamer's own."""
         self._losses.found(sentence, suspect)

@@ -15,7 +15,10 @@ never raise one either:
   known finished and on no pending path — the arm went back over its job;
 * slowness (``check_slowness`` / ``check_time_bound``): pairs of agreed sightings along one
   frame prove the arm slower than the tolerance, on no later frame through the same point;
-  told at the end of a job only when time confirmed frames at a narrower factor.
+  told at the end of a job only when time confirmed frames at a narrower factor;
+* moving past the time bound (``moved_past_time_bound``): at the end, the arm seen moving after
+  every frame written should have finished even on the slowest arm allowed for, with frames
+  confirmed by time — the slowness a 10 ms move never shows in two sightings.
 """
 
 from __future__ import annotations
@@ -195,3 +198,20 @@ class Losses:
             "when more were written (dropped by a full FIFO?); run `armctl probe` again")
         suspect = self.ledger.first_time_only_index or 0
         self.suspect(suspect)
+
+    def moved_past_time_bound(self, moved_after_s: float | None, bound_s: float) -> None:
+        """A sign of loss, told at the end of a job: the arm still moved after ``bound_s`` (when
+        even an arm ``speed_tolerance`` times slower than the model would have finished every frame
+        written), and time confirmed frames — so the arm is slower than the time bound allowed,
+        and what time confirmed may not have run when more frames were written (a full FIFO drops
+        them silently).  The move counts from the reading before it (``moved_after_s``: the job
+        engine's, corrupted reports left out), less a status period (that frame may have been
+        built so long before it was read); an SD program's bound never runs out, so it never
+        raises this."""
+        if moved_after_s is None or not self.ledger.confirmed_by_time or moved_after_s - STATUS_PERIOD_S <= bound_s:
+            return
+        self.found(f"the arm still moved after {moved_after_s - STATUS_PERIOD_S:.2f} s, when an arm {self.tolerance:g}x "
+                   f"slower than the model would have finished every frame written ({bound_s:.2f} s): it is slower than "
+                   "the profile's [connector] speed_tolerance allows, so frames counted done by time may not have run "
+                   "when more were written (dropped by a full FIFO?); run `armctl probe`",
+                   self.ledger.first_time_only_index or 0)
