@@ -72,3 +72,34 @@ def test_armctl_run_of_a_2_m_move_never_ends_finished(tmp_path):
     assert "Traceback" not in done.stderr
     outcomes = [json.loads(line).get("outcome") for line in done.stdout.splitlines() if line.startswith("{")]
     assert "finished" not in outcomes, done.stdout
+
+
+# A target lint only warns about (the built-in profile's workspace is illustrative) but the arm
+# cannot take, between two it can: the simulator refuses it and runs on to the next, from where
+# it stands.  Found by the README audit (wt-readme): pick_and_place.txt with its first X250 made
+# X500 ended "finished", exit 0 — the time bound counted the refused moves done while the arm's
+# reports showed it standing at their start.
+REFUSED_MID_JOB = "G90\nG1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X500\nG1 X250 Y100\n"
+
+
+def test_a_refused_target_mid_job_is_never_finished_in_process():
+    from armctl import Arm, JobFailed
+
+    with Arm.open("sim://?clock=virtual") as arm:
+        try:
+            result = arm.run(REFUSED_MID_JOB)
+        except JobFailed as failed:
+            result = failed.result
+    assert result.outcome != "finished" and result.exit_code == 1, result
+    assert result.last_line_executed is None or result.last_line_executed < 3, result
+
+
+@pytest.mark.timeout(60)
+def test_armctl_run_of_a_refused_target_mid_job_exits_1(tmp_path):
+    job = tmp_path / "reach.txt"
+    job.write_text(REFUSED_MID_JOB)
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", str(job), "--port", "sim://?clock=virtual",
+                           "--no-live", "--json"], capture_output=True, text=True, timeout=60)
+    assert "Traceback" not in done.stderr
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert done.returncode == 1 and summary["outcome"] != "finished", (done.stdout, done.stderr)
