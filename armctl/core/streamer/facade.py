@@ -191,7 +191,9 @@ class Streamer:
                 self._take(found, now)
             pending = self._ledger.pending
             standing = standing_at_start(found, pending, now)
-            self._bound.standing_at = self._losses.check_not_begun(standing, pending[0] if pending else None, now)
+            bound = self._bound
+            bound.standing_at = self._losses.check_not_begun(standing, pending[0] if pending else None, now,
+                                                             None if bound.paused else bound.running_seen_s)
         elif kind == _JOINTS_LOW_KIND:
             found = self._evidence.joint_half(0, (frame.j1_deg, frame.j2_deg, frame.j3_deg), now)
             if found is not None:

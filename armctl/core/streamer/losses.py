@@ -106,9 +106,11 @@ class Losses:
             self.suspect(first)
             return
 
-    def check_not_begun(self, index: int | None, head, now: float) -> int | None:
+    def check_not_begun(self, index: int | None, head, now: float, running_s: float | None) -> int | None:
         """A sign of loss: two position reports in a row, each sampled after the time bound's
-        deadline of the head frame ``index``, put the arm at its start and on no later frame
+        deadline of the head frame ``index`` while the arm was seen running (``running_s``: when
+        it last was, None while it reports a pause — a pause moves the deadline only once it
+        ends), put the arm at its start and on no later frame
         (``evidence.standing_at_start``; None: this report does not) — it did not begin a move
         that even an arm ``tolerance`` times slower than the model has finished by then: the arm
         refused it (a target out of its reach), lost it, or runs slower than the time bound
@@ -117,7 +119,8 @@ class Losses:
         if index is None or index == self.not_begun:
             self.standing_on = None
             return None
-        after = now - STATUS_PERIOD_S >= head.certain_end_s  # sampled after the deadline
+        # sampled after the deadline, which the arm reached running
+        after = running_s is not None and min(now, running_s) - STATUS_PERIOD_S >= head.certain_end_s
         before = self.standing_on[1] if self.standing_on is not None and self.standing_on[0] == index else 0
         self.standing_on = (index, before + after)
         if before + after < 2:
