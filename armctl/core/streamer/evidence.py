@@ -275,13 +275,15 @@ def standing_at_start(found: Sighting | None, pending, now: float) -> int | None
     armctl/sim/executor.py), lost it, or is slower than the time bound allows — and a move counted
     done by time there let the job end "finished" at its last target (tests/test_sim_reach.py).
     Only a straight move whose path is the planned one and longer than the report's tolerance
-    can tell (its start is not its end); the later frames are searched only then (a rotation
-    before the deadline, so a pause-state frame in between cannot let time count it first)."""
+    can tell (its start is not its end), and none a RESET CONNECTOR may have cleared (reports
+    decide those, as ``TimeBound.advance`` leaves them); the later frames are searched only then
+    (a rotation before the deadline, so a pause-state frame in between cannot let time count it
+    first)."""
     if found is None or found.earliest is None or found.previous != found.earliest or not pending:
         return None
     head = pending[0]
     segment = head.segment
-    if (found.earliest != head.index or segment.kind != "line" or not head.path_known
+    if (found.earliest != head.index or segment.kind != "line" or not head.path_known or head.may_be_cleared
             or segment.length <= 4 * head.xyz_tolerance_mm or head.certain_end_s > now + ROTATION_S):
         return None
     window = next((candidate for candidate in found.candidates if candidate[0] == head.index), None)

@@ -189,9 +189,8 @@ class Streamer:
             found = self._evidence.position((frame.x_mm, frame.y_mm, frame.z_mm), now)
             if found is not None:
                 self._take(found, now)
-            pending = self._ledger.pending
-            standing = standing_at_start(found, pending, now)
-            bound = self._bound
+            pending, bound = self._ledger.pending, self._bound
+            standing = standing_at_start(found, pending, now) if bound.time_proves else None  # (not once cleared)
             bound.standing_at = self._losses.check_not_begun(standing, pending[0] if pending else None, now,
                                                              None if bound.paused else bound.running_seen_s)
         elif kind == _JOINTS_LOW_KIND:
