@@ -33,9 +33,16 @@ def test_the_page_has_examples_and_the_readme_links_it():
     assert "(docs/api.md)" in (ROOT / "README.md").read_text(encoding="utf-8")
 
 
-@pytest.mark.parametrize("line, code", python_blocks() + python_blocks(ROOT / "README.md"), ids=lambda value: f"line{value}" if isinstance(value, int) else "")
-def test_a_python_block_of_docs_api_md_runs(tmp_path, line, code):
-    shutil.copy(JOB, tmp_path / "job.txt")
+README = ROOT / "README.md"
+BLOCKS = [(PAGE, *block) for block in python_blocks()] + [(README, *block) for block in python_blocks(README)]
+
+
+@pytest.mark.parametrize("page, line, code", BLOCKS, ids=[f"{page.name}:{line}" for page, line, _code in BLOCKS])
+def test_a_python_block_of_docs_api_md_runs(tmp_path, page, line, code):
+    if page == README:  # as a newcomer runs it in a fresh clone: the repository's scripts/, no job.txt
+        shutil.copytree(ROOT / "scripts", tmp_path / "scripts")
+    else:
+        shutil.copy(JOB, tmp_path / "job.txt")
     env = {**os.environ, "ARMCTL_PORT": "sim://?clock=virtual"}
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=60, env=env, cwd=tmp_path)
     assert done.returncode == 0, f"line {line}:\n{done.stderr}"

@@ -54,3 +54,18 @@ def test_the_installed_command(tmp_path):
                           text=True, timeout=50)
     assert done.returncode == 1 and "a damaged record" in done.stderr and "Traceback" not in done.stderr
     assert '"direction": "tx"' not in done.stdout, done.stdout
+
+
+def test_a_bit_flipped_in_a_records_key_is_damage_too(tmp_path):
+    """Found by the README audit (wt-readme): one bit of a tx record's ``"hex"`` key flipped
+    (``"hdx"``) dropped the frame with exit 0 and no word — a record with no ``hex`` carried no
+    bytes, before its checksum was looked at.  A sealed record whose checksum does not match is
+    damage whatever part of it the damage hit (README: its line is named, exit 1)."""
+    path = _log(tmp_path, flip=False)
+    lines = path.read_text().splitlines()
+    assert '"hex": ' in lines[0]
+    lines[0] = lines[0].replace('"hex": ', '"hdx": ', 1)  # 'e' ^ 1 == 'd': one bit
+    path.write_text("\n".join(lines) + "\n")
+    result = CliRunner().invoke(main, ["decode", str(path)])
+    assert result.exit_code == 1, result.output
+    assert "run.log:1: a damaged record (its checksum does not match)" in result.output

@@ -72,3 +72,72 @@ def test_armctl_run_of_a_2_m_move_never_ends_finished(tmp_path):
     assert "Traceback" not in done.stderr
     outcomes = [json.loads(line).get("outcome") for line in done.stdout.splitlines() if line.startswith("{")]
     assert "finished" not in outcomes, done.stdout
+
+
+# A target lint only warns about (the built-in profile's workspace is illustrative) but the arm
+# cannot take, between two it can: the simulator refuses it and runs on to the next, from where
+# it stands.  Found by the README audit (wt-readme): pick_and_place.txt with its first X250 made
+# X500 ended "finished", exit 0 — the time bound counted the refused moves done while the arm's
+# reports showed it standing at their start.
+REFUSED_MID_JOB = "G90\nG1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X500\nG1 X250 Y100\n"
+
+
+def test_a_refused_target_mid_job_is_never_finished_in_process():
+    from armctl import Arm, JobFailed
+
+    with Arm.open("sim://?clock=virtual") as arm:
+        try:
+            result = arm.run(REFUSED_MID_JOB)
+        except JobFailed as failed:
+            result = failed.result
+    assert result.outcome != "finished" and result.exit_code == 1, result
+    assert result.last_line_executed is None or result.last_line_executed < 3, result
+
+
+@pytest.mark.timeout(60)
+def test_armctl_run_of_a_refused_target_mid_job_exits_1(tmp_path):
+    job = tmp_path / "reach.txt"
+    job.write_text(REFUSED_MID_JOB)
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", str(job), "--port", "sim://?clock=virtual",
+                           "--no-live", "--json"], capture_output=True, text=True, timeout=60)
+    assert "Traceback" not in done.stderr
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert done.returncode == 1 and summary["outcome"] != "finished", (done.stdout, done.stderr)
+
+
+# The sign itself, hand-fed (armctl/core/streamer/losses.py ``check_not_begun``): the arm at the
+# start of a long move after its time bound.  A pause that holds it there is not the sign.
+def _streamer_with_one_long_move():
+    from armctl.core.motion import MotionModel
+    from armctl.core.streamer import Streamer
+    from armctl.host.profile import default_profile
+
+    model = MotionModel(default_profile())
+    pose = model.initial_pose()
+    streamer = Streamer(model, model.reported_pose(pose.xyz, pose.joints, 1500.0, (0.0, 0.0, 0.0)))
+    sent = streamer.wrote(LinearMove(250, 0, 150, 180, 0, 0, 1500, 600), 0.0)  # about 16 s of motion
+    return streamer, sent, pose.xyz
+
+
+def _feed(streamer, xyz, paused: bool, from_s: float, to_s: float) -> None:
+    from armctl.core.protocol import PauseStatus, PositionStatus
+
+    now = from_s
+    while now < to_s:
+        streamer.receive_status(PositionStatus(*xyz), now)
+        streamer.receive_status(PauseStatus(1 if paused else 0, 1500), now + 0.12)
+        now += 0.27
+
+
+def test_the_arm_standing_at_the_start_of_a_move_past_its_time_bound_is_a_sign_of_loss():
+    streamer, sent, home = _streamer_with_one_long_move()
+    _feed(streamer, home, False, 0.03, sent.certain_end_s + 1.0)
+    assert len(streamer.losses) == 1 and "stood at the start of" in streamer.losses[0], streamer.losses
+    assert streamer.first_suspect_index == sent.index
+
+
+def test_nor_is_a_pause_that_holds_the_arm_at_the_start():
+    streamer, sent, home = _streamer_with_one_long_move()
+    _feed(streamer, home, False, 0.03, 1.0)
+    _feed(streamer, home, True, 1.0, sent.certain_end_s + 10.0)  # paused before it began, and held
+    assert streamer.losses == [] and streamer.pending

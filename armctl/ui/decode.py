@@ -213,11 +213,14 @@ def _record(line: bytes):
         return None
     try:
         record = json.loads(line)
+    except (ValueError, RecursionError):
+        return None  # no JSON (a torn last line), nested too deep: no bytes
+    if isinstance(record, dict) and "crc" in record and not intact(record):
+        return _DAMAGED  # its bytes may not be the ones written (a flipped bit, in them or in a key)
+    try:
         data = bytes.fromhex(record["hex"])
-    except (ValueError, KeyError, TypeError, RecursionError):
-        return None  # a note, a summary, no JSON object, nested too deep: no bytes
-    if "crc" in record and not intact(record):
-        return _DAMAGED  # its bytes may not be the ones written (a flipped bit)
+    except (ValueError, KeyError, TypeError):
+        return None  # a note, a summary, no JSON object: no bytes
     t_s = record.get("t")
     direction = record.get("dir")
     return (data, float(t_s) if isinstance(t_s, (int, float)) and not isinstance(t_s, bool) else None,

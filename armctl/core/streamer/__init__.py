@@ -221,8 +221,11 @@ FIFO.  Each part may conclude only what its evidence says; this is the whole lis
    on; a **reversal** — two reports in a row inside a finished frame's path and on no pending
    path; **slowness** — pairs of agreed sightings along one frame (a status period of slack at
    each end) slower than the tolerance, on no later frame through the same point, told at the
-   end only when time confirmed frames at a narrower factor and was still trusted.  Losses move
-   neither the bound nor the estimate: they change what the job may claim (``losses``,
+   end only when time confirmed frames at a narrower factor and was still trusted; a move **not
+   begun** — two position reports sampled after the head frame's time bound still at its start
+   and on no later frame (a target the arm refused: tests/test_sim_reach.py).  Losses move
+   neither the bound nor the estimate — except that time waits for those two reports before it
+   counts such a frame done (only ever later) — they change what the job may claim (``losses``,
    ``first_suspect_index``).
 
 5. *The next frame may go* (``Gate``): rules (a)–(c) above, from the bound (a, c) and the

@@ -18,7 +18,7 @@ from ..protocol import ArcStart, Command, DEFAULT_BAUD, JointsHighStatus, Joints
 from ..protocol import PositionStatus, StatusFrame, frame_seconds
 from .constants import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S, PACE_FOLLOWED
 from .estimate import Estimate
-from .evidence import Sighting, Sightings, ran_at_rest
+from .evidence import Sighting, Sightings, ran_at_rest, standing_at_start
 from .frames import Evidence, SentFrame
 from .gate import Gate
 from .geometry import TimeMemo, start_unknown
@@ -194,6 +194,10 @@ class Streamer:
             found = self._evidence.position((frame.x_mm, frame.y_mm, frame.z_mm), now)
             if found is not None:
                 self._take(found, now)
+            pending, bound = self._ledger.pending, self._bound
+            standing = standing_at_start(found, pending, now) if bound.time_proves else None  # (not once cleared)
+            bound.standing_at = self._losses.check_not_begun(standing, pending[0] if pending else None, now,
+                                                             None if bound.paused else bound.running_seen_s)
         elif kind == _JOINTS_LOW_KIND:
             found = self._evidence.joint_half(0, (frame.j1_deg, frame.j2_deg, frame.j3_deg), now)
             if found is not None:

@@ -16,6 +16,9 @@ never raise one either:
 * slowness (``check_slowness`` / ``check_time_bound``): pairs of agreed sightings along one
   frame prove the arm slower than the tolerance, on no later frame through the same point;
   told at the end of a job only when time confirmed frames at a narrower factor;
+* a move not begun (``check_not_begun``): two position reports sampled after the time bound's
+  deadline of the head frame still put the arm at its start, on no later frame (time holds off
+  that frame until they have said so: the arm refused a target it cannot reach, or lost it);
 * moving past the time bound (``moved_past_time_bound``): at the end, the arm seen moving after
   every frame written should have finished even on the slowest arm allowed for, with frames
   confirmed by time — the slowness a 10 ms move never shows in two sightings.
@@ -48,6 +51,8 @@ class Losses:
         self.span_from: dict[str, tuple[int, float, float]] = {}  # stream → (index, least model s, at): first pair on a frame
         self.span_last: dict[str, tuple[int, float, float, float]] = {}  # stream → (index, model s lo, hi, at): last sighting
         self.too_slow: tuple[float, object] | None = None  # the arm seen slower than the tolerance on a frame
+        self.standing_on: tuple[int, int] | None = None  # (head frame, reports after its deadline): ``check_not_begun``
+        self.not_begun: int | None = None  # the last frame ``check_not_begun`` told
         self.slowest_proven = 0.0  # the most ``too_slow`` was in this job (a stale speed_factor: armctl/host/calibration.py)
 
     def found(self, sentence: str, suspect: int) -> None:
@@ -103,6 +108,33 @@ class Losses:
                                "and on no frame still to run: it did not run the job in order")
             self.suspect(first)
             return
+
+    def check_not_begun(self, index: int | None, head, now: float, running_s: float | None) -> int | None:
+        """A sign of loss: two position reports in a row, each sampled after the time bound's
+        deadline of the head frame ``index`` while the arm was seen running (``running_s``: when
+        it last was, None while it reports a pause — a pause moves the deadline only once it
+        ends), put the arm at its start and on no later frame
+        (``evidence.standing_at_start``; None: this report does not) — it did not begin a move
+        that even an arm ``tolerance`` times slower than the model has finished by then: the arm
+        refused it (a target out of its reach), lost it, or runs slower than the time bound
+        allows.  Until two such reports have said so, time must not count the frame done (the
+        frame's index, for ``TimeBound.standing_at``); once told, it may (None)."""
+        if index is None or index == self.not_begun:
+            self.standing_on = None
+            return None
+        # sampled after the deadline, which the arm reached running
+        after = running_s is not None and min(now, running_s) - STATUS_PERIOD_S >= head.certain_end_s
+        before = self.standing_on[1] if self.standing_on is not None and self.standing_on[0] == index else 0
+        self.standing_on = (index, before + after)
+        if before + after < 2:
+            return index
+        self.not_begun = index
+        self.losses.append(
+            f"the arm stood at the start of {where(head)} past the time even an arm {self.tolerance:g}x slower "
+            "than the model would have finished it: it did not run it (a target out of its reach, refused? "
+            "dropped by a full FIFO?)")
+        self.suspect(index)
+        return None
 
     def check_gap(self, stream: str, index: int, now: float, could_be_on) -> bool:
         """A sign of loss: the arm, seen by this stream at ``now`` at least at frame ``index``,

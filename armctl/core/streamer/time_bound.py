@@ -7,7 +7,8 @@ longer than planned, ``allowance_s``) times ``slowest_factor``, plus ``frame_sla
 time the arm was seen running counts (kind-4 status): a reported pause stops the clock and a
 resume pushes every pending deadline back by the whole pause.  A frame whose deadline the
 running clock has passed is consumed by time (``advance``) — never one a RESET CONNECTOR may
-have cleared, nor any once the FIFO may have been cleared (``cleared``).
+have cleared, nor any once the FIFO may have been cleared (``cleared``), nor a move the arm's
+reports show it standing at the start of (``standing_at``).
 
 The chain is only ever made tighter by agreed evidence that a frame has begun (``restart``,
 from the least fraction of its path both sightings allow) and only ever looser by a measured
@@ -48,6 +49,9 @@ class TimeBound:
         self.pause_began_s = now
         self.time_proves = True  # False once the FIFO may have been cleared (``cleared``)
         self.e_known = False  # a move has set E0/E1 since the start (``moves_e_from_the_start``)
+        # the head frame the arm's last position reports show it has not begun (set by the
+        # streamer from ``evidence.standing_at_start``): time does not count it done
+        self.standing_at: int | None = None
 
     # --- a frame written ----------------------------------------------------------------------
 
@@ -184,7 +188,8 @@ class TimeBound:
         ledger = self.ledger
         pending = ledger.pending
         # (a frame a RESET CONNECTOR may have cleared has no time to finish in: reports decide it)
-        while pending and pending[0].certain_end_s <= certain_now and not pending[0].may_be_cleared:
+        while (pending and pending[0].certain_end_s <= certain_now and not pending[0].may_be_cleared
+               and pending[0].index != self.standing_at):
             if ledger.confirmed_by_time == 0:
                 self.least_factor_confirmed = self.slowest_factor
             ledger.consume_one(by_reports=False)
