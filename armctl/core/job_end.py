@@ -109,7 +109,7 @@ class JobEnd:
             self.written.script_toggles[-1].seen = True
         if paused_at_end or self.rest_proves_all_written(now):
             if self.written.recent:  # (the arm slower than the time bound allowed: a sign of loss)
-                self.streamer.moved_past_time_bound(self.readings.moved_after_s,
+                self.streamer.moved_past_time_bound(self.readings.work_s,
                                                     max(sent.certain_end_s for sent in self.written.recent))
             self.streamer.confirm_all_done()
             view.arm_done_s = self.arrival.done_at(now)

@@ -141,8 +141,6 @@ class Readings:
         self.changed_s = 0.0  # when any kind's readings last changed, blips left out ("Blips")
         self.other_changed_s = 0.0  # ... the pause-and-PWM kind's
         self.motion_active_s: float | None = None  # ``active_s`` by the position and joints, blips left out
-        # ... and the reading before it: the arm moved after that one was built (None: not known)
-        self.moved_after_s: float | None = None
         self.program_active_s: float | None = None  # ... by an SD program's run position, blips left out
         self.last_run_change: tuple | None = None  # (the run position before its last change, program_active_s)
         # the last change of position or joints: (its kind, that kind's readings before it, and
@@ -202,7 +200,7 @@ class Readings:
                     and not self.written.explains(kind, old, before_s)):
                 # this kind's last reading stood alone between two equal ones, and no other
                 # position or joints changed meanwhile: a blip ("Blips"), which dates nothing
-                _, _, motion, self.moved_from, self.motion_active_s, self.moved_after_s, changed_s = last_change
+                _, _, motion, self.moved_from, self.motion_active_s, changed_s = last_change
                 self.active_s = _latest(self.motion_active_s, self.program_active_s)
                 self.changed_s = max(changed_s, self.other_changed_s)
                 settled = self.settled
@@ -216,8 +214,7 @@ class Readings:
                 # within a reading's jitter: no excursion, and the blip before it may still be one
                 self.settled = (now, before_s)
             else:
-                self.last_change = (kind, old, motion, self.moved_from, self.motion_active_s, self.moved_after_s,
-                                    self.changed_s)
+                self.last_change = (kind, old, motion, self.moved_from, self.motion_active_s, self.changed_s)
                 self.settled = None
         self.changed_s = now
         if kind != PAUSE_KIND or motion is None:
@@ -232,7 +229,6 @@ class Readings:
             if moved_from is None or (kind != PAUSE_KIND and slot_moved(kind, moved_from[kind], values)):
                 self.moved_from = readings
                 self.active_s = self.motion_active_s = now
-                self.moved_after_s = before_s if kind != PAUSE_KIND else None
         return True
 
     def take_pause(self, paused: bool, now: float) -> bool | None:

@@ -236,10 +236,11 @@ class Losses:
         even an arm ``speed_tolerance`` times slower than the model would have finished every frame
         written), and time confirmed frames — so the arm is slower than the time bound allowed,
         and what time confirmed may not have run when more frames were written (a full FIFO drops
-        them silently).  The move counts from the reading before it (``moved_after_s``: the job
-        engine's, corrupted reports left out), less a status period (that frame may have been
-        built so long before it was read); an SD program's bound never runs out, so it never
-        raises this."""
+        them silently).  The move counts from the last reading at the value before it, agreed by
+        two reports in a row as the new one is (``moved_after_s``: the job engine's
+        ``Readings.work_s``; corrupted reports never agree), less a status period (that frame
+        may have been built so long before it was read); an SD program's bound never runs out,
+        so it never raises this."""
         if moved_after_s is None or not self.ledger.confirmed_by_time or moved_after_s - STATUS_PERIOD_S <= bound_s:
             return
         self.found(f"the arm still moved after {moved_after_s - STATUS_PERIOD_S:.2f} s, when an arm {self.tolerance:g}x "
