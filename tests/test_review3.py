@@ -132,6 +132,10 @@ def test_an_arm_beyond_the_documents_tolerance_never_ends_finished_with_frames_l
     summary = json.loads(result.stdout.splitlines()[-1])
     assert ports[url].model.frames_dropped > 0  # (141)
     assert summary["outcome"] != "finished", summary
+    # the note names what is wrong: an arm slower than the time bound, not a smaller FIFO (it said
+    # "fifo_frames = 200 … looks wrong … or the arm runs faster than speed_factor")
+    notes = " ".join(summary["messages"])
+    assert "speed_tolerance = 2" in notes and "looks too small" in notes and "fifo_frames" not in notes, notes
 
 
 # --- when a status frame was built (armctl/probe/stream.py latest_built_s) -----------------------

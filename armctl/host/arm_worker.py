@@ -246,7 +246,8 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
             and SD_PROGRAM_NOTE not in job.estimate.notes):
         time_held_overrun = view.arm_time_s / job.estimate.job_s - 1
     view.messages.extend(stale_notes(arm.profile, link.url, runner.streamer.slowest_proven,
-                                     outcome == "frames may have been lost", time_held_overrun))
+                                     outcome == "frames may have been lost", time_held_overrun,
+                                     moved_past_bound=runner.streamer.moved_past_bound))
     return _result(runner, outcome, job, control, spec)
 
 

@@ -354,13 +354,17 @@ def forget(arm: str, directory: Path | None = None) -> bool:
 SLOWED_OVERRUN = 0.10
 
 
-def stale_notes(profile, port: str, slowest: float, frames_lost: bool, time_held_overrun: float | None = None) -> list[str]:
+def stale_notes(profile, port: str, slowest: float, frames_lost: bool, time_held_overrun: float | None = None, *,
+                moved_past_bound: bool = False) -> list[str]:
     """What a finished job says about the ``[connector]`` values it ran with (``profile``'s, for the
     arm on ``port``): the arm proven slower than ``speed_tolerance`` allows (``slowest``: the arm's
     seconds ÷ the model's on a frame, a lower bound from two pairs of its reports —
     ``Streamer.slowest_proven``, 0 when never) means its ``speed_factor`` is wrong; frames that
     may have been lost at an ordinary pace mean the FIFO holds fewer than ``fifo_frames`` (or the
-    arm runs faster than its ``speed_factor``).  Each note names the value, where it came from
+    arm runs faster than its ``speed_factor``), unless the arm was seen moving after even the
+    slowest arm allowed for would have finished every frame (``moved_past_bound``: the streamer's
+    sign of loss ``Losses.moved_past_time_bound``): then ``speed_tolerance`` (or ``speed_factor``)
+    is too small for it.  Each note names the value, where it came from
     (probed on DATE, a file, the document's default) and the probe to run; none when nothing
     speaks against them.  And one that speaks for measuring: ``time_held_overrun`` (how far the
     arm time ran over the estimate, as a share, when the job finished after the FIFO's bound held
@@ -374,6 +378,10 @@ def stale_notes(profile, port: str, slowest: float, frames_lost: bool, time_held
         named = ["speed_factor"]
         said = (f"{_setting(profile, 'speed_factor')} looks wrong: the arm ran at least {slowest:.2f}x slower than it says "
                 f"(more than speed_tolerance {tolerance:g} allows: speed_factor at least {connector.speed_factor * slowest:.2f})")
+    elif moved_past_bound:
+        named = ["speed_tolerance", "speed_factor"]
+        said = (f"{_setting(profile, 'speed_tolerance')} looks too small (or {_setting(profile, 'speed_factor')}): the "
+                f"arm still moved after an arm {tolerance:g}x slower than the model would have finished every frame")
     elif frames_lost:
         named = ["fifo_frames", "speed_factor"]
         said = (f"{_setting(profile, 'fifo_frames')} looks wrong: frames may have been lost, so the FIFO may hold "

@@ -107,6 +107,7 @@ class Streamer:
     first_suspect_index = _part("_losses", "first_suspect_index")
     fastest_factor = _part("_losses", "fastest_factor", False)
     slowest_proven = _part("_losses", "slowest_proven", False)
+    moved_past_bound = _part("_losses", "moved_past_bound", False)
 
     # --- writing ----------------------------------------------------------------------------
 

@@ -53,6 +53,7 @@ class Losses:
         self.too_slow: tuple[float, object] | None = None  # the arm seen slower than the tolerance on a frame
         self.standing_on: tuple[int, int] | None = None  # (head frame, reports after its deadline): ``check_not_begun``
         self.not_begun: int | None = None  # the last frame ``check_not_begun`` told
+        self.moved_past_bound = False  # ``moved_past_time_bound`` told: the arm slower than the time bound allows
         self.slowest_proven = 0.0  # the most ``too_slow`` was in this job (a stale speed_factor: armctl/host/calibration.py)
 
     def found(self, sentence: str, suspect: int) -> None:
@@ -243,6 +244,7 @@ class Losses:
         so it never raises this."""
         if moved_after_s is None or not self.ledger.confirmed_by_time or moved_after_s - STATUS_PERIOD_S <= bound_s:
             return
+        self.moved_past_bound = True
         self.found(f"the arm still moved after {moved_after_s - STATUS_PERIOD_S:.2f} s, when an arm {self.tolerance:g}x "
                    f"slower than the model would have finished every frame written ({bound_s:.2f} s): it is slower than "
                    "the profile's [connector] speed_tolerance allows, so frames counted done by time may not have run "
