@@ -77,3 +77,14 @@ def test_the_probe_behind_a_16_ms_adapter_measures_the_arms_tolerance():
     # before: "speed_tolerance 1.42 … mean start delay 8.3 ms" (the reads' lateness)
     assert tolerance.value <= 1.06, tolerance.evidence
     assert probe.finding("speed_factor").value == pytest.approx(1.0, abs=0.01)
+
+
+def test_the_tolerance_covers_the_longest_start_delay_measured(tmp_path):
+    """An arm that takes 10 ms before every command: the joint moves measure that start delay
+    (10.6 ms) and the linear moves less (6.4 ms: their fit's intercept runs ~5 ms low even on an
+    arm with none, found by the review).  The mean (8.5 ms) gave t = 1.43 where the time bound's
+    slack per frame, (t − 1) × 20 ms, needs t ≥ 1.5 to cover 10 ms; the largest covers it."""
+    arm = tmp_path / "arm.toml"
+    arm.write_text("[timing]\ncommand_overhead_s = 0.010\n")
+    probe = probe_late(1e-9, options=f"profile={arm}", motion=True)
+    assert probe.finding("speed_tolerance").value >= 1.5, probe.finding("speed_tolerance").evidence
