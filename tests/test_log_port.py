@@ -136,7 +136,7 @@ def test_other_port_resumes_the_same_arm_moved_to_another_port(tmp_path, monkeyp
 
 def test_a_log_from_before_the_port_resumes_as_before_and_says_the_port_is_unknown(tmp_path, monkeypatch):
     ports = _stopped_job(tmp_path, monkeypatch)
-    old = _with_port(tmp_path / "j1.log", None, tmp_path / "old.log", sim_process=None)
+    old = _with_port(tmp_path / "j1.log", None, tmp_path / "old.log", sim_process=None, arm=None)
     resumed = _invoke("run", "job.txt", "--no-live", "--resume", "old.log", "--port", URL)
     assert resumed.exit_code == 0, resumed.output
     assert "old.log does not record the port its job ran on" in resumed.output
@@ -174,7 +174,8 @@ def test_the_api_refuses_a_log_of_another_arm(tmp_path):
         # the caller's word that it is the same arm (armctl run --other-port): the point re-aimed
         from armctl import ScriptSnapshot, read_resume_point
 
-        point = replace(read_resume_point(log, ScriptSnapshot(str(script), script.read_bytes())), port=other.url)
+        point = replace(read_resume_point(log, ScriptSnapshot(str(script), script.read_bytes())), port=other.url,
+                        arm=None)
         assert other.run(script, resume=point).frames_sent > 0  # past the port: the log and the arm's report decide
 
 
@@ -193,7 +194,8 @@ def test_the_installed_command_refuses_another_port_and_opens_the_logs(tmp_path,
     port — not to ARMCTL_PORT's simulator — and says so (it is not there: exit 2, nothing sent)."""
     _stopped_job(tmp_path, monkeypatch)
     device = "/dev/ttyACM97"
-    log = _with_port(tmp_path / "j1.log", device, tmp_path / "device.log", sim_process=None)  # (no sim:// arm's)
+    log = _with_port(tmp_path / "j1.log", device, tmp_path / "device.log", sim_process=None,  # (no sim:// arm's)
+                     arm=f"device {device}")  # (its identity, as a run there records it)
     refused = subprocess.run([str(ARMCTL), "run", "job.txt", "--no-live", "--resume", str(log), "--port", URL],
                              capture_output=True, text=True, timeout=60, cwd=tmp_path, env=_env())
     assert refused.returncode == 2, refused.stderr

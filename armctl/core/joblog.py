@@ -13,7 +13,9 @@ pure data out, no I/O here:
   arrival, where the arm stood (``start``) and the port it is on (``port``; absent in a log
   written before armctl recorded it: the port is then unknown) — for a ``sim://`` port, the
   process its simulated arm lives and dies in (``sim_process``: a resume in another process
-  meets a new arm, and is refused).  Another script, or the same
+  meets a new arm, and is refused), and the identity of the arm on the port (``arm``:
+  ``calibration.arm_identity``, a USB adapter's serial number; absent in an older log: unknown;
+  a resume on another arm is refused).  Another script, or the same
   file edited since, is refused (``ResumeRefused``, exit 2): the lines would not mean the same.
 - a job frame's ``tx`` record (``frame_record``), before the frame is written: its number
   ``n`` in the job, its ``line``, ``at`` (where to continue if it did not run: ``--from-line``
@@ -114,10 +116,10 @@ def target_of(segment_end_kind: str, xyz, joints) -> dict:
 
 def job_record(name: str, data: bytes, from_line: int, lead_s: float, frames: int = 0,
                control_on_arrival: bool = False, start: dict | None = None, port: str | None = None,
-               sim_process: str | None = None) -> dict:
+               sim_process: str | None = None, arm: str | None = None) -> dict:
     return {"t": 0.0, "dir": "job", "format": FORMAT, "script": name, "sha256": script_digest(data),
             "from_line": from_line, "lead_s": lead_s, "frames": frames, "control_on_arrival": control_on_arrival,
-            "start": start, "port": port, "sim_process": sim_process}
+            "start": start, "port": port, "sim_process": sim_process, "arm": arm}
 
 
 def frame_record(n: int, line: int, at: int, next_line: int | None, target: dict | None) -> dict:
@@ -195,6 +197,7 @@ class ResumePoint:
     log_path: str | None = None  # the log it was read from: the resume marks it (``resumed_record``)
     port: str | None = None  # the port the job ran on (None: a log written before armctl recorded it)
     sim_process: str | None = None  # a sim:// port's: the process its simulated arm lived (and died) in
+    arm: str | None = None  # the identity of the arm on ``port`` when the job began (None: unknown, an older log)
 
     def __post_init__(self) -> None:
         if not isinstance(self.frames, Frames):
@@ -349,7 +352,7 @@ class _Reader:
         if not (_is_int(from_line) and from_line >= 1 and _is_number(lead_s) and lead_s >= 0 and _is_int(frames)
                 and frames >= 0 and isinstance(arrival, bool) and (start is None or _valid_target(start))
                 and all(value is None or isinstance(value, str) and 0 < len(value) <= 1024
-                        for value in (port, record.get("sim_process")))):
+                        for value in (port, record.get("sim_process"), record.get("arm")))):
             raise self.bad(number, "the job record's fields are not what armctl writes")
         # a later job record (a log resumed into itself) starts the job it records afresh
         self.header, self.frames, self.confirmed, self.done, self.cleared = record, Frames(), 0, 0, None
@@ -414,7 +417,7 @@ class _Reader:
                                 f"resume ran a second time; {instead}")
         return ResumePoint(header["from_line"], float(header["lead_s"]), self.frames, self.confirmed,
                            self.done, header["start"], self.cleared, notes, port=header.get("port"),
-                           sim_process=header.get("sim_process"))
+                           sim_process=header.get("sim_process"), arm=header.get("arm"))
 
 
 def _clears(frame_hex: str, control_on_arrival: bool, who: str) -> str | None:

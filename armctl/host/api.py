@@ -373,5 +373,5 @@ def _claimed_resume(resume, log, snapshot, from_line: int, url: str):
         raise ResumeRefused(f"log= is the journal resume= reads ({os.fspath(resume)}): give the resumed job a "
                             "log of its own; nothing was sent")
     point = read_resume_point(resume, snapshot, from_line)
-    refuse_another_arm(point, url, "resume dataclasses.replace(the ResumePoint, port=arm.url)")
+    refuse_another_arm(point, url, "resume dataclasses.replace(the ResumePoint, port=arm.url, arm=None)")
     return resume_claim(resume), point

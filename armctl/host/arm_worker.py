@@ -297,14 +297,15 @@ def _nothing_to_resume(arm: ArmLine, state) -> RunResult:
 
 
 def _journal_job(runner, job, state, arrival: bool, port: str) -> None:
-    """The job's first record in ``--log``: which script, from which line and pose, on which port."""
+    """The job's first record in ``--log``: which script, from which line and pose, on which port
+    (and which arm: its identity, read as the job starts)."""
     from ..core.joblog import job_record, target_of
-    from .resume_port import simulator_process
+    from .resume_port import arm_of, simulator_process
 
     known = state.position_mm is not None and None not in state.joints_deg
     start = target_of("line", state.position_mm, state.joints_deg) if known else None
     runner.log_record(job_record(job.snapshot.name, job.snapshot.data, job.from_line, job.lead_s, job.estimate.frames,
-                                 arrival, start, port, simulator_process(port)), durable=True)
+                                 arrival, start, port, simulator_process(port), arm_of(port)), durable=True)
 
 
 def _result(runner, outcome: str, job, control: JobControl, spec: JobSpec) -> RunResult:

@@ -10,6 +10,15 @@ is (the arm moved to another port); a log written before armctl recorded its por
 the port given or configured, as it did, with a note saying the port is unknown.
 ``refuse_another_arm`` is the rule itself, for ``Arm.run(resume=)`` too, before anything is sent.
 
+A name is not an arm: after a replug /dev/ttyUSB0 may be another arm, and the log's on
+/dev/ttyUSB1.  So the job record keeps the identity of the arm as the job starts (``arm_of``:
+``calibration.arm_identity``), and the port a resume opens, named by the log or by --port, must
+have that identity now (the same USB serial number or location, the same path a by-id link
+leads to); another is refused naming both, and the port where the log's arm is now found
+(``_ports_of``: the devices pyserial lists, by identity) is the --port to give.  A log without
+an identity (an older one) is checked by name as before; an identity that is only a path or an
+address (a pty, a TCP port) proves no more than the name, and the note says so.
+
 A ``sim://`` arm lives in the armctl process that opened it and dies with it: a resume in
 another process would meet a new arm at its home pose, whose reports prove nothing of the lines
 the old one ran (it "resumed" from where the new arm stands, or said every line was proven
@@ -51,35 +60,86 @@ def refuse_gone_simulator(point) -> None:
         "`armctl sim --tcp PORT`, and its port as --port)")
 
 
-def same_arm(logged: str, url: str) -> bool:
-    """The arm on ``url`` is the one on ``logged`` (a log's port)."""
-    if logged == url:
-        return True
+def arm_of(url: str, ports=None) -> str | None:
+    """The identity of the arm on ``url`` now (``calibration.arm_identity``: what a job record
+    keeps as ``arm``; ``ports``: pyserial's list, read once); None for a URL it cannot read."""
     from .calibration import arm_identity
 
     try:
-        return arm_identity(logged) == arm_identity(url)
-    except ArmctlError:  # a URL it cannot read (ConfigError): not shown to be the same arm
-        return False
+        return arm_identity(url, ports)
+    except ArmctlError:  # a URL it cannot read (ConfigError)
+        return None
+
+
+def same_arm(logged: str, url: str) -> bool:
+    """The arm on ``url`` is the one on ``logged`` (a log's port), by name (a log without ``arm``)."""
+    if logged == url:
+        return True
+    identity = arm_of(logged)
+    return identity is not None and identity == arm_of(url)  # (unreadable: not shown to be the same arm)
+
+
+def _by_name_only(identity: str) -> bool:
+    """An identity no more than the path or address its port leads to (a device without a USB
+    serial number or location, a pty, a TCP port): another arm there has the same one."""
+    from .calibration import _DEVICE, _NETWORK_SCHEMES  # (arm_identity's words, spelt there once)
+
+    return identity.startswith((_DEVICE, *(f"{scheme}://" for scheme in _NETWORK_SCHEMES)))
+
+
+def _ports_of(identity: str, logged: str) -> list[str]:
+    """The ports on which the arm of ``identity`` is found now: the log's port ``logged``, the
+    devices pyserial lists (``armctl ports``), the path a device identity names."""
+    from .calibration import _DEVICE, _USB, port_infos
+
+    candidates, ports = [logged], port_infos()
+    if identity.startswith(_USB):
+        candidates += sorted(info.device for info in ports)
+    elif identity.startswith(_DEVICE) and os.path.exists(identity[len(_DEVICE):]):
+        candidates.append(identity[len(_DEVICE):])
+    return list(dict.fromkeys(port for port in candidates if arm_of(port, ports) == identity))
 
 
 def refuse_another_arm(point, url: str, override: str) -> None:
     """``ResumeRefused`` (exit 2, nothing sent) when the log ``point`` was read from records its
-    job on another arm than the one on ``url``; ``override``: how to say it is the same arm."""
-    if point.port is None or same_arm(point.port, url):
+    job on another arm than the one on ``url`` — by the arm's identity the log recorded
+    (``arm``), else by the port's name; ``override``: how to say it is the same arm."""
+    if point.port is None:
+        return
+    now = arm_of(url)
+    if point.arm is not None and now is not None:
+        if point.arm == now:
+            return
+    elif same_arm(point.port, url):
         return
     name = point.log_path or "the log"
-    raise ResumeRefused(f"--resume {name}: its job ran on {point.port}, not on {url}: a resume on another arm "
-                        f"would continue a job that arm never ran; nothing was sent (leave out --port to resume on "
-                        f"{point.port}, or, if the arm on {url} is that arm moved to another port, {override})")
+    if point.arm is None or now is None:  # by name (a log without the identity)
+        raise ResumeRefused(f"--resume {name}: its job ran on {point.port}, not on {url}: a resume on another arm "
+                            f"would continue a job that arm never ran; nothing was sent (leave out --port to resume "
+                            f"on {point.port}, or, if the arm on {url} is that arm moved to another port, {override})")
+    found = _ports_of(point.arm, point.port)
+    where = (f"leave out --port to resume on {point.port}, where that arm is" if point.port in found else
+             f"that arm is on {found[0]} now: resume with --port {found[0]}" if found else
+             "that arm is not found on this host (`armctl ports` lists the ports): connect it and give its port as "
+             "--port")
+    now_there = f"{point.port} leads to another arm now, {now}" if url == point.port else f"{url} is {now}"
+    raise ResumeRefused(f"--resume {name}: its job ran on {point.port}, the arm {point.arm}; {now_there}: a resume on "
+                        f"another arm would continue a job that arm never ran; nothing was sent ({where}; or, if the "
+                        f"arm on {url} is that arm after all (on another adapter, say), {override})")
+
+
+def moved_to(point, url: str):
+    """The log ``point`` re-aimed at ``url``: the caller's word that the arm its job ran on is
+    there now (``--other-port``), whatever its name or identity."""
+    from dataclasses import replace
+
+    return replace(point, port=url, arm=None)
 
 
 def resume_port(point, option: str | None, other_port: bool = False):
     """The port ``armctl run --resume`` opens for the log ``point`` (``option``: --port, None when
     not given) and what to tell the user about it: (a ``PortChoice``, the note or None, the point —
     re-aimed at the port given when ``other_port`` says it is the same arm)."""
-    from dataclasses import replace
-
     from .port_choice import choose_port
 
     name = point.log_path or "the log"
@@ -91,11 +151,17 @@ def resume_port(point, option: str | None, other_port: bool = False):
         return choice, (f"--resume: {name} does not record the port its job ran on (an armctl before this one wrote "
                         f"it): resuming on {choice.url} ({origin}); be sure that is the arm the job ran on"), point
     if option is None:
+        refuse_another_arm(point, point.port, f"--port {point.port} {OVERRIDE_FLAG}")
+        unchecked = ("its identity is unknown (an armctl before this one wrote the log): be sure it is still that arm"
+                     if point.arm is None else
+                     f"known as {point.arm} only, as any arm there would be: be sure it is still that arm"
+                     if _by_name_only(point.arm) else None)
         return choose_port(point.port, origin=f"--resume {name}"), \
-            f"--resume: on the port {name} records, {point.port} (the arm its job ran on)", point
+            f"--resume: on the port {name} records, {point.port} (the arm its job ran on" + \
+            (f"; {unchecked})" if unchecked else ")"), point
     choice = choose_port(option)
     if other_port:
         return choice, f"--resume: on {choice.url} ({OVERRIDE_FLAG}: the arm {name} ran on, at {point.port})", \
-            replace(point, port=choice.url)
+            moved_to(point, choice.url)
     refuse_another_arm(point, choice.url, f"add {OVERRIDE_FLAG}")
     return choice, None, point

@@ -48,9 +48,11 @@ def print_decoded(source: str, as_json: bool) -> int:
 
 
 def describe_job(job: dict) -> str:
-    """A log's job record for people: ``job JOB.txt from line 1 on port /dev/ttyUSB0``."""
-    port = job.get("port")
-    where = f"on port {port}" if isinstance(port, str) else "port unknown (a log written before armctl recorded it)"
+    """A log's job record for people: ``job JOB.txt from line 1 on port /dev/ttyUSB0 (usb 0403:6001
+    serial A1)`` — the port and the identity of the arm on it."""
+    port, arm = job.get("port"), job.get("arm")
+    where = (f"on port {port} ({arm if isinstance(arm, str) else 'arm unknown'})" if isinstance(port, str) else
+             "port unknown (a log written before armctl recorded it)")
     return f"job {job.get('script')} from line {job.get('from_line')} {where}"
 
 
