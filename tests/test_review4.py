@@ -14,6 +14,7 @@ from click.testing import CliRunner
 
 from armctl.ui.cli import main
 from test_resume_exactly_once import _open_one_arm
+from test_review3 import SLOW_HANDLING_ARM, _back_and_forth
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -115,6 +116,26 @@ def test_a_target_refused_after_a_joint_move_never_ends_finished(tmp_path, monke
     summary, dropped, refused, _ = _run(tmp_path, monkeypatch, script)
     assert (dropped, refused) == (0, 1)
     assert summary["outcome"] != "finished" and summary["exit_code"] == 1, summary
+
+
+# --- moving past the time bound (Losses.moved_past_time_bound) ------------------------------------
+
+
+def test_a_slow_arm_is_not_hidden_by_a_long_delay_at_the_end(tmp_path, monkeypatch):
+    """tests/test_review3.py's arm that takes 50 ms before every command, never probed, and its
+    2000 repeated 10 ms moves: 141 dropped by a full FIFO, and the job ends "frames may have been
+    lost" because the arm still moved after every frame's time bound.  A G4 P20000 after them hid
+    it: the bound the arm's motion was compared with was the latest of every frame's, the delay's
+    included (its 20 s at 2x), so the arm's last 12 s of draining its full FIFO fell inside it —
+    142 dropped, and "finished", exit 0.  A delay moves nothing: motion after the time bound of
+    the last frame that moves the arm is the sign."""
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "arm.toml").write_text(SLOW_HANDLING_ARM)
+    summary, dropped, refused, _ = _run(tmp_path, monkeypatch, _back_and_forth(2000) + "G4 P20000\n",
+                                        f"&profile={tmp_path / 'arm.toml'}")
+    assert dropped > 0  # (142)
+    assert summary["outcome"] == "frames may have been lost", summary
+    assert any("still moved after" in m for m in summary["messages"]), summary["messages"]
 
 
 # --- a false alarm before the first frame: a corrupted worktable report -------------------------
