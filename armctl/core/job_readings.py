@@ -61,6 +61,7 @@ from .commands import OWN_MOTION_COMMANDS
 from .evidence import AGREEING_REPORTS, agreed, known_still_s
 from .protocol import (
     CONTROL_COMMANDS, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus,
+    SetWorktableOrigin,
 )
 from .streamer import ARRIVAL_SLACK_S
 
@@ -337,6 +338,18 @@ def moves_arm(segment) -> bool:
     """Whether a frame's motion changes the reported position or joints (the motion model's
     ``Segment.moves_reported``: not a move of E0/E1 alone, which no status kind reports)."""
     return segment.moves_reported
+
+
+def changes_readings(sent) -> bool:
+    """Whether the position or joint readings may change while a frame written runs, or as it
+    acts: it moves the arm (``moves_arm``), its path is not the planned one (it starts where only
+    the profile's kinematics or an SD program put the arm), its motion is the arm's own
+    (``OWN_MOTION_COMMANDS``), or it sets the worktable origin the X/Y/Z are reported in (G54).
+    A delay, an M code or a PWM change does none of these."""
+    return moves_arm(sent.segment) or not sent.path_known or isinstance(sent.command, _READINGS_COMMANDS)
+
+
+_READINGS_COMMANDS = OWN_MOTION_COMMANDS + (SetWorktableOrigin,)
 
 
 def moved_clearly(before: tuple, after: tuple) -> bool:
