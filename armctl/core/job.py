@@ -227,6 +227,8 @@ class Job:
             now = times[k]
             consumed, plan = streamer.consumed_lower_bound, streamer.plan_changes
             streamer_receive(frame, now)
+            if streamer.consumed_lower_bound != consumed:
+                self.written.done(streamer.consumed_lower_bound, now)  # (what a blip's reading may be explained by)
             # (see "News" in the module docstring: past streaming every frame is news; draining, ...)
             news = control.busy or (not streaming and not (
                 draining and streamer.plan_changes == plan and now < deadline_s

@@ -41,7 +41,7 @@ from enum import StrEnum
 
 from .evidence import REST_CHECK_S
 from .job_program import ProgramWait
-from .job_readings import landed_s, moves_arm, values_text
+from .job_readings import changes_readings, landed_s, moves_arm, values_text
 from .protocol import ArcStart, PauseToggle
 from .streamer import ARRIVAL_SLACK_S, LOSS_SLACK_S, ROTATION_S
 
@@ -108,9 +108,11 @@ class JobEnd:
         if paused_at_end:
             self.written.script_toggles[-1].seen = True
         if paused_at_end or self.rest_proves_all_written(now):
-            if self.written.recent:  # (the arm slower than the time bound allowed: a sign of loss)
-                self.streamer.moved_past_time_bound(self.readings.work_s,
-                                                    max(sent.certain_end_s for sent in self.written.recent))
+            # (the arm slower than the time bound allowed: a sign of loss) — motion after the
+            # bound of every frame that may change the readings: a delay after them moves nothing
+            moving_s = [sent.certain_end_s for sent in self.written.recent if changes_readings(sent)]
+            if moving_s:
+                self.streamer.moved_past_time_bound(self.readings.work_s, max(moving_s))
             self.streamer.confirm_all_done()
             view.arm_done_s = self.arrival.done_at(now)
             if paused_at_end:

@@ -45,8 +45,9 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
   the job waits for that proof (armctl/core/job_end.py).
 
 ``Written`` is the other half of the record: the last ``RECENT_FRAMES`` frames written (the
-trailing frames that move nothing are judged on them), the last that moves the arm, and the
-job's own PAUSE frames.
+trailing frames that move nothing are judged on them), the last that moves the arm, the job's
+own PAUSE frames, and when the streamer's lower bound passed them (``done``: a frame known
+finished explains no later reading, an SD program's whose time bound never runs out included).
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ from .commands import OWN_MOTION_COMMANDS
 from .evidence import AGREEING_REPORTS, agreed, known_still_s
 from .protocol import (
     CONTROL_COMMANDS, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus,
+    SetWorktableOrigin,
 )
 from .streamer import ARRIVAL_SLACK_S
 
@@ -83,6 +85,7 @@ class Written:
         self.script_toggles: list = []  # the job's own PAUSE frames written, in order
         self.script_paused = False  # the job's own PAUSE lines left the arm to pause: an odd number written
         self.control_sent = 0  # the other control frames written after a first frame (POSE, PROGRAM, G54…: H5 says when they act)
+        self.finished: deque = deque(maxlen=RECENT_FRAMES)  # (when, frames known finished by then): ``done``
 
     def note(self, sent) -> None:
         self.recent.append(sent)
@@ -95,15 +98,23 @@ class Written:
         if sent.segment.moves_reported:  # (``moves_arm``)
             self.last_move = sent
 
+    def done(self, frames: int, now: float) -> None:
+        """The streamer's lower bound rose to ``frames`` frames finished at ``now``."""
+        self.finished.append((now, frames))
+
     def explains(self, kind: int, values: tuple, read_s: float) -> bool:
         """Some recent frame the arm may still have been running at ``read_s`` (its time bound not
-        yet run out) passes within a reading's jitter of ``values`` (one kind's readings: 0
+        yet run out, and not known finished before: an SD program's or a first move of U/V's bound
+        never runs out) passes within a reading's jitter of ``values`` (one kind's readings: 0
         position, 1 and 2 the joint halves): each within the span of its start and end; or is
         one whose motion no model knows (``OWN_MOTION_COMMANDS``, a start a program left)."""
         limit = TARGET_MM if kind == 0 else TARGET_DEG
         first = 3 * (kind - 1)
+        # the frames known finished by a report read before this one (status frames come in order:
+        # this one was built after it), whatever their time bound
+        done = next((frames for when, frames in reversed(self.finished) if when < read_s), 0)
         for sent in self.recent:
-            if sent.certain_end_s < read_s:
+            if sent.certain_end_s < read_s or sent.index < done:
                 continue
             if isinstance(sent.command, OWN_MOTION_COMMANDS) or not sent.path_known:
                 return True  # (the arm's own motion, or from where a program left it: it may pass anywhere)
@@ -327,6 +338,18 @@ def moves_arm(segment) -> bool:
     """Whether a frame's motion changes the reported position or joints (the motion model's
     ``Segment.moves_reported``: not a move of E0/E1 alone, which no status kind reports)."""
     return segment.moves_reported
+
+
+def changes_readings(sent) -> bool:
+    """Whether the position or joint readings may change while a frame written runs, or as it
+    acts: it moves the arm (``moves_arm``), its path is not the planned one (it starts where only
+    the profile's kinematics or an SD program put the arm), its motion is the arm's own
+    (``OWN_MOTION_COMMANDS``), or it sets the worktable origin the X/Y/Z are reported in (G54).
+    A delay, an M code or a PWM change does none of these."""
+    return moves_arm(sent.segment) or not sent.path_known or isinstance(sent.command, _READINGS_COMMANDS)
+
+
+_READINGS_COMMANDS = OWN_MOTION_COMMANDS + (SetWorktableOrigin,)
 
 
 def moved_clearly(before: tuple, after: tuple) -> bool:

@@ -25,7 +25,6 @@ from collections import deque
 from dataclasses import dataclass
 from itertools import islice
 
-from ..armstate import ROTATION_S
 from ..motion import distance_to_path
 from .constants import (
     JOINT_TOLERANCE_DEG,
@@ -266,25 +265,25 @@ class Sightings:
         return (candidates[0][0] if candidates else None), candidates, False
 
 
-def standing_at_start(found: Sighting | None, pending, now: float) -> int | None:
-    """The head frame when this position report and the one before it put the arm at its start
-    and on no later frame, with its time bound due before the next position report: the arm has
-    not begun it, so time must not count it done (``TimeBound.standing_at``).  An arm that runs
-    its frames at most ``slowest_factor`` times slower has left the start of a move by its
-    deadline; one still there refused it (a target out of its reach: the simulator refuses those,
-    armctl/sim/executor.py), lost it, or is slower than the time bound allows — and a move counted
-    done by time there let the job end "finished" at its last target (tests/test_sim_reach.py).
-    Only a straight move whose path is the planned one and longer than the report's tolerance
-    can tell (its start is not its end), and none a RESET CONNECTOR may have cleared (reports
-    decide those, as ``TimeBound.advance`` leaves them); the later frames are searched only then
-    (a rotation before the deadline, so a pause-state frame in between cannot let time count it
-    first)."""
-    if found is None or found.earliest is None or found.previous != found.earliest or not pending:
+def standing_at_start(found: Sighting | None, pending) -> int | None:
+    """The head frame when this position report puts the arm at its start and on no later frame:
+    the arm has not begun it, so time must not count it done (``TimeBound.standing_at``, through
+    ``Losses.check_not_begun``, which wants two such reports after its deadline, and lets go of
+    it only when two in a row agree on the arm elsewhere: a corrupted report, alone, never does).
+    An arm that runs its frames at most ``slowest_factor`` times slower has left the start of a
+    move by its deadline; one still there refused it (a target out of its reach: the simulator
+    refuses those, armctl/sim/executor.py), lost it, or is slower than the time bound allows — and
+    a move counted done by time there let the job end "finished" at its last target
+    (tests/test_sim_reach.py).  Only a straight move whose path is the planned one and longer than
+    the report's tolerance can tell (its start is not its end), and none a RESET CONNECTOR may have
+    cleared (reports decide those, as ``TimeBound.advance`` leaves them); the later frames are
+    searched only then."""
+    if found is None or found.earliest is None or not pending:
         return None
     head = pending[0]
     segment = head.segment
     if (found.earliest != head.index or segment.kind != "line" or not head.path_known or head.may_be_cleared
-            or segment.length <= 4 * head.xyz_tolerance_mm or head.certain_end_s > now + ROTATION_S):
+            or segment.length <= 4 * head.xyz_tolerance_mm):
         return None
     window = next((candidate for candidate in found.candidates if candidate[0] == head.index), None)
     if window is None or window[1] > 0.0 or window[2] >= 1.0:

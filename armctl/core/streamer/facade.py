@@ -196,9 +196,11 @@ class Streamer:
             if found is not None:
                 self._take(found, now)
             pending, bound = self._ledger.pending, self._bound
-            standing = standing_at_start(found, pending, now) if bound.time_proves else None  # (not once cleared)
+            standing = standing_at_start(found, pending) if bound.time_proves else None  # (not once cleared)
+            # (elsewhere: this report and the one before agree, not on the start; None twice too)
+            left = standing is None and found is not None and found.previous == found.earliest
             bound.standing_at = self._losses.check_not_begun(standing, pending[0] if pending else None, now,
-                                                             None if bound.paused else bound.running_seen_s)
+                                                             None if bound.paused else bound.running_seen_s, left)
         elif kind == _JOINTS_LOW_KIND:
             found = self._evidence.joint_half(0, (frame.j1_deg, frame.j2_deg, frame.j3_deg), now)
             if found is not None:

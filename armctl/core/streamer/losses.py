@@ -18,7 +18,8 @@ never raise one either:
   told at the end of a job only when time confirmed frames at a narrower factor;
 * a move not begun (``check_not_begun``): two position reports sampled after the time bound's
   deadline of the head frame still put the arm at its start, on no later frame (time holds off
-  that frame until they have said so: the arm refused a target it cannot reach, or lost it);
+  that frame from the first such report until they have said so, or two reports in a row agree
+  on the arm elsewhere: the arm refused a target it cannot reach, or lost it);
 * moving past the time bound (``moved_past_time_bound``): at the end, the arm seen moving after
   every frame written should have finished even on the slowest arm allowed for, with frames
   confirmed by time — the slowness a 10 ms move never shows in two sightings.
@@ -110,22 +111,31 @@ class Losses:
             self.suspect(first)
             return
 
-    def check_not_begun(self, index: int | None, head, now: float, running_s: float | None) -> int | None:
-        """A sign of loss: two position reports in a row, each sampled after the time bound's
-        deadline of the head frame ``index`` while the arm was seen running (``running_s``: when
-        it last was, None while it reports a pause — a pause moves the deadline only once it
-        ends), put the arm at its start and on no later frame
-        (``evidence.standing_at_start``; None: this report does not) — it did not begin a move
-        that even an arm ``tolerance`` times slower than the model has finished by then: the arm
-        refused it (a target out of its reach), lost it, or runs slower than the time bound
-        allows.  Until two such reports have said so, time must not count the frame done (the
-        frame's index, for ``TimeBound.standing_at``); once told, it may (None)."""
-        if index is None or index == self.not_begun:
+    def check_not_begun(self, index: int | None, head, now: float, running_s: float | None,
+                        left: bool = True) -> int | None:
+        """A sign of loss: two position reports, each sampled after the time bound's deadline of
+        the head frame ``index`` while the arm was seen running (``running_s``: when it last was,
+        None while it reports a pause — a pause moves the deadline only once it ends), put the arm
+        at its start and on no later frame (``evidence.standing_at_start``; None: this report
+        does not), and no two reports in a row between them agreed on the arm elsewhere
+        (``left``: this one and the one before did; a corrupted report is alone, and a lost one
+        says nothing) — it did not begin a move that even an arm ``tolerance`` times slower than
+        the model has finished by then: the arm refused it (a target out of its reach), lost it,
+        or runs slower than the time bound allows.  From the first report at its start until two
+        such reports have said so, or the arm was seen elsewhere, time must not count the frame
+        done (the frame's index, for ``TimeBound.standing_at``); once told, it may (None)."""
+        held = self.standing_on
+        if index is None:
+            if left or held is None or head is None or held[0] != head.index or held[0] == self.not_begun:
+                self.standing_on = None
+                return None
+            return held[0]  # a report that says nothing of where the arm is keeps the hold
+        if index == self.not_begun:
             self.standing_on = None
             return None
         # sampled after the deadline, which the arm reached running
         after = running_s is not None and min(now, running_s) - STATUS_PERIOD_S >= head.certain_end_s
-        before = self.standing_on[1] if self.standing_on is not None and self.standing_on[0] == index else 0
+        before = held[1] if held is not None and held[0] == index else 0
         self.standing_on = (index, before + after)
         if before + after < 2:
             return index
