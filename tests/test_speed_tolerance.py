@@ -83,7 +83,9 @@ def test_the_probe_writes_a_tolerance_from_its_precision_and_the_start_delay():
     assert tolerance_finding(1.0, 0.01, [0.0001, 0.0009]).value == 1 + SPEED_TOLERANCE_MARGIN == 1.05
     assert tolerance_finding(1.0, 0.04, [0.0]).value == 1.08  # the precision, twice over
     assert tolerance_finding(2.0, 0.04, [0.0]).value == 1.05  # relative to the factor
-    assert tolerance_finding(1.0, 0.01, [0.004, 0.006]).value == 1.25  # a 5 ms start delay needs 5 ms of slack
+    # the longest start delay measured (6 ms) needs 6 ms of slack: the mean (5 ms) under-measures
+    # an arm whose linear moves' fit runs low (tests/test_probe_stream_lateness.py)
+    assert tolerance_finding(1.0, 0.01, [0.004, 0.006]).value == 1.3
     assert tolerance_finding(1.0, 0.01, [-0.005, -0.005]).value == 1.05  # a negative delay is no room
     assert tolerance_finding(1.0, 0.5, [0.0]).value == 2.0  # never looser than the document
 
