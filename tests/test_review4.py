@@ -208,7 +208,6 @@ def test_a_slow_arm_is_not_hidden_by_a_long_delay_at_the_end_installed(tmp_path)
 # --- a false alarm before the first frame: a corrupted worktable report -------------------------
 
 
-@pytest.mark.xfail(strict=True, reason="not fixed: the start's worktable origin is read from one report (report)")
 def test_a_corrupted_worktable_report_at_the_start_raises_no_alarm(tmp_path, monkeypatch):
     """Seed 99 on a noisy line: the last worktable-origin report before the job starts is corrupted
     (Y 2969.6 mm; the arm's origin is 0), and the start pose takes it — the origin kind is not one

@@ -6,6 +6,9 @@ where H9's second half lives — a value that jumps faster than the arm can move
 and is held back until the next frame of its kind confirms it (one corrupted frame with a
 plausible frame on either side changes nothing; a real jump, e.g. after a reset, is accepted
 one frame later): armctl/core/evidence.py's rule of a confirmed jump (``reach``, ``beyond_reach``).
+The worktable origin, which never moves by itself, is judged so too: any change of it is held
+until the next report of it agrees (a corrupted origin read before a job became its start frame
+of reference: a first move planned ~3 m long, and a false "frames may have been lost").
 """
 
 from __future__ import annotations
@@ -36,6 +39,10 @@ STALE_AFTER_S = 3 * ROTATION_S
 # (0.1 mm, 0.01 deg) and the jitter of when a frame is read.
 _JUMP_SLACK_MM = 2.0
 _JUMP_SLACK_DEG = 2.0
+# The worktable origin never moves by itself (a G54 or a reset sets it): any change beyond half
+# its status step (0.1 mm) is a jump, held back until the next report of it agrees — one
+# corrupted origin report must not become the job's start frame of reference.
+_ORIGIN_SLACK_MM = 0.05
 
 
 @dataclass
@@ -130,13 +137,15 @@ class ArmState:
         """``update`` (less the frame count) for each (frame, read time) of ``run``, all of one
         judged kind, in order: each frame judged against the values last accepted and the frame
         held (``_jump_between``'s test: armctl/core/evidence.py), only the last accepted applied."""
-        speed = self.max_speed_mm_s if kind == _POSITION_KIND else self.max_joint_speed_deg_s
+        speed = (self.max_speed_mm_s if kind == _POSITION_KIND else 0.0 if kind == _WORKTABLE_KIND
+                 else self.max_joint_speed_deg_s)
         held = self._held.get(kind)
         if speed is None:  # nothing is judged: the last frame is taken
             accepted, seen = run[-1]
             held = None
         else:
-            slack = _JUMP_SLACK_MM if kind == _POSITION_KIND else _JUMP_SLACK_DEG
+            slack = (_JUMP_SLACK_MM if kind == _POSITION_KIND else _ORIGIN_SLACK_MM if kind == _WORKTABLE_KIND
+                     else _JUMP_SLACK_DEG)
             values_of = _VALUE_GETTERS[kind]
             seen = self.last_seen.get(kind)
             previous = None if seen is None else self._current(kind)
@@ -165,6 +174,8 @@ class ArmState:
             if self.max_speed_mm_s is None:
                 return False
             limit = reach(self.max_speed_mm_s, elapsed_s, _JUMP_SLACK_MM)
+        elif kind == _WORKTABLE_KIND:
+            limit = _ORIGIN_SLACK_MM
         elif kind in _JUDGED_KINDS and self.max_joint_speed_deg_s is not None:
             limit = reach(self.max_joint_speed_deg_s, elapsed_s, _JUMP_SLACK_DEG)
         else:
@@ -180,6 +191,8 @@ class ArmState:
             return tuple(self.joints_deg[0:3])
         if kind == JointsHighStatus.KIND and self.joints_deg[3] is not None:
             return tuple(self.joints_deg[3:6])
+        if kind == _WORKTABLE_KIND and self.worktable_mm[0] is not None:
+            return tuple(self.worktable_mm)
         return None
 
     def _apply(self, frame: StatusFrame) -> None:
@@ -243,17 +256,19 @@ _APPLY = {
     RunPositionStatus.KIND: ArmState._apply_run_position,
 }
 # The kinds whose values are judged for jumps (``_jump_between``): the others are taken as read.
-_JUDGED_KINDS = frozenset((PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND))
+_JUDGED_KINDS = frozenset((PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND, WorktableStatus.KIND))
 
 _VALUE_NAMES = {
     PositionStatus: ("x_mm", "y_mm", "z_mm"),
     JointsLowStatus: ("j1_deg", "j2_deg", "j3_deg"),
     JointsHighStatus: ("j4_deg", "j5_deg", "j6_deg"),
+    WorktableStatus: ("x_mm", "y_mm", "z_mm"),
 }
 
 
 _VALUE_GETTERS = {frame_class.KIND: attrgetter(*names) for frame_class, names in _VALUE_NAMES.items()}
 _POSITION_KIND = PositionStatus.KIND
+_WORKTABLE_KIND = WorktableStatus.KIND
 
 
 def _values(frame: StatusFrame) -> tuple:
