@@ -111,8 +111,6 @@ def test_a_joint_move_from_a_cartesian_end_does_not_explain_corrupted_reports_fo
     assert summary["arm_time_s"] <= arm_s + 2 * ROTATION_S + 0.1, (arm_s, summary)
 
 
-@pytest.mark.xfail(strict=True, reason="not fixed: the arm time leaves out the frames between an SD program "
-                   "and the end (report)")
 def test_the_arm_time_counts_a_delay_after_an_sd_program(tmp_path, monkeypatch):
     """PROGRAM 1 (4 s on the simulator, which moves nothing) then G4 P5000: the arm time is 13.99 s
     where the simulator's record is 17.94 s (the delay ends at 18.78 s, the first frame began at

@@ -125,6 +125,14 @@ class Arrival:
             # a 2.63 s job read 2.79 s at 115200 baud).
             end_s = last.est_end_s
             done = (end_s if moving_s <= end_s <= seen_s else (moving_s + seen_s) / 2) + trailing_s
+        program = self.written.last_program
+        if (program is not None and readings.program_active_s is not None
+                and (last is None or program.index > last.index)):
+            # the frames after an SD program that move nothing (a delay …) run once it ends,
+            # which its run position last advancing shows (the model gives the program no time:
+            # ``trailing_s`` leaves it out; frames that move the arm are dated by their motion)
+            after_s = self.streamer.motion_sent_s - program.motion_before_s - program.segment.duration_s
+            done = max(done, readings.program_active_s + after_s)
         return min(done, now)
 
     def arms_own_motion_last(self) -> str | None:

@@ -60,7 +60,7 @@ from operator import attrgetter
 from .commands import OWN_MOTION_COMMANDS
 from .evidence import AGREEING_REPORTS, agreed, known_still_s
 from .protocol import (
-    CONTROL_COMMANDS, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus,
+    CONTROL_COMMANDS, JointsHighStatus, RunProgram, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus,
     SetWorktableOrigin,
 )
 from .streamer import ARRIVAL_SLACK_S
@@ -82,6 +82,7 @@ class Written:
     def __init__(self) -> None:
         self.recent: deque = deque(maxlen=RECENT_FRAMES)  # the last frames written
         self.last_move = None  # the last frame written that moves the arm
+        self.last_program = None  # the last PROGRAM frame written (its time only the reports tell)
         self.script_toggles: list = []  # the job's own PAUSE frames written, in order
         self.script_paused = False  # the job's own PAUSE lines left the arm to pause: an odd number written
         self.control_sent = 0  # the other control frames written after a first frame (POSE, PROGRAM, G54…: H5 says when they act)
@@ -97,6 +98,8 @@ class Written:
             self.control_sent += 1
         if sent.segment.moves_reported:  # (``moves_arm``)
             self.last_move = sent
+        elif isinstance(command, RunProgram):
+            self.last_program = sent
 
     def done(self, frames: int, now: float) -> None:
         """The streamer's lower bound rose to ``frames`` frames finished at ``now``."""
