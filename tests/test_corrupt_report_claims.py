@@ -19,6 +19,7 @@ import json
 import pytest
 from click.testing import CliRunner
 
+from armctl.core.protocol import JointsHighStatus
 from armctl.ui.cli import main
 from test_probe_review import JOINT_ROUTINE, NOISY
 from test_resume_exactly_once import _open_one_arm
@@ -41,3 +42,18 @@ def test_the_arm_time_is_the_arms_not_a_corrupted_reports(tmp_path, monkeypatch,
     # the reports come a rotation apart: the arm is seen at rest at most a rotation or two after it
     assert arm_s - 0.1 <= summary["arm_time_s"] <= arm_s + 2 * ROTATION_S + 0.1, (arm_s, summary)
     assert not any("kept working" in m for m in summary["messages"]), summary["messages"]
+
+
+def test_a_reading_that_settles_is_no_blip():
+    """The wrist read at 2.00 then 2.01 degrees (the arm settling, within a reading's jitter) then
+    back at 0: the reading at 2 was not alone, so its return ends no blip — the motion dates from
+    the return.  (A change within jitter kept the candidate of its own kind, as it rightly does one
+    of another kind, and the return undid the motion.)"""
+    from armctl.core.job_readings import Readings, Written
+
+    readings = Readings(Written())
+    wrist = JointsHighStatus.KIND
+    for t, j6 in ((0.0, 0.0), (0.27, 0.0), (0.54, 2.0), (0.81, 2.01), (1.08, 0.0)):
+        for kind, values in ((0, (250.0, 0.0, 150.0)), (1, (0.0, 0.0, 0.0)), (wrist, (0.0, 90.0, j6)), (4, (0, 1500))):
+            readings.take(kind, values, t + 0.03 * kind)
+    assert readings.motion[1] == 1.08 + 0.03 * wrist, readings.motion
