@@ -224,8 +224,10 @@ class Readings:
                     self.changed_s = max(self.changed_s, settled[0])
                 self.motion, self.last_change, self.settled = motion, None, None
                 return True
-            if last_change is not None and old is not None and not slot_moved(kind, old, values):
-                # within a reading's jitter: no excursion, and the blip before it may still be one
+            if (last_change is not None and last_change[0] != kind and old is not None
+                    and not slot_moved(kind, old, values)):
+                # another kind within a reading's jitter: no excursion, and the blip before it may
+                # still be one (the same kind read again near its blip value: that was no blip)
                 self.settled = (now, before_s)
             else:
                 self.last_change = (kind, old, motion, self.moved_from, self.motion_active_s, self.changed_s)
