@@ -60,8 +60,8 @@ from operator import attrgetter
 from .commands import OWN_MOTION_COMMANDS
 from .evidence import AGREEING_REPORTS, agreed, known_still_s
 from .protocol import (
-    CONTROL_COMMANDS, JointsHighStatus, RunProgram, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus,
-    SetWorktableOrigin,
+    CONTROL_COMMANDS, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus,
+    RunProgram, SetWorktableOrigin,
 )
 from .streamer import ARRIVAL_SLACK_S
 
@@ -151,7 +151,6 @@ class Readings:
         self.motion: tuple | None = None  # (position and joints, since when, the latest reading that differed)
         self.moved_from: tuple | None = None  # the readings when they last changed by more than jitter
         self.run_position: float | None = None  # the SD program's run position last reported
-        self.active_s: float | None = None  # when the arm last visibly worked (moved, or ran its program)
         self.changed_s = 0.0  # when any kind's readings last changed, blips left out ("Blips")
         self.other_changed_s = 0.0  # ... the pause-and-PWM kind's
         self.motion_active_s: float | None = None  # ``active_s`` by the position and joints, blips left out
@@ -215,7 +214,6 @@ class Readings:
                 # this kind's last reading stood alone between two equal ones, and no other
                 # position or joints changed meanwhile: a blip ("Blips"), which dates nothing
                 _, _, motion, self.moved_from, self.motion_active_s, changed_s = last_change
-                self.active_s = _latest(self.motion_active_s, self.program_active_s)
                 self.changed_s = max(changed_s, self.other_changed_s)
                 settled = self.settled
                 if settled is not None:  # another kind's change within jitter meanwhile still dates the motion
@@ -244,8 +242,14 @@ class Readings:
             # changed, or equal since it was taken): only this kind's can have moved.
             if moved_from is None or (kind != PAUSE_KIND and slot_moved(kind, moved_from[kind], values)):
                 self.moved_from = readings
-                self.active_s = self.motion_active_s = now
+                self.motion_active_s = now
         return True
+
+    @property
+    def active_s(self) -> float | None:
+        """When the arm last visibly worked: moved, or ran its program (blips left out)."""
+        motion_s, program_s = self.motion_active_s, self.program_active_s
+        return program_s if motion_s is None else motion_s if program_s is None else max(motion_s, program_s)
 
     def take_pause(self, paused: bool, now: float) -> bool | None:
         """A pause report read at ``now``; the pause state the reports now agree on (``paused``)."""
@@ -261,10 +265,9 @@ class Readings:
             last = self.last_run_change
             if last is not None and last[0] == value:  # back where it was before one report: a blip
                 self.program_active_s, self.last_run_change = last[1], None
-                self.active_s = _latest(self.motion_active_s, self.program_active_s)
             else:
                 self.last_run_change = (before, self.program_active_s)
-                self.active_s = self.program_active_s = now
+                self.program_active_s = now
         elif before is not None:
             self.last_run_change = None  # (a value read twice is no blip)
             self._agreed(RUN_POSITION_KIND, value, before_s, _run_position_moved)
@@ -319,10 +322,6 @@ class Readings:
     def joints(self) -> tuple:
         """The six joints as last reported (fewer while a half was never read)."""
         return (self.reported.get(1) or ()) + (self.reported.get(2) or ())
-
-
-def _latest(a_s: float | None, b_s: float | None) -> float | None:
-    return b_s if a_s is None else a_s if b_s is None else max(a_s, b_s)
 
 
 def landed_s(sent) -> float:
