@@ -33,14 +33,11 @@ STEP_SLACK = 1.3  # slots a frame's step may differ from the time since the fram
 def status_stream(probe):
     """The period (the line of the frames' times over their slots: ``_slots``) and the rotation of kinds."""
     frames = probe.seen.frames
-    times = [t for t, _ in frames]
-    gaps = sorted(b - a for a, b in zip(times, times[1:]) if b > a)
-    if len(gaps) < 20:
+    read = _read(frames, 20)
+    if read is None:
         return Finding("status_stream", f"{STATUS_PERIOD_S * 1000:g} ms, {len(STATUS_ROTATION)} kinds", None,
                        f"only {len(frames)} status frames read", UNSURE)
-    slots, period_s = _slots(times, gaps[len(gaps) // 2])
-    kinds = [frame.KIND for _, frame in frames]
-    rotation = _rotation(slots, kinds)
+    times, _, _, period_s, rotation = read
     documented = f"{STATUS_PERIOD_S * 1000:g} ms, {len(STATUS_ROTATION)} kinds {list(STATUS_ROTATION)}"
     value = {"period_ms": round(period_s * 1000, 3), "rotation": rotation}
     evidence = f"{len(frames)} frames over {times[-1] - times[0]:.1f} s"
@@ -71,15 +68,32 @@ def _slots(times: list[float], step_s: float) -> tuple[list[int], float]:
             again.append(max(again[-1] + 1, round(said[len(said) // 2])))
         if again == slots:
             break
-        slots, period_s = again, _slope(again, times)
+        slots, period_s = again, _slope([(again, times)])[0]
     return slots, period_s
 
 
-def _slope(slots: list[int], times: list[float]) -> float:
-    """The least-squares slope of ``times`` over ``slots`` (both rising: it is positive)."""
-    mean_slot, mean_t = sum(slots) / len(slots), sum(times) / len(times)
-    spread = sum((slot - mean_slot) ** 2 for slot in slots)
-    return sum((slot - mean_slot) * (t - mean_t) for slot, t in zip(slots, times)) / spread
+def _read(frames, min_gaps: int):
+    """What the stream read so far says (``status_stream``, ``latest_built_s``): its frames' times and
+    kinds, their slots and period by time (``_slots``) and the rotation (``_rotation``); None with
+    fewer than ``min_gaps`` spacings between them."""
+    times = [t for t, _ in frames]
+    gaps = sorted(b - a for a, b in zip(times, times[1:]) if b > a)
+    if len(gaps) < min_gaps:
+        return None
+    slots, period_s = _slots(times, gaps[len(gaps) // 2])
+    kinds = [frame.KIND for _, frame in frames]
+    return times, kinds, slots, period_s, _rotation(slots, kinds)
+
+
+def _slope(runs) -> tuple[float, float]:
+    """The least-squares slope of time over slot through ``runs`` (each a (slots, times) pair, with
+    its own intercept; both rising: it is positive), and its spread Σ(slot − its run's mean)²."""
+    spread = lean = 0.0
+    for slots, times in runs:
+        mean_slot, mean_t = sum(slots) / len(slots), sum(times) / len(times)
+        spread += sum((slot - mean_slot) ** 2 for slot in slots)
+        lean += sum((slot - mean_slot) * (t - mean_t) for slot, t in zip(slots, times))
+    return lean / spread, spread
 
 
 def _rotation(slots, kinds) -> list[int] | None:
@@ -102,34 +116,23 @@ def _rotation(slots, kinds) -> list[int] | None:
     return None
 
 
-
-
-
 def latest_built_s(frames, first_s: float) -> dict[int, float]:
     """The latest time each frame read from ``first_s`` on can have been built, by ``id`` of its
     entry in ``frames`` (``Seen.frames``: the stream read so far, in order); a frame missing from
     the answer keeps its read time (module docstring).  Each frame's slot is counted by its kind
     (``_kind_slots``), the period is the line through every run of counted frames, and each frame
     is bounded by the frames of its run within ``ANCHOR_SLOTS`` slots of it."""
-    times = [t for t, _ in frames]
-    gaps = sorted(b - a for a, b in zip(times, times[1:]) if b > a)
-    if len(gaps) < MIN_STREAM_GAPS:
+    read = _read(frames, MIN_STREAM_GAPS)
+    if read is None:
         return {}
-    slots, period_s = _slots(times, gaps[len(gaps) // 2])
-    kinds = [frame.KIND for _, frame in frames]
-    cycle = _rotation(slots, kinds)
+    times, kinds, _, period_s, cycle = read
     if cycle is None or len(set(cycle)) < len(cycle):
         return {}  # (a kind twice in the rotation: a kind does not tell its slot)
     runs = [run for run in _kind_slots(times, kinds, cycle, period_s) if len(run) >= MIN_ANCHORS]
     if sum(len(run) for run in runs) < MIN_STREAM_GAPS:
         return {}
     # The period: the slope of time over slot within the runs (each its own intercept) ...
-    spread = lean = 0.0
-    for run in runs:
-        mean_slot, mean_t = sum(s for _, s in run) / len(run), sum(times[i] for i, _ in run) / len(run)
-        spread += sum((s - mean_slot) ** 2 for _, s in run)
-        lean += sum((s - mean_slot) * (times[i] - mean_t) for i, s in run)
-    period_s = lean / spread
+    period_s, spread = _slope([([s for _, s in run], [times[i] for i, _ in run]) for run in runs])
     # ... known to within what the frames' lateness can tilt it: lateness within the residuals'
     # range moves that slope by at most the range × Σ(slots above their run's mean − it) / spread,
     # allowed twice over for every slot between two frames.
