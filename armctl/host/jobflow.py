@@ -351,6 +351,24 @@ IN_USE = ("the job it records is still running, or another armctl is resuming it
           "then resume")
 
 
+def locked(log) -> bool:
+    """An exclusive lock on the open file ``log`` for as long as it is open (the kernel drops it
+    when the process ends, kill -9 included); False when another process holds it.  Where nothing
+    can be locked (no fcntl on Windows, a file system without locks), True: the file goes unlocked.
+    A run's --log is locked so (ui/run_job.py), and a log a resume reads (``resume_claim``)."""
+    try:
+        import fcntl
+    except ImportError:
+        return True
+    try:
+        fcntl.flock(log.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except BlockingIOError:
+        return False
+    except OSError:  # ENOLCK, EOPNOTSUPP…: unlocked, as before locks
+        return True
+    return True
+
+
 @contextmanager
 def resume_claim(log):
     """``log`` (the path a resume reads, after ``read_resume_point``) locked while the resumed
@@ -359,11 +377,7 @@ def resume_claim(log):
     nothing sent).  Nothing to lock for a ``ResumePoint``, or where nothing can be locked."""
     import os
 
-    try:
-        import fcntl
-    except ImportError:
-        fcntl = None
-    if fcntl is None or not isinstance(log, (str, os.PathLike)):
+    if not isinstance(log, (str, os.PathLike)):
         yield
         return
     from ..errors import ResumeRefused
@@ -374,18 +388,14 @@ def resume_claim(log):
         yield
         return
     with held:
-        try:
-            fcntl.flock(held.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            raise ResumeRefused(f"--resume {os.fspath(log)}: {IN_USE}") from None
-        except OSError:  # ENOLCK, EOPNOTSUPP…: resumed unlocked, as a run's log without a lock
-            pass
+        if not locked(held):
+            raise ResumeRefused(f"--resume {os.fspath(log)}: {IN_USE}")
         yield
 
 
 def journal_in_use(path: str) -> bool:
     """Another process holds the lock ``armctl run --log`` keeps on its log while its job runs
-    (armctl/ui/run_job.py, ``_locked``): that job is not over, whatever its log says yet.  False
+    (``locked``, as ui/run_job.py takes it): that job is not over, whatever its log says yet.  False
     where nothing can be locked (no fcntl, a file system without locks)."""
     try:
         import fcntl

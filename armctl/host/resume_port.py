@@ -71,12 +71,12 @@ def arm_of(url: str, ports=None) -> str | None:
         return None
 
 
-def same_arm(logged: str, url: str) -> bool:
+def same_arm(logged: str, url: str, ports=None) -> bool:
     """The arm on ``url`` is the one on ``logged`` (a log's port), by name (a log without ``arm``)."""
     if logged == url:
         return True
-    identity = arm_of(logged)
-    return identity is not None and identity == arm_of(url)  # (unreadable: not shown to be the same arm)
+    identity = arm_of(logged, ports)
+    return identity is not None and identity == arm_of(url, ports)  # (unreadable: not shown to be the same arm)
 
 
 def _by_name_only(identity: str) -> bool:
@@ -87,12 +87,12 @@ def _by_name_only(identity: str) -> bool:
     return identity.startswith((_DEVICE, *(f"{scheme}://" for scheme in _NETWORK_SCHEMES)))
 
 
-def _ports_of(identity: str, logged: str) -> list[str]:
+def _ports_of(identity: str, logged: str, ports) -> list[str]:
     """The ports on which the arm of ``identity`` is found now: the log's port ``logged``, the
-    devices pyserial lists (``armctl ports``), the path a device identity names."""
-    from .calibration import _DEVICE, _USB, port_infos
+    devices pyserial lists (``ports``: ``armctl ports``), the path a device identity names."""
+    from .calibration import _DEVICE, _USB
 
-    candidates, ports = [logged], port_infos()
+    candidates = [logged]
     if identity.startswith(_USB):
         candidates += sorted(info.device for info in ports)
     elif identity.startswith(_DEVICE) and os.path.exists(identity[len(_DEVICE):]):
@@ -106,18 +106,23 @@ def refuse_another_arm(point, url: str, override: str) -> None:
     (``arm``), else by the port's name; ``override``: how to say it is the same arm."""
     if point.port is None:
         return
-    now = arm_of(url)
+    from .calibration import _DEVICE, _USB, port_infos
+
+    # pyserial's list, read once for every identity below, and only where a device path needs it
+    devices = [port for port in (url, point.port) if "://" not in port and not port.startswith((_USB, _DEVICE))]
+    ports = port_infos() if devices else ()
+    now = arm_of(url, ports)
     if point.arm is not None and now is not None:
         if point.arm == now:
             return
-    elif same_arm(point.port, url):
+    elif same_arm(point.port, url, ports):
         return
     name = point.log_path or "the log"
     if point.arm is None or now is None:  # by name (a log without the identity)
         raise ResumeRefused(f"--resume {name}: its job ran on {point.port}, not on {url}: a resume on another arm "
                             f"would continue a job that arm never ran; nothing was sent (leave out --port to resume "
                             f"on {point.port}, or, if the arm on {url} is that arm moved to another port, {override})")
-    found = _ports_of(point.arm, point.port)
+    found = _ports_of(point.arm, point.port, ports)
     where = (f"leave out --port to resume on {point.port}, where that arm is" if point.port in found else
              f"that arm is on {found[0]} now: resume with --port {found[0]}" if found else
              "that arm is not found on this host (`armctl ports` lists the ports): connect it and give its port as "

@@ -31,7 +31,7 @@ import click
 
 from ..errors import ArmctlError, ScriptError
 from ..errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS, UsageFailure, exit_code_for
-from ..host.jobflow import JobFailed
+from ..host.jobflow import JobFailed, locked
 from ..core.job_end import PROBE_HINT
 from ..core.protocol import describe
 from ..core.streamer import DEFAULT_LEAD_S
@@ -168,7 +168,7 @@ def _open_log(path: str):
     except OSError as error:
         raise UsageFailure(f"cannot write --log {path}: {error.strerror or error}") from None
     try:
-        if regular and not _locked(log):
+        if regular and not locked(log):
             raise UsageFailure(f"--log {path} is the journal of a job another armctl is running: it is not "
                                "written over; give this job a --log of its own")
         if regular:
@@ -180,23 +180,6 @@ def _open_log(path: str):
         log.close()
         raise
     return log
-
-
-def _locked(log) -> bool:
-    """An exclusive lock on ``log`` for as long as it is open (the kernel drops it when the
-    process ends, kill -9 included); False when another process holds it.  Where nothing can be
-    locked (no fcntl on Windows, a file system without locks), True: the log is written unlocked."""
-    try:
-        import fcntl
-    except ImportError:
-        return True
-    try:
-        fcntl.flock(log.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
-    except BlockingIOError:
-        return False
-    except OSError:  # ENOLCK, EOPNOTSUPP…: a log without a lock, as before locks
-        return True
-    return True
 
 
 @contextmanager
