@@ -137,15 +137,12 @@ class ArmState:
         """``update`` (less the frame count) for each (frame, read time) of ``run``, all of one
         judged kind, in order: each frame judged against the values last accepted and the frame
         held (``_jump_between``'s test: armctl/core/evidence.py), only the last accepted applied."""
-        speed = (self.max_speed_mm_s if kind == _POSITION_KIND else 0.0 if kind == _WORKTABLE_KIND
-                 else self.max_joint_speed_deg_s)
+        speed, slack = self._limits(kind)
         held = self._held.get(kind)
         if speed is None:  # nothing is judged: the last frame is taken
             accepted, seen = run[-1]
             held = None
         else:
-            slack = (_JUMP_SLACK_MM if kind == _POSITION_KIND else _ORIGIN_SLACK_MM if kind == _WORKTABLE_KIND
-                     else _JUMP_SLACK_DEG)
             values_of = _VALUE_GETTERS[kind]
             seen = self.last_seen.get(kind)
             previous = None if seen is None else self._current(kind)
@@ -170,18 +167,24 @@ class ArmState:
 
     def _jump_between(self, before: StatusFrame | tuple, after: StatusFrame, elapsed_s: float) -> bool:
         kind = after.KIND
-        if kind == _POSITION_KIND:
-            if self.max_speed_mm_s is None:
-                return False
-            limit = reach(self.max_speed_mm_s, elapsed_s, _JUMP_SLACK_MM)
-        elif kind == _WORKTABLE_KIND:
-            limit = _ORIGIN_SLACK_MM
-        elif kind in _JUDGED_KINDS and self.max_joint_speed_deg_s is not None:
-            limit = reach(self.max_joint_speed_deg_s, elapsed_s, _JUMP_SLACK_DEG)
-        else:
+        if kind not in _JUDGED_KINDS:
+            return False
+        speed, slack = self._limits(kind)
+        if speed is None:
             return False
         values = _VALUE_GETTERS[kind]
+        limit = reach(speed, elapsed_s, slack)
         return beyond_reach(before if type(before) is tuple else values(before), values(after), limit)
+
+    def _limits(self, kind: int) -> tuple[float | None, float]:
+        """How fast a judged kind's readings may change (None: not judged) and the slack on top
+        (``reach``): the position at the arm's top speed, the joints at its joint speed, the
+        worktable origin not at all (it never moves by itself)."""
+        if kind == _POSITION_KIND:
+            return self.max_speed_mm_s, _JUMP_SLACK_MM
+        if kind == _WORKTABLE_KIND:
+            return 0.0, _ORIGIN_SLACK_MM
+        return self.max_joint_speed_deg_s, _JUMP_SLACK_DEG
 
     def _current(self, kind: int) -> tuple | None:
         """The values the state holds for a kind judged for jumps (as ``_values`` of its frame)."""
