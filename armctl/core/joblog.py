@@ -90,9 +90,7 @@ def unseal(line: str) -> dict | None:
         record = json.loads(line)
     except (ValueError, RecursionError):  # not JSON, or nested too deep for the parser
         return None
-    if not isinstance(record, dict) or not isinstance(record.get("crc"), str):
-        return None
-    return record if intact(record) else None
+    return record if isinstance(record, dict) and intact(record) else None  # (``intact`` checks the crc is one)
 
 
 def intact(record: dict) -> bool:
