@@ -17,7 +17,6 @@ from functools import partial
 from dataclasses import dataclass
 from typing import IO, Any, Callable
 
-from ..core.estimate import SD_PROGRAM_NOTE
 from .jobflow import JobFailed
 from .results import Progress, RunResult
 
@@ -241,6 +240,8 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
         detach(control)
         link.on_status = None
     view = runner.view
+    from ..core.estimate import SD_PROGRAM_NOTE  # (here: a command that checks no script loads no compiler)
+
     time_held_overrun = None  # (see calibration.SLOWED_OVERRUN; an SD program's own time is not in the estimate)
     if (view.arm_time_s is not None and job.estimate.job_s > 0 and runner.streamer.capacity_held and view.frames_by_time
             and SD_PROGRAM_NOTE not in job.estimate.notes):
