@@ -19,7 +19,6 @@ pytestmark = pytest.mark.timeout(60)
 JOB_ID = "20261128T120000-abc123"
 
 
-@pytest.mark.xfail(strict=True, reason="not fixed yet: a resume holds its journal script uncounted")
 def test_a_resume_counts_its_journal_script_against_the_bytes_held(tmp_path, monkeypatch):
     from armctl.server import app, arms
 

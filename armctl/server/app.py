@@ -7,7 +7,7 @@ client can cause is a 4xx JSON ``{"error": message, "code": word}`` (a script's 
 mapping of armctl's errors to status codes.  Bodies are bounded by the script size limit
 (armctl/host/inputs.py), and the script bodies held at once — read, waiting for their check
 (one at a time in the process: ``off_loop``), being checked — by ``SCRIPTS_HELD_BYTES``
-(``_script``): beyond, an upload is 503 at once, so a neighbour's uploads cannot queue more
+(``_holding``; a resumed job's journal script counts as an upload): beyond, an upload is 503 at once, so a neighbour's uploads cannot queue more
 than two biggest scripts' checks nor hold more than their bytes.
 """
 from __future__ import annotations
@@ -125,13 +125,21 @@ async def _script(request: web.Request):
     size = MAX_INPUT_BYTES if request.content_length is None else request.content_length
     if size > MAX_INPUT_BYTES:  # (refused before it is read)
         raise web.HTTPRequestEntityTooLarge(max_size=MAX_INPUT_BYTES, actual_size=size)
+    with _holding(request, size):
+        yield ScriptSnapshot(request.query.get("name", "script")[:200], await request.read())
+
+
+@contextlib.contextmanager
+def _holding(request: web.Request, size: int):
+    """``size`` bytes of script counted against ``SCRIPTS_HELD_BYTES`` for the block (an
+    upload's body, a resumed job's journal script); ``_TooBusy`` when they do not fit."""
     held = request.app[HELD]
     if held["bytes"] + size > SCRIPTS_HELD_BYTES:
         raise _TooBusy(f"other uploads fill the {describe_limit(SCRIPTS_HELD_BYTES)} of scripts the server holds "
                        "for checking at once: try again once they are answered")
     held["bytes"] += size
     try:
-        yield ScriptSnapshot(request.query.get("name", "script")[:200], await request.read())
+        yield
     finally:
         held["bytes"] -= size
 
@@ -205,8 +213,9 @@ async def create_job(request: web.Request) -> web.Response:
 
     service = _service(request)
     resume = request.query.get("resume")
-    if resume is not None:
-        job, report = await service.resume_job(resume, _client(request))
+    if resume is not None:  # (its journal script held while it waits for its check, as an upload's body is)
+        with _holding(request, service.journal_script(resume).stat().st_size):
+            job, report = await service.resume_job(resume, _client(request))
     else:
         async with _script(request) as snapshot:
             job, report = await service.start_job(snapshot, _client(request))

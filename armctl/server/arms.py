@@ -213,19 +213,28 @@ class ArmService:
         job.task = asyncio.ensure_future(self._run(job, checked, resume, claim))
         return job, checked
 
+    def journal_script(self, job_id: str) -> Path:
+        """The script file of job ``job_id`` of this arm's journal; ``UnknownJob`` if none."""
+        script = self.journal_dir / f"{job_id}.txt"
+        if not NAME_PATTERN.fullmatch(job_id.replace("T", "")) or not script.is_file():
+            raise UnknownJob(f"no job {job_id!r} in the journal of arm {self.name!r}")
+        return script
+
     async def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
         """A job of the journal (this server's or an earlier one's), continued from the line its
         log and the arm's report prove (``Arm.run(resume=)``)."""
         from ..host.jobflow import read_resume_point, resume_claim
         from ..script.files import ScriptSnapshot
 
-        if not NAME_PATTERN.fullmatch(job_id.replace("T", "")) or not (self.journal_dir / f"{job_id}.txt").is_file():
-            raise UnknownJob(f"no job {job_id!r} in the journal of arm {self.name!r}")
+        script = self.journal_script(job_id)
         log = self.journal_dir / f"{job_id}.log"
-        snapshot = ScriptSnapshot(_journal_name(log, job_id), (self.journal_dir / f"{job_id}.txt").read_bytes())
         self.check_control(client)
-        # before the 201: a log that is no log of this script is refused (422), nothing sent
-        resume = await off_loop(read_resume_point, log, snapshot)  # (reads the whole journal)
+
+        def read():  # the script, then its log: before the 201, a log that is no log of it is refused (422), nothing sent
+            snapshot = ScriptSnapshot(_journal_name(log, job_id), script.read_bytes())
+            return snapshot, read_resume_point(log, snapshot)  # (reads the whole journal)
+
+        snapshot, resume = await off_loop(read)  # (off the event loop: the script alone may be 128 MiB)
         claim = contextlib.ExitStack()  # held until the job ends (``_run``): no second resume of the log meanwhile
         try:  # (taken after the read, as armctl run --resume takes it: the read probes for it)
             claim.enter_context(resume_claim(log))  # another resume of it running: refused (422), nothing sent
