@@ -49,6 +49,10 @@ SAMPLE_MARGIN = 3  # samples within this many status steps of either end are lef
 # moves, loads).  0.05 keeps 10 ms moves confirmed by time at 91 % of the arm's rate, i.e. 1,000
 # of them back and forth never fill a 196-frame FIFO with unproven frames (docs/probe.md).
 SPEED_TOLERANCE_MARGIN = 0.05
+# A speed factor is sure while its precision (its moves' spread, or the resolution) is within
+# SPEED_TOLERANCE_MARGIN of it; likely (stated: speed_tolerance covers it twice over) within this
+# share of it; beyond, the moves disagree too much for a value to be stated (``factor_confidence``).
+LIKELY_FACTOR_SPREAD = 0.5
 
 
 def _reported_xyz(probe, since_s: float):
@@ -284,8 +288,16 @@ def speed_factor(probe):
                 + (f"; tool ±{LINEAR_STEP_MM:g} mm at {LINEAR_SPEED_MM_MIN:g} mm/min: {details['linear']}" if linear else "")
                 + f" (arm time ÷ model time, fitted over {sum(r[2] for r in measured)} status samples); ±{precision:g}"
                 + linear_note)
-    found = Finding("speed_factor", default, round(value, 3), evidence, SURE, details)
+    found = Finding("speed_factor", default, round(value, 3), evidence, factor_confidence(value, precision), details)
     return [found, tolerance_finding(value, precision, details["start_delay_s"])]
+
+
+def factor_confidence(value: float, precision: float) -> str:
+    """How sure a speed factor measured ``value`` ± ``precision`` is: sure within
+    ``SPEED_TOLERANCE_MARGIN`` of it (what speed_tolerance allows anyway), likely within
+    ``LIKELY_FACTOR_SPREAD``, unsure (not stated, not written) beyond."""
+    spread = precision / value
+    return SURE if spread <= SPEED_TOLERANCE_MARGIN else LIKELY if spread <= LIKELY_FACTOR_SPREAD else UNSURE
 
 
 def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding:

@@ -1,0 +1,43 @@
+"""The probe on an arm that takes a while before every command (the profile's
+``[timing] command_overhead_s``, impersonated through ``sim://?profile=``): what it measures
+there, and how sure it says it is."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def _probe(tmp_path, overhead_s: float, baud: int) -> dict:
+    """``armctl probe --json`` in a fresh process on an arm that takes ``overhead_s`` before every command."""
+    (tmp_path / "arm.toml").write_text(f"[timing]\ncommand_overhead_s = {overhead_s}\n")
+    url = f"sim://?clock=virtual&profile=arm.toml&baud={baud}"
+    done = subprocess.run([sys.executable, "-m", "armctl", "probe", "--port", url, "--baud", str(baud), "--yes", "--json"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    return {"rc": done.returncode, "stderr": done.stderr, **json.loads(done.stdout)}
+
+
+def test_a_speed_factor_whose_spread_is_larger_than_itself_is_never_sure(tmp_path):
+    """At 115200 baud on an arm that takes 50 ms before every command the probe read speed_factor
+    2.53 ±3 (moves 7.01, 1.03, 1.04, 1.04: the first began while the arm still ran the FIFO
+    step's frames) and called it "sure", and kept it.  The confidence follows the spread."""
+    found = _probe(tmp_path, 0.050, 115200)
+    factor = found["details"]["speed_factor"]
+    value, precision = factor["measured"], factor["data"]["precision"]
+    assert factor["confidence"] != "sure" or precision <= 0.05 * value, factor
+    assert found["speed_factor"] is None or precision <= value / 2, factor
+
+
+@pytest.mark.parametrize("value, precision, sure", [
+    (2.53, 3.0, "unsure"), (1.0, 0.5, "likely"), (1.0, 0.51, "unsure"), (1.3, 0.3, "likely"),
+    (1.0, 0.05, "sure"), (1.0, 0.01, "sure"), (2.0, 0.11, "likely"),
+])
+def test_how_sure_a_speed_factor_is_follows_its_spread(value, precision, sure):
+    from armctl.probe.motion import factor_confidence
+
+    assert factor_confidence(value, precision) == sure
