@@ -155,7 +155,8 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
     landed_s = min(max(landed_s, earliest_s), latest_s)
     total = progress_of(segment.end)
     samples = []
-    built_s = latest_built_s(probe.seen.frames, landed_s)  # the reads' lateness taken out, where the stream proves it
+    # the reads' lateness taken out, where the stream proves it
+    built_s = latest_built_s(probe.seen.frames, landed_s, probe.profile.connector.status_jitter_ms / 1000)
     for entry in probe.seen.since(kind, landed_s):
         t, frame = entry
         if t > arrived_s:
