@@ -10,6 +10,9 @@ import sys
 
 import pytest
 
+from armctl.core.profile_model import SPEED_TOLERANCE_RANGE
+from armctl.core.streamer import FRAME_SLACK_S, SLOWEST_ARM_FACTOR
+
 pytestmark = pytest.mark.timeout(60)
 
 
@@ -41,3 +44,21 @@ def test_how_sure_a_speed_factor_is_follows_its_spread(value, precision, sure):
     from armctl.probe.motion import factor_confidence
 
     assert factor_confidence(value, precision) == sure
+
+
+@pytest.mark.parametrize("overhead_s, baud", [(0.100, 9600), (0.100, 115200), (0.050, 115200)])
+def test_an_arm_that_takes_a_while_before_every_command_is_measured(tmp_path, overhead_s, baud):
+    """An arm that takes 100 ms before every command (a PWM-only frame that changes nothing
+    included): the FIFO step took the quiet of its repeated frames for the end of a round —
+    fifo_frames 2 "sure" at 9600 (15 at 115200, "not consistent" at 50 ms) — and the timed move
+    then began while the arm still ran them: "the arm did not finish a 2.5 s move within 4x that
+    time: stopped probing", exit 1.  Now each round waits out the repeats at round 1's pace."""
+    found = _probe(tmp_path, overhead_s, baud)
+    assert found["rc"] == 0 and found["details"]["stopped"] is None, found["stderr"]
+    assert found["fifo_frames"] == 200, found["details"]["fifo_frames"]
+    factor = found["details"]["speed_factor"]
+    assert factor["confidence"] == "sure" and 1.0 < found["speed_factor"] < 1.1, factor
+    assert min(factor["data"]["start_delay_s"]) > overhead_s * 0.9, factor  # every move's start delay measured
+    tolerance = found["details"]["speed_tolerance"]
+    if 1 + overhead_s * (SLOWEST_ARM_FACTOR - 1) / FRAME_SLACK_S > SPEED_TOLERANCE_RANGE[1]:  # said so, at its most
+        assert found["speed_tolerance"] == 4.0 and "beyond the setting's range" in tolerance["evidence"], tolerance
