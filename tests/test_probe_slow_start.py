@@ -62,3 +62,12 @@ def test_an_arm_that_takes_a_while_before_every_command_is_measured(tmp_path, ov
     tolerance = found["details"]["speed_tolerance"]
     if 1 + overhead_s * (SLOWEST_ARM_FACTOR - 1) / FRAME_SLACK_S > SPEED_TOLERANCE_RANGE[1]:  # said so, at its most
         assert found["speed_tolerance"] == 4.0 and "beyond the setting's range" in tolerance["evidence"], tolerance
+
+
+@pytest.mark.parametrize("precision, sure", [(0.01, "sure"), (0.3, "likely"), (3.0, "unsure")])
+def test_the_tolerance_is_no_surer_than_the_factor_it_is_relative_to(precision, sure):
+    """A factor of 2.53 ±3 gave speed_tolerance 3.38, "sure" (kept), relative to a factor not stated."""
+    from armctl.probe.motion import tolerance_finding
+
+    found = tolerance_finding(2.53, precision, [0.0])
+    assert found.confidence == sure, found.evidence

@@ -307,7 +307,9 @@ def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding
     (twice over), the moves' longest start delay (the time bound's slack per frame is
     ``(t − 1) × FRAME_SLACK_S / (SLOWEST_ARM_FACTOR − 1)``, so t must give it room) and at least
     ``SPEED_TOLERANCE_MARGIN`` for what two small moves do not exercise; rounded up to 0.01, up to
-    the setting's own range (an arm the document's 2.0 is too narrow for needs more, not less)."""
+    the setting's own range (an arm the document's 2.0 is too narrow for needs more, not less).
+    No surer than the factor it is relative to (``factor_confidence``): one not stated leaves it
+    unsure too, relative to a factor the arm was not shown to have."""
     from ..core.streamer import FRAME_SLACK_S, SLOWEST_ARM_FACTOR
 
     # the longest: a linear move's fit runs ~5 ms low even on an arm with no delay, so a mean
@@ -319,6 +321,11 @@ def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding
     evidence = (f"speed_factor ±{precision:g} (twice over: ±{2 * precision / value:.3f} of it), longest start delay "
                 f"{delay_s * 1000:.1f} ms, at least ±{SPEED_TOLERANCE_MARGIN:g}: the time bound confirms a frame "
                 f"once an arm {tolerance:g}x slower has finished it")
+    confidence = SURE if needed == tolerance else LIKELY
     if needed > tolerance:
         evidence += f" (the arm needs {needed:g}, beyond the setting's range: jobs of short moves may lose frames)"
-    return Finding("speed_tolerance", DOCUMENTED["speed_tolerance"], tolerance, evidence, SURE if needed == tolerance else LIKELY)
+    factor = factor_confidence(value, precision)
+    if factor != SURE:
+        confidence = factor  # (likely or unsure: no surer than the factor)
+        evidence += f"; relative to a speed_factor that is {factor}"
+    return Finding("speed_tolerance", DOCUMENTED["speed_tolerance"], tolerance, evidence, confidence)
