@@ -70,7 +70,9 @@ def test_config_names_the_source_of_every_connector_value(tmp_path):
     today = datetime.datetime.now(datetime.timezone.utc).date().isoformat()  # the probe's date (UTC)
     shown = json.loads(armctl("config", "--json", "--port", PORT, cwd=tmp_path).stdout)["settings"]
     connector = {k: v for k, v in shown.items() if k.startswith("connector.")}
-    assert len(connector) == 6
+    assert len(connector) == 7
+    # every value the probe measures (not status_jitter_ms: a port's reads are later than it)
+    assert connector.pop("connector.status_jitter_ms")["value"] == 1.0
     for name, setting in connector.items():
         assert setting["source"] == "probe", (name, setting)
         assert setting["where"] in (f"probed on {day} for {ARM}" for day in (today, _yesterday(today)))

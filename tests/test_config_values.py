@@ -154,7 +154,8 @@ def _sim_accepts(name: str, text: str) -> bool:
               "corrupt": limits.SIM_RATE_RANGE, "noise": limits.SIM_RATE_RANGE,
               "speed_factor": limits.SIM_SLOWDOWN_RANGE, "fifo_frames": limits.SIM_FIFO_RANGE_FRAMES,
               "link_scale": limits.SIM_LINK_SCALE_RANGE, "write_buffer_bytes": limits.SIM_WRITE_BUFFER_RANGE_BYTES,
-              "read_granularity_ms": limits.SIM_READ_GRANULARITY_RANGE_MS}
+              "read_granularity_ms": limits.SIM_READ_GRANULARITY_RANGE_MS,
+              "status_jitter_ms": limits.STATUS_JITTER_RANGE_MS}
     low, high = ranges[name]
     if not text.isascii():  # "١" is a number to int() and float(), not in a URL
         return False

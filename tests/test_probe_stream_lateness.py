@@ -64,7 +64,7 @@ def test_no_frame_is_put_before_it_was_built(seed, count, tick_ms, jitter_ms, lo
 
 def test_a_clean_stream_read_in_16_ms_ticks_is_bounded_within_two_ms():
     frames, built = _stream(1, 1500, 0.016, 0.0, 0.05, 0.0)
-    bound = latest_built_s(frames, frames[-300][0])
+    bound = latest_built_s(frames, frames[-300][0], 0.0)  # (built on the period exactly: no jitter allowed)
     late = [(bound[id(entry)] - built_s) * 1000 for entry, built_s in zip(frames, built) if id(entry) in bound]
     raw = [(entry[0] - built_s) * 1000 for entry, built_s in zip(frames[-300:], built[-300:])]
     assert len(late) >= 290
@@ -75,8 +75,9 @@ def test_the_probe_behind_a_16_ms_adapter_measures_the_arms_tolerance():
     probe = probe_late(0.016, motion=True)
     tolerance = probe.finding("speed_tolerance")
     # before: "speed_tolerance 1.42 … mean start delay 8.3 ms" (the reads' lateness); now the
-    # longest start delay left is ~2 ms of it (1.09), where an arm with none reads 1.05
-    assert tolerance.value <= 1.1, tolerance.evidence
+    # longest start delay left is ~2 ms of it (1.09), where an arm with none reads 1.05; the
+    # document's 1 ms of status jitter, allowed since (``status_jitter_ms``), adds 1 ms: 1.14
+    assert tolerance.value <= 1.15, tolerance.evidence
     assert probe.finding("speed_factor").value == pytest.approx(1.0, abs=0.01)
 
 

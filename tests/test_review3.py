@@ -141,8 +141,6 @@ def test_an_arm_beyond_the_documents_tolerance_never_ends_finished_with_frames_l
 # --- when a status frame was built (armctl/probe/stream.py latest_built_s) -----------------------
 
 
-@pytest.mark.xfail(strict=True, reason="not fixed: latest_built_s assumes the arm builds every frame on its "
-                   "period exactly (report)")
 def test_an_arm_that_builds_its_frames_up_to_a_millisecond_late_is_never_timed_before_it_built_them():
     """The module's promise rests on the arm building a frame exactly every period.  An arm whose
     own loop builds each frame up to 1 ms late (uniform), read promptly: the second earliest line

@@ -32,6 +32,9 @@ REPEAT_DELAY_RANGE_MS = (50.0, 5000.0)  # jog: a single key press moves at most 
 # an arm 4× faster or slower than its profile says has the wrong profile, not a slow arm.
 FIFO_RANGE_FRAMES = (8, 4096)
 SPEED_FACTOR_RANGE = (0.25, 4.0)
+# [connector] status_jitter_ms (and sim://?status_jitter_ms=): up to half the status period (beyond,
+# a frame's slot in the stream is no longer told by its time)
+STATUS_JITTER_RANGE_MS = (0.0, 15.0)
 
 # sim:// options
 SIM_TIME_SCALE_RANGE = (0.01, 1000.0)  # speed=: the simulated arm runs this many times faster

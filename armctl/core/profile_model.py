@@ -98,7 +98,10 @@ class Connector:
     ``speed_tolerance`` (≥ 1): how far the arm may stray from ``speed_factor``, either way — the
     streamer's time bound confirms a frame once an arm that many times slower (plus
     ``speed_tolerance − 1`` × 20 ms of handling) has finished it, and a sign of loss needs the arm
-    that many times faster.  The document pins nothing: 2.0; ``armctl probe`` measures it."""
+    that many times faster.  The document pins nothing: 2.0; ``armctl probe`` measures it.
+    ``status_jitter_ms``: how much later than its place on the period (first frame + n × 30 ms)
+    the arm may build a status frame — the probe's bound on when each frame read was built
+    (armctl/probe/stream.py) allows it.  The document gives the period in whole milliseconds: 1."""
 
     fifo_frames: int
     control_frames: str
@@ -106,6 +109,7 @@ class Connector:
     speed_factor: float
     kinematics_verified: bool
     speed_tolerance: float = 2.0
+    status_jitter_ms: float = 1.0
     given: frozenset = field(default=frozenset(), compare=False)  # keys a file set (not the document's)
 
     def is_default(self, key: str) -> bool:

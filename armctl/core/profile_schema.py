@@ -14,7 +14,7 @@ from typing import Any, Callable
 
 from ..errors import ProfileError
 from .kinematics import JOINT_COUNT
-from .limits import FIFO_RANGE_FRAMES, SPEED_FACTOR_RANGE
+from .limits import FIFO_RANGE_FRAMES, SPEED_FACTOR_RANGE, STATUS_JITTER_RANGE_MS
 from .profile_model import CONTROL_FRAMES, FIXED_POSES, GRIPPER_STATES, SPEED_TOLERANCE_RANGE, STATUS_XYZ_FRAMES
 from .protocol import PWM_RANGE_US
 from .toml_reading import short_repr
@@ -165,6 +165,7 @@ PROFILE_SCHEMA: dict[str, Any] = {
         "fifo_frames": _whole_in(*FIFO_RANGE_FRAMES), "control_frames": _one_of(CONTROL_FRAMES),
         "status_xyz_frame": _one_of(STATUS_XYZ_FRAMES), "speed_factor": _in(*SPEED_FACTOR_RANGE),
         "kinematics_verified": _boolean, "speed_tolerance": _in(*SPEED_TOLERANCE_RANGE),
+        "status_jitter_ms": _in(*STATUS_JITTER_RANGE_MS),
     },
 }
 _OPTIONAL_SECTIONS = {"lint"}

@@ -13,7 +13,11 @@ all 300 frames distinct values would cost minutes.  Two rounds instead: round 1 
 value every ``BLOCK`` frames (the final value names a block of 16); round 2 repeats the value
 the arm now holds (a frame that changes nothing takes no time) up to that block and gives each
 frame in it its own value.  The end of a round is seen, not assumed: the reported PWM has not
-changed for ``max(QUIET_S, 3 ×`` the longest step seen between new values``)``.
+changed for ``max(QUIET_S, 3 ×`` the longest step seen between new values``)``, nor for as long as
+the frames that may follow the last new value unseen can take (``Pace``): a frame that repeats the
+PWM takes no time on the document's arm, but an arm that takes 100 ms before every command
+spends 1.5 s on a block's 15 repeats and 19 s on round 2's 192 (taken for the round's end, they
+made the FIFO 2 frames, "sure", and the arm still ran them when the timed moves began).
 
 The hold is proven, not assumed, at any line rate: the fillers go ``FILL_AHEAD_S`` ahead of the
 wire (a host wakes every 20-30 ms; at 115200 a frame takes 4.2 ms), and a round counts only if
@@ -26,8 +30,10 @@ what to set by hand.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
+from itertools import groupby
 
 from ..core.protocol import PWM_RANGE_US, Delay, PauseStatus
 from .plan import AGREEING_FRAMES, LIKELY, SURE, UNSURE, Finding, Send, Wait
@@ -65,6 +71,22 @@ def _direction(start_us: int, span_us: int) -> int:
 
 
 @dataclass(frozen=True)
+class Pace:
+    """How long one filler takes the arm, as round 1's new values show (one every ``BLOCK``
+    frames): ``change_s``, a frame that changes the PWM (the first new value after the delay's
+    end), and ``repeat_s``, at most, one that repeats it (a block's step ÷ its ``BLOCK − 1``
+    repeats; with one step seen, a change's time: no frame takes longer than that)."""
+
+    change_s: float
+    repeat_s: float
+
+    @classmethod
+    def of(cls, gaps: list[float]) -> Pace:
+        """From round 1's steps between new values, the first from the delay's end."""
+        return cls(gaps[0], max(gaps[1:]) / (BLOCK - 1) if len(gaps) > 1 else gaps[0])
+
+
+@dataclass(frozen=True)
 class Fill:
     """One round's outcome: the PWM the arm ended at (None: the round proves nothing), why, and
     how sure the hold was; ``late_s``: how much longer the delay would have had to hold (a retry
@@ -75,6 +97,7 @@ class Fill:
     confidence: str = SURE
     late_s: float | None = None
     hold: dict = field(default_factory=dict)
+    pace: Pace | None = None  # round 1's (``Pace.of``), for round 2
 
 
 @dataclass
@@ -106,25 +129,38 @@ class _Round:
         """The last filler has landed by then (None: the port still holds it)."""
         return probe.landed_by(self.last_end, self.last_landed_s)
 
-    def settled(self, probe, silent_s: float) -> bool:
-        """The arm has run what it accepted: the port holds no filler, and the PWM has been quiet
-        long enough since the delay's end — the model's, or later as the port's reports prove it
-        began (a buffer may have held it), so the quiet of a delay still running never passes
-        for the end of the round."""
-        if self.landed_by_s(probe) is None:
-            return False
+    def steps(self, probe) -> list[float]:
+        """The steps between the new values reported since the delay's end — the model's, or later
+        as the port's reports prove it began (a buffer may have held it) — the first from that end."""
         start_s = max(self.end_s, self.earliest_end_s(probe))
         times = [t for t, _ in _changes(probe, start_s - 1.0) if t >= start_s]
-        if not times:
-            return probe.now_s - start_s >= silent_s
-        gaps = [b - a for a, b in zip([start_s, *times], times)]
-        return probe.now_s - times[-1] >= max(QUIET_S, 3 * max(gaps))
+        return [b - a for a, b in zip([start_s, *times], times)]
+
+    def settled(self, probe, silent_s: float, pace: Pace | None) -> bool:
+        """The arm has run what it accepted: the port holds no filler, and the PWM has been quiet
+        long enough since the delay's end (``silent_s`` with no new value: the quiet of a delay
+        still running never passes for the end of the round) or since the last new value: three
+        steps between new values, a changing frame's time thrice, and the repeats that may follow
+        it at ``pace`` (round 1's; round 1 its own so far).  Round 2's first step covers its
+        leading repeats (``silent_s`` allowed for them): not a step between new values."""
+        if self.landed_by_s(probe) is None:
+            return False
+        gaps = self.steps(probe)
+        if not gaps:
+            return probe.now_s - max(self.end_s, self.earliest_end_s(probe)) >= silent_s
+        pace = pace or Pace.of(gaps)
+        leading = next((k for k, v in enumerate(self.values) if v != self.start_us), 0)
+        between = gaps[1:] if leading else gaps
+        trailing = max(len(list(run)) - 1 for _, run in groupby(self.values[leading:]))  # repeats after a new value
+        quiet_s = max(QUIET_S, 3 * max(between, default=0.0), 3 * pace.change_s, trailing * pace.repeat_s)
+        return probe.now_s - (max(self.end_s, self.earliest_end_s(probe)) + sum(gaps)) >= quiet_s
 
 
-def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0):
+def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0, pace: Pace | None = None):
     """Delay, then ``values`` as PWM-only frames, written up to ``FILL_AHEAD_S`` ahead of the
     wire; a ``Fill``.  The round counts only if the last frame landed while the delay held the
-    arm: proven from the port's reports (``probe.wire``), else assumed from the line model."""
+    arm: proven from the port's reports (``probe.wire``), else assumed from the line model.
+    ``pace``: round 1's, for round 2 (None: round 1, which measures it)."""
     wire = probe.wire
     after_sent_s = wire.after_sent_bytes * wire.byte_s
     count = len(values)
@@ -138,13 +174,15 @@ def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0):
         fill.last_landed_s = yield Send(pwm_frame(probe, value), ahead_s=FILL_AHEAD_S)
     fill.last_end = wire.written_bytes
     # Frames that repeat the PWM show nothing while they run: until a change is seen, allow them
-    # a frame time each (an arm slower than that could not keep up with the line anyway), and the
-    # delay may end as much later than its earliest end as an adapter may hold it.
+    # a frame time each, or round 1's pace if slower, and the delay may end as much later than
+    # its earliest end as an adapter may hold it.
     repeats = sum(1 for a, b in zip([start_us, *values], values) if a == b)
-    silent_s = QUIET_S + after_sent_s + repeats * probe.frame_s
-    yield Wait(fill.end_s + ROUND_LIMIT_S, lambda: fill.settled(probe, silent_s))
+    silent_s = QUIET_S + after_sent_s + repeats * max(probe.frame_s, pace.repeat_s if pace else 0.0)
+    yield Wait(fill.end_s + ROUND_LIMIT_S, lambda: fill.settled(probe, silent_s, pace))
     probe.known.busy_until_s = max(probe.known.busy_until_s, probe.now_s)
-    return _judged(probe, fill, fill.settled(probe, silent_s))
+    judged = _judged(probe, fill, fill.settled(probe, silent_s, pace))
+    gaps = fill.steps(probe)
+    return dataclasses.replace(judged, pace=pace or (Pace.of(gaps) if gaps else None))
 
 
 def _judged(probe, fill: _Round, settled: bool) -> Fill:
@@ -180,7 +218,7 @@ def _judged(probe, fill: _Round, settled: bool) -> Fill:
                           f"the earliest ({how}); the arm ended at PWM {final[1]} µs", confidence, None, hold)
 
 
-def held_round(probe, make_values):
+def held_round(probe, make_values, pace: Pace | None = None):
     """``fill_round`` on ``make_values(the PWM the arm holds)``, again with a longer delay while
     the hold was not proven for want of time (up to ``ATTEMPTS``): (the Fill, the values sent,
     the PWM they started from, what earlier attempts showed)."""
@@ -188,7 +226,7 @@ def held_round(probe, make_values):
     while True:
         start_us = _current_pwm(probe)
         values = make_values(start_us)
-        fill = yield from fill_round(probe, values, start_us, extra_s)
+        fill = yield from fill_round(probe, values, start_us, extra_s, pace)
         if fill.final is not None or fill.late_s is None or len(tried) + 1 == ATTEMPTS:
             return fill, values, start_us, tried
         tried.append(fill.evidence)
@@ -246,7 +284,7 @@ def fifo(probe):
     block = (accepted1 - 1) // BLOCK
     lead_count = block * BLOCK
     tail = min(BLOCK, MAX_FRAMES - lead_count)
-    fill2, round2, start2_us, tried2 = yield from held_round(probe, _round2(lead_count, tail))
+    fill2, round2, start2_us, tried2 = yield from held_round(probe, _round2(lead_count, tail), fill1.pace)
     holds = {"round_1": fill1.hold, "round_2": fill2.hold}
     if fill2.final is None:
         return Finding("fifo_frames", default, None, _by_hand(f"round 2: {_attempts(tried2, fill2.evidence)}"), UNSURE,

@@ -49,6 +49,10 @@ SAMPLE_MARGIN = 3  # samples within this many status steps of either end are lef
 # moves, loads).  0.05 keeps 10 ms moves confirmed by time at 91 % of the arm's rate, i.e. 1,000
 # of them back and forth never fill a 196-frame FIFO with unproven frames (docs/probe.md).
 SPEED_TOLERANCE_MARGIN = 0.05
+# A speed factor is sure while its precision (its moves' spread, or the resolution) is within
+# SPEED_TOLERANCE_MARGIN of it; likely (stated: speed_tolerance covers it twice over) within this
+# share of it; beyond, the moves disagree too much for a value to be stated (``factor_confidence``).
+LIKELY_FACTOR_SPREAD = 0.5
 
 
 def _reported_xyz(probe, since_s: float):
@@ -151,7 +155,8 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
     landed_s = min(max(landed_s, earliest_s), latest_s)
     total = progress_of(segment.end)
     samples = []
-    built_s = latest_built_s(probe.seen.frames, landed_s)  # the reads' lateness taken out, where the stream proves it
+    # the reads' lateness taken out, where the stream proves it
+    built_s = latest_built_s(probe.seen.frames, landed_s, probe.profile.connector.status_jitter_ms / 1000)
     for entry in probe.seen.since(kind, landed_s):
         t, frame = entry
         if t > arrived_s:
@@ -284,8 +289,16 @@ def speed_factor(probe):
                 + (f"; tool ±{LINEAR_STEP_MM:g} mm at {LINEAR_SPEED_MM_MIN:g} mm/min: {details['linear']}" if linear else "")
                 + f" (arm time ÷ model time, fitted over {sum(r[2] for r in measured)} status samples); ±{precision:g}"
                 + linear_note)
-    found = Finding("speed_factor", default, round(value, 3), evidence, SURE, details)
+    found = Finding("speed_factor", default, round(value, 3), evidence, factor_confidence(value, precision), details)
     return [found, tolerance_finding(value, precision, details["start_delay_s"])]
+
+
+def factor_confidence(value: float, precision: float) -> str:
+    """How sure a speed factor measured ``value`` ± ``precision`` is: sure within
+    ``SPEED_TOLERANCE_MARGIN`` of it (what speed_tolerance allows anyway), likely within
+    ``LIKELY_FACTOR_SPREAD``, unsure (not stated, not written) beyond."""
+    spread = precision / value
+    return SURE if spread <= SPEED_TOLERANCE_MARGIN else LIKELY if spread <= LIKELY_FACTOR_SPREAD else UNSURE
 
 
 def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding:
@@ -294,7 +307,9 @@ def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding
     (twice over), the moves' longest start delay (the time bound's slack per frame is
     ``(t − 1) × FRAME_SLACK_S / (SLOWEST_ARM_FACTOR − 1)``, so t must give it room) and at least
     ``SPEED_TOLERANCE_MARGIN`` for what two small moves do not exercise; rounded up to 0.01, up to
-    the setting's own range (an arm the document's 2.0 is too narrow for needs more, not less)."""
+    the setting's own range (an arm the document's 2.0 is too narrow for needs more, not less).
+    No surer than the factor it is relative to (``factor_confidence``): one not stated leaves it
+    unsure too, relative to a factor the arm was not shown to have."""
     from ..core.streamer import FRAME_SLACK_S, SLOWEST_ARM_FACTOR
 
     # the longest: a linear move's fit runs ~5 ms low even on an arm with no delay, so a mean
@@ -306,6 +321,11 @@ def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding
     evidence = (f"speed_factor ±{precision:g} (twice over: ±{2 * precision / value:.3f} of it), longest start delay "
                 f"{delay_s * 1000:.1f} ms, at least ±{SPEED_TOLERANCE_MARGIN:g}: the time bound confirms a frame "
                 f"once an arm {tolerance:g}x slower has finished it")
+    confidence = SURE if needed == tolerance else LIKELY
     if needed > tolerance:
         evidence += f" (the arm needs {needed:g}, beyond the setting's range: jobs of short moves may lose frames)"
-    return Finding("speed_tolerance", DOCUMENTED["speed_tolerance"], tolerance, evidence, SURE if needed == tolerance else LIKELY)
+    factor = factor_confidence(value, precision)
+    if factor != SURE:
+        confidence = factor  # (likely or unsure: no surer than the factor)
+        evidence += f"; relative to a speed_factor that is {factor}"
+    return Finding("speed_tolerance", DOCUMENTED["speed_tolerance"], tolerance, evidence, confidence)

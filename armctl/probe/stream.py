@@ -1,15 +1,16 @@
 """The status stream as the probe reads it: the arm's period and rotation of kinds, and when each
 frame read was built.
 
-Strategy: the arm builds a status frame every period, in a fixed rotation of kinds; the host
-reads each one late — by its reader's wake-up, or by a USB adapter's latency timer, which hands
+Strategy: the arm builds a status frame every period, in a fixed rotation of kinds — each up to
+the profile's ``[connector] status_jitter_ms`` after its place on the period, never before (its
+own loop may be late); the host reads each one late — by its reader's wake-up, or by a USB adapter's latency timer, which hands
 bytes over in ticks (16 ms by default on the common adapters) — and never early.  So each frame
 read gets its slot in the stream: first by time (``_slots``: counted from the frames just
 before it, which lateness cannot drift), which gives the period and the rotation
 (``_rotation``); then by kind (``_kind_slots``), since lateness may spread over a whole period
 (frames read together, then none for 48 ms, through a pty behind 16 ms ticks) where a kind
 still tells its slot.  Through every run of frames so counted the period is a line, and no frame
-was built after the line through any frame near it (``latest_built_s``): taking the second
+was built later than the jitter after the line through any frame near it (``latest_built_s``): taking the second
 earliest such line, widened by the period's possible tilt, bounds each frame's build time
 without ever putting it before the frame was built — but for the one case ``_kind_slots``
 names, a corrupted kind byte it cannot tell from lateness.  That bound takes the reads'
@@ -19,6 +20,7 @@ arm's start delay; a stretch whose kinds do not count its slots keeps its read t
 
 from __future__ import annotations
 
+from ..core.profile_model import Connector
 from ..core.protocol import STATUS_PERIOD_S, STATUS_ROTATION
 from .plan import LIKELY, SURE, UNSURE, Finding
 
@@ -116,12 +118,14 @@ def _rotation(slots, kinds) -> list[int] | None:
     return None
 
 
-def latest_built_s(frames, first_s: float) -> dict[int, float]:
+def latest_built_s(frames, first_s: float, jitter_s: float = Connector.status_jitter_ms / 1000) -> dict[int, float]:
     """The latest time each frame read from ``first_s`` on can have been built, by ``id`` of its
     entry in ``frames`` (``Seen.frames``: the stream read so far, in order); a frame missing from
     the answer keeps its read time (module docstring).  Each frame's slot is counted by its kind
     (``_kind_slots``), the period is the line through every run of counted frames, and each frame
-    is bounded by the frames of its run within ``ANCHOR_SLOTS`` slots of it."""
+    is bounded by the frames of its run within ``ANCHOR_SLOTS`` slots of it, plus ``jitter_s``:
+    how much later than its place on the period the arm may build a frame (the profile's
+    ``[connector] status_jitter_ms``; the document's reading by default)."""
     read = _read(frames, MIN_STREAM_GAPS)
     if read is None:
         return {}
@@ -151,10 +155,11 @@ def latest_built_s(frames, first_s: float) -> dict[int, float]:
                 high += 1
             if times[i] < first_s or high - low + 1 < MIN_ANCHORS:
                 continue  # (too many frames around it lost or not counted: its read time stands)
-            # no frame was built after the line through any frame near it (reads are never early)
-            # but one: the second earliest, so one miscounted frame alone never moves the bound
+            # no frame was built later than ``jitter_s`` after the line through any frame near it
+            # (reads are never early, nor builds before their place on the period) but one: the
+            # second earliest, so one miscounted frame alone never moves the bound
             line_s = sorted(residual[j] + abs(slot - s) * margin_s for j, s in run[low:high + 1])[1]
-            built[id(frames[i])] = min(times[i], line_s + slot * period_s)
+            built[id(frames[i])] = min(times[i], line_s + slot * period_s + jitter_s)
     return built
 
 

@@ -57,6 +57,7 @@ class SimOptions:
     fifo_frames: int = CONNECTOR_BUFFER_FRAMES  # frames accepted behind the one executing (H6)
     status_xyz_frame: str = "worktable"  # what status kind 0 reports after G54; or "robot"
     link_scale: float = 1.0  # the arm's link lengths are the profile's × this (its kinematics differ)
+    status_jitter_s: float = 0.0  # each status frame is built up to this much after its place on the period
     status_loss_rate: float = 0.0
     status_corrupt_rate: float = 0.0
     noise_rate: float = 0.0
@@ -89,6 +90,8 @@ class SimOptions:
             raise ValueError(f"status_xyz_frame must be 'worktable' or 'robot', not {self.status_xyz_frame!r}")
         if not self.link_scale > 0:
             raise ValueError(f"link_scale must be positive, not {self.link_scale!r}")
+        if not 0 <= self.status_jitter_s < STATUS_PERIOD_S:
+            raise ValueError(f"status_jitter_s must be 0 or more, under the period, not {self.status_jitter_s!r}")
         if self.write_buffer_bytes is not None and not self.write_buffer_bytes > 0:
             raise ValueError(f"write_buffer_bytes must be positive, not {self.write_buffer_bytes!r}")
         if not self.read_granularity_s >= 0:
@@ -126,7 +129,7 @@ class SimulatedArm:
         self.connector = Connector(capacity_frames=options.fifo_frames)
         self.executor = Executor(self.profile, self.connector, options.speed_factor, options.control_on_arrival, start_s)
         self.executor.reports_robot_xyz = options.status_xyz_frame == "robot"
-        self.schedule = StatusSchedule(STATUS_PERIOD_S, first_s=start_s)
+        self.schedule = StatusSchedule(STATUS_PERIOD_S, first_s=start_s, jitter_s=options.status_jitter_s, seed=options.seed)
         self.faults = StatusFaults(options.status_loss_rate, options.status_corrupt_rate, options.noise_rate, options.seed)
         self._status = StatusEncoder()  # status_bytes, straight from the executor
         self.status_frames_built = 0
@@ -212,8 +215,8 @@ class SimulatedArm:
         for its next wait, so a write throws away at most a batch of built frames."""
         run: list[tuple[float, int, float, float, float]] = []
         arm_line = self.arm_line
-        if arm_line._runs or self.faults.active:
-            return run
+        if arm_line._runs or self.faults.active or self.schedule.jitter_s:
+            return run  # (a frame built off its period: the full loop, through ``StatusSchedule.next_s``)
         landings, executor, schedule = self._landings, self.executor, self.schedule
         quiet_until_s = executor.next_event_s()
         if landings and (quiet_until_s is None or landings[0][0] < quiet_until_s):

@@ -19,6 +19,8 @@ speed_factor          the arm's real motion time ÷ the model's: 1.3 = every mot
                       takes 30 % longer than commanded (alias ``slowdown``)
 link_scale            the arm's link lengths are the profile's × this: its reported   1
                       joints and X/Y/Z disagree with the profile's kinematics
+status_jitter_ms      each status frame is built up to this many ms after its place     0
+                      on the period (uniform, from ``seed``)
 baud                  line rate in bit/s (else the port's ``baudrate``)                9600
 loss                  share of status frames lost                                      0
 corrupt               share of status frames with one byte flipped                     0
@@ -31,8 +33,8 @@ read_granularity_ms   status bytes reach the host only at ticks this many ms apa
                       (a USB adapter's latency timer; wall clock only)
 ====================  ===============================================================  =========
 
-The first four after ``clock`` are the arm profile's ``[connector]`` settings under the same
-names: the simulated arm impersonates any arm a profile may describe (its profile's own
+The first four after ``clock``, and ``status_jitter_ms``, are the arm profile's ``[connector]``
+settings under the same names: the simulated arm impersonates any arm a profile may describe (its profile's own
 ``[connector]`` table is the host's belief and is not read here).
 
 Each number has a finite range (armctl/core/limits.py, also in the README); an unknown option, a
@@ -69,6 +71,7 @@ from serial.serialutil import PortNotOpenError, SerialBase, SerialException, Ser
 
 from ..errors import ConfigError
 from ..core.limits import (BAUD_RANGE, SIM_FIFO_RANGE_FRAMES, SIM_LINK_SCALE_RANGE, SIM_RATE_RANGE,
+                           STATUS_JITTER_RANGE_MS,
                       SIM_READ_GRANULARITY_RANGE_MS, SIM_SEED_RANGE, SIM_SLOWDOWN_RANGE, SIM_TIME_SCALE_RANGE,
                       SIM_WRITE_BUFFER_RANGE_BYTES)
 from .model import SimOptions, SimulatedArm
@@ -76,7 +79,7 @@ from .realtime import RealtimeArm, VirtualClock
 
 _USAGE = (
     "expected sim://[?option=value&…] with options speed, clock=wall|virtual, fifo_frames, "
-    "control_frames=queued|arrival, status_xyz_frame=worktable|robot, speed_factor, link_scale, baud, "
+    "control_frames=queued|arrival, status_xyz_frame=worktable|robot, speed_factor, link_scale, status_jitter_ms, baud, "
     "loss, corrupt, noise, seed, profile, write_buffer_bytes, read_granularity_ms"
 )
 
@@ -157,6 +160,7 @@ _OPTIONS: dict[str, tuple[str, Callable[[str, str], object]]] = {
     "status_xyz_frame": ("status_xyz_frame", _one_of("worktable", "robot")),
     "speed_factor": ("speed_factor", _SPEED_FACTOR),
     "link_scale": ("link_scale", _float_in(*SIM_LINK_SCALE_RANGE)),
+    "status_jitter_ms": ("status_jitter_s", _ms_as_s(*STATUS_JITTER_RANGE_MS)),
     "baud": ("baud", _int_in(*BAUD_RANGE)),
     "loss": ("status_loss_rate", _float_in(*SIM_RATE_RANGE)),
     "corrupt": ("status_corrupt_rate", _float_in(*SIM_RATE_RANGE)),

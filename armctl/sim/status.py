@@ -11,6 +11,7 @@ one byte map.  Pure: no clock, no I/O.
 
 from __future__ import annotations
 
+import random
 import struct
 from dataclasses import dataclass
 
@@ -252,20 +253,28 @@ class _ProgramValue:
 
 
 class StatusSchedule:
-    """Frame ``n`` is due at ``first_s + n · period_s`` and is of kind ``rotation[n mod 9]``."""
+    """Frame ``n`` is due at ``first_s + n · period_s`` and is of kind ``rotation[n mod 9]``; an
+    arm whose own loop is late (``jitter_s``) builds each one up to that much later (uniform,
+    drawn from ``seed``)."""
 
-    def __init__(self, period_s: float = STATUS_PERIOD_S, first_s: float = 0.0, rotation=STATUS_ROTATION) -> None:
+    def __init__(self, period_s: float = STATUS_PERIOD_S, first_s: float = 0.0, rotation=STATUS_ROTATION,
+                 jitter_s: float = 0.0, seed: int = 0) -> None:
         self.period_s = period_s
         self.first_s = first_s
         self.rotation = tuple(rotation)
         self.count = 0  # frames built so far
+        self.jitter_s = jitter_s
+        self._late = random.Random(seed) if jitter_s else None
+        self._late_s = self._late.uniform(0.0, jitter_s) if self._late else 0.0  # the next frame's
 
     @property
     def next_s(self) -> float:
-        return self.first_s + self.count * self.period_s
+        return self.first_s + self.count * self.period_s + self._late_s
 
     def pop(self) -> int:
         """The kind of the frame due at ``next_s``; moves on to the next one."""
         kind = self.rotation[self.count % len(self.rotation)]
         self.count += 1
+        if self._late:
+            self._late_s = self._late.uniform(0.0, self.jitter_s)
         return kind

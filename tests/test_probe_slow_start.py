@@ -1,0 +1,73 @@
+"""The probe on an arm that takes a while before every command (the profile's
+``[timing] command_overhead_s``, impersonated through ``sim://?profile=``): what it measures
+there, and how sure it says it is."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from armctl.core.profile_model import SPEED_TOLERANCE_RANGE
+from armctl.core.streamer import FRAME_SLACK_S, SLOWEST_ARM_FACTOR
+
+pytestmark = pytest.mark.timeout(60)
+
+
+def _probe(tmp_path, overhead_s: float, baud: int) -> dict:
+    """``armctl probe --json`` in a fresh process on an arm that takes ``overhead_s`` before every command."""
+    (tmp_path / "arm.toml").write_text(f"[timing]\ncommand_overhead_s = {overhead_s}\n")
+    url = f"sim://?clock=virtual&profile=arm.toml&baud={baud}"
+    done = subprocess.run([sys.executable, "-m", "armctl", "probe", "--port", url, "--baud", str(baud), "--yes", "--json"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    return {"rc": done.returncode, "stderr": done.stderr, **json.loads(done.stdout)}
+
+
+def test_a_speed_factor_whose_spread_is_larger_than_itself_is_never_sure(tmp_path):
+    """At 115200 baud on an arm that takes 50 ms before every command the probe read speed_factor
+    2.53 ±3 (moves 7.01, 1.03, 1.04, 1.04: the first began while the arm still ran the FIFO
+    step's frames) and called it "sure", and kept it.  The confidence follows the spread."""
+    found = _probe(tmp_path, 0.050, 115200)
+    factor = found["details"]["speed_factor"]
+    value, precision = factor["measured"], factor["data"]["precision"]
+    assert factor["confidence"] != "sure" or precision <= 0.05 * value, factor
+    assert found["speed_factor"] is None or precision <= value / 2, factor
+
+
+@pytest.mark.parametrize("value, precision, sure", [
+    (2.53, 3.0, "unsure"), (1.0, 0.5, "likely"), (1.0, 0.51, "unsure"), (1.3, 0.3, "likely"),
+    (1.0, 0.05, "sure"), (1.0, 0.01, "sure"), (2.0, 0.11, "likely"),
+])
+def test_how_sure_a_speed_factor_is_follows_its_spread(value, precision, sure):
+    from armctl.probe.motion import factor_confidence
+
+    assert factor_confidence(value, precision) == sure
+
+
+@pytest.mark.parametrize("overhead_s, baud", [(0.100, 9600), (0.100, 115200), (0.050, 115200)])
+def test_an_arm_that_takes_a_while_before_every_command_is_measured(tmp_path, overhead_s, baud):
+    """An arm that takes 100 ms before every command (a PWM-only frame that changes nothing
+    included): the FIFO step took the quiet of its repeated frames for the end of a round —
+    fifo_frames 2 "sure" at 9600 (15 at 115200, "not consistent" at 50 ms) — and the timed move
+    then began while the arm still ran them: "the arm did not finish a 2.5 s move within 4x that
+    time: stopped probing", exit 1.  Now each round waits out the repeats at round 1's pace."""
+    found = _probe(tmp_path, overhead_s, baud)
+    assert found["rc"] == 0 and found["details"]["stopped"] is None, found["stderr"]
+    assert found["fifo_frames"] == 200, found["details"]["fifo_frames"]
+    factor = found["details"]["speed_factor"]
+    assert factor["confidence"] == "sure" and 1.0 < found["speed_factor"] < 1.1, factor
+    assert min(factor["data"]["start_delay_s"]) > overhead_s * 0.9, factor  # every move's start delay measured
+    tolerance = found["details"]["speed_tolerance"]
+    if 1 + overhead_s * (SLOWEST_ARM_FACTOR - 1) / FRAME_SLACK_S > SPEED_TOLERANCE_RANGE[1]:  # said so, at its most
+        assert found["speed_tolerance"] == 4.0 and "beyond the setting's range" in tolerance["evidence"], tolerance
+
+
+@pytest.mark.parametrize("precision, sure", [(0.01, "sure"), (0.3, "likely"), (3.0, "unsure")])
+def test_the_tolerance_is_no_surer_than_the_factor_it_is_relative_to(precision, sure):
+    """A factor of 2.53 ±3 gave speed_tolerance 3.38, "sure" (kept), relative to a factor not stated."""
+    from armctl.probe.motion import tolerance_finding
+
+    found = tolerance_finding(2.53, precision, [0.0])
+    assert found.confidence == sure, found.evidence
