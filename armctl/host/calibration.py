@@ -38,7 +38,8 @@ STORE_FOLDER = "arms"
 FORMAT = 1  # the record's "format": a later armctl that changes it reads this one or refuses it by name
 # sim:// options that describe the arm (SimOptions fields), in the identity's order; the rest
 # (clock, speed, seed, loss, corrupt, noise) are the line's or the test's
-SIM_ARM_FIELDS = ("baud", "control_frames", "fifo_frames", "link_scale", "profile", "speed_factor", "status_xyz_frame")
+SIM_ARM_FIELDS = ("baud", "control_frames", "fifo_frames", "link_scale", "profile", "speed_factor", "status_jitter_s",
+                  "status_xyz_frame")
 _NETWORK_SCHEMES = ("socket", "rfc2217")
 _USB, _DEVICE = "usb ", "device "
 
@@ -91,6 +92,8 @@ def _sim_identity(url: str) -> str:
             continue
         if name == "profile":
             value = os.path.abspath(value)
+        elif name == "status_jitter_s":  # spelled as its URL option, in ms: an identity is a URL of that arm
+            name, value = "status_jitter_ms", format(value * 1000.0, "g")
         elif isinstance(value, float):
             value = format(value, "g")
         words.append(f"{name}={urllib.parse.quote(str(value), safe='/')}")
