@@ -29,7 +29,7 @@ pure data out, no I/O here:
   returns there), and a second resume would run again every line the first one ran; it is
   refused (exit 2), naming the log to resume instead.
 
-``read_resume_log`` trusts only the longest intact prefix: a damaged last line without its
+``read_resume_lines`` trusts only the longest intact prefix: a damaged last line without its
 line break is the tear a crash leaves (a record made durable before its frame always ends with
 one); any other damaged record — a complete line, one followed by intact records, or a whole
 record followed by bytes other than its line break (a flipped bit there: its frame was written) —
@@ -460,18 +460,12 @@ def _clears(frame_hex: str, control_on_arrival: bool, who: str) -> str | None:
     return None
 
 
-def read_resume_log(text, name: str, data: bytes) -> ResumePoint:
-    """The resume point a ``--log`` (its text; or its lines, each taken as complete) records for
-    the script ``name`` whose snapshot is ``data``."""
-    if not isinstance(text, str):
-        text = "".join(line + "\n" for line in text)
-    return read_resume_lines(_lines_of(text), name, data)
-
-
 def read_resume_lines(lines: Iterable[str], name: str, data: bytes, log: str | None = None) -> ResumePoint:
-    """``read_resume_log`` of a log given line by line (each with its line break, the last
-    without one if the log does not end with one): a day's log is read as it streams by.
-    ``log``: its name, which a damaged line's message gives with the line's number."""
+    """The resume point a ``--log`` records for the script ``name`` whose snapshot is ``data``,
+    the log given line by line (each with its line break, the last without one if the log does
+    not end with one: ``io.StringIO(text)`` gives a text so): a day's log is read as it streams
+    by (``jobflow.read_resume_point``).  ``log``: its name, which a damaged line's message gives
+    with the line's number."""
     reader = _Reader(name, data, log)
     expected = 0  # each run's records count from 0 (a log may hold several runs, appended)
     for number, line in enumerate(lines, 1):
@@ -488,16 +482,6 @@ def read_resume_lines(lines: Iterable[str], name: str, data: bytes, log: str | N
         expected = seq + 1
         reader.take(number, record)
     return reader.point(())
-
-
-def _lines_of(text: str):
-    """``text``'s lines, each with its line break (the last without one if it has none)."""
-    start = 0
-    while (end := text.find("\n", start)) >= 0:
-        yield text[start:end + 1]
-        start = end + 1
-    if start < len(text):
-        yield text[start:]
 
 
 def _damaged(reader: _Reader, line: str, number: int, last: bool) -> ResumePoint:
