@@ -114,6 +114,26 @@ def _device_identity(path: str, ports) -> str:
     return f"{_DEVICE}{real}"
 
 
+def by_name_only(identity: str) -> bool:
+    """An identity no more than the path or address its port leads to (a device without a USB
+    serial number or location, a pty, a TCP port): another arm there has the same one."""
+    return identity.startswith((_DEVICE, *(f"{scheme}://" for scheme in _NETWORK_SCHEMES)))
+
+
+def reads_port_list(port: str) -> bool:
+    """``arm_identity`` of ``port`` reads pyserial's port list: a device path (no URL, no identity)."""
+    return "://" not in port and not port.startswith((_USB, _DEVICE))
+
+
+def ports_to_search(identity: str, ports) -> list[str]:
+    """Where the arm of ``identity`` may be plugged now: for a USB adapter's, every device pyserial
+    lists (``ports``); for a device's, the path it names, if there is one; else nowhere else."""
+    if identity.startswith(_USB):
+        return sorted(info.device for info in ports)
+    path = identity[len(_DEVICE):]
+    return [path] if identity.startswith(_DEVICE) and os.path.exists(path) else []
+
+
 def port_infos():
     """The serial ports pyserial finds (the edge ``arm_identity`` reads for a device path)."""
     from serial.tools import list_ports

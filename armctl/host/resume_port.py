@@ -79,24 +79,12 @@ def same_arm(logged: str, url: str, ports=None) -> bool:
     return identity is not None and identity == arm_of(url, ports)  # (unreadable: not shown to be the same arm)
 
 
-def _by_name_only(identity: str) -> bool:
-    """An identity no more than the path or address its port leads to (a device without a USB
-    serial number or location, a pty, a TCP port): another arm there has the same one."""
-    from .calibration import _DEVICE, _NETWORK_SCHEMES  # (arm_identity's words, spelt there once)
-
-    return identity.startswith((_DEVICE, *(f"{scheme}://" for scheme in _NETWORK_SCHEMES)))
-
-
 def _ports_of(identity: str, logged: str, ports) -> list[str]:
     """The ports on which the arm of ``identity`` is found now: the log's port ``logged``, the
     devices pyserial lists (``ports``: ``armctl ports``), the path a device identity names."""
-    from .calibration import _DEVICE, _USB
+    from .calibration import ports_to_search
 
-    candidates = [logged]
-    if identity.startswith(_USB):
-        candidates += sorted(info.device for info in ports)
-    elif identity.startswith(_DEVICE) and os.path.exists(identity[len(_DEVICE):]):
-        candidates.append(identity[len(_DEVICE):])
+    candidates = [logged, *ports_to_search(identity, ports)]
     return list(dict.fromkeys(port for port in candidates if arm_of(port, ports) == identity))
 
 
@@ -106,11 +94,10 @@ def refuse_another_arm(point, url: str, override: str) -> None:
     (``arm``), else by the port's name; ``override``: how to say it is the same arm."""
     if point.port is None:
         return
-    from .calibration import _DEVICE, _USB, port_infos
+    from .calibration import port_infos, reads_port_list
 
     # pyserial's list, read once for every identity below, and only where a device path needs it
-    devices = [port for port in (url, point.port) if "://" not in port and not port.startswith((_USB, _DEVICE))]
-    ports = port_infos() if devices else ()
+    ports = port_infos() if reads_port_list(url) or reads_port_list(point.port) else ()
     now = arm_of(url, ports)
     if point.arm is not None and now is not None:
         if point.arm == now:
@@ -156,11 +143,13 @@ def resume_port(point, option: str | None, other_port: bool = False):
         return choice, (f"--resume: {name} does not record the port its job ran on (an armctl before this one wrote "
                         f"it): resuming on {choice.url} ({origin}); be sure that is the arm the job ran on"), point
     if option is None:
+        from .calibration import by_name_only
+
         refuse_another_arm(point, point.port, f"--port {point.port} {OVERRIDE_FLAG}")
         unchecked = ("its identity is unknown (an armctl before this one wrote the log): be sure it is still that arm"
                      if point.arm is None else
                      f"known as {point.arm} only, as any arm there would be: be sure it is still that arm"
-                     if _by_name_only(point.arm) else None)
+                     if by_name_only(point.arm) else None)
         return choose_port(point.port, origin=f"--resume {name}"), \
             f"--resume: on the port {name} records, {point.port} (the arm its job ran on" + \
             (f"; {unchecked})" if unchecked else ")"), point
