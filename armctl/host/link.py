@@ -101,18 +101,19 @@ def config_baud(config: dict, path) -> int:
     return check_config_value(path, "baud", config.get("baud", DEFAULT_BAUD))
 
 
-def line_baud(baud: int | None, config, url: str | None) -> tuple[int, str | None]:
-    """The line rate a port-using command talks to the arm on ``url`` at, and where it came from
-    (None: the document's 9600): ``--baud``, else armctl.toml's ``baud``, else the rate ``armctl
-    probe`` read that arm's status at (so a probed 115200 arm needs only ``--port``), else 9600."""
+def line_baud(baud: int | None, config, port) -> tuple[int, str | None]:
+    """The line rate a port-using command talks to the arm on ``port`` (a ``PortChoice``, its arm
+    read once, or a URL; None: no port) at, and where it came from (None: the document's 9600):
+    ``--baud``, else armctl.toml's ``baud``, else the rate ``armctl probe`` read that arm's status
+    at (so a probed 115200 arm needs only ``--port``), else 9600."""
     if baud:
         return baud, "--baud"
     if "baud" in config.values:
         return config_baud(config.values, config.path_of("baud")), str(config.path_of("baud"))
-    if url is not None:
+    if port is not None:
         from .calibration import probed_baud
 
-        probed = probed_baud(url)
+        probed = probed_baud(port)
         if probed is not None:
             return probed
     return DEFAULT_BAUD, None

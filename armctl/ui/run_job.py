@@ -129,18 +129,14 @@ def dry_run(options: JobOptions, checked, model) -> int:
 def configured_baud(port: str | None = None) -> int:
     """The line rate ``run`` opens ``port`` at without ``--baud`` (None: the configured port), and
     what ``--dry-run`` and ``estimate`` plan with: armctl.toml's (the project's, else yours), else
-    what ``armctl probe`` read the arm there at, else 9600 (``link.line_baud``)."""
-    from ..errors import ConfigError
+    what ``armctl probe`` read the arm there at, else 9600 (``link.line_baud``); a port it cannot
+    name does not stop it (``calibration.quiet_port``)."""
+    from ..host.calibration import quiet_port
     from ..host.link import line_baud
-    from ..host.port_choice import choose_port
     from ..host.profile import load_config
 
     config = load_config()
-    try:
-        url = choose_port(port, config).url
-    except ConfigError:  # (a port it would not open does not stop a command that opens none)
-        url = None
-    return line_baud(None, config, url)[0]
+    return line_baud(None, config, quiet_port(port, config))[0]
 
 
 def _same_file(first: str, second: str) -> bool:
