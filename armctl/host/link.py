@@ -51,16 +51,16 @@ def connect(port: "str | PortChoice | None", baud: int | None, announce: Callabl
     port). Returns the link and the baud rate."""
     from .profile import load_config
 
+    from .calibration import arm_profile, with_arm
+
     config = load_config()
-    choice = choose_port(port, config)
+    choice = with_arm(choose_port(port, config))  # (a PortChoice from Arm.open: read already)
     banner = choice.banner()
     if banner and announce is not None:
         announce(banner)
-    baud = line_baud(baud, config, choice.url)[0]
+    baud = line_baud(baud, config, choice)[0]
     if profile is None:
-        from .calibration import arm_profile
-
-        profile = arm_profile(port=choice.url)
+        profile = arm_profile(port=choice)
     link_options.setdefault("state", plausible_state(profile))
     return Link.open(choice.url, baud, **link_options), baud
 

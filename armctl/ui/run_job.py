@@ -245,7 +245,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     from ..host.jobflow import read_resume_point, resume_claim
     from ..host.link import choose_port
     from ..host.resume_port import resume_port
-    from ..host.calibration import arm_profile
+    from ..host.calibration import arm_profile, with_arm
     from ..core.motion import MotionModel
 
     if options.other_port and not options.resume_log:
@@ -254,13 +254,14 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
     if resume is not None:  # the arm the log's job ran on (refused: another arm's --port)
         port, told, resume = resume_port(resume, options.port, options.other_port)
+        port = with_arm(port)  # (read already where the resume checked the arm)
         options = replace(options, port=port.url)  # (the resume command a stop prints names that arm)
         if told is not None:
             click.echo(f"armctl: {told}", err=True)
     else:  # once: the profile carries the stored calibration of the arm on the port (a dry run
-        # opens none: the port given, else the configured one, as estimate)
-        port = None if options.dry_run else choose_port(options.port)
-    profile = arm_profile(options.profile_path, port=options.port if port is None else port.url)
+        # opens none: the port given, else the configured one, as estimate); the arm on it read once
+        port = None if options.dry_run else with_arm(choose_port(options.port))
+    profile = arm_profile(options.profile_path, port=options.port if port is None else port)
     checked = check_script(script, profile, options.from_line)
     if options.dry_run:
         return dry_run(options, checked, MotionModel(profile))
