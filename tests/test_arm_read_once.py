@@ -64,3 +64,35 @@ def test_a_resume_on_a_device_reads_its_arm_once(reads):
     result = CliRunner().invoke(main, ["run", "job.txt", "--resume", "job.log", "--no-live"])
     assert "nothing to resume" in result.output, result.output
     assert reads == {"listings": 1, "store reads": 1}
+
+
+def test_the_summary_says_what_a_probe_would_prove_from_the_engine_not_from_its_text(reads):
+    """The end of a job decides whether a probe answers why it is unproven (``RunView.probe_answers``,
+    armctl/core/job_end.py); the summary reads that, where it searched the notes' text for the
+    hint.  On the unprobed device the FIFO size is the document's: the hint, and the run's
+    ``--json`` summary holds the same note."""
+    from armctl.core.job_end import PROBE_HINT
+
+    result = CliRunner().invoke(main, ["run", "job.txt", "--port", DEVICE, "--no-live"])
+    assert result.exit_code == 1, result.output
+    assert (f"finished, unproven: the arm is at rest at the last target, but what proves the job ran rests on settings "
+            f"not measured on this arm (the note above); {PROBE_HINT}") in result.output
+
+
+def test_the_summary_without_a_probe_to_answer(monkeypatch):
+    """An unproven end a probe does not answer (an SD program never seen running) names no probe,
+    whatever words its notes hold."""
+    from types import SimpleNamespace
+
+    from armctl.core.job_end import PROBE_HINT
+    from armctl.ui import run_job
+
+    lines: list = []
+    monkeypatch.setattr(run_job.click, "echo", lambda text="", err=False: lines.append(text))
+    result = SimpleNamespace(frames_sent=3, total_frames=3, frames_by_reports=3, frames_by_time=0, frames_unseen=0,
+                             messages=(f"finished, unproven: something else ({PROBE_HINT} is no help here)",),
+                             finished=False, outcome="finished, unproven", exit_code=1)
+    view = SimpleNamespace(arm_time_s=None, probe_answers=False)
+    assert run_job._summary(result, view, 1.0, SimpleNamespace(job_s=1.0), None) == 1
+    assert lines[-1] == ("finished, unproven: the arm is at rest at the last target, but its reports do not prove "
+                         "every frame ran (the note above)")

@@ -288,14 +288,14 @@ def _nothing_to_resume(arm: ArmLine, state) -> RunResult:
     a full FIFO dropped before the crash would look the same, and the resume ends unproven (exit 1).
     An arm the stop's abort paused is left so (nothing is sent), and the message says so."""
     from .link import fifo_proven
-    from ..core.job_end import FIFO_UNMEASURED
+    from ..core.job_end import FIFO_UNMEASURED, PROBE_HINT
 
     paused = ("; the arm is paused, as the stop left it: the next job resumes it first" if state.paused else "")
     if fifo_proven(arm.link.url, arm.profile.connector):
         return RunResult.nothing_sent("finished", message=f"nothing to resume: every line of the job is proven executed{paused}")
     return RunResult.nothing_sent("finished, unproven", message=(
         f"nothing to resume: the arm is at rest where the log's last frame leaves it, but {FIFO_UNMEASURED} "
-        f"(dropped before the crash); run `armctl probe` once{paused}"))
+        f"(dropped before the crash); {PROBE_HINT}{paused}"))
 
 
 def _journal_job(runner, job, state, arrival: bool, port) -> None:

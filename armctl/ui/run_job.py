@@ -549,7 +549,7 @@ def _summary(result, view, wall_s: float, estimate, options: JobOptions, departu
         click.echo("finished: the arm finished the job")
         return result.exit_code
     if result.outcome == "finished, unproven":
-        if any(PROBE_HINT in message for message in result.messages):
+        if view.probe_answers:
             click.echo("finished, unproven: the arm is at rest at the last target, but what proves the job ran rests on "
                        f"settings not measured on this arm (the note above); {PROBE_HINT}")
         else:
