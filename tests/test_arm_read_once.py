@@ -2,7 +2,7 @@
 ``armctl probe`` kept for it (the store's file).  Found by the review of "one fact in one place":
 ``armctl run --port /dev/ttyUSB0`` listed the ports three times — for the arm's profile, for the
 line rate the probe kept (``probed_baud``) and for the job record of its ``--log`` — and read the
-store twice; a resume listed them twice more.  Now the port chosen once carries its arm
+store twice; a resume listed them four times, ``estimate`` and a dry run twice.  Now the port chosen once carries its arm
 (``calibration.with_arm``: ``PortChoice.arm``), and each of them reads it there.
 
 The USB adapter is faked at the seam the identity reads (``calibration.port_infos``); the device
@@ -55,6 +55,14 @@ def test_a_run_on_a_device_reads_its_arm_once(reads):
     result = CliRunner().invoke(main, ["run", "job.txt", "--port", DEVICE, "--no-live", "--log", "job.log"])
     assert result.exit_code in (0, 1), result.output  # (finished, unproven: the FIFO size is not probed)
     assert json.loads(open("job.log").readline())["arm"] == ARM
+    assert reads == {"listings": 1, "store reads": 1}
+
+
+@pytest.mark.parametrize("command", [["estimate"], ["run", "--dry-run"], ["lint"]], ids=" ".join)
+def test_a_command_that_opens_none_reads_the_configured_arm_once(reads, monkeypatch, command):
+    monkeypatch.setenv("ARMCTL_PORT", DEVICE)
+    result = CliRunner().invoke(main, [*command, "job.txt"])
+    assert result.exit_code == 0, result.output
     assert reads == {"listings": 1, "store reads": 1}
 
 

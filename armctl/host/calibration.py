@@ -167,7 +167,7 @@ def with_arm(port, identity: str | None = None):
     return replace(choice, arm=ArmOnPort(identity, load(identity)))
 
 
-def quiet_port(option: str | None, config=None):
+def quiet_port(option, config=None):
     """The port a command that opens none would name (lint, estimate, plot, a dry run: ``option``,
     else the configured one), its arm read (``with_arm``), for the arm's kept calibration and line
     rate; None when the port or its arm cannot be named (an empty ARMCTL_PORT, a bad URL): such a
@@ -177,8 +177,8 @@ def quiet_port(option: str | None, config=None):
     from .port_choice import choose_port
 
     try:
-        choice = choose_port(option, config)
-        identity = arm_identity(choice.url)
+        choice = choose_port(option, config)  # (a PortChoice: itself, its arm read already or now)
+        identity = arm_identity(choice.url) if choice.arm is None else None
     except ConfigError:
         return None
     return with_arm(choice, identity)  # (a kept calibration it cannot read is an error all the same)

@@ -116,9 +116,10 @@ def print_estimate(result, header: str) -> None:
         click.echo(f"  note: {note}")
 
 
-def dry_run(options: JobOptions, checked, model) -> int:
+def dry_run(options: JobOptions, checked, model, port=None) -> int:
+    """The frames and the estimate, no port opened (``port``: the one named, its arm read once)."""
     # the estimate first: it refuses a job too long to run (E012) before a frame is printed
-    job = plan_job(checked, model, options.lead_s, options.baud or configured_baud(options.port))
+    job = plan_job(checked, model, options.lead_s, options.baud or configured_baud(port))
     for statement in job.statements():
         frame = statement.command.encode()
         click.echo(f"{statement.line:>6}  {frame.hex()}  {describe(statement.command)}")
@@ -126,8 +127,9 @@ def dry_run(options: JobOptions, checked, model) -> int:
     return EXIT_OK
 
 
-def configured_baud(port: str | None = None) -> int:
-    """The line rate ``run`` opens ``port`` at without ``--baud`` (None: the configured port), and
+def configured_baud(port=None) -> int:
+    """The line rate ``run`` opens ``port`` (a URL or a ``PortChoice``) at without ``--baud`` (None:
+    the configured port), and
     what ``--dry-run`` and ``estimate`` plan with: armctl.toml's (the project's, else yours), else
     what ``armctl probe`` read the arm there at, else 9600 (``link.line_baud``); a port it cannot
     name does not stop it (``calibration.quiet_port``)."""
@@ -245,7 +247,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     from ..host.jobflow import read_resume_point, resume_claim
     from ..host.link import choose_port
     from ..host.resume_port import resume_port
-    from ..host.calibration import arm_profile, with_arm
+    from ..host.calibration import arm_profile, quiet_port, with_arm
     from ..core.motion import MotionModel
 
     if options.other_port and not options.resume_log:
@@ -258,13 +260,14 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
         options = replace(options, port=port.url)  # (the resume command a stop prints names that arm)
         if told is not None:
             click.echo(f"armctl: {told}", err=True)
-    else:  # once: the profile carries the stored calibration of the arm on the port (a dry run
-        # opens none: the port given, else the configured one, as estimate); the arm on it read once
-        port = None if options.dry_run else with_arm(choose_port(options.port))
-    profile = arm_profile(options.profile_path, port=options.port if port is None else port)
+    else:  # the arm on the port read once: the profile carries its stored calibration (a dry run
+        # opens none: the port given, else the configured one, as estimate: None if it names no arm)
+        port = with_arm(choose_port(options.port)) if not options.dry_run else \
+            quiet_port(None) if options.port is None else with_arm(options.port)
+    profile = arm_profile(options.profile_path, port=port)
     checked = check_script(script, profile, options.from_line)
     if options.dry_run:
-        return dry_run(options, checked, MotionModel(profile))
+        return dry_run(options, checked, MotionModel(profile), port)
     if options.resume_log and options.log_path and _same_file(options.resume_log, options.log_path):
         raise UsageFailure(f"--log {options.log_path} is the journal --resume reads: it is never written over; "
                            "give the resumed job a --log of its own")
