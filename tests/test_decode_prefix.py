@@ -201,3 +201,10 @@ def test_decode_and_resume_trust_exactly_the_intact_prefix(crash, damage, stream
         assert ends == 1 or kept == 0, (damage, error)
     else:
         assert ends is None or torn, (damage, kept)
+
+
+def test_a_json_string_in_a_log_without_seals_is_a_record_without_bytes(tmp_path):
+    log = tmp_path / "hand.log"
+    log.write_text(json.dumps({"dir": "tx", "hex": FRAME}) + '\n"a note"\n' + json.dumps({"dir": "rx", "hex": STATUS}) + "\n")
+    result = CliRunner().invoke(main, ["decode", str(log)])
+    assert result.exit_code == 0 and "1 command frame(s), 1 status frame(s)" in result.output, result.output

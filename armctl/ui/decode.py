@@ -207,12 +207,12 @@ def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list, jobs: list) 
         if not line.strip():
             continue
         record = prefix.record(line)
-        if isinstance(record, str):  # the intact prefix ends here
+        if isinstance(record, _Damaged):  # the intact prefix ends here
             text = line.decode("utf-8", "replace")
             if torn(text.rstrip("\n"), text.endswith("\n")):
-                damaged.append(LogDamage(number, record, torn=True))
+                damaged.append(LogDamage(number, record.why, torn=True))
             else:
-                damaged.append(LogDamage(number, record, sum(1 for later in lines if later.strip())))
+                damaged.append(LogDamage(number, record.why, sum(1 for later in lines if later.strip())))
             break
         if isinstance(record, dict) and record.get("dir") == "job":
             jobs.append((number, record))
@@ -229,6 +229,11 @@ def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list, jobs: list) 
 _TOO_DEEP = object()  # a JSON value nested too deep for the parser
 
 
+@dataclass(frozen=True)
+class _Damaged:
+    why: str  # why the line is no intact record (``joblog.damage_of``'s words)
+
+
 class _Prefix:
     """The journal's rule of trust (armctl/core/joblog.py), line by line: ``record(line)`` → the
     line's JSON value (a sealed record's ``crc`` and ``seq`` taken out), or why it ends the
@@ -241,21 +246,22 @@ class _Prefix:
         self.expected = 0  # the ``seq`` due next
 
     def record(self, line: bytes):
+        """The line's JSON value (None: nested too deep, no seals), or ``_Damaged``."""
         text = line.decode("utf-8", "replace")
         try:
             value = json.loads(text)
         except RecursionError:
             value = _TOO_DEEP
         except ValueError:
-            return damage_of(text)
+            return _Damaged(damage_of(text))
         if not self.sealed and not (isinstance(value, dict) and ("crc" in value or "seq" in value)):
             return None if value is _TOO_DEEP else value  # no seals: nothing tells its bytes were written
         self.sealed = True
         if not isinstance(value, dict) or not intact(value):  # (``intact`` takes the crc out)
-            return damage_of(text)
+            return _Damaged(damage_of(text))
         seq = value.pop("seq", None)
         if not in_place(seq, self.expected):
-            return "a record out of its place: one dropped, moved or added"
+            return _Damaged("a record out of its place: one dropped, moved or added")
         self.expected = seq + 1
         return value
 
