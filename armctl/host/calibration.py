@@ -19,9 +19,12 @@ platformdirs' ``user_data_dir("armctl")`` elsewhere), named by the identity (quo
 atomically (a temporary file, fsync, rename): a crash leaves the old record or the new one.
 
 Pure apart from the edges: ``list_ports`` (``port_infos``, only for a device path) and the
-store's files (``load``, ``save``, ``stored``, ``forget``).  Who reads the store: ``arm_profile``
-(the profile of the arm on a port), once, where the port is resolved; everything after it reads
-the profile.  ``stale_notes`` reads a finished job's evidence against the values.
+store's files (``load``, ``save``, ``stored``, ``forget``).  The arm on a port — its identity and
+its record in the store — is read once, where the port is resolved (``with_arm``: it rides on the
+``PortChoice``; ``quiet_port`` for a command that opens none); the profile of that arm
+(``arm_profile``), the line rate its probe kept (``probed_baud``) and a job's log take it from
+there, and everything after reads the profile.  ``stale_notes`` reads a finished job's evidence
+against the values.
 """
 
 from __future__ import annotations
