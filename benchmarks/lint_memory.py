@@ -26,6 +26,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
+DEFAULT_LINES = 1_000_000
 
 _CHILD = """
 import json, resource, sys, time
@@ -38,14 +39,23 @@ print(json.dumps({"seconds": seconds, "rss_mb": resource.getrusage(resource.RUSA
 """
 
 
+def _sweep(index: int, step: int, span: int) -> int:
+    """Back and forth over ``span`` in ``step``s: where the ``index``-th step lands (0 … span)."""
+    at = index * step % (2 * span)
+    return at if at <= span else 2 * span - at
+
+
 def write_script(path: Path, lines: int, noisy: bool) -> None:
-    """Reachable tool-down moves over a 200 × 300 × 180 mm box in 0.1 mm steps (few repeats)."""
+    """Reachable tool-down moves over a 200 × 300 × 180 mm box, each a short step from the one
+    before (0.3, 0.2 and 0.1 mm along X, Y and Z, back and forth: 36,000 distinct targets, few
+    repeats).  Short: the job must stay within E012's bound of motion (24 hours), or the clean
+    script is not clean — jumps across the box took 1.7 s each, E012 at line 50,142."""
     with open(path, "w", encoding="utf-8") as out:
         out.write("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000 ; start from a known pose\n")
         for index in range(1, lines):
-            x = 150 + (index * 7919) % 2000 / 10  # 0.1 mm steps: 18,000 distinct targets
-            y = -150 + (index * 6007) % 3000 / 10
-            z = 20 + (index * 3001) % 1800 / 10
+            x = (1500 + _sweep(index + 333, 3, 2000)) / 10  # in tenths of a mm; from near the start pose
+            y = (-1500 + _sweep(index + 750, 2, 3000)) / 10
+            z = (200 + _sweep(index + 1300, 1, 1800)) / 10
             speed = " F30" if noisy else (" F3000" if index % 5 == 0 else "")
             unknown = " Q1" if noisy and index % 10 == 0 else ""
             comment = f" ; point {index}" if index % 4 == 0 else ""
@@ -63,7 +73,7 @@ def run(path: Path) -> dict:
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--lines", type=int, default=1_000_000)
+    parser.add_argument("--lines", type=int, default=DEFAULT_LINES)
     parser.add_argument("--baseline", type=int, default=10_000)
     parser.add_argument("--max-growth", type=float, default=10.0, help="MB the long run may add (default 10)")
     parser.add_argument("--check", action="store_true", help="exit 1 if memory is not flat")

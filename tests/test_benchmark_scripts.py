@@ -100,3 +100,26 @@ def test_ik_speed_workloads_run():
     module = _load("ik_speed.py")
     for name, work in module.workloads():
         work()
+
+
+def test_the_clean_script_of_lint_memory_lints_clean(tmp_path):
+    """benchmarks/lint_memory.py measures lint on a "clean" script, one that reports nothing — but
+    its moves jumped across the box (1.7 s of motion each), so at its default 1,000,000 lines the
+    job passed E012's 24 hours of motion at line 50,142.  Cheap: a small script lints with no
+    finding at all, and its motion time a line, at the default size, stays well within E012."""
+    import json
+
+    from click.testing import CliRunner
+
+    from armctl.script.source import MAX_JOB_MOTION_S
+    from armctl.ui.cli import main
+
+    bench = _load("lint_memory.py")
+    path = tmp_path / "clean.txt"
+    lines = 2_000
+    bench.write_script(path, lines, noisy=False)
+    linted = CliRunner().invoke(main, ["lint", "--json", str(path)])
+    assert linted.exit_code == 0 and json.loads(linted.stdout) == [], linted.output
+    estimated = CliRunner().invoke(main, ["estimate", "--json", str(path)])
+    motion_s = json.loads(estimated.stdout)["motion_s"]
+    assert motion_s / lines * bench.DEFAULT_LINES < MAX_JOB_MOTION_S / 2, motion_s

@@ -29,6 +29,8 @@ users meet it: each fault found, its reproduction kept as a test, and the sweeps
 
 from __future__ import annotations
 
+import io
+
 import json
 import os
 import re
@@ -39,7 +41,7 @@ from pathlib import Path
 
 import pytest
 
-from armctl.core.joblog import read_resume_log
+from armctl.core.joblog import read_resume_lines
 from armctl.errors import ArmctlError, ResumeRefused
 
 from journal_crash import make_crash, pty_arm
@@ -71,7 +73,7 @@ def pwm_crashes(tmp_path_factory):
 
 def _decide(crash, log: bytes):
     """The line a resume of ``log`` continues at (None: nothing left), or the refusal."""
-    point = read_resume_log(log.decode("utf-8", errors="replace"), crash.script.name, crash.script.read_bytes())
+    point = read_resume_lines(io.StringIO(log.decode("utf-8", errors="replace")), crash.script.name, crash.script.read_bytes())
     return point.line_for(*crash.rest)
 
 
@@ -90,7 +92,7 @@ def _sound(crash, log: bytes) -> str:
 
 def test_a_log_without_a_job_record_does_not_send_the_user_back_to_line_1():
     with pytest.raises(ResumeRefused) as refused:
-        read_resume_log("", "job.txt", b"G1 X200\n")
+        read_resume_lines(io.StringIO(""), "job.txt", b"G1 X200\n")
     message = str(refused.value)
     assert "run the job from its start" not in message
     assert "--resume" in message and "--from-line" in message  # the ways that run may have been started

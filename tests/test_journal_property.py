@@ -16,7 +16,7 @@ virtual-clock simulator, stopped after ``n`` frames with ``abort="none"`` (tests
   neither is what a crash leaves, and no check of records can tell them from what it does
   (nothing after them says they were there).  Both were found by this property before the rule.
 
-Then the resume's decision (``read_resume_log``, ``ResumePoint.line_for`` with the arm's report
+Then the resume's decision (``read_resume_lines``, ``ResumePoint.line_for`` with the arm's report
 at rest) is judged against the simulator's record: refused, or the line whose compilation is
 exactly the frames the arm has not run.  Each distinct decision of each crash is also carried
 out once end to end (``Arm.run(resume=)`` on a simulator brought to the same crash), and the
@@ -33,6 +33,8 @@ Repeat blocks are left out: a resume inside one starts the block again, as ``--f
 
 from __future__ import annotations
 
+import io
+
 import os
 import random
 import re
@@ -44,7 +46,7 @@ from hypothesis import strategies as st
 
 from armctl import Arm
 from armctl.errors import ResumeRefused
-from armctl.core.joblog import JournalDamaged, NotProven, read_resume_log
+from armctl.core.joblog import JournalDamaged, NotProven, read_resume_lines
 from armctl.script.files import read_script
 
 from journal_crash import VIRTUAL, Crash, crash_into, make_crash, ran, sent
@@ -147,7 +149,7 @@ def decide(crash: Crash, data: bytes):
     """The resume's decision: ("refused", why) or ("line", L or None)."""
     snapshot = read_script(str(crash.script))
     try:
-        point = read_resume_log(data.decode("utf-8", errors="replace"), snapshot.name, snapshot.data)
+        point = read_resume_lines(io.StringIO(data.decode("utf-8", errors="replace")), snapshot.name, snapshot.data)
         return "line", point.line_for(*crash.rest)
     except (ResumeRefused, JournalDamaged, NotProven) as error:
         return "refused", type(error).__name__

@@ -7,6 +7,8 @@ host dying after 14 frames — the issue's case) read back with one thing change
 
 from __future__ import annotations
 
+import io
+
 import json
 import zlib
 from pathlib import Path
@@ -14,7 +16,7 @@ from pathlib import Path
 import pytest
 
 from armctl.errors import ResumeRefused
-from armctl.core.joblog import JournalDamaged, NotProven, read_resume_log, seal, unseal
+from armctl.core.joblog import JournalDamaged, NotProven, read_resume_lines, seal, unseal
 from armctl.script.files import read_script
 
 from journal_crash import make_crash
@@ -29,7 +31,7 @@ def crash(tmp_path_factory):
 
 def _read(text: str):
     snapshot = read_script(str(JOINT))
-    return read_resume_log(text, snapshot.name, snapshot.data)
+    return read_resume_lines(io.StringIO(text), snapshot.name, snapshot.data)
 
 
 def _lines(crash) -> list[str]:
@@ -107,7 +109,7 @@ def test_a_frame_whose_write_is_unconfirmed_at_a_repeated_target_is_not_guessed(
 
 def test_another_or_an_edited_script_is_refused(crash):
     with pytest.raises(ResumeRefused, match="other contents"):
-        read_resume_log(crash.log.decode(), str(JOINT), JOINT.read_bytes() + b"G4 P1\n")
+        read_resume_lines(io.StringIO(crash.log.decode()), str(JOINT), JOINT.read_bytes() + b"G4 P1\n")
 
 
 def test_runs_appended_to_one_log_resume_the_last(crash, tmp_path):

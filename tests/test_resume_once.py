@@ -12,6 +12,8 @@ virtual time; and one fresh-process case through the installed command.
 
 from __future__ import annotations
 
+import io
+
 import json
 import os
 import subprocess
@@ -92,7 +94,7 @@ def test_the_installed_command_refuses_a_log_resumed_already(tmp_path, monkeypat
 def test_the_mark_keeps_the_intact_prefix_and_follows_a_whole_line(tmp_path):
     # a torn last line (the crash's cut: its frame never went) is cut off before the mark, so the
     # mark follows a whole line and the log stays readable; a log with no whole line is not marked
-    from armctl.core.joblog import job_record, read_resume_log, seal
+    from armctl.core.joblog import job_record, read_resume_lines, seal
     from armctl.host.jobflow import mark_resumed
 
     data = b"G1 X1\n"
@@ -103,7 +105,7 @@ def test_the_mark_keeps_the_intact_prefix_and_follows_a_whole_line(tmp_path):
     text = log.read_text()
     assert text.startswith(whole) and text.count("\n") == 2 and '"dir": "resumed"' in text.splitlines()[1]
     with pytest.raises(Exception, match="resumed already, at line 1"):
-        read_resume_log(text, "a.txt", data)
+        read_resume_lines(io.StringIO(text), "a.txt", data)
     bare = tmp_path / "torn.log"
     bare.write_text('{"t": 0.0, "dir": "jo')
     with pytest.raises(OSError):

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import pytest
 
-from armctl.core.joblog import NotProven, read_resume_log
+from armctl.core.joblog import NotProven, read_resume_lines
 from armctl.script.files import read_script
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -51,7 +51,7 @@ def test_a_log_whose_first_frame_was_written_does_not_restart_at_the_first_line(
     # the host died after the first frame's write and its tx record, before the journal's record
     crashed = records[: first_tx + 1]
     snapshot = read_script(str(SCRIPT))
-    point = read_resume_log(crashed, "scripts/pick_and_place.txt", snapshot.data)
+    point = read_resume_lines([line + "\n" for line in crashed], "scripts/pick_and_place.txt", snapshot.data)
     target = json.loads(records[first_tx])["target"]  # the frame's own record (written ahead of it) holds its target
     # the arm is at rest at the target of the only frame written: that frame ran
     try:

@@ -11,6 +11,8 @@ every frame of the script exactly once, in order.
 
 from __future__ import annotations
 
+import io
+
 import dataclasses
 import json
 import os
@@ -28,7 +30,7 @@ from click.testing import CliRunner
 from armctl.host.api import RunResult
 from armctl.ui.cli import main
 from armctl.errors import ResumeRefused
-from armctl.core.joblog import FrameEntry, NotProven, ResumePoint, read_resume_log
+from armctl.core.joblog import FrameEntry, NotProven, ResumePoint, read_resume_lines
 from armctl.core.protocol import decode_command
 from armctl.sim.bridge import serve_pty
 from armctl.sim.model import SimOptions, SimulatedArm
@@ -180,7 +182,7 @@ def test_a_log_of_another_or_an_edited_script_is_refused(tmp_path):
     log = tmp_path / "job.log"
     result = CliRunner().invoke(main, ["run", str(SHORT), "--port", FAST_SIM, "--no-live", "--log", str(log)])
     assert result.exit_code == 0, result.output
-    assert read_resume_log(log.read_text(), str(SHORT), SHORT.read_bytes()).sent_line == 6
+    assert read_resume_lines(io.StringIO(log.read_text()), str(SHORT), SHORT.read_bytes()).sent_line == 6
     edited = tmp_path / "short_job.txt"
     edited.write_bytes(SHORT.read_bytes() + b"G1 X230\n")
     for script in (edited, SCRIPTS / "resume_job.txt"):
@@ -189,7 +191,7 @@ def test_a_log_of_another_or_an_edited_script_is_refused(tmp_path):
         assert completed.returncode == 2, completed.stderr
         assert "other contents" in completed.stderr and "Traceback" not in completed.stderr
     with pytest.raises(ResumeRefused):
-        read_resume_log(["not json"], "x", b"")
+        read_resume_lines(["not json\n"], "x", b"")
     both = CliRunner().invoke(main, ["run", str(SHORT), "--port", FAST_SIM, "--resume", str(log), "--from-line", "3"])
     assert both.exit_code == 2 and "drop --from-line" in both.output
 

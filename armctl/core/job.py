@@ -135,6 +135,7 @@ class RunView:
     pause_label: str = "running"  # what the panel shows (the arm's reports decide it)
     feed_percent: int = 100  # the feed override of the frames written from now on
     feed_clamped: bool = False  # the last frame scaled was held to the profile's speed limit
+    probe_answers: bool = False  # "finished, unproven" rests on settings `armctl probe` measures (PROBE_HINT)
 
     @property
     def elapsed_s(self) -> float:

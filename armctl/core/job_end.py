@@ -288,7 +288,8 @@ class JobEnd:
                             "not measured on this arm: one that acts on them as they land cuts short the move "
                             "before each, and rests at the last target all the same")
         if unproven:
-            hint = f"; {PROBE_HINT}" if len(unproven) > probe else ""
+            self.view.probe_answers = len(unproven) > probe
+            hint = f"; {PROBE_HINT}" if self.view.probe_answers else ""
             self.view.messages.append(f"finished, unproven: {'; '.join(unproven)}{hint}")
             return Outcome.UNPROVEN
         return Outcome.FINISHED

@@ -29,7 +29,7 @@ pure data out, no I/O here:
   returns there), and a second resume would run again every line the first one ran; it is
   refused (exit 2), naming the log to resume instead.
 
-``read_resume_log`` trusts only the longest intact prefix: a damaged last line without its
+``read_resume_lines`` trusts only the longest intact prefix: a damaged last line without its
 line break is the tear a crash leaves (a record made durable before its frame always ends with
 one); any other damaged record — a complete line, one followed by intact records, or a whole
 record followed by bytes other than its line break (a flipped bit there: its frame was written) —
@@ -91,6 +91,31 @@ def unseal(line: str) -> dict | None:
     except (ValueError, RecursionError):  # not JSON, or nested too deep for the parser
         return None
     return record if isinstance(record, dict) and intact(record) else None  # (``intact`` checks the crc is one)
+
+
+def damage_of(line: str) -> str:
+    """Why ``line`` holds no intact record (``unseal`` gave None), for the message naming it."""
+    try:
+        record = json.loads(line)
+    except RecursionError:
+        return "nested too deep to read"
+    except ValueError:
+        return "not JSON"
+    return "its checksum does not match" if isinstance(record, dict) and "crc" in record else "not a sealed record"
+
+
+def torn(line: str, complete: bool) -> bool:
+    """A ``line`` that holds no intact record is the crash's cut when it is the log's last and has
+    no line break (a record made durable before its frame always ends with one) — and is no whole
+    record with other bytes where its line break belongs (``_sealed_then_more``).  Any other damaged
+    line ends what the log proves: only its intact prefix is trusted (``--resume``, ``armctl decode``)."""
+    return not complete and not _sealed_then_more(line)
+
+
+def in_place(seq, expected: int) -> bool:
+    """A sealed record's ``seq`` where the log puts it: the one due (``expected``), or 0 (a run
+    appended to the log); else a record was dropped, moved or added."""
+    return _is_int(seq) and seq in (0, expected)
 
 
 def intact(record: dict) -> bool:
@@ -311,8 +336,9 @@ def _is_hex_frame(value) -> bool:
 class _Reader:
     """One pass over the sealed records of a log; ``point`` once all were read."""
 
-    def __init__(self, name: str, data: bytes) -> None:
+    def __init__(self, name: str, data: bytes, log: str | None = None) -> None:
         self.name, self.data = name, data
+        self.log = log  # the log's name, for messages (file:line); None: "line N"
         self.header: dict | None = None
         self.frames = Frames()
         self.confirmed = self.done = 0
@@ -320,7 +346,8 @@ class _Reader:
         self.resumed: dict | None = None  # the resume that continued this job already (``resumed_record``)
 
     def bad(self, number: int, why: str):
-        return JournalDamaged(f"line {number}: {why}: the log cannot prove which lines ran; nothing was sent")
+        where = f"line {number}" if self.log is None else f"{self.log}:{number}"
+        return JournalDamaged(f"{where}: {why}: the log cannot prove which lines ran; nothing was sent")
 
     def take(self, number: int, record: dict) -> None:
         kind = record.get("dir")
@@ -433,18 +460,13 @@ def _clears(frame_hex: str, control_on_arrival: bool, who: str) -> str | None:
     return None
 
 
-def read_resume_log(text, name: str, data: bytes) -> ResumePoint:
-    """The resume point a ``--log`` (its text; or its lines, each taken as complete) records for
-    the script ``name`` whose snapshot is ``data``."""
-    if not isinstance(text, str):
-        text = "".join(line + "\n" for line in text)
-    return read_resume_lines(_lines_of(text), name, data)
-
-
-def read_resume_lines(lines: Iterable[str], name: str, data: bytes) -> ResumePoint:
-    """``read_resume_log`` of a log given line by line (each with its line break, the last
-    without one if the log does not end with one): a day's log is read as it streams by."""
-    reader = _Reader(name, data)
+def read_resume_lines(lines: Iterable[str], name: str, data: bytes, log: str | None = None) -> ResumePoint:
+    """The resume point a ``--log`` records for the script ``name`` whose snapshot is ``data``,
+    the log given line by line (each with its line break, the last without one if the log does
+    not end with one: ``io.StringIO(text)`` gives a text so): a day's log is read as it streams
+    by (``jobflow.read_resume_point``).  ``log``: its name, which a damaged line's message gives
+    with the line's number."""
+    reader = _Reader(name, data, log)
     expected = 0  # each run's records count from 0 (a log may hold several runs, appended)
     for number, line in enumerate(lines, 1):
         complete = line.endswith("\n")
@@ -455,21 +477,11 @@ def read_resume_lines(lines: Iterable[str], name: str, data: bytes) -> ResumePoi
         if record is None:
             return _damaged(reader, line, number, not complete)
         seq = record.pop("seq", None)
-        if not _is_int(seq) or seq not in (0, expected):
+        if not in_place(seq, expected):
             raise reader.bad(number, "a record out of its place (one dropped, moved or added)")
         expected = seq + 1
         reader.take(number, record)
     return reader.point(())
-
-
-def _lines_of(text: str):
-    """``text``'s lines, each with its line break (the last without one if it has none)."""
-    start = 0
-    while (end := text.find("\n", start)) >= 0:
-        yield text[start:end + 1]
-        start = end + 1
-    if start < len(text):
-        yield text[start:]
 
 
 def _damaged(reader: _Reader, line: str, number: int, last: bool) -> ResumePoint:
@@ -483,12 +495,12 @@ def _damaged(reader: _Reader, line: str, number: int, last: bool) -> ResumePoint
         if last and (number > 1 or line.startswith(_RECORD_START) or _RECORD_START.startswith(line)):
             return reader.point(())  # the job record torn by the crash: no job record, no frame sent
         raise ResumeRefused(f"line {number} is not an intact journal record: not a `run --log` file")
-    if last and not _sealed_then_more(line):
+    if torn(line, not last):
         return reader.point(("the log's last line is torn (the crash's cut): ignored",))
     if last:
         raise reader.bad(number, "a whole record followed by other bytes where its line break belongs: the line "
                                  "break is damaged, not the crash's cut")
-    raise reader.bad(number, "the record is damaged (its checksum does not match) and is not the crash's cut "
+    raise reader.bad(number, f"the record is damaged ({damage_of(line)}) and is not the crash's cut "
                              "(a complete line)")
 
 

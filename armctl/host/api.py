@@ -67,11 +67,13 @@ class Arm:
     """
 
     def __init__(self, link, baud: int, profile, *, lead_s: float = DEFAULT_LEAD_S,
-                 status_timeout_s: float = STATUS_TIMEOUT_S) -> None:
-        """Use ``Arm.open``; this takes an open ``armctl.host.link.Link`` and owns it from now on."""
+                 status_timeout_s: float = STATUS_TIMEOUT_S, port=None) -> None:
+        """Use ``Arm.open``; this takes an open ``armctl.host.link.Link`` and owns it from now on
+        (``port``: the ``PortChoice`` it was opened from, its arm read once; None: read when needed)."""
         from ..core.motion import MotionModel
 
         self._link, self._baud, self._profile = link, baud, profile
+        self._port = link.url if port is None else port
         self._model = MotionModel(profile)
         self.lead_s, self.status_timeout_s = lead_s, status_timeout_s
         self._tasks = Tasks(link.url)  # the worker that owns the link, the queued moves, the running job
@@ -92,9 +94,9 @@ class Arm:
         ``armctl.host.link.connect`` with no banner (``armctl run`` passes one that prints the
         simulator's banner; a benchmark one that records the frames written).
         Raises ``ConfigError`` (a bad setting), ``ProfileError`` or ``PortError``."""
-        link, line_baud, loaded = args.open_port(port, baud, profile, connect, lead_s, status_timeout_s)
+        link, line_baud, loaded, choice = args.open_port(port, baud, profile, connect, lead_s, status_timeout_s)
         try:
-            return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s)
+            return cls(link, line_baud, loaded, lead_s=lead_s, status_timeout_s=status_timeout_s, port=choice)
         except BaseException:
             link.close()
             raise
@@ -206,7 +208,7 @@ class Arm:
         resume = args.path_or_none("resume", resume, also=(ResumePoint,))
         source = args.job_snapshot(script)  # read once: a snapshot, or a script checked already
         snapshot = getattr(source, "snapshot", source)
-        claim, resume = _claimed_resume(resume, log, snapshot, from_line, self.url)
+        claim, resume = _claimed_resume(resume, log, snapshot, from_line, self._port)
         job = JobSpec(observer or JobObserver(), on_progress, timeout, log, abort, resume)
         with claim:
             result = self._submit(source, from_line, job, wait=True, from_arm=False, stops=stops)
@@ -343,7 +345,8 @@ class Arm:
             raise checked.refusal()
 
         def job() -> RunResult:
-            line = ArmLine(self._link, self._profile, self._model, self._baud, self.lead_s, self.status_timeout_s)
+            line = ArmLine(self._link, self._profile, self._model, self._baud, self.lead_s, self.status_timeout_s,
+                           self._port)
             return run_job(line, checked, spec, from_arm, lambda: stops != tasks.stops,
                            lambda control: tasks.attach(control, stops), tasks.detach)
 
@@ -359,10 +362,10 @@ class Arm:
         return None
 
 
-def _claimed_resume(resume, log, snapshot, from_line: int, url: str):
+def _claimed_resume(resume, log, snapshot, from_line: int, port):
     """``Arm.run``'s ``resume=``: (the claim held while the job runs — no second resume of that log
     meanwhile, ``jobflow.resume_claim`` — and the ``ResumePoint``, read before anything is sent:
-    ``ResumeRefused``, nothing sent; a log of a job on another arm than the one on ``url`` too);
+    ``ResumeRefused``, nothing sent; a log of a job on another arm than the one on ``port`` too);
     (a null claim, None) without one."""
     if resume is None:
         return contextlib.nullcontext(), None
@@ -373,5 +376,5 @@ def _claimed_resume(resume, log, snapshot, from_line: int, url: str):
         raise ResumeRefused(f"log= is the journal resume= reads ({os.fspath(resume)}): give the resumed job a "
                             "log of its own; nothing was sent")
     point = read_resume_point(resume, snapshot, from_line)
-    refuse_another_arm(point, url, "resume dataclasses.replace(the ResumePoint, port=arm.url, arm=None)")
+    refuse_another_arm(point, port, "resume dataclasses.replace(the ResumePoint, port=arm.url, arm=None)")
     return resume_claim(resume), point

@@ -147,10 +147,11 @@ def move_line(**words: float | None) -> str:
     return " ".join([code] + [_word(name, given[name]) for name in order if name in given]) + "\n"
 
 
-def open_port(port, baud, profile, connect, lead_s: float, status_timeout_s: float) -> tuple[Any, int, Any]:
+def open_port(port, baud, profile, connect, lead_s: float, status_timeout_s: float) -> tuple[Any, int, Any, Any]:
     """``Arm.open``'s arguments checked (types and the CLI's ranges, armctl/core/limits.py) before
-    the port opens, then the port opened as they say: (the link, its baud rate, the profile)."""
-    from .calibration import arm_profile
+    the port opens, then the port opened as they say: (the link, its baud rate, the profile, the
+    ``PortChoice`` with its arm read once: ``calibration.with_arm``)."""
+    from .calibration import arm_profile, with_arm
     from .link import PortChoice, choose_port, connect as open_link
     from .profile import Profile
 
@@ -161,11 +162,12 @@ def open_port(port, baud, profile, connect, lead_s: float, status_timeout_s: flo
     in_range("status_timeout_s", status_timeout_s, "STATUS_TIMEOUT_RANGE_S")
     if baud is not None:
         in_range("baud", baud, "BAUD_RANGE", whole=True)
-    choice = choose_port(port, origin="port")  # once: the arm's stored calibration is loaded for this port
+    # once: the arm on the port (its identity, its stored calibration) for its profile, line rate and job logs
+    choice = with_arm(choose_port(port, origin="port"))
     loaded = profile if isinstance(profile, Profile) else \
-        arm_profile(None if profile is None else os.fspath(profile), port=choice.url)
+        arm_profile(None if profile is None else os.fspath(profile), port=choice)
     link, line_baud = check_connected((open_link if connect is None else connect)(choice, baud, profile=loaded))
-    return link, line_baud, loaded
+    return link, line_baud, loaded, choice
 
 
 def feed_percent(percent) -> float:

@@ -181,6 +181,7 @@ class ArmLine:
     baud: int
     lead_s: float
     status_timeout_s: float
+    port: Any = None  # the PortChoice the arm was opened from, its arm read once (or its URL; None: the link's)
 
 
 def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Callable[[], bool],
@@ -221,7 +222,7 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
         return RunResult.nothing_sent("interrupted")
     runner = start_job(link, arm.model, job, journal)
     if journal is not None:  # which script it records (resume= checks it); a failed write stops the job like any
-        _journal_job(runner, job, state, arrival, link.url)
+        _journal_job(runner, job, state, arrival, link.url if arm.port is None else arm.port)
     if spec.resume is not None and spec.resume.log_path is not None:  # a log is resumed once (jobflow.mark_resumed)
         into = getattr(spec.log, "name", None)
         runner.before_first_frame = partial(mark_resumed, spec.resume.log_path, job.from_line,
@@ -287,26 +288,28 @@ def _nothing_to_resume(arm: ArmLine, state) -> RunResult:
     a full FIFO dropped before the crash would look the same, and the resume ends unproven (exit 1).
     An arm the stop's abort paused is left so (nothing is sent), and the message says so."""
     from .link import fifo_proven
-    from ..core.job_end import FIFO_UNMEASURED
+    from ..core.job_end import FIFO_UNMEASURED, PROBE_HINT
 
     paused = ("; the arm is paused, as the stop left it: the next job resumes it first" if state.paused else "")
     if fifo_proven(arm.link.url, arm.profile.connector):
         return RunResult.nothing_sent("finished", message=f"nothing to resume: every line of the job is proven executed{paused}")
     return RunResult.nothing_sent("finished, unproven", message=(
         f"nothing to resume: the arm is at rest where the log's last frame leaves it, but {FIFO_UNMEASURED} "
-        f"(dropped before the crash); run `armctl probe` once{paused}"))
+        f"(dropped before the crash); {PROBE_HINT}{paused}"))
 
 
-def _journal_job(runner, job, state, arrival: bool, port: str) -> None:
+def _journal_job(runner, job, state, arrival: bool, port) -> None:
     """The job's first record in ``--log``: which script, from which line and pose, on which port
-    (and which arm: its identity, read as the job starts)."""
+    (a ``PortChoice`` or its URL), and which arm: its identity, read as the port was opened (a
+    port kept open keeps its arm)."""
     from ..core.joblog import job_record, target_of
     from .resume_port import arm_of, simulator_process
 
     known = state.position_mm is not None and None not in state.joints_deg
     start = target_of("line", state.position_mm, state.joints_deg) if known else None
+    url = getattr(port, "url", port)
     runner.log_record(job_record(job.snapshot.name, job.snapshot.data, job.from_line, job.lead_s, job.estimate.frames,
-                                 arrival, start, port, simulator_process(port), arm_of(port)), durable=True)
+                                 arrival, start, url, simulator_process(url), arm_of(port)), durable=True)
 
 
 def _result(runner, outcome: str, job, control: JobControl, spec: JobSpec) -> RunResult:

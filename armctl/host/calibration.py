@@ -19,9 +19,12 @@ platformdirs' ``user_data_dir("armctl")`` elsewhere), named by the identity (quo
 atomically (a temporary file, fsync, rename): a crash leaves the old record or the new one.
 
 Pure apart from the edges: ``list_ports`` (``port_infos``, only for a device path) and the
-store's files (``load``, ``save``, ``stored``, ``forget``).  Who reads the store: ``arm_profile``
-(the profile of the arm on a port), once, where the port is resolved; everything after it reads
-the profile.  ``stale_notes`` reads a finished job's evidence against the values.
+store's files (``load``, ``save``, ``stored``, ``forget``).  The arm on a port — its identity and
+its record in the store — is read once, where the port is resolved (``with_arm``: it rides on the
+``PortChoice``; ``quiet_port`` for a command that opens none); the profile of that arm
+(``arm_profile``), the line rate its probe kept (``probed_baud``) and a job's log take it from
+there, and everything after reads the profile.  ``stale_notes`` reads a finished job's evidence
+against the values.
 """
 
 from __future__ import annotations
@@ -117,11 +120,74 @@ def _device_identity(path: str, ports) -> str:
     return f"{_DEVICE}{real}"
 
 
+def by_name_only(identity: str) -> bool:
+    """An identity no more than the path or address its port leads to (a device without a USB
+    serial number or location, a pty, a TCP port): another arm there has the same one."""
+    return identity.startswith((_DEVICE, *(f"{scheme}://" for scheme in _NETWORK_SCHEMES)))
+
+
+def reads_port_list(port: str) -> bool:
+    """``arm_identity`` of ``port`` reads pyserial's port list: a device path (no URL, no identity)."""
+    return "://" not in port and not port.startswith((_USB, _DEVICE))
+
+
+def ports_to_search(identity: str, ports) -> list[str]:
+    """Where the arm of ``identity`` may be plugged now: for a USB adapter's, every device pyserial
+    lists (``ports``); for a device's, the path it names, if there is one; else nowhere else."""
+    if identity.startswith(_USB):
+        return sorted(info.device for info in ports)
+    path = identity[len(_DEVICE):]
+    return [path] if identity.startswith(_DEVICE) and os.path.exists(path) else []
+
+
 def port_infos():
     """The serial ports pyserial finds (the edge ``arm_identity`` reads for a device path)."""
     from serial.tools import list_ports
 
     return list_ports.comports()
+
+
+@dataclass(frozen=True)
+class ArmOnPort:
+    """The arm on a port, read once (``with_arm``): its ``identity`` and what ``armctl probe``
+    kept for it (``kept``: a ``Calibration``, or None)."""
+
+    identity: str
+    kept: "Calibration | None"
+
+
+def with_arm(port, identity: str | None = None):
+    """``port`` (a ``port_choice.PortChoice``, or a URL) with the arm on it read (``PortChoice.arm``,
+    an ``ArmOnPort``) — once: a device's identity lists pyserial's ports, so the command or ``Arm``
+    that chose the port reads it here and passes the choice on; its profile (``arm_profile``), its
+    line rate (``probed_baud``) and its job's log (``resume_port.arm_of``) take it from there.
+    ConfigError for a URL whose arm cannot be named (``identity``: its ``arm_identity``, read already)."""
+    from dataclasses import replace
+
+    from .port_choice import PortChoice
+
+    choice = port if isinstance(port, PortChoice) else PortChoice(port, "--port")
+    if choice.arm is not None:
+        return choice
+    identity = arm_identity(choice.url) if identity is None else identity
+    return replace(choice, arm=ArmOnPort(identity, load(identity)))
+
+
+def quiet_port(option, config=None):
+    """The port a command that opens none would name (lint, estimate, plot, a dry run: ``option``,
+    else the configured one), its arm read (``with_arm``), for the arm's kept calibration and line
+    rate; None when the port or its arm cannot be named (an empty ARMCTL_PORT, a bad URL): such a
+    command does not talk to the arm, so a port it would not open does not stop it — no stored
+    calibration applies then, no [connector] that names an arm, and the line rate is armctl.toml's
+    or the document's."""
+    from .port_choice import choose_port
+
+    try:
+        choice = choose_port(option, config)  # (a PortChoice: itself, its arm read already or now)
+        identity = arm_identity(choice.url) if choice.arm is None else None
+    except ConfigError:
+        return None
+    return with_arm(choice, identity)  # (a kept calibration it cannot read is an error all the same)
 
 
 # --- one arm's record ----------------------------------------------------------------------------
@@ -182,10 +248,11 @@ def calibration_of(port: str, arm: str, findings, probed_on: str, baud: int | No
     return Calibration(arm, port, settings, baud, probed_on if baud is not None else "")
 
 
-def probed_baud(url: str) -> tuple[int, str] | None:
-    """The line rate ``armctl probe`` read the status of the arm on ``url`` at, and the source a
-    setting names for it (``probed on DATE for ARM``); None when no probe of it kept one."""
-    stored_record = load(arm_identity(url))
+def probed_baud(port) -> tuple[int, str] | None:
+    """The line rate ``armctl probe`` read the status of the arm on ``port`` (a ``PortChoice`` or a
+    URL: ``with_arm``) at, and the source a setting names for it (``probed on DATE for ARM``); None
+    when no probe of it kept one."""
+    stored_record = with_arm(port).arm.kept
     if stored_record is None or stored_record.baud is None:
         return None
     return stored_record.baud, f"probed on {stored_record.baud_on} for {stored_record.arm}"
@@ -194,36 +261,23 @@ def probed_baud(url: str) -> tuple[int, str] | None:
 # --- the profile of the arm on a port --------------------------------------------------------------
 
 
-def arm_profile(path=None, port: str | None = None, start=None):
-    """``armctl.host.profile.load_profile`` for the arm on ``port`` (a device path or URL, as resolved;
-    None: the configured port — ARMCTL_PORT, armctl.toml, the simulator — for the commands that
-    open none: lint, estimate, plot, a dry run): the chosen profile with that arm's ``[connector]``
-    laid over its own, key by key — what ``armctl probe`` stored for the arm, then armctl.toml's
-    top-level ``[connector]`` if it names no arm or its ``measured_on`` is this arm.  The one
-    lookup of the store: everything after it reads the profile (``Profile.sources`` says where
-    each value came from)."""
+def arm_profile(path=None, port=None, start=None):
+    """``armctl.host.profile.load_profile`` for the arm on ``port`` (a device path or URL, as resolved,
+    or a ``PortChoice``, its arm read once: ``with_arm``; None: the configured port — ARMCTL_PORT,
+    armctl.toml, the simulator — for the commands that open none: lint, estimate, plot, a dry run:
+    ``quiet_port``): the chosen profile with that arm's ``[connector]`` laid over its own, key by
+    key — what ``armctl probe`` stored for the arm, then armctl.toml's top-level ``[connector]`` if
+    it names no arm or its ``measured_on`` is this arm.  Everything after it reads the profile
+    (``Profile.sources`` says where each value came from)."""
     from .profile import chosen_profile, load_config, with_connector, with_file_connector
 
     config = load_config(start)
     profile = chosen_profile(path, config=config)
-    arm = _configured_arm(config) if port is None else arm_identity(port)
-    stored = None if arm is None else load(arm)
+    choice = quiet_port(None, config) if port is None else with_arm(port)
+    arm, stored = (None, None) if choice is None else (choice.arm.identity, choice.arm.kept)
     for name in () if stored is None else stored.settings:
         profile = with_connector(profile, {name: stored.settings[name].value}, stored.source_of(name))
     return with_file_connector(profile, config, lambda measured_on, where: _identity_in(measured_on, where) == arm)
-
-
-def _configured_arm(config) -> str | None:
-    """The arm on the configured port, for a command that opens none; None when no port can be
-    resolved (ARMCTL_PORT set empty, a bad sim:// URL): such a command does not talk to the arm,
-    so a port it would not use does not stop it — then no stored calibration applies, and no
-    [connector] that names an arm."""
-    from .port_choice import choose_port
-
-    try:
-        return arm_identity(choose_port(None, config).url)
-    except ConfigError:
-        return None
 
 
 def _identity_in(measured_on: str, where: str) -> str:

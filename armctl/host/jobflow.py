@@ -303,7 +303,7 @@ def read_resume_point(log, script, from_line: int = 1):
                 raise ResumeRefused(IN_USE)
             lines = (raw.decode("utf-8", errors="replace")
                      for raw in read_lines_bounded(stream, f"--resume {name}", MAX_LOG_BYTES))
-            point = read_resume_lines(lines, script.name, script.data)
+            point = read_resume_lines(lines, script.name, script.data, name)
         if not os.access(name, os.W_OK):
             raise ResumeRefused("it cannot be written, and a resume marks the log it continues so that it is never "
                                 "resumed twice (mark_resumed): make it writable, or resume a writable copy")

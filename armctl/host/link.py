@@ -51,16 +51,16 @@ def connect(port: "str | PortChoice | None", baud: int | None, announce: Callabl
     port). Returns the link and the baud rate."""
     from .profile import load_config
 
+    from .calibration import arm_profile, with_arm
+
     config = load_config()
-    choice = choose_port(port, config)
+    choice = with_arm(choose_port(port, config))  # (a PortChoice from Arm.open: read already)
     banner = choice.banner()
     if banner and announce is not None:
         announce(banner)
-    baud = line_baud(baud, config, choice.url)[0]
+    baud = line_baud(baud, config, choice)[0]
     if profile is None:
-        from .calibration import arm_profile
-
-        profile = arm_profile(port=choice.url)
+        profile = arm_profile(port=choice)
     link_options.setdefault("state", plausible_state(profile))
     return Link.open(choice.url, baud, **link_options), baud
 
@@ -101,18 +101,19 @@ def config_baud(config: dict, path) -> int:
     return check_config_value(path, "baud", config.get("baud", DEFAULT_BAUD))
 
 
-def line_baud(baud: int | None, config, url: str | None) -> tuple[int, str | None]:
-    """The line rate a port-using command talks to the arm on ``url`` at, and where it came from
-    (None: the document's 9600): ``--baud``, else armctl.toml's ``baud``, else the rate ``armctl
-    probe`` read that arm's status at (so a probed 115200 arm needs only ``--port``), else 9600."""
+def line_baud(baud: int | None, config, port) -> tuple[int, str | None]:
+    """The line rate a port-using command talks to the arm on ``port`` (a ``PortChoice``, its arm
+    read once, or a URL; None: no port) at, and where it came from (None: the document's 9600):
+    ``--baud``, else armctl.toml's ``baud``, else the rate ``armctl probe`` read that arm's status
+    at (so a probed 115200 arm needs only ``--port``), else 9600."""
     if baud:
         return baud, "--baud"
     if "baud" in config.values:
         return config_baud(config.values, config.path_of("baud")), str(config.path_of("baud"))
-    if url is not None:
+    if port is not None:
         from .calibration import probed_baud
 
-        probed = probed_baud(url)
+        probed = probed_baud(port)
         if probed is not None:
             return probed
     return DEFAULT_BAUD, None

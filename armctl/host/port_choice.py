@@ -10,7 +10,8 @@ reader, the link's thread machinery or the simulator.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import Any
 
 from ..errors import ConfigError
 from .profile import CONFIG_NAME, check_config_value
@@ -23,6 +24,9 @@ PORT_ENV = "ARMCTL_PORT"
 class PortChoice:
     url: str
     origin: str  # "--port", "ARMCTL_PORT", the armctl.toml it came from (project or user) or "default"
+    # the arm on it, once read (``calibration.with_arm``: its identity, what ``armctl probe`` kept
+    # for it): the command or ``Arm`` that chose the port reads it once and passes the choice on
+    arm: Any = field(default=None, compare=False, repr=False)
 
     @property
     def from_file(self) -> bool:

@@ -60,13 +60,16 @@ def refuse_gone_simulator(point) -> None:
         "`armctl sim --tcp PORT`, and its port as --port)")
 
 
-def arm_of(url: str, ports=None) -> str | None:
-    """The identity of the arm on ``url`` now (``calibration.arm_identity``: what a job record
-    keeps as ``arm``; ``ports``: pyserial's list, read once); None for a URL it cannot read."""
+def arm_of(port, ports=None) -> str | None:
+    """The identity of the arm on ``port`` (``calibration.arm_identity``: what a job record keeps as
+    ``arm``): a ``PortChoice``'s, read once (``calibration.with_arm``), or a URL's now (``ports``:
+    pyserial's list, read once); None for a URL it cannot read."""
     from .calibration import arm_identity
 
+    if getattr(port, "arm", None) is not None:
+        return port.arm.identity
     try:
-        return arm_identity(url, ports)
+        return arm_identity(getattr(port, "url", port), ports)
     except ArmctlError:  # a URL it cannot read (ConfigError)
         return None
 
@@ -79,44 +82,34 @@ def same_arm(logged: str, url: str, ports=None) -> bool:
     return identity is not None and identity == arm_of(url, ports)  # (unreadable: not shown to be the same arm)
 
 
-def _by_name_only(identity: str) -> bool:
-    """An identity no more than the path or address its port leads to (a device without a USB
-    serial number or location, a pty, a TCP port): another arm there has the same one."""
-    from .calibration import _DEVICE, _NETWORK_SCHEMES  # (arm_identity's words, spelt there once)
-
-    return identity.startswith((_DEVICE, *(f"{scheme}://" for scheme in _NETWORK_SCHEMES)))
-
-
 def _ports_of(identity: str, logged: str, ports) -> list[str]:
     """The ports on which the arm of ``identity`` is found now: the log's port ``logged``, the
     devices pyserial lists (``ports``: ``armctl ports``), the path a device identity names."""
-    from .calibration import _DEVICE, _USB
+    from .calibration import ports_to_search
 
-    candidates = [logged]
-    if identity.startswith(_USB):
-        candidates += sorted(info.device for info in ports)
-    elif identity.startswith(_DEVICE) and os.path.exists(identity[len(_DEVICE):]):
-        candidates.append(identity[len(_DEVICE):])
+    candidates = [logged, *ports_to_search(identity, ports)]
     return list(dict.fromkeys(port for port in candidates if arm_of(port, ports) == identity))
 
 
-def refuse_another_arm(point, url: str, override: str) -> None:
+def refuse_another_arm(point, port, override: str, ports=None) -> None:
     """``ResumeRefused`` (exit 2, nothing sent) when the log ``point`` was read from records its
-    job on another arm than the one on ``url`` — by the arm's identity the log recorded
-    (``arm``), else by the port's name; ``override``: how to say it is the same arm."""
+    job on another arm than the one on ``port`` (a ``PortChoice``, or a URL) — by the arm's
+    identity the log recorded (``arm``), else by the port's name; ``override``: how to say it is
+    the same arm; ``ports``: pyserial's list if read already (``_port_list``)."""
     if point.port is None:
         return
-    from .calibration import _DEVICE, _USB, port_infos
-
-    # pyserial's list, read once for every identity below, and only where a device path needs it
-    devices = [port for port in (url, point.port) if "://" not in port and not port.startswith((_USB, _DEVICE))]
-    ports = port_infos() if devices else ()
-    now = arm_of(url, ports)
+    url = getattr(port, "url", port)
+    if ports is None and getattr(port, "arm", None) is None:  # a URL's arm, read here
+        ports = _port_list(url, point.port)
+    now = arm_of(port, ports)
     if point.arm is not None and now is not None:
         if point.arm == now:
+            return  # (a PortChoice's arm: no list read)
+    else:
+        ports = _port_list(url, point.port) if ports is None else ports
+        if same_arm(point.port, url, ports):
             return
-    elif same_arm(point.port, url, ports):
-        return
+    ports = _port_list(url, point.port) if ports is None else ports  # where the log's arm is now
     name = point.log_path or "the log"
     if point.arm is None or now is None:  # by name (a log without the identity)
         raise ResumeRefused(f"--resume {name}: its job ran on {point.port}, not on {url}: a resume on another arm "
@@ -131,6 +124,24 @@ def refuse_another_arm(point, url: str, override: str) -> None:
     raise ResumeRefused(f"--resume {name}: its job ran on {point.port}, the arm {point.arm}; {now_there}: a resume on "
                         f"another arm would continue a job that arm never ran; nothing was sent ({where}; or, if the "
                         f"arm on {url} is that arm after all (on another adapter, say), {override})")
+
+
+def _port_list(url: str, logged: str):
+    """pyserial's list, read once for every identity of a resume's ports, and only where a device
+    path needs it (``calibration.reads_port_list``)."""
+    from .calibration import port_infos, reads_port_list
+
+    return port_infos() if reads_port_list(url) or reads_port_list(logged) else ()
+
+
+def _with_arm(choice, logged: str):
+    """``choice`` with its arm read (``calibration.with_arm``) from the list of ports its resume
+    reads once, and that list; a URL whose arm cannot be named stays as it is (``arm_of``: None)."""
+    from .calibration import with_arm
+
+    ports = _port_list(choice.url, logged)
+    identity = arm_of(choice.url, ports)
+    return (choice if identity is None else with_arm(choice, identity)), ports
 
 
 def moved_to(point, url: str):
@@ -156,17 +167,21 @@ def resume_port(point, option: str | None, other_port: bool = False):
         return choice, (f"--resume: {name} does not record the port its job ran on (an armctl before this one wrote "
                         f"it): resuming on {choice.url} ({origin}); be sure that is the arm the job ran on"), point
     if option is None:
-        refuse_another_arm(point, point.port, f"--port {point.port} {OVERRIDE_FLAG}")
+        from .calibration import by_name_only
+
+        choice, ports = _with_arm(choose_port(point.port, origin=f"--resume {name}"), point.port)
+        refuse_another_arm(point, choice, f"--port {point.port} {OVERRIDE_FLAG}", ports)
         unchecked = ("its identity is unknown (an armctl before this one wrote the log): be sure it is still that arm"
                      if point.arm is None else
                      f"known as {point.arm} only, as any arm there would be: be sure it is still that arm"
-                     if _by_name_only(point.arm) else None)
-        return choose_port(point.port, origin=f"--resume {name}"), \
+                     if by_name_only(point.arm) else None)
+        return choice, \
             f"--resume: on the port {name} records, {point.port} (the arm its job ran on" + \
             (f"; {unchecked})" if unchecked else ")"), point
     choice = choose_port(option)
     if other_port:
         return choice, f"--resume: on {choice.url} ({OVERRIDE_FLAG}: the arm {name} ran on, at {point.port})", \
             moved_to(point, choice.url)
-    refuse_another_arm(point, choice.url, f"add {OVERRIDE_FLAG}")
+    choice, ports = _with_arm(choice, point.port)
+    refuse_another_arm(point, choice, f"add {OVERRIDE_FLAG}", ports)
     return choice, None, point

@@ -388,14 +388,15 @@ def estimate(script, lead_s, baud, profile_path, as_json):
 
     SCRIPT may be - for standard input.
     """
-    from ..host.calibration import arm_profile
+    from ..host.calibration import arm_profile, quiet_port
     from ..core.motion import MotionModel
     from .run_job import check_script, configured_baud, plan_job, print_estimate
 
     snapshot = _read_script(script)
-    profile = arm_profile(profile_path)  # the configured port's arm
+    port = quiet_port(None)  # the configured port, its arm read once (None: it names none)
+    profile = arm_profile(profile_path, port=port)
     checked = check_script(snapshot, profile)
-    result = plan_job(checked, MotionModel(profile), lead_s, baud or configured_baud()).estimate
+    result = plan_job(checked, MotionModel(profile), lead_s, baud or configured_baud(port)).estimate
     if as_json:
         click.echo(json.dumps(result.to_json()))
     else:

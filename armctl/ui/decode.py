@@ -13,10 +13,13 @@ A log's records carry a time (``t``, the arm's clock) and a direction (``tx``: h
 ``rx``: arm→host); each direction is its own byte stream with its own scanner (a frame never
 spans the two), and each frame is given the time of the record its first byte came in.  Frames
 come out in the log's order, so the two directions interleave by time, not by byte offset;
-a chunk's ``offset`` counts the bytes of its own direction.  A log line that is no JSON object
-with a ``hex`` string carries no bytes (a note, a progress record, a torn line), and neither
-does a sealed record (``run --log``'s: place and CRC-32) whose checksum does not match: its
-bytes may not be the ones written, so the CLI names its line and exits 1.
+a chunk's ``offset`` counts the bytes of its own direction.  A log record that is no JSON object
+with a ``hex`` string carries no bytes (a note, a progress record).  Only a log's intact prefix
+is trusted, as ``--resume`` trusts it (armctl/core/joblog.py: SQLite's recovery stops at the
+first bad frame): the first line that is not JSON, or — once a sealed record (``run --log``'s:
+place and CRC-32) was seen — no intact sealed record in its place, ends the decoding: its bytes
+and everything after it may not be what was written, so the CLI names its line and exits 1 —
+unless it is the torn last line a crash leaves (``joblog.torn``), which is named and ignored.
 
 Pure but for reading the stream it is given: no printing (the CLI formats each ``Decoded``).
 """
@@ -31,10 +34,10 @@ from dataclasses import dataclass
 from typing import BinaryIO, Iterator
 
 from .formats import (  # noqa: F401 - DIRECTIONS: the log's words, offered here too
-    DIRECTIONS, HEX_DIGIT_BYTES, WHITESPACE_BYTES, looks_like_hex, looks_like_log,
+    DIRECTIONS, HEX_DIGIT_BYTES, WHITESPACE_BYTES, holds_sealed_record, looks_like_hex, looks_like_log,
 )
 from ..host.inputs import MAX_INPUT_BYTES, read_blocks_bounded, split_lines
-from ..core.joblog import intact
+from ..core.joblog import damage_of, in_place, intact, torn
 from ..core.protocol import CONTROL_HEAD, FRAME_SIZE, MOTION_HEAD, STATUS_HEAD, STATUS_SIZE
 from ..core.status_frames import Chunk, chunk_at
 
@@ -110,12 +113,12 @@ class FrameScanner:
 
 
 def decode_stream(stream: BinaryIO, name: str, limit_bytes: int = MAX_INPUT_BYTES,
-                  damaged: list[int] | None = None, jobs: list | None = None) -> Iterator[Decoded]:
+                  damaged: list | None = None, jobs: list | None = None) -> Iterator[Decoded]:
     """Every chunk of ``stream`` in order (``InputTooLarge`` past ``limit_bytes``, ``NotHex``
-    for hex text that stops being hex beyond its first block); a log's sealed records whose
-    checksum does not match give no bytes, their line numbers appended to ``damaged``; its
-    intact job records (which script, from which line, on which port) go to ``jobs`` as
-    (line number, record)."""
+    for hex text that stops being hex beyond its first block); a log's chunks up to its first
+    damaged line, which goes to ``damaged`` as a ``LogDamage`` (a torn last line too, ``torn``
+    set); its intact job records (which script, from which line, on which port) go to ``jobs``
+    as (line number, record)."""
     blocks = read_blocks_bounded(stream, name, limit_bytes, BLOCK_BYTES)
     first = b""
     for block in blocks:  # the probe: up to PROBE_BYTES, or the whole input
@@ -174,29 +177,48 @@ def _hex_bytes(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:
 def _looks_like_log(first: bytes, ended: bool) -> bool:
     if ended:
         return looks_like_log(first)
-    return first.lstrip()[:1] == b"{"
+    return first.lstrip()[:1] == b"{" or holds_sealed_record(first)
 
 
 def _log_lines(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:
     return split_lines(_chain(first, rest))
 
 
-def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list[int], jobs: list) -> Iterator[Decoded]:
+@dataclass(frozen=True)
+class LogDamage:
+    """The line of a log that ended the decoding: its ``number``, ``why`` it is no intact record,
+    how many non-blank lines ``after`` it were not decoded, and whether it is the ``torn`` last
+    line a crash leaves (no damage)."""
+
+    number: int
+    why: str
+    after: int = 0
+    torn: bool = False
+
+
+def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list, jobs: list) -> Iterator[Decoded]:
     """Each record's bytes into its direction's scanner; each chunk with the time of the
-    record its first byte came in.  A sealed record (``run --log``'s: its ``crc``) whose
-    checksum does not match gives no bytes: its line number goes to ``damaged``; an intact job
-    record goes to ``jobs``."""
+    record its first byte came in; up to the first damaged line (``_Prefix``), which goes to
+    ``damaged``; an intact job record goes to ``jobs``."""
     scanners: dict[str | None, tuple[FrameScanner, deque]] = {}
-    for number, line in enumerate(_log_lines(first, rest), 1):
-        record = _record(line)
-        if record is _DAMAGED:
-            damaged.append(number)
+    prefix = _Prefix()
+    lines = _log_lines(first, rest)
+    for number, line in enumerate(lines, 1):
+        if not line.strip():
             continue
-        if record is None:
-            if b'"job"' in line and (job := _job(line)) is not None:
-                jobs.append((number, job))
+        record = prefix.record(line)
+        if isinstance(record, _Damaged):  # the intact prefix ends here
+            text = line.decode("utf-8", "replace")
+            if torn(text.rstrip("\n"), text.endswith("\n")):
+                damaged.append(LogDamage(number, record.why, torn=True))
+            else:
+                damaged.append(LogDamage(number, record.why, sum(1 for later in lines if later.strip())))
+            break
+        if isinstance(record, dict) and record.get("dir") == "job":
+            jobs.append((number, record))
+        data, t_s, direction = _frame_of(record)
+        if data is None:
             continue
-        data, t_s, direction = record
         scanner, marks = scanners.setdefault(direction, (FrameScanner(), deque()))
         marks.append((scanner._base + len(scanner._buffer), t_s))  # where this record's bytes start
         yield from _timed(scanner.feed(data), marks, direction)
@@ -204,38 +226,56 @@ def _log_chunks(first: bytes, rest: Iterator[bytes], damaged: list[int], jobs: l
         yield from _timed(scanner.finish(), marks, direction)
 
 
-_DAMAGED = object()  # ``_record``'s answer for a sealed record whose checksum does not match
+_TOO_DEEP = object()  # a JSON value nested too deep for the parser
 
 
-def _record(line: bytes):
-    """A record's (bytes, time, direction); None for a line that carries none; ``_DAMAGED``."""
-    if not line.strip():
-        return None
-    try:
-        record = json.loads(line)
-    except (ValueError, RecursionError):
-        return None  # no JSON (a torn last line), nested too deep: no bytes
-    if isinstance(record, dict) and "crc" in record and not intact(record):
-        return _DAMAGED  # its bytes may not be the ones written (a flipped bit, in them or in a key)
+@dataclass(frozen=True)
+class _Damaged:
+    why: str  # why the line is no intact record (``joblog.damage_of``'s words)
+
+
+class _Prefix:
+    """The journal's rule of trust (armctl/core/joblog.py), line by line: ``record(line)`` → the
+    line's JSON value (a sealed record's ``crc`` and ``seq`` taken out), or why it ends the
+    intact prefix: it is not JSON, or it is no intact sealed record in its place where the log
+    is sealed (a record with ``crc`` or ``seq`` was seen: from then on a key a flipped bit hit
+    is no excuse).  A hand-made log, or one of format 1, without seals, is read as before."""
+
+    def __init__(self) -> None:
+        self.sealed = False
+        self.expected = 0  # the ``seq`` due next
+
+    def record(self, line: bytes):
+        """The line's JSON value (None: nested too deep, no seals), or ``_Damaged``."""
+        text = line.decode("utf-8", "replace")
+        try:
+            value = json.loads(text)
+        except RecursionError:
+            value = _TOO_DEEP
+        except ValueError:
+            return _Damaged(damage_of(text))
+        if not self.sealed and not (isinstance(value, dict) and ("crc" in value or "seq" in value)):
+            return None if value is _TOO_DEEP else value  # no seals: nothing tells its bytes were written
+        self.sealed = True
+        if not isinstance(value, dict) or not intact(value):  # (``intact`` takes the crc out)
+            return _Damaged(damage_of(text))
+        seq = value.pop("seq", None)
+        if not in_place(seq, self.expected):
+            return _Damaged("a record out of its place: one dropped, moved or added")
+        self.expected = seq + 1
+        return value
+
+
+def _frame_of(record) -> tuple:
+    """A record's (bytes, time, direction); (None, None, None) for one that carries none."""
     try:
         data = bytes.fromhex(record["hex"])
-    except (ValueError, KeyError, TypeError):
-        return None  # a note, a summary, no JSON object: no bytes
+    except (ValueError, KeyError, TypeError, IndexError):
+        return None, None, None  # a note, a summary, no JSON object: no bytes
     t_s = record.get("t")
     direction = record.get("dir")
     return (data, float(t_s) if isinstance(t_s, (int, float)) and not isinstance(t_s, bool) else None,
             direction if direction in DIRECTIONS else None)
-
-
-def _job(line: bytes) -> dict | None:
-    """The job record on ``line`` (``run --log``'s first: script, from line, port), if intact."""
-    try:
-        record = json.loads(line)
-    except (ValueError, RecursionError):
-        return None
-    if not isinstance(record, dict) or record.get("dir") != "job" or ("crc" in record and not intact(record)):
-        return None
-    return record
 
 
 def _timed(chunks: list[Chunk], marks: deque, direction: str | None) -> Iterator[Decoded]:

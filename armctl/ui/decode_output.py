@@ -1,7 +1,8 @@
 """``armctl decode``'s output: each ``Decoded`` of the input (armctl/ui/decode.py) printed as a
 line (or a JSON line), a write per 1,024 lines; the tally, a log's job records (script, first
-line, port) and every damaged log record on stderr; the exit code (1 when a sealed record's
-checksum did not match: its bytes were not shown).  The input is a regular file or stdin
+line, port) and the line that ended its intact prefix on stderr; the exit code (1 when that
+line is damaged: it and the lines after it were not shown; 0 for the torn last line a crash
+leaves).  The input is a regular file or stdin
 (``open_input``)."""
 
 from __future__ import annotations
@@ -22,7 +23,7 @@ def print_decoded(source: str, as_json: bool) -> int:
 
     tally = ChunkTally()
     out = sys.stdout
-    damaged: list[int] = []
+    damaged: list = []  # the LogDamage that ended a log's intact prefix, if one did
     jobs: list = []  # (line, record) of each job record of a log: its script and port
     name = "<stdin>" if source == "-" else source
     with open_input(source) as stream:
@@ -41,10 +42,13 @@ def print_decoded(source: str, as_json: bool) -> int:
                 out.write("\n".join(lines) + "\n")
     for number, job in jobs:
         click.echo(f"{name}:{number}: {describe_job(job)}", err=True)
-    for number in damaged:
-        click.echo(f"{name}:{number}: a damaged record (its checksum does not match): its bytes are not shown", err=True)
+    for damage in damaged:
+        click.echo(f"{name}:{damage.number}: " + (
+            "the last line is torn (the crash's cut): ignored" if damage.torn else
+            f"a damaged record ({damage.why}): the log is decoded up to it; it and the {damage.after} line(s) "
+            "after it are not shown (only a log's intact prefix is trusted)"), err=True)
     click.echo(tally.line(), err=True)
-    return EXIT_PROBLEMS if damaged else 0
+    return EXIT_PROBLEMS if any(not damage.torn for damage in damaged) else 0
 
 
 def describe_job(job: dict) -> str:

@@ -62,9 +62,27 @@ _LOG_LINE = re.compile(rb"^\s*\{")
 
 
 def looks_like_log(data: bytes) -> bool:
-    """True when the input is a JSON-lines log whose records carry frames as ``hex``."""
-    first = data.lstrip()[:1]
-    return first == b"{" and all(_LOG_LINE.match(line) for line in data.splitlines() if line.strip())
+    """True when the input is a JSON-lines log whose records carry frames as ``hex``: every line
+    starts as a JSON object does — or, a log with a damaged line (which ``decode`` must name,
+    not read as raw bytes), its first line is a JSON object or a line is a sealed record."""
+    data = data.lstrip()
+    if data[:1] == b"{" and all(_LOG_LINE.match(line) for line in data.splitlines() if line.strip()):
+        return True
+    try:
+        if isinstance(json.loads(data.split(b"\n", 1)[0]), dict):
+            return True
+    except (ValueError, RecursionError):
+        pass
+    return holds_sealed_record(data)
+
+
+def holds_sealed_record(data: bytes) -> bool:
+    """A line of ``data`` is an intact sealed record of a ``run --log`` (its CRC-32 matches: no
+    chance in other bytes) — a log, whatever damage its first lines took."""
+    from ..core.joblog import unseal
+
+    return any(line.startswith(b'{"') and unseal(line.decode("utf-8", "replace")) is not None
+               for line in data.split(b"\n"))
 
 
 def bytes_from_input(data: bytes) -> bytes:

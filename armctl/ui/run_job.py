@@ -116,9 +116,10 @@ def print_estimate(result, header: str) -> None:
         click.echo(f"  note: {note}")
 
 
-def dry_run(options: JobOptions, checked, model) -> int:
+def dry_run(options: JobOptions, checked, model, port=None) -> int:
+    """The frames and the estimate, no port opened (``port``: the one named, its arm read once)."""
     # the estimate first: it refuses a job too long to run (E012) before a frame is printed
-    job = plan_job(checked, model, options.lead_s, options.baud or configured_baud(options.port))
+    job = plan_job(checked, model, options.lead_s, options.baud or configured_baud(port))
     for statement in job.statements():
         frame = statement.command.encode()
         click.echo(f"{statement.line:>6}  {frame.hex()}  {describe(statement.command)}")
@@ -126,21 +127,18 @@ def dry_run(options: JobOptions, checked, model) -> int:
     return EXIT_OK
 
 
-def configured_baud(port: str | None = None) -> int:
-    """The line rate ``run`` opens ``port`` at without ``--baud`` (None: the configured port), and
+def configured_baud(port=None) -> int:
+    """The line rate ``run`` opens ``port`` (a URL or a ``PortChoice``) at without ``--baud`` (None:
+    the configured port), and
     what ``--dry-run`` and ``estimate`` plan with: armctl.toml's (the project's, else yours), else
-    what ``armctl probe`` read the arm there at, else 9600 (``link.line_baud``)."""
-    from ..errors import ConfigError
+    what ``armctl probe`` read the arm there at, else 9600 (``link.line_baud``); a port it cannot
+    name does not stop it (``calibration.quiet_port``)."""
+    from ..host.calibration import quiet_port
     from ..host.link import line_baud
-    from ..host.port_choice import choose_port
     from ..host.profile import load_config
 
     config = load_config()
-    try:
-        url = choose_port(port, config).url
-    except ConfigError:  # (a port it would not open does not stop a command that opens none)
-        url = None
-    return line_baud(None, config, url)[0]
+    return line_baud(None, config, quiet_port(port, config))[0]
 
 
 def _same_file(first: str, second: str) -> bool:
@@ -249,7 +247,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     from ..host.jobflow import read_resume_point, resume_claim
     from ..host.link import choose_port
     from ..host.resume_port import resume_port
-    from ..host.calibration import arm_profile
+    from ..host.calibration import arm_profile, quiet_port, with_arm
     from ..core.motion import MotionModel
 
     if options.other_port and not options.resume_log:
@@ -258,16 +256,18 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
     if resume is not None:  # the arm the log's job ran on (refused: another arm's --port)
         port, told, resume = resume_port(resume, options.port, options.other_port)
+        port = with_arm(port)  # (read already where the resume checked the arm)
         options = replace(options, port=port.url)  # (the resume command a stop prints names that arm)
         if told is not None:
             click.echo(f"armctl: {told}", err=True)
-    else:  # once: the profile carries the stored calibration of the arm on the port (a dry run
-        # opens none: the port given, else the configured one, as estimate)
-        port = None if options.dry_run else choose_port(options.port)
-    profile = arm_profile(options.profile_path, port=options.port if port is None else port.url)
+    else:  # the arm on the port read once: the profile carries its stored calibration (a dry run
+        # opens none: the port given, else the configured one, as estimate: None if it names no arm)
+        port = with_arm(choose_port(options.port)) if not options.dry_run else \
+            quiet_port(None) if options.port is None else with_arm(options.port)
+    profile = arm_profile(options.profile_path, port=port)
     checked = check_script(script, profile, options.from_line)
     if options.dry_run:
-        return dry_run(options, checked, MotionModel(profile))
+        return dry_run(options, checked, MotionModel(profile), port)
     if options.resume_log and options.log_path and _same_file(options.resume_log, options.log_path):
         raise UsageFailure(f"--log {options.log_path} is the journal --resume reads: it is never written over; "
                            "give the resumed job a --log of its own")
@@ -552,7 +552,7 @@ def _summary(result, view, wall_s: float, estimate, options: JobOptions, departu
         click.echo("finished: the arm finished the job")
         return result.exit_code
     if result.outcome == "finished, unproven":
-        if any(PROBE_HINT in message for message in result.messages):
+        if view.probe_answers:
             click.echo("finished, unproven: the arm is at rest at the last target, but what proves the job ran rests on "
                        f"settings not measured on this arm (the note above); {PROBE_HINT}")
         else:
