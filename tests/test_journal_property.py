@@ -33,8 +33,8 @@ Repeat blocks are left out: a resume inside one starts the block again, as ``--f
 
 from __future__ import annotations
 
+import functools
 import io
-
 import os
 import random
 import re
@@ -81,7 +81,7 @@ def crashes(tmp_path_factory):
 
     def crash(index: int, point: float) -> Crash:
         script = scripts[index % len(scripts)]
-        total = len(list(read_script(str(script)).compile()))
+        total = _frame_count(script)
         n = 1 + min(total - 1, int(point * total))
         if (script, n) not in made:
             made[(script, n)] = make_crash(script, n, folder / f"{script.stem}-{n}.log")
@@ -89,6 +89,18 @@ def crashes(tmp_path_factory):
 
     crash.folder = folder
     return crash
+
+
+@functools.cache
+def _snapshot(script: Path):
+    """The script as read once (the scripts do not change during the run; each example reads its
+    journal, not the script, as its own input)."""
+    return read_script(str(script))
+
+
+@functools.cache
+def _frame_count(script: Path) -> int:
+    return len(list(_snapshot(script).compile()))
 
 
 _NUMBER = re.compile(rb"-?\d+(?:\.\d+)?")
@@ -147,7 +159,7 @@ def mutate(crash: Crash, cut: float, damage) -> bytes:
 
 def decide(crash: Crash, data: bytes):
     """The resume's decision: ("refused", why) or ("line", L or None)."""
-    snapshot = read_script(str(crash.script))
+    snapshot = _snapshot(crash.script)
     try:
         point = read_resume_lines(io.StringIO(data.decode("utf-8", errors="replace")), snapshot.name, snapshot.data)
         return "line", point.line_for(*crash.rest)
