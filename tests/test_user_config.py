@@ -138,7 +138,8 @@ def test_config_json_names_every_source(user, project):
     data = config_json()
     settings = data["settings"]
     connector = {f"connector.{key}" for key in CONNECTOR_KEYS}  # the arm's [connector], each with its source
-    assert set(settings) == {"port", "baud", "profile", "lint", "jog"} | connector
+    measured = {"timing.command_overhead_s"}  # measured by the probe too, from another section
+    assert set(settings) == {"port", "baud", "profile", "lint", "jog"} | connector | measured
     assert settings["port"] == {"value": "sim://?clock=virtual", "source": "user", "where": str(user_path)}
     assert settings["lint"] == {"value": {"ignore": ["L203"]}, "source": "project", "where": str(project_path)}
     assert settings["baud"] == {"value": 9600, "source": "default", "where": None}

@@ -19,7 +19,7 @@ from .profile_model import (
     CONNECTOR_KEYS, DOCUMENT, FIXED_POSES, ILLUSTRATIVE, PROTOCOL, PROTOCOL_KEYS, Connector, LintOptions, Profile, Pwm,
     Speeds, Timing, Workspace,
 )
-from .profile_schema import _OPTIONAL_SECTIONS, PROFILE_SCHEMA, check_profile_data
+from .profile_schema import _OPTIONAL_SECTIONS, PROFILE_SCHEMA, _apply, check_profile_data
 from .toml_reading import parse_toml
 
 DEFAULT_RESOURCE = ("armctl.data", "default_profile.toml")
@@ -77,15 +77,37 @@ def _connector(values: dict, sources: dict[str, str]) -> Connector:
     return Connector(**values, given=given)
 
 
+# What the arm does that the profile keeps outside [connector], measured and kept with the
+# [connector] values all the same: ``armctl probe`` stores them with the arm, and ``--write`` puts
+# them into armctl.toml's [connector] (its one table that names the arm: it has no [timing]).
+MEASURED_ELSEWHERE = {"command_overhead_s": "timing"}
+
+
+def check_connector_table(table: dict, source: str) -> dict[str, dict]:
+    """armctl.toml's top-level ``[connector]`` ``table`` checked, by the profile section each key
+    lands in (``{"connector": …, "timing": …}``); errors name ``connector.KEY``."""
+    elsewhere = {key: value for key, value in table.items() if key in MEASURED_ELSEWHERE}
+    checked = {"connector": check_profile_data({"connector": {k: v for k, v in table.items() if k not in elsewhere}},
+                                               source)["connector"], "timing": {}}
+    for key, value in elsewhere.items():
+        section = MEASURED_ELSEWHERE[key]
+        checked[section][key] = _apply(PROFILE_SCHEMA[section][key], value, source, f"connector.{key}")
+    return checked
+
+
 def with_connector(profile: Profile, table: dict, source: str) -> Profile:
     """``profile`` with armctl.toml's top-level ``[connector]`` ``table`` laid over its own, key by
-    key (checked here; errors name ``source`` and ``connector.KEY``)."""
-    given = check_profile_data({"connector": table}, source)["connector"]
-    if not given:
+    key (checked here; errors name ``source`` and ``connector.KEY``); a key of ``MEASURED_ELSEWHERE``
+    lands in its own section."""
+    checked = check_connector_table(table, source)
+    given, timing = checked["connector"], checked["timing"]
+    if not given and not timing:
         return profile
-    sources = {**profile.sources, **{f"connector.{key}": source for key in given}}
+    sources = {**profile.sources, **{f"connector.{key}": source for key in given},
+               **{f"timing.{key}": source for key in timing}}
     values = {key: getattr(profile.connector, key) for key in CONNECTOR_KEYS} | given
-    return dataclasses.replace(profile, connector=_connector(values, sources), sources=sources)
+    return dataclasses.replace(profile, connector=_connector(values, sources),
+                               timing=dataclasses.replace(profile.timing, **timing), sources=sources)
 
 
 def _cross_check(profile: Profile, source: str, prefix: str) -> None:

@@ -11,7 +11,8 @@ device path itself for a device pyserial knows nothing more of.  Two spellings o
 (``sim://?speed_factor=1.3&fifo=50&clock=virtual`` and ``sim://?fifo_frames=50&speed_factor=1.3``)
 are one identity; an identity is a port too (``arm_identity`` of it is itself).
 
-A ``Calibration`` is one arm's measured ``[connector]`` settings, each with the date it was
+A ``Calibration`` is one arm's measured ``[connector]`` settings (and ``command_overhead_s``, the
+profile's ``[timing]`` value: ``with_connector`` lays it there), each with the date it was
 probed, its evidence and how sure the probe was.  A later probe replaces the values it measured
 and keeps the others (a ``--no-motion`` probe does not forget a speed factor measured before).
 The store is one JSON file per arm in the user data directory (``$XDG_DATA_HOME/armctl/arms/``,

@@ -47,7 +47,7 @@ from .config_file import (  # noqa: F401 - the façade offers every part's names
 )
 from ..errors import ConfigError, ProfileError  # noqa: F401 - ProfileError: callers catch it from here
 from ..core.profile_build import (  # noqa: F401
-    DEFAULT_RESOURCE, default_profile, default_profile_data, parse_profile, with_connector,
+    DEFAULT_RESOURCE, check_connector_table, default_profile, default_profile_data, parse_profile, with_connector,
 )
 from ..core.profile_model import (  # noqa: F401
     CONNECTOR_KEYS, CONTROL_FRAMES, DOCUMENT, FIXED_POSES, GRIPPER_STATES, ILLUSTRATIVE, MEASURED_ON, PROBE, PROTOCOL,
@@ -99,7 +99,7 @@ def connector_table(table: dict, where: str) -> tuple[dict, str | None]:
     if MEASURED_ON in table and (not isinstance(measured_on, str) or not measured_on.strip()):
         raise ConfigError(f"{where}: connector.{MEASURED_ON} must be the port (or arm) the values were measured on, "
                           f"such as \"sim://?fifo_frames=50\" or \"usb 0403:6001 serial A10K4XYZ\"")
-    check_profile_data({"connector": values}, where)
+    check_connector_table(values, where)
     return values, measured_on
 
 

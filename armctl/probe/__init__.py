@@ -4,7 +4,7 @@ Map: plan.py (the engine: steps as generators over status frames and ``now``), s
 (listen, H1/H8 and the status frame through G54, control-frame timing, restore), stream.py
 (the status stream: its period and rotation, when each frame read was built), fifo.py (the
 connector's capacity), landing.py (when frames landed, as the port's reports prove it),
-motion.py (speed factor, kinematics), host.py (the loop over a Link), report.py (table, JSON,
+motion.py (speed factor, the wait before every command, kinematics), host.py (the loop over a Link), report.py (table, JSON,
 armctl.toml), command.py (the click command).
 docs/probe.md explains each measurement.
 """
@@ -12,7 +12,7 @@ docs/probe.md explains each measurement.
 from __future__ import annotations
 
 SETTINGS = ("fifo_frames", "control_frames", "status_xyz_frame", "speed_factor", "kinematics_verified",
-            "speed_tolerance")
+            "speed_tolerance", "command_overhead_s")
 
 
 # How late a status frame's timestamp may be on a real port: the link's reader wakes every 20 ms,

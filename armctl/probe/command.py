@@ -28,7 +28,7 @@ MOTION_ANNOUNCEMENT = (
 @click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=None, help="Line rate [default: 9600 or armctl.toml].")
 @click.option("--no-motion", is_flag=True, help="Never move the arm (the speed factor is then not measured).")
 @click.option("--yes", is_flag=True, help="Consent to the small moves without asking.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (the six settings and details), nothing else.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (the seven settings and details), nothing else.")
 @click.option("--write", "write_path", type=click.Path(dir_okay=False), metavar="FILE",
               help="Put the values into the [connector] table of FILE (an armctl.toml), keeping the rest.")
 @click.option("--list", "list_stored", is_flag=True, help="List the arms probed and what was kept for each; probe nothing.")
@@ -36,7 +36,7 @@ MOTION_ANNOUNCEMENT = (
               help="Forget what was kept for ARM (an arm as --list names it, or a port; default: the arm on --port).")
 def probe(port, baud, no_motion, yes, as_json, write_path, list_stored, forget):
     """Find out the arm's unknowns (FIFO size, control-frame timing, status frame, speed factor,
-    kinematics) and print them: setting, documented default, measured value, evidence, how sure.
+    its wait before every command, kinematics) and print them: setting, documented default, measured value, evidence, how sure.
     What it measured is kept with the arm (its USB serial number, host:port or sim:// options)
     and used by every command on that arm. See docs/probe.md."""
     if list_stored or forget is not None:

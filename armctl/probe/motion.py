@@ -7,10 +7,15 @@ model's path at model time τ by bisection, so that sample says ``factor = (t �
 with t the latest time the frame can have been built (armctl/probe/stream.py: a frame is read
 late — behind a USB adapter's 16 ms latency timer, 8 ms on average — and that lateness, taken
 for the arm's start delay, made the time bound's tolerance 1.42 where the arm's is 1.05).
-A least-squares fit over the samples of a move gives its factor; each move is timed there and
-back, joint and linear.  Resolution: a status step (0.01°, 0.1 mm) against the move's speed,
-plus ``probe.timestamp_uncertainty_s`` (a real port's reads: 0 on a virtual clock); the stated precision covers both and
-the spread of the moves.
+Each move is timed there and back, joint and linear, against the model's motion alone (no
+``[timing] command_overhead_s``, whatever was kept for the arm).  A straight-line fit
+``t = delay + slope × τ`` over a move's samples gives its start delay; the arm's wait before every
+command (``command_overhead_s``, ``overhead_of``) is what the start delays share beyond the probe's
+lag, and each move's factor is the least-squares fit through the origin of its samples' time after
+that wait (the wait was folded into the factor before: 1.07 on an arm that waits 100 ms).
+Resolution: a status step (0.01°, 0.1 mm) against the move's speed, plus
+``probe.timestamp_uncertainty_s`` (a real port's reads: 0 on a virtual clock); the stated
+precision covers both and the spread of the moves.
 
 Moves (``--no-motion`` runs none): joint 5 by ``JOINT_STEP_DEG`` at ``JOINT_SPEED_DEG_S`` and
 back (the tool tip moves by tool length × sin 5°, under 10 mm); then, only if the profile's
@@ -26,6 +31,7 @@ poses (one could agree by chance): without motion it stays false.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, replace
 
 from ..core.kinematics import reach_problem
 from ..core.motion import PWM_CHANNEL_COUNT, ArmPose, MotionModel
@@ -124,11 +130,32 @@ def _invert(segment, progress_of, wanted: float) -> float | None:
     return (low + high) / 2
 
 
+@dataclass(frozen=True)
+class MoveFit:
+    """One timed move: its samples ``(t − landing, τ)``, the factor's relative ``resolution``, its
+    ``start_delay_s`` (the intercept) and ``step_s``, one status step's time at its mean speed."""
+
+    samples: list
+    resolution: float
+    start_delay_s: float
+    step_s: float
+
+    def factor(self, overhead_s: float) -> float:
+        """The least-squares factor through the origin of the time after the arm's per-command wait."""
+        return sum((t - overhead_s) * tau for t, tau in self.samples) / sum(tau * tau for _, tau in self.samples)
+
+
+def unwaited(profile):
+    """``profile`` without a per-command wait: the moves are timed against the model's motion
+    alone, whatever a probe kept for the arm before (``[timing] command_overhead_s``)."""
+    return replace(profile, timing=replace(profile.timing, command_overhead_s=0.0))
+
+
 def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, arrived, quantum: float):
-    """Send ``command`` (the arm idle at ``start``), follow it to its end; the factor fitted and
-    its resolution, or None.  ``reading(frame)`` → a comparable value; ``progress_of(value)``
-    (also applied to the model's poses through ``reading_of_pose``) → distance from the start."""
-    segment = MotionModel(probe.profile, 1.0).plan(command, start)
+    """Send ``command`` (the arm idle at ``start``), follow it to its end; its ``MoveFit``, or None.
+    ``reading(frame)`` → a comparable value; ``progress_of(value)`` (also applied to the model's
+    poses) → distance from the start."""
+    segment = MotionModel(unwaited(probe.profile), 1.0).plan(command, start)
     written_s = probe.now_s
     landed_s = yield Send(command)
     at = probe.wire.written_bytes
@@ -170,19 +197,18 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
             samples.append((t - landed_s, tau))
     if len(samples) < 3:
         return None
-    factor = sum(t * tau for t, tau in samples) / sum(tau * tau for _, tau in samples)
     # the start delay: the intercept of a straight-line fit t = delay + slope × τ (handling before
     # the motion begins, which the fit through the origin folds into the factor)
     mean_t = sum(t for t, _ in samples) / len(samples)
     mean_tau = sum(tau for _, tau in samples) / len(samples)
     spread = sum((tau - mean_tau) ** 2 for _, tau in samples)
-    slope_fit = sum((tau - mean_tau) * (t - mean_t) for t, tau in samples) / spread if spread > 0 else factor
+    slope_fit = sum((tau - mean_tau) * (t - mean_t) for t, tau in samples) / spread if spread > 0 else mean_t / mean_tau
     start_delay_s = mean_t - slope_fit * mean_tau
     # one sample's factor error: the status step at the path's slowest sampled speed, and the clock
     # the fit's error bound: half a status step at the mean speed, and the clock, over the longest τ
     slope = total / segment.duration_s
     resolution = (quantum / 2 / slope + probe.timestamp_uncertainty_s + unsure_start_s) / max(tau for _, tau in samples)
-    return factor, resolution, len(samples), start_delay_s
+    return MoveFit(samples, resolution, start_delay_s, quantum / slope)
 
 
 def _joint_progress(start_joints):
@@ -278,19 +304,52 @@ def speed_factor(probe):
     measured = [r for r in joint + linear if r is not None]
     if not measured:
         return Finding("speed_factor", default, None, "too few status samples during the moves", UNSURE)
-    factors = [r[0] for r in measured]
+    overhead_s = overhead_of([(r.start_delay_s, r.step_s) for r in measured])
+    factors = [r.factor(overhead_s) for r in measured]
     value = sum(factors) / len(factors)
-    precision = max(max(r[1] for r in measured), (max(factors) - min(factors)) / 2)
+    precision = max(max(r.resolution for r in measured), (max(factors) - min(factors)) / 2)
     precision = math.ceil(round(max(precision, 0.005) * 100, 6)) / 100  # up to the next 0.01
-    details = {"joint": [round(r[0], 4) for r in filter(None, joint)],
-               "linear": [round(r[0], 4) for r in filter(None, linear)], "precision": precision,
-               "start_delay_s": [round(r[3], 4) for r in measured]}
+    joints = len([r for r in joint if r is not None])  # (measured: the joint moves' first)
+    details = {"joint": [round(f, 4) for f in factors[:joints]], "linear": [round(f, 4) for f in factors[joints:]],
+               "precision": precision, "start_delay_s": [round(r.start_delay_s, 4) for r in measured]}
     evidence = (f"joint 5 ±{JOINT_STEP_DEG:g}° at {JOINT_SPEED_DEG_S:g}°/s: {details['joint']}"
                 + (f"; tool ±{LINEAR_STEP_MM:g} mm at {LINEAR_SPEED_MM_MIN:g} mm/min: {details['linear']}" if linear else "")
-                + f" (arm time ÷ model time, fitted over {sum(r[2] for r in measured)} status samples); ±{precision:g}"
-                + linear_note)
-    found = Finding("speed_factor", default, round(value, 3), evidence, factor_confidence(value, precision), details)
-    return [found, tolerance_finding(value, precision, details["start_delay_s"])]
+                + f" (arm time ÷ model time{f' after the {overhead_s * 1000:g} ms wait' if overhead_s else ''}, "
+                f"fitted over {sum(len(r.samples) for r in measured)} status samples); ±{precision:g}" + linear_note)
+    confidence = factor_confidence(value, precision)
+    found = Finding("speed_factor", default, round(value, 3), evidence, confidence, details)
+    waited = overhead_finding(overhead_s, measured, confidence)
+    left_s = [round(r.start_delay_s - overhead_s, 4) for r in measured]  # (to 0.1 ms, as details shows them)
+    return [found, waited, tolerance_finding(value, precision, left_s, overhead_s)]
+
+
+def overhead_of(fits) -> float:
+    """The arm's wait before every motion command (``[timing] command_overhead_s``), from the moves'
+    ``(start_delay_s, step_s)``: the wait is common to every move, the rest of a start delay is the
+    probe's lag — the status step (a report trails the arm by up to one) and what is left of the reads'
+    lateness — which a coarser step makes larger either way (the linear moves' 0.1 mm at 5 mm/s is 20 ms
+    and their fits run ~5 ms low).  So: the least start delay of the finest moves (the joint moves: 0.01°
+    at 2°/s, 5 ms), in whole milliseconds down; none (0) under one of their steps, which the probe
+    cannot tell from its lag (the document's arm: ≤ 1 ms in virtual time, ≤ 2.9 ms through a pty)."""
+    finest_s = min(step_s for _, step_s in fits)
+    delay_s = min(delay_s for delay_s, step_s in fits if step_s <= finest_s * (1 + 1e-6))
+    return 0.0 if delay_s < finest_s else math.floor(round(delay_s * 1000, 6)) / 1000
+
+
+def overhead_finding(overhead_s: float, measured, factor: str) -> Finding:
+    """``command_overhead_s`` as a finding: sure while every move's start delay is within its own
+    status step (+ the millisecond rounded off) of it, likely beyond (speed_tolerance covers what is
+    left); no surer than the factor fitted with it."""
+    delays_ms = [round(r.start_delay_s * 1000, 1) for r in measured]
+    agree = all(abs(r.start_delay_s - overhead_s) <= r.step_s + 0.001 for r in measured)
+    confidence = factor if factor != SURE else SURE if agree else LIKELY
+    evidence = (f"start delays {delays_ms} ms (the intercepts of the timed moves' fits; one status step is "
+                f"{min(r.step_s for r in measured) * 1000:.1f} ms on the finest): "
+                + (f"{overhead_s * 1000:g} ms before every motion command" if overhead_s else
+                   "none beyond the probe's lag")
+                + ("" if agree else "; the moves disagree by more than their steps"))
+    return Finding("command_overhead_s", DOCUMENTED["command_overhead_s"], overhead_s, evidence, confidence,
+                   {"start_delay_s": [round(r.start_delay_s, 4) for r in measured]})
 
 
 def factor_confidence(value: float, precision: float) -> str:
@@ -301,10 +360,11 @@ def factor_confidence(value: float, precision: float) -> str:
     return SURE if spread <= SPEED_TOLERANCE_MARGIN else LIKELY if spread <= LIKELY_FACTOR_SPREAD else UNSURE
 
 
-def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding:
+def tolerance_finding(value: float, precision: float, start_delays_s, overhead_s: float = 0.0) -> Finding:
     """``speed_tolerance``: how much slower (or faster) than the written speed_factor the arm may
     run, for the streamer's time bound and the loss checks.  It covers the factor's precision
-    (twice over), the moves' longest start delay (the time bound's slack per frame is
+    (twice over), the moves' longest start delay after the wait the model knows (``overhead_s``,
+    ``start_delays_s`` are what is left of each move's; the time bound's slack per frame is
     ``(t − 1) × FRAME_SLACK_S / (SLOWEST_ARM_FACTOR − 1)``, so t must give it room) and at least
     ``SPEED_TOLERANCE_MARGIN`` for what two small moves do not exercise; rounded up to 0.01, up to
     the setting's own range (an arm the document's 2.0 is too narrow for needs more, not less).
@@ -318,8 +378,9 @@ def tolerance_finding(value: float, precision: float, start_delays_s) -> Finding
     excess = max(SPEED_TOLERANCE_MARGIN, 2 * precision / value, delay_s * (SLOWEST_ARM_FACTOR - 1) / FRAME_SLACK_S)
     needed = math.ceil(round((1 + excess) * 100, 6)) / 100
     tolerance = min(SPEED_TOLERANCE_RANGE[1], needed)
+    waited = f" after the {overhead_s * 1000:g} ms command_overhead_s" if overhead_s else ""
     evidence = (f"speed_factor ±{precision:g} (twice over: ±{2 * precision / value:.3f} of it), longest start delay "
-                f"{delay_s * 1000:.1f} ms, at least ±{SPEED_TOLERANCE_MARGIN:g}: the time bound confirms a frame "
+                f"{delay_s * 1000:.1f} ms{waited}, at least ±{SPEED_TOLERANCE_MARGIN:g}: the time bound confirms a frame "
                 f"once an arm {tolerance:g}x slower has finished it")
     confidence = SURE if needed == tolerance else LIKELY
     if needed > tolerance:

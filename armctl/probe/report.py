@@ -4,7 +4,7 @@
 Strategy: one reading of the findings (``settings``) feeds all three outputs.  A value is
 stated only when the probe is sure of it, or likely (a lower bound of the FIFO, kinematics
 that agree at one pose only): an unsure or unmeasured setting is ``null`` in JSON, ``—`` in the
-table and is not written.  JSON keys: exactly the six settings, plus ``details``.
+table and is not written.  JSON keys: exactly the seven settings, plus ``details``.
 """
 
 from __future__ import annotations
@@ -20,6 +20,7 @@ MEANING = {
     "speed_factor": "the arm's motion time ÷ the model's",
     "kinematics_verified": "the profile's kinematics explain the reported joints and X/Y/Z",
     "speed_tolerance": "how much slower (or faster) than speed_factor the arm may run: the time bound's factor",
+    "command_overhead_s": "the arm's wait before every motion command ([timing]; written in [connector])",
 }
 
 
@@ -27,14 +28,14 @@ def finding_for(probe, name: str) -> Finding:
     found = probe.finding(name)
     if found is not None:
         return found
-    why = "not measured: needs motion (run without --no-motion)" if name in ("speed_factor", "speed_tolerance") \
+    why = "not measured: needs motion (run without --no-motion)" if name in ("speed_factor", "speed_tolerance", "command_overhead_s") \
         and not probe.motion_allowed \
         else "not measured (the probe stopped before it)"
     return Finding(name, DOCUMENTED.get(name), None, why, NOT_MEASURED)
 
 
 def settings(probe) -> dict:
-    """The six settings: the measured value, or None when not measured or unsure."""
+    """The seven settings: the measured value, or None when not measured or unsure."""
     values = {}
     for name in SETTINGS:
         found = finding_for(probe, name)

@@ -54,11 +54,13 @@ JOINT_SPEED_DEG_S = 2.0
 ARRIVED_DEG = 0.02
 
 def _documented() -> dict:
-    """The document's readings: the packaged profile's [connector] table (one place)."""
+    """The document's readings: the packaged profile's [connector] table and the per-command wait
+    (one place)."""
     from ..host.profile import CONNECTOR_KEYS, default_profile
 
-    connector = default_profile().connector
-    return {key: getattr(connector, key) for key in CONNECTOR_KEYS}
+    profile = default_profile()
+    return {**{key: getattr(profile.connector, key) for key in CONNECTOR_KEYS},
+            "command_overhead_s": profile.timing.command_overhead_s}
 
 
 DOCUMENTED = _documented()

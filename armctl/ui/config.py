@@ -106,23 +106,26 @@ def _check_tables(config) -> None:
 
 
 def connector_settings(profile, config) -> list[Setting]:
-    """The ``[connector]`` in effect for the arm on the port, each value with its source: ``probe``
+    """The ``[connector]`` (and ``timing.command_overhead_s``, which the probe measures too) in
+    effect for the arm on the port, each value with its source: ``probe``
     (``where``: "probed on DATE for ARM", the calibration stored with the arm), ``project`` or
     ``user`` (armctl.toml's ``[connector]``), ``profile`` (the profile file's own table) or
     ``document`` (the vendor document's reading, an H-decision)."""
-    from ..host.profile import CONNECTOR_KEYS, DOCUMENT
+    from ..core.profile_build import MEASURED_ELSEWHERE
+    from ..host.profile import CONNECTOR_KEYS, DOCUMENT, ILLUSTRATIVE
 
     files = {str(path): kind for kind, path in (("user", config.user_path), ("project", config.project_path)) if path}
     settings = []
-    for key in CONNECTOR_KEYS:
-        source = profile.source_of(f"connector.{key}")
-        if source == DOCUMENT:
+    # and what the probe measures that lives in another section (timing.command_overhead_s)
+    for section, key in [("connector", key) for key in CONNECTOR_KEYS] + [(s, k) for k, s in MEASURED_ELSEWHERE.items()]:
+        source = profile.source_of(f"{section}.{key}")
+        if source in (DOCUMENT, ILLUSTRATIVE):  # (the packaged default's)
             origin = ("document", None)
         elif source.startswith("probed on "):
             origin = ("probe", source)
         else:
             origin = (files.get(source, "profile"), source)
-        settings.append(Setting(f"connector.{key}", getattr(profile.connector, key), *origin))
+        settings.append(Setting(f"{section}.{key}", getattr(getattr(profile, section), key), *origin))
     return settings
 
 
