@@ -200,7 +200,8 @@ def test_a_port_that_says_nothing_stops_before_sending(recorded_writes):
     result = run(SHORT, "--port", "loop://", "--timeout", "0.2", "--no-live")
     assert result.exit_code == 1
     assert result.stderr.strip() == (
-        "armctl: no complete status from loop:// within 0.2 s (received nothing); nothing was sent"
+        "armctl: no complete status from loop:// at 9600 baud within 0.2 s: received nothing (is the arm powered and "
+        "the cable on the host connector?); nothing was sent"
     )
     assert writes == []
 

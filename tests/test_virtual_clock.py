@@ -146,7 +146,7 @@ def test_a_virtual_run_with_faulty_status_still_finishes(faults):
 def test_a_virtual_arm_that_says_nothing_times_out_in_model_time():
     result = CliRunner().invoke(main, ["run", str(TIMED), "--port", f"{VIRTUAL}&loss=1", "--no-live"])
     assert result.exit_code == 1
-    assert "no complete status from sim://?clock=virtual&loss=1 within 3 s (received nothing)" in result.stderr
+    assert "no complete status from sim://?clock=virtual&loss=1 at 9600 baud within 3 s: received nothing" in result.stderr
     assert "Traceback" not in result.output
 
 

@@ -245,7 +245,7 @@ class Arm:
         ``status_json`` read."""
         link = self._link
         if not link.wait_until(lambda s: s.complete, timeout_s):
-            raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s")
+            raise JobFailed(link.silence_message(timeout_s))
         if link.error is not None:  # complete long ago, then the port went away: the last report is not live
             raise link.error
         return link.snapshot()[0]

@@ -46,9 +46,7 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     reports it is paused (``resume_paused``).  The arm's state; ``JobFailed`` when it does not
     answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
-        _, received, _, frames = link.snapshot()
-        heard = "nothing" if received == 0 else f"{received} bytes, {frames} status frames"
-        raise JobFailed(f"no complete status from {link.url} within {timeout_s:g} s (received {heard}); nothing was sent")
+        raise JobFailed(f"{link.silence_message(timeout_s)}; nothing was sent")
     wait_rotations(link, READ_ROTATIONS, timeout_s)
     if unpause:
         resume_paused(link, timeout_s, log, note, control_on_arrival)

@@ -367,6 +367,25 @@ class Link:
             return None
         return waiting * byte_seconds(baud)
 
+    def silence_message(self, timeout_s: float) -> str:
+        """Why the status was not complete within ``timeout_s``, and what to check — the one
+        wording of it (``armctl status``, a job's start, ``Arm.status()``): nothing heard (power,
+        cable), bytes that never formed a status frame (the baud rate: an arm at another rate sends
+        just that), or the kinds never seen."""
+        from ..core.protocol import STATUS_KINDS, STATUS_ROTATION
+
+        state, received, skipped, frames = self.snapshot()
+        baud = getattr(self.port, "baudrate", None)
+        rate = f" at {baud} baud" if isinstance(baud, int) else ""
+        where = f"no complete status from {self.url}{rate} within {timeout_s:g} s"
+        if received == 0:
+            return f"{where}: received nothing (is the arm powered and the cable on the host connector?)"
+        if frames == 0:
+            return (f"{where}: received {received} bytes that never formed a status frame "
+                    f"({skipped} skipped; is the baud rate right?)")
+        missing = [STATUS_KINDS[k].NAME for k in STATUS_ROTATION if k not in state.last_seen]
+        return f"{where}: {frames} status frames read, never saw: {', '.join(missing)}"
+
     def snapshot(self) -> tuple[ArmState, int, int, int]:
         """A copy of the state with bytes received, bytes skipped and frames read so far."""
         with self._changed:

@@ -30,27 +30,12 @@ class NoStatus(ArmctlError):
 
 
 def print_once(link, baud: int, timeout_s: float, as_json: bool) -> None:
-    _wait_complete(link, baud, timeout_s)
+    _wait_complete(link, timeout_s)
     state = link.snapshot()[0]
     if as_json:
         click.echo(json.dumps(state.to_json()))
     else:
         click.echo(status_line(state))
-
-
-def _silence_message(url, baud, timeout_s, state, received, skipped, frames) -> str:
-    where = f"no complete status from {url} at {baud} baud within {timeout_s:g} s"
-    if received == 0:
-        return f"{where}: received nothing (is the arm powered and the cable on the host connector?)"
-    if frames == 0:
-        return (
-            f"{where}: received {received} bytes that never formed a status frame "
-            f"({skipped} skipped; is the baud rate right?)"
-        )
-    from ..core.protocol import STATUS_KINDS, STATUS_ROTATION
-
-    missing = [STATUS_KINDS[k].NAME for k in STATUS_ROTATION if k not in state.last_seen]
-    return f"{where}: {frames} status frames read, never saw: {', '.join(missing)}"
 
 
 class _Rate:
@@ -76,7 +61,7 @@ def watch_status(link, baud: int, as_json: bool, timeout_s: float | None = None)
     began on the port's clock."""
     if as_json or not sys.stdout.isatty():
         if timeout_s is not None:
-            _wait_complete(link, baud, timeout_s)
+            _wait_complete(link, timeout_s)
         started_s = link.clock()
         if as_json:
             _watch_lines(link, JSON_LINE_S, lambda s, h, now: json.dumps({"t": round(now - started_s, 3), **s.to_json()}))
@@ -86,10 +71,9 @@ def watch_status(link, baud: int, as_json: bool, timeout_s: float | None = None)
         _watch_live(link, baud)
 
 
-def _wait_complete(link, baud: int, timeout_s: float) -> None:
+def _wait_complete(link, timeout_s: float) -> None:
     if not link.wait_until(lambda s: s.complete, timeout_s):
-        state, received, skipped, frames = link.snapshot()
-        raise NoStatus(_silence_message(link.url, baud, timeout_s, state, received, skipped, frames))
+        raise NoStatus(link.silence_message(timeout_s))
 
 
 def _health(link, baud, rate, now):
