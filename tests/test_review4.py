@@ -156,7 +156,9 @@ def test_one_lost_or_corrupted_report_never_lets_time_count_a_refused_target_don
     assert any("stood at the start of frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
 
 
-@pytest.mark.xfail(strict=True, reason="not fixed: a refused target after a joint move or POSE ends 'finished' (report)")
+REFUSED_AFTER = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\n{before}\nG1 X500 Y0 Z150 A180 B0 C0 F3000\nG1 X250 Y-100 Z100 F3000\n"
+
+
 @pytest.mark.parametrize("before", ["POSE 1", "G6 J1=10 J2=0 J3=0 J4=0 J5=90 J6=0 F30"], ids=["pose", "joint-move"])
 def test_a_target_refused_after_a_joint_move_never_ends_finished(tmp_path, monkeypatch, before):
     """G1 X500 (out of the simulated arm's reach: refused, the arm does not move) right after a
@@ -166,11 +168,33 @@ def test_a_target_refused_after_a_joint_move_never_ends_finished(tmp_path, monke
     ``standing_at_start`` says nothing), and the joint move's own time bound allows a start
     anywhere within the joint limits (29 s here), so the lower bound is still on the joint move
     when the arm comes to rest at the last target, whose rest then proves every frame ran.
-    (After ``G1 X260`` instead, the same X500 ends "frames may have been lost", as it should.)"""
-    script = f"G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\n{before}\nG1 X500 Y0 Z150 A180 B0 C0 F3000\nG1 X250 Y-100 Z100 F3000\n"
-    summary, dropped, refused, _ = _run(tmp_path, monkeypatch, script)
+    (After ``G1 X260`` instead, the same X500 ends "frames may have been lost", as it should.)
+    Now such a move needs two reports on its path, or inside the next one's (``Ledger.prove_ran``):
+    without them the job ends "finished, unproven", naming it."""
+    summary, dropped, refused, _ = _run(tmp_path, monkeypatch, REFUSED_AFTER.format(before=before))
     assert (dropped, refused) == (0, 1)
     assert summary["outcome"] != "finished" and summary["exit_code"] == 1, summary
+    assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
+
+
+def test_a_target_refused_after_an_sd_program_never_ends_finished(tmp_path, monkeypatch):
+    """The same G1 X500 right after a PROGRAM: the line starts wherever the SD program left the
+    arm (``TimeBound.starts_where_a_program_left``: ``path_known`` False), so the not-begun sign
+    cannot see it either — it ended "finished", exit 0."""
+    summary, dropped, refused, _ = _run(tmp_path, monkeypatch, REFUSED_AFTER.format(before="PROGRAM 1"))
+    assert (dropped, refused) == (0, 1)
+    assert summary["outcome"] != "finished" and summary["exit_code"] == 1, summary
+    assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
+
+
+def test_a_target_refused_after_a_joint_move_never_ends_finished_installed(tmp_path):
+    """The same (after the joint move), through the installed command in a fresh process."""
+    (tmp_path / "job.txt").write_text(REFUSED_AFTER.format(before="G6 J1=10 J2=0 J3=0 J4=0 J5=90 J6=0 F30"))
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", URL],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert done.returncode == 1 and summary["outcome"] != "finished", (done.stderr, summary)
+    assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
 
 
 # --- moving past the time bound (Losses.moved_past_time_bound) ------------------------------------

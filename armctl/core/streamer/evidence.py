@@ -37,6 +37,10 @@ from .frames import SentFrame, est_end
 from .geometry import TimeMemo, estimate_off_s, in_frame, joint_half_fraction, trace_deviation_mm
 from .ledger import Ledger
 
+# How many windows short of a path's end a report lies inside it (``Sightings.note_runs``):
+# 2 windows of a straight move are 4 tolerances (2 mm).
+END_MARGIN = 2.0
+
 
 @dataclass(slots=True)
 class Sighting:
@@ -74,6 +78,7 @@ class Sightings:
         self.cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
         self.blind: deque[int] = deque()  # indexes of pending frames whose X/Y/Z cannot be judged (positions stop there)
         self.joints_unknown: deque[int] = deque()  # ... joint frames whose path is not the planned one (joint halves stop past them)
+        self.proof_wanted: deque[SentFrame] = deque()  # moves whose run only reports prove (``want_proof``)
 
     def written(self, frame: SentFrame) -> None:
         """Note what a frame just written lets each stream judge."""
@@ -87,6 +92,39 @@ class Sightings:
             self.joints_unknown.append(frame.index)
         if not verified and (segment.kind == "joint" or segment.end.xyz_derived) or not frame.path_known:
             self.blind.append(frame.index)
+        frame.judged_by_start = segment.kind == "line" and segment.length > 4 * frame.xyz_tolerance_mm
+        if frame.judged_by_start and not frame.path_known:
+            self.want_proof(frame)
+
+    def want_proof(self, frame: SentFrame) -> None:
+        """A straight move whose refusal the not-begun sign cannot see (``Ledger.prove_ran``): the
+        position reports are scanned for its run (``note_runs``)."""
+        frame.needs_run_proof = True
+        self.proof_wanted.append(frame)
+
+    def note_runs(self, match) -> None:
+        """A position report (``match``: where it lies on a frame's path) on the path of a move
+        that wants proof of its run (``want_proof``), past its start: the arm moved along it
+        (``SentFrame.moved_seen``) — or inside the path of the frame after it away from its end
+        (``END_MARGIN`` windows short of it), where the plan has that one begin: at the move's
+        target, which a refused target leaves unreached (``inside_seen``; a path from elsewhere to
+        the same end meets it only near the end).  Whatever else the report may lie on (a frame no
+        stream can judge before them, an SD program): this proves nothing but the move ran, and two
+        reports of a frame do (not one: a corrupted report is alone)."""
+        wanted, pending = self.proof_wanted, self.ledger.pending
+        first = pending[0].index if pending else self.ledger.sent
+        while wanted and wanted[0].index + 1 < first:
+            wanted.popleft()  # it and the frame after it consumed: judged (``Ledger.prove_ran``)
+        for sent in wanted:
+            if sent.index >= first:
+                found = match(sent)
+                if found is not None and found[0] > 0.0:
+                    sent.moved_seen += 1
+            k = sent.index + 1 - first
+            if 0 <= k < len(pending) and pending[k].path_known:
+                found = match(pending[k])
+                if found is not None and found[0] > 0.0 and found[1] + END_MARGIN * (found[1] - found[0]) < 1.0:
+                    pending[k].inside_seen += 1
 
     def remember(self, stream: str, earliest: int | None, candidates) -> tuple[int | None, float]:
         """Keep this report's earliest frame for the next of its stream; the previous one's and
@@ -130,6 +168,8 @@ class Sightings:
                 return fraction - slack, math.inf
             return fraction - slack, fraction + slack
 
+        if self.proof_wanted:
+            self.note_runs(match)
         # A position says nothing about a frame whose X/Y/Z only the unverified kinematics know,
         # nor about any frame after it: the arm may be on that frame, at a point that also lies
         # on a later path (a wrist turning in place, then a move that starts there).
@@ -282,8 +322,7 @@ def standing_at_start(found: Sighting | None, pending) -> int | None:
         return None
     head = pending[0]
     segment = head.segment
-    if (found.earliest != head.index or segment.kind != "line" or not head.path_known or head.may_be_cleared
-            or segment.length <= 4 * head.xyz_tolerance_mm):
+    if found.earliest != head.index or not head.judged_by_start or not head.path_known or head.may_be_cleared:
         return None
     window = next((candidate for candidate in found.candidates if candidate[0] == head.index), None)
     if window is None or window[1] > 0.0 or window[2] >= 1.0:
