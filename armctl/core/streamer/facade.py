@@ -311,9 +311,9 @@ class Streamer:
         if not moves:
             return []
         more = f" and {count - len(moves)} more" if count > len(moves) else ""
-        return [f"no report showed the arm run {', '.join(where(sent) for sent in moves)}{more} (a move from where "
-                "only the profile's kinematics put a joint move's or POSE's end, or an SD program left the arm): "
-                "a target out of the arm's reach, refused, would look the same"]
+        return [f"no report showed the arm run {', '.join(where(sent) for sent in moves)}{more}: a move whose start "
+                "only the profile's kinematics know (after a joint move, a POSE or an SD program), or with such a "
+                "frame queued behind it, where a target out of the arm's reach, refused, would look the same"]
 
     def ran_at_rest(self, last: SentFrame) -> bool:
         """Whether the arm at rest at the target of ``last`` proves it ran (``evidence.ran_at_rest``)."""

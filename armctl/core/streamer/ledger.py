@@ -44,8 +44,9 @@ class Ledger:
         self.recent_sent: deque[SentFrame] = deque(maxlen=RECENT_SENT_FRAMES)  # kept for the loss checks
         self.reset_index: int | None = None  # the last RESET CONNECTOR written (``record``)
         # A target the arm refused leaves it at the start of its move, which the not-begun sign sees
-        # only on a straight move whose path is the planned one (``evidence.standing_at_start``): the
-        # others consumed with no report to prove they ran (``prove_ran``)
+        # only on a straight move whose path is the planned one with no frame queued behind it whose
+        # X/Y/Z no report can judge (``evidence.standing_at_start``): the others consumed with no
+        # report to prove they ran (``prove_ran``)
         self.runs_unproven: list[SentFrame] = []
         self.runs_unproven_count = 0
         self.awaiting: SentFrame | None = None  # such a move, until the frame after it is consumed
@@ -104,8 +105,9 @@ class Ledger:
 
     def prove_ran(self, sent: SentFrame) -> None:
         """``sent`` is consumed: a straight move whose refusal the not-begun sign cannot see (its
-        start only the profile's kinematics know: ``path_known`` False) needs the arm's reports to
-        prove it ran (``needs_run_proof``) — two on its path past its start, or two inside the next
+        start only the profile's kinematics know, or a frame whose X/Y/Z no report can judge queued
+        behind it: ``Sightings.want_proof``) needs the arm's reports to prove it ran
+        (``needs_run_proof``) — two on its path past its start, or two inside the next
         frame's path, where the plan has that one begin: at this one's target (``Sightings.note_runs``)
         — else it is counted in ``runs_unproven``: FINISHED would claim more than the reports prove."""
         awaiting, self.awaiting = self.awaiting, None
