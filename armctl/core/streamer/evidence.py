@@ -38,6 +38,7 @@ from .frames import SentFrame, est_end
 from .geometry import TimeMemo, estimate_off_s, in_frame, joint_half_fraction, trace_deviation_mm
 from .ledger import Ledger
 
+RUN_SCAN_MOVES = 3  # the long moves not proven yet that one position report is matched against (``note_runs``)
 # How many windows short of a path's end a report lies inside it (``count_inside``):
 # 2 windows of a straight move are 4 tolerances (2 mm).
 END_MARGIN = 2.0
@@ -116,12 +117,17 @@ class Sightings:
     def note_runs(self, match) -> None:
         """One position report (``match``: where it lies on a frame's path) on the long moves still
         pending (``written``) and the frame after each (``count_inside``), whatever else it may
-        lie on (a frame no stream can judge before them, an SD program): it proves only a run."""
+        lie on (a frame no stream can judge before them, an SD program): it proves only a run.
+        For a flat cost, only the oldest ``RUN_SCAN_MOVES`` not proven yet: the arm runs them in
+        order (a move missed costs only the weaker claim, never a false one)."""
         moves, pending = self.long_moves, self.ledger.pending
         first = pending[0].index if pending else self.ledger.sent
-        while moves and moves[0].index + 1 < first:
-            moves.popleft()  # it and the frame after it consumed: judged (``Ledger.prove_ran``)
+        while moves and (moves[0].index + 1 < first or moves[0].moved_seen >= 2):
+            moves.popleft()  # proven, or it and the frame after it consumed: judged (``Ledger.prove_ran``)
+        scanned = 0
         for sent in moves:
+            if sent.moved_seen >= 2:
+                continue  # proven already
             k = sent.index - first
             if k >= 0:
                 found = match(sent)
@@ -131,6 +137,9 @@ class Sightings:
                 found = match(pending[k + 1])
                 if found is not None and count_inside(*found):
                     pending[k + 1].inside_seen += 1
+            scanned += 1
+            if scanned == RUN_SCAN_MOVES:
+                break
 
     def remember(self, stream: str, earliest: int | None, candidates) -> tuple[int | None, float]:
         """Keep this report's earliest frame for the next of its stream; the previous one's and
