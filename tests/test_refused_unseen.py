@@ -14,6 +14,7 @@ from __future__ import annotations
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 from click.testing import CliRunner
@@ -46,14 +47,14 @@ NEXT = {  # the frame queued behind the refused move
 }
 
 
-def _run(tmp_path, monkeypatch, script: str):
+def _run(tmp_path, monkeypatch, script: str, url: str = URL):
     """``armctl run --json`` on the simulated arm: the summary and the frames it dropped and refused."""
     monkeypatch.chdir(tmp_path)
     (tmp_path / "job.txt").write_text(script)
     ports = _open_one_arm(monkeypatch)
-    result = CliRunner().invoke(main, ["run", "job.txt", "--json", "--port", URL], env={"ARMCTL_PORT": None})
+    result = CliRunner().invoke(main, ["run", "job.txt", "--json", "--port", url], env={"ARMCTL_PORT": None})
     summary = json.loads(result.stdout.splitlines()[-1])
-    model = ports[URL].model
+    model = ports[url].model
     return summary, model.frames_dropped, sum(1 for entry in model.execution_log if entry.outcome == "refused")
 
 
@@ -106,3 +107,32 @@ def test_a_refused_target_never_ends_finished_whatever_joint_move_or_pose_follow
         summary, dropped, refused = _run(tmp_path_factory.mktemp("job"), monkeypatch, script)
     assert (dropped, refused) == (0, 1), script
     assert summary["outcome"] != "finished" and summary["exit_code"] == 1, (script, summary)
+
+
+# --- a start pose from one corrupted report (armctl/host/jobflow.py ``agreed_state``) ------------
+
+# scripts/pick_and_place.txt with its first X250 made X500: every move to the infeed refused
+PICK_AT_500 = (Path(__file__).resolve().parent.parent / "scripts" / "pick_and_place.txt").read_text().replace(
+    "G1 X250 Y-120 Z150", "G1 X500 Y-120 Z150", 1)
+NOISY = URL + "&loss=0.05&corrupt=0.02&noise=0.02&seed={seed}"
+
+
+@pytest.mark.parametrize("seed", [22, 84, 108, 109])
+def test_a_refused_target_is_seen_whatever_report_the_start_pose_was_read_from(tmp_path, monkeypatch, seed):
+    """On the README's noisy line these seeds of 0-199 ended "finished", exit 0: the state the job
+    was planned from held a corrupted position, within the arm's reach of the true one so the
+    plausibility test let it through (seed 22: X 212.3 for 210.0), the first move's planned start
+    was 2.3 mm from where the arm stood, no report put the arm at it, and time counted the refused
+    moves done.  The start pose is now one two states a rotation apart agree on."""
+    summary, dropped, refused = _run(tmp_path, monkeypatch, PICK_AT_500, NOISY.format(seed=seed))
+    assert dropped == 0 and refused > 0
+    assert summary["outcome"] != "finished" and summary["exit_code"] == 1, summary
+
+
+def test_a_refused_target_is_seen_whatever_report_the_start_pose_was_read_from_installed(tmp_path):
+    """Seed 22 through the installed command in a fresh process."""
+    (tmp_path / "job.txt").write_text(PICK_AT_500)
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", NOISY.format(seed=22)],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert done.returncode == 1 and summary["outcome"] != "finished", (done.stderr, summary)
