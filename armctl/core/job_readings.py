@@ -132,14 +132,18 @@ class Written:
             unknown.popleft()  # known finished
         if not unknown or len(agreed) < 3:
             return None
-        first = max(done - 1, recent[0].index)
+        if done - 1 < recent[0].index and not (done == 0 and recent[0].index == 0):
+            return None  # the frame the arm may still rest at the end of is no longer kept
+        frames = list(islice(recent, max(done - 1, 0) - recent[0].index, None))
+        if any(isinstance(sent.command, OWN_MOTION_COMMANDS) for sent in frames):
+            return None
+        # (before any frame ran, the arm is at the first one's start: the "end" of frame -1)
+        places = [(-1, recent[0].segment.start, True)] if done == 0 else []
+        places += [(sent.index, sent.segment.end, sent.segment.moves_reported) for sent in frames]
         origin = recent[-1].segment.end.origin_mm  # the frame the engine reads X/Y/Z in
         match, matched = None, False
-        for sent in islice(recent, first - recent[0].index, None):
-            end = sent.segment.end
-            if isinstance(sent.command, OWN_MOTION_COMMANDS):
-                return None
-            if matched and not sent.segment.moves_reported:
+        for index, end, moves in places:
+            if matched and not moves:
                 continue  # (it ends where the frame before did: the same place)
             if not end.xyz_derived:
                 xyz = end.xyz  # (reported in the worktable frame in force: this end's, were the arm there)
@@ -153,7 +157,7 @@ class Written:
             if matched and match is not None:
                 return None  # the ends of two frames: which one, the reports cannot say
             if matched:
-                match = sent.index
+                match = index
         return match if match is not None and match >= unknown[0].index else None
 
     def explains(self, kind: int, values: tuple, read_s: float) -> bool:
