@@ -188,7 +188,7 @@ class Job:
         self.stop_requested = False
         self.failure: str | None = None  # why the job stops, when not by Ctrl-C
         self.outcome: Outcome | None = None
-        self.written = Written()  # the record (armctl/core/job_readings.py): the frames written ...
+        self.written = Written(streamer.reports_robot_xyz)  # the record (armctl/core/job_readings.py): the frames written ...
         self.readings = Readings(self.written)  # ... and the arm's reports
         self.arrival = Arrival(self.readings, self.written, streamer)  # armctl/core/job_arrival.py
         self.end = JobEnd(view, streamer, self.arrival, fifo_proven, control_frames_proven)  # armctl/core/job_end.py

@@ -48,6 +48,15 @@ class Arrival:
         self.streamer = streamer
         self.found_arrival = False  # the arm proved its control frames act as they land (``frozen_mid_move``)
         self.resume_at_next = False  # frozen where the first pending frame ends and the next begins
+        readings.on_rest = self.rested
+
+    def rested(self, through: int, now: float) -> None:
+        """The arm at rest at ``now`` where only frames through ``through`` can have left it
+        (``Written.rests_at``, while a frame nothing else judges holds the lower bound back): they
+        ran, and are confirmed so (no chain restart: the next frame may not have landed)."""
+        streamer = self.streamer
+        streamer.confirm_all_done(before=through + 1)
+        self.written.done(streamer.consumed_lower_bound, now)
 
     @property
     def acts_on_arrival(self) -> bool:

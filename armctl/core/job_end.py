@@ -277,7 +277,7 @@ class JobEnd:
         streamer = self.streamer
         if streamer.losses:
             return Outcome.FRAMES_LOST
-        unproven = self.program.unproven()
+        unproven = self.program.unproven() + streamer.runs_unproven()
         probe = len(unproven)  # the reasons `armctl probe` answers come after these
         if not self.fifo_proven and (streamer.confirmed_by_time or streamer.confirmed_unseen):
             unproven.append(f"{_frames_not_seen(streamer)}, and {FIFO_UNMEASURED}")

@@ -48,12 +48,18 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
 trailing frames that move nothing are judged on them), the last that moves the arm, the job's
 own PAUSE frames, and when the streamer's lower bound passed them (``done``: a frame known
 finished explains no later reading, an SD program's whose time bound never runs out included).
+A frame whose path is not the planned one (a joint move from a Cartesian end, a move from a
+joint end on unverified kinematics) explains any reading, and nothing but time (a start anywhere
+within the joint limits: some 30 s) passed it: the arm at rest at the end of exactly one frame
+not known finished, in the exact half of each end, proves that one and every one before it ran
+(``rests_at``; the engine confirms them, armctl/core/job_arrival.py ``Arrival.rested``).
 """
 
 from __future__ import annotations
 
 import math
 from collections import deque
+from itertools import islice
 from dataclasses import fields
 from operator import attrgetter
 
@@ -79,7 +85,7 @@ RECENT_FRAMES = 64  # frames written kept for the end of the job (the trailing f
 class Written:
     """The frames the job wrote, as the end of the job needs them (each a ``SentFrame``)."""
 
-    def __init__(self) -> None:
+    def __init__(self, reports_robot_xyz: bool = False) -> None:
         self.recent: deque = deque(maxlen=RECENT_FRAMES)  # the last frames written
         self.last_move = None  # the last frame written that moves the arm
         self.last_program = None  # the last PROGRAM frame written (its time only the reports tell)
@@ -87,6 +93,8 @@ class Written:
         self.script_paused = False  # the job's own PAUSE lines left the arm to pause: an odd number written
         self.control_sent = 0  # the other control frames written after a first frame (POSE, PROGRAM, G54…: H5 says when they act)
         self.finished: deque = deque(maxlen=RECENT_FRAMES)  # (when, frames known finished by then): ``done``
+        self.paths_unknown: deque = deque()  # recent frames whose path is not the planned one (``rests_at``)
+        self.reports_robot_xyz = reports_robot_xyz  # the engine's X/Y/Z readings: robot ones less the last frame's origin
 
     def note(self, sent) -> None:
         self.recent.append(sent)
@@ -96,6 +104,8 @@ class Written:
             self.script_paused = len(self.script_toggles) % 2 == 1  # (a plain attribute: read for every frame)
         elif sent.index and isinstance(command, CONTROL_COMMANDS):  # (the first frame has no move before it to cut short)
             self.control_sent += 1
+        if not sent.path_known:
+            self.paths_unknown.append(sent)
         if sent.segment.moves_reported:  # (``moves_arm``)
             self.last_move = sent
         elif isinstance(command, RunProgram):
@@ -104,6 +114,51 @@ class Written:
     def done(self, frames: int, now: float) -> None:
         """The streamer's lower bound rose to ``frames`` frames finished at ``now``."""
         self.finished.append((now, frames))
+
+    def rests_at(self, agreed: dict) -> int | None:
+        """The frame the arm, at rest, has run through, while a frame whose path is not the planned
+        one is not known finished (nothing judges it, and it ``explains`` any reading: the time
+        bound of a joint move from a Cartesian end allows a start anywhere, some 30 s) — else
+        None.  ``agreed``: for position and both joint halves, the value two reports in a row agree
+        on and the arm still reads (not paused).  An arm at rest is at the end of a frame (or at
+        the start of the next: the same place), one not known finished or the last that is: if
+        that is the end of exactly one of them — each in its exact half: the X/Y/Z of a Cartesian
+        target, the joints of a joint one; a frame that moves nothing ends where the one before
+        did — that frame and every one before it ran.  An end with no exact half (a fixed pose's,
+        an SD program's: the arm's own) could be anywhere: no judgement."""
+        done = self.finished[-1][1] if self.finished else 0
+        unknown, recent = self.paths_unknown, self.recent
+        while unknown and unknown[0].index < done:
+            unknown.popleft()  # known finished
+        if not unknown or len(agreed) < 3:
+            return None
+        if done - 1 < recent[0].index and not (done == 0 and recent[0].index == 0):
+            return None  # the frame the arm may still rest at the end of is no longer kept
+        frames = list(islice(recent, max(done - 1, 0) - recent[0].index, None))
+        if any(isinstance(sent.command, OWN_MOTION_COMMANDS) for sent in frames):
+            return None
+        # (before any frame ran, the arm is at the first one's start: the "end" of frame -1)
+        places = [(-1, recent[0].segment.start, True)] if done == 0 else []
+        places += [(sent.index, sent.segment.end, sent.segment.moves_reported) for sent in frames]
+        origin = recent[-1].segment.end.origin_mm  # the frame the engine reads X/Y/Z in
+        match, matched = None, False
+        for index, end, moves in places:
+            if matched and not moves:
+                continue  # (it ends where the frame before did: the same place)
+            if not end.xyz_derived:
+                xyz = end.xyz  # (reported in the worktable frame in force: this end's, were the arm there)
+                if self.reports_robot_xyz:
+                    xyz = tuple(v + o - p for v, o, p in zip(xyz, end.origin_mm, origin))
+                matched = not slot_moved(0, agreed[0], xyz)
+            elif not end.joints_derived:
+                matched = not (slot_moved(1, agreed[1], end.joints[:3]) or slot_moved(2, agreed[2], end.joints[3:]))
+            else:
+                return None
+            if matched and match is not None:
+                return None  # the ends of two frames: which one, the reports cannot say
+            if matched:
+                match = index
+        return match if match is not None and match >= unknown[0].index else None
 
     def explains(self, kind: int, values: tuple, read_s: float) -> bool:
         """Some recent frame the arm may still have been running at ``read_s`` (its time bound not
@@ -163,6 +218,7 @@ class Readings:
         self.last_pause_change: tuple | None = None  # (the readings before, changed_s, other_changed_s)
         self.settled: tuple | None = None  # since ``last_change``, the last change within jitter: (when, last read before)
         self.work_s = -math.inf  # the arm worked after this time, by its reports (``worked_after``)
+        self.on_rest = None  # told ``Written.rests_at``'s frame (armctl/core/job_arrival.py ``Arrival.rested``)
         # kind → [the value two reports in a row last agreed on, when it was last read there before it
         # changed (else its agreement's first report)]: ``_agreed``
         self.agreed_values: dict = {}
@@ -183,6 +239,10 @@ class Readings:
         if not changed:  # two reports in a row agree: a new value agreed on may show work (``_agreed``)
             if kind != PAUSE_KIND and (agreed is None or agreed[0] != values):
                 self._agreed(kind, values, before_s, slot_moved)
+                if self.written.paths_unknown and self.paused is False and self.on_rest is not None:
+                    through = self.written.rests_at(self._agreed_now())
+                    if through is not None:
+                        self.on_rest(through, now)
             # (a value read twice is no blip: "Blips")
             if kind == PAUSE_KIND:
                 self.last_pause_change = None
@@ -287,6 +347,13 @@ class Readings:
             since_s = first_s if kind == RUN_POSITION_KIND else last[1]
             if since_s > self.work_s:
                 self.work_s = since_s
+
+    def _agreed_now(self) -> dict:
+        """Kind → the value two reports in a row agreed on, for the kinds (position, joints) the
+        arm still reads at it."""
+        reported = self.reported
+        return {kind: value[0] for kind, value in self.agreed_values.items()
+                if kind in (0, 1, 2) and reported.get(kind) == value[0]}
 
     def worked_after(self, since_s: float) -> bool:
         """The reports prove the arm worked after ``since_s`` (see "Worked" in the module docstring)."""

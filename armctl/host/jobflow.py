@@ -28,6 +28,7 @@ from ..errors import ArmctlError
 from ..core.job_control import agreed_pause, pause_toggle_needed
 
 READ_ROTATIONS = 2  # after all nine status kinds: two more rotations (a corrupted first frame of a kind replaced, H9)
+AGREE_ROTATIONS = 4  # then up to this many more, until two states a rotation apart agree on the pose (``agreed_state``)
 
 
 class JobFailed(ArmctlError):
@@ -47,23 +48,50 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
         raise JobFailed(f"{link.silence_message(timeout_s)}; nothing was sent")
-    wait_rotations(link, READ_ROTATIONS, timeout_s)
-    if unpause:
-        resume_paused(link, timeout_s, log, note, control_on_arrival)
-    return link.snapshot()[0]
+    wait_rotations(link, READ_ROTATIONS - 1, timeout_s)
+    earlier = link.snapshot()[0]
+    wait_rotations(link, 1, timeout_s)
+    if unpause and resume_paused(link, timeout_s, log, note, control_on_arrival):
+        earlier = None
+    return agreed_state(link, earlier, timeout_s)
+
+
+def agreed_state(link, earlier, timeout_s: float):
+    """The arm's state once it and the one a rotation before (``earlier``) agree on its position
+    and joints within a reading's jitter, so that no one report becomes the job's start pose: a
+    corrupted one the plausibility test lets through (a jump within the arm's reach: 2.3 mm of X
+    on ``sim://?…&corrupt=0.02&seed=22``) had the first move planned from where the arm was not,
+    no report put the arm at its start, and a target it refused there was counted done by time
+    ("finished").  At most ``AGREE_ROTATIONS`` rotations more; then the last state (an arm that
+    still moves: the job plans from its latest report, as before)."""
+    from ..core.job_readings import moved_clearly
+
+    state = link.snapshot()[0]
+    for _ in range(AGREE_ROTATIONS):
+        if earlier is not None and not moved_clearly(_pose(earlier), _pose(state)):
+            return state
+        earlier = state
+        wait_rotations(link, 1, timeout_s)
+        state = link.snapshot()[0]
+    return state
+
+
+def _pose(state) -> tuple:
+    joints = tuple(state.joints_deg)
+    return state.position_mm, joints[:3], joints[3:]
 
 
 def resume_paused(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
-                  control_on_arrival: bool = False) -> None:
+                  control_on_arrival: bool = False) -> bool:
     """Resume an arm that twice reports it is paused, as its control mode needs
     (``job.resume_frames``: on an arm that acts on control frames as they land, a RESET
     CONNECTOR first, so nothing left queued runs twice), and let a move the pause froze finish,
     so the start pose is where the arm rests (``note`` is told).  Each frame's record is durable
-    before the frame is written."""
+    before the frame is written.  True when it resumed the arm."""
     from ..core.job import resume_frames
 
     if not _paused_twice(link, timeout_s):
-        return
+        return False
     commands = resume_frames(control_on_arrival)
     note("armctl: the arm reports it is paused: sending " + (
         "a reset host connector (it acts on control frames as they land: nothing left queued runs twice) and "
@@ -82,6 +110,7 @@ def resume_paused(link, timeout_s: float, log=None, note: Callable[[str], None] 
     wait_rotations(link, 1, timeout_s)
     if control_on_arrival:
         _wait_still(link, timeout_s)
+    return True
 
 
 class JournalFile:

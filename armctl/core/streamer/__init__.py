@@ -200,7 +200,13 @@ FIFO.  Each part may conclude only what its evidence says; this is the whole lis
    only when the caller says the FIFO holds every frame the capacity rule lets in
    (``fifo_holds_all``) and no RESET CONNECTOR may have cleared it, or when the arm rests at its
    very target and could rest there no other way (``evidence.ran_at_rest``); else it is
-   ``confirmed_unseen``.  Time alone is ``confirmed_by_time``.
+   ``confirmed_unseen``.  Time alone is ``confirmed_by_time``.  Nor is *left* always *ran*: a
+   target out of the arm's reach is refused and leaves the FIFO unrun, which only the not-begun
+   sign and the gaps (4.) see; a straight move of ``RUN_PROOF_MIN_S`` or more they cannot judge
+   (its start only the profile's kinematics know, or a frame whose X/Y/Z no report judges
+   queued behind it) counts as run only on two reports on its path, or inside the next frame's,
+   which then began at its target (``Ledger.prove_ran``) — else ``runs_unproven`` names it and
+   the job may not end "finished".
 
 2. *Where the arm probably is* (``Estimate``): from the model's times, re-anchored on every
    sighting, agreed or not, even past a frame the stream cannot judge (``reanchor_beyond``).

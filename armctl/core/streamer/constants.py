@@ -7,6 +7,7 @@ them from here (one home per number).
 
 from __future__ import annotations
 
+from ..armstate import ROTATION_S
 from ..protocol import STATUS_PERIOD_S
 
 DEFAULT_LEAD_S = 2.0
@@ -62,6 +63,11 @@ FEED_AHEAD_S = 0.5
 # An observation is matched against this many of the oldest pending frames and as many around the
 # estimate's frame, so its cost does not grow with the queue (see ``Sightings.search``).
 SCAN_WINDOW_FRAMES = 16
+# A straight move whose refusal no sign of loss can see needs reports on its path to count as run
+# (``Ledger.prove_ran``) only if it lasts this long by the model: four position reports, so two past
+# its start even with one lost.  A shorter one refused shows no gap either (its time at the fastest
+# pace is within a report's timing), so the reports are no worse placed to judge it than anywhere.
+RUN_PROOF_MIN_S = 4 * ROTATION_S
 # With kinematics not verified on the arm, where a joint move really ends may be this share of the
 # reach away from where the profile's forward kinematics put it (a link 10 % off): the time bound of
 # the Cartesian move that starts there allows for that much more path.

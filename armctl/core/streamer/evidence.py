@@ -31,11 +31,17 @@ from .constants import (
     JOINT_TRACE_FRACTION,
     JOINT_TRACE_SLACK,
     POSITION_TOLERANCE_MM,
+    RUN_PROOF_MIN_S,
     SCAN_WINDOW_FRAMES,
 )
 from .frames import SentFrame, est_end
 from .geometry import TimeMemo, estimate_off_s, in_frame, joint_half_fraction, trace_deviation_mm
 from .ledger import Ledger
+
+RUN_SCAN_MOVES = 3  # the long moves not proven yet that one position report is matched against (``note_runs``)
+# How many windows short of a path's end a report lies inside it (``count_inside``):
+# 2 windows of a straight move are 4 tolerances (2 mm).
+END_MARGIN = 2.0
 
 
 @dataclass(slots=True)
@@ -74,6 +80,8 @@ class Sightings:
         self.cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
         self.blind: deque[int] = deque()  # indexes of pending frames whose X/Y/Z cannot be judged (positions stop there)
         self.joints_unknown: deque[int] = deque()  # ... joint frames whose path is not the planned one (joint halves stop past them)
+        self.long_moves: deque[SentFrame] = deque()  # the straight moves a refusal of would show (``written``)
+        self.blind_through = -1  # the last frame written whose X/Y/Z no report can judge
 
     def written(self, frame: SentFrame) -> None:
         """Note what a frame just written lets each stream judge."""
@@ -85,8 +93,53 @@ class Sightings:
             self.cartesian.append(frame.index)
         elif not frame.path_known:
             self.joints_unknown.append(frame.index)
+        frame.judged_by_start = segment.kind == "line" and segment.length > 4 * frame.xyz_tolerance_mm
+        if frame.judged_by_start and segment.duration_s >= RUN_PROOF_MIN_S:
+            self.long_moves.append(frame)  # (a short one refused shows nowhere: no gap, no standing)
         if not verified and (segment.kind == "joint" or segment.end.xyz_derived) or not frame.path_known:
             self.blind.append(frame.index)
+            self.want_proof(frame)
+
+    def want_proof(self, frame: SentFrame) -> None:
+        """``frame``, whose X/Y/Z no report can judge, is written: the not-begun sign cannot see a
+        refusal of it (if a straight move: its start only the profile's kinematics know), nor of a
+        straight move still pending before it — a report at that one's start may lie on this one
+        (``standing_at_start``), and refused, the arm runs this one at once from there, so neither
+        a gap shows (no report judges how long it took) — so only the position reports on their
+        paths prove the long ones ran (``note_runs``, ``Ledger.prove_ran``)."""
+        first = self.ledger.pending[0].index if self.ledger.pending else frame.index
+        for sent in reversed(self.long_moves):
+            if sent.index <= self.blind_through or sent.index < first:
+                break
+            sent.needs_run_proof = True
+        self.blind_through = frame.index
+
+    def note_runs(self, match) -> None:
+        """One position report (``match``: where it lies on a frame's path) on the long moves still
+        pending (``written``) and the frame after each (``count_inside``), whatever else it may
+        lie on (a frame no stream can judge before them, an SD program): it proves only a run.
+        For a flat cost, only the oldest ``RUN_SCAN_MOVES`` not proven yet: the arm runs them in
+        order (a move missed costs only the weaker claim, never a false one)."""
+        moves, pending = self.long_moves, self.ledger.pending
+        first = pending[0].index if pending else self.ledger.sent
+        while moves and (moves[0].index + 1 < first or moves[0].moved_seen >= 2):
+            moves.popleft()  # proven, or it and the frame after it consumed: judged (``Ledger.prove_ran``)
+        scanned = 0
+        for sent in moves:
+            if sent.moved_seen >= 2:
+                continue  # proven already
+            k = sent.index - first
+            if k >= 0:
+                found = match(sent)
+                if found is not None and found[0] > 0.0:
+                    sent.moved_seen += 1  # past its start: the arm moved along it
+            if k + 1 < len(pending) and pending[k + 1].path_known:
+                found = match(pending[k + 1])
+                if found is not None and count_inside(*found):
+                    pending[k + 1].inside_seen += 1
+            scanned += 1
+            if scanned == RUN_SCAN_MOVES:
+                break
 
     def remember(self, stream: str, earliest: int | None, candidates) -> tuple[int | None, float]:
         """Keep this report's earliest frame for the next of its stream; the previous one's and
@@ -130,6 +183,8 @@ class Sightings:
                 return fraction - slack, math.inf
             return fraction - slack, fraction + slack
 
+        if self.long_moves:
+            self.note_runs(match)
         # A position says nothing about a frame whose X/Y/Z only the unverified kinematics know,
         # nor about any frame after it: the arm may be on that frame, at a point that also lies
         # on a later path (a wrist turning in place, then a move that starts there).
@@ -282,8 +337,7 @@ def standing_at_start(found: Sighting | None, pending) -> int | None:
         return None
     head = pending[0]
     segment = head.segment
-    if (found.earliest != head.index or segment.kind != "line" or not head.path_known or head.may_be_cleared
-            or segment.length <= 4 * head.xyz_tolerance_mm):
+    if found.earliest != head.index or not head.judged_by_start or not head.path_known or head.may_be_cleared:
         return None
     window = next((candidate for candidate in found.candidates if candidate[0] == head.index), None)
     if window is None or window[1] > 0.0 or window[2] >= 1.0:
@@ -291,6 +345,14 @@ def standing_at_start(found: Sighting | None, pending) -> int | None:
     if any(found.could_be_on(later) for later in islice(pending, 1, None)):
         return None  # a later frame passes through the start: the arm may have run on to it
     return head.index
+
+
+def count_inside(lo: float, hi: float) -> bool:
+    """Whether a report between fractions ``lo`` and ``hi`` of a frame's path lies inside it, away
+    from its end (the window ends ``END_MARGIN`` windows short of it): the arm began that frame
+    where the plan has it begin — at the target of the frame before, which a refused target leaves
+    unreached (a path from elsewhere to the same end meets this one only near the end)."""
+    return lo > 0.0 and hi + END_MARGIN * (hi - lo) < 1.0
 
 
 def ran_at_rest(last: SentFrame, recent_sent, kinematics_verified: bool) -> bool:

@@ -19,7 +19,7 @@ from ..protocol import PositionStatus, StatusFrame, frame_seconds
 from .constants import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S, PACE_FOLLOWED
 from .estimate import Estimate
 from .evidence import Sighting, Sightings, ran_at_rest, standing_at_start
-from .frames import Evidence, SentFrame
+from .frames import Evidence, SentFrame, where
 from .gate import Gate
 from .geometry import TimeMemo, start_unknown
 from .ledger import Ledger
@@ -300,6 +300,20 @@ class Streamer:
             ledger.bound_evidence = evidence
         if now is not None:
             self._bound.at_rest(now)
+
+    def runs_unproven(self) -> list[str]:
+        """Why FINISHED would claim more than the reports prove: straight moves whose refusal the
+        not-begun sign could not see, consumed with no report to prove they ran (``Ledger.prove_ran``)."""
+        ledger = self._ledger
+        moves, count = ledger.runs_unproven, ledger.runs_unproven_count
+        if ledger.awaiting is not None:  # (the job's last frame: nothing after it to prove it by)
+            moves, count = moves + [ledger.awaiting], count + 1
+        if not moves:
+            return []
+        more = f" and {count - len(moves)} more" if count > len(moves) else ""
+        return [f"no report showed the arm run {', '.join(where(sent) for sent in moves)}{more}: a move whose start "
+                "only the profile's kinematics know (after a joint move, a POSE or an SD program), or with such a "
+                "frame queued behind it, where a target out of the arm's reach, refused, would look the same"]
 
     def ran_at_rest(self, last: SentFrame) -> bool:
         """Whether the arm at rest at the target of ``last`` proves it ran (``evidence.ran_at_rest``)."""

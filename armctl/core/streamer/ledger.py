@@ -16,6 +16,8 @@ from ..protocol import Command, ResetConnector
 from .constants import RECENT_SENT_FRAMES
 from .frames import Evidence, SentFrame
 
+RUNS_UNPROVEN_KEPT = 3  # the moves ``Ledger.runs_unproven`` keeps to name (``runs_unproven_count`` counts them all)
+
 
 class Ledger:
     """The queue of frames written (see the module docstring)."""
@@ -41,6 +43,13 @@ class Ledger:
         self.sure_motion_sent_s = 0.0  # ... less the frames that may be any shorter (``SentFrame.sure_before_s``)
         self.recent_sent: deque[SentFrame] = deque(maxlen=RECENT_SENT_FRAMES)  # kept for the loss checks
         self.reset_index: int | None = None  # the last RESET CONNECTOR written (``record``)
+        # A target the arm refused leaves it at the start of its move, which the not-begun sign sees
+        # only on a straight move whose path is the planned one with no frame queued behind it whose
+        # X/Y/Z no report can judge (``evidence.standing_at_start``): the others consumed with no
+        # report to prove they ran (``prove_ran``)
+        self.runs_unproven: list[SentFrame] = []
+        self.runs_unproven_count = 0
+        self.awaiting: SentFrame | None = None  # such a move, until the frame after it is consumed
 
     @property
     def frames_in_flight_bound(self) -> int:
@@ -75,6 +84,7 @@ class Ledger:
         leaves the time bound's own record, ``first_time_only_index``, as it was)."""
         sent = self.pending.popleft()
         self.last_done_tag = sent.tag
+        self.prove_ran(sent)
         self.consumed_lower_bound += 1
         if by_reports:
             # A report on a later frame (or the arm at rest at the end) proves a frame left the
@@ -92,6 +102,21 @@ class Ledger:
                 self.first_time_only_index = self.consumed_lower_bound - 1
             self.confirmed_by_time += 1
             sent.by_time = True
+
+    def prove_ran(self, sent: SentFrame) -> None:
+        """``sent`` is consumed: a straight move whose refusal the not-begun sign cannot see (its
+        start only the profile's kinematics know, or a frame whose X/Y/Z no report can judge queued
+        behind it: ``Sightings.want_proof``) needs the arm's reports to prove it ran
+        (``needs_run_proof``) — two on its path past its start, or two inside the next
+        frame's path, where the plan has that one begin: at this one's target (``Sightings.note_runs``)
+        — else it is counted in ``runs_unproven``: FINISHED would claim more than the reports prove."""
+        awaiting, self.awaiting = self.awaiting, None
+        if awaiting is not None and not (sent.index == awaiting.index + 1 and sent.path_known and sent.inside_seen >= 2):
+            self.runs_unproven_count += 1
+            if len(self.runs_unproven) < RUNS_UNPROVEN_KEPT:
+                self.runs_unproven.append(awaiting)
+        if sent.needs_run_proof and not (sent.moved_seen >= 2 or sent.seen):
+            self.awaiting = sent
 
     def proven_run(self, sent: SentFrame) -> None:
         """The arm at rest at the very target of ``sent`` proves it ran: seen, so counted by the
