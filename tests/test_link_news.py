@@ -128,3 +128,27 @@ def test_the_steps_of_a_run_past_the_news_are_read_by_the_next_wait_as_a_new_run
     # status frames, counted with the built): a frame built and not read is one of a batch
     # forgotten by a write, by a wait that ended at its time (20 of them) or by the end
     assert len(kept) <= kept_built <= len(kept) + (1 + 20 + 1) * VIRTUAL_BUILD_FRAMES
+
+
+
+def test_a_burst_is_decoded_as_the_reader_feeds_it_clean_or_damaged(monkeypatch):
+    """A news wait's burst of one whole frame is decoded as a run's frames are
+    (``Link._burst_frames``); the frames, their times and the reader's counts are those the
+    reader's ``feed`` gives, on a clean line and on one with noise and damaged frames (fed)."""
+
+    def read(url: str, by_feed: bool):
+        seen = []
+        news = news_of(lambda frame, now: seen.append((frame, now)) or frame.KIND == 4)
+        link = Link.open(url)
+        if by_feed:
+            monkeypatch.setattr(link, "_burst_frames", link.reader.feed)
+        with link:
+            for k in range(200):
+                until_s = link.clock.now() + 0.05 if k % 2 else None  # timed waits read bursts
+                link.wait(until_s, news)
+            reader = link.reader
+            return seen, reader.frames, reader.skipped_bytes, link.bytes_received, link.clock.now()
+
+    for url in (URL, URL + "&noise=0.2&corrupt=0.1&seed=3"):
+        ours, fed = read(url, False), read(url, True)
+        assert len(ours[0]) > 300 and ours == fed

@@ -11,7 +11,9 @@ which frames are news (``news(frames, times)``: the place of the first, or None 
 runner) is woken only by those, and the quiet stretches are then read as runs of steps timed
 ahead, their frames built and decoded a batch at a time and handed to ``news`` in one call, the
 run committed as far as it was read: the same frames at the same model times as one burst at a
-time, without the per-burst machinery.  The steps of a run past the frame that was news, and
+time, without the per-burst machinery; a wait asks for a run only once a burst of it has
+passed without news (the steps right after a write or news are seldom quiet) and two status
+periods are left (``VIRTUAL_RUN_LEFT_S``).  The steps of a run past the frame that was news, and
 the frames built for them, stay the simulator's next while nothing else touches the port (the
 run's arithmetic from the committed state is the same from any step on): the next news wait
 that starts where that frame was read reads them (cut at its own end) instead of timing and
@@ -23,7 +25,7 @@ from __future__ import annotations
 
 from typing import Callable
 
-from ..core.protocol import STATUS_SIZE
+from ..core.protocol import STATUS_PERIOD_S, STATUS_SIZE
 
 VIRTUAL_MIN_STEP_S = 1e-6
 # A news wait reads the simulator's quiet stretches as runs of steps timed ahead, from this
@@ -31,15 +33,26 @@ VIRTUAL_MIN_STEP_S = 1e-6
 # 20-minute job of benchmarks/virtual_run.py (8 was best before the steps were kept).
 VIRTUAL_RUN_FRAMES_MIN = 32
 VIRTUAL_RUN_FRAMES_MAX = 512
+# A wait times a run (a tail kept apart) only once one of its bursts has passed without news,
+# and only while this much is left before its end.  Right after a write or a frame that was news
+# the simulator's next step is seldom a quiet one (the frame written lands, a segment ends), and
+# a run timed for less than two status periods holds one frame at most, which a burst reads for
+# less; a burst reads the same frames at the same times.  The 24,000-frame job of
+# benchmarks/virtual_run.py (a write every 50 ms) asked for 62,520 runs, 47,003 of them empty and
+# most of the rest one step long (15,594 frames read in 15,556 runs); with one period left
+# 20,092, 17,434 empty (2,658 frames in 2,658 runs), 2 % less CPU; with two 12,968, 10,348 empty
+# (2,620 frames in 2,620 runs), 1 % less again; the 20-minute job unchanged.
+VIRTUAL_RUN_LEFT_S = 2 * STATUS_PERIOD_S
 # The frames of a run are built and decoded a batch at a time, ahead of reading them: the
 # simulator's code and the engine's each run in a batch (the 20-minute job: 0.82 -> 0.75 s of
 # CPU).  A batch is as many frames as the waits read of the run before it, at least
 # ``VIRTUAL_BUILD_FIRST`` — after a write, when the wait may end at once — else
 # ``VIRTUAL_BUILD_FRAMES``, and at most that.  The 24,000-frame job writes every 50 ms and its
 # waits end at their first frames (the next kind-4 frame, when the FIFO bound holds it): at 64 a
-# batch it built 96,837 frames to read 15,594 (now 15,594, 3 % of its CPU); the 20-minute job
-# writes 13 frames and reads long runs, 64 a batch as before (from 1 or 8 after every wait, not
-# only after a write, it cost 8 % more).  A write wastes at most a batch (the tail it forgets).
+# batch it built 96,837 frames to read 15,594 (then 15,594, 3 % of its CPU; it reads 2,620 by
+# runs now: ``VIRTUAL_RUN_LEFT_S``); the 20-minute job writes 13 frames and reads long runs, 64 a
+# batch as before (from 1 or 8 after every wait, not only after a write, it cost 8 % more).  A
+# write wastes at most a batch (the tail it forgets).
 VIRTUAL_BUILD_FRAMES = 64
 VIRTUAL_BUILD_FIRST = 1
 UNMERGED_FRAMES_MAX = 4096  # frames of virtual runs held before they are merged into the state
@@ -73,8 +86,10 @@ class VirtualWaits:
         end_s = max(until_s, clock.now_s + VIRTUAL_MIN_STEP_S) if until_s is not None else None
         run_frames = VIRTUAL_RUN_FRAMES_MIN
         tail, self.tail = self.tail, None
+        quiet = False  # a burst of this wait has passed without news: a run may be worth timing
         while True:  # burst after burst (or run after run) until one holds news, or end_s
-            if news is not None:
+            if news is not None and (tail is not None or quiet and (
+                    end_s is None or end_s - clock.now_s >= VIRTUAL_RUN_LEFT_S)):
                 run, built, read_before = self._next_run(tail, end_s, run_frames)
                 tail = None
                 if run:
@@ -87,6 +102,7 @@ class VirtualWaits:
                     # a frame the run could not decode (never on a clean line): the ordinary way reads it
             if self._burst(end_s, news) or (end_s is not None and clock.now_s >= end_s):
                 return
+            quiet = True
 
     def _next_run(self, tail, end_s: float | None, run_frames: int) -> tuple[list, list, int]:
         """The simulator's next quiet steps, the frames built for them already and how many of
