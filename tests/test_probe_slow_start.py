@@ -46,13 +46,16 @@ def test_how_sure_a_speed_factor_is_follows_its_spread(value, precision, sure):
     assert factor_confidence(value, precision) == sure
 
 
-@pytest.mark.parametrize("overhead_s, baud", [(0.100, 9600), (0.100, 115200), (0.050, 115200)])
+@pytest.mark.parametrize("overhead_s, baud", [(0.100, 9600), (0.100, 115200), (0.050, 115200), (0.500, 9600)])
 def test_an_arm_that_takes_a_while_before_every_command_is_measured(tmp_path, overhead_s, baud):
     """An arm that takes 100 ms before every command (a PWM-only frame that changes nothing
     included): the FIFO step took the quiet of its repeated frames for the end of a round —
     fifo_frames 2 "sure" at 9600 (15 at 115200, "not consistent" at 50 ms) — and the timed move
     then began while the arm still ran them: "the arm did not finish a 2.5 s move within 4x that
-    time: stopped probing", exit 1.  Now each round waits out the repeats at round 1's pace."""
+    time: stopped probing", exit 1.  Now each round waits out the repeats at round 1's pace.  An arm
+    that takes 0.5 s runs a round's 200 frames in over 100 s: a round was given up 60 s after its
+    delay ("the PWM had not settled 60 s after the delay", exit 1, the PWM not put back); it is
+    given up 60 s after the last news now."""
     found = _probe(tmp_path, overhead_s, baud)
     assert found["rc"] == 0 and found["details"]["stopped"] is None, found["stderr"]
     assert found["fifo_frames"] == 200, found["details"]["fifo_frames"]

@@ -51,7 +51,10 @@ FILL_AHEAD_S = 0.2
 # runs short by up to this much (ticks of 30 ms, say) still held it.
 HOLD_MARGIN_S = 0.1
 ATTEMPTS = 3  # a round whose hold was not proven for want of time is tried again, the delay longer
-ROUND_LIMIT_S = 60.0  # a round that has not settled by then is given up
+# A round that shows nothing new for this long beyond its expected quiet is given up: after the
+# delay's end, or after the last new value — an arm that takes 0.5 s before every command runs a
+# round's 200 frames in over 100 s, still running, not stuck (``_until_settled``).
+ROUND_LIMIT_S = 60.0
 
 
 def _changes(probe, since_s: float) -> list[tuple[float, int]]:
@@ -178,11 +181,29 @@ def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0, pa
     # its earliest end as an adapter may hold it.
     repeats = sum(1 for a, b in zip([start_us, *values], values) if a == b)
     silent_s = QUIET_S + after_sent_s + repeats * max(probe.frame_s, pace.repeat_s if pace else 0.0)
-    yield Wait(fill.end_s + ROUND_LIMIT_S, lambda: fill.settled(probe, silent_s, pace))
+    yield from _until_settled(probe, fill, silent_s, pace)
     probe.known.busy_until_s = max(probe.known.busy_until_s, probe.now_s)
     judged = _judged(probe, fill, fill.settled(probe, silent_s, pace))
     gaps = fill.steps(probe)
     return dataclasses.replace(judged, pace=pace or (Pace.of(gaps) if gaps else None))
+
+
+def _until_settled(probe, fill: _Round, silent_s: float, pace: Pace | None):
+    """Wait until ``fill`` settles, or until it has shown nothing new for ``ROUND_LIMIT_S`` after
+    the delay's end and the quiet its leading repeats may take (``silent_s``), or after its last
+    new value; never longer than ``ROUND_LIMIT_S`` for each block of ``BLOCK`` frames (a noisy
+    line's corrupted frames are news too: the wait stays bounded)."""
+    last_s = fill.end_s + silent_s + ROUND_LIMIT_S * math.ceil(len(fill.values) / BLOCK)
+
+    def news_s() -> float:
+        start_s = max(fill.end_s, fill.earliest_end_s(probe))
+        return min(start_s + max(silent_s, sum(fill.steps(probe))), last_s)
+
+    while True:
+        deadline_s = news_s() + ROUND_LIMIT_S
+        yield Wait(deadline_s, lambda: fill.settled(probe, silent_s, pace) or news_s() + ROUND_LIMIT_S > deadline_s)
+        if fill.settled(probe, silent_s, pace) or news_s() + ROUND_LIMIT_S <= deadline_s:
+            return
 
 
 def _judged(probe, fill: _Round, settled: bool) -> Fill:
@@ -212,7 +233,7 @@ def _judged(probe, fill: _Round, settled: bool) -> Fill:
                           "for the delay", UNSURE, None, hold)
     final = probe.seen.agreed(PauseStatus.KIND, fill.end_s, lambda f: f.pwm_us)
     if not settled or final is None:
-        return Fill(None, f"the PWM had not settled {ROUND_LIMIT_S:g} s after the delay", UNSURE, None, hold)
+        return Fill(None, f"the PWM had not settled: nothing new for {ROUND_LIMIT_S:g} s", UNSURE, None, hold)
     return Fill(final[1], f"{len(fill.values)} PWM-only frames behind a {delay_s:g} s delay, the last landed by "
                           f"{landed_by_s - written_s:.2f} s and the delay ending at {ends_s - written_s:.2f} s at "
                           f"the earliest ({how}); the arm ended at PWM {final[1]} µs", confidence, None, hold)
