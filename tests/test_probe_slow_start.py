@@ -78,3 +78,21 @@ def test_the_tolerance_is_no_surer_than_the_factor_it_is_relative_to(precision, 
 
     found = tolerance_finding(2.53, precision, [0.0])
     assert found.confidence == sure, found.evidence
+
+
+@pytest.mark.parametrize("seed", [2, 6])
+def test_a_corrupted_status_frame_does_not_end_a_round_early(tmp_path, seed):
+    """On the 100 ms arm with 15 % of the status frames corrupted (sim://?corrupt=0.15&seed=2 or 6) a
+    corrupted PWM just after the delay's end passed for round 1's first step (the pace: 0.05 s where
+    a frame takes 0.4 s), the quiet of the next block's repeats for the round's end: fifo_frames 2,
+    "sure" (the arm holds 200), and the timed move then began while the arm still ran the fillers
+    (exit 1).  A corrupted frame is a blip off the sequence sent: the round's steps count only new
+    values further along it."""
+    (tmp_path / "arm.toml").write_text("[timing]\ncommand_overhead_s = 0.1\n")
+    url = f"sim://?clock=virtual&profile=arm.toml&corrupt=0.15&seed={seed}"
+    done = subprocess.run([sys.executable, "-m", "armctl", "probe", "--port", url, "--yes", "--json"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    found = json.loads(done.stdout)
+    fifo = found["details"]["fifo_frames"]
+    assert fifo["measured"] in (None, 200), fifo
+    assert done.returncode == 0 and found["details"]["stopped"] is None, done.stderr

@@ -60,7 +60,7 @@ ROUND_LIMIT_S = 60.0
 def _changes(probe, since_s: float) -> list[tuple[float, int]]:
     """(time, PWM) of each kind-4 frame since ``since_s`` whose PWM differs from the frame before.
     Single frames, not agreed runs: while the FIFO drains a value may last less than two frames
-    of its kind; a corrupted frame only adds a change, which makes the wait longer, not wrong."""
+    of its kind (a corrupted frame adds a change: ``_Round.steps`` leaves its blips out)."""
     changes, previous = [], None
     for t, frame in probe.seen.since(PauseStatus.KIND, since_s):
         if previous is not None and frame.pwm_us != previous:
@@ -134,9 +134,21 @@ class _Round:
 
     def steps(self, probe) -> list[float]:
         """The steps between the new values reported since the delay's end — the model's, or later
-        as the port's reports prove it began (a buffer may have held it) — the first from that end."""
+        as the port's reports prove it began (a buffer may have held it) — the first from that end.
+        A new value counts only if it is further along the values sent than the last one counted
+        and the next frame (while there is none: counted, the round not ended on it) stays there or
+        goes further: a corrupted frame is a blip and back (its short steps, taken for round 1's
+        pace, let the quiet of a block's repeats pass for the round's end: fifo_frames 2, "sure",
+        for 200), and a PWM one byte off is often one sent."""
         start_s = max(self.end_s, self.earliest_end_s(probe))
-        times = [t for t, _ in _changes(probe, start_s - 1.0) if t >= start_s]
+        last = {value: k for k, value in enumerate(self.values)}  # a value's last place in the sequence
+        frames = [(t, frame.pwm_us) for t, frame in probe.seen.since(PauseStatus.KIND, start_s - 1.0)]
+        times, reached = [], last.get(self.start_us, -1)
+        for (_, before), (t, value), (_, after) in zip(frames, frames[1:], [*frames[2:], (None, None)]):
+            stays = after is None or last.get(value, -1) <= last.get(after, -1)
+            if t >= start_s and value != before and reached < last.get(value, -1) and stays:
+                times.append(t)
+                reached = last[value]
         return [b - a for a, b in zip([start_s, *times], times)]
 
     def settled(self, probe, silent_s: float, pace: Pace | None) -> bool:
