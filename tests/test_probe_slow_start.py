@@ -96,3 +96,20 @@ def test_a_corrupted_status_frame_does_not_end_a_round_early(tmp_path, seed):
     fifo = found["details"]["fifo_frames"]
     assert fifo["measured"] in (None, 200), fifo
     assert done.returncode == 0 and found["details"]["stopped"] is None, done.stderr
+
+
+def test_a_corrupted_sample_does_not_tilt_a_timed_move(tmp_path):
+    """On the 100 ms arm with corrupt=0.15&seed=5 one corrupted joint frame read 0.335 s into the
+    second joint move 1 ms after it landed: that move's fit tilted to a start delay of -23.8 ms (the
+    others 100.6, 92.0, 95.0), the least of the joint moves', so command_overhead_s was 0 and the
+    factor, the wait folded in again, 1.067 "sure" for an arm at 1.0.  A sample off the fitted line
+    by more than two status steps (and the clock's uncertainty) is left out, and the fit redone."""
+    (tmp_path / "arm.toml").write_text("[timing]\ncommand_overhead_s = 0.1\n")
+    url = "sim://?clock=virtual&profile=arm.toml&corrupt=0.15&seed=5"
+    done = subprocess.run([sys.executable, "-m", "armctl", "probe", "--port", url, "--yes", "--json"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    found = json.loads(done.stdout)
+    assert done.returncode == 0, done.stderr
+    assert found["command_overhead_s"] == pytest.approx(0.1, abs=0.002), found["details"]["command_overhead_s"]
+    factor = found["details"]["speed_factor"]
+    assert factor["confidence"] != "sure" or abs(factor["measured"] - 1.0) <= factor["data"]["precision"], factor
