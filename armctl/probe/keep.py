@@ -41,6 +41,24 @@ def written(arm: str, values: dict) -> dict:
     return {MEASURED_ON: arm, **values}
 
 
+def measured_elsewhere(table: dict, arm: str, values: dict) -> list[str]:
+    """The settings an armctl.toml's ``[connector]`` ``table`` holds from a probe of another arm than
+    ``arm`` (its ``measured_on``) that ``values`` does not replace: ``--write`` takes them out, or
+    they would name ``arm`` (a probe without motion of arm B left arm A's command_overhead_s)."""
+    from ..errors import ConfigError
+    from ..host.profile import MEASURED_ON
+    from . import SETTINGS
+
+    measured_on = table.get(MEASURED_ON)
+    if not isinstance(measured_on, str):
+        return []
+    try:
+        same = arm_identity(measured_on) == arm
+    except ConfigError:  # (a bad sim:// URL: not this arm)
+        same = False
+    return [] if same else [name for name in SETTINGS if name in table and name not in values]
+
+
 def list_stored(as_json: bool) -> int:
     records = calibration.stored()
     if as_json:

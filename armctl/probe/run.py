@@ -103,13 +103,18 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     if probe.stopped is not None:
         click.echo(f"armctl: probe stopped: {probe.stopped}", err=True)
         return EXIT_PROBLEMS
-    from .keep import arm_identity, keep, written
+    from ..host.profile import MEASURED_ON
+    from .keep import arm_identity, keep, measured_elsewhere, written
 
     arm = arm_identity(choice.url)
     if target is not None:
         values = written(arm, to_write(probe))
-        write_connector(target, values)
+        before = connector_table(target)
+        drop = measured_elsewhere(before, arm, values)
+        write_connector(target, values, drop)
         say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {toml_value(v)}" for k, v in values.items()))
+        if drop:
+            say(f"--write: took {', '.join(drop)} out of {target}: measured on another arm ({before[MEASURED_ON]})")
         if "fifo_frames" not in values:
             say(unmeasured_fifo_note(target, connector_table(target).get("fifo_frames")))
     keep(choice.url, arm, probe, say)  # with the arm: every command on it uses what was measured
