@@ -50,3 +50,18 @@ def test_the_same_arm_keeps_what_a_probe_without_motion_did_not_measure(tmp_path
     assert _armctl(tmp_path, "probe", "--no-motion", "--json", "--port", arm_a, "--write", "armctl.toml").returncode == 0
     table = tomllib.loads((tmp_path / "armctl.toml").read_text())["connector"]
     assert table["command_overhead_s"] == 0.1 and table["speed_factor"] == pytest.approx(1.0, abs=0.02), table
+
+
+def test_a_probe_without_motion_does_not_unverify_the_kinematics(tmp_path):
+    """A probe with motion verified the kinematics at 3 poses (true, sure); ``--no-motion`` then sees
+    one pose, which agrees: false, "likely" (one pose is not proof), and it replaced the true in the
+    store and in the file — the streamer then trusts no sighting of a path on that arm.  One
+    agreeing pose proves nothing against it: the true stays."""
+    arm = "sim://?clock=virtual&fifo=50"
+    assert _armctl(tmp_path, "probe", "--yes", "--json", "--port", arm, "--write", "armctl.toml").returncode == 0
+    done = _armctl(tmp_path, "probe", "--no-motion", "--json", "--port", arm, "--write", "armctl.toml")
+    assert done.returncode == 0, done.stderr
+    assert tomllib.loads((tmp_path / "armctl.toml").read_text())["connector"]["kinematics_verified"] is True
+    (tmp_path / "armctl.toml").unlink()
+    listed = _armctl(tmp_path, "probe", "--list").stdout
+    assert "kinematics_verified = true" in listed, listed
