@@ -113,3 +113,33 @@ def test_a_corrupted_sample_does_not_tilt_a_timed_move(tmp_path):
     assert found["command_overhead_s"] == pytest.approx(0.1, abs=0.002), found["details"]["command_overhead_s"]
     factor = found["details"]["speed_factor"]
     assert factor["confidence"] != "sure" or abs(factor["measured"] - 1.0) <= factor["data"]["precision"], factor
+
+
+@pytest.mark.parametrize("interrupt_at_s", [40.0, 170.0])
+def test_ctrl_c_in_a_fifo_round_of_a_slow_arm_puts_the_pwm_back(tmp_path, monkeypatch, interrupt_at_s):
+    """Ctrl-C (the stop event) at 40 s (round 1) or 170 s (round 2's 192 leading repeats) of the
+    probe of an arm that takes 0.5 s before every command: the restore step took 1.5 s of quiet
+    for the end of what was queued — a block's repeats take 8 s, round 2's leading ones 100 s —
+    put the PWM back behind them, waited 15 s and said "NOT as found: PWM" (1525 or 1565 for 1500).
+    It waits at the round's pace now."""
+    import armctl.probe.host as host
+
+    (tmp_path / "arm.toml").write_text("[timing]\ncommand_overhead_s = 0.5\n")
+    monkeypatch.chdir(tmp_path)
+    drive = host.drive
+
+    def interrupting(link, probe, inbox, progress=None, stop=None):
+        def hook(probe):
+            if probe.arm_time_s >= interrupt_at_s:
+                stop.set()
+        return drive(link, probe, inbox, hook, stop)
+
+    monkeypatch.setattr(host, "drive", interrupting)
+    from click.testing import CliRunner
+
+    from armctl.ui.cli import main
+
+    done = CliRunner().invoke(main, ["probe", "--yes", "--port", "sim://?clock=virtual&profile=arm.toml"])
+    assert done.exit_code == 130, done.output
+    assert "as found: worktable origin, PWM, running (not paused), joints" in done.output, done.output
+    assert "NOT as found" not in done.output, done.output

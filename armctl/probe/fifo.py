@@ -132,6 +132,19 @@ class _Round:
         """The last filler has landed by then (None: the port still holds it)."""
         return probe.landed_by(self.last_end, self.last_landed_s)
 
+    def queued_until_s(self, probe, silent_s: float, pace: Pace | None) -> float:
+        """When the arm may have run the round's frames after the last new value seen, at the pace
+        seen (``pace``, else this round's so far; a frame time each before any): the restore step
+        waits for it after a Ctrl-C (1.5 s of quiet had passed for it, and the PWM put back queued
+        behind a block's repeats, 8 s at 0.5 s a frame, or round 2's 192 leading ones, 100 s)."""
+        start_s = max(self.end_s, self.earliest_end_s(probe))
+        gaps, reached = self._progress(probe)
+        pace = pace or (Pace.of(gaps) if gaps else Pace(probe.frame_s, probe.frame_s))
+        rest = self.values[reached + 1:]
+        changes = sum(1 for a, b in zip([self.values[reached] if reached >= 0 else self.start_us, *rest], rest) if a != b)
+        return (max(start_s + silent_s, start_s + sum(gaps)) + changes * max(probe.frame_s, pace.change_s)
+                + (len(rest) - changes) * max(probe.frame_s, pace.repeat_s))
+
     def steps(self, probe) -> list[float]:
         """The steps between the new values reported since the delay's end — the model's, or later
         as the port's reports prove it began (a buffer may have held it) — the first from that end.
@@ -140,6 +153,10 @@ class _Round:
         goes further: a corrupted frame is a blip and back (its short steps, taken for round 1's
         pace, let the quiet of a block's repeats pass for the round's end: fifo_frames 2, "sure",
         for 200), and a PWM one byte off is often one sent."""
+        return self._progress(probe)[0]
+
+    def _progress(self, probe) -> tuple[list[float], int]:
+        """``steps``, and the last place in the values sent that the last new value counted holds."""
         start_s = max(self.end_s, self.earliest_end_s(probe))
         last = {value: k for k, value in enumerate(self.values)}  # a value's last place in the sequence
         frames = [(t, frame.pwm_us) for t, frame in probe.seen.since(PauseStatus.KIND, start_s - 1.0)]
@@ -149,7 +166,7 @@ class _Round:
             if t >= start_s and value != before and reached < last.get(value, -1) and stays:
                 times.append(t)
                 reached = last[value]
-        return [b - a for a, b in zip([start_s, *times], times)]
+        return [b - a for a, b in zip([start_s, *times], times)], reached
 
     def settled(self, probe, silent_s: float, pace: Pace | None) -> bool:
         """The arm has run what it accepted: the port holds no filler, and the PWM has been quiet
@@ -193,7 +210,9 @@ def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0, pa
     # its earliest end as an adapter may hold it.
     repeats = sum(1 for a, b in zip([start_us, *values], values) if a == b)
     silent_s = QUIET_S + after_sent_s + repeats * max(probe.frame_s, pace.repeat_s if pace else 0.0)
+    probe.known.queued_until_s = lambda: fill.queued_until_s(probe, silent_s, pace)  # (for a Ctrl-C meanwhile)
     yield from _until_settled(probe, fill, silent_s, pace)
+    probe.known.queued_until_s = None
     probe.known.busy_until_s = max(probe.known.busy_until_s, probe.now_s)
     judged = _judged(probe, fill, fill.settled(probe, silent_s, pace))
     gaps = fill.steps(probe)
