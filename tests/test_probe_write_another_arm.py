@@ -1,4 +1,6 @@
-"""``armctl probe --write`` into an armctl.toml whose ``[connector]`` was measured on another arm.
+"""What ``armctl probe`` keeps and writes over what an arm already has: ``--write`` into an
+armctl.toml whose ``[connector]`` was measured on another arm, and a probe without motion over a
+verified kinematics.
 
 The fault: the probe of arm A (waits 100 ms before every command) wrote its seven values with
 ``measured_on = A``; ``armctl probe --no-motion --write`` of arm B then set ``measured_on = B`` and
