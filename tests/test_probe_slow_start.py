@@ -46,13 +46,16 @@ def test_how_sure_a_speed_factor_is_follows_its_spread(value, precision, sure):
     assert factor_confidence(value, precision) == sure
 
 
-@pytest.mark.parametrize("overhead_s, baud", [(0.100, 9600), (0.100, 115200), (0.050, 115200)])
+@pytest.mark.parametrize("overhead_s, baud", [(0.100, 9600), (0.100, 115200), (0.050, 115200), (0.500, 9600)])
 def test_an_arm_that_takes_a_while_before_every_command_is_measured(tmp_path, overhead_s, baud):
     """An arm that takes 100 ms before every command (a PWM-only frame that changes nothing
     included): the FIFO step took the quiet of its repeated frames for the end of a round —
     fifo_frames 2 "sure" at 9600 (15 at 115200, "not consistent" at 50 ms) — and the timed move
     then began while the arm still ran them: "the arm did not finish a 2.5 s move within 4x that
-    time: stopped probing", exit 1.  Now each round waits out the repeats at round 1's pace."""
+    time: stopped probing", exit 1.  Now each round waits out the repeats at round 1's pace.  An arm
+    that takes 0.5 s runs a round's 200 frames in over 100 s: a round was given up 60 s after its
+    delay ("the PWM had not settled 60 s after the delay", exit 1, the PWM not put back); it is
+    given up 60 s after the last news now."""
     found = _probe(tmp_path, overhead_s, baud)
     assert found["rc"] == 0 and found["details"]["stopped"] is None, found["stderr"]
     assert found["fifo_frames"] == 200, found["details"]["fifo_frames"]
@@ -75,3 +78,68 @@ def test_the_tolerance_is_no_surer_than_the_factor_it_is_relative_to(precision, 
 
     found = tolerance_finding(2.53, precision, [0.0])
     assert found.confidence == sure, found.evidence
+
+
+@pytest.mark.parametrize("seed", [2, 6])
+def test_a_corrupted_status_frame_does_not_end_a_round_early(tmp_path, seed):
+    """On the 100 ms arm with 15 % of the status frames corrupted (sim://?corrupt=0.15&seed=2 or 6) a
+    corrupted PWM just after the delay's end passed for round 1's first step (the pace: 0.05 s where
+    a frame takes 0.4 s), the quiet of the next block's repeats for the round's end: fifo_frames 2,
+    "sure" (the arm holds 200), and the timed move then began while the arm still ran the fillers
+    (exit 1).  A corrupted frame is a blip off the sequence sent: the round's steps count only new
+    values further along it."""
+    (tmp_path / "arm.toml").write_text("[timing]\ncommand_overhead_s = 0.1\n")
+    url = f"sim://?clock=virtual&profile=arm.toml&corrupt=0.15&seed={seed}"
+    done = subprocess.run([sys.executable, "-m", "armctl", "probe", "--port", url, "--yes", "--json"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    found = json.loads(done.stdout)
+    fifo = found["details"]["fifo_frames"]
+    assert fifo["measured"] in (None, 200), fifo
+    assert done.returncode == 0 and found["details"]["stopped"] is None, done.stderr
+
+
+def test_a_corrupted_sample_does_not_tilt_a_timed_move(tmp_path):
+    """On the 100 ms arm with corrupt=0.15&seed=5 one corrupted joint frame read 0.335 s into the
+    second joint move 1 ms after it landed: that move's fit tilted to a start delay of -23.8 ms (the
+    others 100.6, 92.0, 95.0), the least of the joint moves', so command_overhead_s was 0 and the
+    factor, the wait folded in again, 1.067 "sure" for an arm at 1.0.  A sample off the fitted line
+    by more than two status steps (and the clock's uncertainty) is left out, and the fit redone."""
+    (tmp_path / "arm.toml").write_text("[timing]\ncommand_overhead_s = 0.1\n")
+    url = "sim://?clock=virtual&profile=arm.toml&corrupt=0.15&seed=5"
+    done = subprocess.run([sys.executable, "-m", "armctl", "probe", "--port", url, "--yes", "--json"],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    found = json.loads(done.stdout)
+    assert done.returncode == 0, done.stderr
+    assert found["command_overhead_s"] == pytest.approx(0.1, abs=0.002), found["details"]["command_overhead_s"]
+    factor = found["details"]["speed_factor"]
+    assert factor["confidence"] != "sure" or abs(factor["measured"] - 1.0) <= factor["data"]["precision"], factor
+
+
+@pytest.mark.parametrize("interrupt_at_s", [40.0, 170.0])
+def test_ctrl_c_in_a_fifo_round_of_a_slow_arm_puts_the_pwm_back(tmp_path, monkeypatch, interrupt_at_s):
+    """Ctrl-C (the stop event) at 40 s (round 1) or 170 s (round 2's 192 leading repeats) of the
+    probe of an arm that takes 0.5 s before every command: the restore step took 1.5 s of quiet
+    for the end of what was queued — a block's repeats take 8 s, round 2's leading ones 100 s —
+    put the PWM back behind them, waited 15 s and said "NOT as found: PWM" (1525 or 1565 for 1500).
+    It waits at the round's pace now."""
+    import armctl.probe.host as host
+
+    (tmp_path / "arm.toml").write_text("[timing]\ncommand_overhead_s = 0.5\n")
+    monkeypatch.chdir(tmp_path)
+    drive = host.drive
+
+    def interrupting(link, probe, inbox, progress=None, stop=None):
+        def hook(probe):
+            if probe.arm_time_s >= interrupt_at_s:
+                stop.set()
+        return drive(link, probe, inbox, hook, stop)
+
+    monkeypatch.setattr(host, "drive", interrupting)
+    from click.testing import CliRunner
+
+    from armctl.ui.cli import main
+
+    done = CliRunner().invoke(main, ["probe", "--yes", "--port", "sim://?clock=virtual&profile=arm.toml"])
+    assert done.exit_code == 130, done.output
+    assert "as found: worktable origin, PWM, running (not paused), joints" in done.output, done.output
+    assert "NOT as found" not in done.output, done.output

@@ -51,13 +51,16 @@ FILL_AHEAD_S = 0.2
 # runs short by up to this much (ticks of 30 ms, say) still held it.
 HOLD_MARGIN_S = 0.1
 ATTEMPTS = 3  # a round whose hold was not proven for want of time is tried again, the delay longer
-ROUND_LIMIT_S = 60.0  # a round that has not settled by then is given up
+# A round that shows nothing new for this long beyond its expected quiet is given up: after the
+# delay's end, or after the last new value — an arm that takes 0.5 s before every command runs a
+# round's 200 frames in over 100 s, still running, not stuck (``_until_settled``).
+ROUND_LIMIT_S = 60.0
 
 
 def _changes(probe, since_s: float) -> list[tuple[float, int]]:
     """(time, PWM) of each kind-4 frame since ``since_s`` whose PWM differs from the frame before.
     Single frames, not agreed runs: while the FIFO drains a value may last less than two frames
-    of its kind; a corrupted frame only adds a change, which makes the wait longer, not wrong."""
+    of its kind (a corrupted frame adds a change: ``_Round.steps`` leaves its blips out)."""
     changes, previous = [], None
     for t, frame in probe.seen.since(PauseStatus.KIND, since_s):
         if previous is not None and frame.pwm_us != previous:
@@ -129,12 +132,41 @@ class _Round:
         """The last filler has landed by then (None: the port still holds it)."""
         return probe.landed_by(self.last_end, self.last_landed_s)
 
+    def queued_until_s(self, probe, silent_s: float, pace: Pace | None) -> float:
+        """When the arm may have run the round's frames after the last new value seen, at the pace
+        seen (``pace``, else this round's so far; a frame time each before any): the restore step
+        waits for it after a Ctrl-C (1.5 s of quiet had passed for it, and the PWM put back queued
+        behind a block's repeats, 8 s at 0.5 s a frame, or round 2's 192 leading ones, 100 s)."""
+        start_s = max(self.end_s, self.earliest_end_s(probe))
+        gaps, reached = self._progress(probe)
+        pace = pace or (Pace.of(gaps) if gaps else Pace(probe.frame_s, probe.frame_s))
+        rest = self.values[reached + 1:]
+        changes = sum(1 for a, b in zip([self.values[reached] if reached >= 0 else self.start_us, *rest], rest) if a != b)
+        return (max(start_s + silent_s, start_s + sum(gaps)) + changes * max(probe.frame_s, pace.change_s)
+                + (len(rest) - changes) * max(probe.frame_s, pace.repeat_s))
+
     def steps(self, probe) -> list[float]:
         """The steps between the new values reported since the delay's end — the model's, or later
-        as the port's reports prove it began (a buffer may have held it) — the first from that end."""
+        as the port's reports prove it began (a buffer may have held it) — the first from that end.
+        A new value counts only if it is further along the values sent than the last one counted
+        and the next frame (while there is none: counted, the round not ended on it) stays there or
+        goes further: a corrupted frame is a blip and back (its short steps, taken for round 1's
+        pace, let the quiet of a block's repeats pass for the round's end: fifo_frames 2, "sure",
+        for 200), and a PWM one byte off is often one sent."""
+        return self._progress(probe)[0]
+
+    def _progress(self, probe) -> tuple[list[float], int]:
+        """``steps``, and the last place in the values sent that the last new value counted holds."""
         start_s = max(self.end_s, self.earliest_end_s(probe))
-        times = [t for t, _ in _changes(probe, start_s - 1.0) if t >= start_s]
-        return [b - a for a, b in zip([start_s, *times], times)]
+        last = {value: k for k, value in enumerate(self.values)}  # a value's last place in the sequence
+        frames = [(t, frame.pwm_us) for t, frame in probe.seen.since(PauseStatus.KIND, start_s - 1.0)]
+        times, reached = [], last.get(self.start_us, -1)
+        for (_, before), (t, value), (_, after) in zip(frames, frames[1:], [*frames[2:], (None, None)]):
+            stays = after is None or last.get(value, -1) <= last.get(after, -1)
+            if t >= start_s and value != before and reached < last.get(value, -1) and stays:
+                times.append(t)
+                reached = last[value]
+        return [b - a for a, b in zip([start_s, *times], times)], reached
 
     def settled(self, probe, silent_s: float, pace: Pace | None) -> bool:
         """The arm has run what it accepted: the port holds no filler, and the PWM has been quiet
@@ -178,11 +210,31 @@ def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0, pa
     # its earliest end as an adapter may hold it.
     repeats = sum(1 for a, b in zip([start_us, *values], values) if a == b)
     silent_s = QUIET_S + after_sent_s + repeats * max(probe.frame_s, pace.repeat_s if pace else 0.0)
-    yield Wait(fill.end_s + ROUND_LIMIT_S, lambda: fill.settled(probe, silent_s, pace))
+    probe.known.queued_until_s = lambda: fill.queued_until_s(probe, silent_s, pace)  # (for a Ctrl-C meanwhile)
+    yield from _until_settled(probe, fill, silent_s, pace)
+    probe.known.queued_until_s = None
     probe.known.busy_until_s = max(probe.known.busy_until_s, probe.now_s)
     judged = _judged(probe, fill, fill.settled(probe, silent_s, pace))
     gaps = fill.steps(probe)
     return dataclasses.replace(judged, pace=pace or (Pace.of(gaps) if gaps else None))
+
+
+def _until_settled(probe, fill: _Round, silent_s: float, pace: Pace | None):
+    """Wait until ``fill`` settles, or until it has shown nothing new for ``ROUND_LIMIT_S`` after
+    the delay's end and the quiet its leading repeats may take (``silent_s``), or after its last
+    new value; never longer than ``ROUND_LIMIT_S`` for each block of ``BLOCK`` frames (a noisy
+    line's corrupted frames are news too: the wait stays bounded)."""
+    last_s = fill.end_s + silent_s + ROUND_LIMIT_S * math.ceil(len(fill.values) / BLOCK)
+
+    def news_s() -> float:
+        start_s = max(fill.end_s, fill.earliest_end_s(probe))
+        return min(start_s + max(silent_s, sum(fill.steps(probe))), last_s)
+
+    while True:
+        deadline_s = news_s() + ROUND_LIMIT_S
+        yield Wait(deadline_s, lambda: fill.settled(probe, silent_s, pace) or news_s() + ROUND_LIMIT_S > deadline_s)
+        if fill.settled(probe, silent_s, pace) or news_s() + ROUND_LIMIT_S <= deadline_s:
+            return
 
 
 def _judged(probe, fill: _Round, settled: bool) -> Fill:
@@ -212,7 +264,7 @@ def _judged(probe, fill: _Round, settled: bool) -> Fill:
                           "for the delay", UNSURE, None, hold)
     final = probe.seen.agreed(PauseStatus.KIND, fill.end_s, lambda f: f.pwm_us)
     if not settled or final is None:
-        return Fill(None, f"the PWM had not settled {ROUND_LIMIT_S:g} s after the delay", UNSURE, None, hold)
+        return Fill(None, f"the PWM had not settled: nothing new for {ROUND_LIMIT_S:g} s", UNSURE, None, hold)
     return Fill(final[1], f"{len(fill.values)} PWM-only frames behind a {delay_s:g} s delay, the last landed by "
                           f"{landed_by_s - written_s:.2f} s and the delay ending at {ends_s - written_s:.2f} s at "
                           f"the earliest ({how}); the arm ended at PWM {final[1]} µs", confidence, None, hold)

@@ -22,11 +22,26 @@ def today() -> str:
 arm_identity = calibration.arm_identity
 
 
-def keep(port: str, arm: str, probe, say) -> None:
-    """Store what ``probe`` found for ``arm``, probed through ``port``."""
+def stated(probe, kept: dict) -> dict:
+    """What ``probe`` states (``report.to_write``) to keep or write over ``kept``, what this arm's
+    store or file holds: all of it, but a ``kinematics_verified`` false that one agreeing pose gave
+    (likely: a probe without motion) over a true — one pose proves nothing against it."""
+    from .plan import LIKELY
     from .report import finding_for, to_write
 
     values = to_write(probe)
+    if (values.get("kinematics_verified") is False and kept.get("kinematics_verified") is True
+            and finding_for(probe, "kinematics_verified").confidence == LIKELY):
+        del values["kinematics_verified"]
+    return values
+
+
+def keep(port: str, arm: str, probe, say) -> None:
+    """Store what ``probe`` found for ``arm``, probed through ``port``."""
+    from .report import finding_for
+
+    earlier = calibration.load(arm)
+    values = stated(probe, {} if earlier is None else earlier.values())
     findings = [(name, value, finding_for(probe, name).evidence, finding_for(probe, name).confidence)
                 for name, value in values.items()]
     if findings:
@@ -39,6 +54,30 @@ def written(arm: str, values: dict) -> dict:
     from ..host.profile import MEASURED_ON
 
     return {MEASURED_ON: arm, **values}
+
+
+def measured_elsewhere(table: dict, arm: str, values: dict) -> list[str]:
+    """The settings an armctl.toml's ``[connector]`` ``table`` holds from a probe of another arm than
+    ``arm`` (its ``measured_on``) that ``values`` does not replace: ``--write`` takes them out, or
+    they would name ``arm`` (a probe without motion of arm B left arm A's command_overhead_s)."""
+    from ..host.profile import MEASURED_ON
+    from . import SETTINGS
+
+    measured_on = table.get(MEASURED_ON)
+    if not isinstance(measured_on, str) or measured_on_arm(table, arm):
+        return []
+    return [name for name in SETTINGS if name in table and name not in values]
+
+
+def measured_on_arm(table: dict, arm: str) -> bool:
+    """Whether an armctl.toml's ``[connector]`` ``table`` names ``arm`` as the one it was measured on."""
+    from ..errors import ConfigError
+    from ..host.profile import MEASURED_ON
+
+    try:
+        return isinstance(table.get(MEASURED_ON), str) and arm_identity(table[MEASURED_ON]) == arm
+    except ConfigError:  # (a bad sim:// URL: not this arm)
+        return False
 
 
 def list_stored(as_json: bool) -> int:

@@ -195,20 +195,41 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
         tau = _invert(segment, lambda pose: progress_of(pose), progress)
         if tau is not None and tau > 0:
             samples.append((t - landed_s, tau))
+    slope = total / segment.duration_s
+    # a corrupted frame (no checksum, H9) reads anywhere on the path: one 0.335 s in, 1 ms after
+    # landing, tilted a fit to a start delay of -23.8 ms (the wait then 0, the factor 1.067 "sure")
+    samples = _on_the_line(samples, 2 * quantum / slope + probe.timestamp_uncertainty_s)
     if len(samples) < 3:
         return None
-    # the start delay: the intercept of a straight-line fit t = delay + slope × τ (handling before
-    # the motion begins, which the fit through the origin folds into the factor)
+    start_delay_s = _line(samples)[0]
+    # one sample's factor error: the status step at the path's slowest sampled speed, and the clock
+    # the fit's error bound: half a status step at the mean speed, and the clock, over the longest τ
+    resolution = (quantum / 2 / slope + probe.timestamp_uncertainty_s + unsure_start_s) / max(tau for _, tau in samples)
+    return MoveFit(samples, resolution, start_delay_s, quantum / slope)
+
+
+def _line(samples) -> tuple[float, float]:
+    """The straight-line fit ``t = delay + slope × τ`` of ``samples``: (delay, slope).  The delay,
+    the intercept, is the start delay: handling before the motion begins, which the fit through
+    the origin folds into the factor."""
     mean_t = sum(t for t, _ in samples) / len(samples)
     mean_tau = sum(tau for _, tau in samples) / len(samples)
     spread = sum((tau - mean_tau) ** 2 for _, tau in samples)
-    slope_fit = sum((tau - mean_tau) * (t - mean_t) for t, tau in samples) / spread if spread > 0 else mean_t / mean_tau
-    start_delay_s = mean_t - slope_fit * mean_tau
-    # one sample's factor error: the status step at the path's slowest sampled speed, and the clock
-    # the fit's error bound: half a status step at the mean speed, and the clock, over the longest τ
-    slope = total / segment.duration_s
-    resolution = (quantum / 2 / slope + probe.timestamp_uncertainty_s + unsure_start_s) / max(tau for _, tau in samples)
-    return MoveFit(samples, resolution, start_delay_s, quantum / slope)
+    slope = sum((tau - mean_tau) * (t - mean_t) for t, tau in samples) / spread if spread > 0 else mean_t / mean_tau
+    return mean_t - slope * mean_tau, slope
+
+
+def _on_the_line(samples, off_s: float):
+    """``samples`` without those more than ``off_s`` off the line the rest fit, the worst left out
+    first (at least 3 kept): a sample's honest error is within a status step and the clock's."""
+    samples = list(samples)
+    while len(samples) > 3:
+        delay_s, slope = _line(samples)
+        worst = max(samples, key=lambda sample: abs(sample[0] - delay_s - slope * sample[1]))
+        if abs(worst[0] - delay_s - slope * worst[1]) <= off_s:
+            break
+        samples.remove(worst)
+    return samples
 
 
 def _joint_progress(start_joints):

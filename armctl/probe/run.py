@@ -58,7 +58,7 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     from ..host.calibration import arm_profile
     from . import ADAPTER_FIFO_BYTES, build_probe
     from .host import FrameInbox, deferred_stop, drive
-    from .report import as_json as json_object, print_lines, print_table, to_write
+    from .report import as_json as json_object, print_lines, print_table
     from .toml_edit import check_writable, connector_table, toml_value, write_connector
 
     say = (lambda text: click.echo(text, err=True)) if as_json else click.echo
@@ -103,13 +103,18 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     if probe.stopped is not None:
         click.echo(f"armctl: probe stopped: {probe.stopped}", err=True)
         return EXIT_PROBLEMS
-    from .keep import arm_identity, keep, written
+    from ..host.profile import MEASURED_ON
+    from .keep import arm_identity, keep, measured_elsewhere, measured_on_arm, stated, written
 
     arm = arm_identity(choice.url)
     if target is not None:
-        values = written(arm, to_write(probe))
-        write_connector(target, values)
+        before = connector_table(target)
+        values = written(arm, stated(probe, before if measured_on_arm(before, arm) else {}))
+        drop = measured_elsewhere(before, arm, values)
+        write_connector(target, values, drop)
         say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {toml_value(v)}" for k, v in values.items()))
+        if drop:
+            say(f"--write: took {', '.join(drop)} out of {target}: measured on another arm ({before[MEASURED_ON]})")
         if "fifo_frames" not in values:
             say(unmeasured_fifo_note(target, connector_table(target).get("fifo_frames")))
     keep(choice.url, arm, probe, say)  # with the arm: every command on it uses what was measured

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 import struct
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from ..core.evidence import agreeing_runs
@@ -76,6 +77,9 @@ class Known:
     pwm_us: int
     float_order: str = "<"  # H1; ">" once the arm shows it reads floats big-endian
     busy_until_s: float = 0.0  # every frame sent has finished by then (model time)
+    # a step whose frames' time shows only as the arm runs them (a FIFO round's fillers, at the pace
+    # its reports show): when they may have run, asked anew (the restore step waits for it)
+    queued_until_s: Callable[[], float] | None = None
     status_xyz_frame: str | None = None
     moved: bool = False  # a motion step ran: the restore step compares the joints
     poses: list = field(default_factory=list)  # (joints, robot X/Y/Z) where the arm rested
@@ -365,13 +369,19 @@ def restore(probe):
         return None
     yield from resume_if_paused(probe, probe.now_s - 1.0)
     # Let what is queued (delays, PWM-only frames, a small move) finish: quiet and past its planned end
-    limit_s = probe.now_s + QUIET_LIMIT_S
+    started_s = probe.now_s
     kinds = (PauseStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND)
 
-    def quiet():
-        return probe.now_s >= known.busy_until_s and probe.now_s - _last_change_s(probe, kinds) >= QUIET_S
+    def busy_until_s() -> float:
+        return max(known.busy_until_s, known.queued_until_s() if known.queued_until_s else 0.0)
 
-    yield from wait_until(probe, limit_s, quiet)
+    def quiet():
+        return probe.now_s >= busy_until_s() and probe.now_s - _last_change_s(probe, kinds) >= QUIET_S
+
+    while not quiet() and probe.now_s < max(started_s, busy_until_s()) + QUIET_LIMIT_S:
+        limit_s = max(started_s, busy_until_s()) + QUIET_LIMIT_S
+        yield from wait_until(probe, limit_s, lambda: quiet() or max(started_s, busy_until_s()) + QUIET_LIMIT_S > limit_s)
+    known.busy_until_s, known.queued_until_s = busy_until_s(), None
     # judge by readings the arm built after the last frame landed and everything sent had ended
     since_s = max(probe.line_free_s, known.busy_until_s)
     yield from wait_until(probe, since_s + READBACK_TIMEOUT_S, lambda: _readings(probe, since_s) is not None)

@@ -3,7 +3,8 @@
 Strategy: a small text edit of one table, not a TOML writer: every byte outside the keys set
 is kept as it was (comments, other tables, key order, blank lines).  The file must parse
 (tomllib) before and after; a key is replaced in place (a comment after its value is kept), a
-new key goes after the table's last key, a missing table is appended.  ``connector`` given in
+new key goes after the table's last key, a missing table is appended; a key taken out (measured
+on another arm: ``keep.measured_elsewhere``) loses its line.  ``connector`` given in
 any other form (dotted keys, an inline table, not a table) is refused: edit it by hand.
 Pure text in, text out (``updated``); ``write_connector`` is the thin file edge.
 
@@ -45,8 +46,9 @@ def parse(text: str, where: str) -> dict:
         raise ConfigError(f"{where} is not valid TOML ({error}): not written; fix or move it first") from None
 
 
-def updated(text: str, values: dict, where: str = "armctl.toml") -> str:
-    """``text`` with ``values`` set in its ``[connector]`` table."""
+def updated(text: str, values: dict, where: str = "armctl.toml", drop=()) -> str:
+    """``text`` with ``values`` set in its ``[connector]`` table, and the keys ``drop`` taken out of it."""
+    text = _without(text, drop, where) if drop else text
     data = parse(text, where)
     lines = text.splitlines(keepends=True)
     headers = [k for k, line in enumerate(lines) if _HEADER.match(line)]
@@ -83,6 +85,22 @@ def updated(text: str, values: dict, where: str = "armctl.toml") -> str:
     return result
 
 
+def _without(text: str, keys, where: str) -> str:
+    """``text`` without the lines that set ``keys`` in its one ``[connector]`` table."""
+    lines = text.splitlines(keepends=True)
+    start = next(k for k, line in enumerate(lines) if _HEADER.match(line)) + 1
+    end = next((k for k in range(start, len(lines)) if _ANY_HEADER.match(lines[k])), len(lines))
+    for key in keys:
+        found = [k for k in range(start, end) if re.match(rf"^\s*{re.escape(key)}\s*=", lines[k])]
+        simple = re.compile(rf"^\s*{re.escape(key)}\s*=\s*{_VALUE}\s*(#.*)?$")
+        if any(not simple.match(lines[k].rstrip("\r\n")) for k in found):
+            raise ConfigError(f"{where}: [{TABLE}] {key} has a value the probe does not take out: remove it by hand")
+        for k in reversed(found):
+            del lines[k]
+            end -= 1
+    return "".join(lines)
+
+
 def _after_last_key(lines: list[str], start: int, end: int) -> int:
     """Where a new key goes: after the table's last key line (not after trailing blank lines or
     comments that introduce the next table)."""
@@ -117,8 +135,8 @@ def _existing_text(path: Path) -> str:
         raise ConfigError(f"cannot read {path}: {error}") from None
 
 
-def write_connector(path: Path, values: dict) -> None:
-    result = updated(_existing_text(path), values, str(path))
+def write_connector(path: Path, values: dict, drop=()) -> None:
+    result = updated(_existing_text(path), values, str(path), drop)
     temporary = path.with_name(f".{path.name}.probe-tmp")
     temporary.write_text(result, encoding="utf-8")
     os.replace(temporary, path)
