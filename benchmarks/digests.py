@@ -63,7 +63,9 @@ def frames_digest(script: str, url: str) -> str:
     cwd = os.getcwd()
     try:
         os.chdir(ROOT)  # the script named as given, relative: the same in any checkout
-        result = CliRunner().invoke(main, ["run", f"scripts/{script}", "--no-live", "--port", url],
+        rate = re.search(r"[?&]baud=(\d+)", url)  # the port set to the arm's rate, as a user of that arm sets it
+        result = CliRunner().invoke(main, ["run", f"scripts/{script}", "--no-live", "--port", url,
+                                           *(["--baud", rate.group(1)] if rate else [])],
                                     env={"ARMCTL_PORT": None, "ARMCTL_CONFIG": None})
     finally:
         SimulatedArm.write = write

@@ -24,7 +24,6 @@ pytestmark = pytest.mark.timeout(30)
 JOB = "G1 X250 Y0 Z150 A180 B0 C0 F3000 S1000\n"
 
 
-@pytest.mark.xfail(strict=True, reason="not fixed yet: the simulated arm runs at its own rate whatever the port's")
 @pytest.mark.parametrize("url, host_baud", [("sim://?clock=virtual&baud=115200", 9600),
                                             ("sim://?clock=virtual&baud=9600", 115200),
                                             ("sim://?baud=115200&speed=8", 9600)])
@@ -57,7 +56,6 @@ def test_the_same_rate_on_both_ends_is_a_clean_line():
         port.close()
 
 
-@pytest.mark.xfail(strict=True, reason="not fixed yet: the simulated arm runs at its own rate whatever the port's")
 def test_run_without_baud_on_a_115200_arm_says_to_check_the_rate_and_sends_nothing(tmp_path):
     script = tmp_path / "job.txt"
     script.write_text(JOB)
@@ -70,7 +68,6 @@ def test_run_without_baud_on_a_115200_arm_says_to_check_the_rate_and_sends_nothi
     assert "nothing was sent" in result.stderr and "Traceback" not in result.stderr
 
 
-@pytest.mark.xfail(strict=True, reason="not fixed yet: the simulated arm runs at its own rate whatever the port's")
 def test_the_api_with_the_arms_rate_runs_the_job(tmp_path):
     script = tmp_path / "job.txt"
     script.write_text(JOB)
@@ -78,3 +75,15 @@ def test_the_api_with_the_arms_rate_runs_the_job(tmp_path):
         assert arm.run(str(script)).outcome == "finished"
     with Arm.open("sim://?clock=virtual&baud=115200") as arm, pytest.raises(ArmctlError):
         arm.run(str(script))
+
+
+def test_setting_the_port_to_the_arms_rate_once_open_cleans_the_line():
+    port = serial.serial_for_url("sim://?clock=virtual&baud=115200", baudrate=9600, timeout=0)
+    try:
+        port.virtual_clock.advance_to(0.3)
+        assert STATUS_HEAD not in port.read(4096)
+        port.baudrate = 115200
+        port.virtual_clock.advance_to(0.6)
+        assert STATUS_HEAD in port.read(4096)
+    finally:
+        port.close()

@@ -21,7 +21,8 @@ link_scale            the arm's link lengths are the profile's × this: its repo
                       joints and X/Y/Z disagree with the profile's kinematics
 status_jitter_ms      each status frame is built up to this many ms after its place     0
                       on the period (uniform, from ``seed``)
-baud                  line rate in bit/s (else the port's ``baudrate``)                9600
+baud                  the arm's line rate in bit/s (else the port's ``baudrate``); a   9600
+                      port set to another rate hears noise and the arm nothing
 loss                  share of status frames lost                                      0
 corrupt               share of status frames with one byte flipped                     0
 noise                 share of status frames preceded by random noise bytes            0
@@ -36,6 +37,11 @@ read_granularity_ms   status bytes reach the host only at ticks this many ms apa
 The first four after ``clock``, and ``status_jitter_ms``, are the arm profile's ``[connector]``
 settings under the same names: the simulated arm impersonates any arm a profile may describe (its profile's own
 ``[connector]`` table is the host's belief and is not read here).
+
+A port opened at another rate than the arm's ``baud`` is a line set wrong, as on a real arm: the
+arm hears nothing it can frame (the bytes written are lost) and the host reads noise — as many
+bytes as the arm's status at the port's rate would give, never a status frame's first byte, so
+armctl says to check the baud rate (``LineNoise``).  The port keeps the rate it was set to.
 
 Each number has a finite range (armctl/core/limits.py, also in the README); an unknown option, a
 bad or out-of-range value is a ``SimOptionError`` naming the option: a ``ConfigError`` for
@@ -213,6 +219,32 @@ def parse_sim_url(url: str, baud: int | None = None) -> SimOptions:
         raise SimOptionError(f"{error} in {_shown(url)} ({_USAGE})") from None
 
 
+class LineNoise:
+    """What a port set to ``port_baud`` reads of an arm sending at ``arm_baud``: each of the arm's
+    bytes spans ``port_baud / arm_baud`` of the port's byte times, so about that many bytes of
+    noise (at least one a burst: the line was not idle), from ``seed``, none of them a status
+    frame's first byte (a frame would otherwise start in the noise now and then, which a real
+    line at the wrong rate seldom gives and the reader's checks would mostly refuse anyway)."""
+
+    def __init__(self, port_baud: int, arm_baud: int, seed: int) -> None:
+        import random
+
+        from ..core.frame_fields import STATUS_HEAD
+
+        self._ratio = port_baud / arm_baud
+        self._owed = 0.0
+        self._random = random.Random(seed)
+        self._bytes = bytes(b for b in range(256) if b != STATUS_HEAD)
+
+    def heard(self, data: bytes) -> bytes:
+        if not data:
+            return b""
+        self._owed += len(data) * self._ratio
+        count = max(1, int(self._owed))
+        self._owed = max(0.0, self._owed - count)
+        return bytes(self._random.choice(self._bytes) for _ in range(count))
+
+
 class Serial(SerialBase):
     """A pyserial port whose other end is the simulated arm."""
 
@@ -221,6 +253,7 @@ class Serial(SerialBase):
         self._arm: RealtimeArm | None = None
         self.virtual_clock: VirtualClock | None = None  # set for clock=virtual
         self._received = bytearray()  # status bytes that reached the host, not yet read
+        self._noise: LineNoise | None = None  # set when the port's rate is not the arm's
         self._wake = threading.Event()
         super().__init__(*args, **kwargs)
 
@@ -232,11 +265,11 @@ class Serial(SerialBase):
         if self._port is None:
             raise SerialException("Port must be configured before it can be used.")
         options = parse_sim_url(self.portstr, baud=self._baudrate)
-        self._baudrate = options.baud
         try:
             self.model = SimulatedArm(options)
         except Exception as error:  # a bad profile path or a profile that makes no sense
             raise SimOptionError(f"sim:// option profile: {error}") from None
+        self._listen_at(self._baudrate)
         self.virtual_clock = VirtualClock() if options.virtual_clock else None
         self._arm = RealtimeArm(self.model, options.time_scale, clock=self.virtual_clock or time.monotonic)
         self._received.clear()
@@ -253,6 +286,13 @@ class Serial(SerialBase):
     def _reconfigure_port(self) -> None:
         if not isinstance(self._baudrate, numbers.Integral) or not 0 < self._baudrate < 2**32:
             raise ValueError(f"invalid baudrate: {self._baudrate!r}")
+        if self.model is not None:  # the port set to another rate once open
+            self._listen_at(self._baudrate)
+
+    def _listen_at(self, port_baud: int) -> None:
+        """The port set to ``port_baud``: a clean line at the arm's rate, else noise (``LineNoise``)."""
+        arm = self.model.options
+        self._noise = None if port_baud == arm.baud else LineNoise(port_baud, arm.baud, arm.seed)
 
     def _update_rts_state(self) -> None:
         pass
@@ -288,7 +328,11 @@ class Serial(SerialBase):
 
     def _collect(self, arm: RealtimeArm) -> None:
         """Move the status bytes that reached the host into the input buffer (lock held)."""
-        self._received += arm.poll()
+        self._received += self._heard(arm.poll())
+
+    def _heard(self, data: bytes) -> bytes:
+        """The arm's bytes as the port reads them: noise at another rate than the arm's."""
+        return data if self._noise is None else self._noise.heard(data)
 
     @property
     def in_waiting(self) -> int:
@@ -351,7 +395,7 @@ class Serial(SerialBase):
         received = self._received
         with arm.lock:
             self.virtual_clock.advance_to(t_s)
-            data = self.model.advance(arm.model_now_s())
+            data = self._heard(self.model.advance(arm.model_now_s()))
             if received:  # bytes left from before (a ``read`` of fewer than arrived)
                 data = bytes(received + data)
                 received.clear()
@@ -365,7 +409,7 @@ class Serial(SerialBase):
         clock at each one's time, its frame from ``status_frame`` — and then commits those it
         read (``commit_status_run``) before anything else touches the port."""
         arm = self._check_open()
-        if self._received:
+        if self._received or self._noise is not None:  # (noise: no status frame to time ahead)
             return []
         with arm.lock:
             return self.model.status_run(self.virtual_clock.now_s, end_s, min_step_s, max_frames,
@@ -406,6 +450,8 @@ class Serial(SerialBase):
         data = to_bytes(data)
         total = len(data)
         arm = self._check_open()
+        if self._noise is not None:  # the arm frames nothing sent at another rate
+            return total
         deadline = None if self._write_timeout is None else time.monotonic() + self._write_timeout
         while True:
             room = arm.write_room()
