@@ -155,7 +155,8 @@ def test_the_virtual_clock_keeps_moving_at_large_model_times(tmp_path):
     # after 1024 s of model time, and the clock stalled for ever.
     job = tmp_path / "long.txt"
     job.write_text("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\n" + "G4 P60000\n" * 20 + "G1 X250 Y50 Z150\n")
-    result = CliRunner().invoke(main, ["run", str(job), "--port", f"{VIRTUAL}&baud=4000000", "--no-live"])
+    result = CliRunner().invoke(main, ["run", str(job), "--port", f"{VIRTUAL}&baud=4000000", "--baud", "4000000",
+                                       "--no-live"])
     assert result.exit_code == 0, result.output
     assert result.stdout.splitlines()[-1] == "finished: the arm finished the job"
 
