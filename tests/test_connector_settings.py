@@ -424,3 +424,16 @@ def test_a_line_from_an_unverified_joint_end_is_not_passed_by_a_sighting_of_the_
     ops = [("line", 0, 600.0), ("pwm", 1000.0), ("joint", 5, 30.0, 0), ("line", 0, 600.0), ("arc", 0, 5),
            ("line", 0, 600.0), ("pwm", 1000.0), ("pwm", 1000.0), ("pwm", 1000.0), ("pwm", 1000.0)]
     check_random_job(ops, 8, "queued", "worktable", 0.7, 1.05, (10.0, -20.0, 5.0), 0.1, 725)
+
+
+def test_an_unknown_connector_key_in_armctl_toml_names_the_wait_the_probe_writes_there_too(tmp_path):
+    """``armctl probe --write`` puts ``command_overhead_s`` into armctl.toml's [connector]; a key
+    misspelt there is told the keys that table takes — that one included."""
+    (tmp_path / "armctl.toml").write_text("[connector]\ncommand_overhed_s = 0.1\n")
+    with pytest.raises(ProfileError,
+                       match=r"unknown key 'connector.command_overhed_s' \(did you mean 'command_overhead_s'\?\)"):
+        load_profile(start=tmp_path)
+    (tmp_path / "armctl.toml").write_text("[connector]\nzzz = 1\n")
+    with pytest.raises(ProfileError,
+                       match=r"unknown key 'connector.zzz' \(known: .*status_jitter_ms, command_overhead_s\)"):
+        load_profile(start=tmp_path)

@@ -19,7 +19,7 @@ from .profile_model import (
     CONNECTOR_KEYS, DOCUMENT, FIXED_POSES, ILLUSTRATIVE, PROTOCOL, PROTOCOL_KEYS, Connector, LintOptions, Profile, Pwm,
     Speeds, Timing, Workspace,
 )
-from .profile_schema import _OPTIONAL_SECTIONS, PROFILE_SCHEMA, _apply, check_profile_data
+from .profile_schema import _OPTIONAL_SECTIONS, PROFILE_SCHEMA, _apply, _unknown, check_profile_data
 from .toml_reading import parse_toml
 
 DEFAULT_RESOURCE = ("armctl.data", "default_profile.toml")
@@ -86,6 +86,10 @@ MEASURED_ELSEWHERE = {"command_overhead_s": "timing"}
 def check_connector_table(table: dict, source: str) -> dict[str, dict]:
     """armctl.toml's top-level ``[connector]`` ``table`` checked, by the profile section each key
     lands in (``{"connector": …, "timing": …}``); errors name ``connector.KEY``."""
+    known = [*PROFILE_SCHEMA["connector"], *MEASURED_ELSEWHERE]  # (what an unknown key is told: all it takes)
+    for key in table:
+        if key not in known:
+            raise _unknown(source, f"connector.{key}", known)
     elsewhere = {key: value for key, value in table.items() if key in MEASURED_ELSEWHERE}
     checked = {"connector": check_profile_data({"connector": {k: v for k, v in table.items() if k not in elsewhere}},
                                                source)["connector"], "timing": {}}
