@@ -218,7 +218,9 @@ def _inverse_by_enumeration(pose, links, near, limits):
                 break
             fitted.append(value)
         else:
-            cost = sum((a - h) ** 2 for a, h in zip(fitted, near))
+            cost = 0.0  # left to right, as first written (sum() of floats rounds otherwise from Python 3.12)
+            for a, h in zip(fitted, near):
+                cost += (a - h) ** 2
             if cost < best_cost:
                 best, best_cost = tuple(fitted), cost
     return best if best is not None else f"J{worst[0] + 1} = {worst[1]:.1f}°"

@@ -15,7 +15,8 @@ method generated) and then gives the class:
              ``FrozenInstanceError``, as generated; ``__getstate__``/``__setstate__`` for a
              frozen class with slots (pickle, copy), as dataclass adds them;
   __eq__, __hash__, __repr__  shared functions reading the fields through one ``attrgetter``:
-             equal only to an instance of the very same class whose compared fields are equal,
+             equal only to an instance of the very same class whose compared fields are equal
+             (as tuples, or field by field from Python 3.13, as that Python's dataclass does),
              the hash of the hashed fields' tuple (a mutable class is unhashable, as with
              ``eq=True``), ``Name(field=value, …)`` over the fields shown in repr.
 
@@ -30,10 +31,16 @@ tests/test_records.py holds all of this to twins made by ``dataclass``.
 from __future__ import annotations
 
 import operator
+import sys
 from dataclasses import MISSING, FrozenInstanceError, dataclass, field, fields
 from types import MethodType
 
 __all__ = ["record"]
+
+# How the running Python's dataclass compares: as tuples of the fields up to 3.12 (so a field
+# holding one NaN object equals itself), field by field from 3.13 (an instance equals itself,
+# and NaN never equals NaN).  A record compares as a dataclass of the same Python does.
+_FIELD_BY_FIELD_EQ = sys.version_info >= (3, 13)
 
 
 def _getter(names: tuple):
@@ -147,10 +154,23 @@ def record(cls=None, /, *, frozen: bool = True, slots: bool = False):
         shown = tuple(f.name for f in every if f.repr)
         shown_values = _getter(shown)
 
-        def __eq__(self, other):
-            if other.__class__ is self.__class__:
-                return compared(self) == compared(other)
-            return NotImplemented
+        if _FIELD_BY_FIELD_EQ:
+            def __eq__(self, other):
+                if self is other:
+                    return True
+                if other.__class__ is self.__class__:
+                    equal = True  # ``self.a == other.a and self.b == other.b …``, as generated
+                    for mine, theirs in zip(compared(self), compared(other)):
+                        equal = mine == theirs
+                        if not equal:
+                            return equal
+                    return equal
+                return NotImplemented
+        else:
+            def __eq__(self, other):
+                if other.__class__ is self.__class__:
+                    return compared(self) == compared(other)
+                return NotImplemented
 
         def __hash__(self):
             return hash(hashed(self))
