@@ -132,16 +132,16 @@ def test_the_steps_of_a_run_past_the_news_are_read_by_the_next_wait_as_a_new_run
 
 
 def test_a_burst_is_decoded_as_the_reader_feeds_it_clean_or_damaged(monkeypatch):
-    """A news wait's burst of one whole frame is decoded as a run's frames are
-    (``Link._burst_frames``); the frames, their times and the reader's counts are those the
-    reader's ``feed`` gives, on a clean line and on one with noise and damaged frames (fed)."""
+    """A burst of one whole frame is decoded as a run's frames are (``StatusReader._one_frame``);
+    the frames, their times and the reader's counts are those the reader's scan gives, on a clean
+    line and on one with noise and damaged frames (fed)."""
 
     def read(url: str, by_feed: bool):
         seen = []
         news = news_of(lambda frame, now: seen.append((frame, now)) or frame.KIND == 4)
         link = Link.open(url)
         if by_feed:
-            monkeypatch.setattr(link, "_burst_frames", link.reader.feed)
+            monkeypatch.setattr(link.reader, "_one_frame", lambda data: [])  # every burst to the scan
         with link:
             for k in range(200):
                 until_s = link.clock.now() + 0.05 if k % 2 else None  # timed waits read bursts

@@ -2,8 +2,9 @@
 
 Strategy: H9 — a status frame has no checksum, so after noise ``StatusReader.feed`` slides one
 byte and tries again; bytes that may begin a frame not fully arrived are held back.  The common
-cases cost least: a burst of whole, valid frames and nothing held (``_aligned``: no scan), and a
-virtual run's bursts of one frame each (``decode_frame``/``decode_frames``: the kinds that repeat
+cases cost least: a burst of whole, valid frames and nothing held (``_aligned``: no scan), and
+bursts of one frame each — the arm's, and a virtual run's (``_one_frame``, ``decode_frame``/
+``decode_frames``: the kinds that repeat
 for minutes are given again from the bytes seen, the three-word kinds decoded by a decoder made
 once per kind).  The frames are armctl/core/status_frames.py's; ``armctl.core.protocol`` offers
 ``StatusReader`` (imported on first use, as the status frames are).  Bytes only, no I/O.
@@ -46,8 +47,8 @@ class StatusReader:
 
     def feed(self, data: bytes) -> list[StatusFrame]:
         if not self._buffer:  # the common case: whole frames, nothing held, nothing to skip
-            found = self._aligned(data)
-            if found is not None:
+            found = self._one_frame(data) if len(data) == STATUS_SIZE else self._aligned(data)
+            if found:
                 self.frames += len(found)
                 return found
         buffer = self._buffer
@@ -132,6 +133,12 @@ class StatusReader:
             found.append(frame)
         return found
 
+    def _one_frame(self, data: bytes) -> list[StatusFrame]:
+        """A burst of one whole, valid frame, as the arm sends them (40,000 in 20 minutes; a
+        virtual wait's bursts): decoded as a run's frames are (``decode_frames``: a repeating
+        kind's bytes decoded once); [] for anything else, which the scan takes from the start."""
+        return self.decode_frames((data,))
+
     @staticmethod
     def _aligned(data: bytes) -> list[StatusFrame] | None:
         """The frames of a burst made of whole, valid status frames and nothing else (what a
@@ -139,14 +146,6 @@ class StatusReader:
         anything else (noise, a frame cut short or damaged, a value no frame can carry), which
         the scan takes from the start."""
         size = len(data)
-        if size == STATUS_SIZE:  # one frame per burst, as the arm sends them
-            frame_class = STATUS_KINDS.get(data[7])
-            if frame_class is None or data[0] != STATUS_HEAD or data[8] != STATUS_TAIL:
-                return None
-            try:
-                return [frame_class._from_data(bytes(data[1:7]))]
-            except (FrameError, FieldError):
-                return None
         if not size or size % STATUS_SIZE:
             return None
         found = []

@@ -262,13 +262,13 @@ class Link:
 
     def take(self, data: bytes, news: News | None = None) -> bool:
         """Feed bytes read to the status reader and the state; whether a frame was found — with
-        ``news`` (a virtual wait's burst, ``_burst_frames``), whether one of them was news to it
+        ``news`` (a virtual wait's burst), whether one of them was news to it
         (it takes every frame found: it is asked again with those after the one it named; the
         state merges them when it is read, as a run's)."""
         now = self.clock()
-        if news is not None:
-            return self._take_news(self._burst_frames(data), now, len(data), news)
         frames = self.reader.feed(data)
+        if news is not None:
+            return self._take_news(frames, now, len(data), news)
         with self._changed:
             self.bytes_received += len(data)
             update, on_status = self.state.update, self.on_status
@@ -279,19 +279,6 @@ class Link:
             if not self.clock.virtual:  # a virtual link's waits run the simulator: nobody sleeps on it
                 self._changed.notify_all()
         return bool(frames)
-
-    def _burst_frames(self, data: bytes) -> list:
-        """``reader.feed(data)`` for a virtual wait's burst: one whole valid frame (what a clean
-        line delivers, a frame a burst) decoded as a run's frames are (``StatusReader.decode_frames``:
-        the same frames, a repeating kind's bytes decoded once), anything else fed to the reader
-        (the 24,000-frame job of benchmarks/virtual_run.py: 45,225 bursts, 3 % of its CPU)."""
-        reader = self.reader
-        if len(data) == STATUS_SIZE:
-            frames = reader.decode_frames((data,))
-            if frames:
-                reader.frames += 1
-                return frames
-        return reader.feed(data)
 
     def _take_news(self, frames: list, now: float, received_bytes: int, news: News) -> bool:
         """``take``'s frames of a virtual wait: held for the state, every one handed to ``news``."""
