@@ -378,17 +378,18 @@ IN_USE = ("the job it records is still running, or another armctl is resuming it
           "then resume")
 
 
-def locked(log) -> bool:
-    """An exclusive lock on the open file ``log`` for as long as it is open (the kernel drops it
-    when the process ends, kill -9 included); False when another process holds it.  Where nothing
-    can be locked (no fcntl on Windows, a file system without locks), True: the file goes unlocked.
-    A run's --log is locked so (ui/run_job.py), and a log a resume reads (``resume_claim``)."""
+def locked(log, shared: bool = False) -> bool:
+    """An exclusive lock (``shared``: a shared one) on the open file ``log`` for as long as it is
+    open (the kernel drops it when the process ends, kill -9 included); False when another process
+    holds one that excludes it.  Where nothing can be locked (no fcntl on Windows, a file system
+    without locks), True: the file goes unlocked.  A run's --log is locked so (ui/run_job.py), and
+    a log a resume reads (``resume_claim``); ``journal_in_use`` asks for a shared one."""
     try:
         import fcntl
     except ImportError:
         return True
     try:
-        fcntl.flock(log.fileno(), fcntl.LOCK_EX | fcntl.LOCK_NB)
+        fcntl.flock(log.fileno(), (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
     except BlockingIOError:
         return False
     except OSError:  # ENOLCK, EOPNOTSUPP…: unlocked, as before locks
@@ -425,17 +426,10 @@ def journal_in_use(path: str) -> bool:
     (``locked``, as ui/run_job.py takes it): that job is not over, whatever its log says yet.  False
     where nothing can be locked (no fcntl, a file system without locks)."""
     try:
-        import fcntl
-    except ImportError:
-        return False
-    try:
         with open(path, "rb") as probe:
-            fcntl.flock(probe.fileno(), fcntl.LOCK_SH | fcntl.LOCK_NB)  # released as the file closes
-    except BlockingIOError:
-        return True
-    except OSError:  # ENOLCK, EOPNOTSUPP…: as a run that could not lock its log
+            return not locked(probe, shared=True)  # (released as the file closes)
+    except OSError:
         return False
-    return False
 
 
 def same_journal(log, resume) -> bool:
