@@ -128,6 +128,11 @@ class _Round:
         while the port still held it) + its length."""
         return probe.earliest_landing(self.delay_end, self.delay_written_s) + self.delay_s
 
+    def delay_ended_s(self, probe) -> float:
+        """When the delay ended, as far as the reports can tell: the model's end, or later as the
+        port's reports prove it began (a buffer may have held it)."""
+        return max(self.end_s, self.earliest_end_s(probe))
+
     def landed_by_s(self, probe) -> float | None:
         """The last filler has landed by then (None: the port still holds it)."""
         return probe.landed_by(self.last_end, self.last_landed_s)
@@ -137,7 +142,7 @@ class _Round:
         seen (``pace``, else this round's so far; a frame time each before any): the restore step
         waits for it after a Ctrl-C (1.5 s of quiet had passed for it, and the PWM put back queued
         behind a block's repeats, 8 s at 0.5 s a frame, or round 2's 192 leading ones, 100 s)."""
-        start_s = max(self.end_s, self.earliest_end_s(probe))
+        start_s = self.delay_ended_s(probe)
         gaps, reached = self._progress(probe)
         pace = pace or (Pace.of(gaps) if gaps else Pace(probe.frame_s, probe.frame_s))
         rest = self.values[reached + 1:]
@@ -157,7 +162,7 @@ class _Round:
 
     def _progress(self, probe) -> tuple[list[float], int]:
         """``steps``, and the last place in the values sent that the last new value counted holds."""
-        start_s = max(self.end_s, self.earliest_end_s(probe))
+        start_s = self.delay_ended_s(probe)
         last = {value: k for k, value in enumerate(self.values)}  # a value's last place in the sequence
         frames = [(t, frame.pwm_us) for t, frame in probe.seen.since(PauseStatus.KIND, start_s - 1.0)]
         times, reached = [], last.get(self.start_us, -1)
@@ -179,13 +184,13 @@ class _Round:
             return False
         gaps = self.steps(probe)
         if not gaps:
-            return probe.now_s - max(self.end_s, self.earliest_end_s(probe)) >= silent_s
+            return probe.now_s - self.delay_ended_s(probe) >= silent_s
         pace = pace or Pace.of(gaps)
         leading = next((k for k, v in enumerate(self.values) if v != self.start_us), 0)
         between = gaps[1:] if leading else gaps
         trailing = max(len(list(run)) - 1 for _, run in groupby(self.values[leading:]))  # repeats after a new value
         quiet_s = max(QUIET_S, 3 * max(between, default=0.0), 3 * pace.change_s, trailing * pace.repeat_s)
-        return probe.now_s - (max(self.end_s, self.earliest_end_s(probe)) + sum(gaps)) >= quiet_s
+        return probe.now_s - (self.delay_ended_s(probe) + sum(gaps)) >= quiet_s
 
 
 def fill_round(probe, values: list[int], start_us: int, extra_s: float = 0.0, pace: Pace | None = None):
@@ -227,7 +232,7 @@ def _until_settled(probe, fill: _Round, silent_s: float, pace: Pace | None):
     last_s = fill.end_s + silent_s + ROUND_LIMIT_S * math.ceil(len(fill.values) / BLOCK)
 
     def news_s() -> float:
-        start_s = max(fill.end_s, fill.earliest_end_s(probe))
+        start_s = fill.delay_ended_s(probe)
         return min(start_s + max(silent_s, sum(fill.steps(probe))), last_s)
 
     while True:

@@ -378,9 +378,12 @@ def restore(probe):
     def quiet():
         return probe.now_s >= busy_until_s() and probe.now_s - _last_change_s(probe, kinds) >= QUIET_S
 
-    while not quiet() and probe.now_s < max(started_s, busy_until_s()) + QUIET_LIMIT_S:
-        limit_s = max(started_s, busy_until_s()) + QUIET_LIMIT_S
-        yield from wait_until(probe, limit_s, lambda: quiet() or max(started_s, busy_until_s()) + QUIET_LIMIT_S > limit_s)
+    def deadline_s() -> float:  # (it moves on while a FIFO round's fillers may still be running)
+        return max(started_s, busy_until_s()) + QUIET_LIMIT_S
+
+    while not quiet() and probe.now_s < deadline_s():
+        limit_s = deadline_s()
+        yield from wait_until(probe, limit_s, lambda: quiet() or deadline_s() > limit_s)
     known.busy_until_s, known.queued_until_s = busy_until_s(), None
     # judge by readings the arm built after the last frame landed and everything sent had ended
     since_s = max(probe.line_free_s, known.busy_until_s)
