@@ -70,6 +70,7 @@ from .protocol import (
     RunProgram, SetWorktableOrigin,
 )
 from .streamer import ARRIVAL_SLACK_S
+from .streamer.geometry import in_frame
 
 TARGET_MM = 0.5  # how close the reported position must be to the last target (0.1 mm resolution)
 TARGET_DEG = 0.2
@@ -147,8 +148,8 @@ class Written:
                 continue  # (it ends where the frame before did: the same place)
             if not end.xyz_derived:
                 xyz = end.xyz  # (reported in the worktable frame in force: this end's, were the arm there)
-                if self.reports_robot_xyz:
-                    xyz = tuple(v + o - p for v, o, p in zip(xyz, end.origin_mm, origin))
+                if self.reports_robot_xyz:  # (robot X/Y/Z there, read in the last frame's worktable frame)
+                    xyz = in_frame(tuple(v + o for v, o in zip(xyz, end.origin_mm)), origin)
                 matched = not slot_moved(0, agreed[0], xyz)
             elif not end.joints_derived:
                 matched = not (slot_moved(1, agreed[1], end.joints[:3]) or slot_moved(2, agreed[2], end.joints[3:]))
