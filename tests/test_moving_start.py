@@ -24,8 +24,7 @@ from armctl.script import compile_text
 from armctl.ui.cli import main
 from test_resume_exactly_once import _open_one_arm
 
-pytestmark = [pytest.mark.timeout(60),
-              pytest.mark.xfail(strict=True, reason="read_arm plans from a moving arm (the fix follows)")]
+pytestmark = pytest.mark.timeout(60)
 
 URL = "sim://?clock=virtual"
 FIRST = "G90\nG1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\n"
@@ -38,7 +37,7 @@ def _leftover(feed_mm_min: float) -> list[bytes]:
         f"G90\nG1 X250 Y-100 Z150 A180 B0 C0 S1000 F{feed_mm_min:g}\n")]
 
 
-def _run_on_moving_arm(tmp_path, monkeypatch, script: str, feed_mm_min: float = 600):
+def _run_on_moving_arm(tmp_path, monkeypatch, script: str, feed_mm_min: float = 1200):
     """FIRST run to its end, then a leftover move written to the arm, then ``armctl run --json``."""
     monkeypatch.chdir(tmp_path)
     ports = _open_one_arm(monkeypatch)
@@ -78,3 +77,27 @@ def test_an_arm_that_does_not_come_to_rest_gets_nothing(tmp_path, monkeypatch):
     assert result.exit_code == 1, result.output
     assert "did not come to rest" in result.stderr and "nothing was sent" in result.stderr, result.stderr
     assert len(model.execution_log) == 2, model.execution_log  # FIRST's frame and the leftover: no frame of the job
+
+
+@pytest.mark.realtime
+def test_a_job_on_an_arm_another_process_left_moving_installed(tmp_path):
+    """The installed command in a fresh process on ``armctl sim --pty`` (its own process, 10x
+    time): a move written to the arm just before (20 s of the arm's time, 2 s of the wall's);
+    ``armctl run`` says it waits, and the job's first frame lands after that move ended."""
+    from journal_crash import pty_arm
+
+    stats = tmp_path / "stats.json"
+    (tmp_path / "job.txt").write_text("G90\nG1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\n")
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    env["XDG_DATA_HOME"] = str(tmp_path / "data")  # no probe record of another test's arm
+    with pty_arm("--url", "sim://?speed=10", "--stats", str(stats), env=env) as pty:
+        with open(pty, "wb", buffering=0) as line:
+            line.write(b"".join(_leftover(300)))
+        time.sleep(0.5)  # the frame has landed and the arm moves when armctl first reads it
+        done = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", pty],
+                              cwd=tmp_path, capture_output=True, text=True, timeout=40, env=env)
+    assert "waiting for it to come to rest" in done.stderr, done.stderr
+    assert json.loads(done.stdout.splitlines()[-1])["frames_sent"] == 1, done.stdout
+    seen = json.loads(stats.read_text())
+    (_, leftover_start_s, leftover_end_s, outcome), = seen["executions"][:1]
+    assert outcome == "done" and seen["frames"][1][1] >= leftover_end_s, seen

@@ -193,7 +193,7 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     reachable by ``pause``/``stop`` (True: a stop came meanwhile); ``detach`` when it ended."""
     from ..core import checked as checking
     from .calibration import stale_notes
-    from .jobflow import JournalFile, drive, journal_for, mark_resumed, read_arm, start_job
+    from .jobflow import JournalFile, drive, journal_for, mark_resumed, read_arm, rest_wait_s, start_job
     from ..core.job import abort_frames
 
     link, observer = arm.link, spec.observer
@@ -201,7 +201,10 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     journal = None if spec.log is None else JournalFile(spec.log, sync=not getattr(link.clock, "virtual", False))
     # a resume decides from the arm as it is, paused or not: it continues or refuses before it sends anything
     state = read_arm(link, arm.status_timeout_s, journal, note=observer.note, control_on_arrival=arrival,
-                     unpause=spec.resume is None)
+                     unpause=spec.resume is None, stopped=stopped,
+                     rest_s=None if spec.resume is not None else rest_wait_s(arm.status_timeout_s, arm.lead_s))
+    if state is None:  # stop() (Ctrl-C) while an arm still moving was waited for: no frame goes
+        return RunResult.nothing_sent("interrupted")
     if spec.resume is not None:
         resumed = _resume(arm, checked, spec, journal, stopped)
         if isinstance(resumed, RunResult):

@@ -41,19 +41,49 @@ class JobFailed(ArmctlError):
 
 
 def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
-             control_on_arrival: bool = False, unpause: bool = True):
+             control_on_arrival: bool = False, unpause: bool = True, rest_s: float | None = None,
+             stopped: Callable[[], bool] | None = None):
     """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
     kind has been replaced or held back, H9); with ``unpause``, resume an arm that twice
     reports it is paused (``resume_paused``).  The arm's state; ``JobFailed`` when it does not
-    answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to."""
+    answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to.
+    ``rest_s``: an arm still moving after ``agreed_state`` (frames queued before this job) is
+    waited for until it rests, at most ``rest_s`` (``rest_wait_s``; ``note`` is told), and None
+    returned when ``stopped()`` comes first; None: the job plans from its latest report (a
+    resume waits for rest itself: ``resume_start``)."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
         raise JobFailed(f"{link.silence_message(timeout_s)}; nothing was sent")
+    first = link.snapshot()[0]
     wait_rotations(link, READ_ROTATIONS - 1, timeout_s)
     earlier = link.snapshot()[0]
     wait_rotations(link, 1, timeout_s)
     if unpause and resume_paused(link, timeout_s, log, note, control_on_arrival):
-        earlier = None
-    return agreed_state(link, earlier, timeout_s)
+        first = earlier = None
+    state, agreed = agreed_state(link, earlier, timeout_s)
+    # Any reading changed at all since the first (not only by more than a reading's jitter: an
+    # arm at F10 moves 0.05 mm a rotation) and the arm may still run frames queued before this
+    # job (another program on the line, an armctl killed mid-job).  Planned from a moving arm's
+    # report, the job's first frames would be timed from when they land, not from when the queue
+    # before them ends: a sound job ended "unproven", and its arm time blamed the arm's speed.
+    if rest_s is None or (agreed and (first is None or _pose(first) == _pose(state))):
+        return state
+    note("armctl: the arm is moving (frames queued before this job still running? another program, or an armctl "
+         "stopped without its abort sequence): waiting for it to come to rest before the job is planned")
+    try:
+        return wait_for_rest(link, rest_s, stopped)
+    except JobFailed:
+        raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; nothing was sent (frames queued before "
+                        "this job may still be running: once the arm is still, run the job again, or give it a longer "
+                        "--timeout)") from None
+
+
+def rest_wait_s(timeout_s: float, lead_s: float) -> float:
+    """How long a job waits for an arm still running what was queued before it (``read_arm``,
+    ``resume_start``): the status timeout, twice a host's lead (an armctl's own queue when it
+    died) and the engine's slack for an arm coming to rest."""
+    from ..core.job import SETTLE_SLACK_S
+
+    return timeout_s + 2 * lead_s + SETTLE_SLACK_S
 
 
 def agreed_state(link, earlier, timeout_s: float):
@@ -62,18 +92,18 @@ def agreed_state(link, earlier, timeout_s: float):
     corrupted one the plausibility test lets through (a jump within the arm's reach: 2.3 mm of X
     on ``sim://?…&corrupt=0.02&seed=22``) had the first move planned from where the arm was not,
     no report put the arm at its start, and a target it refused there was counted done by time
-    ("finished").  At most ``AGREE_ROTATIONS`` rotations more; then the last state (an arm that
-    still moves: the job plans from its latest report, as before)."""
+    ("finished").  At most ``AGREE_ROTATIONS`` rotations more; then the last state of an arm
+    that still moves.  (state, whether two agreed)."""
     from ..core.job_readings import moved_clearly
 
     state = link.snapshot()[0]
     for _ in range(AGREE_ROTATIONS):
         if earlier is not None and not moved_clearly(_pose(earlier), _pose(state)):
-            return state
+            return state, True
         earlier = state
         wait_rotations(link, 1, timeout_s)
         state = link.snapshot()[0]
-    return state
+    return state, False
 
 
 def _pose(state) -> tuple:
@@ -450,9 +480,7 @@ def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable
     second time — ``ResumePoint.repeated``: a repeat block started again — or None), or
     (state, None, None) when every line ran; ``joblog.NotProven`` when the report proves
     neither; None when ``stopped()`` came first (see ``wait_for_rest``)."""
-    from ..core.job import SETTLE_SLACK_S
-
-    wait_s = timeout_s + 2 * max(point.lead_s, lead_s) + SETTLE_SLACK_S
+    wait_s = rest_wait_s(timeout_s, max(point.lead_s, lead_s))
     try:
         state = wait_for_rest(link, wait_s, stopped)
     except JobFailed:  # a move longer than the wait was in progress: safe to try again once it ends
