@@ -78,22 +78,18 @@ def test_a_motion_starts_exactly_the_wait_after_its_frame_lands(tmp_path):
 TOLERANCE_S = 0.0005
 
 
-def _probe(tmp_path, overhead_s: float) -> dict:
+def _probe(tmp_path, overhead_s: float, options: str = "") -> dict:
     (tmp_path / "arm.toml").write_text(f"[timing]\ncommand_overhead_s = {overhead_s}\n")
     env = {**os.environ, "XDG_DATA_HOME": str(tmp_path / "data")}
     env.pop("ARMCTL_PORT", None)
     done = subprocess.run([sys.executable, "-m", "armctl", "probe", "--yes", "--json", "--port",
-                           f"sim://?clock=virtual&profile={tmp_path / 'arm.toml'}"],
+                           f"sim://?{options}clock=virtual&profile={tmp_path / 'arm.toml'}"],
                           cwd=tmp_path, env=env, capture_output=True, text=True, timeout=50)
     assert done.returncode == 0, done.stderr
     return json.loads(done.stdout)
 
 
-_UNRESOLVED = pytest.mark.xfail(strict=True, reason="the probe resolves the wait only to a 5 ms status step")
-
-
-@pytest.mark.parametrize("overhead_s", [pytest.param(0.003, marks=_UNRESOLVED), pytest.param(0.004, marks=_UNRESOLVED),
-                                        pytest.param(0.007, marks=_UNRESOLVED), 0.0])
+@pytest.mark.parametrize("overhead_s", [0.003, 0.004, 0.007, 0.0])
 @pytest.mark.timeout(60)
 def test_the_probe_finds_a_wait_under_one_status_step(tmp_path, overhead_s):
     found = _probe(tmp_path, overhead_s)
@@ -102,3 +98,37 @@ def test_the_probe_finds_a_wait_under_one_status_step(tmp_path, overhead_s):
     assert waited["confidence"] == "sure", waited
     if not overhead_s:
         assert found["command_overhead_s"] == 0.0, waited
+
+
+def test_without_room_for_the_chain_a_wait_under_one_step_is_not_resolved(tmp_path):
+    """A connector of 4 frames holds no chain of delays: the lone moves cannot tell a wait under a
+    step from the probe's lag, so the probe says so ("likely", "not resolved"), never a sure 0."""
+    found = _probe(tmp_path, 0.0, "fifo=4&")
+    waited = found["details"]["command_overhead_s"]
+    assert found["command_overhead_s"] == 0.0 and waited["confidence"] == "likely", waited
+    assert "under 5.0 ms, not resolved" in waited["evidence"], waited
+
+
+def _fit(start_delay_s: float, waits: int = 1):
+    from armctl.probe.motion import MoveFit
+
+    return MoveFit([], 0.0, start_delay_s, 0.005, waits, 0.005)
+
+
+def test_the_chain_against_the_lone_move_gives_the_wait_to_a_step_over_n():
+    from armctl.probe.overhead import measured_wait
+
+    lag_s = 0.0016
+    wait = measured_wait([_fit(0.004 + lag_s), _fit(21 * 0.004 + lag_s + 0.002, waits=21)])
+    assert wait.value_s == pytest.approx(0.0041) and wait.precision_s == pytest.approx(0.0005) and wait.sure, wait
+
+
+def test_a_delay_lost_from_the_chain_is_not_taken_for_a_shorter_wait():
+    """One delay of 100 ms lost (a FIFO smaller than measured) starts the move 100 ms + a wait early:
+    the chain's answer (−1 ms) disagrees with the lone move, so the lone rule answers, likely."""
+    from armctl.probe.overhead import measured_wait
+
+    lag_s = 0.0016
+    wait = measured_wait([_fit(0.004 + lag_s), _fit(20 * 0.004 - 0.1 + lag_s, waits=21)])
+    assert wait.value_s == 0.005 and wait.precision_s is None and not wait.sure, wait
+    assert "the chain disagrees with the lone moves" in wait.evidence, wait
