@@ -126,7 +126,7 @@ def test_a_bad_hand_written_overhead_is_refused_by_name(tmp_path):
     ((0.0, 0.0, -0.005, -0.0046), 0.0),  # ... in virtual time
 ])
 def test_the_wait_is_the_finest_moves_start_delay_above_the_probes_lag(delays_s, stated_s):
-    from armctl.probe.motion import overhead_of
+    from armctl.probe.overhead import overhead_of
 
     fits = [(delay, resolution) for delay, resolution in zip(delays_s, (0.0053, 0.0053, 0.021, 0.021))]
     assert overhead_of(fits) == pytest.approx(stated_s)

@@ -4,8 +4,9 @@ Map: plan.py (the engine: steps as generators over status frames and ``now``), s
 (listen, H1/H8 and the status frame through G54, control-frame timing, restore), stream.py
 (the status stream: its period and rotation, when each frame read was built), fifo.py (the
 connector's capacity), landing.py (when frames landed, as the port's reports prove it),
-motion.py (speed factor, the wait before every command, kinematics), host.py (the loop over a Link), report.py (table, JSON,
-armctl.toml), command.py (the click command).
+motion.py (speed factor, kinematics; the timed moves), overhead.py (the wait before every
+command), host.py (the loop over a Link), report.py (table, JSON, armctl.toml), command.py (the
+click command).
 docs/probe.md explains each measurement.
 """
 

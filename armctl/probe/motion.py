@@ -10,9 +10,10 @@ for the arm's start delay, made the time bound's tolerance 1.42 where the arm's 
 Each move is timed there and back, joint and linear, against the model's motion alone (no
 ``[timing] command_overhead_s``, whatever was kept for the arm).  A straight-line fit
 ``t = delay + slope × τ`` over a move's samples gives its start delay; the arm's wait before every
-command (``command_overhead_s``, ``overhead_of``) is what the start delays share beyond the probe's
-lag, and each move's factor is the least-squares fit through the origin of its samples' time after
-that wait (the wait was folded into the factor before: 1.07 on an arm that waits 100 ms).
+command (``command_overhead_s``, armctl/probe/overhead.py: the joint move back goes behind a chain
+of delays, whose waits add up in its start) is what the start delays share beyond the probe's lag,
+and each move's factor is the least-squares fit through the origin of its samples' time after its
+waits (the wait was folded into the factor before: 1.07 on an arm that waits 100 ms).
 Resolution: a status step (0.01°, 0.1 mm) against the move's speed, plus
 ``probe.timestamp_uncertainty_s`` (a real port's reads: 0 on a virtual clock); the stated
 precision covers both and the spread of the moves.
@@ -37,6 +38,7 @@ from ..core.kinematics import reach_problem
 from ..core.motion import PWM_CHANNEL_COUNT, ArmPose, MotionModel
 from ..core.profile_model import SPEED_TOLERANCE_RANGE
 from ..core.protocol import JointMove, JointsHighStatus, LinearMove, PositionStatus
+from .overhead import Chain, chain_for, measured_wait, overhead_finding
 from .plan import LIKELY, SURE, UNSURE, Finding, ProbeStop, Send
 from .stream import latest_built_s
 from .steps import (  # JOINT_SPEED_DEG_S, ARRIVED_DEG: shared with the restore step's return move
@@ -133,16 +135,27 @@ def _invert(segment, progress_of, wanted: float) -> float | None:
 @dataclass(frozen=True)
 class MoveFit:
     """One timed move: its samples ``(t − landing, τ)``, the factor's relative ``resolution``, its
-    ``start_delay_s`` (the intercept) and ``step_s``, one status step's time at its mean speed."""
+    ``start_delay_s`` (the intercept) and ``step_s``, one status step's time at its mean speed;
+    ``waits``: the per-command waits in its start delay (1, or 1 + a chain's delays: its samples
+    then count from the chain's first landing + the delays' model time); ``delay_error_s``: how
+    far the intercept may be off either way (a status step — every sample may sit at one phase of
+    it — and the landing's uncertainty; the reads' lateness, one way only, apart)."""
 
     samples: list
     resolution: float
     start_delay_s: float
     step_s: float
+    waits: int = 1
+    delay_error_s: float = 0.0
 
     def factor(self, overhead_s: float) -> float:
-        """The least-squares factor through the origin of the time after the arm's per-command wait."""
-        return sum((t - overhead_s) * tau for t, tau in self.samples) / sum(tau * tau for _, tau in self.samples)
+        """The least-squares factor through the origin of the time after the arm's per-command waits."""
+        waited_s = self.waits * overhead_s
+        return sum((t - waited_s) * tau for t, tau in self.samples) / sum(tau * tau for _, tau in self.samples)
+
+    def own_delay_s(self, overhead_s: float) -> float:
+        """Its start delay less the waits of the chain before it: the move's own."""
+        return self.start_delay_s - (self.waits - 1) * overhead_s
 
 
 def unwaited(profile):
@@ -151,17 +164,24 @@ def unwaited(profile):
     return replace(profile, timing=replace(profile.timing, command_overhead_s=0.0))
 
 
-def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, arrived, quantum: float):
+def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, arrived, quantum: float,
+               chain: Chain | None = None):
     """Send ``command`` (the arm idle at ``start``), follow it to its end; its ``MoveFit``, or None.
     ``reading(frame)`` → a comparable value; ``progress_of(value)`` (also applied to the model's
-    poses) → distance from the start."""
+    poses) → distance from the start.  With a ``chain`` (armctl/probe/overhead.py) its delays go
+    first and the move's time counts from the first one's landing + their model time."""
     segment = MotionModel(unwaited(probe.profile), 1.0).plan(command, start)
     written_s = probe.now_s
-    landed_s = yield Send(command)
-    at = probe.wire.written_bytes
-    probe.known.moved = True
-    probe.known.busy_until_s = landed_s + SLOWEST_FACTOR * segment.duration_s
-    limit_s = landed_s + SLOWEST_FACTOR * segment.duration_s + READBACK_TIMEOUT_S
+    delays = chain.commands if chain is not None else ()
+    ahead_s = chain.allowed_s if chain is not None else 0.0  # the chain's time, before the move's
+    landed_s = at = None
+    for sent in (*delays, command):
+        landed = yield Send(sent)
+        if landed_s is None:  # the first frame's landing: the arm is idle, it starts there
+            landed_s, at = landed, probe.wire.written_bytes
+            probe.known.moved = True  # (from here: a Ctrl-C meanwhile waits for what was sent)
+            probe.known.busy_until_s = landed_s + ahead_s + SLOWEST_FACTOR * segment.duration_s
+    limit_s = landed_s + ahead_s + SLOWEST_FACTOR * segment.duration_s + READBACK_TIMEOUT_S
 
     def done():
         got = probe.seen.agreed(kind, landed_s, reading)
@@ -180,6 +200,7 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
     latest_s = max(earliest_s, latest_s if latest_s is not None else probe.now_s)
     unsure_start_s = 0.0 if earliest_s <= landed_s <= latest_s else latest_s - earliest_s
     landed_s = min(max(landed_s, earliest_s), latest_s)
+    origin_s = landed_s + (chain.model_s if chain is not None else 0.0)  # the move's start on an arm with no wait
     total = progress_of(segment.end)
     samples = []
     # the reads' lateness taken out, where the stream proves it
@@ -194,7 +215,7 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
             continue
         tau = _invert(segment, lambda pose: progress_of(pose), progress)
         if tau is not None and tau > 0:
-            samples.append((t - landed_s, tau))
+            samples.append((t - origin_s, tau))
     slope = total / segment.duration_s
     # a corrupted frame (no checksum, H9) reads anywhere on the path: one 0.335 s in, 1 ms after
     # landing, tilted a fit to a start delay of -23.8 ms (the wait then 0, the factor 1.067 "sure")
@@ -205,7 +226,8 @@ def timed_move(probe, command, start: ArmPose, kind: int, reading, progress_of, 
     # one sample's factor error: the status step at the path's slowest sampled speed, and the clock
     # the fit's error bound: half a status step at the mean speed, and the clock, over the longest τ
     resolution = (quantum / 2 / slope + probe.timestamp_uncertainty_s + unsure_start_s) / max(tau for _, tau in samples)
-    return MoveFit(samples, resolution, start_delay_s, quantum / slope)
+    waits = 1 + (len(chain.commands) if chain is not None else 0)
+    return MoveFit(samples, resolution, start_delay_s, quantum / slope, waits, quantum / slope + unsure_start_s)
 
 
 def _line(samples) -> tuple[float, float]:
@@ -258,12 +280,15 @@ def _joint_moves(probe):
     start = tuple(known.joints_deg)
     step = JOINT_STEP_DEG if start[JOINT_INDEX] + JOINT_STEP_DEG <= high else -JOINT_STEP_DEG
     if not low <= start[JOINT_INDEX] + step <= high:
-        return []  # no room for 5° either way: speed_factor then rests on the linear move alone
+        return [], "no joint move"  # no room for 5° either way: speed_factor then rests on the linear move alone
     target = list(start)
     target[JOINT_INDEX] += step
-    results = []
+    results, no_chain = [], ""
     for there, back in ((start, tuple(target)), (tuple(target), start)):
         command = JointMove(*back, pwm_us=known.pwm_us, speed_deg_s=JOINT_SPEED_DEG_S)
+        chain = None
+        if results:  # the move back goes behind a chain of delays (armctl/probe/overhead.py)
+            chain, no_chain = chain_for(probe, results[0])
 
         def reading(frame):  # kind 2 carries joints 4…6: placed where JOINT_INDEX finds them
             return (0.0, 0.0, 0.0, frame.j4_deg, frame.j5_deg, frame.j6_deg)
@@ -272,10 +297,10 @@ def _joint_moves(probe):
             return abs(value[JOINT_INDEX] - back[JOINT_INDEX]) <= ARRIVED_DEG
 
         result = yield from timed_move(probe, command, _pose(probe, there), JointsHighStatus.KIND, reading,
-                                       _joint_progress(there), arrived, 0.01)
+                                       _joint_progress(there), arrived, 0.01, chain)
         yield from record_pose(probe)
         results.append(result)
-    return results
+    return results, no_chain
 
 
 def _linear_moves(probe):
@@ -314,7 +339,7 @@ def _linear_moves(probe):
 def speed_factor(probe):
     yield from settle(probe)
     default = DOCUMENTED["speed_factor"]
-    joint = yield from _joint_moves(probe)
+    joint, no_chain = yield from _joint_moves(probe)
     linear = []
     poses = probe.known.poses
     if poses and _kinematics_error_mm(probe, *poses[0]) <= KINEMATICS_TOLERANCE_MM and probe.known.status_xyz_frame:
@@ -325,52 +350,24 @@ def speed_factor(probe):
     measured = [r for r in joint + linear if r is not None]
     if not measured:
         return Finding("speed_factor", default, None, "too few status samples during the moves", UNSURE)
-    overhead_s = overhead_of([(r.start_delay_s, r.step_s) for r in measured])
+    wait = measured_wait(measured, no_chain, probe.timestamp_uncertainty_s)
+    overhead_s = wait.value_s
     factors = [r.factor(overhead_s) for r in measured]
     value = sum(factors) / len(factors)
     precision = max(max(r.resolution for r in measured), (max(factors) - min(factors)) / 2)
     precision = math.ceil(round(max(precision, 0.005) * 100, 6)) / 100  # up to the next 0.01
     joints = len([r for r in joint if r is not None])  # (measured: the joint moves' first)
     details = {"joint": [round(f, 4) for f in factors[:joints]], "linear": [round(f, 4) for f in factors[joints:]],
-               "precision": precision, "start_delay_s": [round(r.start_delay_s, 4) for r in measured]}
+               "precision": precision, "start_delay_s": [round(r.own_delay_s(wait.measured_s), 4) for r in measured]}
     evidence = (f"joint 5 ±{JOINT_STEP_DEG:g}° at {JOINT_SPEED_DEG_S:g}°/s: {details['joint']}"
                 + (f"; tool ±{LINEAR_STEP_MM:g} mm at {LINEAR_SPEED_MM_MIN:g} mm/min: {details['linear']}" if linear else "")
                 + f" (arm time ÷ model time{f' after the {overhead_s * 1000:g} ms wait' if overhead_s else ''}, "
                 f"fitted over {sum(len(r.samples) for r in measured)} status samples); ±{precision:g}" + linear_note)
     confidence = factor_confidence(value, precision)
     found = Finding("speed_factor", default, round(value, 3), evidence, confidence, details)
-    waited = overhead_finding(overhead_s, measured, confidence)
-    left_s = [round(r.start_delay_s - overhead_s, 4) for r in measured]  # (to 0.1 ms, as details shows them)
+    waited = overhead_finding(wait, measured, confidence)
+    left_s = [round(r.own_delay_s(wait.measured_s) - overhead_s, 4) for r in measured]  # (to 0.1 ms, as details shows them)
     return [found, waited, tolerance_finding(value, precision, left_s, overhead_s)]
-
-
-def overhead_of(fits) -> float:
-    """The arm's wait before every motion command (``[timing] command_overhead_s``), from the moves'
-    ``(start_delay_s, step_s)``: the wait is common to every move, the rest of a start delay is the
-    probe's lag — the status step (a report trails the arm by up to one) and what is left of the reads'
-    lateness — which a coarser step makes larger either way (the linear moves' 0.1 mm at 5 mm/s is 20 ms
-    and their fits run ~5 ms low).  So: the least start delay of the finest moves (the joint moves: 0.01°
-    at 2°/s, 5 ms), in whole milliseconds down; none (0) under one of their steps, which the probe
-    cannot tell from its lag (the document's arm: ≤ 1 ms in virtual time, ≤ 2.9 ms through a pty)."""
-    finest_s = min(step_s for _, step_s in fits)
-    delay_s = min(delay_s for delay_s, step_s in fits if step_s <= finest_s * (1 + 1e-6))
-    return 0.0 if delay_s < finest_s else math.floor(round(delay_s * 1000, 6)) / 1000
-
-
-def overhead_finding(overhead_s: float, measured, factor: str) -> Finding:
-    """``command_overhead_s`` as a finding: sure while every move's start delay is within its own
-    status step (+ the millisecond rounded off) of it, likely beyond (speed_tolerance covers what is
-    left); no surer than the factor fitted with it."""
-    delays_ms = [round(r.start_delay_s * 1000, 1) for r in measured]
-    agree = all(abs(r.start_delay_s - overhead_s) <= r.step_s + 0.001 for r in measured)
-    confidence = factor if factor != SURE else SURE if agree else LIKELY
-    evidence = (f"start delays {delays_ms} ms (the intercepts of the timed moves' fits; one status step is "
-                f"{min(r.step_s for r in measured) * 1000:.1f} ms on the finest): "
-                + (f"{overhead_s * 1000:g} ms before every motion command" if overhead_s else
-                   "none beyond the probe's lag")
-                + ("" if agree else "; the moves disagree by more than their steps"))
-    return Finding("command_overhead_s", DOCUMENTED["command_overhead_s"], overhead_s, evidence, confidence,
-                   {"start_delay_s": [round(r.start_delay_s, 4) for r in measured]})
 
 
 def factor_confidence(value: float, precision: float) -> str:
