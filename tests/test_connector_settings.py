@@ -73,8 +73,8 @@ def test_each_key_is_read_and_marked_as_given(key, value):
 
 
 @pytest.mark.parametrize("key, value, message", [
-    ("fifo_frames", 7, "connector.fifo_frames must be a whole number 8…4096, not 7"),
-    ("fifo_frames", 4097, "must be a whole number 8…4096"),
+    ("fifo_frames", 2, "connector.fifo_frames must be a whole number 3…4096, not 2"),
+    ("fifo_frames", 4097, "must be a whole number 3…4096"),
     ("fifo_frames", 50.0, "must be a whole number"),
     ("fifo_frames", True, "must be a whole number"),
     ("fifo_frames", "200", "must be a whole number"),

@@ -69,13 +69,13 @@ class JobEstimator:
         """``lead_s`` defaults to the streamer's lead."""
         # The streamer's numbers, imported here rather than with the module: lint imports this
         # module for motion_time_overrun alone, and the streamer costs every start (issue 13).
-        from .streamer import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S
+        from .streamer import DEFAULT_LEAD_S, limit_frames
 
         self.planner = Planner(model, start)
         self._feed_line, self._max_linear_mm_min = self.planner.feed_line, model.profile.speed.max_linear_mm_min
         self.lead_s = DEFAULT_LEAD_S if lead_s is None else lead_s
         # the streamer never lets more frames be in flight than this (see streamer.py)
-        self.frame_limit = model.profile.connector.fifo_frames - CAPACITY_MARGIN_FRAMES
+        self.frame_limit = limit_frames(model.profile.connector.fifo_frames)
         self.frame_s = frame_seconds(baud)
         self.result = Estimate()
         self._wire_free = 0.0

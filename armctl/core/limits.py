@@ -26,11 +26,12 @@ LINE_RANGE = (1, 2**31 - 1)  # a line number in a script
 TCP_PORT_RANGE = (1, 65535)
 REPEAT_DELAY_RANGE_MS = (50.0, 5000.0)  # jog: a single key press moves at most this long
 
-# The arm profile's [connector] table (armctl/host/profile.py), the arm's unknowns.  fifo_frames: below 8
-# the streamer's margin (streamer.CAPACITY_MARGIN_FRAMES) leaves almost nothing to stream with;
-# 4096 frames (196 KB) is twenty times the document's 200 — a bigger number is a typo.  speed_factor:
+# The arm profile's [connector] table (armctl/host/profile.py), the arm's unknowns.  fifo_frames: from 3
+# (under 8 the streamer keeps half of it free, not its 4-frame margin, and writes at least 2 ahead,
+# an arc's two frames: streamer/constants.py ``limit_frames``; a probe keeps no smaller value); 4096
+# frames (196 KB) is twenty times the document's 200 — a bigger number is a typo.  speed_factor:
 # an arm 4× faster or slower than its profile says has the wrong profile, not a slow arm.
-FIFO_RANGE_FRAMES = (8, 4096)
+FIFO_RANGE_FRAMES = (3, 4096)
 SPEED_FACTOR_RANGE = (0.25, 4.0)
 # [connector] status_jitter_ms (and sim://?status_jitter_ms=): up to half the status period (beyond,
 # a frame's slot in the stream is no longer told by its time)

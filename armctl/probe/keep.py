@@ -22,10 +22,12 @@ def today() -> str:
 arm_identity = calibration.arm_identity
 
 
-def stated(probe, kept: dict) -> dict:
+def stated(probe, kept: dict, say=lambda text: None) -> dict:
     """What ``probe`` states (``report.to_write``) to keep or write over ``kept``, what this arm's
     store or file holds: all of it, but a ``kinematics_verified`` false that one agreeing pose gave
-    (likely: a probe without motion) over a true — one pose proves nothing against it."""
+    (likely: a probe without motion) over a true — one pose proves nothing against it — and a
+    value the profile's own checks refuse (a FIFO of 2 frames, under the 3 armctl streams to:
+    kept, it made every later command on the arm, this probe's included, exit 2), told to ``say``."""
     from .plan import LIKELY
     from .report import finding_for, to_write
 
@@ -33,7 +35,25 @@ def stated(probe, kept: dict) -> dict:
     if (values.get("kinematics_verified") is False and kept.get("kinematics_verified") is True
             and finding_for(probe, "kinematics_verified").confidence == LIKELY):
         del values["kinematics_verified"]
+    for name, value in list(values.items()):
+        refused = refusal(name, value)
+        if refused is not None:
+            del values[name]
+            say(f"not kept: {refused}: armctl cannot drive this arm as measured")
     return values
+
+
+def refusal(name: str, value) -> str | None:
+    """Why the profile refuses ``value`` for the setting ``name`` (the schema's own words), or None."""
+    from ..core.profile_schema import PROFILE_SCHEMA, check_profile_data
+    from ..errors import ProfileError
+
+    section = "connector" if name in PROFILE_SCHEMA["connector"] else "timing"
+    try:
+        check_profile_data({section: {name: value}}, "probe")
+    except ProfileError as error:
+        return str(error).removeprefix("probe: ")
+    return None
 
 
 def keep(port: str, arm: str, probe, say) -> None:
@@ -41,7 +61,7 @@ def keep(port: str, arm: str, probe, say) -> None:
     from .report import finding_for
 
     earlier = calibration.load(arm)
-    values = stated(probe, {} if earlier is None else earlier.values())
+    values = stated(probe, {} if earlier is None else earlier.values(), say)
     findings = [(name, value, finding_for(probe, name).evidence, finding_for(probe, name).confidence)
                 for name, value in values.items()]
     if findings:

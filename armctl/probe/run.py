@@ -109,7 +109,7 @@ def run_probe(port, baud, no_motion, yes, as_json, write_path, announcement) -> 
     arm = arm_identity(choice.url)
     if target is not None:
         before = connector_table(target)
-        values = written(arm, stated(probe, before if measured_on_arm(before, arm) else {}))
+        values = written(arm, stated(probe, before if measured_on_arm(before, arm) else {}))  # (keep says what is not kept)
         drop = measured_elsewhere(before, arm, values)
         write_connector(target, values, drop)
         say(f"wrote [connector] in {target}: " + ", ".join(f"{k} = {toml_value(v)}" for k, v in values.items()))

@@ -262,6 +262,7 @@ from .constants import (
     SLOWEST_ARM_FACTOR,
     UNVERIFIED_FK_SHARE,
     frame_slack_s,
+    limit_frames,
 )
 from .facade import Streamer
 from .frames import Evidence, SentFrame, WaitReason
@@ -271,5 +272,5 @@ __all__ = [
     "FRAME_SLACK_S", "JOINT_TOLERANCE_DEG", "JOINT_TRACE_FRACTION", "JOINT_TRACE_SLACK", "LOSS_SLACK_S",
     "PACE_FOLLOWED", "PACE_MAX", "PACE_MIN_SPAN_S", "PACE_SAMPLES", "POSITION_TOLERANCE_MM",
     "RECENT_SENT_FRAMES", "ROTATION_S", "SCAN_WINDOW_FRAMES", "SLOWEST_ARM_FACTOR", "UNVERIFIED_FK_SHARE",
-    "Evidence", "SentFrame", "Streamer", "WaitReason", "frame_slack_s",
+    "Evidence", "SentFrame", "Streamer", "WaitReason", "frame_slack_s", "limit_frames",
 ]

@@ -14,6 +14,16 @@ DEFAULT_LEAD_S = 2.0
 # Frames kept free in the FIFO below its capacity: one for a frame the arm may still count while
 # executing it, the rest for what no model foresees.
 CAPACITY_MARGIN_FRAMES = 4
+
+
+def limit_frames(capacity: int, margin: int = CAPACITY_MARGIN_FRAMES) -> int:
+    """Frames that may wait in the connector unconfirmed (the gate's bound, and the estimate's):
+    its ``capacity`` less the ``margin`` kept free — but at most half of a connector under twice
+    the margin (a probe may measure 4 frames: the whole margin would leave none to stream with)
+    — and at least 2, an arc's two frames (with 1 a job with an arc never ended: its second frame
+    waited for the first's room; the profile's ``fifo_frames`` starts at 3: core/limits.py)."""
+    return max(capacity - min(margin, capacity // 2), 2)
+
 # The time bound assumes the arm is never more than ``speed_tolerance`` times slower than the model,
 # whose durations already include the profile's speed_factor: the slowest arm allowed for is
 # relative to the configured one.  That is a hypothesis about the arm the document leaves open, so

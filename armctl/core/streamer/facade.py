@@ -16,7 +16,7 @@ from operator import attrgetter
 from ..motion import ArmPose, MotionModel, Segment
 from ..protocol import ArcStart, Command, DEFAULT_BAUD, JointsHighStatus, JointsLowStatus, PauseStatus
 from ..protocol import PositionStatus, StatusFrame, frame_seconds
-from .constants import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S, PACE_FOLLOWED
+from .constants import CAPACITY_MARGIN_FRAMES, DEFAULT_LEAD_S, PACE_FOLLOWED, limit_frames
 from .estimate import Estimate
 from .evidence import Sighting, Sightings, ran_at_rest, standing_at_start
 from .frames import Evidence, SentFrame, where
@@ -67,7 +67,7 @@ class Streamer:
         self._ledger = Ledger(connector.control_on_arrival)
         self._estimate = Estimate(self._ledger, memo)
         self._gate = Gate(self._ledger, self._estimate, model, start, lead_s=lead_s,
-                          limit_frames=(connector.fifo_frames if capacity is None else capacity) - margin,
+                          limit_frames=limit_frames(connector.fifo_frames if capacity is None else capacity, margin),
                           frame_s=frame_seconds(baud), now=now, write_ahead_s=write_ahead_s)
         self._bound = TimeBound(self._ledger, model, slowest, memo, now)
         self._evidence = Sightings(self._ledger, memo, connector.kinematics_verified, connector.reports_robot_xyz)
