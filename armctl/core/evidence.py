@@ -23,14 +23,20 @@ still" from status frames asks here and restates nothing:
   (armctl/core/job_readings.py) and the waits for rest before and after a resume
   (armctl/host/jobflow.py ``wait_for_rest``); the probe's stillness (armctl/probe/steps.py) takes
   its span from agreeing runs, each kind's from its own first run.
+- **Motion seen** (``MotionSeen``): the arm moves once more than one of a kind's latest reports
+  (three or four) differ from any value they share: one corrupted report within reach, or a
+  corrupted first one, is one — a still arm never shows that without two corrupted among four.
+  It only says the arm moves (``jobflow.read_arm``'s note); when it rests is the rule above.
 """
 
 from __future__ import annotations
 
+from collections import deque
 from typing import Iterable
 
 AGREEING_REPORTS = 2  # consecutive reports of a kind that must agree before their value counts
 REST_CHECK_S = 0.6  # the arm counts as at rest when every kind reported the same readings this long
+MOTION_REPORTS = 4  # a kind's latest reports ``MotionSeen`` judges: one corrupted among them is not motion
 
 
 def agreed(reports: Iterable) -> object | None:
@@ -82,3 +88,26 @@ def known_still_s(changed_s: float, read_s: Iterable[float]) -> float:
 def still_long_enough(changed_s: float, read_s: Iterable[float]) -> bool:
     """At rest: the readings known unchanged (``known_still_s``) for ``REST_CHECK_S``."""
     return known_still_s(changed_s, read_s) >= REST_CHECK_S
+
+
+class MotionSeen:
+    """Whether the reports show the arm moving (``Motion seen``): each kind's latest ``MOTION_REPORTS``
+    readings, in the order of ``kinds``; a new report of a kind is one whose read time changed."""
+
+    def __init__(self, kinds: Iterable) -> None:
+        self.latest: dict = {kind: deque(maxlen=MOTION_REPORTS) for kind in kinds}
+        self.read_s: dict = {}
+        self.seen = False
+
+    def read(self, readings: Iterable, read_s: Iterable[float]) -> bool:
+        """Each kind's latest reading and when its report was read; True once motion is seen: in a
+        kind's latest reports (three or four) more than one differ from any value they share — one
+        corrupted report (no checksum, H9) is one, on a still arm or as the first read."""
+        for (kind, latest), value, at_s in zip(self.latest.items(), readings, read_s):
+            if self.read_s.get(kind) == at_s:  # no new report of this kind
+                continue
+            self.read_s[kind] = at_s
+            latest.append(value)
+            if len(latest) >= 3 and max(latest.count(v) for v in latest) < len(latest) - 1:
+                self.seen = True
+        return self.seen

@@ -48,7 +48,8 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     reports it is paused (``resume_paused``).  The arm's state; ``JobFailed`` when it does not
     answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to.
     ``rest_s``: an arm still moving after ``agreed_state`` (frames queued before this job) is
-    waited for until it rests, at most ``rest_s`` (``rest_wait_s``; ``note`` is told), and None
+    waited for until it rests, at most ``rest_s`` (``rest_wait_s``; ``note`` is told once the
+    reports show it move: ``MotionSeen``), and None
     returned when ``stopped()`` comes first; None: the job plans from its latest report (a
     resume waits for rest itself: ``resume_start``)."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
@@ -67,10 +68,10 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     # before them ends: a sound job ended "unproven", and its arm time blamed the arm's speed.
     if rest_s is None or (agreed and (first is None or _pose(first) == _pose(state))):
         return state
-    note("armctl: the arm is moving (frames queued before this job still running? another program, or an armctl "
-         "stopped without its abort sequence): waiting for it to come to rest before the job is planned")
-    try:
-        return wait_for_rest(link, rest_s, stopped)
+    try:  # said once motion is seen: a first report corrupted within reach (H9) differed too, on a still arm
+        return wait_for_rest(link, rest_s, stopped, moving=lambda: note(
+            "armctl: the arm is moving (frames queued before this job still running? another program, or an armctl "
+            "stopped without its abort sequence): waiting for it to come to rest before the job is planned"))
     except JobFailed:
         raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; nothing was sent (frames queued before "
                         "this job may still be running: once the arm is still, run the job again, or give it a longer "
@@ -223,25 +224,30 @@ def _wait_still(link, timeout_s: float) -> None:
                         "nothing else was sent") from None
 
 
-def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = None):
+def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = None,
+                  moving: Callable[[], None] | None = None):
     """The arm's state once its position and joints stayed the same for ``REST_CHECK_S``, each
     kind re-read in that time (armctl/core/evidence.py's rule of rest, the engine's own:
     ``still_long_enough``), and no SD program's run position advanced in it (an arm standing
     still in a program is at work, as at a job's end: ``Arrival.arm_at_rest``); ``JobFailed`` after
     ``timeout_s``; None as soon as ``stopped()`` says a stop was asked (Ctrl-C while a resume
-    waits: nothing was sent, nothing is owed)."""
-    from ..core.evidence import still_long_enough
+    waits: nothing was sent, nothing is owed).  ``moving()`` is called once the reports show the
+    arm move (``evidence.MotionSeen``: not one corrupted report)."""
+    from ..core.evidence import MotionSeen, still_long_enough
     from ..core.protocol import JointsHighStatus, JointsLowStatus, PositionStatus
 
     kinds = (PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND)
     deadline = link.clock() + timeout_s
-    reading, since = None, link.clock()
+    reading, since, seen = None, link.clock(), MotionSeen(kinds)
     while True:
         if stopped is not None and stopped():
             return None
         state = link.snapshot()[0]
         now = link.clock()
         read_s = [state.last_seen.get(kind, float("-inf")) for kind in kinds]  # -inf: never read
+        if moving is not None and seen.read(_pose(state), read_s):
+            moving()
+            moving = None
         if (state.position_mm, tuple(state.joints_deg), state.run_position) != reading:
             reading, since = (state.position_mm, tuple(state.joints_deg), state.run_position), now
         elif still_long_enough(since, read_s):
