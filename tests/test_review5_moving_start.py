@@ -65,3 +65,15 @@ def test_a_moving_arm_on_a_noisy_line_is_still_waited_for(tmp_path, monkeypatch,
     assert WAITING in result.stderr, result.stderr
     leftover = port.model.execution_log[1]
     assert leftover.outcome == "done" and port.model.frames_received[2].arrival_s >= leftover.end_s
+
+
+@pytest.mark.xfail(strict=True, reason="read_arm refuses a still arm whose reports the rule of rest never finds "
+                                       "unchanged for 0.6 s on a very noisy line, though none showed motion")
+@pytest.mark.parametrize("seed", (7, 9, 18))
+def test_a_still_arm_on_a_very_noisy_line_is_not_refused(tmp_path, seed):
+    """corrupt=0.3: a corrupted pose report within reach every few rotations keeps the readings from
+    standing still for REST_CHECK_S; before the wait (58010a3^) these jobs ran and finished; with it,
+    'the arm did not come to rest within 9 s; nothing was sent' on an idle arm."""
+    done = _run_installed(tmp_path, f"sim://?clock=virtual&corrupt=0.3&seed={seed}")
+    assert done.returncode == 0 and "finished: the arm finished the job" in done.stdout + done.stderr, done.stderr
+    assert "did not come to rest" not in done.stderr, done.stderr
