@@ -25,6 +25,7 @@ from contextlib import contextmanager
 from typing import Any, Callable, Iterable
 
 from ..errors import ArmctlError
+from ..core.evidence import REST_CHECK_S
 from ..core.job_control import agreed_pause, pause_toggle_needed
 
 READ_ROTATIONS = 2  # after all nine status kinds: two more rotations (a corrupted first frame of a kind replaced, H9)
@@ -68,11 +69,16 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     # before them ends: a sound job ended "unproven", and its arm time blamed the arm's speed.
     if rest_s is None or (agreed and (first is None or _pose(first) == _pose(state))):
         return state
-    try:  # said once motion is seen: a first report corrupted within reach (H9) differed too, on a still arm
-        return wait_for_rest(link, rest_s, stopped, moving=lambda: note(
+    seen: list = []  # said once motion is seen: a first report corrupted within reach (H9) differed too, on a still arm
+    try:
+        return wait_for_rest(link, rest_s, stopped, moving=lambda: seen.append(note(
             "armctl: the arm is moving (frames queued before this job still running? another program, or an armctl "
-            "stopped without its abort sequence): waiting for it to come to rest before the job is planned"))
+            "stopped without its abort sequence): waiting for it to come to rest before the job is planned")))
     except JobFailed:
+        if not seen:  # only corrupted reports kept the readings from standing still: no motion, as before the wait
+            note(f"armctl: in {rest_s:g} s the arm's reports never all held still for {REST_CHECK_S:g} s, and none "
+                 "showed it move (a noisy line?): the job is planned from where they agree it stands")
+            return agreed_state(link, link.snapshot()[0], timeout_s)[0]
         raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; nothing was sent (frames queued before "
                         "this job may still be running: once the arm is still, run the job again, or give it a longer "
                         "--timeout)") from None
