@@ -107,14 +107,13 @@ def test_a_leftover_slower_than_a_reading_step_per_rest_check_is_waited_for(tmp_
     assert result.exit_code in (0, 1) and "no confirmation" not in result.output, result.output
 
 
-@pytest.mark.xfail(strict=True, reason="read_arm resumes a paused arm before it waits for rest: a pause queued behind "
-                                       "the leftover pauses the arm during the wait, and the job is streamed into it")
 def test_a_pause_queued_behind_a_leftover_is_resumed_after_the_wait(tmp_path, monkeypatch):
     """Another host queued two 2 s moves and then PAUSE (its abort, as `armctl run`'s default stop
     sends it on an arm whose control frames queue).  The job starts while the first move runs:
     the arm is not paused yet, the wait sees it move and waits; the PAUSE lands at the queue's
     end, the arm rests paused, and the job was streamed into a paused arm ('the arm reports it is
-    paused: the rest of the job waits in its buffer', no confirmation, exit 1)."""
+    paused: the rest of the job waits in its buffer', no confirmation, exit 1).  Now an arm that rests
+    paused after the wait is resumed as at the start (``resume_paused``)."""
     url = "sim://?clock=virtual"
     monkeypatch.chdir(tmp_path)
     ports = _open_one_arm(monkeypatch)

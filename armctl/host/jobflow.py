@@ -25,7 +25,6 @@ from contextlib import contextmanager
 from typing import Any, Callable, Iterable
 
 from ..errors import ArmctlError
-from ..core.evidence import REST_CHECK_S
 from ..core.job_control import agreed_pause, pause_toggle_needed
 
 READ_ROTATIONS = 2  # after all nine status kinds: two more rotations (a corrupted first frame of a kind replaced, H9)
@@ -48,11 +47,10 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     kind has been replaced or held back, H9); with ``unpause``, resume an arm that twice
     reports it is paused (``resume_paused``).  The arm's state; ``JobFailed`` when it does not
     answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to.
-    ``rest_s``: an arm still moving after ``agreed_state`` (frames queued before this job) is
-    waited for until it rests, at most ``rest_s`` (``rest_wait_s``; ``note`` is told once the
-    reports show it move: ``MotionSeen``), and None
-    returned when ``stopped()`` comes first; None: the job plans from its latest report (a
-    resume waits for rest itself: ``resume_start``)."""
+    ``rest_s``: an arm still moving after ``agreed_state`` (frames queued before this job) is waited
+    for until it rests, at most ``rest_s`` (``rest_wait_s``; ``note`` told once reports show motion:
+    ``MotionSeen``), None when ``stopped()`` comes first; None: the job plans from its latest report
+    (a resume waits for rest itself: ``resume_start``)."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
         raise JobFailed(f"{link.silence_message(timeout_s)}; nothing was sent")
     first = link.snapshot()[0]
@@ -62,26 +60,28 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     if unpause and resume_paused(link, timeout_s, log, note, control_on_arrival):
         first = earlier = None
     state, agreed = agreed_state(link, earlier, timeout_s)
-    # Any reading changed at all since the first (not only by more than a reading's jitter: an
-    # arm at F10 moves 0.05 mm a rotation) and the arm may still run frames queued before this
-    # job (another program on the line, an armctl killed mid-job).  Planned from a moving arm's
-    # report, the job's first frames would be timed from when they land, not from when the queue
-    # before them ends: a sound job ended "unproven", and its arm time blamed the arm's speed.
+    # Any reading changed since the first (not only beyond jitter: F10 moves 0.05 mm a rotation): the arm may
+    # still run frames queued before this job (another program, an armctl killed mid-job).  Planned from a
+    # moving arm's report, the job's frames were timed from when they land, not from when that queue ends (a
+    # sound job ended "unproven", its arm time blamed the arm's speed); resumed if the queue ended in a PAUSE.
     if rest_s is None or (agreed and (first is None or _pose(first) == _pose(state))):
         return state
     seen: list = []  # said once motion is seen: a first report corrupted within reach (H9) differed too, on a still arm
     try:
-        return wait_for_rest(link, rest_s, stopped, moving=lambda: seen.append(note(
+        state = wait_for_rest(link, rest_s, stopped, moving=lambda: seen.append(note(
             "armctl: the arm is moving (frames queued before this job still running? another program, or an armctl "
             "stopped without its abort sequence): waiting for it to come to rest before the job is planned")))
     except JobFailed:
-        if not seen:  # only corrupted reports kept the readings from standing still: no motion, as before the wait
-            note(f"armctl: in {rest_s:g} s the arm's reports never all held still for {REST_CHECK_S:g} s, and none "
-                 "showed it move (a noisy line?): the job is planned from where they agree it stands")
-            return agreed_state(link, link.snapshot()[0], timeout_s)[0]
-        raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; nothing was sent (frames queued before "
-                        "this job may still be running: once the arm is still, run the job again, or give it a longer "
-                        "--timeout)") from None
+        if seen:
+            raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; nothing was sent (frames queued before "
+                            "this job may still be running: once the arm is still, run the job again, or give it a "
+                            "longer --timeout)") from None
+        note(f"armctl: in {rest_s:g} s the arm's reports never held still long enough to prove it at rest, and none "
+             "showed it move (a noisy line?): the job is planned from where they agree it stands")
+        state = agreed_state(link, link.snapshot()[0], timeout_s)[0]  # only corrupted reports: as before the wait
+    if state is not None and unpause and resume_paused(link, timeout_s, log, note, control_on_arrival):
+        state = link.snapshot()[0]  # a PAUSE queued behind what ran (another host's stop) paused it at rest
+    return state
 
 
 def rest_wait_s(timeout_s: float, lead_s: float) -> float:
