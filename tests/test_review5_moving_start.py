@@ -129,3 +129,24 @@ def test_a_pause_queued_behind_a_leftover_is_resumed_after_the_wait(tmp_path, mo
     result = CliRunner().invoke(main, ["run", "job.txt", "--port", url], env={"ARMCTL_PORT": None})
     assert result.exit_code == 0 and "finished: the arm finished the job" in result.output, result.output
     assert not port.model.paused
+
+
+@pytest.mark.xfail(strict=True, reason="the refusal names armctl run's --timeout, which Arm and armctl serve do not have")
+def test_the_api_s_refusal_of_an_arm_that_does_not_rest_names_no_cli_option(monkeypatch):
+    """Arm.move on an arm running a 600 s move another host queued: JobFailed, nothing sent; its
+    message told to 'give it a longer --timeout' (armctl serve's job error says the same), an
+    option of `armctl run` alone (Arm.open has status_timeout_s= and lead_s=; serve has --lead)."""
+    from armctl import Arm, JobFailed
+
+    url = "sim://?clock=virtual"
+    ports = _open_one_arm(monkeypatch)
+    with Arm.open(port=url) as arm:
+        arm.move(x=250, y=0, z=150, f=3000)
+        for frame in _leftover(10):
+            ports[url].write(frame)
+        with pytest.raises(JobFailed) as failed:
+            arm.move(x=300, y=0, z=150, f=3000)
+    message = str(failed.value)
+    assert "did not come to rest" in message and "nothing was sent" in message, message
+    assert "--" not in message, message
+    assert len(ports[url].model.execution_log) == 2  # the first move and the leftover: nothing of this one
