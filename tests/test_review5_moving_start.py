@@ -131,11 +131,11 @@ def test_a_pause_queued_behind_a_leftover_is_resumed_after_the_wait(tmp_path, mo
     assert not port.model.paused
 
 
-@pytest.mark.xfail(strict=True, reason="the refusal names armctl run's --timeout, which Arm and armctl serve do not have")
 def test_the_api_s_refusal_of_an_arm_that_does_not_rest_names_no_cli_option(monkeypatch):
     """Arm.move on an arm running a 600 s move another host queued: JobFailed, nothing sent; its
     message told to 'give it a longer --timeout' (armctl serve's job error says the same), an
-    option of `armctl run` alone (Arm.open has status_timeout_s= and lead_s=; serve has --lead)."""
+    option of `armctl run` alone (Arm.open has status_timeout_s= and lead_s=; serve has --lead).  Now
+    it names what waits longer in every edge's own words: a longer status timeout or lead."""
     from armctl import Arm, JobFailed
 
     url = "sim://?clock=virtual"

@@ -74,8 +74,8 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     except JobFailed:
         if seen:
             raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; nothing was sent (frames queued before "
-                            "this job may still be running: once the arm is still, run the job again, or give it a "
-                            "longer --timeout)") from None
+                            "this job may still be running: once the arm is still, run the job again; a longer status "
+                            "timeout or lead waits longer)") from None
         note(f"armctl: in {rest_s:g} s the arm's reports never held still long enough to prove it at rest, and none "
              "showed it move (a noisy line?): the job is planned from where they agree it stands")
         state = agreed_state(link, link.snapshot()[0], timeout_s)[0]  # only corrupted reports: as before the wait
@@ -496,8 +496,8 @@ def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable
     try:
         state = wait_for_rest(link, wait_s, stopped)
     except JobFailed:  # a move longer than the wait was in progress: safe to try again once it ends
-        raise JobFailed(f"the arm did not come to rest within {wait_s:g} s; nothing was sent (a long move may still "
-                        f"be running: once the arm is still, run the resume again, or give it a longer --timeout)") from None
+        raise JobFailed(f"the arm did not come to rest within {wait_s:g} s; nothing was sent (a long move may still be "
+                        "running: once the arm is still, run the resume again; a longer status timeout or lead waits longer)") from None
     if state is None:
         return None
     ran = point.frames_run(state.position_mm, tuple(state.joints_deg))
