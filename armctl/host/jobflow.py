@@ -43,14 +43,13 @@ class JobFailed(ArmctlError):
 def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
              control_on_arrival: bool = False, unpause: bool = True, rest_s: float | None = None,
              stopped: Callable[[], bool] | None = None):
-    """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
-    kind has been replaced or held back, H9); with ``unpause``, resume an arm that twice
-    reports it is paused (``resume_paused``).  The arm's state; ``JobFailed`` when it does not
-    answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to.
-    ``rest_s``: an arm still moving after ``agreed_state`` (frames queued before this job) is waited
-    for until it rests, at most ``rest_s`` (``rest_wait_s``; ``note`` told once reports show motion:
-    ``MotionSeen``), None when ``stopped()`` comes first; None: the job plans from its latest report
-    (a resume waits for rest itself: ``resume_start``)."""
+    """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a kind has
+    been replaced or held back, H9); with ``unpause``, resume an arm that twice reports it is paused
+    (``resume_paused``).  The arm's state; ``JobFailed`` when it does not answer.  ``log``: a
+    ``JournalFile`` (or a text file) the frames sent are journalled to.  ``rest_s``: an arm still moving
+    after ``agreed_state`` (frames queued before this job) is waited for until it rests, at most ``rest_s``
+    (``rest_wait_s``; ``note`` told once reports show motion: ``MotionSeen``), None when ``stopped()``
+    comes first; None: the job plans from its latest report (a resume waits: ``resume_start``)."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
         raise JobFailed(f"{link.silence_message(timeout_s)}; nothing was sent")
     first = link.snapshot()[0]
@@ -73,9 +72,10 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
             "stopped without its abort sequence): waiting for it to come to rest before the job is planned")))
     except JobFailed:
         if seen:
-            raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; nothing was sent (frames queued before "
-                            "this job may still be running: once the arm is still, run the job again; a longer status "
-                            "timeout or lead waits longer)") from None
+            raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; "
+                            f"{'nothing' if first is not None else 'only the pause toggle that resumed it'} was sent (frames "
+                            "queued before this job may still be running: once the arm is still, run the job again; a longer "
+                            "status timeout or lead waits longer)") from None
         note(f"armctl: in {rest_s:g} s the arm's reports never held still long enough to prove it at rest, and none "
              "showed it move (a noisy line?): the job is planned from where they agree it stands")
         state = agreed_state(link, link.snapshot()[0], timeout_s)[0]  # only corrupted reports: as before the wait
