@@ -176,3 +176,38 @@ def test_a_refusal_after_the_resume_toggle_does_not_say_nothing_was_sent(tmp_pat
     refusal = next(line for line in result.stderr.splitlines() if "did not come to rest" in line)
     assert "nothing was sent" not in refusal and "pause toggle" in refusal, refusal
     assert len(port.model.frames_received) == 5  # FIRST, the leftover's three, the toggle: nothing of the job
+
+
+@pytest.mark.realtime
+def test_ctrl_c_while_the_job_waits_for_rest_sends_nothing_installed(tmp_path):
+    """The installed command in a fresh process on ``armctl sim --pty`` (its own process, 2x time):
+    a 20 s move written to the arm just before; SIGINT once armctl says it waits: exit 130, the
+    summary 'interrupted' with no frame sent, and the arm received nothing but the move."""
+    import json
+    import signal
+    import time
+
+    from journal_crash import pty_arm
+
+    stats = tmp_path / "stats.json"
+    (tmp_path / "job.txt").write_text(JOB)
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    env["XDG_DATA_HOME"] = str(tmp_path / "data")
+    with pty_arm("--url", "sim://?speed=2", "--stats", str(stats), env=env) as pty:
+        with open(pty, "wb", buffering=0) as line:
+            line.write(b"".join(_leftover(300)))
+        time.sleep(0.3)
+        run = subprocess.Popen([sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", pty], cwd=tmp_path,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env)
+        told = []
+        for text in run.stderr:  # until armctl says it waits (within the move's 10 s of wall time)
+            told.append(text)
+            if WAITING in text:
+                break
+        run.send_signal(signal.SIGINT)
+        out, err = run.communicate(timeout=20)
+    assert WAITING in "".join(told), "".join(told) + err
+    assert run.returncode == 130, err
+    summary = json.loads(out.splitlines()[-1])
+    assert (summary["outcome"], summary["frames_sent"]) == ("interrupted", 0), summary
+    assert len(json.loads(stats.read_text())["frames"]) == 1  # the move; nothing of the job
