@@ -213,14 +213,14 @@ def test_ctrl_c_while_the_job_waits_for_rest_sends_nothing_installed(tmp_path):
     assert len(json.loads(stats.read_text())["frames"]) == 1  # the move; nothing of the job
 
 
-@pytest.mark.xfail(strict=True, reason="the fallback for a very noisy line takes an SD program at work for noise")
 @pytest.mark.parametrize("seed", (2, 5))
 def test_an_sd_program_at_work_is_not_taken_for_a_noisy_line(tmp_path, monkeypatch, seed):
     """An SD program (PROGRAM 1: 12 s at slowdown 3; it holds the arm without moving it, its run
     position advancing) started by another host; a corrupted first report makes the job wait; the
     run position keeps the rule of rest from holding for the whole 9 s, and no pose report shows
     motion: the fallback said 'none showed it move (a noisy line?)' and planned the job behind
-    the program.  The program is the arm at work, as the rule of rest says: refused, as before."""
+    the program.  The program is the arm at work, as the rule of rest says: refused, as before
+    (``MotionSeen`` reads the run position too)."""
     url = f"sim://?clock=virtual&corrupt=0.15&seed={seed}&slowdown=3"
     monkeypatch.chdir(tmp_path)
     ports = _open_one_arm(monkeypatch)

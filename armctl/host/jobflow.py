@@ -237,23 +237,23 @@ def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = N
     ``still_long_enough``), and no SD program's run position advanced in it (an arm standing
     still in a program is at work, as at a job's end: ``Arrival.arm_at_rest``); ``JobFailed`` after
     ``timeout_s``; None as soon as ``stopped()`` says a stop was asked (Ctrl-C while a resume
-    waits: nothing was sent, nothing is owed).  ``moving()`` is called once the reports show the
-    arm move (``evidence.MotionSeen``: not one corrupted report)."""
+    waits: nothing was sent, nothing is owed).  ``moving()`` (returning None) is called once the
+    reports show it at work (``evidence.MotionSeen``; an SD program's run position too)."""
     from ..core.evidence import MotionSeen, still_long_enough
-    from ..core.protocol import JointsHighStatus, JointsLowStatus, PositionStatus
+    from ..core.protocol import JointsHighStatus, JointsLowStatus, PositionStatus, RunPositionStatus
 
     kinds = (PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND)
     deadline = link.clock() + timeout_s
-    reading, since, seen = None, link.clock(), MotionSeen(kinds)
+    program = RunPositionStatus.KIND  # an SD program at work shows as motion does (``moving``)
+    reading, since, seen = None, link.clock(), MotionSeen((*kinds, program))
     while True:
         if stopped is not None and stopped():
             return None
         state = link.snapshot()[0]
         now = link.clock()
         read_s = [state.last_seen.get(kind, float("-inf")) for kind in kinds]  # -inf: never read
-        if moving is not None and seen.read(_pose(state), read_s):
-            moving()
-            moving = None
+        if moving is not None and seen.read((*_pose(state), state.run_position), (*read_s, state.last_seen.get(program))):
+            moving = moving()  # (it returns None: said once)
         if (state.position_mm, tuple(state.joints_deg), state.run_position) != reading:
             reading, since = (state.position_mm, tuple(state.joints_deg), state.run_position), now
         elif still_long_enough(since, read_s):
