@@ -43,14 +43,13 @@ class JobFailed(ArmctlError):
 def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lambda text: None,
              control_on_arrival: bool = False, unpause: bool = True, rest_s: float | None = None,
              stopped: Callable[[], bool] | None = None):
-    """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a
-    kind has been replaced or held back, H9); with ``unpause``, resume an arm that twice
-    reports it is paused (``resume_paused``).  The arm's state; ``JobFailed`` when it does not
-    answer.  ``log``: a ``JournalFile`` (or a text file) the frames sent are journalled to.
-    ``rest_s``: an arm still moving after ``agreed_state`` (frames queued before this job) is
-    waited for until it rests, at most ``rest_s`` (``rest_wait_s``; ``note`` is told), and None
-    returned when ``stopped()`` comes first; None: the job plans from its latest report (a
-    resume waits for rest itself: ``resume_start``)."""
+    """Wait for all nine status kinds and two more rotations (so a corrupted first frame of a kind has
+    been replaced or held back, H9); with ``unpause``, resume an arm that twice reports it is paused
+    (``resume_paused``).  The arm's state; ``JobFailed`` when it does not answer.  ``log``: a
+    ``JournalFile`` (or a text file) the frames sent are journalled to.  ``rest_s``: an arm still moving
+    after ``agreed_state`` (frames queued before this job) is waited for until it rests, at most ``rest_s``
+    (``rest_wait_s``; ``note`` told once reports show motion: ``MotionSeen``), None when ``stopped()``
+    comes first; None: the job plans from its latest report (a resume waits: ``resume_start``)."""
     if not link.wait_until(lambda s: s.complete, timeout_s):
         raise JobFailed(f"{link.silence_message(timeout_s)}; nothing was sent")
     first = link.snapshot()[0]
@@ -60,21 +59,29 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     if unpause and resume_paused(link, timeout_s, log, note, control_on_arrival):
         first = earlier = None
     state, agreed = agreed_state(link, earlier, timeout_s)
-    # Any reading changed at all since the first (not only by more than a reading's jitter: an
-    # arm at F10 moves 0.05 mm a rotation) and the arm may still run frames queued before this
-    # job (another program on the line, an armctl killed mid-job).  Planned from a moving arm's
-    # report, the job's first frames would be timed from when they land, not from when the queue
-    # before them ends: a sound job ended "unproven", and its arm time blamed the arm's speed.
+    # Any reading changed since the first (not only beyond jitter: F10 moves 0.05 mm a rotation): the arm may
+    # still run frames queued before this job (another program, an armctl killed mid-job).  Planned from a
+    # moving arm's report, the job's frames were timed from when they land, not from when that queue ends (a
+    # sound job ended "unproven", its arm time blamed the arm's speed); resumed if the queue ended in a PAUSE.
     if rest_s is None or (agreed and (first is None or _pose(first) == _pose(state))):
         return state
-    note("armctl: the arm is moving (frames queued before this job still running? another program, or an armctl "
-         "stopped without its abort sequence): waiting for it to come to rest before the job is planned")
+    seen: list = []  # said once motion is seen: a first report corrupted within reach (H9) differed too, on a still arm
     try:
-        return wait_for_rest(link, rest_s, stopped)
+        state = wait_for_rest(link, rest_s, stopped, moving=lambda: seen.append(note(
+            "armctl: the arm is moving (frames queued before this job still running? another program, or an armctl "
+            "stopped without its abort sequence): waiting for it to come to rest before the job is planned")))
     except JobFailed:
-        raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; nothing was sent (frames queued before "
-                        "this job may still be running: once the arm is still, run the job again, or give it a longer "
-                        "--timeout)") from None
+        if seen:
+            raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; "
+                            f"{'nothing' if first is not None else 'only the pause toggle that resumed it'} was sent (frames "
+                            "queued before this job may still be running: once the arm is still, run the job again; a longer "
+                            "status timeout or lead waits longer)") from None
+        note(f"armctl: in {rest_s:g} s the arm's reports never held still long enough to prove it at rest, and none "
+             "showed it move (a noisy line?): the job is planned from where they agree it stands")
+        state = agreed_state(link, link.snapshot()[0], timeout_s)[0]  # only corrupted reports: as before the wait
+    if state is not None and unpause and resume_paused(link, timeout_s, log, note, control_on_arrival):
+        state = link.snapshot()[0]  # a PAUSE queued behind what ran (another host's stop) paused it at rest
+    return state
 
 
 def rest_wait_s(timeout_s: float, lead_s: float) -> float:
@@ -223,25 +230,30 @@ def _wait_still(link, timeout_s: float) -> None:
                         "nothing else was sent") from None
 
 
-def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = None):
+def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = None,
+                  moving: Callable[[], None] | None = None):
     """The arm's state once its position and joints stayed the same for ``REST_CHECK_S``, each
     kind re-read in that time (armctl/core/evidence.py's rule of rest, the engine's own:
     ``still_long_enough``), and no SD program's run position advanced in it (an arm standing
     still in a program is at work, as at a job's end: ``Arrival.arm_at_rest``); ``JobFailed`` after
     ``timeout_s``; None as soon as ``stopped()`` says a stop was asked (Ctrl-C while a resume
-    waits: nothing was sent, nothing is owed)."""
-    from ..core.evidence import still_long_enough
-    from ..core.protocol import JointsHighStatus, JointsLowStatus, PositionStatus
+    waits: nothing was sent, nothing is owed).  ``moving()`` (returning None) is called once the
+    reports show it at work (``evidence.MotionSeen``; an SD program's run position too)."""
+    from ..core.evidence import MotionSeen, still_long_enough
+    from ..core.protocol import JointsHighStatus, JointsLowStatus, PositionStatus, RunPositionStatus
 
     kinds = (PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND)
     deadline = link.clock() + timeout_s
-    reading, since = None, link.clock()
+    program = RunPositionStatus.KIND  # an SD program at work shows as motion does (``moving``)
+    reading, since, seen = None, link.clock(), MotionSeen((*kinds, program))
     while True:
         if stopped is not None and stopped():
             return None
         state = link.snapshot()[0]
         now = link.clock()
         read_s = [state.last_seen.get(kind, float("-inf")) for kind in kinds]  # -inf: never read
+        if moving is not None and seen.read((*_pose(state), state.run_position), (*read_s, state.last_seen.get(program))):
+            moving = moving()  # (it returns None: said once)
         if (state.position_mm, tuple(state.joints_deg), state.run_position) != reading:
             reading, since = (state.position_mm, tuple(state.joints_deg), state.run_position), now
         elif still_long_enough(since, read_s):
@@ -484,8 +496,8 @@ def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable
     try:
         state = wait_for_rest(link, wait_s, stopped)
     except JobFailed:  # a move longer than the wait was in progress: safe to try again once it ends
-        raise JobFailed(f"the arm did not come to rest within {wait_s:g} s; nothing was sent (a long move may still "
-                        f"be running: once the arm is still, run the resume again, or give it a longer --timeout)") from None
+        raise JobFailed(f"the arm did not come to rest within {wait_s:g} s; nothing was sent (a long move may still be "
+                        "running: once the arm is still, run the resume again; a longer status timeout or lead waits longer)") from None
     if state is None:
         return None
     ran = point.frames_run(state.position_mm, tuple(state.joints_deg))
