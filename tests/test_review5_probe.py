@@ -46,8 +46,6 @@ def test_ctrl_c_mid_chain_waits_for_the_delays_sent_and_restores(options, stop_a
     assert log[-1].start_s >= delays[-1].end_s  # the restore's move ran after the last delay sent
 
 
-@pytest.mark.xfail(strict=True, reason="a probe keeps fifo_frames below the profile's 8...4096; every later command "
-                                       "on that arm then exits 2, armctl probe itself included")
 def test_an_arm_with_a_fifo_under_eight_frames_can_be_probed_again(tmp_path):
     """sim://?fifo=4: the probe measures 4 (sure) and keeps it 'for every command on this arm'; then
     `armctl probe` (and run) on that arm: 'connector.fifo_frames must be a whole number 8…4096, not
