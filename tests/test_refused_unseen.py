@@ -136,3 +136,42 @@ def test_a_refused_target_is_seen_whatever_report_the_start_pose_was_read_from_i
                           cwd=tmp_path, capture_output=True, text=True, timeout=50)
     summary = json.loads(done.stdout.splitlines()[-1])
     assert done.returncode == 1 and summary["outcome"] != "finished", (done.stderr, summary)
+
+
+# --- a refused target too short for two reports on its path (shorter than RUN_PROOF_MIN_S) -----
+
+# fixed by the profile's kinematics at X370 Y0 Z150, tool down: near the edge of the reach
+EDGE_JOINTS = "G6 J1=0 J2=62.1 J3=-45.1 J4=0 J5=72.9 J6=0 F30"
+SHORT_REFUSED = "G1 X395 Y0 Z150 A180 B0 C0 F6000"  # 25 mm on, out of reach: 0.25 s by the model
+SHORT = {  # (the frames around it, the refused move's line)
+    "joint-move-before": (f"{EDGE_JOINTS}\n{SHORT_REFUSED}\n{NEXT['joint-move']}", 3),
+    "program-before": (f"G1 X370 Y0 Z150 F3000\nPROGRAM 1\n{SHORT_REFUSED}\n{NEXT['joint-move']}", 4),
+    "pose-behind": (f"G1 X370 Y0 Z150 F3000\n{SHORT_REFUSED}\n{NEXT['pose']}", 3),
+    "joint-move-behind": (f"G1 X370 Y0 Z150 F3000\n{SHORT_REFUSED}\n{NEXT['joint-move']}", 3),
+}
+
+
+@pytest.mark.xfail(strict=True, reason="a refused move shorter than RUN_PROOF_MIN_S needs no proof")
+@pytest.mark.parametrize("case", list(SHORT), ids=list(SHORT))
+def test_a_short_refused_target_no_report_judges_never_ends_finished(tmp_path, monkeypatch, case):
+    """A 0.25 s move to a target out of reach, right after a joint move or an SD program (its start
+    where only the profile's kinematics put the arm), or with a POSE or a joint move queued behind
+    it: the job ended "finished", exit 0.  Only moves of RUN_PROOF_MIN_S (1.08 s) or more needed
+    the reports' proof that they ran — "a shorter one refused shows nowhere" was the reason, and
+    so nothing was claimed for it but "finished"."""
+    around, line = SHORT[case]
+    summary, dropped, refused = _run(tmp_path, monkeypatch, f"{FIRST.splitlines()[0]}\n{around}\n{LAST}")
+    assert (dropped, refused) == (0, 1)
+    assert summary["outcome"] == "finished, unproven" and summary["exit_code"] == 1, summary
+    assert any(f"(line {line})" in m for m in summary["messages"]), summary["messages"]
+
+
+@pytest.mark.xfail(strict=True, reason="a refused move shorter than RUN_PROOF_MIN_S needs no proof")
+def test_a_short_refused_target_after_a_joint_move_never_ends_finished_installed(tmp_path):
+    """The joint move before it, through the installed command in a fresh process: exit 1, line 3 named."""
+    (tmp_path / "job.txt").write_text(f"{FIRST.splitlines()[0]}\n{SHORT['joint-move-before'][0]}\n{LAST}")
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", URL],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert done.returncode == 1 and summary["outcome"] == "finished, unproven", (done.stderr, summary)
+    assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
