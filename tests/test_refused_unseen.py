@@ -138,10 +138,29 @@ def test_a_refused_target_is_seen_whatever_report_the_start_pose_was_read_from_i
     assert done.returncode == 1 and summary["outcome"] != "finished", (done.stderr, summary)
 
 
-# --- a refused target too short for two reports on its path (shorter than RUN_PROOF_MIN_S) -----
-
 # fixed by the profile's kinematics at X370 Y0 Z150, tool down: near the edge of the reach
 EDGE_JOINTS = "G6 J1=0 J2=62.1 J3=-45.1 J4=0 J5=72.9 J6=0 F30"
+
+
+# --- the next line back through the refused move's start (``count_inside``) ---------------------
+
+
+@pytest.mark.xfail(strict=True, reason="a report inside the next line's path counts where the arm passes anyway")
+def test_a_refused_target_whose_next_line_runs_back_through_its_start_never_ends_finished(tmp_path, monkeypatch):
+    """After a joint move to X370, G1 X500 (2.6 s, out of reach: refused) then G1 X200 on the same
+    line: the arm runs X370 -> X200, inside the planned X500 -> X200 path over most of its length,
+    so two reports "inside the next frame's path" took the refused move for run — "finished", exit 0.
+    A report proves the next line began at the refused move's target only off the way the arm would
+    take to the same target from the refused move's start."""
+    script = f"{FIRST.splitlines()[0]}\n{EDGE_JOINTS}\nG1 X500 Y0 Z150 A180 B0 C0 F3000\nG1 X200 Y0 Z150 F1500\n{LAST}"
+    summary, dropped, refused = _run(tmp_path, monkeypatch, script)
+    assert (dropped, refused) == (0, 1)
+    assert summary["outcome"] == "finished, unproven" and summary["exit_code"] == 1, summary
+    assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
+
+
+# --- a refused target too short for two reports on its path (shorter than RUN_PROOF_MIN_S) -----
+
 SHORT_REFUSED = "G1 X395 Y0 Z150 A180 B0 C0 F6000"  # 25 mm on, out of reach: 0.25 s by the model
 SHORT = {  # (the frames around it, the refused move's line)
     "joint-move-before": (f"{EDGE_JOINTS}\n{SHORT_REFUSED}\n{NEXT['joint-move']}", 3),
