@@ -145,7 +145,6 @@ EDGE_JOINTS = "G6 J1=0 J2=62.1 J3=-45.1 J4=0 J5=72.9 J6=0 F30"
 # --- the next line back through the refused move's start (``count_inside``) ---------------------
 
 
-@pytest.mark.xfail(strict=True, reason="a report inside the next line's path counts where the arm passes anyway")
 def test_a_refused_target_whose_next_line_runs_back_through_its_start_never_ends_finished(tmp_path, monkeypatch):
     """After a joint move to X370, G1 X500 (2.6 s, out of reach: refused) then G1 X200 on the same
     line: the arm runs X370 -> X200, inside the planned X500 -> X200 path over most of its length,

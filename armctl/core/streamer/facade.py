@@ -70,7 +70,8 @@ class Streamer:
                           limit_frames=(connector.fifo_frames if capacity is None else capacity) - margin,
                           frame_s=frame_seconds(baud), now=now, write_ahead_s=write_ahead_s)
         self._bound = TimeBound(self._ledger, model, slowest, memo, now)
-        self._evidence = Sightings(self._ledger, memo, connector.kinematics_verified, connector.reports_robot_xyz)
+        self._evidence = Sightings(self._ledger, memo, connector.kinematics_verified, connector.reports_robot_xyz,
+                                   self._bound.unknown_start_mm)
         self._losses = Losses(self._ledger, memo, slowest, connector.kinematics_verified)
         self.status_frames = 0
 
