@@ -4,10 +4,10 @@ never stands at the refused move's start, and a report there may lie on that fra
 (``evidence.standing_at_start`` says nothing) — the not-begun sign cannot see the refusal, and
 the job ended "finished", exit 0.  An earlier review's random runs found 23 of 400 so; these
 scripts (the refused G1 X500 between a short move and the next frame) ended "finished" after
-every G6 and POSE.  Such a move (of a second or more: a shorter one refused shows nowhere) now
-needs two reports on its path, or inside the next one's (``Ledger.prove_ran``): without them the
-job ends "finished, unproven" (exit 1).  The simulator's
-own record (``execution_log``) is the truth."""
+every G6 and POSE.  Such a move (of a second or more, or shorter where the profile's kinematics
+find its target out of reach) now needs two reports on its path, or inside the next line's off
+the way from its start (``Ledger.prove_ran``): without them the job ends "finished, unproven"
+(exit 1).  The simulator's own record (``execution_log``) is the truth."""
 
 from __future__ import annotations
 
@@ -169,14 +169,14 @@ SHORT = {  # (the frames around it, the refused move's line)
 }
 
 
-@pytest.mark.xfail(strict=True, reason="a refused move shorter than RUN_PROOF_MIN_S needs no proof")
 @pytest.mark.parametrize("case", list(SHORT), ids=list(SHORT))
 def test_a_short_refused_target_no_report_judges_never_ends_finished(tmp_path, monkeypatch, case):
     """A 0.25 s move to a target out of reach, right after a joint move or an SD program (its start
     where only the profile's kinematics put the arm), or with a POSE or a joint move queued behind
     it: the job ended "finished", exit 0.  Only moves of RUN_PROOF_MIN_S (1.08 s) or more needed
     the reports' proof that they ran — "a shorter one refused shows nowhere" was the reason, and
-    so nothing was claimed for it but "finished"."""
+    so nothing was claimed for it but "finished".  Now a shorter one needs it too where the plan
+    itself foresees the refusal: the profile's kinematics find no joints for its target."""
     around, line = SHORT[case]
     summary, dropped, refused = _run(tmp_path, monkeypatch, f"{FIRST.splitlines()[0]}\n{around}\n{LAST}")
     assert (dropped, refused) == (0, 1)
@@ -184,7 +184,6 @@ def test_a_short_refused_target_no_report_judges_never_ends_finished(tmp_path, m
     assert any(f"(line {line})" in m for m in summary["messages"]), summary["messages"]
 
 
-@pytest.mark.xfail(strict=True, reason="a refused move shorter than RUN_PROOF_MIN_S needs no proof")
 def test_a_short_refused_target_after_a_joint_move_never_ends_finished_installed(tmp_path):
     """The joint move before it, through the installed command in a fresh process: exit 1, line 3 named."""
     (tmp_path / "job.txt").write_text(f"{FIRST.splitlines()[0]}\n{SHORT['joint-move-before'][0]}\n{LAST}")
@@ -195,7 +194,6 @@ def test_a_short_refused_target_after_a_joint_move_never_ends_finished_installed
     assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
 
 
-@pytest.mark.xfail(strict=True, reason="a short move refused shows nowhere, and needs no proof")
 def test_a_short_refused_target_between_two_lines_never_ends_finished(tmp_path, monkeypatch):
     """The same 0.25 s move between two lines, no joint move, POSE or program anywhere: refused,
     the arm runs the next line at once from where it stands, so the not-begun sign sees nothing

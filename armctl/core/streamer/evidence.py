@@ -84,7 +84,7 @@ class Sightings:
         self.cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
         self.blind: deque[int] = deque()  # indexes of pending frames whose X/Y/Z cannot be judged (positions stop there)
         self.joints_unknown: deque[int] = deque()  # ... joint frames whose path is not the planned one (joint halves stop past them)
-        self.long_moves: deque[SentFrame] = deque()  # the straight moves a refusal of would show (``written``)
+        self.long_moves: deque[SentFrame] = deque()  # the straight moves a refusal of would show (``written``): long, or foreseen
         self.blind_through = -1  # the last frame written whose X/Y/Z no report can judge
 
     def written(self, frame: SentFrame) -> None:
@@ -98,8 +98,13 @@ class Sightings:
         elif not frame.path_known:
             self.joints_unknown.append(frame.index)
         frame.judged_by_start = segment.kind == "line" and segment.length > 4 * frame.xyz_tolerance_mm
-        if frame.judged_by_start and segment.duration_s >= RUN_PROOF_MIN_S:
-            self.long_moves.append(frame)  # (a short one refused shows nowhere: no gap, no standing)
+        if frame.judged_by_start:
+            # a short one refused shows nowhere (no gap, no standing: the arm runs on at once), so
+            # only one whose refusal the plan foresees needs proof, wherever it stands
+            foreseen = self.may_refuse(segment)
+            frame.needs_run_proof = foreseen
+            if foreseen or segment.duration_s >= RUN_PROOF_MIN_S:
+                self.long_moves.append(frame)
         if not verified and (segment.kind == "joint" or segment.end.xyz_derived) or not frame.path_known:
             self.blind.append(frame.index)
             self.want_proof(frame)
@@ -110,7 +115,8 @@ class Sightings:
         straight move still pending before it — a report at that one's start may lie on this one
         (``standing_at_start``), and refused, the arm runs this one at once from there, so neither
         a gap shows (no report judges how long it took) — so only the position reports on their
-        paths prove the long ones ran (``note_runs``, ``Ledger.prove_ran``)."""
+        paths prove the long ones ran (``note_runs``, ``Ledger.prove_ran``) — and a short one
+        whose refusal the plan foresees wherever it stands (``may_refuse``)."""
         first = self.ledger.pending[0].index if self.ledger.pending else frame.index
         for sent in reversed(self.long_moves):
             if sent.index <= self.blind_through or sent.index < first:
@@ -148,6 +154,14 @@ class Sightings:
             scanned += 1
             if scanned == RUN_SCAN_MOVES:
                 break
+
+    @staticmethod
+    def may_refuse(segment) -> bool:
+        """Whether the plan foresees the arm refusing ``segment``'s target: the profile's own
+        kinematics find no joints for it inside the limits (lint's L103, a warning only with
+        illustrative numbers; the simulator refuses such a target, armctl/sim/executor.py)."""
+        end = segment.end
+        return not end.kinematics.can_take(end.robot_cartesian, end.ik_hint)
 
     def start_error_mm(self, sent: SentFrame) -> float:
         """How far from its planned start ``sent`` may really begin: 0 where the plan knows it, the

@@ -304,7 +304,8 @@ class Streamer:
 
     def runs_unproven(self) -> list[str]:
         """Why FINISHED would claim more than the reports prove: straight moves whose refusal the
-        not-begun sign could not see, consumed with no report to prove they ran (``Ledger.prove_ran``)."""
+        not-begun sign could not see (or, short, no sign at all), consumed with no report to prove
+        they ran (``Ledger.prove_ran``)."""
         ledger = self._ledger
         moves, count = ledger.runs_unproven, ledger.runs_unproven_count
         if ledger.awaiting is not None:  # (the job's last frame: nothing after it to prove it by)
@@ -312,9 +313,10 @@ class Streamer:
         if not moves:
             return []
         more = f" and {count - len(moves)} more" if count > len(moves) else ""
-        return [f"no report showed the arm run {', '.join(where(sent) for sent in moves)}{more}: a move whose start "
-                "only the profile's kinematics know (after a joint move, a POSE or an SD program), or with such a "
-                "frame queued behind it, where a target out of the arm's reach, refused, would look the same"]
+        return [f"no report showed the arm run {', '.join(where(sent) for sent in moves)}{more}: a move whose target "
+                "the profile's kinematics put out of the arm's reach, or whose start only they know (after a joint "
+                "move, a POSE or an SD program), or with such a frame queued behind it, where a target out of the "
+                "arm's reach, refused, would look the same"]
 
     def ran_at_rest(self, last: SentFrame) -> bool:
         """Whether the arm at rest at the target of ``last`` proves it ran (``evidence.ran_at_rest``)."""
