@@ -4,10 +4,10 @@ never stands at the refused move's start, and a report there may lie on that fra
 (``evidence.standing_at_start`` says nothing) — the not-begun sign cannot see the refusal, and
 the job ended "finished", exit 0.  An earlier review's random runs found 23 of 400 so; these
 scripts (the refused G1 X500 between a short move and the next frame) ended "finished" after
-every G6 and POSE.  Such a move (of a second or more: a shorter one refused shows nowhere) now
-needs two reports on its path, or inside the next one's (``Ledger.prove_ran``): without them the
-job ends "finished, unproven" (exit 1).  The simulator's
-own record (``execution_log``) is the truth."""
+every G6 and POSE.  Such a move (of a second or more, or shorter where the profile's kinematics
+find its target out of reach) now needs two reports on its path, or inside the next line's off
+the way from its start (``Ledger.prove_ran``): without them the job ends "finished, unproven"
+(exit 1).  The simulator's own record (``execution_log``) is the truth."""
 
 from __future__ import annotations
 
@@ -136,3 +136,72 @@ def test_a_refused_target_is_seen_whatever_report_the_start_pose_was_read_from_i
                           cwd=tmp_path, capture_output=True, text=True, timeout=50)
     summary = json.loads(done.stdout.splitlines()[-1])
     assert done.returncode == 1 and summary["outcome"] != "finished", (done.stderr, summary)
+
+
+# fixed by the profile's kinematics at X370 Y0 Z150, tool down: near the edge of the reach
+EDGE_JOINTS = "G6 J1=0 J2=62.1 J3=-45.1 J4=0 J5=72.9 J6=0 F30"
+
+
+# --- the next line back through the refused move's start (``count_inside``) ---------------------
+
+
+def test_a_refused_target_whose_next_line_runs_back_through_its_start_never_ends_finished(tmp_path, monkeypatch):
+    """After a joint move to X370, G1 X500 (2.6 s, out of reach: refused) then G1 X200 on the same
+    line: the arm runs X370 -> X200, inside the planned X500 -> X200 path over most of its length,
+    so two reports "inside the next frame's path" took the refused move for run — "finished", exit 0.
+    A report proves the next line began at the refused move's target only off the way the arm would
+    take to the same target from the refused move's start."""
+    script = f"{FIRST.splitlines()[0]}\n{EDGE_JOINTS}\nG1 X500 Y0 Z150 A180 B0 C0 F3000\nG1 X200 Y0 Z150 F1500\n{LAST}"
+    summary, dropped, refused = _run(tmp_path, monkeypatch, script)
+    assert (dropped, refused) == (0, 1)
+    assert summary["outcome"] == "finished, unproven" and summary["exit_code"] == 1, summary
+    assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
+
+
+# --- a refused target too short for two reports on its path (shorter than RUN_PROOF_MIN_S) -----
+
+SHORT_REFUSED = "G1 X395 Y0 Z150 A180 B0 C0 F6000"  # 25 mm on, out of reach: 0.25 s by the model
+SHORT = {  # (the frames around it, the refused move's line)
+    "joint-move-before": (f"{EDGE_JOINTS}\n{SHORT_REFUSED}\n{NEXT['joint-move']}", 3),
+    "program-before": (f"G1 X370 Y0 Z150 F3000\nPROGRAM 1\n{SHORT_REFUSED}\n{NEXT['joint-move']}", 4),
+    "pose-behind": (f"G1 X370 Y0 Z150 F3000\n{SHORT_REFUSED}\n{NEXT['pose']}", 3),
+    "joint-move-behind": (f"G1 X370 Y0 Z150 F3000\n{SHORT_REFUSED}\n{NEXT['joint-move']}", 3),
+}
+
+
+@pytest.mark.parametrize("case", list(SHORT), ids=list(SHORT))
+def test_a_short_refused_target_no_report_judges_never_ends_finished(tmp_path, monkeypatch, case):
+    """A 0.25 s move to a target out of reach, right after a joint move or an SD program (its start
+    where only the profile's kinematics put the arm), or with a POSE or a joint move queued behind
+    it: the job ended "finished", exit 0.  Only moves of RUN_PROOF_MIN_S (1.08 s) or more needed
+    the reports' proof that they ran — "a shorter one refused shows nowhere" was the reason, and
+    so nothing was claimed for it but "finished".  Now a shorter one needs it too where the plan
+    itself foresees the refusal: the profile's kinematics find no joints for its target."""
+    around, line = SHORT[case]
+    summary, dropped, refused = _run(tmp_path, monkeypatch, f"{FIRST.splitlines()[0]}\n{around}\n{LAST}")
+    assert (dropped, refused) == (0, 1)
+    assert summary["outcome"] == "finished, unproven" and summary["exit_code"] == 1, summary
+    assert any(f"(line {line})" in m for m in summary["messages"]), summary["messages"]
+
+
+def test_a_short_refused_target_after_a_joint_move_never_ends_finished_installed(tmp_path):
+    """The joint move before it, through the installed command in a fresh process: exit 1, line 3 named."""
+    (tmp_path / "job.txt").write_text(f"{FIRST.splitlines()[0]}\n{SHORT['joint-move-before'][0]}\n{LAST}")
+    done = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", URL],
+                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
+    summary = json.loads(done.stdout.splitlines()[-1])
+    assert done.returncode == 1 and summary["outcome"] == "finished, unproven", (done.stderr, summary)
+    assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
+
+
+def test_a_short_refused_target_between_two_lines_never_ends_finished(tmp_path, monkeypatch):
+    """The same 0.25 s move between two lines, no joint move, POSE or program anywhere: refused,
+    the arm runs the next line at once from where it stands, so the not-begun sign sees nothing
+    either (it ended "finished", exit 0 — on 75 of 100 random such jobs; the other 25 "frames may
+    have been lost").  A short move whose target the profile's own kinematics cannot take needs
+    the reports' proof wherever it stands."""
+    script = f"{FIRST.splitlines()[0]}\nG1 X370 Y0 Z150 F3000\n{SHORT_REFUSED}\nG1 X300 Y60 Z150 F3000\n{LAST}"
+    summary, dropped, refused = _run(tmp_path, monkeypatch, script)
+    assert (dropped, refused) == (0, 1)
+    assert summary["outcome"] == "finished, unproven" and summary["exit_code"] == 1, summary
+    assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]

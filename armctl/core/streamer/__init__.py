@@ -204,9 +204,11 @@ FIFO.  Each part may conclude only what its evidence says; this is the whole lis
    target out of the arm's reach is refused and leaves the FIFO unrun, which only the not-begun
    sign and the gaps (4.) see; a straight move of ``RUN_PROOF_MIN_S`` or more they cannot judge
    (its start only the profile's kinematics know, or a frame whose X/Y/Z no report judges
-   queued behind it) counts as run only on two reports on its path, or inside the next frame's,
-   which then began at its target (``Ledger.prove_ran``) — else ``runs_unproven`` names it and
-   the job may not end "finished".
+   queued behind it), and a shorter one anywhere whose target the profile's kinematics cannot
+   take (``Sightings.may_refuse``: refused, the arm runs on at once, which no sign sees), counts
+   as run only on two reports on its path, or inside the next line's off the way the arm would
+   take there from its start, so the next began at its target (``Ledger.prove_ran``) — else
+   ``runs_unproven`` names it and the job may not end "finished".
 
 2. *Where the arm probably is* (``Estimate``): from the model's times, re-anchored on every
    sighting, agreed or not, even past a frame the stream cannot judge (``reanchor_beyond``).

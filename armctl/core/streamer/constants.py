@@ -74,9 +74,11 @@ FEED_AHEAD_S = 0.5
 # estimate's frame, so its cost does not grow with the queue (see ``Sightings.search``).
 SCAN_WINDOW_FRAMES = 16
 # A straight move whose refusal no sign of loss can see needs reports on its path to count as run
-# (``Ledger.prove_ran``) only if it lasts this long by the model: four position reports, so two past
-# its start even with one lost.  A shorter one refused shows no gap either (its time at the fastest
-# pace is within a report's timing), so the reports are no worse placed to judge it than anywhere.
+# (``Ledger.prove_ran``) if it lasts this long by the model: four position reports, so two past its
+# start even with one lost.  A shorter one refused shows no gap and no standing either (its time at
+# the fastest pace is within a report's timing, and the arm runs on at once), so nothing could prove
+# it ran: it needs the reports' proof only where the plan itself foresees the refusal — a target the
+# profile's kinematics put out of the arm's reach (``Sightings.may_refuse``), wherever it stands.
 RUN_PROOF_MIN_S = 4 * ROTATION_S
 # With kinematics not verified on the arm, where a joint move really ends may be this share of the
 # reach away from where the profile's forward kinematics put it (a link 10 % off): the time bound of

@@ -35,7 +35,9 @@ from .constants import (
     SCAN_WINDOW_FRAMES,
 )
 from .frames import SentFrame, est_end
-from .geometry import TimeMemo, estimate_off_s, in_frame, joint_half_fraction, trace_deviation_mm
+from .geometry import (
+    TimeMemo, distance_to_chord_mm, estimate_off_s, in_frame, joint_half_fraction, start_unknown, trace_deviation_mm,
+)
 from .ledger import Ledger
 
 RUN_SCAN_MOVES = 3  # the long moves not proven yet that one position report is matched against (``note_runs``)
@@ -71,8 +73,10 @@ class Sighting:
 class Sightings:
     """Matches reports against the pending frames (see the module docstring)."""
 
-    def __init__(self, ledger: Ledger, memo: TimeMemo, kinematics_verified: bool, reports_robot_xyz: bool) -> None:
+    def __init__(self, ledger: Ledger, memo: TimeMemo, kinematics_verified: bool, reports_robot_xyz: bool,
+                 unknown_start_mm: float) -> None:
         self.ledger, self.memo = ledger, memo
+        self.unknown_start_mm = unknown_start_mm  # how far the profile's unverified kinematics may put a start (``start_error_mm``)
         self.kinematics_verified = kinematics_verified
         self.reports_robot_xyz = reports_robot_xyz
         self.last_candidate: dict[str, int | None] = {}
@@ -80,7 +84,7 @@ class Sightings:
         self.cartesian: deque[int] = deque()  # indexes of pending Cartesian frames (joint halves stop there)
         self.blind: deque[int] = deque()  # indexes of pending frames whose X/Y/Z cannot be judged (positions stop there)
         self.joints_unknown: deque[int] = deque()  # ... joint frames whose path is not the planned one (joint halves stop past them)
-        self.long_moves: deque[SentFrame] = deque()  # the straight moves a refusal of would show (``written``)
+        self.long_moves: deque[SentFrame] = deque()  # the straight moves a refusal of would show (``written``): long, or foreseen
         self.blind_through = -1  # the last frame written whose X/Y/Z no report can judge
 
     def written(self, frame: SentFrame) -> None:
@@ -94,8 +98,13 @@ class Sightings:
         elif not frame.path_known:
             self.joints_unknown.append(frame.index)
         frame.judged_by_start = segment.kind == "line" and segment.length > 4 * frame.xyz_tolerance_mm
-        if frame.judged_by_start and segment.duration_s >= RUN_PROOF_MIN_S:
-            self.long_moves.append(frame)  # (a short one refused shows nowhere: no gap, no standing)
+        if frame.judged_by_start:
+            # a short one refused shows nowhere (no gap, no standing: the arm runs on at once), so
+            # only one whose refusal the plan foresees needs proof, wherever it stands
+            foreseen = self.may_refuse(segment)
+            frame.needs_run_proof = foreseen
+            if foreseen or segment.duration_s >= RUN_PROOF_MIN_S:
+                self.long_moves.append(frame)
         if not verified and (segment.kind == "joint" or segment.end.xyz_derived) or not frame.path_known:
             self.blind.append(frame.index)
             self.want_proof(frame)
@@ -106,7 +115,8 @@ class Sightings:
         straight move still pending before it — a report at that one's start may lie on this one
         (``standing_at_start``), and refused, the arm runs this one at once from there, so neither
         a gap shows (no report judges how long it took) — so only the position reports on their
-        paths prove the long ones ran (``note_runs``, ``Ledger.prove_ran``)."""
+        paths prove the long ones ran (``note_runs``, ``Ledger.prove_ran``) — and a short one
+        whose refusal the plan foresees wherever it stands (``may_refuse``)."""
         first = self.ledger.pending[0].index if self.ledger.pending else frame.index
         for sent in reversed(self.long_moves):
             if sent.index <= self.blind_through or sent.index < first:
@@ -114,10 +124,11 @@ class Sightings:
             sent.needs_run_proof = True
         self.blind_through = frame.index
 
-    def note_runs(self, match) -> None:
-        """One position report (``match``: where it lies on a frame's path) on the long moves still
-        pending (``written``) and the frame after each (``count_inside``), whatever else it may
-        lie on (a frame no stream can judge before them, an SD program): it proves only a run.
+    def note_runs(self, match, xyz) -> None:
+        """One position report at ``xyz`` (``match``: where it lies on a frame's path) on the long
+        moves still pending (``written``) and the frame after each (``count_inside``,
+        ``off_the_refused_way``), whatever else it may lie on (a frame no stream can judge before
+        them, an SD program): it proves only a run.
         For a flat cost, only the oldest ``RUN_SCAN_MOVES`` not proven yet: the arm runs them in
         order (a move missed costs only the weaker claim, never a false one)."""
         moves, pending = self.long_moves, self.ledger.pending
@@ -126,20 +137,39 @@ class Sightings:
             moves.popleft()  # proven, or it and the frame after it consumed: judged (``Ledger.prove_ran``)
         scanned = 0
         for sent in moves:
-            if sent.moved_seen >= 2:
-                continue  # proven already
             k = sent.index - first
+            if sent.moved_seen >= 2 or 0 <= k + 1 < len(pending) and pending[k + 1].inside_seen >= 2:
+                continue  # proven already
             if k >= 0:
                 found = match(sent)
                 if found is not None and found[0] > 0.0:
                     sent.moved_seen += 1  # past its start: the arm moved along it
             if k + 1 < len(pending) and pending[k + 1].path_known:
-                found = match(pending[k + 1])
-                if found is not None and count_inside(*found):
-                    pending[k + 1].inside_seen += 1
+                after = pending[k + 1]
+                found = match(after)
+                if found is not None and count_inside(*found) and off_the_refused_way(
+                        sent, after, in_frame(xyz, after.segment.start.origin_mm) if self.reports_robot_xyz else xyz,
+                        self.start_error_mm(sent)):
+                    after.inside_seen += 1
             scanned += 1
             if scanned == RUN_SCAN_MOVES:
                 break
+
+    @staticmethod
+    def may_refuse(segment) -> bool:
+        """Whether the plan foresees the arm refusing ``segment``'s target: the profile's own
+        kinematics find no joints for it inside the limits (lint's L103, a warning only with
+        illustrative numbers; the simulator refuses such a target, armctl/sim/executor.py)."""
+        end = segment.end
+        return not end.kinematics.can_take(end.robot_cartesian, end.ik_hint)
+
+    def start_error_mm(self, sent: SentFrame) -> float:
+        """How far from its planned start ``sent`` may really begin: 0 where the plan knows it, the
+        time bound's ``unknown_start_mm`` where only the profile's unverified kinematics put it (a
+        joint move's or a POSE's end), without bound where an SD program left the arm."""
+        if sent.path_known:
+            return 0.0
+        return self.unknown_start_mm if start_unknown(sent.segment, self.kinematics_verified) else math.inf
 
     def remember(self, stream: str, earliest: int | None, candidates) -> tuple[int | None, float]:
         """Keep this report's earliest frame for the next of its stream; the previous one's and
@@ -184,7 +214,7 @@ class Sightings:
             return fraction - slack, fraction + slack
 
         if self.long_moves:
-            self.note_runs(match)
+            self.note_runs(match, xyz)
         # A position says nothing about a frame whose X/Y/Z only the unverified kinematics know,
         # nor about any frame after it: the arm may be on that frame, at a point that also lies
         # on a later path (a wrist turning in place, then a move that starts there).
@@ -353,6 +383,19 @@ def count_inside(lo: float, hi: float) -> bool:
     where the plan has it begin — at the target of the frame before, which a refused target leaves
     unreached (a path from elsewhere to the same end meets this one only near the end)."""
     return lo > 0.0 and hi + END_MARGIN * (hi - lo) < 1.0
+
+
+def off_the_refused_way(before: SentFrame, after: SentFrame, xyz, start_error_mm: float) -> bool:
+    """Whether a report at ``xyz`` (in ``after``'s frame), inside the path of ``after``, shows the
+    arm began it where ``before`` ends: it lies off every way the arm could take to the same target
+    were ``before`` refused — a straight line from where ``before`` really begins, up to
+    ``start_error_mm`` from its planned start — by more than the report's tolerance (a line back
+    through that start, or from near it to a short move's target, runs inside the next path too).
+    Only a straight ``after`` can tell (an arc from elsewhere is another arc)."""
+    if after.segment.kind != "line" or math.isinf(start_error_mm):
+        return False
+    return (distance_to_chord_mm(xyz, before.segment.start.xyz, after.segment.end.xyz)
+            > start_error_mm + after.xyz_tolerance_mm)
 
 
 def ran_at_rest(last: SentFrame, recent_sent, kinematics_verified: bool) -> bool:

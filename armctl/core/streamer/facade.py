@@ -70,7 +70,8 @@ class Streamer:
                           limit_frames=limit_frames(connector.fifo_frames if capacity is None else capacity, margin),
                           frame_s=frame_seconds(baud), now=now, write_ahead_s=write_ahead_s)
         self._bound = TimeBound(self._ledger, model, slowest, memo, now)
-        self._evidence = Sightings(self._ledger, memo, connector.kinematics_verified, connector.reports_robot_xyz)
+        self._evidence = Sightings(self._ledger, memo, connector.kinematics_verified, connector.reports_robot_xyz,
+                                   self._bound.unknown_start_mm)
         self._losses = Losses(self._ledger, memo, slowest, connector.kinematics_verified)
         self.status_frames = 0
 
@@ -303,7 +304,8 @@ class Streamer:
 
     def runs_unproven(self) -> list[str]:
         """Why FINISHED would claim more than the reports prove: straight moves whose refusal the
-        not-begun sign could not see, consumed with no report to prove they ran (``Ledger.prove_ran``)."""
+        not-begun sign could not see (or, short, no sign at all), consumed with no report to prove
+        they ran (``Ledger.prove_ran``)."""
         ledger = self._ledger
         moves, count = ledger.runs_unproven, ledger.runs_unproven_count
         if ledger.awaiting is not None:  # (the job's last frame: nothing after it to prove it by)
@@ -311,9 +313,10 @@ class Streamer:
         if not moves:
             return []
         more = f" and {count - len(moves)} more" if count > len(moves) else ""
-        return [f"no report showed the arm run {', '.join(where(sent) for sent in moves)}{more}: a move whose start "
-                "only the profile's kinematics know (after a joint move, a POSE or an SD program), or with such a "
-                "frame queued behind it, where a target out of the arm's reach, refused, would look the same"]
+        return [f"no report showed the arm run {', '.join(where(sent) for sent in moves)}{more}: a move whose target "
+                "the profile's kinematics put out of the arm's reach, or whose start only they know (after a joint "
+                "move, a POSE or an SD program), or with such a frame queued behind it, where a target out of the "
+                "arm's reach, refused, would look the same"]
 
     def ran_at_rest(self, last: SentFrame) -> bool:
         """Whether the arm at rest at the target of ``last`` proves it ran (``evidence.ran_at_rest``)."""

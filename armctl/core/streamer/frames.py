@@ -74,9 +74,10 @@ class SentFrame:
     by_time: bool = False  # counted consumed by time alone (``Ledger.consume_one``; ``Ledger.proven_run`` recounts it)
     may_be_cleared: bool = False  # queued when a RESET CONNECTOR may have cleared it (``Streamer.cleared``)
     judged_by_start: bool = False  # a straight move the not-begun sign judges by its start (``evidence.standing_at_start``)
-    # ... a long one whose refusal it cannot see, so only reports prove it ran (``Ledger.prove_ran``):
-    # two on its path past its start, or two inside the next frame's path away from its end
-    # (``Sightings.note_runs``, which counts them on every long move)
+    # ... a long one whose refusal it cannot see, or a short one whose refusal the plan foresees
+    # (``Sightings.may_refuse``), so only reports prove it ran (``Ledger.prove_ran``):
+    # two on its path past its start, or two inside the next line's path away from its end and
+    # off the way from its start (``Sightings.note_runs``, which counts them on every such move)
     needs_run_proof: bool = False
     moved_seen: int = 0
     inside_seen: int = 0

@@ -37,6 +37,15 @@ def in_frame(xyz, origin_mm) -> tuple[float, float, float]:
     return (xyz[0] - origin_mm[0], xyz[1] - origin_mm[1], xyz[2] - origin_mm[2])
 
 
+def distance_to_chord_mm(p, a, b) -> float:
+    """The distance of point ``p`` from the straight segment ``a``-``b`` (X/Y/Z, mm)."""
+    d = (b[0] - a[0], b[1] - a[1], b[2] - a[2])
+    w = (p[0] - a[0], p[1] - a[1], p[2] - a[2])
+    span = d[0] * d[0] + d[1] * d[1] + d[2] * d[2]
+    u = min(max((w[0] * d[0] + w[1] * d[1] + w[2] * d[2]) / span, 0.0), 1.0) if span > 0.0 else 0.0
+    return math.dist(p, (a[0] + d[0] * u, a[1] + d[1] * u, a[2] + d[2] * u))
+
+
 def estimate_off_s(sent: SentFrame, lo: float, hi: float, now: float, time_at=None) -> float:
     """How far (s) the estimate is from having the arm between fractions ``lo`` and ``hi`` of
     ``sent``'s path at ``now`` (0 when it agrees); ``time_at`` as ``time_window``'s."""

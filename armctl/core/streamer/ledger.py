@@ -107,9 +107,11 @@ class Ledger:
         """``sent`` is consumed: a straight move whose refusal the not-begun sign cannot see (its
         start only the profile's kinematics know, or a frame whose X/Y/Z no report can judge queued
         behind it: ``Sightings.want_proof``) needs the arm's reports to prove it ran
-        (``needs_run_proof``) — two on its path past its start, or two inside the next
-        frame's path, where the plan has that one begin: at this one's target (``Sightings.note_runs``)
-        — else it is counted in ``runs_unproven``: FINISHED would claim more than the reports prove."""
+        (``needs_run_proof``; and a short one anywhere whose refusal the plan foresees,
+        ``Sightings.may_refuse``) — two on its path past its start, or two inside the next line's
+        path off the way the arm would take to its target from this one's start, so where the plan
+        has that one begin: at this one's target (``Sightings.note_runs``) — else it is counted in
+        ``runs_unproven``: FINISHED would claim more than the reports prove."""
         awaiting, self.awaiting = self.awaiting, None
         if awaiting is not None and not (sent.index == awaiting.index + 1 and sent.path_known and sent.inside_seen >= 2):
             self.runs_unproven_count += 1
