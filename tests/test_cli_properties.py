@@ -262,10 +262,20 @@ FLOAT32_MAX_SCRIPTS = (
 )
 
 
-@pytest.mark.parametrize("command", STATEMENT_COMMANDS, ids=" ".join)
-@pytest.mark.parametrize("script", FLOAT32_MAX_SCRIPTS, ids=range(len(FLOAT32_MAX_SCRIPTS)))
-def test_float32_extremes_through_the_installed_command(tmp_path, command, script):
-    code, _stdout, stderr = check_fresh([*command, write(tmp_path, script)], tmp_path)
+@pytest.mark.parametrize("index", range(len(FLOAT32_MAX_SCRIPTS)))
+def test_float32_extremes_in_process_and_through_the_installed_command(workdir, index):
+    """Each reproducer through every command in process, and through one command in a fresh
+    process (in turn: every command meets one there), where each pair was a process (30)."""
+    path = write(workdir, FLOAT32_MAX_SCRIPTS[index])
+    for command in STATEMENT_COMMANDS:
+        result = check_in_process([*command, path])
+        _located_unless_lint(command, result.exit_code, result.stderr)
+    command = STATEMENT_COMMANDS[index % len(STATEMENT_COMMANDS)]
+    code, _stdout, stderr = check_fresh([*command, path], workdir)
+    _located_unless_lint(command, code, stderr)
+
+
+def _located_unless_lint(command, code: int, stderr: str) -> None:
     if command[0] != "lint" and code == 1:
         assert re.search(r"job\.txt:\d+:\d+", stderr), stderr
 
