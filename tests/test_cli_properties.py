@@ -262,10 +262,20 @@ FLOAT32_MAX_SCRIPTS = (
 )
 
 
-@pytest.mark.parametrize("command", STATEMENT_COMMANDS, ids=" ".join)
-@pytest.mark.parametrize("script", FLOAT32_MAX_SCRIPTS, ids=range(len(FLOAT32_MAX_SCRIPTS)))
-def test_float32_extremes_through_the_installed_command(tmp_path, command, script):
-    code, _stdout, stderr = check_fresh([*command, write(tmp_path, script)], tmp_path)
+@pytest.mark.parametrize("index", range(len(FLOAT32_MAX_SCRIPTS)))
+def test_float32_extremes_in_process_and_through_the_installed_command(workdir, index):
+    """Each reproducer through every command in process, and through one command in a fresh
+    process (in turn: every command meets one there), where each pair was a process (30)."""
+    path = write(workdir, FLOAT32_MAX_SCRIPTS[index])
+    for command in STATEMENT_COMMANDS:
+        result = check_in_process([*command, path])
+        _located_unless_lint(command, result.exit_code, result.stderr)
+    command = STATEMENT_COMMANDS[index % len(STATEMENT_COMMANDS)]
+    code, _stdout, stderr = check_fresh([*command, path], workdir)
+    _located_unless_lint(command, code, stderr)
+
+
+def _located_unless_lint(command, code: int, stderr: str) -> None:
     if command[0] != "lint" and code == 1:
         assert re.search(r"job\.txt:\d+:\d+", stderr), stderr
 
@@ -428,19 +438,33 @@ def _with_option(path, option, value, script: Path) -> list[str]:
     return [*quick_args(path, script), f"{option}={value}"]
 
 
+# Through the installed command: one value each option must refuse and one it may accept (a fresh
+# process per value repeated what the in-process run proves: 132 processes, 14 s of CPU a suite).
+FRESH_VALUES = ("nan", "99999999999999999999999")
+
+
 @pytest.mark.parametrize("path, option", NUMERIC_OPTIONS, ids=[f"{' '.join(p)} {o}" for p, o in NUMERIC_OPTIONS])
-def test_a_numeric_option_rejects_nan_inf_and_accepts_or_rejects_the_rest_clearly(tmp_path, path, option):
-    """Through the installed command: an accepted NaN can mean a wait for ever."""
-    script = write(tmp_path, TINY_SCRIPT)
-    without_option = None
-    for value in (*MUST_REJECT, *MAY_ACCEPT):
-        args = _with_option(path, option, value, script)
-        code, _stdout, stderr = check_fresh(args, tmp_path, input=b"", allowed={0, 1, 2} - (
-            {0, 1} if value in MUST_REJECT else set()))
-        if code == 2 and option not in stderr:
-            # accepted, and the command failed for a reason of its own (jog needs a terminal):
-            # then it fails the same way without the option
-            if without_option is None:
-                without_option = check_fresh(args[:-1], tmp_path, input=b"")
-            assert value not in MUST_REJECT and (code, stderr) == (without_option[0], without_option[2]), (
-                f"armctl {' '.join(args)}: exit 2 and the message does not name {option}:\n{stderr}")
+def test_a_numeric_option_rejects_nan_inf_and_accepts_or_rejects_the_rest_clearly(workdir, path, option):
+    """Every value in process, and ``FRESH_VALUES`` through the installed command, where an
+    accepted NaN that waits for ever fails at the subprocess's timeout."""
+    script = write(workdir, TINY_SCRIPT)
+    for fresh, values in ((False, (*MUST_REJECT, *MAY_ACCEPT)), (True, FRESH_VALUES)):
+        without_option = None
+        for value in values:
+            args = _with_option(path, option, value, script)
+            code, stderr = _numeric_outcome(args, fresh, workdir, {0, 1, 2} - ({0, 1} if value in MUST_REJECT else set()))
+            if code == 2 and option not in stderr:
+                # accepted, and the command failed for a reason of its own (jog needs a terminal):
+                # then it fails the same way without the option
+                if without_option is None:
+                    without_option = _numeric_outcome(args[:-1], fresh, workdir, EXIT_CODES)
+                assert value not in MUST_REJECT and (code, stderr) == without_option, (
+                    f"armctl {' '.join(args)}: exit 2 and the message does not name {option}:\n{stderr}")
+
+
+def _numeric_outcome(args, fresh: bool, cwd: Path, allowed) -> tuple[int, str]:
+    if fresh:
+        code, _stdout, stderr = check_fresh(args, cwd, input=b"", allowed=allowed)
+        return code, stderr
+    result = check_in_process(args, input=b"", allowed=allowed)
+    return result.exit_code, result.stderr

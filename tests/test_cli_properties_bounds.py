@@ -72,9 +72,11 @@ UNBOUNDED = {
 @pytest.mark.parametrize("command", SCRIPT_COMMANDS, ids=" ".join)
 @pytest.mark.parametrize("name", UNBOUNDED)
 def test_unbounded_expansion_is_a_located_error_not_a_hang(tmp_path, name, command):
+    """(tests/test_input_trust.py: a count known only from an assignment.)"""
     code, stdout, stderr = armctl([*command, write(tmp_path, UNBOUNDED[name])], tmp_path)
     assert code == 1, f"{name}: exit {code}\n{stdout[-500:]}{stderr[-500:]}"
     assert LOCATED.search(stdout + stderr), f"{name}: the error is not located:\n{stdout[-500:]}{stderr[-500:]}"
+    assert re.search(r"job\.txt:1:\d+: E012 ", stdout + stderr), f"{name}: not E012 on line 1:\n{stdout[-500:]}{stderr[-500:]}"
 
 
 @pytest.mark.parametrize("count", ["3.4028235e38", "1e39", "inf", "nan", "-1", "0.5", "#<n>"])

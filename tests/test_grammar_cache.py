@@ -25,9 +25,10 @@ def _cache_files(cache_home: Path) -> list[Path]:
     return sorted((cache_home / "armctl").glob("grammar-*.cache"))
 
 
-@pytest.fixture
+@pytest.fixture(scope="module")
 def reference(tmp_path_factory):
-    """What lint says with a cache that works (built by the first run, read by the second)."""
+    """What lint says with a cache that works (built by the first run, read by the second); the
+    same for every test (module scope: two processes once, not for each test)."""
     tmp = tmp_path_factory.mktemp("reference")
     first, second = _lint(tmp, tmp / "cache"), _lint(tmp, tmp / "cache")
     assert first.returncode == second.returncode == 0, first.stderr
