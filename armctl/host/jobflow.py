@@ -59,17 +59,16 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     if unpause and resume_paused(link, timeout_s, log, note, control_on_arrival):
         first = earlier = None
     state, agreed = agreed_state(link, earlier, timeout_s)
-    # Any reading changed since the first (not only beyond jitter: F10 moves 0.05 mm a rotation): the arm may
-    # still run frames queued before this job (another program, an armctl killed mid-job).  Planned from a
-    # moving arm's report, the job's frames were timed from when they land, not from when that queue ends (a
-    # sound job ended "unproven", its arm time blamed the arm's speed); resumed if the queue ended in a PAUSE.
+    # Any reading changed since the first (not only beyond jitter: F10 moves 0.05 mm a rotation): the arm may still run
+    # frames queued before this job (another program, an armctl killed mid-job).  Planned from a moving arm, the job's frames
+    # were timed from when they land, not from when that queue ends ("unproven", the arm's speed blamed).
     if rest_s is None or (agreed and (first is None or _pose(first) == _pose(state))):
         return state
     seen: list = []  # said once motion is seen: a first report corrupted within reach (H9) differed too, on a still arm
     try:
         state = wait_for_rest(link, rest_s, stopped, moving=lambda: seen.append(note(
-            "armctl: the arm is moving (frames queued before this job still running? another program, or an armctl "
-            "stopped without its abort sequence): waiting for it to come to rest before the job is planned")))
+            "armctl: the arm is moving (frames queued before this job still running? another program, an armctl stopped "
+            "without its abort sequence; or a line so noisy every report differs): waiting for it to come to rest before the job is planned")))
     except JobFailed:
         if seen:
             raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; "
