@@ -79,9 +79,6 @@ class _DelaysDoNotWait:
         return Model
 
 
-@pytest.mark.xfail(strict=True, reason="the chain of delays assumes a delay takes the per-command wait (not in the "
-                                       "document, no profile setting or sim:// option); where it does not, a 4 or 7 ms "
-                                       "wait is stated 0, sure")
 @pytest.mark.parametrize("wait_s", [0.004, 0.007])
 def test_no_sure_wait_on_an_arm_whose_delays_do_not_wait(tmp_path, monkeypatch, wait_s):
     """The chained move's start then carries one wait, as the lone one's: '20 delays started 5.6 ms
