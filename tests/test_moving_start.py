@@ -101,3 +101,24 @@ def test_a_job_on_an_arm_another_process_left_moving_installed(tmp_path):
     seen = json.loads(stats.read_text())
     (_, leftover_start_s, leftover_end_s, outcome), = seen["executions"][:1]
     assert outcome == "done" and seen["frames"][1][1] >= leftover_end_s, seen
+
+
+def test_a_resume_says_it_waits_for_an_arm_still_at_work(tmp_path, monkeypatch):
+    """``--resume`` waits for the arm to run out what was queued (``resume_start``); it did so in
+    silence, up to --timeout + 2 x --lead + 2 s with nothing on the screen.  Now it says why."""
+    from test_resume_exactly_once import _stop_after
+
+    monkeypatch.chdir(tmp_path)
+    ports = _open_one_arm(monkeypatch)
+    (tmp_path / "job.txt").write_text(FIRST + "".join(f"G1 X{250 + 5 * k} Y{(k % 4) * 5}\n" for k in range(1, 20)))
+    _stop_after(monkeypatch, 6)
+    first = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--log", "job.log", "--abort", "none", "--port", URL],
+                               env={"ARMCTL_PORT": None})
+    assert first.exit_code == 130, first.output
+    port = ports[URL]  # the same arm, still where the first run left it
+    port.is_open = True
+    for frame in _leftover(1200):  # another host's move meanwhile: the arm at work when the resume reads it
+        port.write(frame)
+    second = CliRunner().invoke(main, ["run", "job.txt", "--no-live", "--resume", "job.log", "--port", URL],
+                                env={"ARMCTL_PORT": None})
+    assert "--resume: the arm is still at work" in second.stderr, second.output

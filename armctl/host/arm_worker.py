@@ -264,7 +264,7 @@ def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[],
     observer = spec.observer
     for told in spec.resume.notes:  # e.g. the torn last line a crash left, ignored
         observer.note(f"armctl: --resume: {told}")
-    started = resume_start(arm.link, spec.resume, arm.status_timeout_s, arm.lead_s, stopped=stopped)
+    started = resume_start(arm.link, spec.resume, arm.status_timeout_s, arm.lead_s, stopped=stopped, note=observer.note)
     if started is None:  # stop() (Ctrl-C) while the arm ran out its queue: no frame goes
         return RunResult.nothing_sent("interrupted")
     state, from_line, again = started

@@ -93,13 +93,11 @@ def rest_wait_s(timeout_s: float, lead_s: float) -> float:
 
 
 def agreed_state(link, earlier, timeout_s: float):
-    """The arm's state once it and the one a rotation before (``earlier``) agree on its position
-    and joints within a reading's jitter, so that no one report becomes the job's start pose: a
-    corrupted one the plausibility test lets through (a jump within the arm's reach: 2.3 mm of X
-    on ``sim://?…&corrupt=0.02&seed=22``) had the first move planned from where the arm was not,
-    no report put the arm at its start, and a target it refused there was counted done by time
-    ("finished").  At most ``AGREE_ROTATIONS`` rotations more; then the last state of an arm
-    that still moves.  (state, whether two agreed)."""
+    """The arm's state once it and the one a rotation before (``earlier``) agree on its position and joints
+    within a reading's jitter, so that no one report becomes the job's start pose: a corrupted one the
+    plausibility test lets through (a jump within reach: 2.3 mm of X on ``sim://?…&corrupt=0.02&seed=22``) had
+    the first move planned from where the arm was not, and a target it refused there counted done by time
+    ("finished").  At most ``AGREE_ROTATIONS`` rotations more.  (state, whether two agreed)."""
     from ..core.job_readings import moved_clearly
 
     state = link.snapshot()[0]
@@ -485,15 +483,18 @@ def same_journal(log, resume) -> bool:
         return False
 
 
-def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable[[], bool] | None = None):
-    """Wait for the arm to come to rest (it runs out what was queued when the host died), then
-    the line its report proves: (the state to start from, the line, the last line that runs a
-    second time — ``ResumePoint.repeated``: a repeat block started again — or None), or
-    (state, None, None) when every line ran; ``joblog.NotProven`` when the report proves
-    neither; None when ``stopped()`` came first (see ``wait_for_rest``)."""
+def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable[[], bool] | None = None,
+                 note: Callable[[str], None] = lambda text: None):
+    """Wait for the arm to come to rest (it runs out what was queued when the host died; ``note``
+    told once its reports show it at work), then the line its report proves: (the state to start
+    from, the line, the last line that runs a second time — ``ResumePoint.repeated``: a repeat block
+    started again — or None), or (state, None, None) when every line ran; ``joblog.NotProven`` when
+    the report proves neither; None when ``stopped()`` came first (see ``wait_for_rest``)."""
     wait_s = rest_wait_s(timeout_s, max(point.lead_s, lead_s))
     try:
-        state = wait_for_rest(link, wait_s, stopped)
+        state = wait_for_rest(link, wait_s, stopped, moving=lambda: note(
+            "armctl: --resume: the arm is still at work (what was queued when the job stopped): waiting for it to come "
+            "to rest before its report says where to resume"))
     except JobFailed:  # a move longer than the wait was in progress: safe to try again once it ends
         raise JobFailed(f"the arm did not come to rest within {wait_s:g} s; nothing was sent (a long move may still be "
                         "running: once the arm is still, run the resume again; a longer status timeout or lead waits longer)") from None
