@@ -111,9 +111,11 @@ def measured_wait(measured, no_chain: str = "", lateness_s: float = 0.0) -> Wait
     # The chain assumes the arm's delays take the wait as its moves do (the document does not say).
     # Where they do not, the chained move carries one wait, as the lone one: the chain reads 0 while
     # the lone move started a wait late.  A lone start delay is the wait plus a lag of at most about
-    # 0.7 of a step (its samples' phase: 3.4 ms of 5 seen) and the reads' lateness: a chain below
-    # that is stated as the lone rule states it, the larger and so the safer, and only "likely".
-    if value_s < floor_s - LONE_LAG_STEPS * alone.step_s - lateness_s - precision_s:
+    # 0.7 of a step (its samples' phase: 3.4 ms of 5 seen), its landing's uncertainty (an adapter
+    # that held the frame: 30 ms) and the reads' lateness: a chain below that is stated as the lone
+    # rule states it, the larger and so the safer, and only "likely".
+    landing_s = alone.delay_error_s - alone.step_s  # (delay_error_s: a step and the landing's uncertainty)
+    if value_s < floor_s - LONE_LAG_STEPS * alone.step_s - landing_s - lateness_s - precision_s:
         return _lone(floor_s, finest_s, f"{told}: under the lone moves' {floor_s * 1000:g} ms, as on an arm whose delays "
                      "do not take the wait (the document does not say; the chain assumes they do)", False)
     # stated to the precision's decade (0.1 ms at ±0.5 ms; 1 ms behind a real port's ±2.5 ms), 0 within it
