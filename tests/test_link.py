@@ -260,3 +260,107 @@ def test_a_pseudo_terminal_whose_other_end_goes_away_is_a_port_error():
         link.close()
         if master is not None:
             os.close(master)
+
+
+@pytest.mark.timeout(20)
+def test_a_read_that_finds_the_pseudo_terminals_data_gone_is_not_a_port_that_went_away(monkeypatch):
+    """pyserial raises "device reports readiness to read but returned no data" when select()
+    said readable and read() got nothing: on a tty that is still there it is another holder
+    (a second reader, a flush: here a TCIFLUSH between the two) taking the bytes; a hung-up tty
+    says POLLHUP too.  The link keeps reading: the next frame reaches its state, no error."""
+    termios = pytest.importorskip("termios")
+    import select as real_select
+
+    import serial.serialposix as serialposix
+
+    master, slave = os.openpty()
+    path = os.ttyname(slave)
+    os.close(slave)
+    flushed = threading.Event()
+
+    class FlushAfterSelect:  # the bytes gone between pyserial's select() and its read(), once
+        error = real_select.error
+
+        @staticmethod
+        def select(readers, writers, errors, timeout=None):
+            ready = real_select.select(readers, writers, errors, timeout)
+            port_fd = readers[0]  # (a read's select: [the port, pyserial's abort pipe])
+            if not writers and not flushed.is_set() and port_fd in ready[0]:
+                termios.tcflush(port_fd, termios.TCIFLUSH)
+                flushed.set()
+            return ready
+
+    monkeypatch.setattr(serialposix, "select", FlushAfterSelect)
+    link = Link.open(path)
+    try:
+        os.write(master, PositionStatus(1.0, 2.0, 3.0).encode())
+        assert flushed.wait(5.0)
+        os.write(master, PositionStatus(4.0, 5.0, 6.0).encode())
+        assert link.wait_until(lambda state: state.x_mm == 4.0, timeout_s=2.0), link.error
+        assert link.error is None
+    finally:
+        link.close()
+        os.close(master)
+
+
+def test_a_tty_that_stays_readable_with_nothing_to_read_is_a_port_that_went_away():
+    """The same error again and again on a tty that polls no hang-up (a driver that never says
+    POLLHUP) is not another holder taking bytes: after ``TAKEN_READS_MAX`` reads in a row, gone."""
+    from armctl.host.link import TAKEN_READS_MAX
+
+    master, slave = os.openpty()
+    reads = []
+
+    class EmptyTty(QuietPort):
+        fd = slave
+
+        def read(self, size=1):
+            reads.append(size)
+            raise serial.SerialException("device reports readiness to read but returned no data "
+                                         "(device disconnected or multiple access on port?)")
+
+    try:
+        with Link(EmptyTty(), "/dev/ttyFAKE") as link:
+            link.start()
+            with pytest.raises(PortError, match=r"^the port /dev/ttyFAKE went away: device reports readiness"):
+                link.wait_until(lambda state: False, timeout_s=5.0)
+        assert len(reads) == TAKEN_READS_MAX + 1
+    finally:
+        os.close(master)
+        os.close(slave)
+
+
+@pytest.mark.realtime
+@pytest.mark.timeout(30)
+def test_armctl_status_watch_goes_on_while_another_program_reads_the_same_tty(sim_pty):
+    """``armctl status --watch`` (the installed command, a fresh process) on ``armctl sim --pty``
+    while another program that takes no lock (a serial monitor, a modem manager probing the
+    device) reads the same tty for a second: the bytes it takes are lost to armctl, the port did
+    not go away (before: "went away: device reports readiness to read but returned no data" in 10
+    of 10 such runs)."""
+    import signal
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    env = {k: v for k, v in os.environ.items() if k != "ARMCTL_PORT"}
+    watch = subprocess.Popen([str(Path(sys.executable).with_name("armctl")), "status", "--watch", "--json", "--port", sim_pty],
+                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True, env=env)
+    try:
+        time.sleep(1.0)  # it has the port open and reads
+        other = os.open(sim_pty, os.O_RDWR | os.O_NOCTTY | os.O_NONBLOCK)
+        try:
+            end = time.monotonic() + 1.0
+            while time.monotonic() < end and watch.poll() is None:
+                try:
+                    os.read(other, 64)
+                except BlockingIOError:
+                    pass
+        finally:
+            os.close(other)
+        assert watch.poll() is None, watch.communicate()[1]
+        watch.send_signal(signal.SIGINT)
+        stderr = watch.communicate(timeout=10)[1]
+    finally:
+        watch.kill()
+    assert "went away" not in stderr, stderr

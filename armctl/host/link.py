@@ -160,6 +160,30 @@ def describe_open_error(url: str, error: Exception) -> str:
     return f"cannot open {url}: {text}"
 
 
+TAKEN_READS_MAX = 8  # a device that is readable with nothing to read more often in a row than this is gone
+
+
+def bytes_taken(port, error: Exception) -> bool:
+    """Whether pyserial's "device reports readiness to read but returned no data" came from a tty
+    that is still there: select() said readable, then read() found the bytes gone — taken or
+    flushed by another holder of the tty between the two (pyserial opens a port with a flush) —
+    and the next read goes on.  A tty that is gone says so to poll(): unplugged, or a
+    pseudo-terminal whose other end closed, it is hung up (POLLHUP, POLLERR).  Ports without a
+    file descriptor (socket://, sim://) and other errors: False."""
+    import select
+
+    descriptor = getattr(port, "fd", None)
+    if not isinstance(descriptor, int) or not hasattr(select, "poll") or "returned no data" not in str(error):
+        return False
+    poller = select.poll()
+    poller.register(descriptor, select.POLLIN)
+    gone = select.POLLHUP | select.POLLERR | select.POLLNVAL
+    try:
+        return not any(events & gone for _, events in poller.poll(0))
+    except OSError:
+        return False
+
+
 class Link:
     """An open port with a reader thread that keeps ``state`` current.
 
@@ -244,6 +268,7 @@ class Link:
 
     def _read_loop(self) -> None:
         port = self.port
+        taken_in_a_row = 0  # reads in a row that found the bytes taken (``bytes_taken``)
         while not self._stop.is_set():
             try:
                 # A status frame's bytes, then whatever else is waiting: each frame is taken (and
@@ -254,9 +279,14 @@ class Link:
                 if waiting:
                     data += port.read(min(waiting, READ_CHUNK))
             except Exception as error:  # pyserial raises SerialException, OSError or TypeError on unplug
-                if not self._stop.is_set():
-                    self._set_error(PortError(f"the port {self.url} went away: {error}"))
+                if self._stop.is_set():
+                    return
+                taken_in_a_row += 1
+                if taken_in_a_row <= TAKEN_READS_MAX and bytes_taken(port, error):
+                    continue
+                self._set_error(PortError(f"the port {self.url} went away: {error}"))
                 return
+            taken_in_a_row = 0
             if data:
                 self.take(data)
 
