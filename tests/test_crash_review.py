@@ -195,7 +195,7 @@ def test_a_log_being_resumed_cannot_be_resumed_again_at_the_same_time(tmp_path, 
     to a point), and sent the same lines a second time.  A resume now holds LOG locked while it
     runs, as a run holds its --log: the second is refused, exit 2, nothing sent."""
     from armctl import Arm
-    from armctl.host.jobflow import journal_in_use
+    from armctl.host.log_lock import journal_in_use
 
     crash = pwm_crashes[0]
     log = tmp_path / "crash.log"
@@ -209,7 +209,7 @@ def test_a_log_being_resumed_cannot_be_resumed_again_at_the_same_time(tmp_path, 
     # the installed command: a second resume while one holds the log
     holder = subprocess.Popen([sys.executable, "-c", (
         "import sys, time\n"
-        "from armctl.host.jobflow import resume_claim\n"
+        "from armctl.host.log_lock import resume_claim\n"
         f"with resume_claim({str(log)!r}):\n"
         "    print('claimed', flush=True)\n"
         "    time.sleep(60)\n")], stdout=subprocess.PIPE, text=True)

@@ -31,25 +31,37 @@ FIRST = "G90\nG1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\n"
 PICK = (Path(__file__).resolve().parent.parent / "scripts" / "pick_and_place.txt").read_text()
 
 
-def _leftover(feed_mm_min: float) -> list[bytes]:
+def _leftover_script(feed_mm_min: float) -> str:
     """One move another host queued: 100 mm at ``feed_mm_min``, from where FIRST leaves the arm."""
-    return [statement.command.encode() for statement in compile_text(
-        f"G90\nG1 X250 Y-100 Z150 A180 B0 C0 S1000 F{feed_mm_min:g}\n")]
+    return f"G90\nG1 X250 Y-100 Z150 A180 B0 C0 S1000 F{feed_mm_min:g}\n"
 
 
-def _run_on_moving_arm(tmp_path, monkeypatch, script: str, feed_mm_min: float = 1200):
-    """FIRST run to its end, then a leftover move written to the arm, then ``armctl run --json``."""
+def _leftover(feed_mm_min: float) -> list[bytes]:
+    return [statement.command.encode() for statement in compile_text(_leftover_script(feed_mm_min))]
+
+
+def _job_on_arm_left_moving(tmp_path, monkeypatch, url: str, queued: str, job: str, *options: str,
+                            first_must_finish: bool = True):
+    """FIRST run to its end on ``url``, then the frames of ``queued`` (a script another host sent)
+    written to the arm, then ``armctl run job.txt OPTIONS`` (``job``): its result and the arm's port."""
     monkeypatch.chdir(tmp_path)
     ports = _open_one_arm(monkeypatch)
     (tmp_path / "first.txt").write_text(FIRST)
-    first = CliRunner().invoke(main, ["run", "first.txt", "--json", "--port", URL], env={"ARMCTL_PORT": None})
-    assert first.exit_code == 0, first.output
-    port = ports[URL]
+    first = CliRunner().invoke(main, ["run", "first.txt", "--port", url], env={"ARMCTL_PORT": None})
+    if first_must_finish:
+        assert first.exit_code == 0, first.output
+    port = ports[url]
     port.is_open = True
-    for frame in _leftover(feed_mm_min):
-        port.write(frame)
-    (tmp_path / "job.txt").write_text(script)
-    result = CliRunner().invoke(main, ["run", "job.txt", "--json", "--port", URL], env={"ARMCTL_PORT": None})
+    for statement in compile_text(queued):
+        port.write(statement.command.encode())
+    (tmp_path / "job.txt").write_text(job)
+    return CliRunner().invoke(main, ["run", "job.txt", *options, "--port", url], env={"ARMCTL_PORT": None}), port
+
+
+def _run_on_moving_arm(tmp_path, monkeypatch, script: str, feed_mm_min: float = 1200):
+    """A leftover move at ``feed_mm_min`` before ``script`` (``_job_on_arm_left_moving``), run with
+    ``--json``: the result, its summary (None when it printed none) and the simulated arm."""
+    result, port = _job_on_arm_left_moving(tmp_path, monkeypatch, URL, _leftover_script(feed_mm_min), script, "--json")
     last = (result.stdout.splitlines() or [""])[-1]
     return result, json.loads(last) if last.startswith("{") else None, port.model
 

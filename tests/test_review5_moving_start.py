@@ -18,10 +18,8 @@ import subprocess
 import sys
 
 import pytest
-from click.testing import CliRunner
 
-from armctl.ui.cli import main
-from test_moving_start import FIRST, _leftover
+from test_moving_start import _job_on_arm_left_moving, _leftover, _leftover_script
 from test_resume_exactly_once import _open_one_arm
 
 pytestmark = pytest.mark.timeout(60)
@@ -50,17 +48,7 @@ def test_a_still_arm_on_a_noisy_line_is_not_said_to_be_moving(tmp_path, seed):
 def test_a_moving_arm_on_a_noisy_line_is_still_waited_for(tmp_path, monkeypatch, seed):
     """FIRST run to its end, a 5 s move another host queued, then the job: said, waited for, finished."""
     url = f"sim://?clock=virtual&corrupt=0.15&seed={seed}"
-    monkeypatch.chdir(tmp_path)
-    ports = _open_one_arm(monkeypatch)
-    (tmp_path / "first.txt").write_text(FIRST)
-    first = CliRunner().invoke(main, ["run", "first.txt", "--port", url], env={"ARMCTL_PORT": None})
-    assert first.exit_code == 0, first.output
-    port = ports[url]
-    port.is_open = True
-    for frame in _leftover(1200):
-        port.write(frame)
-    (tmp_path / "job.txt").write_text(JOB)
-    result = CliRunner().invoke(main, ["run", "job.txt", "--port", url], env={"ARMCTL_PORT": None})
+    result, port = _job_on_arm_left_moving(tmp_path, monkeypatch, url, _leftover_script(1200), JOB)
     assert result.exit_code == 0 and "finished: the arm finished the job" in result.output, result.output
     assert WAITING in result.stderr, result.stderr
     leftover = port.model.execution_log[1]
@@ -88,19 +76,8 @@ def test_a_leftover_slower_than_a_reading_step_per_rest_check_is_waited_for(tmp_
     move at F1: a 0.1 mm step each 6 s, joints each 2 s) the start sees no motion at all.  Waiting
     longer for every moving start only moves the limit (and slows every start); the engine's own
     end-of-job proof uses the same 0.6 s."""
-    url = "sim://?clock=virtual"
-    monkeypatch.chdir(tmp_path)
-    ports = _open_one_arm(monkeypatch)
-    (tmp_path / "first.txt").write_text(FIRST)
-    assert CliRunner().invoke(main, ["run", "first.txt", "--port", url], env={"ARMCTL_PORT": None}).exit_code == 0
-    port = ports[url]
-    port.is_open = True
-    from armctl.script import compile_text
-
-    for statement in compile_text("G90\nG6 J1=0.2 J2=0 J3=0 J4=0 J5=90 J6=0 S1000 F0.01\n"):
-        port.write(statement.command.encode())
-    (tmp_path / "job.txt").write_text(JOB)
-    result = CliRunner().invoke(main, ["run", "job.txt", "--port", url], env={"ARMCTL_PORT": None})
+    result, port = _job_on_arm_left_moving(tmp_path, monkeypatch, "sim://?clock=virtual",
+                                           "G90\nG6 J1=0.2 J2=0 J3=0 J4=0 J5=90 J6=0 S1000 F0.01\n", JOB)
     leftover = port.model.execution_log[1]
     arrivals = [frame.arrival_s for frame in port.model.frames_received[2:]]
     assert not arrivals or leftover.end_s is not None and arrivals[0] >= leftover.end_s, (arrivals, leftover)
@@ -114,19 +91,8 @@ def test_a_pause_queued_behind_a_leftover_is_resumed_after_the_wait(tmp_path, mo
     end, the arm rests paused, and the job was streamed into a paused arm ('the arm reports it is
     paused: the rest of the job waits in its buffer', no confirmation, exit 1).  Now an arm that rests
     paused after the wait is resumed as at the start (``resume_paused``)."""
-    url = "sim://?clock=virtual"
-    monkeypatch.chdir(tmp_path)
-    ports = _open_one_arm(monkeypatch)
-    (tmp_path / "first.txt").write_text(FIRST)
-    assert CliRunner().invoke(main, ["run", "first.txt", "--port", url], env={"ARMCTL_PORT": None}).exit_code == 0
-    port = ports[url]
-    port.is_open = True
-    from armctl.script import compile_text
-
-    for statement in compile_text("G90\nG1 X250 Y-20 Z150 A180 B0 C0 S1000 F600\nG1 X250 Y0 Z150 F600\nPAUSE\n"):
-        port.write(statement.command.encode())
-    (tmp_path / "job.txt").write_text(JOB)
-    result = CliRunner().invoke(main, ["run", "job.txt", "--port", url], env={"ARMCTL_PORT": None})
+    result, port = _job_on_arm_left_moving(tmp_path, monkeypatch, "sim://?clock=virtual",
+                                           "G90\nG1 X250 Y-20 Z150 A180 B0 C0 S1000 F600\nG1 X250 Y0 Z150 F600\nPAUSE\n", JOB)
     assert result.exit_code == 0 and "finished: the arm finished the job" in result.output, result.output
     assert not port.model.paused
 
@@ -158,20 +124,8 @@ def test_a_refusal_after_the_resume_toggle_does_not_say_nothing_was_sent(tmp_pat
     toggle, said), the arm runs out the frozen move and the queued one (20 s), and the job is
     refused: 'the arm did not come to rest within 9 s; nothing was sent' — one line after
     'sending one pause toggle to resume it'.  Now: 'only the pause toggle that resumed it was sent'."""
-    url = "sim://?clock=virtual&control=arrival"
-    monkeypatch.chdir(tmp_path)
-    ports = _open_one_arm(monkeypatch)
-    (tmp_path / "first.txt").write_text(FIRST)
-    assert CliRunner().invoke(main, ["run", "first.txt", "--port", url], env={"ARMCTL_PORT": None}).exit_code == 0
-    port = ports[url]
-    port.is_open = True
-    from armctl.script import compile_text
-
     leftover = "G90\nG1 X250 Y-100 Z150 A180 B0 C0 S1000 F600\nPAUSE\nG1 X250 Y0 Z150 F600\n"
-    for statement in compile_text(leftover):
-        port.write(statement.command.encode())
-    (tmp_path / "job.txt").write_text(JOB)
-    result = CliRunner().invoke(main, ["run", "job.txt", "--port", url], env={"ARMCTL_PORT": None})
+    result, port = _job_on_arm_left_moving(tmp_path, monkeypatch, "sim://?clock=virtual&control=arrival", leftover, JOB)
     assert result.exit_code == 1 and "sending one pause toggle" in result.stderr, result.output
     refusal = next(line for line in result.stderr.splitlines() if "did not come to rest" in line)
     assert "nothing was sent" not in refusal and "pause toggle" in refusal, refusal
@@ -222,17 +176,6 @@ def test_an_sd_program_at_work_is_not_taken_for_a_noisy_line(tmp_path, monkeypat
     the program.  The program is the arm at work, as the rule of rest says: refused, as before
     (``MotionSeen`` reads the run position too)."""
     url = f"sim://?clock=virtual&corrupt=0.15&seed={seed}&slowdown=3"
-    monkeypatch.chdir(tmp_path)
-    ports = _open_one_arm(monkeypatch)
-    (tmp_path / "first.txt").write_text(FIRST)
-    CliRunner().invoke(main, ["run", "first.txt", "--port", url], env={"ARMCTL_PORT": None})
-    port = ports[url]
-    port.is_open = True
-    from armctl.script import compile_text
-
-    for statement in compile_text("PROGRAM 1\n"):
-        port.write(statement.command.encode())
-    (tmp_path / "job.txt").write_text(JOB)
-    result = CliRunner().invoke(main, ["run", "job.txt", "--port", url], env={"ARMCTL_PORT": None})
+    result, port = _job_on_arm_left_moving(tmp_path, monkeypatch, url, "PROGRAM 1\n", JOB, first_must_finish=False)
     assert "a noisy line?" not in result.stderr, result.stderr
     assert result.exit_code == 1 and "did not come to rest" in result.stderr, result.stderr

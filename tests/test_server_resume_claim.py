@@ -1,5 +1,5 @@
 """The server's resume holds the log it continues, as ``armctl run --resume`` and ``Arm.run(resume=)``
-do (``jobflow.resume_claim``): another resume of the same log while this one runs — from the
+do (``log_lock.resume_claim``): another resume of the same log while this one runs — from the
 command line, or a second request — is refused before anything is sent.  Found while fixing the
 crash review's "a log is resumed once": the server read the log and handed the job a
 ``ResumePoint``, which takes no lock.
@@ -13,7 +13,7 @@ pytest.importorskip("aiohttp", reason="the serve extra (aiohttp) is not installe
 
 import asyncio  # noqa: E402
 
-from armctl.host.jobflow import journal_in_use, resume_claim  # noqa: E402
+from armctl.host.log_lock import journal_in_use, resume_claim  # noqa: E402
 from test_server_inprocess import SHORT, finished, with_client  # noqa: E402
 
 pytestmark = pytest.mark.timeout(60)

@@ -364,12 +364,13 @@ class Arm:
 
 def _claimed_resume(resume, log, snapshot, from_line: int, port):
     """``Arm.run``'s ``resume=``: (the claim held while the job runs — no second resume of that log
-    meanwhile, ``jobflow.resume_claim`` — and the ``ResumePoint``, read before anything is sent:
+    meanwhile, ``log_lock.resume_claim`` — and the ``ResumePoint``, read before anything is sent:
     ``ResumeRefused``, nothing sent; a log of a job on another arm than the one on ``port`` too);
     (a null claim, None) without one."""
     if resume is None:
         return contextlib.nullcontext(), None
-    from .jobflow import read_resume_point, resume_claim, same_journal
+    from .jobflow import read_resume_point
+    from .log_lock import resume_claim, same_journal
     from .resume_port import refuse_another_arm
 
     if log is not None and same_journal(log, resume):

@@ -21,7 +21,6 @@ Errors are ``JobFailed`` (the arm did not answer, or the job did not finish).
 from __future__ import annotations
 
 import json
-from contextlib import contextmanager
 from typing import Any, Callable, Iterable
 
 from ..errors import ArmctlError
@@ -65,10 +64,14 @@ def read_arm(link, timeout_s: float, log=None, note: Callable[[str], None] = lam
     if rest_s is None or (agreed and (first is None or _pose(first) == _pose(state))):
         return state
     seen: list = []  # said once motion is seen: a first report corrupted within reach (H9) differed too, on a still arm
+
+    def moving() -> None:
+        seen.append(True)
+        note("armctl: the arm is moving (frames queued before this job still running? another program, an armctl stopped "
+             "without its abort sequence; or a line so noisy every report differs): waiting for it to come to rest before the job is planned")
+
     try:
-        state = wait_for_rest(link, rest_s, stopped, moving=lambda: seen.append(note(
-            "armctl: the arm is moving (frames queued before this job still running? another program, an armctl stopped "
-            "without its abort sequence; or a line so noisy every report differs): waiting for it to come to rest before the job is planned")))
+        state = wait_for_rest(link, rest_s, stopped, moving)
     except JobFailed:
         if seen:
             raise JobFailed(f"the arm did not come to rest within {rest_s:g} s; "
@@ -249,10 +252,12 @@ def wait_for_rest(link, timeout_s: float, stopped: Callable[[], bool] | None = N
         state = link.snapshot()[0]
         now = link.clock()
         read_s = [state.last_seen.get(kind, float("-inf")) for kind in kinds]  # -inf: never read
-        if moving is not None and seen.read((*_pose(state), state.run_position), (*read_s, state.last_seen.get(program))):
-            moving = moving()  # (it returns None: said once)
-        if (state.position_mm, tuple(state.joints_deg), state.run_position) != reading:
-            reading, since = (state.position_mm, tuple(state.joints_deg), state.run_position), now
+        readings = (*_pose(state), state.run_position)  # one value per kind, as ``MotionSeen`` reads them
+        if moving is not None and seen.read(readings, (*read_s, state.last_seen.get(program))):
+            moving()
+            moving = None  # said once
+        if readings != reading:
+            reading, since = readings, now
         elif still_long_enough(since, read_s):
             return state
         if now >= deadline:
@@ -354,6 +359,7 @@ def read_resume_point(log, script, from_line: int = 1):
 
     from ..errors import ResumeRefused
     from .inputs import MAX_LOG_BYTES, open_regular, read_lines_bounded
+    from .log_lock import IN_USE, journal_in_use
     from ..core.joblog import ResumePoint, read_resume_lines
     from .resume_port import refuse_gone_simulator
 
@@ -410,77 +416,6 @@ def mark_resumed(path: str, at_line: int, into: str | None) -> None:
         log.write((seal(resumed_record(at_line, into), 0) + "\n").encode())
         log.flush()
         os.fsync(log.fileno())
-
-
-IN_USE = ("the job it records is still running, or another armctl is resuming it: it holds the lock a run keeps on "
-          "its --log, and a resume on the log it resumes, while its job runs; let that job end, or stop it (Ctrl-C), "
-          "then resume")
-
-
-def locked(log, shared: bool = False) -> bool:
-    """An exclusive lock (``shared``: a shared one) on the open file ``log`` for as long as it is
-    open (the kernel drops it when the process ends, kill -9 included); False when another process
-    holds one that excludes it.  Where nothing can be locked (no fcntl on Windows, a file system
-    without locks), True: the file goes unlocked.  A run's --log is locked so (ui/run_job.py), and
-    a log a resume reads (``resume_claim``); ``journal_in_use`` asks for a shared one."""
-    try:
-        import fcntl
-    except ImportError:
-        return True
-    try:
-        fcntl.flock(log.fileno(), (fcntl.LOCK_SH if shared else fcntl.LOCK_EX) | fcntl.LOCK_NB)
-    except BlockingIOError:
-        return False
-    except OSError:  # ENOLCK, EOPNOTSUPP…: unlocked, as before locks
-        return True
-    return True
-
-
-@contextmanager
-def resume_claim(log):
-    """``log`` (the path a resume reads, after ``read_resume_point``) locked while the resumed
-    job runs, as a run locks its --log: another resume of it at the same time — it would decide
-    from the same records and send the same lines again — is refused (``ResumeRefused``, exit 2,
-    nothing sent).  Nothing to lock for a ``ResumePoint``, or where nothing can be locked."""
-    import os
-
-    if not isinstance(log, (str, os.PathLike)):
-        yield
-        return
-    from ..errors import ResumeRefused
-
-    try:
-        held = open(log, "rb")  # a regular file: read_resume_point read it
-    except OSError:
-        yield
-        return
-    with held:
-        if not locked(held):
-            raise ResumeRefused(f"--resume {os.fspath(log)}: {IN_USE}")
-        yield
-
-
-def journal_in_use(path: str) -> bool:
-    """Another process holds the lock ``armctl run --log`` keeps on its log while its job runs
-    (``locked``, as ui/run_job.py takes it): that job is not over, whatever its log says yet.  False
-    where nothing can be locked (no fcntl, a file system without locks)."""
-    try:
-        with open(path, "rb") as probe:
-            return not locked(probe, shared=True)  # (released as the file closes)
-    except OSError:
-        return False
-
-
-def same_journal(log, resume) -> bool:
-    """``log`` (an open file) is the file ``resume`` (a path; anything else: no) names."""
-    import os
-
-    if not isinstance(resume, (str, os.PathLike)):
-        return False
-    try:
-        return os.path.samestat(os.fstat(log.fileno()), os.stat(resume))
-    except (AttributeError, OSError, ValueError):
-        return False
 
 
 def resume_start(link, point, timeout_s: float, lead_s: float, stopped: Callable[[], bool] | None = None,

@@ -61,7 +61,7 @@ def chain_for(probe, lone) -> tuple[Chain | None, str]:
     None, and why not."""
     if lone is None:
         return None, "the first joint move gave no start delay"
-    fifo = next((f for f in probe.findings if f.name == "fifo_frames"), None)
+    fifo = probe.finding("fifo_frames")
     room = fifo.value if fifo is not None and fifo.value is not None else 0
     count = min(CHAIN_COMMANDS, room)
     if count < MIN_CHAIN_COMMANDS:

@@ -223,7 +223,8 @@ class ArmService:
     async def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
         """A job of the journal (this server's or an earlier one's), continued from the line its
         log and the arm's report prove (``Arm.run(resume=)``)."""
-        from ..host.jobflow import read_resume_point, resume_claim
+        from ..host.jobflow import read_resume_point
+        from ..host.log_lock import resume_claim
         from ..script.files import ScriptSnapshot
 
         script = self.journal_script(job_id)

@@ -31,7 +31,8 @@ import click
 
 from ..errors import ArmctlError, ScriptError
 from ..errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS, UsageFailure, exit_code_for
-from ..host.jobflow import JobFailed, locked
+from ..host.jobflow import JobFailed
+from ..host.log_lock import locked
 from ..core.job_end import PROBE_HINT
 from ..core.protocol import describe
 from ..core.streamer import DEFAULT_LEAD_S
@@ -244,7 +245,8 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     from dataclasses import replace
 
     from ..host.api import Arm
-    from ..host.jobflow import read_resume_point, resume_claim
+    from ..host.jobflow import read_resume_point
+    from ..host.log_lock import resume_claim
     from ..host.link import choose_port
     from ..host.resume_port import resume_port
     from ..host.calibration import arm_profile, quiet_port, with_arm
