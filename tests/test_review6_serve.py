@@ -43,8 +43,6 @@ def _pose(server) -> tuple:
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="a second stop of a stopping job cut short the wait for the arm: the job "
-                   "ended 'interrupted' 0.15 s after the stop, the arm still moving, last line executed None")
 def test_a_double_clicked_stop_still_waits_for_the_arm_to_come_to_rest(tmp_path):
     """The run panel's Stop pressed twice (or two clients' stops): the job ended "interrupted"
     0.15-0.21 s after (4 of 4 runs) with ``last_line_executed`` None and ``resume_line`` 1, while
@@ -107,8 +105,6 @@ def test_a_page_open_when_the_server_stops_is_told_the_job_ended_interrupted(tmp
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="ArmService.close stopped a stopping job again: its wait for the arm was cut "
-                   "short (last line executed None, the arm left moving, the port closed)")
 def test_closing_an_arm_whose_job_is_stopping_waits_for_the_arm(tmp_path):
     """A job stopped (from the API, or by the shutdown itself), then the arm closed while it
     stops — ``armctl serve``'s shutdown closes each arm after the sockets — and

@@ -243,7 +243,7 @@ async def control_job(request: web.Request) -> web.Response:
     if action == "resume":
         return web.json_response({"id": job.id, "toggle_sent": await arm.resume()})
     if action == "stop":
-        await arm.stop("stopped from the API")
+        await service.stop_once("stopped from the API")
         return web.json_response({"id": job.id, "stopping": True})
     body = await _json_object(request)
     percent = body.get("percent")

@@ -37,6 +37,7 @@ MAX_VIEWERS = 200  # WebSockets on one arm (each holds at most its queue): more 
 STATUS_EVERY_S = 0.25  # a status event this often while someone watches
 JOG_LEASE_S = 0.075  # the jog stops this long after the page's last heartbeat
 JOG_POLL_S = 0.01  # how often the dead-man's lease is looked at
+JOB_END_WAIT_S = 30.0  # a stopping server waits this long for a stopped job to end (the arm to come to rest)
 _SCRIPT_WORK = threading.Lock()  # one script's check or path at a time in the process (``off_loop``)
 _WAITING: set[asyncio.Future] = set()  # the answers script work owes (``abandon_script_work``)
 
@@ -128,6 +129,7 @@ class ArmService:
         self.jobs: dict[str, Job] = {}
         self.running: Job | None = None
         self.moving = False
+        self._stop_asked = False  # the running job or move was asked to stop (``stop_once``)
         self.controller: str | None = None
         self._control_sockets = 0  # the controller's WebSockets that asked for control (a duplicated tab: 2)
         self.status: dict | None = None
@@ -210,6 +212,7 @@ class ArmService:
         job = Job(job_id, snapshot.name, self.journal_dir / f"{job_id}.txt", self.journal_dir / f"{job_id}.log")
         job.script_path.write_bytes(snapshot.data)
         self.jobs[job_id] = self.running = job
+        self._stop_asked = False
         job.task = asyncio.ensure_future(self._run(job, checked, resume, claim))
         return job, checked
 
@@ -309,12 +312,31 @@ class ArmService:
         self.check_control(client)
         if not self.busy:
             return False
-        await self.arm.stop("stopped from the API")
+        await self.stop_once("stopped from the API")
         return True
+
+    async def stop_once(self, why: str) -> None:
+        """``Arm.stop``, once for the running job or move: asked again while it stops, ``Arm.stop``
+        cuts short its wait for the arm to come to rest (a second Ctrl-C) — and a double-clicked
+        Stop, a second client's, or the shutdown's close after its own stop, is no such wish."""
+        if not self._stop_asked:
+            self._stop_asked = True
+            await self.arm.stop(why)
+
+    async def stop_and_wait(self, why: str) -> None:
+        """Stop the job or the move (``stop_once``) and wait for the job's end (at most
+        ``JOB_END_WAIT_S``): its summary is published before this returns."""
+        if self.busy:
+            await self.stop_once(why)
+        if self.running is not None:
+            try:
+                await asyncio.wait_for(asyncio.shield(self.running.task), JOB_END_WAIT_S)
+            except (asyncio.TimeoutError, Exception):
+                pass
 
     async def move(self, words: dict, client: str | None) -> dict:
         self.check_free(client)
-        self.moving = True
+        self.moving, self._stop_asked = True, False
         try:
             result = await self.arm.move(**words)
         finally:
@@ -395,12 +417,7 @@ class ArmService:
             if task is not None:
                 task.cancel()
         await self.jog_stop()
-        if self.running is not None:
-            await self.arm.stop("the server is stopping")
-            try:
-                await asyncio.wait_for(asyncio.shield(self.running.task), 30)
-            except (asyncio.TimeoutError, Exception):
-                pass
+        await self.stop_and_wait("the server is stopping")
         await self.arm.close()
 
 

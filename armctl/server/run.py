@@ -126,7 +126,7 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
             loop.add_signal_handler(number, stop.set)
         await stop.wait()
         for service in services.values():  # a job or a move stops first: no handler waits for it
-            await service.arm.stop("the server is stopping")
+            await service.stop_once("the server is stopping")
         await runner.cleanup()
     finally:
         for service in services.values():
