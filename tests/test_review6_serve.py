@@ -66,8 +66,6 @@ def test_a_double_clicked_stop_still_waits_for_the_arm_to_come_to_rest(tmp_path)
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="the server closed the WebSockets before the job it stopped had ended: "
-                   "a page watching never got its summary and went on showing the job as running")
 def test_a_page_open_when_the_server_stops_is_told_the_job_ended_interrupted(tmp_path):
     """SIGINT mid-job with a page's WebSocket open: the job was stopped and the sockets closed
     (1001) at once, its ``summary`` published afterwards to nobody — the page's job line stayed

@@ -5,7 +5,8 @@ Strategy: everything on one asyncio loop (aiohttp's).  The listening address is 
 are opened as ``AsyncArm``, then the server accepts its first request on the sockets bound;
 SIGINT, SIGTERM and SIGHUP (the terminal closed: ``stop_signals``'s three)
 stop the server the way Ctrl-C stops ``armctl run``: a running job is stopped (the abort
-sequence, the arm waited for, the journal closed), the WebSockets closed, the arms closed,
+sequence, the arm waited for, the journal closed, its summary published), then the WebSockets
+closed, the arms closed,
 then the process exits 130.
 """
 from __future__ import annotations
@@ -125,8 +126,9 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
         for number in STOP_SIGNALS:  # (SIGHUP too: a closed terminal ended the process with no abort sequence)
             loop.add_signal_handler(number, stop.set)
         await stop.wait()
-        for service in services.values():  # a job or a move stops first: no handler waits for it
-            await service.stop_once("the server is stopping")
+        # every job or move stops first (no handler waits for it), and a job's end is published
+        # before the WebSockets close: a page shows it interrupted, not running for good
+        await asyncio.gather(*(service.stop_and_wait("the server is stopping") for service in services.values()))
         await runner.cleanup()
     finally:
         for service in services.values():
