@@ -135,8 +135,6 @@ def test_closing_an_arm_whose_job_is_stopping_waits_for_the_arm(tmp_path):
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="a second Ctrl-C of a stopping armctl serve did nothing: it waited for the "
-                   "arm as long as after one (5.3 s here; up to 30 s, then 30 s more in close)")
 def test_a_second_ctrl_c_cuts_short_the_wait_for_the_arm_as_armctl_run_s_does(tmp_path):
     """docs/server.md: Ctrl-C stops a job as ``armctl run``'s does — whose second Ctrl-C stops
     waiting for the arm to come to rest.  ``armctl serve``'s handler only set its stop event,

@@ -315,17 +315,16 @@ class ArmService:
         await self.stop_once("stopped from the API")
         return True
 
-    async def stop_once(self, why: str) -> None:
+    async def stop_once(self, why: str, *, again: bool = False) -> None:
         """``Arm.stop``, once for the running job or move: asked again while it stops, ``Arm.stop``
-        cuts short its wait for the arm to come to rest (a second Ctrl-C) — and a double-clicked
-        Stop, a second client's, or the shutdown's close after its own stop, is no such wish."""
-        if not self._stop_asked:
+        cuts short its wait for the arm to come to rest — a second Ctrl-C (``again``: the server's),
+        which a double-clicked Stop, a second client's, or the shutdown's close after its stop is not."""
+        if again or not self._stop_asked:
             self._stop_asked = True
             await self.arm.stop(why)
 
     async def stop_and_wait(self, why: str) -> None:
-        """Stop the job or the move (``stop_once``) and wait for the job's end (at most
-        ``JOB_END_WAIT_S``): its summary is published before this returns."""
+        """``stop_once``, then the job's end waited for (``JOB_END_WAIT_S`` at most): its summary published."""
         if self.busy:
             await self.stop_once(why)
         if self.running is not None:

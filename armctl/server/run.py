@@ -5,9 +5,8 @@ Strategy: everything on one asyncio loop (aiohttp's).  The listening address is 
 are opened as ``AsyncArm``, then the server accepts its first request on the sockets bound;
 SIGINT, SIGTERM and SIGHUP (the terminal closed: ``stop_signals``'s three)
 stop the server the way Ctrl-C stops ``armctl run``: a running job is stopped (the abort
-sequence, the arm waited for, the journal closed, its summary published), then the WebSockets
-closed, the arms closed,
-then the process exits 130.
+sequence, the arm waited for — a second signal cuts that wait short —, the journal closed, its
+summary published), then the WebSockets closed, the arms closed, then the process exits 130.
 """
 from __future__ import annotations
 
@@ -122,9 +121,16 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
             f"on http://{shown}:{port}/" + ("" if token is None else "?token=TOKEN") + "  (Ctrl-C to stop)")
         sys.stdout.flush()
         stop = asyncio.Event()
+
+        def signalled() -> None:
+            if stop.is_set():  # a second one: as armctl run's second Ctrl-C, the arms are no longer waited for
+                for service in services.values():
+                    asyncio.ensure_future(service.stop_once("the server is stopping", again=True))
+            stop.set()
+
         loop = asyncio.get_running_loop()
         for number in STOP_SIGNALS:  # (SIGHUP too: a closed terminal ended the process with no abort sequence)
-            loop.add_signal_handler(number, stop.set)
+            loop.add_signal_handler(number, signalled)
         await stop.wait()
         # every job or move stops first (no handler waits for it), and a job's end is published
         # before the WebSockets close: a page shows it interrupted, not running for good
