@@ -154,3 +154,45 @@ def test_a_second_ctrl_c_cuts_short_the_wait_for_the_arm_as_armctl_run_s_does(tm
     records = [json.loads(line) for line in Path(created["journal"]).read_text().splitlines()]
     assert any(r["dir"] == "tx" and r.get("abort") for r in records), "no abort sequence in the journal"
     assert "Traceback" not in "".join(server.stderr_lines)
+
+
+DEEP = "[" * 30000 + "]" * 30000  # JSON, nested deeper than Python's json parser recurses
+
+
+@pytest.fixture(scope="module")
+def fast_server(tmp_path_factory):
+    with served("--arm", "a=sim://?speed=20", journal=tmp_path_factory.mktemp("journal")) as running:
+        yield running
+
+
+@pytest.mark.xfail(strict=True, reason="a JSON body nested 30,000 deep was 500 'internal' with a RecursionError "
+                   "traceback in the server's log, not 400 bad_json")
+@pytest.mark.parametrize("body", [DEEP, '{"percent": ' + DEEP + "}"])
+def test_a_body_nested_too_deep_for_the_parser_is_bad_json(fast_server, body):
+    status, answer = fast_server.request("POST", "/api/arms/a/move", body, {"Content-Type": "application/json"})
+    assert status == 400 and answer["code"] == "bad_json", answer
+    assert "nested too deeply" in answer["error"], answer
+    assert "Traceback" not in "".join(fast_server.stderr_lines)
+
+
+@pytest.mark.xfail(strict=True, reason="a WebSocket message nested 30,000 deep ended the socket in a protocol error "
+                   "(1002: the server wrote a 500 response onto it) and a traceback in the server's log")
+def test_a_websocket_message_nested_too_deep_is_answered_with_an_error(fast_server):
+    """docs/server.md: a message that is not JSON is answered with an ``error`` event."""
+    async def main() -> list:
+        async with aiohttp.ClientSession() as session:
+            async with session.ws_connect(fast_server.base.replace("http", "ws") + "/api/arms/a/events") as socket:
+                assert (await socket.receive_json(timeout=10))["event"] == "hello"
+                await socket.send_str(DEEP)
+                await socket.send_json({"ping": 7})
+                answers = []
+                while not answers or answers[-1].get("event") != "pong":
+                    message = await socket.receive(timeout=10)
+                    assert message.type == aiohttp.WSMsgType.TEXT, (message.type, message.data, socket.close_code)
+                    if json.loads(message.data)["event"] != "status":
+                        answers.append(json.loads(message.data))
+                return answers
+
+    answers = asyncio.run(main())
+    assert [a["event"] for a in answers] == ["error", "pong"], answers
+    assert "Traceback" not in "".join(fast_server.stderr_lines)
