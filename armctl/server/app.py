@@ -144,6 +144,14 @@ def _holding(request: web.Request, size: int):
         held["bytes"] -= size
 
 
+def _loads(text: str):
+    """``json.loads``; JSON nested deeper than the parser recurses is a ``JSONDecodeError`` too."""
+    try:
+        return json.loads(text)
+    except RecursionError:
+        raise json.JSONDecodeError("nested too deeply", text, 0) from None
+
+
 async def _json_object(request: web.Request) -> dict:
     data = await request.read()
     try:  # JSON is UTF-8 (RFC 8259), whatever charset a Content-Type names
@@ -151,7 +159,7 @@ async def _json_object(request: web.Request) -> dict:
     except UnicodeDecodeError as error:
         raise _BadJson(f"the body is not JSON: byte {data[error.start]:#04x} at offset {error.start} is not UTF-8 text") from None
     try:
-        value = json.loads(text) if text.strip() else {}
+        value = _loads(text) if text.strip() else {}
     except json.JSONDecodeError as error:
         raise _BadJson(f"the body is not JSON: {error.msg} at line {error.lineno} column {error.colno}") from None
     if not isinstance(value, dict):
@@ -318,7 +326,7 @@ async def _on_message(service, client: str, socket, text: str) -> None:
     """A message from a viewer: ``{"jog": "j1_plus"}`` (a heartbeat: start or renew),
     ``{"jog": null}`` (release), ``{"ping": …}``."""
     try:
-        message = json.loads(text)
+        message = _loads(text)
     except json.JSONDecodeError:
         await socket.send_json({"event": "error", "error": "not JSON"})
         return
