@@ -192,3 +192,28 @@ def test_a_websocket_message_nested_too_deep_is_answered_with_an_error(fast_serv
     answers = asyncio.run(main())
     assert [a["event"] for a in answers] == ["error", "pong"], answers
     assert "Traceback" not in "".join(fast_server.stderr_lines)
+
+
+@pytest.mark.realtime
+@pytest.mark.xfail(strict=True, reason="Resume pressed while a job stopped was taken: the arm, frozen mid-move by "
+                   "the abort, was resumed once the job had ended and ran on, the record saying line 1 not executed")
+def test_resume_while_a_job_stops_is_refused_and_the_arm_stays_at_rest(tmp_path):
+    """On an arm whose control frames act as they land (``control_frames=arrival``) the stop's
+    pause freezes the arm mid-move and the queue is cleared.  A Resume pressed then (the run
+    panel's, after its Stop) was answered ``toggle_sent: true``: not carried out by the stopping
+    job, it was sent to the idle arm after the job ended "interrupted", last line executed None,
+    resume line 1 — and the arm went on to finish line 1 (Z 283 → 192 → 150 over the next
+    second).  A job that is stopping takes no pause, resume or feed: 409, as a job that ended."""
+    with served("--arm", "a=sim://?speed=4&control_frames=arrival", journal=tmp_path) as server:
+        status, created = server.request("POST", "/api/arms/a/jobs?name=long.txt", long_job(10))
+        assert status == 201, created
+        job_id = created["id"]
+        _wait_frames(server, job_id, 3)
+        assert server.request("POST", f"/api/arms/a/jobs/{job_id}/stop")[0] == 200
+        status, answer = server.request("POST", f"/api/arms/a/jobs/{job_id}/resume")
+        assert status == 409 and answer["code"] == "busy" and "stopping" in answer["error"], answer
+        job = server.wait_job("a", job_id)
+        assert job["outcome"] == "interrupted", job
+        first = _pose(server)
+        time.sleep(0.6)
+        assert _pose(server) == first, "the arm moved after its job was shown interrupted"
