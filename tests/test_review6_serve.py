@@ -195,8 +195,6 @@ def test_a_websocket_message_nested_too_deep_is_answered_with_an_error(fast_serv
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="Resume pressed while a job stopped was taken: the arm, frozen mid-move by "
-                   "the abort, was resumed once the job had ended and ran on, the record saying line 1 not executed")
 def test_resume_while_a_job_stops_is_refused_and_the_arm_stays_at_rest(tmp_path):
     """On an arm whose control frames act as they land (``control_frames=arrival``) the stop's
     pause freezes the arm mid-move and the queue is cleared.  A Resume pressed then (the run

@@ -244,7 +244,7 @@ async def get_job(request: web.Request) -> web.Response:
 async def control_job(request: web.Request) -> web.Response:
     service = _service(request)
     action = request.match_info["action"]
-    job = await service.running_job(request.match_info["id"], _client(request))
+    job = await service.running_job(request.match_info["id"], _client(request), action)
     arm = service.arm
     if action == "pause":
         return web.json_response({"id": job.id, "toggle_sent": await arm.pause()})

@@ -292,9 +292,10 @@ class ArmService:
         except KeyError:
             raise UnknownJob(f"no job {job_id!r} on arm {self.name!r}") from None
 
-    async def running_job(self, job_id: str, client: str | None) -> Job:
+    async def running_job(self, job_id: str, client: str | None, action: str = "stop") -> Job:
         """The running job ``job_id``, once its first frame went (a pause or a feed asked while
-        the arm is read and the job planned waits for that, up to the status timeout)."""
+        the arm is read and the job planned waits for that, up to the status timeout); a stopping
+        one takes only a stop (a resume would be sent to the arm its stop paused, once it ended)."""
         job = self.job(job_id)
         self.check_control(client)
         if job is self.running:
@@ -304,6 +305,8 @@ class ArmService:
                 pass
         if job is not self.running:
             raise Busy(f"job {job_id} is not running (outcome {job.result.get('outcome') if job.result else None})")
+        if action != "stop" and self._stop_asked:
+            raise Busy(f"job {job_id} is stopping: no {action} now; wait for its end")
         return job
 
     async def stop(self, client: str | None) -> bool:
@@ -328,10 +331,8 @@ class ArmService:
         if self.busy:
             await self.stop_once(why)
         if self.running is not None:
-            try:
+            with contextlib.suppress(Exception):  # (its end, or the time out: the job's faults are its record's)
                 await asyncio.wait_for(asyncio.shield(self.running.task), JOB_END_WAIT_S)
-            except (asyncio.TimeoutError, Exception):
-                pass
 
     async def move(self, words: dict, client: str | None) -> dict:
         self.check_free(client)
