@@ -218,8 +218,6 @@ def test_resume_while_a_job_stops_is_refused_and_the_arm_stays_at_rest(tmp_path)
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="while the stopping server waited for a job's arm, a move asked of its other "
-                   "arm was taken and run to its end: the server exited 39 s after SIGINT")
 def test_a_stopping_server_takes_no_new_job_or_move(tmp_path):
     """A stopping server waits for each stopped job's arm (its summary before the sockets
     close); meanwhile it still answered requests, and a move asked of the other, idle arm 0.3 s

@@ -58,6 +58,8 @@ async def _guard(request: web.Request, handler):
     if token is not None and is_api and not auth.bearer_ok(token, request.headers.get("Authorization"),
                                                           request.headers.get("Sec-WebSocket-Protocol")):
         return _error(401, "unauthorized", "this server needs its token: Authorization: Bearer TOKEN")
+    if request.method == "POST" and settings.get("stopping"):  # (its jobs stopping: nothing new begins)
+        return _error(503, "stopping", "the server is stopping: it takes no new job, move or control now")
     websocket = request.headers.get("Upgrade", "").lower() == "websocket"
     if (request.method == "POST" or websocket) and not auth.origin_ok(request.headers.get("Origin"), request.headers.get("Host")):
         return _error(403, "bad_origin", f"requests from the origin {request.headers.get('Origin')!r} are refused")

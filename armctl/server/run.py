@@ -96,7 +96,7 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
     from aiohttp import web
 
     from ..aio import AsyncArm
-    from .app import build_app
+    from .app import SETTINGS, build_app
 
     services: dict[str, ArmService] = {}
     listening = bind(host, port)  # before any arm is opened: a taken address touches no arm
@@ -132,6 +132,7 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
         for number in STOP_SIGNALS:  # (SIGHUP too: a closed terminal ended the process with no abort sequence)
             loop.add_signal_handler(number, signalled)
         await stop.wait()
+        app[SETTINGS]["stopping"] = True  # every POST refused from now on (503)
         # every job or move stops first (no handler waits for it), and a job's end is published
         # before the WebSockets close: a page shows it interrupted, not running for good
         await asyncio.gather(*(service.stop_and_wait("the server is stopping") for service in services.values()))
