@@ -52,7 +52,6 @@ def workdir(tmp_path):
     return tmp_path
 
 
-@pytest.mark.xfail(strict=True, reason="UnicodeEncodeError quoting the arm's identity: traceback, exit 1")
 @pytest.mark.timeout(120)
 @pytest.mark.parametrize("args, expected", [
     (["status", "--once", "--port", f"/dev/tty{NOT_UTF8}"], 1),  # no such device, as any missing one
