@@ -75,7 +75,6 @@ def test_a_port_with_bytes_that_are_not_utf8(workdir, tmp_path, args, expected):
         assert stderr.rstrip().splitlines()[-1].startswith(("armctl: ", "nothing stored for device /dev/tty")), stderr
 
 
-@pytest.mark.xfail(strict=True, reason="the group's --help/--version write outside the error handler: OSError traceback")
 @pytest.mark.parametrize("args", [["--help"], ["--version"], ["-h"]], ids=" ".join)
 def test_the_groups_own_options_into_a_full_device(tmp_path, args):
     with open("/dev/full", "w") as full:
@@ -86,9 +85,7 @@ def test_the_groups_own_options_into_a_full_device(tmp_path, args):
     assert stderr.strip() == "armctl: No space left on device", stderr  # (as `armctl run --help > /dev/full`)
 
 
-@pytest.mark.parametrize("args", [pytest.param(["--help"], marks=pytest.mark.xfail(strict=True, reason="click exits 1")),
-                                  pytest.param(["--version"], marks=pytest.mark.xfail(strict=True, reason="click exits 1")),
-                                  ["run", "--help"]], ids=" ".join)
+@pytest.mark.parametrize("args", [["--help"], ["--version"], ["run", "--help"]], ids=" ".join)
 def test_the_groups_own_options_into_a_pipe_nobody_reads(tmp_path, args):
     read, write = os.pipe()
     os.close(read)  # the reader went away before armctl wrote a byte (`| head -c0`)

@@ -19,6 +19,7 @@ if is_the_program():  # the armctl command (not a test or a script importing thi
 
 import json  # noqa: E402  (the handlers first: a signal in the first instant is exit 130, no traceback)
 import sys  # noqa: E402
+from contextlib import contextmanager  # noqa: E402
 from itertools import islice  # noqa: E402
 
 import click  # noqa: E402
@@ -40,21 +41,34 @@ class ArmctlGroup(click.Group):
         _tolerant_output()
         return super().main(*args, **kwargs)
 
+    def make_context(self, *args, **kwargs):
+        """The group's own options (``--help``, ``--version``) write before any command runs:
+        a full disk or a reader gone is the same exit there (2, 141) as in a command."""
+        with _exit_codes():
+            return super().make_context(*args, **kwargs)
+
     def invoke(self, ctx: click.Context):
-        try:
+        with _exit_codes():
             try:
                 with command_running():  # a stop signal is Ctrl-C from here (armctl/host/stop_signals.py)
                     return super().invoke(ctx)
             finally:
                 _flush_stdout()
-        except ArmctlError as error:
-            _fail(str(error), exit_code_for(error))
-        except KeyboardInterrupt:
-            _fail("interrupted", EXIT_INTERRUPTED)
-        except BrokenPipeError:
-            _reader_went_away()
-        except OSError as error:
-            _fail(_os_error_text(error), EXIT_USAGE)
+
+
+@contextmanager
+def _exit_codes():
+    """Every error a user can cause, as one line on stderr and its exit code."""
+    try:
+        yield
+    except ArmctlError as error:
+        _fail(str(error), exit_code_for(error))
+    except KeyboardInterrupt:
+        _fail("interrupted", EXIT_INTERRUPTED)
+    except BrokenPipeError:
+        _reader_went_away()
+    except OSError as error:
+        _fail(_os_error_text(error), EXIT_USAGE)
 
 
 def _flush_stdout() -> None:
