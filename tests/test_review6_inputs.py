@@ -96,3 +96,41 @@ def test_the_groups_own_options_into_a_pipe_nobody_reads(tmp_path, args):
         os.close(write)
     stderr = _no_traceback(done)
     assert done.returncode == 141 and not stderr.strip(), stderr
+
+
+# --- an armctl.toml that is not a regular file ----------------------------------------------------
+# Found by name only where it is a regular file (``Path.is_file``): a dangling symbolic link (a
+# config linked to a file since moved), a link loop, a named pipe, a directory, a link to a
+# device were passed over as if there were no armctl.toml — the search went on to the parent
+# directory's, or to none — so the file's port, baud, [connector] (a measured FIFO of 50 frames)
+# and [lint] silently did not apply: exit 0 on every command.  Now each is refused as a profile
+# named by one is (exit 2, naming the file), before it is opened: a named pipe is never waited on.
+
+_NOT_A_FILE = {
+    "a dangling symbolic link": lambda path: path.symlink_to(path.parent / "moved-away.toml"),
+    "a symbolic link loop": lambda path: path.symlink_to(path),
+    "a named pipe": lambda path: os.mkfifo(path),
+    "a directory": lambda path: path.mkdir(),
+    "a link to /dev/zero": lambda path: path.symlink_to("/dev/zero"),
+}
+
+
+@pytest.mark.xfail(strict=True, reason="armctl.toml found by Path.is_file: anything else is passed over, exit 0")
+@pytest.mark.parametrize("where", ["project", "user"])
+@pytest.mark.parametrize("kind", list(_NOT_A_FILE))
+@pytest.mark.parametrize("args", [["config"], ["estimate", "job.txt"], ["status", "--once", "--port", VIRTUAL]],
+                         ids=" ".join)
+def test_an_armctl_toml_that_is_not_a_regular_file_is_refused(workdir, tmp_path, args, kind, where):
+    project = workdir / "project"
+    project.mkdir()
+    shutil.copy(workdir / "job.txt", project / "job.txt")
+    # what the search found instead: a parent's armctl.toml (project), none (user)
+    (workdir / "armctl.toml").write_text('[connector]\nfifo_frames = 200\n')
+    user_folder = tmp_path / "config" / "armctl"
+    user_folder.mkdir(parents=True)
+    path = (project if where == "project" else user_folder) / "armctl.toml"
+    _NOT_A_FILE[kind](path)
+    done = _armctl(args, project, _env(XDG_CONFIG_HOME=str(tmp_path / "config")))
+    stderr = _no_traceback(done)
+    assert done.returncode == 2, stderr
+    assert stderr.strip().splitlines()[-1].startswith(f"armctl: {path}"), stderr
