@@ -143,7 +143,6 @@ def test_an_armctl_toml_that_is_not_a_regular_file_is_refused(workdir, tmp_path,
 # passed ``armctl config`` (exit 0) while every command that opens the port refused it.
 
 
-@pytest.mark.xfail(strict=True, reason="SIM:// is not taken for the simulator: finished, unproven, exit 1")
 @pytest.mark.parametrize("scheme", ["SIM", "Sim"])
 def test_a_sim_url_in_capitals_is_the_simulator(workdir, scheme):
     done = _armctl(["run", "job.txt", "--no-live", "--port", f"{scheme}://?clock=virtual"], workdir)
@@ -153,7 +152,6 @@ def test_a_sim_url_in_capitals_is_the_simulator(workdir, scheme):
     assert "finished: the arm finished the job" in (done.stdout.decode() + stderr), stderr
 
 
-@pytest.mark.xfail(strict=True, reason="an unknown scheme passes armctl config, and the commands exit 1 on opening")
 @pytest.mark.parametrize("args", [["config"], ["status", "--once"], ["run", "job.txt", "--no-live"]], ids=" ".join)
 @pytest.mark.parametrize("port", ["http://arm.local", " sim://", "bogus://x"])
 def test_a_port_of_a_scheme_no_handler_takes_is_a_configuration_error(workdir, args, port):

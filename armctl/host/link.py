@@ -26,7 +26,7 @@ from typing import Callable
 from ..core.armstate import ArmState
 from .clock import Clock, as_clock
 from ..errors import ConfigError, PortError
-from .port_choice import PORT_ENV, SIMULATOR_URL, PortChoice, check_sim_url, choose_port, resolve_port  # noqa: F401  (re-exported)
+from .port_choice import PORT_ENV, SIMULATOR_URL, PortChoice, check_port_url, check_sim_url, choose_port, resolve_port  # noqa: F401  (re-exported)
 from .profile import check_config_value
 from ..core.protocol import DEFAULT_BAUD, STATUS_SIZE, StatusFrame, StatusReader, byte_seconds
 from .virtual_wait import UNMERGED_FRAMES_MAX, News, VirtualWaits
