@@ -168,7 +168,6 @@ def test_a_port_of_a_scheme_no_handler_takes_is_a_configuration_error(workdir, a
 # doubt, exit 0 — where ``--port ''`` is refused as naming no port.
 
 
-@pytest.mark.xfail(strict=True, reason="--forget '' is --forget alone: the configured arm's calibration is forgotten")
 @pytest.mark.timeout(120)
 def test_probe_forget_of_an_empty_name_forgets_nothing(tmp_path):
     arm = f"{VIRTUAL}&fifo=50"
