@@ -199,7 +199,6 @@ _EMPTY_OUTPUT = {
 }
 
 
-@pytest.mark.xfail(strict=True, reason="an empty output name is taken as the option left out")
 @pytest.mark.timeout(40)
 @pytest.mark.parametrize("name", list(_EMPTY_OUTPUT))
 def test_an_output_option_naming_no_file_is_a_usage_error(workdir, name):

@@ -13,7 +13,7 @@ import sys
 
 import click
 
-from ..ui.cli_types import number
+from ..ui.cli_types import NamedFile, number
 from ..core.limits import BAUD_RANGE
 
 MOTION_ANNOUNCEMENT = (
@@ -33,7 +33,7 @@ ON_PORT = "\0"
 @click.option("--no-motion", is_flag=True, help="Never move the arm (the speed factor is then not measured).")
 @click.option("--yes", is_flag=True, help="Consent to the small moves without asking.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (the seven settings and details), nothing else.")
-@click.option("--write", "write_path", type=click.Path(dir_okay=False), metavar="FILE",
+@click.option("--write", "write_path", type=NamedFile(dir_okay=False), metavar="FILE",
               help="Put the values into the [connector] table of FILE (an armctl.toml), keeping the rest.")
 @click.option("--list", "list_stored", is_flag=True, help="List the arms probed and what was kept for each; probe nothing.")
 @click.option("--forget", "forget", is_flag=False, flag_value=ON_PORT, default=None, metavar="[ARM]",

@@ -26,7 +26,7 @@ import click  # noqa: E402
 
 from .. import __version__  # noqa: E402
 from ..bench import SCENARIO_NAMES as BENCH_SCENARIOS  # the names only: imports nothing else
-from .cli_types import OutputFile, number
+from .cli_types import NamedFile, OutputFile, number
 from ..errors import ArmctlError, ConfigError, ProfileError
 from ..errors import EXIT_BROKEN_PIPE, EXIT_INTERRUPTED, EXIT_PROBLEMS, EXIT_USAGE, UsageFailure, exit_code_for
 from ..core.limits import BAUD_RANGE, BENCH_JOBS_RANGE, BENCH_LEAD_RANGE_S, LEAD_RANGE_S, LINE_RANGE, START_TIMEOUT_RANGE_S, STATUS_TIMEOUT_RANGE_S, TCP_PORT_RANGE
@@ -250,7 +250,7 @@ def _report_script_errors(compilation) -> None:
 @click.option("--format", "fmt", type=click.Choice(["hex", "json", "bin"]), default="hex", show_default=True,
               help="hex: one frame per line, 96 hex digits; json: one object per frame; bin: the raw bytes.")
 @click.option("--json", "as_json", is_flag=True, help="The same as --format json (armctl's one JSON spelling).")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Write here instead of stdout.")
+@click.option("-o", "--output", type=NamedFile(dir_okay=False, writable=True), help="Write here instead of stdout.")
 def compile_command(script: str, fmt: str, as_json: bool, output: str | None):
     """Check a motion script, then print the exact frames the arm would receive.
 
@@ -466,7 +466,7 @@ def home(port, baud, profile_path, timeout_s, as_json):
 @click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True),
               help="Serve on 127.0.0.1:PORT (socket://127.0.0.1:PORT): one client at a time, the same arm.")
 @click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?speed_factor=1.3&loss=0.05.")
-@click.option("--stats", "stats_path", type=click.Path(dir_okay=False, writable=True), default=None,
+@click.option("--stats", "stats_path", type=NamedFile(dir_okay=False, writable=True), default=None,
               help="On exit, write what the arm saw (frames landed, dropped, run) as JSON to this file (--pty).")
 def sim(use_pty, tcp_port, sim_url, stats_path):
     """Run the built-in simulated arm for other programs to talk to."""

@@ -7,6 +7,8 @@ option declares a number: both bounds are required, NaN and ±inf are refused by
 failure is click's usage error (exit 2, naming the option).  The tests find every numeric
 option through click's own command objects and require it to be ``Bounded``.
 
+``NamedFile`` is the type of every option naming a file armctl writes (``compile -o``, ``plot -o``,
+``probe --write``, ``sim --stats``): a ``click.Path`` that refuses an empty name.
 ``OutputFile`` is the type of an option naming a file armctl writes as it goes (``run --log``,
 ``jog --log``, ``jog --record``): a named pipe (its open waits for a reader for ever) or a
 directory is refused as a usage error naming the option; a character device is written through.
@@ -60,7 +62,17 @@ def number(low: float, high: float, *, whole: bool = False) -> click.ParamType:
     return BoundedFloat(float(low), float(high))
 
 
-class OutputFile(click.Path):
+class NamedFile(click.Path):
+    """A file an option names: an empty or blank name (``--log "$LOG"``, LOG unset) is a usage
+    error, never the option left out (a job run without its journal, a plot written elsewhere)."""
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not value.strip():
+            self.fail(f"{value!r} names no file: give a path, or leave the option out", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class OutputFile(NamedFile):
     """A file to write, named by an option: not a directory, not a named pipe or socket (the
     check of armctl/host/inputs.py, decided without opening it); a device such as /dev/null is fine."""
 
