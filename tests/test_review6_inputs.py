@@ -211,3 +211,38 @@ def test_an_output_option_naming_no_file_is_a_usage_error(workdir, name):
     option = name.split()[1]
     assert f"Invalid value for '{option}" in stderr and "names no file" in stderr, stderr
     assert not done.stdout and sorted(p.name for p in workdir.iterdir()) == ["job.txt", f"p{NOT_UTF8}.toml"]
+
+
+# --- probe --write through a symbolic link, or into no directory ----------------------------------
+# ``probe --write linked.toml`` (a link to a shared armctl.toml) replaced the link with a regular
+# file (a temporary file renamed over the link's own name): the shared file never got the values,
+# and the link was gone.  ``--write nodir/armctl.toml`` probed the arm, then failed naming a
+# temporary file nobody asked for (``nodir/.armctl.toml.probe-tmp``).
+
+
+@pytest.mark.xfail(strict=True, reason="the link is replaced by a regular file; the shared file is unchanged")
+@pytest.mark.timeout(120)
+def test_probe_write_through_a_symbolic_link_writes_its_target(tmp_path):
+    shared = tmp_path / "shared" / "armctl.toml"
+    shared.parent.mkdir()
+    shared.write_text('# the team\'s config\n[lint]\nignore = ["L203"]\n')
+    shared.chmod(0o640)
+    (tmp_path / "armctl.toml").symlink_to(shared)
+    done = _armctl(["probe", "--no-motion", "--port", f"{VIRTUAL}&fifo=60", "--write", "armctl.toml"], tmp_path,
+                   _env(XDG_DATA_HOME=str(tmp_path / "data")))
+    assert done.returncode == 0, _no_traceback(done)
+    assert (tmp_path / "armctl.toml").is_symlink()
+    text = shared.read_text()
+    assert text.startswith('# the team\'s config\n[lint]\nignore = ["L203"]\n') and "fifo_frames = 60" in text, text
+    assert shared.stat().st_mode & 0o777 == 0o640
+    assert sorted(p.name for p in shared.parent.iterdir()) == ["armctl.toml"]  # no temporary file left
+
+
+@pytest.mark.xfail(strict=True, reason="probes first, then fails naming its temporary file")
+def test_probe_write_into_a_missing_directory_is_refused_before_the_probe(tmp_path):
+    done = _armctl(["probe", "--no-motion", "--port", VIRTUAL, "--write", "nodir/armctl.toml"], tmp_path,
+                   _env(XDG_DATA_HOME=str(tmp_path / "data")))
+    stderr = _no_traceback(done)
+    assert done.returncode == 2, stderr
+    assert stderr.strip().splitlines()[-1] == "armctl: cannot write nodir/armctl.toml: no directory nodir", stderr
+    assert not done.stdout and not (tmp_path / "data").exists()  # nothing probed, nothing kept
