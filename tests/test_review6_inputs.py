@@ -220,7 +220,6 @@ def test_an_output_option_naming_no_file_is_a_usage_error(workdir, name):
 # temporary file nobody asked for (``nodir/.armctl.toml.probe-tmp``).
 
 
-@pytest.mark.xfail(strict=True, reason="the link is replaced by a regular file; the shared file is unchanged")
 @pytest.mark.timeout(120)
 def test_probe_write_through_a_symbolic_link_writes_its_target(tmp_path):
     shared = tmp_path / "shared" / "armctl.toml"
@@ -238,7 +237,6 @@ def test_probe_write_through_a_symbolic_link_writes_its_target(tmp_path):
     assert sorted(p.name for p in shared.parent.iterdir()) == ["armctl.toml"]  # no temporary file left
 
 
-@pytest.mark.xfail(strict=True, reason="probes first, then fails naming its temporary file")
 def test_probe_write_into_a_missing_directory_is_refused_before_the_probe(tmp_path):
     done = _armctl(["probe", "--no-motion", "--port", VIRTUAL, "--write", "nodir/armctl.toml"], tmp_path,
                    _env(XDG_DATA_HOME=str(tmp_path / "data")))
