@@ -251,7 +251,6 @@ def test_probe_write_into_a_missing_directory_is_refused_before_the_probe(tmp_pa
 # two (the file and stdout), went unsaid, where the module's rule is that errors carry the path given.
 
 
-@pytest.mark.xfail(strict=True, reason="the write-through to a device raises OSError without the path")
 @pytest.mark.parametrize("fmt", ["hex", "bin", "json"])
 def test_compile_into_a_full_device_names_it(workdir, fmt):
     done = _armctl(["compile", "job.txt", "--format", fmt, "-o", "/dev/full"], workdir)
