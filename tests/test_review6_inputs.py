@@ -257,3 +257,31 @@ def test_compile_into_a_full_device_names_it(workdir, fmt):
     stderr = _no_traceback(done)
     assert done.returncode == 2, stderr
     assert stderr.strip() == "armctl: /dev/full: No space left on device", stderr
+
+
+# --- a sim:// profile that the simulator refuses --------------------------------------------------
+# ``armctl config --port 'sim://?profile=bad.toml'`` listed the port (exit 0) while every command
+# that opens it refused the profile (exit 2): the simulator read it only as the port opened.  It is
+# read where the URL is checked now, as ``sim --url`` reads it, and the message names the origin.
+
+_BAD_SIM_PROFILES = {
+    "missing": None,
+    "a directory": "dir",
+    "not UTF-8": b"name = \"\xff\"\n",
+    "a limit upside down": b"[joints]\nj1_deg = [170.0, -170.0]\n",
+}
+
+
+@pytest.mark.xfail(strict=True, reason="armctl config does not read the sim:// profile the commands refuse")
+@pytest.mark.parametrize("kind", list(_BAD_SIM_PROFILES))
+@pytest.mark.parametrize("args", [["config"], ["status", "--once"]], ids=" ".join)
+def test_a_sim_profile_the_simulator_refuses_is_refused_by_config_too(tmp_path, kind, args):
+    content = _BAD_SIM_PROFILES[kind]
+    if content == "dir":
+        (tmp_path / "sim.toml").mkdir()
+    elif content is not None:
+        (tmp_path / "sim.toml").write_bytes(content)
+    done = _armctl([*args, "--port", f"{VIRTUAL}&profile=sim.toml"], tmp_path)
+    stderr = _no_traceback(done)
+    assert done.returncode == 2, stderr
+    assert stderr.strip().splitlines()[-1].startswith("armctl: --port: sim:// option profile: sim.toml"), stderr
