@@ -272,7 +272,6 @@ _BAD_SIM_PROFILES = {
 }
 
 
-@pytest.mark.xfail(strict=True, reason="armctl config does not read the sim:// profile the commands refuse")
 @pytest.mark.parametrize("kind", list(_BAD_SIM_PROFILES))
 @pytest.mark.parametrize("args", [["config"], ["status", "--once"]], ids=" ".join)
 def test_a_sim_profile_the_simulator_refuses_is_refused_by_config_too(tmp_path, kind, args):

@@ -128,13 +128,23 @@ def _pyserial_takes(scheme: str) -> bool:
 
 def check_sim_url(choice: PortChoice) -> None:
     """A bad ``sim://`` option is a usage error (exit 2) naming where the URL came from, raised
-    before anything opens: the one parse is armctl/sim/protocol_sim.py's."""
+    before anything opens: the one parse is armctl/sim/protocol_sim.py's.  A ``profile`` option's
+    file is read here too, as ``sim --url`` reads it (a missing or bad one is refused by
+    ``armctl config`` as by the command that would open the port)."""
     if choice.url in ("sim://", "sim:///", "sim://?"):
         return  # the default arm: nothing to parse, and lint or estimate need not load the simulator
+    from ..errors import ProfileError
     from ..sim.protocol_sim import parse_sim_url
 
+    where = f"{choice.origin}: port" if choice.from_file else choice.origin
     try:
-        parse_sim_url(choice.url)
+        options = parse_sim_url(choice.url)
     except ConfigError as error:
-        where = f"{choice.origin}: port" if choice.from_file else choice.origin
         raise ConfigError(f"{where}: {error}") from None
+    if isinstance(options.profile, str):
+        from .profile import load_profile
+
+        try:
+            load_profile(options.profile)
+        except (ConfigError, ProfileError) as error:
+            raise ConfigError(f"{where}: sim:// option profile: {error}") from None
