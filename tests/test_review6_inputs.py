@@ -284,3 +284,22 @@ def test_a_sim_profile_the_simulator_refuses_is_refused_by_config_too(tmp_path, 
     stderr = _no_traceback(done)
     assert done.returncode == 2, stderr
     assert stderr.strip().splitlines()[-1].startswith("armctl: --port: sim:// option profile: sim.toml"), stderr
+
+
+# --- a NUL in armctl.toml's port -----------------------------------------------------------------
+# TOML can hold a NUL (``port = "/dev/ttyUSB0\u0000"``), a command line or the environment cannot:
+# armctl config listed it (exit 0) and every command failed on opening, "cannot open /dev/ttyUSB0:
+# embedded null byte" (exit 1), naming a port that is not the one written.  A profile path with a
+# NUL was refused already; the port is refused the same way, naming the file.
+
+
+@pytest.mark.xfail(strict=True, reason="a NUL in port passes the check of armctl.toml")
+@pytest.mark.parametrize("port", ["/dev/ttyUSB0\\u0000", "socket://\\u0000:1", "loop://\\u0000"])
+@pytest.mark.parametrize("args", [["config"], ["status", "--once"], ["run", "job.txt", "--no-live"]], ids=" ".join)
+def test_a_nul_in_the_port_of_armctl_toml_is_refused(workdir, port, args):
+    (workdir / "armctl.toml").write_text(f'port = "{port}"\n')
+    done = _armctl(args, workdir)
+    stderr = _no_traceback(done)
+    assert done.returncode == 2, stderr
+    assert stderr.strip().splitlines()[-1].startswith(f"armctl: {workdir / 'armctl.toml'}: port = "), stderr
+    assert "NUL" in stderr, stderr
