@@ -293,7 +293,6 @@ def test_a_sim_profile_the_simulator_refuses_is_refused_by_config_too(tmp_path, 
 # NUL was refused already; the port is refused the same way, naming the file.
 
 
-@pytest.mark.xfail(strict=True, reason="a NUL in port passes the check of armctl.toml")
 @pytest.mark.parametrize("port", ["/dev/ttyUSB0\\u0000", "socket://\\u0000:1", "loop://\\u0000"])
 @pytest.mark.parametrize("args", [["config"], ["status", "--once"], ["run", "job.txt", "--no-live"]], ids=" ".join)
 def test_a_nul_in_the_port_of_armctl_toml_is_refused(workdir, port, args):

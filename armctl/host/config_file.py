@@ -111,8 +111,8 @@ def load_config(start: Path | None = None) -> Config:
 
 
 def _config_port(value) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise BadValue('must be a device path or URL such as "/dev/ttyUSB0" or "sim://" '
+    if not isinstance(value, str) or not value.strip() or "\0" in value:  # (a NUL: TOML holds one, no port name does)
+        raise BadValue('must be a device path or URL such as "/dev/ttyUSB0" or "sim://", without a NUL character '
                    "(leave port out to use the built-in simulator)")
     return value
 

@@ -58,6 +58,8 @@ def resolve_port(option: str | None, environ=os.environ, config: dict | None = N
         if not option.strip():
             raise ConfigError(f"{origin} is empty: give a device or URL (`armctl ports` lists the devices found), "
                               f"or leave {origin} out")
+        if "\0" in option:  # (Arm.open's port, serve's --arm: a command line cannot hold one)
+            raise ConfigError(f"{origin} {option!r} holds a NUL character, which no port name has")
         return PortChoice(_scheme_lowered(option), origin)
     if PORT_ENV in environ:
         if not environ[PORT_ENV].strip():
