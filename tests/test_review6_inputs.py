@@ -302,3 +302,26 @@ def test_a_nul_in_the_port_of_armctl_toml_is_refused(workdir, port, args):
     assert done.returncode == 2, stderr
     assert stderr.strip().splitlines()[-1].startswith(f"armctl: {workdir / 'armctl.toml'}: port = "), stderr
     assert "NUL" in stderr, stderr
+
+
+# --- a port path that names no device -------------------------------------------------------------
+# ``--port job.txt`` said "cannot open job.txt: Could not configure port: (25, 'Inappropriate ioctl
+# for device')", ``--port adir`` "[Errno 21] could not open port adir: [Errno 21] Is a directory:
+# 'adir'": pyserial's words, after opening a regular file read-write.  Now it is said what the path
+# is, before anything is opened (exit 1, as any port that cannot be opened).
+
+_NOT_A_DEVICE = {"job.txt": "a regular file", "adir": "a directory", "fifo": "a named pipe"}
+
+
+@pytest.mark.xfail(strict=True, reason="pyserial's words after opening the path read-write")
+@pytest.mark.parametrize("path", list(_NOT_A_DEVICE))
+def test_a_port_that_is_no_device_is_named_for_what_it_is(workdir, path):
+    (workdir / "adir").mkdir()
+    os.mkfifo(workdir / "fifo")
+    before = (workdir / "job.txt").stat().st_mtime_ns
+    done = _armctl(["status", "--once", "--port", path], workdir)
+    stderr = _no_traceback(done)
+    assert done.returncode == 1, stderr
+    assert stderr.strip() == (f"armctl: {path} is {_NOT_A_DEVICE[path]}, not a serial device: give the arm's port "
+                              "(`armctl ports` lists the ports found)"), stderr
+    assert (workdir / "job.txt").stat().st_mtime_ns == before
