@@ -313,7 +313,6 @@ def test_a_nul_in_the_port_of_armctl_toml_is_refused(workdir, port, args):
 _NOT_A_DEVICE = {"job.txt": "a regular file", "adir": "a directory", "fifo": "a named pipe"}
 
 
-@pytest.mark.xfail(strict=True, reason="pyserial's words after opening the path read-write")
 @pytest.mark.parametrize("path", list(_NOT_A_DEVICE))
 def test_a_port_that_is_no_device_is_named_for_what_it_is(workdir, path):
     (workdir / "adir").mkdir()

@@ -135,12 +135,30 @@ def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_
     kwargs = {"baudrate": baud, "timeout": timeout, "write_timeout": write_timeout}
     if "://" not in url:
         kwargs["exclusive"] = True  # a second armctl on the same arm would interleave frames
+        _refuse_unless_device(url)
     try:
         return serial.serial_for_url(url, **kwargs)
     except ConfigError:  # a bad sim:// option: the user's configuration, not the port
         raise
     except (serial.SerialException, OSError, ValueError) as error:
         raise PortError(describe_open_error(url, error)) from None
+
+
+def _refuse_unless_device(path: str) -> None:
+    """A path that names a file, a directory or a named pipe is said to be one, before pyserial
+    opens it read-write and fails in its own words; a missing path is pyserial's to report."""
+    import os
+    import stat
+
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return
+    if not stat.S_ISCHR(mode):
+        from .inputs import kind_of
+
+        raise PortError(f"{path} is {kind_of(mode)}, not a serial device: give the arm's port "
+                        "(`armctl ports` lists the ports found)")
 
 
 def describe_open_error(url: str, error: Exception) -> str:
