@@ -324,3 +324,18 @@ def test_a_port_that_is_no_device_is_named_for_what_it_is(workdir, path):
     assert stderr.strip() == (f"armctl: {path} is {_NOT_A_DEVICE[path]}, not a serial device: give the arm's port "
                               "(`armctl ports` lists the ports found)"), stderr
     assert (workdir / "job.txt").stat().st_mtime_ns == before
+
+
+# --- a port with a space at its end ----------------------------------------------------------------
+# ``ARMCTL_PORT="/dev/ttyUSB0 "`` (a copied line): "no such device: /dev/ttyUSB0  (is the arm
+# plugged in? …)" — the one character at fault cannot be seen.  A port name with a space at
+# either end is quoted in the message.
+
+
+@pytest.mark.xfail(strict=True, reason="the name is printed bare: its trailing space cannot be seen")
+@pytest.mark.parametrize("port", ["/dev/ttyUSB9 ", " /dev/ttyUSB9", "/dev/ttyUSB9\t"])
+def test_a_port_name_with_space_at_an_end_is_quoted(tmp_path, port):
+    done = _armctl(["status", "--once"], tmp_path, _env(ARMCTL_PORT=port))
+    stderr = _no_traceback(done)
+    assert done.returncode == 1, stderr
+    assert stderr.strip().startswith(f"armctl: no such device: {port!r} (is the arm plugged in?"), stderr
