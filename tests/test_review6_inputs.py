@@ -332,7 +332,6 @@ def test_a_port_that_is_no_device_is_named_for_what_it_is(workdir, path):
 # either end is quoted in the message.
 
 
-@pytest.mark.xfail(strict=True, reason="the name is printed bare: its trailing space cannot be seen")
 @pytest.mark.parametrize("port", ["/dev/ttyUSB9 ", " /dev/ttyUSB9", "/dev/ttyUSB9\t"])
 def test_a_port_name_with_space_at_an_end_is_quoted(tmp_path, port):
     done = _armctl(["status", "--once"], tmp_path, _env(ARMCTL_PORT=port))

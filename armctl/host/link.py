@@ -164,6 +164,7 @@ def _refuse_unless_device(path: str) -> None:
 def describe_open_error(url: str, error: Exception) -> str:
     code = getattr(error, "errno", None)
     text = str(error)
+    url = url if url == url.strip() else repr(url)  # ("/dev/ttyUSB0 ": the space at fault, seen)
     if code == errno.ENOENT or "No such file" in text:
         return f"no such device: {url} (is the arm plugged in? `armctl ports` lists the ports found)"
     if code == errno.EACCES or "Permission denied" in text:
