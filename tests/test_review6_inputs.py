@@ -338,3 +338,36 @@ def test_a_port_name_with_space_at_an_end_is_quoted(tmp_path, port):
     stderr = _no_traceback(done)
     assert done.returncode == 1, stderr
     assert stderr.strip().startswith(f"armctl: no such device: {port!r} (is the arm plugged in?"), stderr
+
+
+# --- "-" as an output ------------------------------------------------------------------------------
+# "-" is standard input for a script; as an output it made a file named "-": ``compile -o -``
+# printed nothing and exited 0 (the frames in ./-), ``run --log -`` journalled to ./-.  Now
+# ``compile -o -`` is standard output (the frames printed, as without -o), and any other output
+# option refuses "-" (exit 2, before anything is read or sent): ./- names such a file.
+
+_DASH_OUTPUT = {name: [("-" if arg == "" else arg) for arg in args] for name, args in _EMPTY_OUTPUT.items()
+                if name != "compile -o"}
+
+
+@pytest.mark.xfail(strict=True, reason="compile -o - writes a file named '-'")
+def test_compile_o_dash_is_standard_output(workdir):
+    done = _armctl(["compile", "job.txt", "-o", "-"], workdir)
+    assert done.returncode == 0, _no_traceback(done)
+    assert done.stdout == _armctl(["compile", "job.txt"], workdir).stdout and done.stdout.count(b"\n") == 14
+    assert not (workdir / "-").exists()
+
+
+@pytest.mark.xfail(strict=True, reason="'-' makes a file named '-'")
+@pytest.mark.timeout(40)
+@pytest.mark.parametrize("name", list(_DASH_OUTPUT))
+def test_an_output_option_refuses_a_dash(workdir, name):
+    try:
+        done = _armctl(_DASH_OUTPUT[name], workdir, timeout=15)
+    except subprocess.TimeoutExpired:
+        pytest.fail(f"{name} - ran on")
+    stderr = _no_traceback(done)
+    assert done.returncode == 2, stderr
+    option = name.split()[1]
+    assert f"Invalid value for '{option}" in stderr and "'-' names no file here: write ./- for a file named -" in stderr
+    assert not (workdir / "-").exists()
