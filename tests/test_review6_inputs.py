@@ -202,14 +202,20 @@ _EMPTY_OUTPUT = {
 @pytest.mark.timeout(40)
 @pytest.mark.parametrize("name", list(_EMPTY_OUTPUT))
 def test_an_output_option_naming_no_file_is_a_usage_error(workdir, name):
+    _refused_at_once(_EMPTY_OUTPUT[name], name, "names no file: give a path", workdir)
+
+
+def _refused_at_once(args, name: str, said: str, workdir) -> None:
+    """``args`` end at once in a usage error naming the option of ``name`` ("run --log"), saying
+    ``said``, with nothing written: not the option left out, not a file made."""
     try:
-        done = _armctl(_EMPTY_OUTPUT[name], workdir, timeout=15)
+        done = _armctl(args, workdir, timeout=15)
     except subprocess.TimeoutExpired:
-        pytest.fail(f"{name} '' ran on as if the option were left out")
+        pytest.fail(f"{' '.join(args)}: ran on as if the option were left out")
     stderr = _no_traceback(done)
     assert done.returncode == 2, stderr
     option = name.split()[1]
-    assert f"Invalid value for '{option}" in stderr and "names no file" in stderr, stderr
+    assert f"Invalid value for '{option}" in stderr and said in stderr, stderr
     assert not done.stdout and sorted(p.name for p in workdir.iterdir()) == ["job.txt", f"p{NOT_UTF8}.toml"]
 
 
@@ -346,11 +352,9 @@ def test_a_port_name_with_space_at_an_end_is_quoted(tmp_path, port):
 # ``compile -o -`` is standard output (the frames printed, as without -o), and any other output
 # option refuses "-" (exit 2, before anything is read or sent): ./- names such a file.
 
-_DASH_OUTPUT = {name: [("-" if arg == "" else arg) for arg in args] for name, args in _EMPTY_OUTPUT.items()
-                if name != "compile -o"}
+_DASH_OUTPUT = {name: [*args[:-1], "-"] for name, args in _EMPTY_OUTPUT.items() if name != "compile -o"}
 
 
-@pytest.mark.xfail(strict=True, reason="compile -o - writes a file named '-'")
 def test_compile_o_dash_is_standard_output(workdir):
     done = _armctl(["compile", "job.txt", "-o", "-"], workdir)
     assert done.returncode == 0, _no_traceback(done)
@@ -358,16 +362,7 @@ def test_compile_o_dash_is_standard_output(workdir):
     assert not (workdir / "-").exists()
 
 
-@pytest.mark.xfail(strict=True, reason="'-' makes a file named '-'")
 @pytest.mark.timeout(40)
 @pytest.mark.parametrize("name", list(_DASH_OUTPUT))
 def test_an_output_option_refuses_a_dash(workdir, name):
-    try:
-        done = _armctl(_DASH_OUTPUT[name], workdir, timeout=15)
-    except subprocess.TimeoutExpired:
-        pytest.fail(f"{name} - ran on")
-    stderr = _no_traceback(done)
-    assert done.returncode == 2, stderr
-    option = name.split()[1]
-    assert f"Invalid value for '{option}" in stderr and "'-' names no file here: write ./- for a file named -" in stderr
-    assert not (workdir / "-").exists()
+    _refused_at_once(_DASH_OUTPUT[name], name, "'-' names no file here: write ./- for a file named -", workdir)

@@ -250,7 +250,8 @@ def _report_script_errors(compilation) -> None:
 @click.option("--format", "fmt", type=click.Choice(["hex", "json", "bin"]), default="hex", show_default=True,
               help="hex: one frame per line, 96 hex digits; json: one object per frame; bin: the raw bytes.")
 @click.option("--json", "as_json", is_flag=True, help="The same as --format json (armctl's one JSON spelling).")
-@click.option("-o", "--output", type=NamedFile(dir_okay=False, writable=True), help="Write here instead of stdout.")
+@click.option("-o", "--output", type=NamedFile(dir_okay=False, writable=True, dash_is_stdout=True),
+              help="Write here instead of stdout (- : stdout).")
 def compile_command(script: str, fmt: str, as_json: bool, output: str | None):
     """Check a motion script, then print the exact frames the arm would receive.
 

@@ -64,11 +64,21 @@ def number(low: float, high: float, *, whole: bool = False) -> click.ParamType:
 
 class NamedFile(click.Path):
     """A file an option names: an empty or blank name (``--log "$LOG"``, LOG unset) is a usage
-    error, never the option left out (a job run without its journal, a plot written elsewhere)."""
+    error, never the option left out (a job run without its journal, a plot written elsewhere);
+    so is "-", standard input for a script, which would make a file named "-" (``./-`` names one),
+    unless ``dash_is_stdout`` (``compile -o -``: None, standard output)."""
+
+    def __init__(self, *, dash_is_stdout: bool = False, **kwargs) -> None:
+        super().__init__(**kwargs)
+        self.dash_is_stdout = dash_is_stdout
 
     def convert(self, value, param, ctx):
         if isinstance(value, str) and not value.strip():
             self.fail(f"{value!r} names no file: give a path, or leave the option out", param, ctx)
+        if value == "-":
+            if self.dash_is_stdout:
+                return None
+            self.fail("'-' names no file here: write ./- for a file named -", param, ctx)
         return super().convert(value, param, ctx)
 
 
