@@ -415,3 +415,17 @@ def test_move_prints_the_warning_of_its_line(tmp_path, quiet):
     assert done.returncode == 1, stderr
     assert ("L103 target (0, 0, 0)" in stderr) is not quiet, stderr
     assert b"frames may have been lost" in done.stdout  # (the summary: the arm refused the target)
+
+
+# --- an output in a directory that is not there ---------------------------------------------------------
+# ``sim --pty --stats nodir/stats.json`` served the arm until Ctrl-C, then failed to write what it
+# had counted ("armctl: nodir/stats.json: No such file or directory", exit 2): the whole session's
+# statistics lost.  Every output option now refuses a file in a missing directory before anything
+# starts, naming both.
+
+
+@pytest.mark.xfail(strict=True, reason="sim --stats is opened only at exit")
+@pytest.mark.timeout(40)
+def test_sim_stats_in_a_missing_directory_is_refused_at_once(workdir):
+    _refused_at_once(["sim", "--pty", "--stats", "nodir/stats.json"], "sim --stats",
+                     "nodir/stats.json: no directory nodir", workdir)
