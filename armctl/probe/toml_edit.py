@@ -115,10 +115,8 @@ def _after_last_key(lines: list[str], start: int, end: int) -> int:
 
 def check_writable(path: Path) -> None:
     """Before the probe sends anything: an existing file must be a regular file (the write
-    replaces it: a device such as /dev/full must never be) and valid TOML, a new one in a
-    directory that is there."""
-    if not path.parent.is_dir():
-        raise ConfigError(f"cannot write {path}: no directory {path.parent}")
+    replaces it: a device such as /dev/full must never be) and valid TOML (a missing directory:
+    the option's type, ``cli_types.NamedFile``)."""
     updated(_existing_text(path), {}, str(path))
 
 

@@ -17,6 +17,7 @@ directory is refused as a usage error naming the option; a character device is w
 from __future__ import annotations
 
 import math
+import os
 
 import click
 
@@ -66,7 +67,8 @@ class NamedFile(click.Path):
     """A file an option names: an empty or blank name (``--log "$LOG"``, LOG unset) is a usage
     error, never the option left out (a job run without its journal, a plot written elsewhere);
     so is "-", standard input for a script, which would make a file named "-" (``./-`` names one),
-    unless ``dash_is_stdout`` (``compile -o -``: None, standard output)."""
+    unless ``dash_is_stdout`` (``compile -o -``: None, standard output), and a file in a directory
+    that is not there (``sim --stats`` would find out at exit, its session's counts lost)."""
 
     def __init__(self, *, dash_is_stdout: bool = False, **kwargs) -> None:
         super().__init__(**kwargs)
@@ -79,6 +81,9 @@ class NamedFile(click.Path):
             if self.dash_is_stdout:
                 return None
             self.fail("'-' names no file here: write ./- for a file named -", param, ctx)
+        directory = os.path.dirname(value)
+        if directory and not os.path.isdir(directory):  # (refused now, not after a session that wrote nothing)
+            self.fail(f"cannot write {value}: no directory {directory}", param, ctx)
         return super().convert(value, param, ctx)
 
 
