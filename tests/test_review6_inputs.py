@@ -249,7 +249,7 @@ def test_probe_write_into_a_missing_directory_is_refused_before_the_probe(tmp_pa
     stderr = _no_traceback(done)
     assert done.returncode == 2, stderr
     assert stderr.strip().splitlines()[-1] == ("Error: Invalid value for '--write': cannot write nodir/armctl.toml: "
-                                               "no directory nodir"), stderr
+                                               "No such file or directory (no directory nodir)"), stderr
     assert not done.stdout and not (tmp_path / "data").exists()  # nothing probed, nothing kept
 
 
@@ -428,4 +428,4 @@ def test_move_prints_the_warning_of_its_line(tmp_path, quiet):
 @pytest.mark.timeout(40)
 def test_sim_stats_in_a_missing_directory_is_refused_at_once(workdir):
     _refused_at_once(["sim", "--pty", "--stats", "nodir/stats.json"], "sim --stats",
-                     "cannot write nodir/stats.json: no directory nodir", workdir)
+                     "cannot write nodir/stats.json: No such file or directory (no directory nodir)", workdir)

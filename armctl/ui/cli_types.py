@@ -83,7 +83,7 @@ class NamedFile(click.Path):
             self.fail("'-' names no file here: write ./- for a file named -", param, ctx)
         directory = os.path.dirname(value)
         if directory and not os.path.isdir(directory):  # (refused now, not after a session that wrote nothing)
-            self.fail(f"cannot write {value}: no directory {directory}", param, ctx)
+            self.fail(f"cannot write {value}: No such file or directory (no directory {directory})", param, ctx)
         return super().convert(value, param, ctx)
 
 
