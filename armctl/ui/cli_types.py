@@ -70,6 +70,8 @@ class NamedFile(click.Path):
     unless ``dash_is_stdout`` (``compile -o -``: None, standard output), and a file in a directory
     that is not there (``sim --stats`` would find out at exit, its session's counts lost)."""
 
+    check_directory = True
+
     def __init__(self, *, dash_is_stdout: bool = False, **kwargs) -> None:
         super().__init__(**kwargs)
         self.dash_is_stdout = dash_is_stdout
@@ -82,14 +84,18 @@ class NamedFile(click.Path):
                 return None
             self.fail("'-' names no file here: write ./- for a file named -", param, ctx)
         directory = os.path.dirname(value)
-        if directory and not os.path.isdir(directory):  # (refused now, not after a session that wrote nothing)
+        if self.check_directory and directory and not os.path.isdir(directory):  # (now, not after a session)
             self.fail(f"cannot write {value}: No such file or directory (no directory {directory})", param, ctx)
         return super().convert(value, param, ctx)
 
 
 class OutputFile(NamedFile):
     """A file to write, named by an option: not a directory, not a named pipe or socket (the
-    check of armctl/host/inputs.py, decided without opening it); a device such as /dev/null is fine."""
+    check of armctl/host/inputs.py, decided without opening it); a device such as /dev/null is fine.
+    Its command opens it before anything starts and says why it cannot in its own terms (a
+    ``run --json`` summary among them), so a missing directory is left to that open."""
+
+    check_directory = False
 
     def __init__(self, *, writable: bool = False) -> None:
         super().__init__(dir_okay=False, writable=writable)
