@@ -429,3 +429,22 @@ def test_move_prints_the_warning_of_its_line(tmp_path, quiet):
 def test_sim_stats_in_a_missing_directory_is_refused_at_once(workdir):
     _refused_at_once(["sim", "--pty", "--stats", "nodir/stats.json"], "sim --stats",
                      "cannot write nodir/stats.json: No such file or directory (no directory nodir)", workdir)
+
+
+# --- decode: where hex text stops being hex ------------------------------------------------------------
+# Hex text longer than 64 KiB that stops being hex is exit 2 (README): the message named the
+# byte's offset in the file ("not hex text: byte 145509 is b'z'") where every other input error
+# names FILE:LINE:COLUMN — one frame per line, the line is what a user opens.
+
+
+@pytest.mark.xfail(strict=True, reason="the message gives a byte offset, not the line and column")
+@pytest.mark.parametrize("newline", ["\n", "\r\n"])
+def test_decode_names_the_line_and_column_where_hex_text_stops(tmp_path, newline):
+    frame = "ee310100007a430000f0c20000164300003443000000000000000000007a4400000000000000000000000000803b45ef"
+    lines = [frame] * 2000
+    lines[1499] = frame[:4] + "zz" + frame[6:]
+    (tmp_path / "frames.hex").write_text(newline.join(lines) + newline, newline="")
+    done = _armctl(["decode", "frames.hex"], tmp_path)
+    stderr = _no_traceback(done)
+    assert done.returncode == 2, stderr
+    assert stderr.strip().splitlines()[-1] == "armctl: frames.hex:1500:5: not hex text: 'z'", stderr
