@@ -437,7 +437,6 @@ def test_sim_stats_in_a_missing_directory_is_refused_at_once(workdir):
 # names FILE:LINE:COLUMN — one frame per line, the line is what a user opens.
 
 
-@pytest.mark.xfail(strict=True, reason="the message gives a byte offset, not the line and column")
 @pytest.mark.parametrize("newline", ["\n", "\r\n"])
 def test_decode_names_the_line_and_column_where_hex_text_stops(tmp_path, newline):
     frame = "ee310100007a430000f0c20000164300003443000000000000000000007a4400000000000000000000000000803b45ef"

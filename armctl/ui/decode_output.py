@@ -36,7 +36,7 @@ def print_decoded(source: str, as_json: bool) -> int:
                     out.write("\n".join(lines) + "\n")
                     lines = []
         except NotHex as error:
-            raise UsageFailure(f"{source}: {error}") from None
+            raise UsageFailure(f"{source}:{error.where}: {error}" if error.where else f"{source}: {error}") from None
         finally:
             if lines:
                 out.write("\n".join(lines) + "\n")
