@@ -456,7 +456,6 @@ def test_decode_names_the_line_and_column_where_hex_text_stops(tmp_path, newline
 # terminal — retitle it, clear it, recolour what follows.  Control characters are shown escaped.
 
 
-@pytest.mark.xfail(strict=True, reason="the job record's names are printed raw")
 def test_decode_shows_control_characters_of_a_log_escaped(tmp_path):
     record = {"t": 0, "dir": "job", "format": 1, "script": "job\x1b]0;owned\x07.txt", "from_line": 1,
               "port": "/dev/ttyUSB0\x1b[2J", "arm": "usb \x9b31m"}
