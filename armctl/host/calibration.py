@@ -46,6 +46,9 @@ SIM_ARM_FIELDS = ("baud", "control_frames", "fifo_frames", "link_scale", "profil
                   "status_xyz_frame")
 _NETWORK_SCHEMES = ("socket", "rfc2217")
 _USB, _DEVICE = "usb ", "device "
+# a path's bytes that are not UTF-8 (``/dev/tty\xff``, a profile ``p\xff.toml``: Python hands them over
+# as surrogates) are those bytes again in a quoted identity or a record's file name (``%FF``)
+_FILE_NAME_BYTES = "surrogateescape"
 
 
 # --- identity -------------------------------------------------------------------------------------
@@ -100,7 +103,7 @@ def _sim_identity(url: str) -> str:
             name, value = "status_jitter_ms", format(value * 1000.0, "g")
         elif isinstance(value, float):
             value = format(value, "g")
-        words.append(f"{name}={urllib.parse.quote(str(value), safe='/')}")
+        words.append(f"{name}={urllib.parse.quote(str(value), safe='/', errors=_FILE_NAME_BYTES)}")
     return "sim://" + ("?" + "&".join(words) if words else "")
 
 
@@ -312,11 +315,11 @@ def store_dir() -> Path:
 def record_path(arm: str, directory: Path | None = None) -> Path:
     """``arm``'s file: the identity, quoted (one name per identity, readable in a listing), or a
     hash of it when that would be too long a file name."""
-    name = urllib.parse.quote(arm, safe="")
+    name = urllib.parse.quote(arm, safe="", errors=_FILE_NAME_BYTES)
     if len(name) > 200:
         import hashlib
 
-        name = "sha256-" + hashlib.sha256(arm.encode("utf-8")).hexdigest()
+        name = "sha256-" + hashlib.sha256(arm.encode("utf-8", _FILE_NAME_BYTES)).hexdigest()
     return (store_dir() if directory is None else directory) / f"{name}.json"
 
 
@@ -350,7 +353,8 @@ def save(calibration: Calibration, directory: Path | None = None) -> Path:
     earlier = load(calibration.arm, directory)
     record = calibration if earlier is None else earlier.updated(calibration)
     path = record_path(calibration.arm, directory)
-    text = json.dumps(record.to_json(), indent=2, ensure_ascii=False) + "\n"
+    # (ASCII: a path's bytes that are not UTF-8 are kept as JSON's \\u escapes, which read back the same)
+    text = json.dumps(record.to_json(), indent=2) + "\n"
     try:
         directory.mkdir(parents=True, exist_ok=True)
         handle, temporary = tempfile.mkstemp(prefix=".", suffix=".tmp", dir=directory)

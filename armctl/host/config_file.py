@@ -9,6 +9,7 @@ checked by their owners.  (``armctl config``, armctl/ui/config.py, prints what t
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Callable
@@ -36,6 +37,8 @@ def read_toml(path: Path) -> dict:
     try:
         data = read_file_bounded(str(path), str(path), MAX_TOML_BYTES)  # /dev/zero is not a profile
     except FileNotFoundError:
+        if os.path.islink(path):  # (a config linked to a file since moved: `ls` shows it, so say what it is)
+            raise ProfileError(f"{path}: a symbolic link to {os.readlink(path)}, which does not exist") from None
         raise ProfileError(f"{path}: file not found") from None
     except OSError as error:
         raise ProfileError(f"{path}: cannot read: {error.strerror or error}") from None
@@ -46,14 +49,22 @@ def read_toml(path: Path) -> dict:
 
 def find_config(start: Path | None = None) -> tuple[Path | None, dict]:
     """The first armctl.toml in ``start`` (default: the working directory) or a parent, and
-    its whole content with every top-level key checked; ``(None, {})`` when there is none."""
+    its whole content with every top-level key checked; ``(None, {})`` when there is none.
+    Anything by that name is the file (``_present``): one that cannot be read is an error, never
+    passed over for a parent's."""
     directory = Path.cwd() if start is None else Path(start)
     directory = directory.resolve()
     for candidate in (directory, *directory.parents):
         path = candidate / CONFIG_NAME
-        if path.is_file():
+        if _present(path):
             return path, read_config(path)
     return None, {}
+
+
+def _present(path: Path) -> bool:
+    """Something is at ``path``: a file, or what ``read_toml`` refuses by name (a directory, a
+    named pipe, a device, a dangling or looping symbolic link), not a quiet absence."""
+    return os.path.lexists(path)
 
 
 def user_config_path() -> Path:
@@ -87,7 +98,7 @@ def load_config(start: Path | None = None) -> Config:
     """The project file (``find_config``) laid over the user file, both read by ``read_config``."""
     project_path, project = find_config(start)
     user_path = user_config_path()
-    user = read_config(user_path) if user_path.is_file() else {}
+    user = read_config(user_path) if _present(user_path) else {}
     origins = {key: user_path for key in user}
     origins.update({key: project_path for key in project})
     return Config({**user, **project}, origins, project_path, user_path)
@@ -100,8 +111,8 @@ def load_config(start: Path | None = None) -> Config:
 
 
 def _config_port(value) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise BadValue('must be a device path or URL such as "/dev/ttyUSB0" or "sim://" '
+    if not isinstance(value, str) or not value.strip() or "\0" in value:  # (a NUL: TOML holds one, no port name does)
+        raise BadValue('must be a device path or URL such as "/dev/ttyUSB0" or "sim://", without a NUL character '
                    "(leave port out to use the built-in simulator)")
     return value
 

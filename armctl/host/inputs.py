@@ -145,6 +145,11 @@ def _kind(mode: int) -> str | None:
     return next((words for test, words in _KINDS if test(mode)), "not a regular file")
 
 
+def kind_of(mode: int) -> str:
+    """A file's kind in words, from its ``st_mode``: "a regular file", "a named pipe", …"""
+    return _kind(mode) or "a regular file"
+
+
 def refuse_unless_regular(path, name: str | None = None, *, devices_ok: bool = False) -> None:
     """``NotARegularFile`` unless ``path`` names a regular file (through symlinks), decided
     without opening it: opening a named pipe waits for a writer (or a reader) for ever, and

@@ -26,7 +26,7 @@ from typing import Callable
 from ..core.armstate import ArmState
 from .clock import Clock, as_clock
 from ..errors import ConfigError, PortError
-from .port_choice import PORT_ENV, SIMULATOR_URL, PortChoice, check_sim_url, choose_port, resolve_port  # noqa: F401  (re-exported)
+from .port_choice import PORT_ENV, SIMULATOR_URL, PortChoice, check_port_url, check_sim_url, choose_port, resolve_port  # noqa: F401  (re-exported)
 from .profile import check_config_value
 from ..core.protocol import DEFAULT_BAUD, STATUS_SIZE, StatusFrame, StatusReader, byte_seconds
 from .virtual_wait import UNMERGED_FRAMES_MAX, News, VirtualWaits
@@ -135,6 +135,7 @@ def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_
     kwargs = {"baudrate": baud, "timeout": timeout, "write_timeout": write_timeout}
     if "://" not in url:
         kwargs["exclusive"] = True  # a second armctl on the same arm would interleave frames
+        _refuse_unless_device(url)
     try:
         return serial.serial_for_url(url, **kwargs)
     except ConfigError:  # a bad sim:// option: the user's configuration, not the port
@@ -143,9 +144,27 @@ def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_
         raise PortError(describe_open_error(url, error)) from None
 
 
+def _refuse_unless_device(path: str) -> None:
+    """A path that names a file, a directory or a named pipe is said to be one, before pyserial
+    opens it read-write and fails in its own words; a missing path is pyserial's to report."""
+    import os
+    import stat
+
+    try:
+        mode = os.stat(path).st_mode
+    except (OSError, ValueError):
+        return
+    if not stat.S_ISCHR(mode):
+        from .inputs import kind_of
+
+        raise PortError(f"{path} is {kind_of(mode)}, not a serial device: give the arm's port "
+                        "(`armctl ports` lists the ports found)")
+
+
 def describe_open_error(url: str, error: Exception) -> str:
     code = getattr(error, "errno", None)
     text = str(error)
+    url = url if url == url.strip() else repr(url)  # ("/dev/ttyUSB0 ": the space at fault, seen)
     if code == errno.ENOENT or "No such file" in text:
         return f"no such device: {url} (is the arm plugged in? `armctl ports` lists the ports found)"
     if code == errno.EACCES or "Permission denied" in text:

@@ -94,8 +94,12 @@ class PendingOutput:
                 shutil.copyfileobj(self._file, target)
                 target.flush()
             else:  # a device, a FIFO: written through, never replaced
-                with open(self._real, "wb" if self.binary else "w", encoding=None if self.binary else "utf-8") as target:
-                    shutil.copyfileobj(self._file, target)
+                try:
+                    with open(self._real, "wb" if self.binary else "w",
+                              encoding=None if self.binary else "utf-8") as target:
+                        shutil.copyfileobj(self._file, target)
+                except OSError as error:  # (a full device: the error names no file of its own)
+                    raise OSError(error.errno, error.strerror, self.path) from None
         self.committed = True
 
     def discard(self) -> None:

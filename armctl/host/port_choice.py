@@ -58,15 +58,26 @@ def resolve_port(option: str | None, environ=os.environ, config: dict | None = N
         if not option.strip():
             raise ConfigError(f"{origin} is empty: give a device or URL (`armctl ports` lists the devices found), "
                               f"or leave {origin} out")
-        return PortChoice(option, origin)
+        if "\0" in option:  # (Arm.open's port, serve's --arm: a command line cannot hold one)
+            raise ConfigError(f"{origin} {option!r} holds a NUL character, which no port name has")
+        return PortChoice(_scheme_lowered(option), origin)
     if PORT_ENV in environ:
         if not environ[PORT_ENV].strip():
             raise ConfigError(f"{PORT_ENV} is set but empty: give a device or URL, or unset it "
                               f"(`unset {PORT_ENV}`)")
-        return PortChoice(environ[PORT_ENV], PORT_ENV)
+        return PortChoice(_scheme_lowered(environ[PORT_ENV]), PORT_ENV)
     if config and "port" in config:
-        return PortChoice(check_config_value(config_path, "port", config["port"]), str(config_path))
+        url = check_config_value(config_path, "port", config["port"])
+        return PortChoice(_scheme_lowered(url), str(config_path))
     return PortChoice(SIMULATOR_URL, "default")
+
+
+def _scheme_lowered(url: str) -> str:
+    """``url`` with its scheme in lower case, as pyserial reads it (``SIM://`` opens its sim://
+    handler): one spelling, so that every test of the scheme here (the banner, the simulator's own
+    FIFO as proof, the arm's identity) sees the port pyserial opens."""
+    scheme, separator, rest = url.partition("://")
+    return scheme.lower() + separator + rest if separator else url
 
 
 def choose_port(port: "str | PortChoice | None", config=None, origin: str = "--port") -> PortChoice:
@@ -78,20 +89,64 @@ def choose_port(port: "str | PortChoice | None", config=None, origin: str = "--p
 
     config = config or load_config()
     choice = resolve_port(port, config=config.values, config_path=config.path_of("port"), origin=origin)
+    check_port_url(choice)
+    return choice
+
+
+# schemes every command meets, known without asking pyserial (which ``check_port_url`` asks for the rest)
+_KNOWN_SCHEMES = ("sim", "socket", "rfc2217")
+
+
+def check_port_url(choice: PortChoice) -> None:
+    """A URL whose scheme no pyserial handler takes (``http://``, `` sim://``) or a bad ``sim://``
+    option is a usage error (exit 2) naming where the URL came from, raised before anything
+    opens — by ``armctl config`` as by the commands that would open it."""
+    scheme, separator, _ = choice.url.partition("://")
+    if separator and scheme not in _KNOWN_SCHEMES and not _pyserial_takes(scheme):
+        where = f"{choice.origin}: port" if choice.from_file else choice.origin
+        raise ConfigError(f"{where}: {choice.url!r}: no port type {scheme!r} (a device path such as /dev/ttyUSB0, "
+                          "socket://HOST:PORT, rfc2217://HOST:PORT or sim://[?options])")
     if choice.is_simulator:
         check_sim_url(choice)
-    return choice
+
+
+def _pyserial_takes(scheme: str) -> bool:
+    """pyserial has a handler for ``scheme`` (its own ``loop://``, ``spy://``, ``hwgrep://`` …):
+    the module ``serial_for_url`` would import, looked up in the packages it searches."""
+    import importlib.util
+
+    import serial
+
+    if not scheme.isidentifier():
+        return False
+    for package in serial.protocol_handler_packages:
+        try:
+            if importlib.util.find_spec(f"{package}.protocol_{scheme}") is not None:
+                return True
+        except ImportError:
+            continue
+    return False
 
 
 def check_sim_url(choice: PortChoice) -> None:
     """A bad ``sim://`` option is a usage error (exit 2) naming where the URL came from, raised
-    before anything opens: the one parse is armctl/sim/protocol_sim.py's."""
+    before anything opens: the one parse is armctl/sim/protocol_sim.py's.  A ``profile`` option's
+    file is read here too, as ``sim --url`` reads it (a missing or bad one is refused by
+    ``armctl config`` as by the command that would open the port)."""
     if choice.url in ("sim://", "sim:///", "sim://?"):
         return  # the default arm: nothing to parse, and lint or estimate need not load the simulator
+    from ..errors import ProfileError
     from ..sim.protocol_sim import parse_sim_url
 
+    where = f"{choice.origin}: port" if choice.from_file else choice.origin
     try:
-        parse_sim_url(choice.url)
+        options = parse_sim_url(choice.url)
     except ConfigError as error:
-        where = f"{choice.origin}: port" if choice.from_file else choice.origin
         raise ConfigError(f"{where}: {error}") from None
+    if isinstance(options.profile, str):
+        from .profile import load_profile
+
+        try:
+            load_profile(options.profile)
+        except (ConfigError, ProfileError) as error:
+            raise ConfigError(f"{where}: sim:// option profile: {error}") from None

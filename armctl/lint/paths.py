@@ -42,10 +42,10 @@ def expand(paths: Iterable[str], include: Iterable[str] = DEFAULT_INCLUDE, exclu
             yield Target(STDIN)
         elif os.path.isdir(path):
             found = False
-            for file in _walk(path, include, exclude):
+            for target in _walk(path, include, exclude):
                 found = True
-                if _first_time(file, seen):
-                    yield Target(file)
+                if target.problem is not None or _first_time(target.path, seen):
+                    yield target
             if not found:
                 yield Target(path, f"{path}: no motion scripts here ({' '.join(include)}, searched recursively)")
         elif os.path.exists(path) or os.path.islink(path):
@@ -63,15 +63,26 @@ def _first_time(path: str, seen: set[str]) -> bool:
     return True
 
 
-def _walk(root: str, include: tuple[str, ...], exclude: tuple[str, ...]) -> Iterator[str]:
-    for directory, subdirectories, files in os.walk(root):
+def _walk(root: str, include: tuple[str, ...], exclude: tuple[str, ...]) -> Iterator[Target]:
+    """The scripts below ``root``, and a problem for each directory that cannot be listed (os.walk
+    would pass over it: its scripts unchecked, nothing said)."""
+    unreadable: list[OSError] = []
+    for directory, subdirectories, files in os.walk(root, onerror=unreadable.append):
+        yield from _problems(unreadable)
         subdirectories[:] = sorted(d for d in subdirectories if not d.startswith(".") and not _excluded(
             os.path.relpath(os.path.join(directory, d), root), d, exclude))
         for name in sorted(files):
             path = os.path.join(directory, name)
             relative = os.path.relpath(path, root)
             if _matches(name, include) and not _excluded(relative, name, exclude) and os.path.isfile(path):
-                yield path
+                yield Target(path)
+    yield from _problems(unreadable)
+
+
+def _problems(errors: list[OSError]) -> Iterator[Target]:
+    for error in errors:
+        yield Target(error.filename, f"cannot read {error.filename}: {error.strerror or error}")
+    errors.clear()
 
 
 def _matches(name: str, patterns: tuple[str, ...]) -> bool:

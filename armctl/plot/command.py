@@ -21,7 +21,7 @@ import sys
 
 import click
 
-from ..ui.cli_types import number
+from ..ui.cli_types import NamedFile, number
 from ..errors import EXIT_OK, EXIT_PROBLEMS, EXIT_USAGE
 from ..core.limits import LINE_RANGE
 
@@ -37,7 +37,7 @@ def _fail(message: str, code: int = EXIT_USAGE):
 
 @click.command(name="plot")
 @click.argument("script", metavar="JOB")
-@click.option("-o", "--output", metavar="FILE",
+@click.option("-o", "--output", type=NamedFile(), metavar="FILE",
               help="FILE.html: interactive 3D, self-contained, works offline (plotly). FILE.svg or FILE.png: "
                    "the three orthographic views (matplotlib).  [default: JOB's name with .html, here]")
 @click.option("--view", type=click.Choice(["3d", "xy", "xz", "yz"]), default=None,

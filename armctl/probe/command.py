@@ -13,7 +13,7 @@ import sys
 
 import click
 
-from ..ui.cli_types import number
+from ..ui.cli_types import NamedFile, number
 from ..core.limits import BAUD_RANGE
 
 MOTION_ANNOUNCEMENT = (
@@ -23,16 +23,20 @@ MOTION_ANNOUNCEMENT = (
     "by ≤ 100 µs and the pause state, and puts them back).")
 
 
+# ``--forget`` alone (no command line can hold a NUL): the arm on --port, told from ``--forget ''``
+ON_PORT = "\0"
+
+
 @click.command(name="probe")
 @click.option("--port", metavar="URL", help="Device path or pyserial URL (default: ARMCTL_PORT, armctl.toml, the simulator).")
 @click.option("--baud", type=number(*BAUD_RANGE, whole=True), default=None, help="Line rate [default: 9600 or armctl.toml].")
 @click.option("--no-motion", is_flag=True, help="Never move the arm (the speed factor is then not measured).")
 @click.option("--yes", is_flag=True, help="Consent to the small moves without asking.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (the seven settings and details), nothing else.")
-@click.option("--write", "write_path", type=click.Path(dir_okay=False), metavar="FILE",
+@click.option("--write", "write_path", type=NamedFile(dir_okay=False), metavar="FILE",
               help="Put the values into the [connector] table of FILE (an armctl.toml), keeping the rest.")
 @click.option("--list", "list_stored", is_flag=True, help="List the arms probed and what was kept for each; probe nothing.")
-@click.option("--forget", "forget", is_flag=False, flag_value="", default=None, metavar="[ARM]",
+@click.option("--forget", "forget", is_flag=False, flag_value=ON_PORT, default=None, metavar="[ARM]",
               help="Forget what was kept for ARM (an arm as --list names it, or a port; default: the arm on --port).")
 def probe(port, baud, no_motion, yes, as_json, write_path, list_stored, forget):
     """Find out the arm's unknowns (FIFO size, control-frame timing, status frame, speed factor,
@@ -44,7 +48,7 @@ def probe(port, baud, no_motion, yes, as_json, write_path, list_stored, forget):
 
         if list_stored and forget is not None:
             raise click.UsageError("choose --list or --forget, not both")
-        sys.exit(listing(as_json) if list_stored else forget_arm(forget or None, port))
+        sys.exit(listing(as_json) if list_stored else forget_arm(None if forget == ON_PORT else forget, port))
     from .run import run_probe
 
     sys.exit(run_probe(port, baud, no_motion, yes, as_json, write_path, MOTION_ANNOUNCEMENT))

@@ -122,8 +122,12 @@ def list_stored(as_json: bool) -> int:
 def forget_arm(arm_or_port: str | None, port: str | None) -> int:
     """``--forget [ARM]``: ARM is an identity or a port; none given: the arm on ``--port`` (or
     the configured port)."""
+    from ..errors import UsageFailure
     from ..host.link import choose_port
 
+    if arm_or_port is not None and not arm_or_port.strip():  # `--forget "$ARM"`, ARM unset: not the arm on the port
+        raise UsageFailure(f"--forget {arm_or_port!r} names no arm: give one as `armctl probe --list` names it, "
+                           "or a port, or --forget alone for the arm on --port")
     target = arm_or_port or choose_port(port).url
     arm = calibration.arm_identity(target)
     if calibration.forget(arm):

@@ -17,7 +17,6 @@ more dependency for one rare form.  It does not clearly beat this editor, so it 
 
 from __future__ import annotations
 
-import os
 import re
 import tomllib
 from pathlib import Path
@@ -116,7 +115,8 @@ def _after_last_key(lines: list[str], start: int, end: int) -> int:
 
 def check_writable(path: Path) -> None:
     """Before the probe sends anything: an existing file must be a regular file (the write
-    replaces it: a device such as /dev/full must never be) and valid TOML."""
+    replaces it: a device such as /dev/full must never be) and valid TOML (a missing directory:
+    the option's type, ``cli_types.NamedFile``)."""
     updated(_existing_text(path), {}, str(path))
 
 
@@ -136,10 +136,15 @@ def _existing_text(path: Path) -> str:
 
 
 def write_connector(path: Path, values: dict, drop=()) -> None:
+    """The file with ``values`` in its ``[connector]`` table, replaced atomically as ``compile -o``
+    replaces its output (armctl/host/outputs.py): through a symbolic link to its target, keeping
+    the file's mode; an error names ``path``."""
+    from ..host.outputs import PendingOutput
+
     result = updated(_existing_text(path), values, str(path), drop)
-    temporary = path.with_name(f".{path.name}.probe-tmp")
-    temporary.write_text(result, encoding="utf-8")
-    os.replace(temporary, path)
+    with PendingOutput(str(path), binary=False) as output:
+        output.stream.write(result)
+        output.commit()
 
 
 def connector_table(path: Path) -> dict:

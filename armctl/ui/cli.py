@@ -19,13 +19,14 @@ if is_the_program():  # the armctl command (not a test or a script importing thi
 
 import json  # noqa: E402  (the handlers first: a signal in the first instant is exit 130, no traceback)
 import sys  # noqa: E402
+from contextlib import contextmanager  # noqa: E402
 from itertools import islice  # noqa: E402
 
 import click  # noqa: E402
 
 from .. import __version__  # noqa: E402
 from ..bench import SCENARIO_NAMES as BENCH_SCENARIOS  # the names only: imports nothing else
-from .cli_types import OutputFile, number
+from .cli_types import NamedFile, OutputFile, number
 from ..errors import ArmctlError, ConfigError, ProfileError
 from ..errors import EXIT_BROKEN_PIPE, EXIT_INTERRUPTED, EXIT_PROBLEMS, EXIT_USAGE, UsageFailure, exit_code_for
 from ..core.limits import BAUD_RANGE, BENCH_JOBS_RANGE, BENCH_LEAD_RANGE_S, LEAD_RANGE_S, LINE_RANGE, START_TIMEOUT_RANGE_S, STATUS_TIMEOUT_RANGE_S, TCP_PORT_RANGE
@@ -40,21 +41,34 @@ class ArmctlGroup(click.Group):
         _tolerant_output()
         return super().main(*args, **kwargs)
 
+    def make_context(self, *args, **kwargs):
+        """The group's own options (``--help``, ``--version``) write before any command runs:
+        a full disk or a reader gone is the same exit there (2, 141) as in a command."""
+        with _exit_codes():
+            return super().make_context(*args, **kwargs)
+
     def invoke(self, ctx: click.Context):
-        try:
+        with _exit_codes():
             try:
                 with command_running():  # a stop signal is Ctrl-C from here (armctl/host/stop_signals.py)
                     return super().invoke(ctx)
             finally:
                 _flush_stdout()
-        except ArmctlError as error:
-            _fail(str(error), exit_code_for(error))
-        except KeyboardInterrupt:
-            _fail("interrupted", EXIT_INTERRUPTED)
-        except BrokenPipeError:
-            _reader_went_away()
-        except OSError as error:
-            _fail(_os_error_text(error), EXIT_USAGE)
+
+
+@contextmanager
+def _exit_codes():
+    """Every error a user can cause, as one line on stderr and its exit code."""
+    try:
+        yield
+    except ArmctlError as error:
+        _fail(str(error), exit_code_for(error))
+    except KeyboardInterrupt:
+        _fail("interrupted", EXIT_INTERRUPTED)
+    except BrokenPipeError:
+        _reader_went_away()
+    except OSError as error:
+        _fail(_os_error_text(error), EXIT_USAGE)
 
 
 def _flush_stdout() -> None:
@@ -236,7 +250,8 @@ def _report_script_errors(compilation) -> None:
 @click.option("--format", "fmt", type=click.Choice(["hex", "json", "bin"]), default="hex", show_default=True,
               help="hex: one frame per line, 96 hex digits; json: one object per frame; bin: the raw bytes.")
 @click.option("--json", "as_json", is_flag=True, help="The same as --format json (armctl's one JSON spelling).")
-@click.option("-o", "--output", type=click.Path(dir_okay=False, writable=True), help="Write here instead of stdout.")
+@click.option("-o", "--output", type=NamedFile(dir_okay=False, writable=True, dash_is_stdout=True),
+              help="Write here instead of stdout (- : stdout).")
 def compile_command(script: str, fmt: str, as_json: bool, output: str | None):
     """Check a motion script, then print the exact frames the arm would receive.
 
@@ -452,7 +467,7 @@ def home(port, baud, profile_path, timeout_s, as_json):
 @click.option("--tcp", "tcp_port", type=number(*TCP_PORT_RANGE, whole=True),
               help="Serve on 127.0.0.1:PORT (socket://127.0.0.1:PORT): one client at a time, the same arm.")
 @click.option("--url", "sim_url", default="sim://", show_default=True, help="Simulator options, as in sim://?speed_factor=1.3&loss=0.05.")
-@click.option("--stats", "stats_path", type=click.Path(dir_okay=False, writable=True), default=None,
+@click.option("--stats", "stats_path", type=NamedFile(dir_okay=False, writable=True), default=None,
               help="On exit, write what the arm saw (frames landed, dropped, run) as JSON to this file (--pty).")
 def sim(use_pty, tcp_port, sim_url, stats_path):
     """Run the built-in simulated arm for other programs to talk to."""

@@ -7,6 +7,8 @@ option declares a number: both bounds are required, NaN and ±inf are refused by
 failure is click's usage error (exit 2, naming the option).  The tests find every numeric
 option through click's own command objects and require it to be ``Bounded``.
 
+``NamedFile`` is the type of every option naming a file armctl writes (``compile -o``, ``plot -o``,
+``probe --write``, ``sim --stats``): a ``click.Path`` that refuses an empty name.
 ``OutputFile`` is the type of an option naming a file armctl writes as it goes (``run --log``,
 ``jog --log``, ``jog --record``): a named pipe (its open waits for a reader for ever) or a
 directory is refused as a usage error naming the option; a character device is written through.
@@ -15,6 +17,7 @@ directory is refused as a usage error naming the option; a character device is w
 from __future__ import annotations
 
 import math
+import os
 
 import click
 
@@ -60,9 +63,39 @@ def number(low: float, high: float, *, whole: bool = False) -> click.ParamType:
     return BoundedFloat(float(low), float(high))
 
 
-class OutputFile(click.Path):
+class NamedFile(click.Path):
+    """A file an option names: an empty or blank name (``--log "$LOG"``, LOG unset) is a usage
+    error, never the option left out (a job run without its journal, a plot written elsewhere);
+    so is "-", standard input for a script, which would make a file named "-" (``./-`` names one),
+    unless ``dash_is_stdout`` (``compile -o -``: None, standard output), and a file in a directory
+    that is not there (``sim --stats`` would find out at exit, its session's counts lost)."""
+
+    check_directory = True
+
+    def __init__(self, *, dash_is_stdout: bool = False, **kwargs) -> None:
+        super().__init__(**kwargs)
+        self.dash_is_stdout = dash_is_stdout
+
+    def convert(self, value, param, ctx):
+        if isinstance(value, str) and not value.strip():
+            self.fail(f"{value!r} names no file: give a path, or leave the option out", param, ctx)
+        if value == "-":
+            if self.dash_is_stdout:
+                return None
+            self.fail("'-' names no file here: write ./- for a file named -", param, ctx)
+        directory = os.path.dirname(value)
+        if self.check_directory and directory and not os.path.isdir(directory):  # (now, not after a session)
+            self.fail(f"cannot write {value}: No such file or directory (no directory {directory})", param, ctx)
+        return super().convert(value, param, ctx)
+
+
+class OutputFile(NamedFile):
     """A file to write, named by an option: not a directory, not a named pipe or socket (the
-    check of armctl/host/inputs.py, decided without opening it); a device such as /dev/null is fine."""
+    check of armctl/host/inputs.py, decided without opening it); a device such as /dev/null is fine.
+    Its command opens it before anything starts and says why it cannot in its own terms (a
+    ``run --json`` summary among them), so a missing directory is left to that open."""
+
+    check_directory = False
 
     def __init__(self, *, writable: bool = False) -> None:
         super().__init__(dir_okay=False, writable=writable)

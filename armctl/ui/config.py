@@ -48,7 +48,7 @@ def _file_source(config, key: str) -> tuple[str, str | None]:
 
 def effective_settings(port: str | None = None, baud: int | None = None, environ=None) -> tuple[list[Setting], Any]:
     """The settings a port-using command would take with these options, and the ``Config``."""
-    from ..host.link import PORT_ENV, line_baud, resolve_port
+    from ..host.link import PORT_ENV, check_port_url, line_baud, resolve_port
     from ..host.calibration import arm_profile
     from ..host.profile import DEFAULT_RESOURCE, load_config
 
@@ -57,6 +57,7 @@ def effective_settings(port: str | None = None, baud: int | None = None, environ
     settings = []
 
     choice = resolve_port(port, environ=environ, config=config.values, config_path=config.path_of("port"))
+    check_port_url(choice)  # what every command that opens it refuses (exit 2)
     if choice.origin in ("--port", PORT_ENV):
         source = ("option" if choice.origin == "--port" else "environment"), choice.origin
     else:

@@ -51,7 +51,12 @@ _NEXT_HEAD = re.compile(b"[" + re.escape(bytes(sorted(_HEADS))) + b"]")
 
 
 class NotHex(Exception):
-    """Hex text (judged on its first block) with a byte that is not a hex digit later on."""
+    """Hex text (judged on its first block) with a byte that is not a hex digit later on;
+    ``where``: its ``LINE:COLUMN`` (1-based), as every input error names it."""
+
+    def __init__(self, message: str, where: str | None = None) -> None:
+        super().__init__(message)
+        self.where = where
 
 
 @dataclass(frozen=True)
@@ -158,7 +163,7 @@ def _looks_like_hex(first: bytes, ended: bool) -> bool:
 def _hex_bytes(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:
     """The bytes hex text spells (whitespace anywhere only separates digits)."""
     pending = ""  # a digit whose partner is in the next block
-    offset = 0
+    line, column = 1, 1  # where this block starts
     for block in _chain(first, rest):
         text = block.decode("ascii", "replace")
         digits = pending + "".join(text.split())
@@ -167,9 +172,12 @@ def _hex_bytes(first: bytes, rest: Iterator[bytes]) -> Iterator[bytes]:
             yield bytes.fromhex(digits[:whole])
         except ValueError:
             bad = next(i for i, char in enumerate(text) if not (char in string.hexdigits or char.isspace()))
-            raise NotHex(f"not hex text: byte {offset + bad} is {block[bad:bad + 1]!r}") from None
+            before = text.count("\n", 0, bad)
+            at = bad - text.rfind("\n", 0, bad) if before else column + bad
+            raise NotHex(f"not hex text: {block[bad:bad + 1].decode('latin-1')!r}", f"{line + before}:{at}") from None
         pending = digits[whole:]
-        offset += len(block)
+        newlines = text.count("\n")
+        line, column = line + newlines, len(text) - text.rfind("\n") if newlines else column + len(text)
     if pending:
         raise NotHex("hex text ends with half a byte (an odd count of digits)")
 

@@ -36,7 +36,7 @@ def print_decoded(source: str, as_json: bool) -> int:
                     out.write("\n".join(lines) + "\n")
                     lines = []
         except NotHex as error:
-            raise UsageFailure(f"{source}: {error}") from None
+            raise UsageFailure(f"{source}:{error.where}: {error}" if error.where else f"{source}: {error}") from None
         finally:
             if lines:
                 out.write("\n".join(lines) + "\n")
@@ -55,9 +55,16 @@ def describe_job(job: dict) -> str:
     """A log's job record for people: ``job JOB.txt from line 1 on port /dev/ttyUSB0 (usb 0403:6001
     serial A1)`` — the port and the identity of the arm on it."""
     port, arm = job.get("port"), job.get("arm")
-    where = (f"on port {port} ({arm if isinstance(arm, str) else 'arm unknown'})" if isinstance(port, str) else
-             "port unknown (a log written before armctl recorded it)")
-    return f"job {job.get('script')} from line {job.get('from_line')} {where}"
+    where = (f"on port {_plain(port)} ({_plain(arm) if isinstance(arm, str) else 'arm unknown'})"
+             if isinstance(port, str) else "port unknown (a log written before armctl recorded it)")
+    return f"job {_plain(job.get('script'))} from line {_plain(job.get('from_line'))} {where}"
+
+
+def _plain(value) -> str:
+    """``value`` as text with its control characters escaped (``\\x1b``): a log's names are the
+    log's, and a log from elsewhere must not drive the terminal (retitle, clear, recolour it)."""
+    text = str(value)
+    return text if text.isprintable() else "".join(c if c.isprintable() else repr(c)[1:-1] for c in text)
 
 
 @contextmanager

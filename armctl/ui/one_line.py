@@ -15,6 +15,8 @@ import click
 
 from ..errors import EXIT_PROBLEMS
 
+API_LOGGER = "armctl.host.api"  # where Arm.move's job tells its warnings and notes (host/arm_worker.py)
+
 
 def move_words(texts: tuple[str, ...]) -> dict:
     """``("z=200", "f=3000")`` → ``{"z": 200.0, "f": 3000.0}``: ``Arm.move``'s keywords, each
@@ -47,11 +49,16 @@ def one_line_job(port, baud, profile_path, timeout_s, as_json, act, connect) -> 
     """``armctl move``/``home``: open the arm, ``act(arm)`` (one line run as a job, proven at
     rest), print where the arm ended (text, or the ``RunResult`` as JSON), exit with its code.
     ``connect``: how the port is opened (``Arm.open``'s; the CLI's prints the simulator's banner)."""
+    import logging
+
     from ..host.api import Arm
     from ..errors import ScriptError
     from ..host.jobflow import JobFailed
+    from .output import quiet
     from .run_job import one_line_summary
 
+    if not quiet():  # the line's lint warnings and the job's notes, as `armctl run` prints its own:
+        logging.getLogger(API_LOGGER).setLevel(logging.INFO)  # (JobObserver's defaults log them there)
     with Arm.open(port, baud, profile_path, status_timeout_s=timeout_s, connect=connect) as arm:
         try:
             with _stop_signals(arm):
