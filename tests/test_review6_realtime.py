@@ -34,7 +34,6 @@ def _tiny_job(tmp_path, moves: int = 300):
     return path
 
 
-@pytest.mark.xfail(strict=True, reason="the ETA counts the motion left, not the line the unsent frames must cross")
 def test_the_eta_of_a_line_bound_job_counts_the_line(tmp_path):
     script = _tiny_job(tmp_path)
     done = subprocess.run([sys.executable, "-m", "armctl", "run", str(script), "--port", "sim://?clock=virtual", "--json"],

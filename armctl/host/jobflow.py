@@ -303,12 +303,14 @@ def start_job(link, model, job, log=None):
     from .link import control_frames_proven, fifo_proven
     from .runner import JobRunner
     from ..core.job import RunView
+    from ..core.protocol import frame_seconds
     from ..core.streamer import Streamer
 
     estimate = job.estimate
     streamer = Streamer(model, job.start, lead_s=job.lead_s, baud=job.baud)
     view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=job.total_lines,
-                   lead_s=job.lead_s, capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
+                   lead_s=job.lead_s, capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s,
+                   frame_s=frame_seconds(job.baud))
     # ``done`` needs a FIFO size that is proven (probed, or a simulator known to hold it): link.fifo_proven;
     # and, for a job that sends control frames, how the arm takes them: link.control_frames_proven
     connector = model.profile.connector
