@@ -7,7 +7,8 @@ for the port's device, ``host:port`` for ``socket://`` and ``rfc2217://``, the a
 for ``sim://`` (what the simulated arm does — FIFO, control frames, status frame, speed factor,
 links, baud, profile — in one canonical spelling, defaults left out; not the clock, the time
 scale, the seed or the faults, which are the line's and the test's, not the arm's), and the
-device path itself for a device pyserial knows nothing more of.  Two spellings of one arm
+device path itself for a device pyserial knows nothing more of (a pty's with the moment it was
+made: the next pty takes its path).  Two spellings of one arm
 (``sim://?speed_factor=1.3&fifo=50&clock=virtual`` and ``sim://?fifo_frames=50&speed_factor=1.3``)
 are one identity; an identity is a port too (``arm_identity`` of it is itself).
 
@@ -46,6 +47,7 @@ SIM_ARM_FIELDS = ("baud", "control_frames", "fifo_frames", "link_scale", "profil
                   "status_xyz_frame")
 _NETWORK_SCHEMES = ("socket", "rfc2217")
 _USB, _DEVICE = "usb ", "device "
+_PTY_FOLDER, _PTY_MADE = "/dev/pts/", " pty made "  # a pty's identity: its path and when it was made (_pty_made)
 
 
 # --- identity -------------------------------------------------------------------------------------
@@ -118,12 +120,33 @@ def _device_identity(path: str, ports) -> str:
         if info.location:
             return f"{usb} at {info.location}"
         break
-    return f"{_DEVICE}{real}"
+    made = _pty_made(real)
+    return f"{_DEVICE}{real}" + ("" if made is None else f"{_PTY_MADE}{made}")
+
+
+def _pty_made(real: str) -> str | None:
+    """When the kernel made the pty ``real`` (its node's ctime, UTC to the ns; None for any other device): a
+    pty's path names whichever pty has that number now — the next ``armctl sim --pty`` gets
+    /dev/pts/1 as soon as the last one closed — so the moment tells one arm behind it from the next
+    (the kernel's clock is coarse: two ptys made within its tick, a few ms, would share it; no
+    program that serves an arm starts that fast)."""
+    if not real.startswith(_PTY_FOLDER):
+        return None
+    import time
+
+    try:
+        made_ns = os.stat(real).st_ctime_ns
+    except OSError:
+        return None
+    return time.strftime("%Y-%m-%dT%H:%M:%S", time.gmtime(made_ns // 10**9)) + f".{made_ns % 10**9:09d}Z"
 
 
 def by_name_only(identity: str) -> bool:
     """An identity no more than the path or address its port leads to (a device without a USB
-    serial number or location, a pty, a TCP port): another arm there has the same one."""
+    serial number or location, a TCP port): another arm there has the same one.  Not a pty's: the
+    moment it was made is in it."""
+    if identity.startswith(_DEVICE) and _PTY_MADE in identity:
+        return False
     return identity.startswith((_DEVICE, *(f"{scheme}://" for scheme in _NETWORK_SCHEMES)))
 
 
@@ -137,7 +160,7 @@ def ports_to_search(identity: str, ports) -> list[str]:
     lists (``ports``); for a device's, the path it names, if there is one; else nowhere else."""
     if identity.startswith(_USB):
         return sorted(info.device for info in ports)
-    path = identity[len(_DEVICE):]
+    path = identity[len(_DEVICE):].split(_PTY_MADE)[0]
     return [path] if identity.startswith(_DEVICE) and os.path.exists(path) else []
 
 
