@@ -341,14 +341,27 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
     on_stopping(runner.failure or "interrupted")
     try:
         runner.abort(abort_sequence)
-    except KeyboardInterrupt:
-        pass
+    except KeyboardInterrupt:  # a second Ctrl-C (Arm.stop again): the wait for rest ends here
+        view.messages.append(_wait_cut_short(runner.job))
     except Exception as error:  # the abort itself failed: say so, the summary still follows
         view.messages.append(f"the abort did not complete: {type(error).__name__}: {error}")
     if runner.job.outcome is None and runner.failure:  # the abort was cut short: the engine did not end it
         view.outcome = "failed"
         view.messages.append(runner.failure)
     return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
+
+
+def _wait_cut_short(job) -> str:
+    """What the summary says when the abort's wait for the arm was stopped: the arm may run on
+    through what was sent (all of it, if the abort sequence did not go), and a ``--from-line``
+    resume would run again whatever of it ran meanwhile."""
+    view = job.view
+    sent = getattr(view.last_sent, "line", None)
+    what = "the frames sent" if sent is None else f"the lines sent up to line {sent}"
+    unsent = " (the abort sequence was not all sent)" if job.stop.frames else ""
+    return (f"the wait for the arm to come to rest was cut short{unsent}: it may still be running {what} "
+            "and not known finished; let it stop before resuming — a resume waits for rest, but --from-line "
+            "runs again every line after it that ran meanwhile (with a --log, --resume LOG finds the last one that ran)")
 
 
 def read_resume_point(log, script, from_line: int = 1):
