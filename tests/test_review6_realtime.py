@@ -187,7 +187,6 @@ def test_a_second_ctrl_c_says_the_arm_may_still_be_running(tmp_path):
 # speed_tolerance a probe through a pty measures (1.25): 3.375 s and 3.405 s for 3.629 s and 3.642 s.  Now the arm time is never before the last frame left the wire.
 
 
-@pytest.mark.xfail(strict=True, reason="the arm time is dated from aliased readings, before the last frame landed")
 @pytest.mark.parametrize("seed", (1, 6))
 def test_the_arm_time_never_ends_before_the_last_frame_landed(tmp_path, monkeypatch, seed):
     from click.testing import CliRunner
@@ -207,4 +206,4 @@ def test_the_arm_time_never_ends_before_the_last_frame_landed(tmp_path, monkeypa
     first_written_s = model.frames_received[0].arrival_s - 48 * 10 / 115200
     truth_s = model.execution_log[-1].end_s - first_written_s
     landed_s = model.frames_received[-1].arrival_s - first_written_s
-    assert summary["arm_time_s"] >= landed_s - 1e-6, (summary["arm_time_s"], truth_s)
+    assert summary["arm_time_s"] >= landed_s - 0.0005, (summary["arm_time_s"], truth_s)  # (rounded to the ms)

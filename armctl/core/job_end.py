@@ -114,7 +114,12 @@ class JobEnd:
             if moving_s:
                 self.streamer.moved_past_time_bound(self.readings.work_s, max(moving_s))
             self.streamer.confirm_all_done()
-            view.arm_done_s = self.arrival.done_at(now)
+            done_s = self.arrival.done_at(now)
+            # and never before the last frame left the wire: moves of a few ms back and forth alias
+            # into still readings (X comes every 270 ms), which dated a 3.63 s job's rest 3.38 s
+            # (the loss check below keeps the readings' own time)
+            recent = self.written.recent
+            view.arm_done_s = min(max(done_s, recent[-1].wire_end_s), now) if recent else done_s
             if paused_at_end:
                 view.messages.append(f"the arm is paused, as the script's PAUSE at line "
                                      f"{self.written.script_pause_line()} leaves it")
@@ -122,7 +127,7 @@ class JobEnd:
             if self.overran and active_s is not None and active_s > self.deadline_s - REST_CHECK_S:
                 view.messages.append("the arm kept working past the estimate (moving, or running an SD program "
                                      "whose time armctl cannot know); armctl waited until it stopped")
-            self.check_job_time(view.arm_done_s)
+            self.check_job_time(done_s)
             return self.finished_outcome()
         limit_s = self.deadline_s
         if now >= self.deadline_s:
