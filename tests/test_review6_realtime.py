@@ -207,3 +207,36 @@ def test_the_arm_time_never_ends_before_the_last_frame_landed(tmp_path, monkeypa
     truth_s = model.execution_log[-1].end_s - first_written_s
     landed_s = model.frames_received[-1].arrival_s - first_written_s
     assert summary["arm_time_s"] >= landed_s - 0.0005, (summary["arm_time_s"], truth_s)  # (rounded to the ms)
+
+
+# --- ... and the other way: two corrupted reports in one rotation ----------------------------------
+# joint_routine.txt (16.5 s) on `sim://?clock=virtual&noise=0.05&corrupt=0.05`, seeds 1-20: the arm time
+# said 21.3-23.0 s in 4 of 20 (seeds 2, 3, 15, 17; +29 % to +39 %), and seed 15 added "the arm kept
+# working past the estimate … armctl waited until it stopped"; at 10 % each,
+# seed 11 said 46.2 s for 16.9 s.  A corrupted report is a "blip" (not work) only while no other
+# position or joints kind changed meanwhile (armctl/core/job_readings.py, "Blips"): two corrupted
+# reports in one rotation pass for motion.  Not fixed here: the rule is the core's evidence of work.
+
+
+@pytest.mark.xfail(strict=True, reason="two corrupted reports in one rotation pass for work: joint_routine's 16.5 s "
+                                       "read 23.0 s with a false 'kept working' note (noise=0.05&corrupt=0.05, seed 15)")
+def test_corrupted_reports_do_not_make_work_after_the_job(tmp_path, monkeypatch):
+    from pathlib import Path
+
+    from click.testing import CliRunner
+
+    from armctl.ui.cli import main
+    from test_resume_exactly_once import _open_one_arm
+
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    monkeypatch.chdir(tmp_path)
+    ports = _open_one_arm(monkeypatch)
+    url = "sim://?clock=virtual&noise=0.05&corrupt=0.05&seed=15"
+    script = Path(__file__).parent.parent / "scripts" / "joint_routine.txt"
+    result = CliRunner().invoke(main, ["run", str(script), "--port", url, "--json"])
+    summary = json.loads(result.stdout.splitlines()[-1])
+    assert summary["outcome"] == "finished", summary
+    model = ports[url].model
+    truth_s = model.execution_log[-1].end_s - (model.frames_received[0].arrival_s - 0.05)
+    assert not any("kept working" in message for message in summary["messages"]), summary["messages"]
+    assert summary["arm_time_s"] <= truth_s + 0.6, (summary["arm_time_s"], truth_s)  # two rotations late at most
