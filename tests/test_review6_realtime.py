@@ -240,3 +240,35 @@ def test_corrupted_reports_do_not_make_work_after_the_job(tmp_path, monkeypatch)
     truth_s = model.execution_log[-1].end_s - (model.frames_received[0].arrival_s - 0.05)
     assert not any("kept working" in message for message in summary["messages"]), summary["messages"]
     assert summary["arm_time_s"] <= truth_s + 0.6, (summary["arm_time_s"], truth_s)  # two rotations late at most
+
+
+# --- the line rate through a pty -------------------------------------------------------------------
+# `sim://?baud=115200` opened at 9600 is a line set wrong: the host reads noise, the arm hears
+# nothing (README, `baud`).  Through `armctl sim --pty` the rate the program set on the pty was
+# ignored: `armctl status --once --baud 115200` on the default 9600 arm read its status, and `run
+# --baud 115200` paced 301 frames 12 times faster than the arm's line took them — 15.2 s of arm time
+# for "estimated 3.2 s (+370.3 %)", the backlog hidden in the pty's buffer (a Ctrl-C's pause waits
+# behind it), and a probe at that rate would keep 115200 for a 9600 arm.
+
+
+@pytest.mark.realtime
+@pytest.mark.timeout(60)
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux ptys (/dev/pts/N)")
+@pytest.mark.xfail(strict=True, reason="sim --pty ignores the rate the program sets on the pty")
+def test_a_pty_set_to_another_rate_than_the_arms_is_a_line_set_wrong(tmp_path):
+    arm, path = _sim_pty(tmp_path, "sim://", "arm.json")  # the document's 9600 baud
+    try:
+        def status(*baud):
+            return subprocess.run([sys.executable, "-m", "armctl", "status", "--once", "--port", path, "--timeout", "2",
+                                   *baud], capture_output=True, text=True, timeout=30, env=_env(tmp_path), cwd=tmp_path)
+        wrong, right = status("--baud", "115200"), status()
+        script = _tiny_job(tmp_path, 4)
+        ran = subprocess.run([sys.executable, "-m", "armctl", "run", str(script), "--port", path, "--no-live",
+                              "--baud", "115200"], capture_output=True, text=True, timeout=30, env=_env(tmp_path), cwd=tmp_path)
+    finally:
+        _stop(arm)
+    assert right.returncode == 0 and "xyz=210.0,0.0,300.0" in right.stdout, right.stderr
+    assert wrong.returncode == 1 and "is the baud rate right?" in wrong.stderr, wrong.stdout + wrong.stderr
+    assert ran.returncode == 1 and "is the baud rate right?" in ran.stderr, ran.stdout + ran.stderr
+    stats = json.loads((tmp_path / "arm.json").read_text())
+    assert stats["frames"] == []  # the arm heard nothing it could frame
