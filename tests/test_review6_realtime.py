@@ -254,7 +254,6 @@ def test_corrupted_reports_do_not_make_work_after_the_job(tmp_path, monkeypatch)
 @pytest.mark.realtime
 @pytest.mark.timeout(60)
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="Linux ptys (/dev/pts/N)")
-@pytest.mark.xfail(strict=True, reason="sim --pty ignores the rate the program sets on the pty")
 def test_a_pty_set_to_another_rate_than_the_arms_is_a_line_set_wrong(tmp_path):
     arm, path = _sim_pty(tmp_path, "sim://", "arm.json")  # the document's 9600 baud
     try:
