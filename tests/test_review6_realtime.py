@@ -176,6 +176,7 @@ def test_a_second_ctrl_c_says_the_arm_may_still_be_running(tmp_path):
     assert [outcome for *_, outcome in stats["executions"]].count("done") >= 3  # it ran on past the second Ctrl-C
     said = out + err
     assert "the wait for the arm to come to rest was cut short" in said and "may still be running" in said, said
+    assert "once the arm is at rest: it may have run lines from 2 meanwhile, which that runs again" in out, out
 
 
 # --- the arm time on a noisy line ------------------------------------------------------------------

@@ -351,17 +351,16 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
     return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
 
 
+WAIT_CUT_SHORT = "the wait for the arm to come to rest was cut short"  # (run's summary adds how to resume)
+
+
 def _wait_cut_short(job) -> str:
     """What the summary says when the abort's wait for the arm was stopped: the arm may run on
-    through what was sent (all of it, if the abort sequence did not go), and a ``--from-line``
-    resume would run again whatever of it ran meanwhile."""
-    view = job.view
-    sent = getattr(view.last_sent, "line", None)
-    what = "the frames sent" if sent is None else f"the lines sent up to line {sent}"
+    through what was sent (all of it, if the abort sequence did not go)."""
+    sent = getattr(job.view.last_sent, "line", None)
+    what = "what was sent" if sent is None or job.view.total_lines <= 1 else f"what was sent, up to line {sent}"
     unsent = " (the abort sequence was not all sent)" if job.stop.frames else ""
-    return (f"the wait for the arm to come to rest was cut short{unsent}: it may still be running {what} "
-            "and not known finished; let it stop before resuming — a resume waits for rest, but --from-line "
-            "runs again every line after it that ran meanwhile (with a --log, --resume LOG finds the last one that ran)")
+    return f"{WAIT_CUT_SHORT}{unsent}: it may still be running {what}: let it come to rest before going on"
 
 
 def read_resume_point(log, script, from_line: int = 1):
