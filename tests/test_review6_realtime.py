@@ -272,3 +272,23 @@ def test_a_pty_set_to_another_rate_than_the_arms_is_a_line_set_wrong(tmp_path):
     assert ran.returncode == 1 and "is the baud rate right?" in ran.stderr, ran.stdout + ran.stderr
     stats = json.loads((tmp_path / "arm.json").read_text())
     assert stats["frames"] == []  # the arm heard nothing it could frame
+
+
+def test_a_pty_probed_again_replaces_the_records_of_the_ptys_before_it_on_its_path(tmp_path):
+    """A pty's identity names when it was made, so each `armctl sim --pty` probed is another arm:
+    the records of those that had its path before are gone for good, and are dropped."""
+    from armctl.host import calibration
+
+    def keep(arm):
+        findings = [("fifo_frames", 200, "measured", "sure")]
+        calibration.save(calibration.calibration_of("/dev/pts/7", arm, findings, "2026-11-28"), tmp_path)
+
+    keep("device /dev/pts/7")  # a record written before a pty's identity named its making
+    keep("device /dev/pts/7 pty made 2026-11-28T17:00:00.000000001Z")
+    keep("device /dev/pts/70 pty made 2026-11-28T17:00:00.000000002Z")  # another path
+    keep("usb 0403:6001 serial A1")
+    assert len(calibration.stored(tmp_path)) == 3  # the pty of the first record replaced it
+    keep("device /dev/pts/7 pty made 2026-11-28T17:05:00.000000003Z")
+    assert [record.arm for record in calibration.stored(tmp_path)] == [
+        "device /dev/pts/7 pty made 2026-11-28T17:05:00.000000003Z",
+        "device /dev/pts/70 pty made 2026-11-28T17:00:00.000000002Z", "usb 0403:6001 serial A1"]

@@ -389,7 +389,23 @@ def save(calibration: Calibration, directory: Path | None = None) -> Path:
         _sync_directory(directory)
     except OSError as error:
         raise ConfigError(f"cannot keep the calibration in {directory}: {error.strerror or error}") from None
+    for gone in _gone_ptys(calibration.arm, directory):
+        gone.unlink(missing_ok=True)
     return path
+
+
+def _gone_ptys(arm: str, directory: Path) -> list[Path]:
+    """The records of the ptys that had ``arm``'s path before it (a pty's identity is its path and
+    when it was made; a record from before that, its path alone): gone for good, as another pty
+    has the path now — without this every ``armctl sim --pty`` probed would stay listed."""
+    import glob
+
+    if not arm.startswith(_DEVICE) or _PTY_MADE not in arm:
+        return []
+    device = arm.split(_PTY_MADE)[0]
+    mine, prefix = record_path(arm, directory), record_path(device + _PTY_MADE, directory).name[:-len(".json")]
+    earlier = [record_path(device, directory), *directory.glob(glob.escape(prefix) + "*.json")]
+    return [path for path in earlier if path != mine and path.exists()]
 
 
 def _sync_directory(directory: Path) -> None:
