@@ -16,8 +16,8 @@ With ``write_buffer_bytes`` the loop reads host bytes only while the arm's write
 bytes at the ticks ``RealtimeArm.poll`` releases them.
 Until a program opens the pty, the arm runs and its status bytes are discarded (a tty would
 otherwise hand the first reader a backlog of stale frames).
-The pty's line rate is the one the program sets on it, as a serial port's (``PtyLine``; the pty
-starts at the arm's): at another rate the arm hears nothing it can frame and the program reads
+On Linux the pty's line rate is the one the program sets on it, as a serial port's (``PtyLine``;
+the pty starts at the arm's): at another rate the arm hears nothing it can frame and the program reads
 noise, as through a ``sim://`` port set wrong (``protocol_sim.LineNoise``).
 """
 
@@ -27,6 +27,7 @@ import errno
 import os
 import select
 import socket
+import sys
 import threading
 from typing import Callable
 
@@ -126,10 +127,11 @@ def serve_pty(
 
     model = model or SimulatedArm(options)
     master_fd, slave_fd = os.openpty()
-    line = PtyLine(master_fd, model.options.baud, model.options.seed)
+    # (Linux: a pty's master reads its slave's termios, checked there; elsewhere the rate is not read)
+    line = PtyLine(master_fd, model.options.baud, model.options.seed) if sys.platform.startswith("linux") else None
     try:
         tty.setraw(slave_fd, termios.TCSANOW)
-        code = line.speed_code()
+        code = None if line is None else line.speed_code()
         if code is not None:  # the pty starts at the arm's rate, a serial port left at the right one
             attributes = termios.tcgetattr(slave_fd)
             attributes[4] = attributes[5] = code
