@@ -7,7 +7,8 @@ for the port's device, ``host:port`` for ``socket://`` and ``rfc2217://``, the a
 for ``sim://`` (what the simulated arm does — FIFO, control frames, status frame, speed factor,
 links, baud, profile — in one canonical spelling, defaults left out; not the clock, the time
 scale, the seed or the faults, which are the line's and the test's, not the arm's), and the
-device path itself for a device pyserial knows nothing more of.  Two spellings of one arm
+device path itself for a device pyserial knows nothing more of (a pty's with the moment it was
+made: the next pty takes its path).  Two spellings of one arm
 (``sim://?speed_factor=1.3&fifo=50&clock=virtual`` and ``sim://?fifo_frames=50&speed_factor=1.3``)
 are one identity; an identity is a port too (``arm_identity`` of it is itself).
 
@@ -49,6 +50,7 @@ _USB, _DEVICE = "usb ", "device "
 # a path's bytes that are not UTF-8 (``/dev/tty\xff``, a profile ``p\xff.toml``: Python hands them over
 # as surrogates) are those bytes again in a quoted identity or a record's file name (``%FF``)
 _FILE_NAME_BYTES = "surrogateescape"
+_PTY_FOLDER, _PTY_MADE = "/dev/pts/", " pty made "  # a pty's identity: its path and when it was made (_pty_made)
 
 
 # --- identity -------------------------------------------------------------------------------------
@@ -121,12 +123,33 @@ def _device_identity(path: str, ports) -> str:
         if info.location:
             return f"{usb} at {info.location}"
         break
-    return f"{_DEVICE}{real}"
+    made = _pty_made(real)
+    return f"{_DEVICE}{real}" + ("" if made is None else f"{_PTY_MADE}{made}")
+
+
+def _pty_made(real: str) -> str | None:
+    """When the kernel made the pty ``real`` (its node's ctime, UTC to the ns; None for any other device): a
+    pty's path names whichever pty has that number now — the next ``armctl sim --pty`` gets
+    /dev/pts/1 as soon as the last one closed — so the moment tells one arm behind it from the next
+    (the kernel's clock is coarse: two ptys made within its tick, a few ms, would share it; no
+    program that serves an arm starts that fast)."""
+    if not real.startswith(_PTY_FOLDER):
+        return None
+    import time
+
+    try:
+        made_ns = os.stat(real).st_ctime_ns
+    except OSError:
+        return None
+    return time.strftime("%Y-%m-%dT%H:%M:%S", time.gmtime(made_ns // 10**9)) + f".{made_ns % 10**9:09d}Z"
 
 
 def by_name_only(identity: str) -> bool:
     """An identity no more than the path or address its port leads to (a device without a USB
-    serial number or location, a pty, a TCP port): another arm there has the same one."""
+    serial number or location, a TCP port): another arm there has the same one.  Not a pty's: the
+    moment it was made is in it."""
+    if identity.startswith(_DEVICE) and _PTY_MADE in identity:
+        return False
     return identity.startswith((_DEVICE, *(f"{scheme}://" for scheme in _NETWORK_SCHEMES)))
 
 
@@ -140,7 +163,7 @@ def ports_to_search(identity: str, ports) -> list[str]:
     lists (``ports``); for a device's, the path it names, if there is one; else nowhere else."""
     if identity.startswith(_USB):
         return sorted(info.device for info in ports)
-    path = identity[len(_DEVICE):]
+    path = identity[len(_DEVICE):].split(_PTY_MADE)[0]
     return [path] if identity.startswith(_DEVICE) and os.path.exists(path) else []
 
 
@@ -370,7 +393,23 @@ def save(calibration: Calibration, directory: Path | None = None) -> Path:
         _sync_directory(directory)
     except OSError as error:
         raise ConfigError(f"cannot keep the calibration in {directory}: {error.strerror or error}") from None
+    for gone in _gone_ptys(calibration.arm, directory):
+        gone.unlink(missing_ok=True)
     return path
+
+
+def _gone_ptys(arm: str, directory: Path) -> list[Path]:
+    """The records of the ptys that had ``arm``'s path before it (a pty's identity is its path and
+    when it was made; a record from before that, its path alone): gone for good, as another pty
+    has the path now — without this every ``armctl sim --pty`` probed would stay listed."""
+    import glob
+
+    if not arm.startswith(_DEVICE) or _PTY_MADE not in arm:
+        return []
+    device = arm.split(_PTY_MADE)[0]
+    mine, prefix = record_path(arm, directory), record_path(device + _PTY_MADE, directory).name[:-len(".json")]
+    earlier = [record_path(device, directory), *directory.glob(glob.escape(prefix) + "*.json")]
+    return [path for path in earlier if path != mine and path.exists()]
 
 
 def _sync_directory(directory: Path) -> None:

@@ -303,12 +303,14 @@ def start_job(link, model, job, log=None):
     from .link import control_frames_proven, fifo_proven
     from .runner import JobRunner
     from ..core.job import RunView
+    from ..core.protocol import frame_seconds
     from ..core.streamer import Streamer
 
     estimate = job.estimate
     streamer = Streamer(model, job.start, lead_s=job.lead_s, baud=job.baud)
     view = RunView(total_frames=estimate.frames, estimated_job_s=estimate.job_s, total_lines=job.total_lines,
-                   lead_s=job.lead_s, capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s)
+                   lead_s=job.lead_s, capacity=streamer.limit_frames, remaining_motion_s=estimate.motion_s,
+                   frame_s=frame_seconds(job.baud))
     # ``done`` needs a FIFO size that is proven (probed, or a simulator known to hold it): link.fifo_proven;
     # and, for a job that sends control frames, how the arm takes them: link.control_frames_proven
     connector = model.profile.connector
@@ -339,14 +341,26 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
     on_stopping(runner.failure or "interrupted")
     try:
         runner.abort(abort_sequence)
-    except KeyboardInterrupt:
-        pass
+    except KeyboardInterrupt:  # a second Ctrl-C (Arm.stop again): the wait for rest ends here
+        view.messages.append(_wait_cut_short(runner.job))
     except Exception as error:  # the abort itself failed: say so, the summary still follows
         view.messages.append(f"the abort did not complete: {type(error).__name__}: {error}")
     if runner.job.outcome is None and runner.failure:  # the abort was cut short: the engine did not end it
         view.outcome = "failed"
         view.messages.append(runner.failure)
     return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
+
+
+WAIT_CUT_SHORT = "the wait for the arm to come to rest was cut short"  # (run's summary adds how to resume)
+
+
+def _wait_cut_short(job) -> str:
+    """What the summary says when the abort's wait for the arm was stopped: the arm may run on
+    through what was sent (all of it, if the abort sequence did not go)."""
+    sent = getattr(job.view.last_sent, "line", None)
+    what = "what was sent" if sent is None or job.view.total_lines <= 1 else f"what was sent, up to line {sent}"
+    unsent = " (the abort sequence was not all sent)" if job.stop.frames else ""
+    return f"{WAIT_CUT_SHORT}{unsent}: it may still be running {what}: let it come to rest before going on"
 
 
 def read_resume_point(log, script, from_line: int = 1):

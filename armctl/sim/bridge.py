@@ -16,6 +16,9 @@ With ``write_buffer_bytes`` the loop reads host bytes only while the arm's write
 bytes at the ticks ``RealtimeArm.poll`` releases them.
 Until a program opens the pty, the arm runs and its status bytes are discarded (a tty would
 otherwise hand the first reader a backlog of stale frames).
+On Linux the pty's line rate is the one the program sets on it, as a serial port's (``PtyLine``;
+the pty starts at the arm's): at another rate the arm hears nothing it can frame and the program reads
+noise, as through a ``sim://`` port set wrong (``protocol_sim.LineNoise``).
 """
 
 from __future__ import annotations
@@ -24,6 +27,7 @@ import errno
 import os
 import select
 import socket
+import sys
 import threading
 from typing import Callable
 
@@ -57,6 +61,46 @@ def _take_room(arm: RealtimeArm) -> int:
     return READ_CHUNK if room is None else min(room, READ_CHUNK)
 
 
+# the rates termios names (a program may also set one it cannot name: pyserial's custom rates)
+_STANDARD_RATES = (50, 75, 110, 134, 150, 200, 300, 600, 1200, 1800, 2400, 4800, 9600, 19200, 38400, 57600, 115200,
+                   230400, 460800, 500000, 576000, 921600, 1000000, 1152000, 1500000, 2000000, 2500000, 3000000,
+                   3500000, 4000000)
+
+
+class PtyLine:
+    """The line between the program on the pty and the arm, at the rate the program set (a pty's
+    master reads its slave's termios): at the arm's rate clean; at another rate termios names, a
+    line set wrong — the arm hears nothing (``to_arm``), the program reads noise (``to_host``); at
+    a rate termios cannot name, taken as right."""
+
+    def __init__(self, master_fd: int, arm_baud: int, seed: int) -> None:
+        import termios
+
+        self._fd, self._arm_baud, self._seed, self._tcgetattr = master_fd, arm_baud, seed, termios.tcgetattr
+        self._rates = {getattr(termios, f"B{rate}"): rate for rate in _STANDARD_RATES if hasattr(termios, f"B{rate}")}
+        self._noise, self._noise_rate = None, None
+
+    def speed_code(self) -> int | None:
+        """The termios code of the arm's rate (the pty starts at it), None if it has none."""
+        return next((code for code, rate in self._rates.items() if rate == self._arm_baud), None)
+
+    def check(self) -> None:
+        """Read the rate the program set now."""
+        rate = self._rates.get(self._tcgetattr(self._fd)[5])
+        if rate is None or rate == self._arm_baud:
+            self._noise = self._noise_rate = None
+        elif rate != self._noise_rate:
+            from .protocol_sim import LineNoise
+
+            self._noise, self._noise_rate = LineNoise(rate, self._arm_baud, self._seed), rate
+
+    def to_arm(self, data: bytes) -> bytes:
+        return data if self._noise is None else b""
+
+    def to_host(self, data: bytes) -> bytes:
+        return data if self._noise is None else self._noise.heard(data)
+
+
 def _stopped(stop: threading.Event | None) -> bool:
     return stop is not None and stop.is_set()
 
@@ -81,28 +125,37 @@ def serve_pty(
     import termios  # here, not at the top: serve_tcp needs neither and works on Windows
     import tty
 
+    model = model or SimulatedArm(options)
     master_fd, slave_fd = os.openpty()
+    # (Linux: a pty's master reads its slave's termios, checked there; elsewhere the rate is not read)
+    line = PtyLine(master_fd, model.options.baud, model.options.seed) if sys.platform.startswith("linux") else None
     try:
         tty.setraw(slave_fd, termios.TCSANOW)
+        code = None if line is None else line.speed_code()
+        if code is not None:  # the pty starts at the arm's rate, a serial port left at the right one
+            attributes = termios.tcgetattr(slave_fd)
+            attributes[4] = attributes[5] = code
+            termios.tcsetattr(slave_fd, termios.TCSANOW, attributes)
         path = os.ttyname(slave_fd)
     except BaseException:
         os.close(master_fd)
         os.close(slave_fd)
         raise
     os.close(slave_fd)  # so that POLLHUP tells whether a program has the slave open
-    arm = RealtimeArm(model or SimulatedArm(options), options.time_scale if time_scale is None else time_scale)
+    arm = RealtimeArm(model, options.time_scale if time_scale is None else time_scale)
     if on_arm is not None:
         on_arm(arm)  # (its clock: ``armctl sim --stats`` places the model's times on the machine's clock)
     try:
         on_ready(path)
-        return _pump_pty(master_fd, arm, stop, keep_serving)
+        return _pump_pty(master_fd, arm, stop, keep_serving, line)
     except KeyboardInterrupt:
         return INTERRUPTED
     finally:
         os.close(master_fd)
 
 
-def _pump_pty(master_fd: int, arm: RealtimeArm, stop: threading.Event | None, keep_serving: bool = False) -> str:
+def _pump_pty(master_fd: int, arm: RealtimeArm, stop: threading.Event | None, keep_serving: bool = False,
+              line: PtyLine | None = None) -> str:
     poller = select.poll()
     poller.register(master_fd, select.POLLIN)
     peer_seen = False
@@ -123,9 +176,14 @@ def _pump_pty(master_fd: int, arm: RealtimeArm, stop: threading.Event | None, ke
             continue
         peer_seen = True
         try:
+            if line is not None:
+                line.check()
             if room and events.get(master_fd, 0) & select.POLLIN:
-                arm.write(os.read(master_fd, room))
+                data = os.read(master_fd, room)
+                arm.write(data if line is None else line.to_arm(data))
             output = arm.poll()
+            if output and line is not None:
+                output = line.to_host(output)
             if output:
                 os.write(master_fd, output)
         except OSError as error:

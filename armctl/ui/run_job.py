@@ -31,7 +31,7 @@ import click
 
 from ..errors import ArmctlError, ScriptError
 from ..errors import EXIT_INTERRUPTED, EXIT_OK, EXIT_PROBLEMS, UsageFailure, exit_code_for
-from ..host.jobflow import JobFailed
+from ..host.jobflow import WAIT_CUT_SHORT, JobFailed
 from ..host.log_lock import locked
 from ..core.job_end import PROBE_HINT
 from ..core.protocol import describe
@@ -566,6 +566,10 @@ def _summary(result, view, wall_s: float, estimate, options: JobOptions, departu
     click.echo(f"last line known executed: {done if done is not None else 'none'}")
     if result.resume_line is not None:
         click.echo(f"resume with: {result.resume_command}{_repeat_note(view, result.resume_line)}")
+        if any(message.startswith(WAIT_CUT_SHORT) for message in result.messages):  # the arm may run on
+            click.echo(f"  once the arm is at rest: it may have run lines from {result.resume_line} meanwhile, which that "
+                       "runs again" + (f" (`--resume {options.log_path}` continues after the last that ran)"
+                                       if options.log_path else ""))
     if result.outcome == "interrupted":
         click.echo(f"stopped: interrupted; abort sequence: {options.abort}", err=True)
     else:
