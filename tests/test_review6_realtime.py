@@ -219,8 +219,6 @@ def test_the_arm_time_never_ends_before_the_last_frame_landed(tmp_path, monkeypa
 # reports in one rotation pass for motion.  Not fixed here: the rule is the core's evidence of work.
 
 
-@pytest.mark.xfail(strict=True, reason="two corrupted reports in one rotation pass for work: joint_routine's 16.5 s "
-                                       "read 23.0 s with a false 'kept working' note (noise=0.05&corrupt=0.05, seed 15)")
 def test_corrupted_reports_do_not_make_work_after_the_job(tmp_path, monkeypatch):
     from pathlib import Path
 

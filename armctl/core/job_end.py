@@ -144,9 +144,9 @@ class JobEnd:
                 # Still for long enough, but some kind not re-read since (its reports lost): the
                 # next reports may yet prove the rest — waited for as for an arm that just stopped.
                 settle_until.append(readings.rest_since_s() + REST_CHECK_S + SETTLE_SLACK_S)
-            if readings.rest is not None and readings.rest[1] > readings.changed_s:
-                # a blip (armctl/core/job_readings.py) dates the rest proof, not the arm's work:
-                # the proof it put off is waited for, as for an arm that stopped then
+            if readings.rest is not None and (active_s is None or readings.rest[1] > active_s):
+                # a change that is no visible work (a blip, armctl/core/job_readings.py; one yet to prove
+                # one; pause, PWM, jitter) dates the rest proof: the proof it put off is waited for
                 settle_until.append(readings.rest[1] + REST_CHECK_S + SETTLE_SLACK_S)
             resting = self.resting_before_last_move()
             if resting:  # frames rest cannot prove: their time bound (widened by a slow pace) decides

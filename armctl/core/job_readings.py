@@ -34,13 +34,18 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
   within one rotation is read once, alone, between two readings at its start) is taken for such
   a blip, and the motion, the arm's activity and the last change
   (``changed_s``) are what they were before it, so the arm's time and a "kept working" note
-  never count from a blip.  Which readings: a position or joints reading, if neither of the other
-  two of those kinds changed meanwhile by more than a reading's jitter (the arm cannot go
-  somewhere and come back so fast that the joints, read 30 ms after the position, still read
-  as before; a change within jitter still dates the motion: the arm settling, read late); an SD
-  program's run position; a pause-and-PWM reading with the pause state of its neighbours and a
-  PWM no recent frame written sets (a job may toggle its gripper faster than the rotation reads
-  it).  What the other kinds showed meanwhile still counts.  The rest proof stays the careful
+  never count from a blip.  Which readings: a position or joints reading — or up to
+  ``BLIP_READINGS`` in a row, each beyond jitter from the one before (a reading settling within
+  jitter is the arm's) — if every other of those kinds that left its value meanwhile came back
+  too (a noisy line corrupts two kinds in one rotation now and then; the arm cannot go somewhere
+  and come back so fast that the joints, read 30 ms after the position, still read as before; a
+  change within jitter still dates the motion: the arm settling, read late); an SD program's run
+  position; a pause-and-PWM reading whose pause state no recent frame written toggles and whose
+  PWM none sets, each unless it is its neighbours' (a job may toggle its gripper faster than the
+  rotation reads it).  A kind that moved for real (read twice where it went, explained, settling,
+  away too long) ends the chances of the blips of kinds that left before it: undoing them would
+  undo its motion (``Readings.away``).  What the other kinds showed meanwhile still counts.  The
+  rest proof stays the careful
   one: ``rest`` dates from the blip's end, a rest is proven REST_CHECK_S after it, and the end of
   the job waits for that proof (armctl/core/job_end.py).
 
@@ -80,6 +85,9 @@ REST_VALUES = {cls.KIND: attrgetter(*(f.name for f in fields(cls)))
                for cls in (PositionStatus, JointsLowStatus, JointsHighStatus, PauseStatus)}
 RUN_POSITION_KIND = RunPositionStatus.KIND
 PAUSE_KIND = PauseStatus.KIND
+# How many readings in a row of one kind a blip may be ("Blips"): on a noisy line two corrupted
+# reports of one kind come in a row now and then; more would be a kind read wrong, not noise.
+BLIP_READINGS = 2
 RECENT_FRAMES = 64  # frames written kept for the end of the job (the trailing frames that move nothing)
 
 
@@ -190,6 +198,10 @@ class Written:
         """Some recent frame written sets a PWM channel to ``pwm_us`` (as the status reports it)."""
         return any(round(value) == pwm_us for sent in self.recent for value in sent.segment.end.pwm_us)
 
+    def toggles_pause(self) -> bool:
+        """Some recent frame written toggles the pause state."""
+        return any(isinstance(sent.command, PauseToggle) for sent in self.recent)
+
     def script_pause_line(self):
         return getattr(self.script_toggles[-1].tag, "line", None)
 
@@ -212,12 +224,13 @@ class Readings:
         self.motion_active_s: float | None = None  # ``active_s`` by the position and joints, blips left out
         self.program_active_s: float | None = None  # ... by an SD program's run position, blips left out
         self.last_run_change: tuple | None = None  # (the run position before its last change, program_active_s)
-        # the last change of position or joints: (its kind, that kind's readings before it, and
-        # what it replaced of motion, moved_from, active_s and changed_s): undone if the next
-        # change of those kinds returns it
-        self.last_change: tuple | None = None
+        # the position and joints kinds away from their readings, each a blip if it comes back
+        # ("Blips"), oldest first: [its kind, its readings before, how many readings since (0:
+        # back, waiting for the later ones), what its leaving replaced of motion, moved_from,
+        # active_s and changed_s]
+        self.away: list = []
         self.last_pause_change: tuple | None = None  # (the readings before, changed_s, other_changed_s)
-        self.settled: tuple | None = None  # since ``last_change``, the last change within jitter: (when, last read before)
+        self.settled: tuple | None = None  # the last change within jitter while a kind was away: (when, last read before)
         self.work_s = -math.inf  # the arm worked after this time, by its reports (``worked_after``)
         self.on_rest = None  # told ``Written.rests_at``'s frame (armctl/core/job_arrival.py ``Arrival.rested``)
         # kind → [the value two reports in a row last agreed on, when it was last read there before it
@@ -247,8 +260,8 @@ class Readings:
             # (a value read twice is no blip: "Blips")
             if kind == PAUSE_KIND:
                 self.last_pause_change = None
-            elif self.last_change is not None and self.last_change[0] == kind:
-                self.last_change = None
+            elif any(entry[0] == kind and entry[2] for entry in self.away):
+                self._moved(kind)  # read twice where it went: no blip
             if self.rest is not None:
                 return False
             before_s = None  # (the last reading of this kind that differed: none)
@@ -261,36 +274,45 @@ class Readings:
         motion = self.motion
         if kind == PAUSE_KIND:
             blip = self.last_pause_change
-            if blip is not None and blip[0] == values and old[0] == values[0] and not self.written.sets_pwm(old[1]):
-                # a PWM alone between two equal readings, one no frame written sets: a blip
+            if (blip is not None and blip[0] == values and (old[0] == values[0] or not self.written.toggles_pause())
+                    and (old[1] == values[1] or not self.written.sets_pwm(old[1]))):
+                # a pause state or a PWM alone between two equal readings, one no recent frame
+                # written sets: a blip
                 self.changed_s, self.other_changed_s = blip[1], blip[2]
                 self.last_pause_change = None
                 return True
             self.last_pause_change = (old, self.changed_s, self.other_changed_s)
             self.other_changed_s = now
         else:
-            last_change = self.last_change
-            if (last_change is not None and last_change[0] == kind and last_change[1] == values
-                    and not self.written.explains(kind, old, before_s)):
-                # this kind's last reading stood alone between two equal ones, and no other
-                # position or joints changed meanwhile: a blip ("Blips"), which dates nothing
-                _, _, motion, self.moved_from, self.motion_active_s, changed_s = last_change
-                self.changed_s = max(changed_s, self.other_changed_s)
-                settled = self.settled
-                if settled is not None:  # another kind's change within jitter meanwhile still dates the motion
-                    moving_s = settled[1] if motion is None or motion[2] is None else max(settled[1], motion[2])
-                    motion = (rest[0][:3], settled[0], moving_s)
-                    self.changed_s = max(self.changed_s, settled[0])
-                self.motion, self.last_change, self.settled = motion, None, None
-                return True
-            if (last_change is not None and last_change[0] != kind and old is not None
-                    and not slot_moved(kind, old, values)):
-                # another kind within a reading's jitter: no excursion, and the blip before it may
+            away = self.away
+            entry = next((entry for entry in away if entry[0] == kind), None)
+            if entry is not None:
+                if not entry[2] or self.written.explains(kind, old, before_s):
+                    entry = None  # it left again after it came back, or a frame passes there: motion
+                elif entry[1] == values:
+                    # this kind's readings since it left stood alone between two equal ones
+                    entry[2] = 0
+                    if away[-1] is entry:
+                        # ... and so did those of every kind that left after it: blips (two kinds in
+                        # one rotation, or one twice, on a noisy line), which date nothing
+                        while away and not away[-1][2]:
+                            entry = away.pop()
+                        self._undo(entry[3], rest)
+                        return True
+                    # (a kind that left after it is not back: dated as any change, undone if it comes back)
+                elif entry[2] < BLIP_READINGS and slot_moved(kind, old, values):
+                    entry[2] += 1  # somewhere else again, where no frame passes either
+                else:
+                    entry = None  # settling within a reading's jitter, or away too long: motion
+                if entry is None:
+                    self._moved(kind)
+                    away.append([kind, old, 1, (motion, self.moved_from, self.motion_active_s, self.changed_s)])
+            elif away and old is not None and not slot_moved(kind, old, values):
+                # another kind within a reading's jitter: no excursion, and a blip before it may
                 # still be one (the same kind read again near its blip value: that was no blip)
                 self.settled = (now, before_s)
-            else:
-                self.last_change = (kind, old, motion, self.moved_from, self.motion_active_s, self.changed_s)
-                self.settled = None
+            elif old is not None:
+                away.append([kind, old, 1, (motion, self.moved_from, self.motion_active_s, self.changed_s)])
         self.changed_s = now
         if kind != PAUSE_KIND or motion is None:
             moving_s = motion[2] if motion is not None else None
@@ -305,6 +327,25 @@ class Readings:
                 self.moved_from = readings
                 self.motion_active_s = now
         return True
+
+    def _undo(self, before: tuple, rest: tuple) -> None:
+        """Put back what the readings were before a blip (``before``: motion, moved_from, active_s
+        and changed_s then), but for another kind's change within jitter meanwhile, which still
+        dates the motion (the arm settling, read late)."""
+        motion, self.moved_from, self.motion_active_s, changed_s = before
+        self.changed_s = max(changed_s, self.other_changed_s)
+        settled = self.settled
+        if settled is not None and settled[0] > changed_s:
+            moving_s = settled[1] if motion is None or motion[2] is None else max(settled[1], motion[2])
+            motion = (rest[0][:3], settled[0], moving_s)
+            self.changed_s = max(self.changed_s, settled[0])
+        self.motion = motion
+
+    def _moved(self, kind: int) -> None:
+        """``kind`` moved for real: no blip, nor can a blip of a kind that left before it be undone
+        (that would undo this motion too)."""
+        away = self.away
+        del away[:next(k for k, entry in enumerate(away) if entry[0] == kind) + 1]
 
     @property
     def active_s(self) -> float | None:
