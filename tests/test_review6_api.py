@@ -47,8 +47,6 @@ def assert_stopped_at_rest(arm: Arm) -> None:
     assert arm.status().paused and arm.status().position_mm == before
 
 
-@pytest.mark.xfail(strict=True, reason="observer.note raising on the stop's note skipped the abort: 0 pause "
-                                       "toggles, the arm ran on (z 141.9 -> 150), a bare RuntimeError")
 def test_an_observer_note_that_raises_while_the_job_stops_does_not_skip_the_abort():
     class Raises(JobObserver):
         def note(self, text):
@@ -61,8 +59,6 @@ def test_an_observer_note_that_raises_while_the_job_stops_does_not_skip_the_abor
         assert_stopped_at_rest(arm)
 
 
-@pytest.mark.xfail(strict=True, reason="observer.update raising during the abort cut it short: 0 pause toggles, "
-                                       "outcome 'interrupted' while the arm ran on")
 def test_an_observer_update_that_raises_during_the_abort_does_not_cut_it_short():
     stopping = []
 
@@ -82,8 +78,6 @@ def test_an_observer_update_that_raises_during_the_abort_does_not_cut_it_short()
         assert_stopped_at_rest(arm)
 
 
-@pytest.mark.xfail(strict=True, reason="sys.exit() in on_progress left the job without its abort: 0 pause "
-                                       "toggles, the arm ran on")
 def test_sys_exit_in_on_progress_stops_the_arm_before_it_leaves():
     with Arm.open(VIRTUAL) as arm:
         def on_progress(progress):

@@ -124,7 +124,7 @@ class JobControl:
         if self.journal is not None:
             self.journal(view)  # --log's progress records, to the end (the abort included)
         if self.observer is not None:
-            self.observer.update(view)  # the live view follows the abort too
+            self._update_observer(view)  # the live view follows the abort too
         if self.stop_asked:
             return
         now_s = view.now_s
@@ -138,9 +138,26 @@ class JobControl:
                 self._shown, self._shown_s = shown, now_s
                 try:
                     self.on_progress(Progress.of(view, self.runner.job.arm_paused, now_s))
-                except Exception as error:  # stops the job (jobflow.drive); raised as the cause
-                    self.callback_error, self.stop_asked = error, True  # no callback while it aborts
+                except BaseException as error:  # stops the job (jobflow.drive); raised as the cause
+                    self.stop_asked = True  # no callback while it aborts (sys.exit() too)
+                    if isinstance(error, Exception):
+                        self.callback_error = error
                     raise
+
+    def _update_observer(self, view) -> None:
+        """``observer.update``: an exception it raises stops the job, as ``on_progress``'s does;
+        once the job is stopping, it is noted in the result instead — it must not cut the abort
+        sequence short (the arm would run on with its queued frames)."""
+        runner = self.runner
+        if not (self.stop_asked or runner.stop_requested or runner.failure):
+            self.observer.update(view)
+            return
+        try:
+            self.observer.update(view)
+        except Exception as error:
+            told = f"the observer's update failed while the job stopped: {type(error).__name__}: {error}"
+            if told not in view.messages:
+                view.messages.append(told)
 
     def end(self) -> None:
         """The job is over: a request it did not carry out is done on the idle arm instead."""

@@ -326,6 +326,7 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
     from ..errors import PortError
 
     view = runner.view
+    leaving: BaseException | None = None  # sys.exit() in a callback: the arm is stopped first, then it goes on
     try:
         runner.run()
         return view.outcome
@@ -336,7 +337,13 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
         return "port lost"
     except Exception as error:  # anything else mid-job: the same path as Ctrl-C
         runner.fail(f"{type(error).__name__}: {error}")
-    on_stopping(runner.failure or "interrupted")
+    except BaseException as error:  # SystemExit, GeneratorExit: the same path, then raised again
+        runner.fail(f"{type(error).__name__}: {error}")
+        leaving = error
+    try:  # a caller's hook that fails here must not keep the abort sequence from going
+        on_stopping(runner.failure or "interrupted")
+    except Exception as error:
+        view.messages.append(f"while stopping: {type(error).__name__}: {error}")
     try:
         runner.abort(abort_sequence)
     except KeyboardInterrupt:
@@ -346,6 +353,8 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
     if runner.job.outcome is None and runner.failure:  # the abort was cut short: the engine did not end it
         view.outcome = "failed"
         view.messages.append(runner.failure)
+    if leaving is not None:
+        raise leaving
     return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
 
 
