@@ -89,8 +89,6 @@ def test_sys_exit_in_on_progress_stops_the_arm_before_it_leaves():
         assert_stopped_at_rest(arm)
 
 
-@pytest.mark.xfail(strict=True, reason="arm.run() from on_progress ran a second job inside the first one's stream "
-                                       "(its G4 between the first job's frames 2 and 3); the first said 'finished'")
 @pytest.mark.parametrize("call", ["run", "move", "home", "wait", "close"])
 def test_a_call_that_waits_for_the_arm_from_inside_its_own_job_is_refused(call):
     asked = []

@@ -23,7 +23,8 @@ a running job (``pause``, ``resume``, ``toggle_pause``, ``feed_override`` — th
 call these) is a request to the job engine that the worker carries out between two writes
 (``JobRunner.control``); ``stop`` and a timeout take the Ctrl-C path (``JobRunner.request_stop``,
 then ``jobflow.drive``'s abort; a second ``stop`` once the abort went, ``JobRunner.cut_short``) —
-never a write from another thread.  Observers and ``on_progress`` run on the worker.  This module
+never a write from another thread.  Observers and ``on_progress`` run on the worker (a call there
+that waits for the arm — ``run``, ``wait`` — would run inside the job: ``Tasks.refuse_on_worker``).  This module
 is the façade: the values it returns are armctl/host/results.py's, its argument checks
 armctl/host/arguments.py's, the worker and its queue armctl/host/arm_tasks.py's, a job on it
 armctl/host/arm_worker.py's.  Nothing is module-level state: several arms work at once in one process.
@@ -217,7 +218,7 @@ class Arm:
 
     def wait(self) -> None:
         """Return when every move queued with ``wait=False`` has run (its error, if one failed)."""
-        self._call(lambda: None)
+        self._tasks.call(lambda: None, waiting="wait")
 
     # --- reading and control -----------------------------------------------------------------
 
@@ -325,10 +326,10 @@ class Arm:
         from ..script import ScriptSnapshot
 
         return self._submit(ScriptSnapshot(name, line.encode("ascii")), 1, JobSpec(JobObserver(), timeout_s=timeout),
-                            wait, from_arm=True)
+                            wait, from_arm=True, call="home" if name == _HOME_NAME else "move")
 
     def _submit(self, source, from_line: int, spec: JobSpec, wait: bool, from_arm: bool,
-                stops: int | None = None) -> RunResult | None:
+                stops: int | None = None, call: str = "run") -> RunResult | None:
         """Check ``source`` here (``ScriptError``, nothing sent), then run it on the worker.
 
         ``from_arm``: the script is a move's one line, whose words left out are the arm's; it
@@ -352,7 +353,7 @@ class Arm:
 
         if wait:
             try:
-                return tasks.call(job)
+                return tasks.call(job, waiting=call)  # (``call``: the method asked, refused from a hook of a job)
             except KeyboardInterrupt:
                 # Ctrl-C while the call waits: the job it started stops, as armctl run's does,
                 # rather than run on behind a program that catches the exception and goes on

@@ -76,11 +76,14 @@ class Tasks:
         self.stops = 0  # how many times stop() was called: a queued move from before it is not sent
         self.closed = False
 
-    def call(self, task: Callable[[], Any]) -> Any:
+    def call(self, task: Callable[[], Any], waiting: str | None = None) -> Any:
         """Run ``task`` on the worker after everything queued — unless a queued move failed:
-        then its error is raised and ``task`` does not run."""
+        then its error is raised and ``task`` does not run.  ``waiting``: the name of a call that
+        waits for the arm (``run``, ``wait``), refused from a hook of the running job."""
         if self.closed:
             raise ArmctlError(f"the arm on {self.url} is closed")
+        if waiting is not None:
+            self.refuse_on_worker(waiting)
 
         def unless_failed():
             return SKIPPED if self.deferred is not None else task()
@@ -92,6 +95,15 @@ class Tasks:
         if result is SKIPPED:  # another thread took the queued move's error first
             raise JobFailed("not run: a move queued before it failed")
         return result
+
+    def refuse_on_worker(self, call: str) -> None:
+        """``ArmctlError`` for ``call`` (one that waits for the arm) made on the worker: from
+        ``on_progress`` or an observer, whose job is the task running — it would run inside that
+        job's stream (its frames between the job's), or never see the queue it waits for."""
+        if self.worker.is_current():
+            raise ArmctlError(f"arm.{call}() was called from on_progress or an observer of the job running on {self.url}: "
+                              f"it would run inside that job; queue a move with wait=False, or call {call}() after "
+                              "run() returns (stop() and status() may be called there)")
 
     def queue(self, task: Callable[[], Any], stops: int) -> None:
         """``task`` queued on the worker, not waited for: not run if ``stop()`` came since
@@ -177,6 +189,7 @@ class Tasks:
 
     def close(self, link, raise_deferred: bool = True) -> None:
         """Wait for the queued tasks (each run exactly once), stop the worker, close ``link``."""
+        self.refuse_on_worker("close")
         with self.lock:
             if self.closed:
                 return
