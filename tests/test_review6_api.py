@@ -113,8 +113,6 @@ def test_a_call_that_waits_for_the_arm_from_inside_its_own_job_is_refused(call):
         assert arm.run("G4 P100\n").finished  # the arm is usable after
 
 
-@pytest.mark.xfail(strict=True, reason="a read-only log= raised io.UnsupportedOperation('not writable') from "
-                                       "the worker, a closed one ended the job 'failed': not the documented TypeError")
 @pytest.mark.parametrize("how", ["closed", "read-only"])
 def test_a_log_that_cannot_be_written_is_refused_at_the_call(tmp_path, how):
     path = tmp_path / "job.log"
