@@ -143,3 +143,63 @@ def test_a_program_that_ends_with_queued_moves_runs_them_before_it_exits(tmp_pat
     done = subprocess.run([sys.executable, "-c", program], capture_output=True, text=True, timeout=25, cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     assert done.stdout.split() == ["received", "2"], done.stdout + done.stderr
+
+
+def run_program(program: str, tmp_path, timeout_s: float = 25) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-c", textwrap.dedent(program)], capture_output=True, text=True,
+                          timeout=timeout_s, cwd=tmp_path)
+
+
+@pytest.mark.xfail(strict=True, reason="a program that died of an exception with moves queued and no close() "
+                                       "exited with the arm running them, no abort sent (0 pause toggles)")
+def test_a_program_that_dies_of_an_exception_with_queued_moves_stops_the_arm(tmp_path):
+    done = run_program("""
+        import atexit
+        from armctl.core.protocol import PauseToggle
+        from armctl import Arm
+        models = []  # runs after armctl's own exit handlers (last in, first out)
+        atexit.register(lambda: print("toggles", sum(isinstance(f.command, PauseToggle) for f in models[0].frames_received)))
+        arm = Arm.open("sim://?clock=virtual")
+        models.append(arm._link.port.model)
+        arm.move(x=250, y=0, z=150, a=180, b=0, c=0, f=3000, wait=False)
+        arm.move(x=150, f=300, wait=False)
+        arm.move(x=250, f=300, wait=False)
+        arm.status_json(at_once=True)  # (the first move is under way)
+        raise RuntimeError("the program failed")
+    """, tmp_path)
+    assert done.returncode == 1 and "RuntimeError: the program failed" in done.stderr, done.stderr
+    assert done.stdout.split() == ["toggles", "1"], done.stdout + done.stderr
+
+
+@pytest.mark.xfail(strict=True, reason="a move queued with wait=False that failed in a program ending without "
+                                       "close() was never said: exit 0, nothing on stderr")
+def test_a_queued_move_that_fails_at_exit_is_said_on_stderr(tmp_path):
+    done = run_program("""
+        from armctl import Arm
+        arm = Arm.open("sim://?clock=virtual&loss=1", status_timeout_s=0.2)  # every status frame lost
+        arm.move(x=250, y=0, z=150, a=180, b=0, c=0, f=3000, wait=False)
+    """, tmp_path)
+    assert done.returncode == 0, done.stderr
+    assert "wait=False failed: no complete status" in done.stderr, done.stderr
+
+
+@pytest.mark.xfail(strict=True, reason="Ctrl-C while a with block's end waited for its queued moves was not a stop: "
+                                       "the arm ran all 3 moves, KeyboardInterrupt 48.2 s after the block's end")
+def test_ctrl_c_while_the_with_block_waits_for_queued_moves_stops_the_arm(tmp_path):
+    done = run_program("""
+        import os, signal, threading, time
+        from armctl import Arm
+        start = time.monotonic()
+        try:
+            with Arm.open("sim://?speed=4") as arm:
+                model = arm._link.port.model
+                arm.move(x=250, y=0, z=150, a=180, b=0, c=0, f=3000, wait=False)
+                arm.move(x=150, f=300, wait=False)  # 20 s of the arm's time: 5 s on this 4x simulator
+                arm.move(x=250, f=300, wait=False)
+                threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+        except KeyboardInterrupt:
+            print("stopped", len(model.frames_received), round(time.monotonic() - start, 1))
+    """, tmp_path, timeout_s=40)
+    words = done.stdout.split()
+    assert words[:2] == ["stopped", "2"], done.stdout + done.stderr  # the third move is never sent
+    assert float(words[2]) < 8, done.stdout
