@@ -77,7 +77,7 @@ class Arm:
         self._port = link.url if port is None else port
         self._model = MotionModel(profile)
         self.lead_s, self.status_timeout_s = lead_s, status_timeout_s
-        self._tasks = Tasks(link.url)  # the worker that owns the link, the queued moves, the running job
+        self._tasks = Tasks(link.url, link)  # the worker that owns the link, the queued moves, the running job
 
     @classmethod
     def open(cls, port: str | None = None, baud: int | None = None, profile: str | os.PathLike[str] | Profile | None = None,

@@ -4,13 +4,18 @@ Strategy: ``Tasks`` is what makes ``Arm`` thread-safe.  Public calls put a task 
 queue (``Worker``, the only thread that touches the link); a blocking call waits for its task
 (``call``), a move with ``wait=False`` is queued (``queue``) and returns at once.  A queued move
 that fails cancels the moves queued after it — the arm is no longer where they assume — and
-its error is raised by the next blocking call (``raise_deferred``).  ``stop`` counts the stops
-(a job whose call began before one sends nothing), cancels the queue and asks the running job
+its error is raised by the next blocking call (``raise_deferred``).  The worker is a daemon
+thread, so an arm still open when the interpreter exits is closed then as leaving a ``with`` block
+closes it (``close_at_exit``): its queued moves run, each once — unless the program died of an
+exception (Ctrl-C too): then it is stopped first.  ``stop`` counts the stops (a job whose call began before one sends nothing), cancels the queue and asks the running job
 (``attach``/``detach`` make it reachable) to stop; ``ask_job`` hands a request to its engine.
 """
 from __future__ import annotations
 
+import atexit
+import logging
 import queue
+import sys
 import threading
 from concurrent.futures import Future
 from typing import Any, Callable
@@ -66,7 +71,8 @@ class Worker:
 class Tasks:
     """The worker of the arm on ``url``, the moves queued on it and the job it runs."""
 
-    def __init__(self, url: str) -> None:
+    def __init__(self, url: str, link: Any = None) -> None:
+        """``link``: the port the arm's worker owns, closed at the interpreter's exit if still open."""
         self.url = url
         self.lock = threading.Lock()
         self.worker = Worker(f"armctl-arm {url}")
@@ -75,6 +81,9 @@ class Tasks:
         self.job: JobControl | None = None
         self.stops = 0  # how many times stop() was called: a queued move from before it is not sent
         self.closed = False
+        self._at_exit = None if link is None else (lambda: self.close_at_exit(link))
+        if self._at_exit is not None:
+            atexit.register(self._at_exit)
 
     def call(self, task: Callable[[], Any], waiting: str | None = None) -> Any:
         """Run ``task`` on the worker after everything queued — unless a queued move failed:
@@ -194,10 +203,31 @@ class Tasks:
             if self.closed:
                 return
             self.closed = True
+        if self._at_exit is not None:
+            atexit.unregister(self._at_exit)
         try:
             self.worker.call(lambda: None)  # every task queued before has run
+        except KeyboardInterrupt:  # Ctrl-C while the queue runs out: stop the arm, as leaving a with block by it does
+            self.stop_once()
+            raise
         finally:
             self.worker.stop()
             link.close()
         if raise_deferred:
             self.raise_deferred()
+
+    def close_at_exit(self, link) -> None:
+        """At the interpreter's exit, an arm nobody closed: closed as leaving a ``with`` block
+        would — stopped first if the program died of an exception (``sys.last_value``: Ctrl-C
+        too) — and a queued move's error said on the ``armctl.host.api`` logger (WARNING: on
+        stderr when logging is not set up), not dropped without a word."""
+        if getattr(sys, "last_value", None) is not None:
+            self.stop_once()
+        try:
+            self.close(link, raise_deferred=False)
+        except KeyboardInterrupt:  # (close stopped the arm and waited for it)
+            pass
+        error = self.deferred
+        if error is not None:
+            logging.getLogger("armctl.host.api").warning("armctl: the arm on %s was closed at exit; a move queued on "
+                                                         "it with wait=False failed: %s", self.url, error)
