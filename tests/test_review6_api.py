@@ -196,3 +196,27 @@ def test_ctrl_c_while_the_with_block_waits_for_queued_moves_stops_the_arm(tmp_pa
     words = done.stdout.split()
     assert words[:2] == ["stopped", "2"], done.stdout + done.stderr  # the third move is never sent
     assert float(words[2]) < 8, done.stdout
+
+
+@pytest.mark.xfail(strict=True, reason="a signal handler calling arm.stop() (docs/api.md: 'from a signal handler') "
+                                       "while the main thread was inside a call holding the arm's lock (queueing a "
+                                       "move, raising a deferred error) deadlocked: the lock is not reentrant")
+def test_stop_from_a_signal_handler_that_comes_while_a_call_holds_the_lock_does_not_deadlock(tmp_path):
+    program = """
+        import os, signal
+        from armctl import Arm
+        arm = Arm.open("sim://?clock=virtual")
+        signal.signal(signal.SIGTERM, lambda number, frame: arm.stop("stopped by SIGTERM"))
+        with arm._tasks.lock:  # the moment the signal comes: arm.move(wait=False) queueing, say
+            os.kill(os.getpid(), signal.SIGTERM)
+            for _ in range(1000):  # (the handler runs in this thread, between two bytecodes)
+                pass
+        arm.move(x=250, y=0, z=150, a=180, b=0, c=0, f=3000)
+        arm.close()
+        print("handled")
+    """
+    try:
+        done = run_program(program, tmp_path, timeout_s=10)
+    except subprocess.TimeoutExpired:
+        pytest.fail("deadlocked: the program did not end within 10 s")
+    assert done.stdout.split() == ["handled"], done.stdout + done.stderr
