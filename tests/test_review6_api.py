@@ -198,9 +198,6 @@ def test_ctrl_c_while_the_with_block_waits_for_queued_moves_stops_the_arm(tmp_pa
     assert float(words[2]) < 8, done.stdout
 
 
-@pytest.mark.xfail(strict=True, reason="a signal handler calling arm.stop() (docs/api.md: 'from a signal handler') "
-                                       "while the main thread was inside a call holding the arm's lock (queueing a "
-                                       "move, raising a deferred error) deadlocked: the lock is not reentrant")
 def test_stop_from_a_signal_handler_that_comes_while_a_call_holds_the_lock_does_not_deadlock(tmp_path):
     program = """
         import os, signal

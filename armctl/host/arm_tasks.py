@@ -74,7 +74,7 @@ class Tasks:
     def __init__(self, url: str, link: Any = None) -> None:
         """``link``: the port the arm's worker owns, closed at the interpreter's exit if still open."""
         self.url = url
-        self.lock = threading.Lock()
+        self.lock = threading.RLock()  # reentrant: stop() from a signal handler may come while this thread holds it
         self.worker = Worker(f"armctl-arm {url}")
         self.queued: list[Future] = []  # moves queued with wait=False, not yet finished
         self.deferred: BaseException | None = None  # the error of a queued move, for the next blocking call
