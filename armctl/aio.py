@@ -21,8 +21,8 @@ import time
 from concurrent.futures import ThreadPoolExecutor
 from typing import IO, Any, Callable
 
-from .errors import ArmctlError
 from .host.api import Arm, ArmStatus, JobObserver, RunResult
+from .host.arm_tasks import closed_error
 from .core.streamer import DEFAULT_LEAD_S
 
 __all__ = ["AsyncArm", "EventObserver"]
@@ -122,7 +122,7 @@ class AsyncArm:
 
     async def _call(self, function: Callable[..., Any], *args, **kwargs) -> Any:
         if self._closed:  # (the pool is shut down: say what the arm says)
-            raise ArmctlError(f"the arm on {self.url} is closed")
+            raise closed_error(self.url)
         return await self._in_pool(function, *args, **kwargs)
 
     async def _in_pool(self, function: Callable[..., Any], *args, **kwargs) -> Any:

@@ -219,8 +219,6 @@ def test_stop_from_a_signal_handler_that_comes_while_a_call_holds_the_lock_does_
     assert done.stdout.split() == ["handled"], done.stdout + done.stderr
 
 
-@pytest.mark.xfail(strict=True, reason="after close(), feed_override() and toggle_pause() said 'no job is running on "
-                                       "…' where every other call says the arm is closed")
 @pytest.mark.parametrize("call", ["feed_override", "toggle_pause"])
 def test_a_control_call_after_close_says_the_arm_is_closed(call):
     arm = Arm.open(VIRTUAL)

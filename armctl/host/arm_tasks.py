@@ -27,6 +27,11 @@ from .jobflow import JobFailed
 SKIPPED = object()  # a task not run: a queued move before it failed (its error is raised instead)
 
 
+def closed_error(url: str) -> ArmctlError:
+    """What a call on an arm closed already raises (``Arm``'s and ``AsyncArm``'s)."""
+    return ArmctlError(f"the arm on {url} is closed")
+
+
 class Worker:
     """One thread that runs tasks in order: the only one that touches the arm's link."""
 
@@ -89,8 +94,7 @@ class Tasks:
         """Run ``task`` on the worker after everything queued — unless a queued move failed:
         then its error is raised and ``task`` does not run.  ``waiting``: the name of a call that
         waits for the arm (``run``, ``wait``), refused from a hook of the running job."""
-        if self.closed:
-            raise ArmctlError(f"the arm on {self.url} is closed")
+        self.check_open()
         if waiting is not None:
             self.refuse_on_worker(waiting)
 
@@ -105,6 +109,10 @@ class Tasks:
             raise JobFailed("not run: a move queued before it failed")
         return result
 
+    def check_open(self) -> None:
+        if self.closed:
+            raise closed_error(self.url)
+
     def refuse_on_worker(self, call: str) -> None:
         """``ArmctlError`` for ``call`` (one that waits for the arm) made on the worker: from
         ``on_progress`` or an observer, whose job is the task running — it would run inside that
@@ -117,8 +125,7 @@ class Tasks:
     def queue(self, task: Callable[[], Any], stops: int) -> None:
         """``task`` queued on the worker, not waited for: not run if ``stop()`` came since
         ``stops``, nor if a move queued before it failed (its error is kept, the rest cancelled)."""
-        if self.closed:
-            raise ArmctlError(f"the arm on {self.url} is closed")
+        self.check_open()
 
         def queued() -> Any:
             if stops != self.stops:
@@ -167,6 +174,7 @@ class Tasks:
         """``action(job)`` carried out by the running job's engine at the runner's next turn
         (at once when called on the worker, from ``on_progress``: that is between two turns);
         ``JOB_ENDED`` when no job is running or it ended first."""
+        self.check_open()
         with self.lock:
             job = self.job if self.job is not None and not self.job.stop_asked else None
             if job is None:
