@@ -11,6 +11,7 @@ from __future__ import annotations
 import subprocess
 import sys
 import textwrap
+import threading
 
 import pytest
 
@@ -225,3 +226,39 @@ def test_a_control_call_after_close_says_the_arm_is_closed(call):
     arm.close()
     with pytest.raises(ArmctlError, match="is closed"):
         arm.feed_override(50) if call == "feed_override" else arm.toggle_pause()
+
+
+@pytest.mark.xfail(strict=True, reason="resume() asked while the job stops (from its observer, on sim://?clock=virtual"
+                                       "&control_frames=arrival) sent a second pause toggle during the abort: the arm, "
+                                       "reported paused by the stop, ran on (z 145 -> 150) after run() said 'interrupted'")
+@pytest.mark.parametrize("where", ["observer", "another thread"])
+def test_resume_while_the_job_stops_is_refused_and_the_arm_stays_paused(where):
+    answers = []
+    with Arm.open(VIRTUAL + "&control_frames=arrival") as arm:
+        def ask() -> None:
+            try:
+                answers.append(arm.resume())
+            except ArmctlError as error:
+                answers.append(str(error))
+
+        class Resumes(JobObserver):
+            def update(self, view):  # the job stops, and the arm reports the abort's pause
+                if answers or "stop" not in stage or not arm._link.snapshot()[0].paused:
+                    return
+                if where == "observer":
+                    ask()
+                else:
+                    asking = threading.Thread(target=ask)
+                    asking.start()
+                    asking.join(2.0)  # (a resume that waits for the job's end would wait for this call)
+                    answers.append(answers.pop() if answers else "waited for the job's end")
+
+            def note(self, text):
+                stage.append("stop")
+
+        stage: list = []
+
+        result = arm.run(LONG_JOB, on_progress=stop_at_frame(arm, 5), observer=Resumes())
+        assert result.outcome == "interrupted"
+        assert answers and "stopping" in str(answers[0]), answers
+        assert_stopped_at_rest(arm)
