@@ -228,9 +228,6 @@ def test_a_control_call_after_close_says_the_arm_is_closed(call):
         arm.feed_override(50) if call == "feed_override" else arm.toggle_pause()
 
 
-@pytest.mark.xfail(strict=True, reason="resume() asked while the job stops (from its observer, on sim://?clock=virtual"
-                                       "&control_frames=arrival) sent a second pause toggle during the abort: the arm, "
-                                       "reported paused by the stop, ran on (z 145 -> 150) after run() said 'interrupted'")
 @pytest.mark.parametrize("where", ["observer", "another thread"])
 def test_resume_while_the_job_stops_is_refused_and_the_arm_stays_paused(where):
     answers = []

@@ -173,12 +173,16 @@ class Tasks:
     def ask_job(self, action: Callable[[Any], Any]) -> Any:
         """``action(job)`` carried out by the running job's engine at the runner's next turn
         (at once when called on the worker, from ``on_progress``: that is between two turns);
-        ``JOB_ENDED`` when no job is running or it ended first."""
+        ``JOB_ENDED`` when no job is running or it ended first; ``ArmctlError`` while it stops (its
+        abort pauses the arm: a resume now would run the frames it left queued, a pause is its own)."""
         self.check_open()
         with self.lock:
-            job = self.job if self.job is not None and not self.job.stop_asked else None
+            job = self.job
             if job is None:
                 return JOB_ENDED
+            if job.stop_asked or job.runner.stop_requested:
+                raise ArmctlError(f"the job on {self.url} is stopping (its abort sequence pauses the arm): no pause, "
+                                  "resume or feed override now; ask again once run() has returned")
             if self.worker.is_current():
                 return action(job.runner.job)
             future = job.request(action)
