@@ -48,3 +48,15 @@ def test_an_on_event_that_raises_stops_the_job_as_on_progress_does():
 
     asyncio.run(main())
     assert logged == []
+
+
+@pytest.mark.xfail(strict=True, reason="AsyncArm.move(wait=False), documented as always waited for, returned None "
+                                       "at once and left the move queued on the arm's worker")
+def test_async_move_refuses_wait_and_sends_nothing():
+    async def main():
+        async with await AsyncArm.open(VIRTUAL) as arm:
+            with pytest.raises(TypeError, match="wait"):
+                await arm.move(x=250, y=0, z=150, a=180, b=0, c=0, f=3000, wait=False)
+            assert arm.arm._link.port.model.frames_received == []
+
+    asyncio.run(main())
