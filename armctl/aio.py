@@ -146,7 +146,11 @@ class AsyncArm:
     # --- moving ------------------------------------------------------------------------------
 
     async def move(self, *, timeout: float | None = None, **words: float) -> RunResult:
-        """``Arm.move(**words)``, waited for: the arm's reports prove it at rest at the target."""
+        """``Arm.move(**words)``, waited for: the arm's reports prove it at rest at the target
+        (no ``wait=``: for a move that streams while the loop goes on, make it a task)."""
+        if "wait" in words:
+            raise TypeError("AsyncArm.move() takes no wait=: it is always awaited (a move that streams while you "
+                            "go on is a task: asyncio.create_task(arm.move(...)))")
         return await self._until_done(self.arm.move, timeout=timeout, **words)
 
     async def run(self, script, *, from_line: int = 1, on_event: Callable[[dict], Any] | None = None,

@@ -50,8 +50,6 @@ def test_an_on_event_that_raises_stops_the_job_as_on_progress_does():
     assert logged == []
 
 
-@pytest.mark.xfail(strict=True, reason="AsyncArm.move(wait=False), documented as always waited for, returned None "
-                                       "at once and left the move queued on the arm's worker")
 def test_async_move_refuses_wait_and_sends_nothing():
     async def main():
         async with await AsyncArm.open(VIRTUAL) as arm:
