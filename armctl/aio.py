@@ -176,7 +176,8 @@ class AsyncArm:
                 self.arm.stop(f"stopped: on_event raised {type(error).__name__}: {error}")
 
         if observer is None and on_event is not None:
-            name = getattr(script, "name", None) or ("<script>" if isinstance(script, str) and "\n" in script else os.fspath(script))
+            named = isinstance(script, os.PathLike) or (isinstance(script, str) and "\n" not in script)
+            name = getattr(script, "name", None) or (os.fspath(script) if named else "<script>")  # (Arm.run checks the type)
             observer = EventObserver(lambda event: loop.call_soon_threadsafe(deliver, event), name)
         try:
             result = await self._until_done(self.arm.run, script, from_line=from_line, on_progress=on_progress,

@@ -60,8 +60,6 @@ def test_async_move_refuses_wait_and_sends_nothing():
     asyncio.run(main())
 
 
-@pytest.mark.xfail(strict=True, reason="AsyncArm.run(3, on_event=…) raised os.fspath's 'expected str, bytes or "
-                                       "os.PathLike object, not int', not naming the argument as Arm.run does")
 @pytest.mark.parametrize("script", [3, None])
 def test_async_run_with_on_event_names_a_script_of_the_wrong_type(script):
     async def main():
