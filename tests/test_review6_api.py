@@ -261,8 +261,6 @@ def test_resume_while_the_job_stops_is_refused_and_the_arm_stays_paused(where):
         assert_stopped_at_rest(arm)
 
 
-@pytest.mark.xfail(strict=True, reason="status_json(at_once=True) after close() waited 3 s on sim:// and said 'no "
-                                       "complete status from sim:// … never saw: joints 1-3, …', not that the arm is closed")
 def test_status_json_at_once_after_close_says_the_arm_is_closed():
     arm = Arm.open("sim://")
     arm.close()

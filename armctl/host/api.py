@@ -227,7 +227,7 @@ class Arm:
         the job asked for before it ran); ``JobFailed`` when it is not complete within
         ``timeout`` seconds (default ``status_timeout_s``)."""
         timeout_s = self.status_timeout_s if timeout is None else args.check_timeout(timeout, "STATUS_TIMEOUT_RANGE_S")
-        return self._call(lambda: ArmStatus.of(self._complete_state(timeout_s), self._link.clock()))
+        return self._call(lambda: ArmStatus.of(_complete_state(self._link, timeout_s), self._link.clock()))
 
     def status_json(self, timeout: float | None = None, *, at_once: bool = False) -> dict:
         """The arm's decoded report with the keys of ``armctl status --once --json``, once every
@@ -237,19 +237,9 @@ class Arm:
         the worker, so there it waits its turn all the same)."""
         timeout_s = self.status_timeout_s if timeout is None else args.check_timeout(timeout, "STATUS_TIMEOUT_RANGE_S")
         def read() -> dict:
-            return self._complete_state(timeout_s).to_json()
+            return _complete_state(self._link, timeout_s).to_json()
+        self._tasks.check_open()  # (at_once reads the link here: a closed one would be waited for)
         return read() if at_once and not self.is_virtual else self._call(read)
-
-    def _complete_state(self, timeout_s: float):
-        """A copy of the link's state once every status kind has been seen (``JobFailed`` after
-        ``timeout_s``; the link's ``PortError`` once the port went away): what ``status`` and
-        ``status_json`` read."""
-        link = self._link
-        if not link.wait_until(lambda s: s.complete, timeout_s):
-            raise JobFailed(link.silence_message(timeout_s))
-        if link.error is not None:  # complete long ago, then the port went away: the last report is not live
-            raise link.error
-        return link.snapshot()[0]
 
     def pause(self) -> bool:
         """Pause the arm.  During a job (``run``, or a ``move`` with ``wait=False``) this asks
@@ -361,6 +351,17 @@ class Arm:
                 raise
         tasks.queue(job, stops)
         return None
+
+
+def _complete_state(link, timeout_s: float):
+    """A copy of the link's state once every status kind has been seen (``JobFailed`` after
+    ``timeout_s``; the link's ``PortError`` once the port went away): what ``status`` and
+    ``status_json`` read."""
+    if not link.wait_until(lambda s: s.complete, timeout_s):
+        raise JobFailed(link.silence_message(timeout_s))
+    if link.error is not None:  # complete long ago, then the port went away: the last report is not live
+        raise link.error
+    return link.snapshot()[0]
 
 
 def _claimed_resume(resume, log, snapshot, from_line: int, port):
