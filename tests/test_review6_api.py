@@ -266,3 +266,24 @@ def test_status_json_at_once_after_close_says_the_arm_is_closed():
     arm.close()
     with pytest.raises(ArmctlError, match="is closed"):
         arm.status_json(at_once=True)
+
+
+@pytest.mark.xfail(strict=True, reason="Ctrl-C in arm.wait() caught by the program left the queued moves running (3 moves, "
+                                       "the arm not paused) where run(), a waiting move and close() stop what they wait for")
+def test_ctrl_c_caught_around_wait_stops_the_queued_moves(tmp_path):
+    done = run_program("""
+        import os, signal, threading, time
+        from armctl import Arm
+        with Arm.open("sim://?speed=4") as arm:
+            model = arm._link.port.model
+            arm.move(x=250, y=0, z=150, a=180, b=0, c=0, f=3000, wait=False)
+            arm.move(x=150, f=300, wait=False)  # 20 s of the arm's time: 5 s on this 4x simulator
+            arm.move(x=250, f=300, wait=False)
+            threading.Timer(1.0, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+            try:
+                arm.wait()
+            except KeyboardInterrupt:
+                arm.status()  # (after the stopped move's end)
+                print("stopped", len(model.frames_received), arm.status().paused)
+    """, tmp_path, timeout_s=40)
+    assert done.stdout.split() == ["stopped", "3", "True"], done.stdout + done.stderr  # 2 moves and the abort's toggle
