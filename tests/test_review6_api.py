@@ -268,8 +268,6 @@ def test_status_json_at_once_after_close_says_the_arm_is_closed():
         arm.status_json(at_once=True)
 
 
-@pytest.mark.xfail(strict=True, reason="Ctrl-C in arm.wait() caught by the program left the queued moves running (3 moves, "
-                                       "the arm not paused) where run(), a waiting move and close() stop what they wait for")
 def test_ctrl_c_caught_around_wait_stops_the_queued_moves(tmp_path):
     done = run_program("""
         import os, signal, threading, time
@@ -283,7 +281,9 @@ def test_ctrl_c_caught_around_wait_stops_the_queued_moves(tmp_path):
             try:
                 arm.wait()
             except KeyboardInterrupt:
-                arm.status()  # (after the stopped move's end)
-                print("stopped", len(model.frames_received), arm.status().paused)
+                paused = arm.status().paused  # (after the stopped move's end)
+                toggles = sum(type(frame.command).__name__ == "PauseToggle" for frame in model.frames_received)
+                print("stopped", len(model.frames_received) - toggles, toggles, paused)
     """, tmp_path, timeout_s=40)
-    assert done.stdout.split() == ["stopped", "3", "True"], done.stdout + done.stderr  # 2 moves and the abort's toggle
+    words = done.stdout.split()
+    assert words[0] == "stopped" and int(words[1]) < 3 and words[2:] == ["1", "True"], done.stdout + done.stderr

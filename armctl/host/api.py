@@ -341,14 +341,8 @@ class Arm:
             return run_job(line, checked, spec, from_arm, lambda: stops != tasks.stops,
                            lambda control: tasks.attach(control, stops), tasks.detach)
 
-        if wait:
-            try:
-                return tasks.call(job, waiting=call)  # (``call``: the method asked, refused from a hook of a job)
-            except KeyboardInterrupt:
-                # Ctrl-C while the call waits: the job it started stops, as armctl run's does,
-                # rather than run on behind a program that catches the exception and goes on
-                tasks.stop_once()
-                raise
+        if wait:  # (``call``: the method asked; Ctrl-C while it waits stops the job, Tasks.call)
+            return tasks.call(job, waiting=call)
         tasks.queue(job, stops)
         return None
 

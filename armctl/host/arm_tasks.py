@@ -93,7 +93,9 @@ class Tasks:
     def call(self, task: Callable[[], Any], waiting: str | None = None) -> Any:
         """Run ``task`` on the worker after everything queued — unless a queued move failed:
         then its error is raised and ``task`` does not run.  ``waiting``: the name of a call that
-        waits for the arm (``run``, ``wait``), refused from a hook of the running job."""
+        waits for the arm (``run``, ``wait``), refused from a hook of the running job; Ctrl-C while
+        it waits stops the arm (the job it started, the moves it waits for), as ``armctl run``'s
+        does, rather than let them run on behind a program that catches the exception and goes on."""
         self.check_open()
         if waiting is not None:
             self.refuse_on_worker(waiting)
@@ -103,6 +105,10 @@ class Tasks:
 
         try:
             result = self.worker.call(unless_failed)
+        except KeyboardInterrupt:
+            if waiting is not None:
+                self.stop_once()
+            raise
         finally:
             self.raise_deferred()
         if result is SKIPPED:  # another thread took the queued move's error first
