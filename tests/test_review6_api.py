@@ -289,9 +289,6 @@ def test_ctrl_c_caught_around_wait_stops_the_queued_moves(tmp_path):
     assert words[0] == "stopped" and int(words[1]) < 3 and words[2:] == ["1", "True"], done.stdout + done.stderr
 
 
-@pytest.mark.xfail(strict=True, reason="a log= (or --log) on /dev/null or a pipe ended the job 'failed' before its "
-                                       "first frame: fsync of a non-regular file is EINVAL ('the log /dev/null could "
-                                       "not be written ([Errno 22] Invalid argument)'), though --log /dev/null is allowed")
 @pytest.mark.parametrize("where", ["api /dev/null", "api pipe", "cli /dev/null"])
 def test_a_log_written_through_a_device_or_a_pipe_does_not_fail_the_job(tmp_path, where):
     script = tmp_path / "job.txt"

@@ -154,7 +154,8 @@ class JournalFile:
     """``--log`` as the journal writes it (armctl/core/joblog.py): each record sealed (its place and
     CRC-32) on a line of its own; ``append(record, durable=True)`` returns once the line is
     flushed and fsynced (a frame's record, before the frame goes to the port).  A file object
-    without a descriptor (``io.StringIO``) is flushed only, and so is every record when ``sync``
+    without a descriptor (``io.StringIO``) or not a regular file (``/dev/null``, a pipe) is
+    flushed only, and so is every record when ``sync``
     is False: an arm on a virtual clock (``sim://?clock=virtual``) lives in the host's process
     and its time moves only with the host, so nothing of it runs on after a crash — and an
     fsync a frame would cost a virtual job more wall time than the job itself.  The first fsync
@@ -186,11 +187,14 @@ class JournalFile:
 
     def _fsync(self) -> None:
         import os
+        import stat
 
         try:
             descriptor = self.file.fileno()
         except (AttributeError, OSError, ValueError):  # no descriptor (io.StringIO): flushed is all there is
             return
+        if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+            return  # written through (/dev/null, a pipe, a terminal): nothing to fsync, and fsync says EINVAL
         os.fsync(descriptor)
         if not self._directory_synced:
             self._directory_synced = True
