@@ -178,7 +178,11 @@ class AsyncArm:
         if observer is None and on_event is not None:
             named = isinstance(script, os.PathLike) or (isinstance(script, str) and "\n" not in script)
             name = getattr(script, "name", None) or (os.fspath(script) if named else "<script>")  # (Arm.run checks the type)
-            observer = EventObserver(lambda event: loop.call_soon_threadsafe(deliver, event), name)
+
+            def sink(event: dict) -> None:
+                loop.call_soon_threadsafe(deliver, event)
+
+            observer = EventObserver(sink, name)
         try:
             result = await self._until_done(self.arm.run, script, from_line=from_line, on_progress=on_progress,
                                             timeout=timeout, observer=observer, log=log, abort=abort, resume=resume)

@@ -148,12 +148,14 @@ class JobControl:
         """``observer.update``: an exception it raises stops the job, as ``on_progress``'s does;
         once the job is stopping, it is noted in the result instead — it must not cut the abort
         sequence short (the arm would run on with its queued frames)."""
-        runner = self.runner
+        runner, observer = self.runner, self.observer
+        if observer is None:
+            return
         if not (self.stop_asked or runner.stop_requested or runner.failure):
-            self.observer.update(view)
+            observer.update(view)
             return
         try:
-            self.observer.update(view)
+            observer.update(view)
         except Exception as error:
             told = f"the observer's update failed while the job stopped: {type(error).__name__}: {error}"
             if told not in view.messages:
