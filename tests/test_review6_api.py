@@ -309,9 +309,6 @@ def test_a_log_written_through_a_device_or_a_pipe_does_not_fail_the_job(tmp_path
         assert arm.run(script, log=log).finished
 
 
-@pytest.mark.xfail(strict=True, reason="a resume() handed to a paused job's engine just before a stop was carried "
-                                       "out on the idle arm once the job had ended 'interrupted': a second toggle, "
-                                       "the arm no longer paused (sim://?clock=virtual&control_frames=arrival)")
 def test_a_resume_asked_just_before_a_stop_is_not_carried_out_on_the_idle_arm():
     answers: list = []
     with Arm.open(VIRTUAL + "&control_frames=arrival") as arm:

@@ -100,7 +100,16 @@ class JobControl:
         lock too: a request is either carried out or answered ``JOB_ENDED``)."""
         future: Future = Future()
         self._asked.append(future)
-        self.runner.control(lambda job: future.done() or future.set_result(action(job)))
+
+        def carry_out(job) -> None:  # on the worker, at the runner's turn: the abort's turns too
+            if future.done():
+                return
+            if self.stop_asked or self.runner.stop_requested:  # a stop came after the request: it is not carried out
+                future.set_exception(_stopped_first())
+            else:
+                future.set_result(action(job))
+
+        self.runner.control(carry_out)
         return future
 
     def request_stop(self, why: str | None = None) -> None:
@@ -162,11 +171,27 @@ class JobControl:
                 view.messages.append(told)
 
     def end(self) -> None:
-        """The job is over: a request it did not carry out is done on the idle arm instead."""
+        """The job is over: a request it did not carry out is done on the idle arm instead —
+        unless the job stopped (its abort paused the arm: a resume then would run the frames it
+        left queued), then it is refused, nothing sent."""
+        stopped = self.stop_asked or self.runner.stop_requested
         for future in self._asked:
-            if not future.done():
+            if future.done():
+                continue
+            if stopped:
+                future.set_exception(_stopped_first())
+            else:
                 future.set_result(JOB_ENDED)
         self._asked = []
+
+
+def _stopped_first():
+    """What a pause, resume or feed request handed to a job that then stopped raises: the abort
+    paused the arm, and a resume carried out now would run the frames it left queued."""
+    from ..errors import ArmctlError
+
+    return ArmctlError("the job stopped before it carried out this request: nothing was sent; ask again once "
+                       "run() has returned")
 
 
 def toggle_idle_arm(link, want_paused: bool) -> bool:
