@@ -7,8 +7,9 @@ that fails cancels the moves queued after it — the arm is no longer where they
 its error is raised by the next blocking call (``raise_deferred``).  The worker is a daemon
 thread, so an arm still open when the interpreter exits is closed then as leaving a ``with`` block
 closes it (``close_at_exit``): its queued moves run, each once — unless the program died of an
-exception (Ctrl-C too): then it is stopped first.  ``stop`` counts the stops (a job whose call began before one sends nothing), cancels the queue and asks the running job
-(``attach``/``detach`` make it reachable) to stop; ``ask_job`` hands a request to its engine.
+exception (Ctrl-C too): then it is stopped first.  ``stop`` counts the stops (a job whose call
+began before one sends nothing), cancels the queue and asks the running job (``attach``/``detach``
+make it reachable) to stop; ``ask_job`` hands a request to its engine (none while it stops).
 """
 from __future__ import annotations
 
@@ -180,7 +181,7 @@ class Tasks:
         """``action(job)`` carried out by the running job's engine at the runner's next turn
         (at once when called on the worker, from ``on_progress``: that is between two turns);
         ``JOB_ENDED`` when no job is running or it ended first; ``ArmctlError`` while it stops (its
-        abort pauses the arm: a resume now would run the frames it left queued, a pause is its own)."""
+        abort pauses the arm itself, and a resume now would run the frames it left queued)."""
         self.check_open()
         with self.lock:
             job = self.job
