@@ -22,6 +22,7 @@ from concurrent.futures import ThreadPoolExecutor
 from typing import IO, Any, Callable
 
 from .host.api import Arm, ArmStatus, JobObserver, RunResult
+from .host.arm_tasks import closed_error
 from .core.streamer import DEFAULT_LEAD_S
 
 __all__ = ["AsyncArm", "EventObserver"]
@@ -120,6 +121,11 @@ class AsyncArm:
         await self.close()
 
     async def _call(self, function: Callable[..., Any], *args, **kwargs) -> Any:
+        if self._closed:  # (the pool is shut down: say what the arm says)
+            raise closed_error(self.url)
+        return await self._in_pool(function, *args, **kwargs)
+
+    async def _in_pool(self, function: Callable[..., Any], *args, **kwargs) -> Any:
         loop = asyncio.get_running_loop()
         return await loop.run_in_executor(self._pool, lambda: function(*args, **kwargs))
 
@@ -140,7 +146,11 @@ class AsyncArm:
     # --- moving ------------------------------------------------------------------------------
 
     async def move(self, *, timeout: float | None = None, **words: float) -> RunResult:
-        """``Arm.move(**words)``, waited for: the arm's reports prove it at rest at the target."""
+        """``Arm.move(**words)``, waited for: the arm's reports prove it at rest at the target
+        (no ``wait=``: for a move that streams while the loop goes on, make it a task)."""
+        if "wait" in words:
+            raise TypeError("AsyncArm.move() takes no wait=: it is always awaited (a move that streams while you "
+                            "go on is a task: asyncio.create_task(arm.move(...)))")
         return await self._until_done(self.arm.move, timeout=timeout, **words)
 
     async def run(self, script, *, from_line: int = 1, on_event: Callable[[dict], Any] | None = None,
@@ -149,26 +159,44 @@ class AsyncArm:
                   observer: JobObserver | None = None) -> RunResult:
         """``Arm.run`` (same arguments), awaited.  ``on_event(dict)``: the ``run --json`` events,
         called on this loop; the last is the ``summary`` (the ``RunResult``'s words), sent also
-        when the job ends ``JobFailed`` (its result; then the error is raised)."""
+        when the job ends ``JobFailed`` (its result; then the error is raised).  An exception
+        ``on_event`` raises stops the job (``Arm.stop``): ``JobFailed`` from it, with the result."""
         from .host.jobflow import JobFailed
 
         loop = asyncio.get_running_loop()
+        failed: list[Exception] = []  # what on_event raised: it stops the job, as on_progress's error does
+
+        def deliver(event: dict) -> None:
+            if on_event is None or (failed and event["event"] != "summary"):
+                return
+            try:
+                on_event(event)
+            except Exception as error:
+                failed.append(error)
+                self.arm.stop(f"stopped: on_event raised {type(error).__name__}: {error}")
+
         if observer is None and on_event is not None:
-            name = getattr(script, "name", None) or ("<script>" if isinstance(script, str) and "\n" in script else os.fspath(script))
+            named = isinstance(script, os.PathLike) or (isinstance(script, str) and "\n" not in script)
+            name = getattr(script, "name", None) or (os.fspath(script) if named else "<script>")  # (Arm.run checks the type)
 
             def sink(event: dict) -> None:
-                loop.call_soon_threadsafe(on_event, event)
+                loop.call_soon_threadsafe(deliver, event)
 
             observer = EventObserver(sink, name)
         try:
             result = await self._until_done(self.arm.run, script, from_line=from_line, on_progress=on_progress,
                                             timeout=timeout, observer=observer, log=log, abort=abort, resume=resume)
         except JobFailed as error:
-            if on_event is not None and error.result is not None:
-                on_event({"event": "summary", **error.result.to_json()})
-            raise
-        if on_event is not None:
-            on_event({"event": "summary", **result.to_json()})
+            if error.result is not None:
+                deliver({"event": "summary", **error.result.to_json()})
+            if not failed:
+                raise
+            result = error.result
+        else:
+            deliver({"event": "summary", **result.to_json()})
+        if failed:
+            raise JobFailed(f"on_event raised {type(failed[0]).__name__}: {failed[0]}: the job was stopped", result) \
+                from failed[0]
         return result
 
     # --- reading and control -----------------------------------------------------------------
@@ -215,6 +243,6 @@ class AsyncArm:
             return
         self._closed = True
         try:
-            await self._call(self.arm.close)
+            await self._in_pool(self.arm.close)
         finally:
             self._pool.shutdown(wait=False)

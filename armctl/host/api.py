@@ -23,7 +23,8 @@ a running job (``pause``, ``resume``, ``toggle_pause``, ``feed_override`` — th
 call these) is a request to the job engine that the worker carries out between two writes
 (``JobRunner.control``); ``stop`` and a timeout take the Ctrl-C path (``JobRunner.request_stop``,
 then ``jobflow.drive``'s abort; a second ``stop`` once the abort went, ``JobRunner.cut_short``) —
-never a write from another thread.  Observers and ``on_progress`` run on the worker.  This module
+never a write from another thread.  Observers and ``on_progress`` run on the worker (a call there
+that waits for the arm — ``run``, ``wait`` — would run inside the job: ``Tasks.refuse_on_worker``).  This module
 is the façade: the values it returns are armctl/host/results.py's, its argument checks
 armctl/host/arguments.py's, the worker and its queue armctl/host/arm_tasks.py's, a job on it
 armctl/host/arm_worker.py's.  Nothing is module-level state: several arms work at once in one process.
@@ -76,7 +77,7 @@ class Arm:
         self._port = link.url if port is None else port
         self._model = MotionModel(profile)
         self.lead_s, self.status_timeout_s = lead_s, status_timeout_s
-        self._tasks = Tasks(link.url)  # the worker that owns the link, the queued moves, the running job
+        self._tasks = Tasks(link.url, link)  # the worker that owns the link, the queued moves, the running job
 
     @classmethod
     def open(cls, port: str | None = None, baud: int | None = None, profile: str | os.PathLike[str] | Profile | None = None,
@@ -217,7 +218,7 @@ class Arm:
 
     def wait(self) -> None:
         """Return when every move queued with ``wait=False`` has run (its error, if one failed)."""
-        self._call(lambda: None)
+        self._tasks.call(lambda: None, waiting="wait")
 
     # --- reading and control -----------------------------------------------------------------
 
@@ -226,7 +227,7 @@ class Arm:
         the job asked for before it ran); ``JobFailed`` when it is not complete within
         ``timeout`` seconds (default ``status_timeout_s``)."""
         timeout_s = self.status_timeout_s if timeout is None else args.check_timeout(timeout, "STATUS_TIMEOUT_RANGE_S")
-        return self._call(lambda: ArmStatus.of(self._complete_state(timeout_s), self._link.clock()))
+        return self._call(lambda: ArmStatus.of(_complete_state(self._link, timeout_s), self._link.clock()))
 
     def status_json(self, timeout: float | None = None, *, at_once: bool = False) -> dict:
         """The arm's decoded report with the keys of ``armctl status --once --json``, once every
@@ -236,19 +237,9 @@ class Arm:
         the worker, so there it waits its turn all the same)."""
         timeout_s = self.status_timeout_s if timeout is None else args.check_timeout(timeout, "STATUS_TIMEOUT_RANGE_S")
         def read() -> dict:
-            return self._complete_state(timeout_s).to_json()
+            return _complete_state(self._link, timeout_s).to_json()
+        self._tasks.check_open()  # (at_once reads the link here: a closed one would be waited for)
         return read() if at_once and not self.is_virtual else self._call(read)
-
-    def _complete_state(self, timeout_s: float):
-        """A copy of the link's state once every status kind has been seen (``JobFailed`` after
-        ``timeout_s``; the link's ``PortError`` once the port went away): what ``status`` and
-        ``status_json`` read."""
-        link = self._link
-        if not link.wait_until(lambda s: s.complete, timeout_s):
-            raise JobFailed(link.silence_message(timeout_s))
-        if link.error is not None:  # complete long ago, then the port went away: the last report is not live
-            raise link.error
-        return link.snapshot()[0]
 
     def pause(self) -> bool:
         """Pause the arm.  During a job (``run``, or a ``move`` with ``wait=False``) this asks
@@ -325,10 +316,10 @@ class Arm:
         from ..script import ScriptSnapshot
 
         return self._submit(ScriptSnapshot(name, line.encode("ascii")), 1, JobSpec(JobObserver(), timeout_s=timeout),
-                            wait, from_arm=True)
+                            wait, from_arm=True, call="home" if name == _HOME_NAME else "move")
 
     def _submit(self, source, from_line: int, spec: JobSpec, wait: bool, from_arm: bool,
-                stops: int | None = None) -> RunResult | None:
+                stops: int | None = None, call: str = "run") -> RunResult | None:
         """Check ``source`` here (``ScriptError``, nothing sent), then run it on the worker.
 
         ``from_arm``: the script is a move's one line, whose words left out are the arm's; it
@@ -350,16 +341,21 @@ class Arm:
             return run_job(line, checked, spec, from_arm, lambda: stops != tasks.stops,
                            lambda control: tasks.attach(control, stops), tasks.detach)
 
-        if wait:
-            try:
-                return tasks.call(job)
-            except KeyboardInterrupt:
-                # Ctrl-C while the call waits: the job it started stops, as armctl run's does,
-                # rather than run on behind a program that catches the exception and goes on
-                tasks.stop_once()
-                raise
+        if wait:  # (``call``: the method asked; Ctrl-C while it waits stops the job, Tasks.call)
+            return tasks.call(job, waiting=call)
         tasks.queue(job, stops)
         return None
+
+
+def _complete_state(link, timeout_s: float):
+    """A copy of the link's state once every status kind has been seen (``JobFailed`` after
+    ``timeout_s``; the link's ``PortError`` once the port went away): what ``status`` and
+    ``status_json`` read."""
+    if not link.wait_until(lambda s: s.complete, timeout_s):
+        raise JobFailed(link.silence_message(timeout_s))
+    if link.error is not None:  # complete long ago, then the port went away: the last report is not live
+        raise link.error
+    return link.snapshot()[0]
 
 
 def _claimed_resume(resume, log, snapshot, from_line: int, port):

@@ -91,6 +91,11 @@ def check_log(log) -> None:
         raise TypeError(f"log must be an open text file, not {kind_of(log)}")
     if isinstance(log, (io.RawIOBase, io.BufferedIOBase)) or "b" in getattr(log, "mode", ""):
         raise TypeError("log must be a text file (open(path, 'w')), not a binary one: the journal is JSON lines of text")
+    if getattr(log, "closed", False):
+        raise ValueError(f"log is closed ({short(log)}): give an open text file; nothing was sent")
+    writable = getattr(log, "writable", None)
+    if callable(writable) and not writable():
+        raise TypeError(f"log must be a file open for writing (open(path, 'w')), not {short(log)}; nothing was sent")
 
 
 def check_connected(connected) -> tuple[Any, int]:

@@ -4,13 +4,19 @@ Strategy: ``Tasks`` is what makes ``Arm`` thread-safe.  Public calls put a task 
 queue (``Worker``, the only thread that touches the link); a blocking call waits for its task
 (``call``), a move with ``wait=False`` is queued (``queue``) and returns at once.  A queued move
 that fails cancels the moves queued after it — the arm is no longer where they assume — and
-its error is raised by the next blocking call (``raise_deferred``).  ``stop`` counts the stops
-(a job whose call began before one sends nothing), cancels the queue and asks the running job
-(``attach``/``detach`` make it reachable) to stop; ``ask_job`` hands a request to its engine.
+its error is raised by the next blocking call (``raise_deferred``).  The worker is a daemon
+thread, so an arm still open when the interpreter exits is closed then as leaving a ``with`` block
+closes it (``close_at_exit``): its queued moves run, each once — unless the program died of an
+exception (Ctrl-C too): then it is stopped first.  ``stop`` counts the stops (a job whose call
+began before one sends nothing), cancels the queue and asks the running job (``attach``/``detach``
+make it reachable) to stop; ``ask_job`` hands a request to its engine (none while it stops).
 """
 from __future__ import annotations
 
+import atexit
+import logging
 import queue
+import sys
 import threading
 from concurrent.futures import Future
 from typing import Any, Callable
@@ -20,6 +26,11 @@ from ..errors import ArmctlError
 from .jobflow import JobFailed
 
 SKIPPED = object()  # a task not run: a queued move before it failed (its error is raised instead)
+
+
+def closed_error(url: str) -> ArmctlError:
+    """What a call on an arm closed already raises (``Arm``'s and ``AsyncArm``'s)."""
+    return ArmctlError(f"the arm on {url} is closed")
 
 
 class Worker:
@@ -66,38 +77,62 @@ class Worker:
 class Tasks:
     """The worker of the arm on ``url``, the moves queued on it and the job it runs."""
 
-    def __init__(self, url: str) -> None:
+    def __init__(self, url: str, link: Any = None) -> None:
+        """``link``: the port the arm's worker owns, closed at the interpreter's exit if still open."""
         self.url = url
-        self.lock = threading.Lock()
+        self.lock = threading.RLock()  # reentrant: stop() from a signal handler may come while this thread holds it
         self.worker = Worker(f"armctl-arm {url}")
         self.queued: list[Future] = []  # moves queued with wait=False, not yet finished
         self.deferred: BaseException | None = None  # the error of a queued move, for the next blocking call
         self.job: JobControl | None = None
         self.stops = 0  # how many times stop() was called: a queued move from before it is not sent
         self.closed = False
+        self._at_exit = None if link is None else (lambda: self.close_at_exit(link))
+        if self._at_exit is not None:
+            atexit.register(self._at_exit)
 
-    def call(self, task: Callable[[], Any]) -> Any:
+    def call(self, task: Callable[[], Any], waiting: str | None = None) -> Any:
         """Run ``task`` on the worker after everything queued — unless a queued move failed:
-        then its error is raised and ``task`` does not run."""
-        if self.closed:
-            raise ArmctlError(f"the arm on {self.url} is closed")
+        then its error is raised and ``task`` does not run.  ``waiting``: the name of a call that
+        waits for the arm (``run``, ``wait``), refused from a hook of the running job; Ctrl-C while
+        it waits stops the arm (the job it started, the moves it waits for), as ``armctl run``'s
+        does, rather than let them run on behind a program that catches the exception and goes on."""
+        self.check_open()
+        if waiting is not None:
+            self.refuse_on_worker(waiting)
 
         def unless_failed():
             return SKIPPED if self.deferred is not None else task()
 
         try:
             result = self.worker.call(unless_failed)
+        except KeyboardInterrupt:
+            if waiting is not None:
+                self.stop_once()
+            raise
         finally:
             self.raise_deferred()
         if result is SKIPPED:  # another thread took the queued move's error first
             raise JobFailed("not run: a move queued before it failed")
         return result
 
+    def check_open(self) -> None:
+        if self.closed:
+            raise closed_error(self.url)
+
+    def refuse_on_worker(self, call: str) -> None:
+        """``ArmctlError`` for ``call`` (one that waits for the arm) made on the worker: from
+        ``on_progress`` or an observer, whose job is the task running — it would run inside that
+        job's stream (its frames between the job's), or never see the queue it waits for."""
+        if self.worker.is_current():
+            raise ArmctlError(f"arm.{call}() was called from on_progress or an observer of the job running on {self.url}: "
+                              f"it would run inside that job; queue a move with wait=False, or call {call}() after "
+                              "run() returns (stop() and status() may be called there)")
+
     def queue(self, task: Callable[[], Any], stops: int) -> None:
         """``task`` queued on the worker, not waited for: not run if ``stop()`` came since
         ``stops``, nor if a move queued before it failed (its error is kept, the rest cancelled)."""
-        if self.closed:
-            raise ArmctlError(f"the arm on {self.url} is closed")
+        self.check_open()
 
         def queued() -> Any:
             if stops != self.stops:
@@ -145,11 +180,16 @@ class Tasks:
     def ask_job(self, action: Callable[[Any], Any]) -> Any:
         """``action(job)`` carried out by the running job's engine at the runner's next turn
         (at once when called on the worker, from ``on_progress``: that is between two turns);
-        ``JOB_ENDED`` when no job is running or it ended first."""
+        ``JOB_ENDED`` when no job is running or it ended first; ``ArmctlError`` while it stops (its
+        abort pauses the arm itself, and a resume now would run the frames it left queued)."""
+        self.check_open()
         with self.lock:
-            job = self.job if self.job is not None and not self.job.stop_asked else None
+            job = self.job
             if job is None:
                 return JOB_ENDED
+            if job.stop_asked or job.runner.stop_requested:
+                raise ArmctlError(f"the job on {self.url} is stopping (its abort sequence pauses the arm): no pause, "
+                                  "resume or feed override now; ask again once run() has returned")
             if self.worker.is_current():
                 return action(job.runner.job)
             future = job.request(action)
@@ -177,14 +217,36 @@ class Tasks:
 
     def close(self, link, raise_deferred: bool = True) -> None:
         """Wait for the queued tasks (each run exactly once), stop the worker, close ``link``."""
+        self.refuse_on_worker("close")
         with self.lock:
             if self.closed:
                 return
             self.closed = True
+        if self._at_exit is not None:
+            atexit.unregister(self._at_exit)
         try:
             self.worker.call(lambda: None)  # every task queued before has run
+        except KeyboardInterrupt:  # Ctrl-C while the queue runs out: stop the arm, as leaving a with block by it does
+            self.stop_once()
+            raise
         finally:
             self.worker.stop()
             link.close()
         if raise_deferred:
             self.raise_deferred()
+
+    def close_at_exit(self, link) -> None:
+        """At the interpreter's exit, an arm nobody closed: closed as leaving a ``with`` block
+        would — stopped first if the program died of an exception (``sys.last_value``: Ctrl-C
+        too) — and a queued move's error said on the ``armctl.host.api`` logger (WARNING: on
+        stderr when logging is not set up), not dropped without a word."""
+        if getattr(sys, "last_value", None) is not None:
+            self.stop_once()
+        try:
+            self.close(link, raise_deferred=False)
+        except KeyboardInterrupt:  # (close stopped the arm and waited for it)
+            pass
+        error = self.deferred
+        if error is not None:
+            logging.getLogger("armctl.host.api").warning("armctl: the arm on %s was closed at exit; a move queued on "
+                                                         "it with wait=False failed: %s", self.url, error)

@@ -100,7 +100,16 @@ class JobControl:
         lock too: a request is either carried out or answered ``JOB_ENDED``)."""
         future: Future = Future()
         self._asked.append(future)
-        self.runner.control(lambda job: future.done() or future.set_result(action(job)))
+
+        def carry_out(job) -> None:  # on the worker, at the runner's turn: the abort's turns too
+            if future.done():
+                return
+            if self.stop_asked or self.runner.stop_requested:  # a stop came after the request: it is not carried out
+                future.set_exception(_stopped_first())
+            else:
+                future.set_result(action(job))
+
+        self.runner.control(carry_out)
         return future
 
     def request_stop(self, why: str | None = None) -> None:
@@ -124,7 +133,7 @@ class JobControl:
         if self.journal is not None:
             self.journal(view)  # --log's progress records, to the end (the abort included)
         if self.observer is not None:
-            self.observer.update(view)  # the live view follows the abort too
+            self._update_observer(view)  # the live view follows the abort too
         if self.stop_asked:
             return
         now_s = view.now_s
@@ -138,16 +147,51 @@ class JobControl:
                 self._shown, self._shown_s = shown, now_s
                 try:
                     self.on_progress(Progress.of(view, self.runner.job.arm_paused, now_s))
-                except Exception as error:  # stops the job (jobflow.drive); raised as the cause
-                    self.callback_error, self.stop_asked = error, True  # no callback while it aborts
+                except BaseException as error:  # stops the job (jobflow.drive); raised as the cause
+                    self.stop_asked = True  # no callback while it aborts (sys.exit() too)
+                    if isinstance(error, Exception):
+                        self.callback_error = error
                     raise
 
+    def _update_observer(self, view) -> None:
+        """``observer.update``: an exception it raises stops the job, as ``on_progress``'s does;
+        once the job is stopping, it is noted in the result instead — it must not cut the abort
+        sequence short (the arm would run on with its queued frames)."""
+        runner, observer = self.runner, self.observer
+        if observer is None:
+            return
+        if not (self.stop_asked or runner.stop_requested or runner.failure):
+            observer.update(view)
+            return
+        try:
+            observer.update(view)
+        except Exception as error:
+            told = f"the observer's update failed while the job stopped: {type(error).__name__}: {error}"
+            if told not in view.messages:
+                view.messages.append(told)
+
     def end(self) -> None:
-        """The job is over: a request it did not carry out is done on the idle arm instead."""
+        """The job is over: a request it did not carry out is done on the idle arm instead —
+        unless the job stopped (its abort paused the arm: a resume then would run the frames it
+        left queued), then it is refused, nothing sent."""
+        stopped = self.stop_asked or self.runner.stop_requested
         for future in self._asked:
-            if not future.done():
+            if future.done():
+                continue
+            if stopped:
+                future.set_exception(_stopped_first())
+            else:
                 future.set_result(JOB_ENDED)
         self._asked = []
+
+
+def _stopped_first():
+    """What a pause, resume or feed request handed to a job that then stopped raises: the abort
+    paused the arm, and a resume carried out now would run the frames it left queued."""
+    from ..errors import ArmctlError
+
+    return ArmctlError("the job stopped before it carried out this request: nothing was sent; ask again once "
+                       "run() has returned")
 
 
 def toggle_idle_arm(link, want_paused: bool) -> bool:

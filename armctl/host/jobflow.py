@@ -154,7 +154,8 @@ class JournalFile:
     """``--log`` as the journal writes it (armctl/core/joblog.py): each record sealed (its place and
     CRC-32) on a line of its own; ``append(record, durable=True)`` returns once the line is
     flushed and fsynced (a frame's record, before the frame goes to the port).  A file object
-    without a descriptor (``io.StringIO``) is flushed only, and so is every record when ``sync``
+    without a descriptor (``io.StringIO``) or not a regular file (``/dev/null``, a pipe) is
+    flushed only, and so is every record when ``sync``
     is False: an arm on a virtual clock (``sim://?clock=virtual``) lives in the host's process
     and its time moves only with the host, so nothing of it runs on after a crash — and an
     fsync a frame would cost a virtual job more wall time than the job itself.  The first fsync
@@ -186,11 +187,14 @@ class JournalFile:
 
     def _fsync(self) -> None:
         import os
+        import stat
 
         try:
             descriptor = self.file.fileno()
         except (AttributeError, OSError, ValueError):  # no descriptor (io.StringIO): flushed is all there is
             return
+        if not stat.S_ISREG(os.fstat(descriptor).st_mode):
+            return  # written through (/dev/null, a pipe, a terminal): nothing to fsync, and fsync says EINVAL
         os.fsync(descriptor)
         if not self._directory_synced:
             self._directory_synced = True
@@ -328,6 +332,7 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
     from ..errors import PortError
 
     view = runner.view
+    leaving: BaseException | None = None  # sys.exit() in a callback: the arm is stopped first, then it goes on
     try:
         runner.run()
         return view.outcome
@@ -338,7 +343,13 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
         return "port lost"
     except Exception as error:  # anything else mid-job: the same path as Ctrl-C
         runner.fail(f"{type(error).__name__}: {error}")
-    on_stopping(runner.failure or "interrupted")
+    except BaseException as error:  # SystemExit, GeneratorExit: the same path, then raised again
+        runner.fail(f"{type(error).__name__}: {error}")
+        leaving = error
+    try:  # a caller's hook that fails here must not keep the abort sequence from going
+        on_stopping(runner.failure or "interrupted")
+    except Exception as error:
+        view.messages.append(f"while stopping: {type(error).__name__}: {error}")
     try:
         runner.abort(abort_sequence)
     except KeyboardInterrupt:  # a second Ctrl-C (Arm.stop again): the wait for rest ends here
@@ -348,6 +359,8 @@ def drive(runner, abort_sequence: tuple, on_stopping: Callable[[str], None] = la
     if runner.job.outcome is None and runner.failure:  # the abort was cut short: the engine did not end it
         view.outcome = "failed"
         view.messages.append(runner.failure)
+    if leaving is not None:
+        raise leaving
     return view.outcome  # "interrupted", "failed", or "port lost" if the abort could not be sent
 
 
