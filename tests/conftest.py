@@ -213,6 +213,8 @@ LONG_WAITING = (
     "test_review_users.py::test_sim_tcp_serves", "test_run_json_resume.py::test_kill_9_mid_job",
     "test_api_client.py::test_an_unprobed_arm_ends", "test_api.py::test_the_example_against_armctl_sim_pty",
     "test_crash_review.py::test_kill_9_twice", "test_probe_rates.py::test_installed_command_at_115200",
+    "test_review6_realtime.py::test_a_second_ctrl_c_says", "test_review6_api.py::test_a_program_that_dies_of_an_exception",
+    "test_review6_realtime.py::test_a_pty_set_to_another_rate", "test_review6_realtime.py::test_a_probe_of_the_last_sim_pty",
 )
 
 
