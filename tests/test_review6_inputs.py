@@ -40,6 +40,21 @@ def _armctl(args, cwd, env=None, timeout=TIMEOUT_S) -> subprocess.CompletedProce
                           env=env or _env(), stdin=subprocess.DEVNULL)
 
 
+def _armctl_fresh_or_here(args, cwd, monkeypatch, fresh: bool, **extra_env: str):
+    """``armctl ARGS`` in ``cwd``: the installed command in a fresh process (``fresh``), else in this
+    process (click's runner; the same exit code and stderr, for a matrix's other cases at a
+    fraction of a process's start-up)."""
+    if fresh:
+        return _armctl(args, cwd, _env(**extra_env))
+    from click.testing import CliRunner
+
+    from armctl.ui.cli import main
+
+    monkeypatch.chdir(cwd)
+    result = CliRunner().invoke(main, args, env={"ARMCTL_PORT": None, **extra_env})
+    return subprocess.CompletedProcess(args, result.exit_code, result.stdout_bytes, result.stderr_bytes)
+
+
 def _no_traceback(done: subprocess.CompletedProcess) -> str:
     stderr = done.stderr.decode("utf-8", "replace")
     assert "Traceback" not in stderr, stderr
@@ -120,7 +135,7 @@ _NOT_A_FILE = {
 @pytest.mark.parametrize("kind", list(_NOT_A_FILE))
 @pytest.mark.parametrize("args", [["config"], ["estimate", "job.txt"], ["status", "--once", "--port", VIRTUAL]],
                          ids=" ".join)
-def test_an_armctl_toml_that_is_not_a_regular_file_is_refused(workdir, tmp_path, args, kind, where):
+def test_an_armctl_toml_that_is_not_a_regular_file_is_refused(workdir, tmp_path, monkeypatch, args, kind, where):
     project = workdir / "project"
     project.mkdir()
     shutil.copy(workdir / "job.txt", project / "job.txt")
@@ -130,7 +145,8 @@ def test_an_armctl_toml_that_is_not_a_regular_file_is_refused(workdir, tmp_path,
     user_folder.mkdir(parents=True)
     path = (project if where == "project" else user_folder) / "armctl.toml"
     _NOT_A_FILE[kind](path)
-    done = _armctl(args, project, _env(XDG_CONFIG_HOME=str(tmp_path / "config")))
+    fresh = args == ["config"] and where == "project"  # the others in this process
+    done = _armctl_fresh_or_here(args, project, monkeypatch, fresh, XDG_CONFIG_HOME=str(tmp_path / "config"))
     stderr = _no_traceback(done)
     assert done.returncode == 2, stderr
     assert stderr.strip().splitlines()[-1].startswith(f"armctl: {path}"), stderr
@@ -155,8 +171,8 @@ def test_a_sim_url_in_capitals_is_the_simulator(workdir, scheme):
 
 @pytest.mark.parametrize("args", [["config"], ["status", "--once"], ["run", "job.txt", "--no-live"]], ids=" ".join)
 @pytest.mark.parametrize("port", ["http://arm.local", " sim://", "bogus://x"])
-def test_a_port_of_a_scheme_no_handler_takes_is_a_configuration_error(workdir, args, port):
-    done = _armctl(args, workdir, _env(ARMCTL_PORT=port))
+def test_a_port_of_a_scheme_no_handler_takes_is_a_configuration_error(workdir, monkeypatch, args, port):
+    done = _armctl_fresh_or_here(args, workdir, monkeypatch, port == " sim://", ARMCTL_PORT=port)
     stderr = _no_traceback(done)
     assert done.returncode == 2, stderr
     scheme = port.split("://")[0]
@@ -303,9 +319,9 @@ def test_a_sim_profile_the_simulator_refuses_is_refused_by_config_too(tmp_path, 
 
 @pytest.mark.parametrize("port", ["/dev/ttyUSB0\\u0000", "socket://\\u0000:1", "loop://\\u0000"])
 @pytest.mark.parametrize("args", [["config"], ["status", "--once"], ["run", "job.txt", "--no-live"]], ids=" ".join)
-def test_a_nul_in_the_port_of_armctl_toml_is_refused(workdir, port, args):
+def test_a_nul_in_the_port_of_armctl_toml_is_refused(workdir, monkeypatch, port, args):
     (workdir / "armctl.toml").write_text(f'port = "{port}"\n')
-    done = _armctl(args, workdir)
+    done = _armctl_fresh_or_here(args, workdir, monkeypatch, port.startswith("/dev/"))
     stderr = _no_traceback(done)
     assert done.returncode == 2, stderr
     assert stderr.strip().splitlines()[-1].startswith(f"armctl: {workdir / 'armctl.toml'}: port = "), stderr
