@@ -107,7 +107,6 @@ def _corruptions(draw_kind):
     return st.lists(st.one_of(st.none(), st.lists(far, min_size=1, max_size=BLIP_READINGS)), min_size=1, max_size=8)
 
 
-@pytest.mark.xfail(strict=True, reason="fails now: a kind back while another is away, then away again, dates the motion")
 @settings(max_examples=200, deadline=None)
 @given(data=st.data())
 def test_blips_never_date_the_arms_motion(data):

@@ -287,8 +287,10 @@ class Readings:
             away = self.away
             entry = next((entry for entry in away if entry[0] == kind), None)
             if entry is not None:
-                if not entry[2] or self.written.explains(kind, old, before_s):
-                    entry = None  # it left again after it came back, or a frame passes there: motion
+                if not entry[2]:
+                    entry[2] = 1  # away again from where it came back to: one more blip, as the first
+                elif self.written.explains(kind, old, before_s):
+                    entry = None  # a frame passes there: motion
                 elif entry[1] == values:
                     # this kind's readings since it left stood alone between two equal ones
                     entry[2] = 0
