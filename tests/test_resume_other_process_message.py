@@ -16,7 +16,6 @@ from armctl.host.resume_port import refuse_gone_simulator
 pytestmark = pytest.mark.timeout(30)
 
 
-@pytest.mark.xfail(strict=True, reason="fails now: the refusal says the other process 'has ended'")
 def test_the_refusal_does_not_say_the_other_process_ended():
     alive = SimpleNamespace(sim_process=f"{os.getpid()}-another0process", log_path="job.log", port="sim://")
     with pytest.raises(ResumeRefused) as refused:

@@ -53,8 +53,8 @@ def refuse_gone_simulator(point) -> None:
         return
     name = point.log_path or "the log"
     raise ResumeRefused(
-        f"--resume {name}: its job ran on a simulated arm ({point.port}) of another armctl process, which has "
-        "ended: a simulated arm does not outlive its process, and the one a resume would open now starts afresh "
+        f"--resume {name}: its job ran on a simulated arm ({point.port}) of another armctl process: a "
+        "simulated arm does not outlive its process, and the one a resume would open here starts afresh "
         "at its home pose, so none of its reports can prove which lines ran; nothing was sent (run the job "
         "again; to try a resume, keep a simulated arm in a process of its own: `armctl sim --pty` or "
         "`armctl sim --tcp PORT`, and its port as --port)")
