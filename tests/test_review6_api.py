@@ -40,6 +40,16 @@ def stop_at_frame(arm: Arm, frames: int):
     return on_progress
 
 
+def resume_asker(arm: Arm, answers: list):
+    """A function that asks ``arm.resume()`` and keeps its answer, or the error's text, in ``answers``."""
+    def ask() -> None:
+        try:
+            answers.append(arm.resume())
+        except ArmctlError as error:
+            answers.append(str(error))
+    return ask
+
+
 def assert_stopped_at_rest(arm: Arm) -> None:
     """The abort went (one pause toggle) and the arm stays where it stopped for 10 s of its clock."""
     assert toggles(arm) == 1, received(arm)
@@ -232,11 +242,7 @@ def test_a_control_call_after_close_says_the_arm_is_closed(call):
 def test_resume_while_the_job_stops_is_refused_and_the_arm_stays_paused(where):
     answers = []
     with Arm.open(VIRTUAL + "&control_frames=arrival") as arm:
-        def ask() -> None:
-            try:
-                answers.append(arm.resume())
-            except ArmctlError as error:
-                answers.append(str(error))
+        ask = resume_asker(arm, answers)
 
         class Resumes(JobObserver):
             def update(self, view):  # the job stops, and the arm reports the abort's pause
@@ -314,11 +320,7 @@ def test_a_resume_asked_just_before_a_stop_is_not_carried_out_on_the_idle_arm():
     with Arm.open(VIRTUAL + "&control_frames=arrival") as arm:
         steps: list = []
 
-        def ask() -> None:
-            try:
-                answers.append(arm.resume())
-            except ArmctlError as error:
-                answers.append(str(error))
+        ask = resume_asker(arm, answers)
 
         def on_progress(progress):
             if progress.frames_sent == 5 and not steps:

@@ -135,17 +135,24 @@ def test_closing_an_arm_whose_job_is_stopping_waits_for_the_arm(tmp_path):
 
 
 @pytest.mark.realtime
+def _interrupt_a_long_job(server) -> tuple[dict, float]:
+    """A long job on arm ``a``, three frames in, then SIGINT to the server: the job as created,
+    and when the signal was sent."""
+    status, created = server.request("POST", "/api/arms/a/jobs?name=long.txt", long_job(40))
+    assert status == 201, created
+    _wait_frames(server, created["id"], 3)
+    started = time.monotonic()
+    server.process.send_signal(signal.SIGINT)
+    return created, started
+
+
 def test_a_second_ctrl_c_cuts_short_the_wait_for_the_arm_as_armctl_run_s_does(tmp_path):
     """docs/server.md: Ctrl-C stops a job as ``armctl run``'s does — whose second Ctrl-C stops
     waiting for the arm to come to rest.  ``armctl serve``'s handler only set its stop event,
     already set: a second SIGINT 0.5 s after the first changed nothing, the server exited 5.3 s
     after the first (sim://?speed=1: the 2 s lead of motion and the rest)."""
     with served("--arm", "a=sim://?speed=1", journal=tmp_path) as server:
-        status, created = server.request("POST", "/api/arms/a/jobs?name=long.txt", long_job(40))
-        assert status == 201, created
-        _wait_frames(server, created["id"], 3)
-        started = time.monotonic()
-        server.process.send_signal(signal.SIGINT)
+        created, started = _interrupt_a_long_job(server)
         time.sleep(0.5)
         server.process.send_signal(signal.SIGINT)
         assert server.process.wait(40) == 130
@@ -224,11 +231,7 @@ def test_a_stopping_server_takes_no_new_job_or_move(tmp_path):
     after SIGINT was started and waited for: the server exited after the move's 37 s.  Now every
     POST is refused once the server stops: 503 ``stopping``."""
     with served("--arm", "a=sim://?speed=1", "--arm", "b=sim://?speed=1", journal=tmp_path) as server:
-        status, created = server.request("POST", "/api/arms/a/jobs?name=long.txt", long_job(40))
-        assert status == 201, created
-        _wait_frames(server, created["id"], 3)
-        started = time.monotonic()
-        server.process.send_signal(signal.SIGINT)
+        created, started = _interrupt_a_long_job(server)
         time.sleep(0.3)
         status, answer = server.request("POST", "/api/arms/b/move",
                                         {"x": 250, "y": 100, "z": 150, "a": 180, "b": 0, "c": 0, "f": 300}, timeout=60)

@@ -187,7 +187,7 @@ class Tasks:
             job = self.job
             if job is None:
                 return JOB_ENDED
-            if job.stop_asked or job.runner.stop_requested:
+            if job.stopping:
                 raise ArmctlError(f"the job on {self.url} is stopping (its abort sequence pauses the arm): no pause, "
                                   "resume or feed override now; ask again once run() has returned")
             if self.worker.is_current():

@@ -104,7 +104,7 @@ class JobControl:
         def carry_out(job) -> None:  # on the worker, at the runner's turn: the abort's turns too
             if future.done():
                 return
-            if self.stop_asked or self.runner.stop_requested:  # a stop came after the request: it is not carried out
+            if self.stopping:  # a stop came after the request: it is not carried out
                 future.set_exception(_stopped_first())
             else:
                 future.set_result(action(job))
@@ -112,12 +112,17 @@ class JobControl:
         self.runner.control(carry_out)
         return future
 
+    @property
+    def stopping(self) -> bool:
+        """The job was asked to stop (``stop()``, the timeout) or its runner began to on its own."""
+        return self.stop_asked or self.runner.stop_requested
+
     def request_stop(self, why: str | None = None) -> None:
         """The Ctrl-C path (``jobflow.drive`` sends the abort sequence); ``why`` goes into the
         result's messages.  Asked again while stopping: stop waiting for the arm (a second Ctrl-C)."""
         if why is not None and why not in self.runner.view.messages:  # two SIGTERMs: one note
             self.runner.view.messages.append(why)
-        first = not self.stop_asked and not self.runner.stop_requested
+        first = not self.stopping
         self.stop_asked = True
         if first:
             try:
@@ -160,7 +165,7 @@ class JobControl:
         runner, observer = self.runner, self.observer
         if observer is None:
             return
-        if not (self.stop_asked or runner.stop_requested or runner.failure):
+        if not (self.stopping or runner.failure):
             observer.update(view)
             return
         try:
@@ -174,7 +179,7 @@ class JobControl:
         """The job is over: a request it did not carry out is done on the idle arm instead —
         unless the job stopped (its abort paused the arm: a resume then would run the frames it
         left queued), then it is refused, nothing sent."""
-        stopped = self.stop_asked or self.runner.stop_requested
+        stopped = self.stopping
         for future in self._asked:
             if future.done():
                 continue

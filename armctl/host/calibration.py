@@ -144,11 +144,17 @@ def _pty_made(real: str) -> str | None:
     return time.strftime("%Y-%m-%dT%H:%M:%S", time.gmtime(made_ns // 10**9)) + f".{made_ns % 10**9:09d}Z"
 
 
+def _pty_device(identity: str) -> str | None:
+    """A pty's identity without the moment it was made (``device /dev/pts/N``); None for any other."""
+    device, made, _ = identity.partition(_PTY_MADE)
+    return device if made and identity.startswith(_DEVICE) else None
+
+
 def by_name_only(identity: str) -> bool:
     """An identity no more than the path or address its port leads to (a device without a USB
     serial number or location, a TCP port): another arm there has the same one.  Not a pty's: the
     moment it was made is in it."""
-    if identity.startswith(_DEVICE) and _PTY_MADE in identity:
+    if _pty_device(identity) is not None:
         return False
     return identity.startswith((_DEVICE, *(f"{scheme}://" for scheme in _NETWORK_SCHEMES)))
 
@@ -163,7 +169,7 @@ def ports_to_search(identity: str, ports) -> list[str]:
     lists (``ports``); for a device's, the path it names, if there is one; else nowhere else."""
     if identity.startswith(_USB):
         return sorted(info.device for info in ports)
-    path = identity[len(_DEVICE):].split(_PTY_MADE)[0]
+    path = (_pty_device(identity) or identity)[len(_DEVICE):]
     return [path] if identity.startswith(_DEVICE) and os.path.exists(path) else []
 
 
@@ -404,9 +410,9 @@ def _gone_ptys(arm: str, directory: Path) -> list[Path]:
     has the path now — without this every ``armctl sim --pty`` probed would stay listed."""
     import glob
 
-    if not arm.startswith(_DEVICE) or _PTY_MADE not in arm:
+    device = _pty_device(arm)
+    if device is None:
         return []
-    device = arm.split(_PTY_MADE)[0]
     mine, prefix = record_path(arm, directory), record_path(device + _PTY_MADE, directory).name[:-len(".json")]
     earlier = [record_path(device, directory), *directory.glob(glob.escape(prefix) + "*.json")]
     return [path for path in earlier if path != mine and path.exists()]

@@ -103,11 +103,15 @@ def check_port_url(choice: PortChoice) -> None:
     opens — by ``armctl config`` as by the commands that would open it."""
     scheme, separator, _ = choice.url.partition("://")
     if separator and scheme not in _KNOWN_SCHEMES and not _pyserial_takes(scheme):
-        where = f"{choice.origin}: port" if choice.from_file else choice.origin
-        raise ConfigError(f"{where}: {choice.url!r}: no port type {scheme!r} (a device path such as /dev/ttyUSB0, "
+        raise ConfigError(f"{_where(choice)}: {choice.url!r}: no port type {scheme!r} (a device path such as /dev/ttyUSB0, "
                           "socket://HOST:PORT, rfc2217://HOST:PORT or sim://[?options])")
     if choice.is_simulator:
         check_sim_url(choice)
+
+
+def _where(choice: PortChoice) -> str:
+    """Where a port came from, as its errors name it (a file's key, or the option or variable)."""
+    return f"{choice.origin}: port" if choice.from_file else choice.origin
 
 
 def _pyserial_takes(scheme: str) -> bool:
@@ -138,7 +142,7 @@ def check_sim_url(choice: PortChoice) -> None:
     from ..errors import ProfileError
     from ..sim.protocol_sim import parse_sim_url
 
-    where = f"{choice.origin}: port" if choice.from_file else choice.origin
+    where = _where(choice)
     try:
         options = parse_sim_url(choice.url)
     except ConfigError as error:
