@@ -147,6 +147,23 @@ def test_a_probe_of_the_last_sim_pty_is_not_taken_for_the_next_one(tmp_path):
 # the pause (sim --stats: they ran after armctl exited).  Pasting that command runs them twice, and
 # nothing said the arm was still moving.
 
+def _stdout_until(process, marker: str, within_s: float) -> str:
+    """What ``process`` printed up to the line holding ``marker`` (a progress line: a line every
+    2 s with --no-live), read within ``within_s``."""
+    import select
+
+    printed, deadline = "", time.monotonic() + within_s
+    while time.monotonic() < deadline:
+        ready, _, _ = select.select([process.stdout], [], [], 0.1)
+        if ready:
+            line = process.stdout.readline()
+            assert line, "the run ended before printing " + repr(marker) + ":\n" + printed + process.stderr.read()
+            printed += line
+            if marker in line:
+                return printed
+    raise AssertionError(f"{marker!r} not printed within {within_s} s:\n{printed}")
+
+
 LONG_MOVES = "G1 X210 Y0 Z250 A180 B0 C0 S1500 F1000\nG1 Z200\nG1 Z250\nG1 Z200\nG1 Z250\n"  # 3 s each
 
 
@@ -162,11 +179,14 @@ def test_a_second_ctrl_c_says_the_arm_may_still_be_running(tmp_path):
     try:
         run = subprocess.Popen([sys.executable, "-m", "armctl", "run", str(script), "--port", path, "--no-live"],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=_env(tmp_path), cwd=tmp_path)
-        time.sleep(4.5)  # the second move running, the third queued (lead 2 s)
+        # the second move running, the third queued (lead 2 s): seen in the run's progress line, not
+        # guessed from the wall clock (a loaded machine once took the fixed 4.5 s this waited to start)
+        printed = _stdout_until(run, "line sent 3", 30)
         run.send_signal(signal.SIGINT)
         time.sleep(0.5)
         run.send_signal(signal.SIGINT)
         out, err = run.communicate(timeout=20)
+        out = printed + out
         time.sleep(6.5)  # what was queued runs out (two moves at most)
     finally:
         _stop(arm)
