@@ -37,6 +37,7 @@ anywhere.
 from __future__ import annotations
 
 import json
+import multiprocessing
 import os
 import sys
 import time
@@ -233,7 +234,9 @@ def run_bench(scenarios: list[Scenario], strategies=STRATEGY_NAMES, lead_s: floa
     if jobs > 1:
         # Longest first, so the pool does not end waiting on one slow cell.
         order = sorted(range(len(work)), key=lambda i: -work[i][0].frames)
-        with ProcessPoolExecutor(jobs) as pool:
+        # Spawned workers, not forked: a fork copies the threads' locks of a process that has other
+        # threads (an API user's, a test run's), which may deadlock the child; Python 3.12+ warns.
+        with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
             results = dict(zip(order, pool.map(_run_cell_args, [work[i] for i in order])))
         cells = [results[i] for i in range(len(work))]
     else:
