@@ -41,10 +41,6 @@ def place(tmp_path):
 
 # -- 1. a resume= that names a directory (or a named pipe): ResumeRefused, as documented ------------
 
-FAULT1 = pytest.mark.xfail(strict=True, reason="resume= naming a directory or a pipe raises NotARegularFile, "
-                           "not the documented ResumeRefused")
-
-@FAULT1
 @pytest.mark.parametrize("what", ["journals", "pipe"])
 def test_a_resume_of_no_regular_file_is_refused_as_a_resume(place, what):
     """``Arm.run(resume=DIR)`` raised ``NotARegularFile`` (armctl.host.inputs, not public), where
@@ -56,7 +52,6 @@ def test_a_resume_of_no_regular_file_is_refused_as_a_resume(place, what):
         assert received(arm) == []
 
 
-@FAULT1
 def test_the_async_api_refuses_a_directory_as_a_resume(place):
     from armctl.aio import AsyncArm
 
@@ -71,7 +66,6 @@ def test_the_async_api_refuses_a_directory_as_a_resume(place):
     assert str(place / "journals") in asyncio.run(main())
 
 
-@FAULT1
 def test_a_program_catching_resume_refused_gets_it_for_a_directory(place):
     """As a program meets it, in a fresh process: the documented error, its message naming the path."""
     done = run_program("""

@@ -379,13 +379,13 @@ def _wait_cut_short(job) -> str:
 def read_resume_point(log, script, from_line: int = 1):
     """The resume point a ``--log`` (a path, or a ``joblog.ResumePoint`` already read) records
     for this very ``script`` — read bounded, as every input; ``ResumeRefused`` (exit 2) for
-    another script, an edited one, a file that is no log, a ``from_line`` given as well, or a
+    another script, an edited one, a file that is no log (or no regular file), a ``from_line`` given as well, or a
     job on a simulated arm of another process (``resume_port.refuse_gone_simulator``)."""
     import os
     from dataclasses import replace
 
     from ..errors import ResumeRefused
-    from .inputs import MAX_LOG_BYTES, open_regular, read_lines_bounded
+    from .inputs import MAX_LOG_BYTES, NotARegularFile, open_regular, read_lines_bounded
     from .log_lock import IN_USE, journal_in_use
     from ..core.joblog import ResumePoint, read_resume_lines
     from .resume_port import refuse_gone_simulator
@@ -409,6 +409,8 @@ def read_resume_point(log, script, from_line: int = 1):
         point = replace(point, log_path=name)
     except ResumeRefused as error:
         raise ResumeRefused(f"--resume {name}: {error}") from None
+    except NotARegularFile as error:  # a directory, a pipe, a device: no log (named already: open_regular)
+        raise ResumeRefused(str(error)) from None
     except OSError as error:
         raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
     refuse_gone_simulator(point)
