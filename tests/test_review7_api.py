@@ -78,3 +78,80 @@ def test_a_program_catching_resume_refused_gets_it_for_a_directory(place):
         """, place)
     assert done.returncode == 0, done.stderr
     assert done.stdout.startswith("refused:") and "journals" in done.stdout, done.stdout
+
+
+# -- 2. a refused resume speaks the API's words, not armctl run's flags ------------------------------
+
+CLI_WORDS = ("--resume", "--port", "--from-line", "--other-port")
+
+
+def assert_api_words(message: str, log) -> None:
+    assert f"resume={str(log)!r}" in message, message
+    assert not any(flag in message for flag in CLI_WORDS), message
+
+
+def _stopped_job_log(arm: Arm, place, name: str = "job.log"):
+    """A job of ``place/job.txt`` stopped after its second frame, journalled to ``place/name``."""
+    def stop(progress) -> None:
+        if progress.frames_sent == 2:
+            arm.stop()
+
+    with open(place / name, "w", encoding="utf-8") as log:
+        arm.run(place / "job.txt", on_progress=stop, log=log)
+    return place / name
+
+
+FAULT2 = pytest.mark.xfail(strict=True, reason="resume refusals through the API say --resume, --port, "
+                           "--from-line: armctl run's words")
+
+
+@FAULT2
+def test_a_resume_with_from_line_is_refused_in_the_api_words(place):
+    with Arm.open(VIRTUAL) as arm:
+        log = _stopped_job_log(arm, place)
+        with pytest.raises(ResumeRefused) as refused:
+            arm.run(place / "job.txt", resume=log, from_line=2)
+    assert "from_line" in str(refused.value)
+    assert_api_words(str(refused.value), log)
+
+
+@FAULT2
+def test_a_resume_on_another_arm_is_refused_in_the_api_words(place):
+    with Arm.open(VIRTUAL) as arm:
+        log = _stopped_job_log(arm, place)
+    with Arm.open(VIRTUAL + "&fifo_frames=150") as other:  # another arm: another FIFO
+        with pytest.raises(ResumeRefused) as refused:
+            other.run(place / "job.txt", resume=log)
+        assert received(other) == []
+    assert f"Arm.open({VIRTUAL!r})" in str(refused.value)  # where the arm its job ran on is
+    assert_api_words(str(refused.value), log)
+
+
+@FAULT2
+def test_a_resume_of_another_process_simulated_arm_is_refused_in_the_api_words(place):
+    """The log of a job on a simulated arm of another process (a program run before this one)."""
+    done = run_program("""
+        from armctl import Arm
+        with Arm.open() as arm:
+            with open("job.log", "w", encoding="utf-8") as log:
+                arm.run("job.txt", log=log)
+        """, place)
+    assert done.returncode == 0, done.stderr
+    with Arm.open(VIRTUAL) as arm:
+        with pytest.raises(ResumeRefused, match="does not outlive its process") as refused:
+            arm.run(place / "job.txt", resume=place / "job.log")
+        assert received(arm) == []
+    assert "Arm.open(" in str(refused.value)  # how to open an arm kept in a process of its own
+    assert_api_words(str(refused.value), place / "job.log")
+
+
+@FAULT2
+def test_a_resume_of_a_journal_another_resume_holds_is_refused_in_the_api_words(place):
+    from armctl.host.log_lock import resume_claim
+
+    with Arm.open(VIRTUAL) as arm:
+        log = _stopped_job_log(arm, place)
+        with resume_claim(str(log)):  # another program resuming it now
+            with pytest.raises(ResumeRefused, match="still running") as refused:
+                arm.run(place / "job.txt", resume=log)
+    assert_api_words(str(refused.value), log)
