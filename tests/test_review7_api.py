@@ -101,11 +101,6 @@ def _stopped_job_log(arm: Arm, place, name: str = "job.log"):
     return place / name
 
 
-FAULT2 = pytest.mark.xfail(strict=True, reason="resume refusals through the API say --resume, --port, "
-                           "--from-line: armctl run's words")
-
-
-@FAULT2
 def test_a_resume_with_from_line_is_refused_in_the_api_words(place):
     with Arm.open(VIRTUAL) as arm:
         log = _stopped_job_log(arm, place)
@@ -115,7 +110,6 @@ def test_a_resume_with_from_line_is_refused_in_the_api_words(place):
     assert_api_words(str(refused.value), log)
 
 
-@FAULT2
 def test_a_resume_on_another_arm_is_refused_in_the_api_words(place):
     with Arm.open(VIRTUAL) as arm:
         log = _stopped_job_log(arm, place)
@@ -127,7 +121,6 @@ def test_a_resume_on_another_arm_is_refused_in_the_api_words(place):
     assert_api_words(str(refused.value), log)
 
 
-@FAULT2
 def test_a_resume_of_another_process_simulated_arm_is_refused_in_the_api_words(place):
     """The log of a job on a simulated arm of another process (a program run before this one)."""
     done = run_program("""
@@ -145,7 +138,6 @@ def test_a_resume_of_another_process_simulated_arm_is_refused_in_the_api_words(p
     assert_api_words(str(refused.value), place / "job.log")
 
 
-@FAULT2
 def test_a_resume_of_a_journal_another_resume_holds_is_refused_in_the_api_words(place):
     from armctl.host.log_lock import resume_claim
 

@@ -16,7 +16,6 @@ JOB = "G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 Z120\nG1 Z100\n"
 CLI_WORDS = ("--resume", "--port", "--from-line", "--other-port")
 
 
-@pytest.mark.xfail(strict=True, reason="a refused ?resume= says --resume LOG and --port: armctl run's words")
 def test_a_refused_resume_speaks_the_server_words(tmp_path):
     """A job of a server that has stopped since, on its simulated arm (gone with its process),
     resumed by the next server: refused (422, nothing sent) naming the job the request named and
