@@ -14,7 +14,7 @@ import textwrap
 
 import pytest
 
-from armctl import Arm, ResumeRefused
+from armctl import Arm, JobFailed, JobObserver, ResumeRefused
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -147,3 +147,83 @@ def test_a_resume_of_a_journal_another_resume_holds_is_refused_in_the_api_words(
             with pytest.raises(ResumeRefused, match="still running") as refused:
                 arm.run(place / "job.txt", resume=log)
     assert_api_words(str(refused.value), log)
+
+
+# -- 3. an observer whose started() raises: the job ends before its first frame, JobFailed from it ----
+
+class _FailsToStart(JobObserver):
+    def __init__(self, error: BaseException) -> None:
+        self.error, self.updates = error, 0
+
+    def started(self, view, plan) -> None:
+        raise self.error
+
+    def update(self, view) -> None:
+        self.updates += 1
+
+
+FAULT3 = pytest.mark.xfail(strict=True, reason="an exception in observer.started comes out raw: not the JobFailed "
+                           "(outcome failed) an observer's or on_progress's exception gives")
+
+
+@FAULT3
+def test_an_observer_whose_started_raises_fails_the_job_with_nothing_sent(place):
+    """docs/api.md: an exception an observer raises stops the job, as ``on_progress``'s does
+    (``JobFailed``, outcome "failed", the exception as its cause).  ``started`` comes before the
+    first frame: nothing is sent, the arm stays at rest, and the next job runs."""
+    observer = _FailsToStart(ValueError("the panel could not be drawn"))
+    with Arm.open(VIRTUAL) as arm:
+        before = arm.status()
+        with open(place / "job.log", "w", encoding="utf-8") as log:
+            with pytest.raises(JobFailed) as failed:
+                arm.run(place / "job.txt", observer=observer, log=log)
+        assert failed.value.__cause__ is observer.error
+        result = failed.value.result
+        assert result.outcome == "failed" and result.frames_sent == 0 and result.resume_line == 1, result
+        assert "ValueError: the panel could not be drawn" in str(failed.value), failed.value
+        assert received(arm) == [] and observer.updates == 0
+        arm._call(lambda: arm._link.wait_until(lambda state: False, 2.0))  # 2 s of the arm's clock: still at rest
+        assert received(arm) == [] and arm.status().position_mm == before.position_mm and not arm.status().paused
+        assert arm.run(place / "job.txt", resume=place / "job.log").finished  # the journal says: from line 1
+
+
+@FAULT3
+def test_an_async_observer_whose_started_raises_fails_the_job(place):
+    from armctl.aio import AsyncArm
+
+    async def main():
+        async with await AsyncArm.open(VIRTUAL) as arm:
+            with pytest.raises(JobFailed) as failed:
+                await arm.run(place / "job.txt", observer=_FailsToStart(RuntimeError("no screen")))
+            return failed.value, received(arm.arm)
+
+    error, sent = asyncio.run(main())
+    assert isinstance(error.__cause__, RuntimeError) and error.result.outcome == "failed" and sent == []
+
+
+@FAULT3
+def test_a_program_whose_observer_fails_to_start_is_told_so(place):
+    """As a program meets it, in a fresh process: a ``JobFailed`` it can catch, naming what its observer raised."""
+    done = run_program("""
+        from armctl import Arm, JobFailed, JobObserver
+        class Panel(JobObserver):
+            def started(self, view, plan):
+                raise KeyError("width")
+        with Arm.open() as arm:
+            try:
+                arm.run("job.txt", observer=Panel())
+            except JobFailed as error:
+                print("failed:", error.result.outcome, error.result.frames_sent, error)
+        """, place)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.startswith("failed: failed 0") and "KeyError" in done.stdout, done.stdout
+
+
+def test_an_interrupt_in_started_leaves_with_nothing_sent(place):
+    """Ctrl-C (``KeyboardInterrupt``) or ``sys.exit()`` in ``started`` is not turned into ``JobFailed``:
+    it leaves ``run`` as raised — before the first frame, so nothing was sent."""
+    with Arm.open(VIRTUAL) as arm:
+        with pytest.raises(KeyboardInterrupt):
+            arm.run(place / "job.txt", observer=_FailsToStart(KeyboardInterrupt()))
+        assert received(arm) == []
+        assert arm.run(place / "job.txt").finished
