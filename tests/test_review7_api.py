@@ -162,11 +162,6 @@ class _FailsToStart(JobObserver):
         self.updates += 1
 
 
-FAULT3 = pytest.mark.xfail(strict=True, reason="an exception in observer.started comes out raw: not the JobFailed "
-                           "(outcome failed) an observer's or on_progress's exception gives")
-
-
-@FAULT3
 def test_an_observer_whose_started_raises_fails_the_job_with_nothing_sent(place):
     """docs/api.md: an exception an observer raises stops the job, as ``on_progress``'s does
     (``JobFailed``, outcome "failed", the exception as its cause).  ``started`` comes before the
@@ -187,7 +182,6 @@ def test_an_observer_whose_started_raises_fails_the_job_with_nothing_sent(place)
         assert arm.run(place / "job.txt", resume=place / "job.log").finished  # the journal says: from line 1
 
 
-@FAULT3
 def test_an_async_observer_whose_started_raises_fails_the_job(place):
     from armctl.aio import AsyncArm
 
@@ -201,7 +195,6 @@ def test_an_async_observer_whose_started_raises_fails_the_job(place):
     assert isinstance(error.__cause__, RuntimeError) and error.result.outcome == "failed" and sent == []
 
 
-@FAULT3
 def test_a_program_whose_observer_fails_to_start_is_told_so(place):
     """As a program meets it, in a fresh process: a ``JobFailed`` it can catch, naming what its observer raised."""
     done = run_program("""
