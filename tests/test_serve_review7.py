@@ -40,7 +40,6 @@ def test_a_refused_resume_speaks_the_server_words(tmp_path):
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="a jog message during the shutdown wait is carried out: the arm moves")
 def test_no_jog_moves_an_arm_while_the_server_shuts_down(tmp_path):
     """SIGINT while arm ``a``'s job runs: the server waits for that job to stop (the arm to come to
     rest), its WebSockets still open.  A jog on arm ``b``, idle, from the page controlling it, was
