@@ -94,7 +94,6 @@ window.catchUp = () => { window.losing = false;
 
 @pytest.mark.realtime
 @pytest.mark.timeout(120)
-@pytest.mark.xfail(strict=True, reason="the page ignores a dropped event: no word of it, the job shown running for good")
 def test_the_page_says_events_were_lost_and_reads_the_job_again(tmp_path):
     """A page too slow to read loses events (the server's queue for it is full) and is then sent
     ``dropped`` with their count.  The page ignored it: nothing said, and a job whose summary was
