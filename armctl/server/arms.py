@@ -234,7 +234,7 @@ class ArmService:
         self.check_control(client)
         words = served(self.name)  # (a refusal in the server's words: ?resume=ID, not armctl run's --resume LOG)
         # (off the event loop: the script alone may be 128 MiB)
-        snapshot, resume = await off_loop(_read_resume, job_id, script, log, self.port, words)
+        snapshot, resume = await off_loop(_read_resume, job_id, script, log, self.arm.url, words)
         claim = contextlib.ExitStack()  # held until the job ends (``_run``): no second resume of the log meanwhile
         try:  # (taken after the read, as armctl run --resume takes it: the read probes for it)
             claim.enter_context(resume_claim(log, words))  # another resume of it running: refused (422), nothing sent
