@@ -103,7 +103,7 @@ def test_resume_refuses_a_log_of_another_script_and_from_line_with_it(tmp_path):
         before = len(received(arm))
         with pytest.raises(ResumeRefused, match="other contents"):
             arm.run(TIMED, resume=log_path)
-        with pytest.raises(ResumeRefused, match="drop --from-line"):
+        with pytest.raises(ResumeRefused, match="drop from_line"):
             arm.run(SHORT, resume=log_path, from_line=3)
         assert len(received(arm)) == before  # nothing sent
 

@@ -96,8 +96,8 @@ def test_the_library_refuses_before_opening(place):
 
 def test_the_api_refuses_a_named_pipe_as_resume(place):
     from armctl import Arm
-    from armctl.host.inputs import NotARegularFile
+    from armctl import ResumeRefused
 
     with Arm.open(SIM) as arm:
-        with pytest.raises(NotARegularFile, match="a named pipe"):
+        with pytest.raises(ResumeRefused, match="a named pipe"):
             arm.run(place / "job.txt", resume=place / "pipe")

@@ -197,7 +197,7 @@ def test_the_api_refuses_a_resume_on_another_arm(tmp_path, monkeypatch):
     with Arm.open(port="/dev/ttyUSB0") as other:
         with pytest.raises(ResumeRefused, match=re.escape(B)) as refused:
             other.run(tmp_path / "job.txt", resume=tmp_path / "j1.log")
-        assert "--port /dev/ttyUSB1" in str(refused.value) and "arm=None" in str(refused.value)
+        assert "Arm.open('/dev/ttyUSB1')" in str(refused.value) and "arm=None" in str(refused.value)
     assert host.sent("ARM-B") == 0
     with Arm.open(port="/dev/ttyUSB1") as same:  # the log's arm under its new name
         assert same.run(tmp_path / "job.txt", resume=tmp_path / "j1.log").outcome.startswith("finished")

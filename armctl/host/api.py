@@ -368,10 +368,11 @@ def _claimed_resume(resume, log, snapshot, from_line: int, port):
     from .jobflow import read_resume_point
     from .log_lock import resume_claim, same_journal
     from .resume_port import refuse_another_arm
+    from .resume_words import API
 
     if log is not None and same_journal(log, resume):
         raise ResumeRefused(f"log= is the journal resume= reads ({os.fspath(resume)}): give the resumed job a "
                             "log of its own; nothing was sent")
-    point = read_resume_point(resume, snapshot, from_line)
-    refuse_another_arm(point, port, "resume dataclasses.replace(the ResumePoint, port=arm.url, arm=None)")
-    return resume_claim(resume), point
+    point = read_resume_point(resume, snapshot, from_line, API)
+    refuse_another_arm(point, port, "resume dataclasses.replace(the ResumePoint, port=arm.url, arm=None)", words=API)
+    return resume_claim(resume, API), point

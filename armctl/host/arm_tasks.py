@@ -7,7 +7,9 @@ that fails cancels the moves queued after it — the arm is no longer where they
 its error is raised by the next blocking call (``raise_deferred``).  The worker is a daemon
 thread, so an arm still open when the interpreter exits is closed then as leaving a ``with`` block
 closes it (``close_at_exit``): its queued moves run, each once — unless the program died of an
-exception (Ctrl-C too): then it is stopped first.  ``stop`` counts the stops (a job whose call
+exception (Ctrl-C too): then it is stopped first.  The exit hook holds the arm weakly: an arm no
+one holds any more (so with nothing queued: a queued move holds it) is closed as it goes
+(``_close_dropped``), not kept with its worker and port until the exit.  ``stop`` counts the stops (a job whose call
 began before one sends nothing), cancels the queue and asks the running job (``attach``/``detach``
 make it reachable) to stop; ``ask_job`` hands a request to its engine (none while it stops).
 """
@@ -18,7 +20,9 @@ import logging
 import queue
 import sys
 import threading
+import weakref
 from concurrent.futures import Future
+from functools import partial
 from typing import Any, Callable
 
 from .arm_worker import JOB_ENDED, JobControl
@@ -55,23 +59,24 @@ class Worker:
     def is_current(self) -> bool:
         return threading.current_thread() is self._thread
 
-    def stop(self) -> None:
+    def stop(self, join: bool = True) -> None:
         self._tasks.put(None)
-        if not self.is_current():
+        if join and not self.is_current():
             self._thread.join()
 
     def _loop(self) -> None:
-        while True:
-            item = self._tasks.get()
-            if item is None:
-                return
-            task, future = item
-            if not future.set_running_or_notify_cancel():
-                continue  # cancelled while queued (stop, or a queued move before it failed)
-            try:
-                future.set_result(task())
-            except BaseException as error:  # handed to whoever waits; the worker goes on
-                future.set_exception(error)
+        while (item := self._tasks.get()) is not None:
+            self._run(*item)
+            item = None  # (a task done is not held while the next is waited for: it would hold its arm)
+
+    @staticmethod
+    def _run(task: Callable[[], Any], future: Future) -> None:
+        if not future.set_running_or_notify_cancel():
+            return  # cancelled while queued (stop, or a queued move before it failed)
+        try:
+            future.set_result(task())
+        except BaseException as error:  # handed to whoever waits; the worker goes on
+            future.set_exception(error)
 
 
 class Tasks:
@@ -87,9 +92,13 @@ class Tasks:
         self.job: JobControl | None = None
         self.stops = 0  # how many times stop() was called: a queued move from before it is not sent
         self.closed = False
-        self._at_exit = None if link is None else (lambda: self.close_at_exit(link))
+        self._link = link
+        self._failed: list[str] = []  # ``deferred`` in words, for ``_close_dropped`` (it may not hold the error)
+        self._at_exit = None if link is None else partial(_close_if_open, weakref.ref(self))  # (its own: unregistered alone)
         if self._at_exit is not None:
             atexit.register(self._at_exit)
+            self._dropped = weakref.finalize(self, _close_dropped, self.worker, link, self._at_exit, url, self._failed)
+            self._dropped.atexit = False  # (at the exit, ``_at_exit`` closes it, waiting for its queue)
 
     def call(self, task: Callable[[], Any], waiting: str | None = None) -> Any:
         """Run ``task`` on the worker after everything queued — unless a queued move failed:
@@ -149,6 +158,7 @@ class Tasks:
     def raise_deferred(self) -> None:
         with self.lock:
             error, self.deferred = self.deferred, None
+            self._failed.clear()
         if error is not None:
             raise error
 
@@ -161,6 +171,7 @@ class Tasks:
             if error is None:
                 return
             self.deferred = self.deferred or error
+            self._failed[:] = [str(self.deferred)]
             later, self.queued = self.queued, []
         for queued in later:  # outside the lock: cancel() calls this method again at once
             queued.cancel()
@@ -224,6 +235,7 @@ class Tasks:
             self.closed = True
         if self._at_exit is not None:
             atexit.unregister(self._at_exit)
+            self._dropped.detach()
         try:
             self.worker.call(lambda: None)  # every task queued before has run
         except KeyboardInterrupt:  # Ctrl-C while the queue runs out: stop the arm, as leaving a with block by it does
@@ -235,7 +247,7 @@ class Tasks:
         if raise_deferred:
             self.raise_deferred()
 
-    def close_at_exit(self, link) -> None:
+    def close_at_exit(self) -> None:
         """At the interpreter's exit, an arm nobody closed: closed as leaving a ``with`` block
         would — stopped first if the program died of an exception (``sys.last_value``: Ctrl-C
         too) — and a queued move's error said on the ``armctl.host.api`` logger (WARNING: on
@@ -243,10 +255,33 @@ class Tasks:
         if getattr(sys, "last_value", None) is not None:
             self.stop_once()
         try:
-            self.close(link, raise_deferred=False)
+            self.close(self._link, raise_deferred=False)
         except KeyboardInterrupt:  # (close stopped the arm and waited for it)
             pass
         error = self.deferred
         if error is not None:
-            logging.getLogger("armctl.host.api").warning("armctl: the arm on %s was closed at exit; a move queued on "
-                                                         "it with wait=False failed: %s", self.url, error)
+            _say_failed(self.url, "at exit", error)
+
+
+def _close_if_open(tasks: "weakref.ref[Tasks]") -> None:
+    """The exit hook of one arm: closed (``close_at_exit``) if it is still open; held weakly."""
+    alive = tasks()
+    if alive is not None:
+        alive.close_at_exit()
+
+
+def _close_dropped(worker: Worker, link, at_exit, url: str, failed: list[str]) -> None:
+    """An arm no one holds any more — so its worker is idle: a queued move holds the arm — closed
+    as it goes: its port closed and its worker ended, both on the worker and never waited for here
+    (a collection may come on any thread, the worker's or the port reader's among them); its exit
+    hook unregistered; a queued move's error no call raised (``failed``) said, as at the exit."""
+    atexit.unregister(at_exit)
+    worker.submit(link.close)
+    for error in failed:
+        worker.submit(partial(_say_failed, url, "as the program dropped it", error))
+    worker.stop(join=False)
+
+
+def _say_failed(url: str, when: str, error) -> None:
+    logging.getLogger("armctl.host.api").warning("armctl: the arm on %s was closed %s; a move queued on it with "
+                                                 "wait=False failed: %s", url, when, error)

@@ -285,7 +285,7 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     try:
         if attach(control):  # a stop() between the check above and here
             control.request_stop()
-        observer.started(runner.view, job)
+        _started(observer, runner, job)
         outcome = drive(runner, abort_frames(spec.abort, arrival), on_stopping=lambda why: observer.note(
             f"\narmctl: {why}: no more frames are sent; sending the abort sequence ({spec.abort}) and waiting for "
             "the arm to come to rest …"))
@@ -303,6 +303,22 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
                                      outcome == "frames may have been lost", time_held_overrun,
                                      moved_past_bound=runner.streamer.moved_past_bound))
     return _result(runner, outcome, job, control, spec)
+
+
+def _started(observer: JobObserver, runner, job) -> None:
+    """``observer.started``, before the first frame.  An exception it raises ends the job there,
+    nothing sent, the arm left as it is (no abort sequence: nothing of the job is queued) —
+    ``JobFailed`` from it, outcome "failed", as an observer's exception stops a job; the job
+    resumes at its first line.  Ctrl-C or ``sys.exit()`` there leave ``run`` as raised."""
+    from dataclasses import replace
+
+    try:
+        observer.started(runner.view, job)
+    except Exception as error:
+        told = f"the observer's started() raised {type(error).__name__}: {error}: nothing was sent"
+        runner.view.messages.append(told)
+        result = RunResult.of(runner.view, "failed", (), estimated_job_s=job.estimate.job_s)
+        raise JobFailed(f"the job ended failed: {told}", replace(result, resume_line=job.from_line)) from error
 
 
 def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[], bool]):

@@ -376,42 +376,48 @@ def _wait_cut_short(job) -> str:
     return f"{WAIT_CUT_SHORT}{unsent}: it may still be running {what}: let it come to rest before going on"
 
 
-def read_resume_point(log, script, from_line: int = 1):
+def read_resume_point(log, script, from_line: int = 1, words=None):
     """The resume point a ``--log`` (a path, or a ``joblog.ResumePoint`` already read) records
     for this very ``script`` — read bounded, as every input; ``ResumeRefused`` (exit 2) for
-    another script, an edited one, a file that is no log, a ``from_line`` given as well, or a
-    job on a simulated arm of another process (``resume_port.refuse_gone_simulator``)."""
+    another script, an edited one, a file that is no log (or no regular file), a ``from_line`` given as well, or a
+    job on a simulated arm of another process (``resume_port.refuse_gone_simulator``), told in
+    ``words`` (``resume_words``: the interface's; the API's by default)."""
     import os
     from dataclasses import replace
 
     from ..errors import ResumeRefused
-    from .inputs import MAX_LOG_BYTES, open_regular, read_lines_bounded
+    from .inputs import MAX_LOG_BYTES, NotARegularFile, open_regular, read_lines_bounded
     from .log_lock import IN_USE, journal_in_use
     from ..core.joblog import ResumePoint, read_resume_lines
     from .resume_port import refuse_gone_simulator
+    from .resume_words import API
 
+    words = words or API
     if from_line != 1:
-        raise ResumeRefused("--resume LOG decides the line to continue at: drop --from-line")
+        named = words.naming(log.log_path if isinstance(log, ResumePoint) else log)
+        raise ResumeRefused(f"{named}: the log decides the line to continue at: drop {words.from_line}")
     if isinstance(log, ResumePoint):
-        refuse_gone_simulator(log)
+        refuse_gone_simulator(log, words)
         return log
-    name = str(log)
+    name, named = str(log), words.naming(log)
     try:  # bounded: an endless file is an error, not a hang; a device (/dev/zero) is no log (open_regular)
-        with open_regular(name, f"--resume {name}") as stream:
+        with open_regular(name, named) as stream:
             if journal_in_use(name):
                 raise ResumeRefused(IN_USE)
             lines = (raw.decode("utf-8", errors="replace")
-                     for raw in read_lines_bounded(stream, f"--resume {name}", MAX_LOG_BYTES))
+                     for raw in read_lines_bounded(stream, named, MAX_LOG_BYTES))
             point = read_resume_lines(lines, script.name, script.data, name)
         if not os.access(name, os.W_OK):
             raise ResumeRefused("it cannot be written, and a resume marks the log it continues so that it is never "
                                 "resumed twice (mark_resumed): make it writable, or resume a writable copy")
         point = replace(point, log_path=name)
     except ResumeRefused as error:
-        raise ResumeRefused(f"--resume {name}: {error}") from None
+        raise ResumeRefused(f"{named}: {error}") from None
+    except NotARegularFile as error:  # a directory, a pipe, a device: no log (named already: open_regular)
+        raise ResumeRefused(str(error)) from None
     except OSError as error:
-        raise ResumeRefused(f"--resume {name}: {error.strerror or error}") from None
-    refuse_gone_simulator(point)
+        raise ResumeRefused(f"{named}: {error.strerror or error}") from None
+    refuse_gone_simulator(point, words)
     return point
 
 

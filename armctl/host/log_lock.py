@@ -37,17 +37,19 @@ def locked(log, shared: bool = False) -> bool:
 
 
 @contextmanager
-def resume_claim(log):
+def resume_claim(log, words=None):
     """``log`` (the path a resume reads, after ``read_resume_point``) locked while the resumed
     job runs, as a run locks its --log: another resume of it at the same time — it would decide
     from the same records and send the same lines again — is refused (``ResumeRefused``, exit 2,
-    nothing sent).  Nothing to lock for a ``ResumePoint``, or where nothing can be locked."""
+    nothing sent; told in ``words``, ``resume_words``: the CLI's by default).  Nothing to lock for a
+    ``ResumePoint``, or where nothing can be locked."""
     import os
 
     if not isinstance(log, (str, os.PathLike)):
         yield
         return
     from ..errors import ResumeRefused
+    from .resume_words import CLI
 
     try:
         held = open(log, "rb")  # a regular file: read_resume_point read it
@@ -56,7 +58,7 @@ def resume_claim(log):
         return
     with held:
         if not locked(held):
-            raise ResumeRefused(f"--resume {os.fspath(log)}: {IN_USE}")
+            raise ResumeRefused(f"{(words or CLI).naming(log)}: {IN_USE}")
         yield
 
 

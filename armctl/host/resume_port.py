@@ -34,6 +34,7 @@ import uuid
 
 from ..errors import ArmctlError, ResumeRefused, UsageFailure
 from .port_choice import SIMULATOR_URL
+from .resume_words import CLI, ResumeWords
 
 OVERRIDE_FLAG = "--other-port"
 _PROCESS_MARK = uuid.uuid4().hex[:16]  # this process's, once: with the pid, what no later process has
@@ -45,19 +46,18 @@ def simulator_process(url: str) -> str | None:
     return f"{os.getpid()}-{_PROCESS_MARK}" if url.startswith(SIMULATOR_URL) else None
 
 
-def refuse_gone_simulator(point) -> None:
+def refuse_gone_simulator(point, words: ResumeWords = CLI) -> None:
     """``ResumeRefused`` (exit 2, nothing sent) when the log ``point`` was read from records a job
     on a simulated arm of another process: that arm is gone, and no report of a new one proves
-    which lines ran."""
+    which lines ran (told in ``words``: the interface's)."""
     if point.sim_process is None or point.sim_process == simulator_process(SIMULATOR_URL):
         return
-    name = point.log_path or "the log"
     raise ResumeRefused(
-        f"--resume {name}: its job ran on a simulated arm ({point.port}) of another armctl process: a "
+        f"{words.naming(point.log_path)}: its job ran on a simulated arm ({point.port}) of another armctl process: a "
         "simulated arm does not outlive its process, and the one a resume would open here starts afresh "
-        "at its home pose, so none of its reports can prove which lines ran; nothing was sent (run the job "
-        "again; to try a resume, keep a simulated arm in a process of its own: `armctl sim --pty` or "
-        "`armctl sim --tcp PORT`, and its port as --port)")
+        f"at its home pose, so none of its reports can prove which lines ran; nothing was sent ({words.again}; "
+        "to try a resume, keep a simulated arm in a process of its own: `armctl sim --pty` or "
+        f"`armctl sim --tcp PORT`, and {words.give_port})")
 
 
 def arm_of(port, ports=None) -> str | None:
@@ -91,11 +91,11 @@ def _ports_of(identity: str, logged: str, ports) -> list[str]:
     return list(dict.fromkeys(port for port in candidates if arm_of(port, ports) == identity))
 
 
-def refuse_another_arm(point, port, override: str, ports=None) -> None:
+def refuse_another_arm(point, port, override: str, ports=None, words: ResumeWords = CLI) -> None:
     """``ResumeRefused`` (exit 2, nothing sent) when the log ``point`` was read from records its
     job on another arm than the one on ``port`` (a ``PortChoice``, or a URL) — by the arm's
     identity the log recorded (``arm``), else by the port's name; ``override``: how to say it is
-    the same arm; ``ports``: pyserial's list if read already (``_port_list``)."""
+    the same arm; ``ports``: pyserial's list if read already (``_port_list``); ``words``: the interface's."""
     if point.port is None:
         return
     url = getattr(port, "url", port)
@@ -110,18 +110,18 @@ def refuse_another_arm(point, port, override: str, ports=None) -> None:
         if same_arm(point.port, url, ports):
             return
     ports = _port_list(url, point.port) if ports is None else ports  # where the log's arm is now
-    name = point.log_path or "the log"
+    name, logged = words.naming(point.log_path), words.on_logged_port.format(port=point.port)
     if point.arm is None or now is None:  # by name (a log without the identity)
-        raise ResumeRefused(f"--resume {name}: its job ran on {point.port}, not on {url}: a resume on another arm "
-                            f"would continue a job that arm never ran; nothing was sent (leave out --port to resume "
-                            f"on {point.port}, or, if the arm on {url} is that arm moved to another port, {override})")
+        raise ResumeRefused(f"{name}: its job ran on {point.port}, not on {url}: a resume on another arm "
+                            f"would continue a job that arm never ran; nothing was sent ({logged}, "
+                            f"or, if the arm on {url} is that arm moved to another port, {override})")
     found = _ports_of(point.arm, point.port, ports)
-    where = (f"leave out --port to resume on {point.port}, where that arm is" if point.port in found else
-             f"that arm is on {found[0]} now: resume with --port {found[0]}" if found else
-             "that arm is not found on this host (`armctl ports` lists the ports): connect it and give its port as "
-             "--port")
+    where = (f"{logged}, where that arm is" if point.port in found else
+             f"that arm is on {found[0]} now: {words.on_port.format(port=found[0])}" if found else
+             "that arm is not found on this host (`armctl ports` lists the ports): connect it and "
+             f"{words.give_port}")
     now_there = f"{point.port} leads to another arm now, {now}" if url == point.port else f"{url} is {now}"
-    raise ResumeRefused(f"--resume {name}: its job ran on {point.port}, the arm {point.arm}; {now_there}: a resume on "
+    raise ResumeRefused(f"{name}: its job ran on {point.port}, the arm {point.arm}; {now_there}: a resume on "
                         f"another arm would continue a job that arm never ran; nothing was sent ({where}; or, if the "
                         f"arm on {url} is that arm after all (on another adapter, say), {override})")
 

@@ -31,6 +31,7 @@ _logger = logging.getLogger(__name__)
 CLIENT_HEADER = "X-Armctl-Client"  # which client a state-changing request comes from (the controller's id)
 WS_HEARTBEAT_S = 10.0  # aiohttp's ping on idle WebSockets (a dead peer is noticed)
 CLOSE_AT_SHUTDOWN_S = 1.0  # a WebSocket's time to answer the server's close when it stops (then dropped)
+STOPPING = "the server is stopping: it takes no new job, move, jog or control now"  # (a POST's 503, a jog's error)
 SERVICES = web.AppKey("services", dict)
 SETTINGS = web.AppKey("settings", dict)
 SOCKETS = web.AppKey("sockets", set)  # the open WebSockets, closed at shutdown
@@ -59,7 +60,7 @@ async def _guard(request: web.Request, handler):
                                                           request.headers.get("Sec-WebSocket-Protocol")):
         return _error(401, "unauthorized", "this server needs its token: Authorization: Bearer TOKEN")
     if request.method == "POST" and settings.get("stopping"):  # (its jobs stopping: nothing new begins)
-        return _error(503, "stopping", "the server is stopping: it takes no new job, move or control now")
+        return _error(503, "stopping", STOPPING)
     websocket = request.headers.get("Upgrade", "").lower() == "websocket"
     if (request.method == "POST" or websocket) and not auth.origin_ok(request.headers.get("Origin"), request.headers.get("Host")):
         return _error(403, "bad_origin", f"requests from the origin {request.headers.get('Origin')!r} are refused")
@@ -306,7 +307,7 @@ async def events(request: web.Request) -> web.WebSocketResponse:
         sender = asyncio.ensure_future(viewer.send_all(socket.send_str))
         async for message in socket:
             if message.type == WSMsgType.TEXT:
-                await _on_message(service, client, socket, message.data)
+                await _on_message(service, client, socket, message.data, request.app[SETTINGS].get("stopping", False))
             elif message.type == WSMsgType.BINARY:  # answered too: the client would wait for an answer
                 await socket.send_json({"event": "error", "error": "expected a text message (JSON), not a binary one"})
     except ConnectionError:
@@ -324,9 +325,10 @@ async def events(request: web.Request) -> web.WebSocketResponse:
     return socket
 
 
-async def _on_message(service, client: str, socket, text: str) -> None:
-    """A message from a viewer: ``{"jog": "j1_plus"}`` (a heartbeat: start or renew),
-    ``{"jog": null}`` (release), ``{"ping": …}``."""
+async def _on_message(service, client: str, socket, text: str, stopping: bool = False) -> None:
+    """A message from a viewer: ``{"jog": "j1_plus"}`` (a heartbeat: start or renew; refused
+    once the server is ``stopping``: nothing moves an arm while it shuts down), ``{"jog": null}``
+    (release), ``{"ping": …}``."""
     try:
         message = _loads(text)
     except json.JSONDecodeError:
@@ -342,6 +344,8 @@ async def _on_message(service, client: str, socket, text: str) -> None:
             if message["jog"] is None:
                 if client == service.controller:
                     await service.jog_stop()
+            elif stopping:
+                await socket.send_json({"event": "error", "error": STOPPING})
             else:
                 await service.jog(str(message["jog"]), client)
         else:

@@ -226,22 +226,18 @@ class ArmService:
     async def resume_job(self, job_id: str, client: str | None) -> tuple[Job, Any]:
         """A job of the journal (this server's or an earlier one's), continued from the line its
         log and the arm's report prove (``Arm.run(resume=)``)."""
-        from ..host.jobflow import read_resume_point
         from ..host.log_lock import resume_claim
-        from ..script.files import ScriptSnapshot
+        from ..host.resume_words import served
 
         script = self.journal_script(job_id)
         log = self.journal_dir / f"{job_id}.log"
         self.check_control(client)
-
-        def read():  # the script, then its log: before the 201, a log that is no log of it is refused (422), nothing sent
-            snapshot = ScriptSnapshot(_journal_name(log, job_id), script.read_bytes())
-            return snapshot, read_resume_point(log, snapshot)  # (reads the whole journal)
-
-        snapshot, resume = await off_loop(read)  # (off the event loop: the script alone may be 128 MiB)
+        words = served(self.name)  # (a refusal in the server's words: ?resume=ID, not armctl run's --resume LOG)
+        # (off the event loop: the script alone may be 128 MiB)
+        snapshot, resume = await off_loop(_read_resume, job_id, script, log, self.arm.url, words)
         claim = contextlib.ExitStack()  # held until the job ends (``_run``): no second resume of the log meanwhile
         try:  # (taken after the read, as armctl run --resume takes it: the read probes for it)
-            claim.enter_context(resume_claim(log))  # another resume of it running: refused (422), nothing sent
+            claim.enter_context(resume_claim(log, words))  # another resume of it running: refused (422), nothing sent
             return await self.start_job(snapshot, client, resume=resume, claim=claim)
         except BaseException:
             claim.close()
@@ -419,6 +415,21 @@ class ArmService:
         await self.jog_stop()
         await self.stop_and_wait("the server is stopping")
         await self.arm.close()
+
+
+def _read_resume(job_id: str, script: Path, log: Path, port: str, words):
+    """(the script, the ``ResumePoint``) of job ``job_id`` of a journal — the script, then its log:
+    before the 201, a log that is no log of it, or of a job on another arm than the one on ``port``,
+    is refused (``ResumeRefused``: 422, in ``words``), nothing sent."""
+    from ..host.jobflow import read_resume_point
+    from ..host.resume_port import refuse_another_arm
+    from ..script.files import ScriptSnapshot
+
+    snapshot = ScriptSnapshot(_journal_name(log, job_id), script.read_bytes())
+    point = read_resume_point(log, snapshot, words=words)  # (reads the whole journal)
+    refuse_another_arm(point, port, f"stop this server and resume it with `armctl run --resume {log} --port {port} "
+                       "--other-port`", words=words)  # (Arm.run's check, in the server's words)
+    return snapshot, point
 
 
 def _journal_name(log: Path, default: str) -> str:

@@ -132,7 +132,9 @@ async def _serve(arms, host, port, token, journal, profile, lead_s, say) -> None
         for number in STOP_SIGNALS:  # (SIGHUP too: a closed terminal ended the process with no abort sequence)
             loop.add_signal_handler(number, signalled)
         await stop.wait()
-        app[SETTINGS]["stopping"] = True  # every POST refused from now on (503)
+        app[SETTINGS]["stopping"] = True  # every POST (503) and every jog refused from now on
+        for service in services.values():  # a jog held now: the neutral at once, not at its lease's end
+            await service.jog_stop()
         # every job or move stops first (no handler waits for it), and a job's end is published
         # before the WebSockets close: a page shows it interrupted, not running for good
         await asyncio.gather(*(service.stop_and_wait("the server is stopping") for service in services.values()))

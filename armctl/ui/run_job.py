@@ -249,13 +249,14 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     from ..host.log_lock import resume_claim
     from ..host.link import choose_port
     from ..host.resume_port import resume_port
+    from ..host.resume_words import CLI
     from ..host.calibration import arm_profile, quiet_port, with_arm
     from ..core.motion import MotionModel
 
     if options.other_port and not options.resume_log:
         raise UsageFailure("--other-port is for --resume LOG: it says --port is the arm LOG's job ran on")
     # read first (before --log is opened for writing, and before the port): its port is the one to open
-    resume = read_resume_point(options.resume_log, script, options.from_line) if options.resume_log else None
+    resume = read_resume_point(options.resume_log, script, options.from_line, CLI) if options.resume_log else None
     if resume is not None:  # the arm the log's job ran on (refused: another arm's --port)
         port, told, resume = resume_port(resume, options.port, options.other_port)
         port = with_arm(port)  # (read already where the resume checked the arm)
