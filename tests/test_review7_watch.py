@@ -1,6 +1,6 @@
 """Review 7: what ``armctl status --watch`` and ``armctl run`` show a user.
 
-1. ``status --watch`` on a noisy line printed the first report of each kind as read: on
+1. ``status --watch`` (and ``--once``) on a noisy line printed the first report of each kind as read: on
    ``sim://?noise=0.05&corrupt=0.05&seed=2`` the first joints 4-6 report is corrupted (J5 reads
    322.96°, the arm is at 90°), and the plausibility rule (armctl/core/armstate.py) judges a kind
    only against an earlier report, so that first line showed a value the arm never reported.
@@ -61,7 +61,6 @@ def test_the_home_pose_is_what_a_clean_line_reports():
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="review 7: status --watch prints the first report of each kind as read (J5 322.96° on seed 2)")
 def test_watch_json_first_line_is_no_corrupted_report():
     process = _spawn(["status", "--watch", "--json", "--port", f"sim://?speed=20&{NOISY}"], env=ENV,
                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
@@ -77,7 +76,6 @@ def test_watch_json_first_line_is_no_corrupted_report():
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="review 7: the live panel shows the first report of each kind as read (J5 322.96° on seed 2)")
 def test_watch_live_panel_never_shows_the_corrupted_report():
     master, slave = os.openpty()
     try:
@@ -111,7 +109,6 @@ def test_watch_live_panel_never_shows_the_corrupted_report():
     assert "322.96" not in text
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: status --once prints the first report of each kind as read (J5 322.96° on seed 2)")
 def test_once_json_is_no_corrupted_report():
     out = subprocess.run([*ARMCTL, "status", "--once", "--json", "--port", f"sim://?clock=virtual&{NOISY}"], cwd=ROOT,
                          env=ENV, capture_output=True, text=True, timeout=WAIT_S)
