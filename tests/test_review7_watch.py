@@ -6,6 +6,8 @@
    only against an earlier report, so that first line showed a value the arm never reported.
    The first reading shown is now the one a job would start from (armctl/host/jobflow.py
    ``read_arm``: every kind, two more rotations, two states a rotation apart agreeing).
+2. ``run --json`` interrupted while the job waits for the arm to rest (before its first frame)
+   gave ``total_frames`` 0 in its summary, though the job has its frames.
 
 Each runs the installed command in a fresh process (SIGINT with the default handler restored),
 every wait bounded; the simulator's faults are seeded, so the corrupted report is the same one
@@ -114,3 +116,47 @@ def test_once_json_is_no_corrupted_report():
                          env=ENV, capture_output=True, text=True, timeout=WAIT_S)
     assert out.returncode == 0, out.stderr
     assert _pose(json.loads(out.stdout)) == HOME
+
+
+# --- 2. run --json: Ctrl-C while the job waits for the arm to rest ------------------------------
+
+
+def _summary(stdout: str) -> dict:
+    summary = json.loads(stdout.splitlines()[-1])
+    assert summary["event"] == "summary", stdout
+    return summary
+
+
+@pytest.mark.realtime
+@pytest.mark.xfail(strict=True, reason="review 7: a Ctrl-C during the start wait gives total_frames 0 in run --json's summary")
+def test_ctrl_c_while_the_job_waits_for_rest_gives_the_job_s_total(tmp_path):
+    """The installed command on ``armctl sim --pty`` (its own process, 2x time), a 20 s move
+    written to it just before: the job waits for the arm to rest; SIGINT then.  The summary says
+    nothing was sent, of the job's frames — as many as a run of it on a still arm has."""
+    from journal_crash import pty_arm
+    from test_moving_start import _leftover
+    from test_review5_moving_start import JOB, WAITING
+
+    (tmp_path / "job.txt").write_text(JOB)
+    env = {**ENV, "XDG_DATA_HOME": str(tmp_path / "data")}
+    whole = subprocess.run([*ARMCTL, "run", "job.txt", "--json", "--port", "sim://?clock=virtual"], cwd=tmp_path,
+                           env=env, capture_output=True, text=True, timeout=WAIT_S)
+    total = _summary(whole.stdout)["total_frames"]
+    assert whole.returncode == 0 and total == 2, whole.stderr
+    with pty_arm("--url", "sim://?speed=2", env=env) as pty:
+        with open(pty, "wb", buffering=0) as line:
+            line.write(b"".join(_leftover(300)))
+        time.sleep(0.3)
+        run = subprocess.Popen([*ARMCTL, "run", "job.txt", "--json", "--port", pty], cwd=tmp_path, env=env,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, preexec_fn=_default_sigint)
+        told = []
+        for text in run.stderr:  # until armctl says it waits (within the move's 10 s of wall time)
+            told.append(text)
+            if WAITING in text:
+                break
+        run.send_signal(signal.SIGINT)
+        out, err = run.communicate(timeout=WAIT_S)
+    assert WAITING in "".join(told), "".join(told) + err
+    assert run.returncode == 130, err
+    summary = _summary(out)
+    assert (summary["outcome"], summary["frames_sent"], summary["total_frames"]) == ("interrupted", 0, total), summary
