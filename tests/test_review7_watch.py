@@ -7,7 +7,8 @@
    The first reading shown is now the one a job would start from (armctl/host/jobflow.py
    ``read_arm``: every kind, two more rotations, two states a rotation apart agreeing).
 2. ``run --json`` interrupted while the job waits for the arm to rest (before its first frame)
-   gave ``total_frames`` 0 in its summary, though the job has its frames.
+   gave ``total_frames`` 0 in its summary, though the job has its frames: the summary now counts
+   them (``CheckedScript.frames``, the estimate's count) and says 0 were sent.
 
 Each runs the installed command in a fresh process (SIGINT with the default handler restored),
 every wait bounded; the simulator's faults are seeded, so the corrupted report is the same one
@@ -128,7 +129,6 @@ def _summary(stdout: str) -> dict:
 
 
 @pytest.mark.realtime
-@pytest.mark.xfail(strict=True, reason="review 7: a Ctrl-C during the start wait gives total_frames 0 in run --json's summary")
 def test_ctrl_c_while_the_job_waits_for_rest_gives_the_job_s_total(tmp_path):
     """The installed command on ``armctl sim --pty`` (its own process, 2x time), a 20 s move
     written to it just before: the job waits for the arm to rest; SIGINT then.  The summary says
@@ -160,3 +160,24 @@ def test_ctrl_c_while_the_job_waits_for_rest_gives_the_job_s_total(tmp_path):
     assert run.returncode == 130, err
     summary = _summary(out)
     assert (summary["outcome"], summary["frames_sent"], summary["total_frames"]) == ("interrupted", 0, total), summary
+
+
+@pytest.mark.parametrize("text, from_line", [
+    ("G90\nG1 X360 Y0 Z150 A180 B0 C0 S1000 F3000\nG6 J1=-7.6 J2=11.4 J3=-7.9 J4=0 J5=90 J6=0 F30\n", 1),
+    ("G90\nO1 repeat [40]\nG1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X260 Y0 Z150 A180 B0 C0 S1000 F3000\n"
+     "O1 endrepeat\nG91\nG1 X1\nG1 X-1\n", 1),
+    ("G90\nG1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X260\nG1 X270\nG4 P0.5\nG1 X280\n", 3),
+])
+def test_a_checked_job_counts_the_frames_its_plan_sends(text, from_line):
+    """``CheckedScript.frames`` (the total a job stopped before it was planned reports) is the
+    estimate's count of the frames the job sends, from the arm's start as from the fixed pose."""
+    from armctl.core.checked import check, plan, start_at
+    from armctl.core.motion import MotionModel
+    from armctl.host.profile import load_profile
+    from armctl.script.files import ScriptSnapshot
+
+    profile = load_profile(None)
+    checked = check(ScriptSnapshot("job.txt", text.encode()), profile, from_line=from_line)
+    assert checked.refusal() is None
+    model = MotionModel(profile)
+    assert checked.frames() == plan(checked, model, *start_at(model), 0.5, 9600).estimate.frames > 0

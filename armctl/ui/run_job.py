@@ -291,6 +291,13 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
                 if error.result is None:
                     raise
                 result = error.result
+            except KeyboardInterrupt:  # Ctrl-C before the first frame (``_stop_signals``): nothing sent, of the job's
+                # frames (a resume's first line is the arm's report's to decide: its total is not known yet)
+                if events is not None and watch.view is None and resume is None:
+                    from .run_json import failure_result
+
+                    events.summary(failure_result("interrupted", EXIT_INTERRUPTED, total_frames=checked.frames() or 0))
+                raise
             finally:
                 watch.display.__exit__(None, None, None)
         return _report(result, watch, options, events)  # before the port and the log close, as the job's end
