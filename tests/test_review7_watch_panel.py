@@ -68,7 +68,6 @@ def _panel_output(monkeypatch, script: Path, width: int = 120, height: int = 40)
     return out.getvalue(), watch.view, watch.display.grid
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: the run panel redraws the whole panel up to 10 times a second (10.9 KB a second of the job)")
 def test_the_live_panel_writes_only_what_changes_a_few_times_a_second(monkeypatch):
     text, view, _ = _panel_output(monkeypatch, JOB)
     job_s = view.now_s - view.started_s
