@@ -34,6 +34,9 @@ ENV = {key: value for key, value in os.environ.items() if key != "ARMCTL_PORT"}
 WAIT_S = 20  # upper bound for any one wait; a healthy run takes a fraction of it
 # seed 2: the first joints 4-6 report is corrupted (J5 322.96°); the arm stands at its home pose
 NOISY = "noise=0.05&corrupt=0.05&seed=2"
+# --timeout counts the port's model seconds: 2 s at speed=20 is 0.1 s of wall time, which a loaded
+# machine overruns (the reads of two more rotations then end early); 60 is 3 s of wall time
+MODEL_TIMEOUT = "60"
 HOME = {"x": 210.0, "y": 0.0, "z": 300.0, "joints": [0.0, 0.0, 0.0, 0.0, 90.0, 0.0], "worktable": [0.0, 0.0, 0.0]}
 
 
@@ -55,17 +58,29 @@ def _pose(record: dict) -> dict:
     return {key: record[key] for key in HOME}
 
 
+def _at_home(record: dict) -> bool:
+    """Position, joints and worktable within a reading's jitter of the home pose (the engine's
+    rule, ``moved_clearly``: what ``read_arm`` proves; a corrupted report within the arm's reach
+    may pass it by less)."""
+    from armctl.core.job_readings import moved_clearly
+
+    def pose(r):
+        return (r["x"], r["y"], r["z"]), tuple(r["joints"][:3]), tuple(r["joints"][3:])
+
+    return not moved_clearly(pose(record), pose(HOME)) and record["worktable"] == HOME["worktable"]
+
+
 def test_the_home_pose_is_what_a_clean_line_reports():
     """The reference the noisy runs are compared with."""
     out = subprocess.run([*ARMCTL, "status", "--once", "--json", "--port", "sim://?clock=virtual"], cwd=ROOT, env=ENV,
                          capture_output=True, text=True, timeout=WAIT_S)
     assert out.returncode == 0, out.stderr
-    assert _pose(json.loads(out.stdout)) == HOME
+    assert _pose(json.loads(out.stdout)) == HOME  # (virtual time: the same reports in every run)
 
 
 @pytest.mark.realtime
 def test_watch_json_first_line_is_no_corrupted_report():
-    process = _spawn(["status", "--watch", "--json", "--port", f"sim://?speed=20&{NOISY}"], env=ENV,
+    process = _spawn(["status", "--watch", "--json", "--port", f"sim://?speed=20&{NOISY}", "--timeout", MODEL_TIMEOUT], env=ENV,
                      stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         first = _readline(process.stdout)
@@ -75,14 +90,15 @@ def test_watch_json_first_line_is_no_corrupted_report():
     finally:
         process.kill()
     assert code == 130, err
-    assert _pose(json.loads(first)) == HOME
+    assert _at_home(json.loads(first)), first
 
 
 @pytest.mark.realtime
 def test_watch_live_panel_never_shows_the_corrupted_report():
     master, slave = os.openpty()
     try:
-        process = _spawn(["status", "--watch", "--port", f"sim://?speed=20&{NOISY}"], stdin=slave, stdout=slave,
+        process = _spawn(["status", "--watch", "--port", f"sim://?speed=20&{NOISY}", "--timeout", MODEL_TIMEOUT],
+                         stdin=slave, stdout=slave,
                          stderr=slave, env={**ENV, "TERM": "xterm-256color", "COLUMNS": "120", "LINES": "40"})
     finally:
         os.close(slave)
@@ -116,7 +132,7 @@ def test_once_json_is_no_corrupted_report():
     out = subprocess.run([*ARMCTL, "status", "--once", "--json", "--port", f"sim://?clock=virtual&{NOISY}"], cwd=ROOT,
                          env=ENV, capture_output=True, text=True, timeout=WAIT_S)
     assert out.returncode == 0, out.stderr
-    assert _pose(json.loads(out.stdout)) == HOME
+    assert _pose(json.loads(out.stdout)) == HOME  # (virtual time: the same reports in every run)
 
 
 # --- 2. run --json: Ctrl-C while the job waits for the arm to rest ------------------------------
