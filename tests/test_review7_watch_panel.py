@@ -14,7 +14,11 @@ time): no wall clock is measured, and the bytes per second of the job are what a
 from __future__ import annotations
 
 import io
+import os
 import re
+import shutil
+import subprocess
+import sys
 from pathlib import Path
 
 import pytest
@@ -93,3 +97,31 @@ def test_the_terminal_shows_the_whole_last_panel_at_the_end(monkeypatch):
     Console(file=fresh, width=120, height=40, color_system=None, legacy_windows=False).print(
         render_run(view, f"armctl run {JOB.name}", grid))
     assert shown == [line.rstrip() for line in fresh.getvalue().splitlines() if line.strip()]
+
+
+@pytest.mark.realtime
+@pytest.mark.skipif(shutil.which("tmux") is None, reason="needs tmux")
+@pytest.mark.xfail(strict=True, reason="live_lines: a note the terminal wraps leaves its second row beside the panel's old line")
+def test_a_message_the_terminal_wraps_leaves_no_remnant_in_the_panel():
+    """On a real terminal 110 columns wide, Ctrl-C's note (some 130 characters, soft-wrapped: the
+    terminal wraps it) is printed above the panel: its second row once kept the rest of the
+    panel's frames line beside it ('me to rest … ━━━━ 13/14 │'), as no line written erased it."""
+    from test_ctrl_c import ENV, ROOT as REPO, WAIT_S, _wait_for_pane
+
+    socket_name = f"armctl-test-wrap-{os.getpid()}"
+    tmux = ["tmux", "-L", socket_name]
+    command = f"{sys.executable} -m armctl run scripts/pick_and_place.txt --port 'sim://?speed=4'; echo EXIT=$?; sleep 60"
+    subprocess.run([*tmux, "new-session", "-d", "-s", "t", "-x", "110", "-y", "45", command], cwd=REPO,
+                   env={**ENV, "TERM": "xterm-256color"}, check=True, timeout=WAIT_S)
+    try:
+        _wait_for_pane(tmux, "last line sent    1")  # the panel is up and a frame went out
+        subprocess.run([*tmux, "send-keys", "-t", "t", "C-c"], check=True, timeout=WAIT_S)
+        pane = _wait_for_pane(tmux, "EXIT=")
+    finally:
+        subprocess.run([*tmux, "kill-server"], timeout=WAIT_S, capture_output=True)
+    assert "EXIT=130" in pane, pane
+    rows = pane.splitlines()
+    note = next(row for row, text in enumerate(rows) if text.startswith("armctl: interrupted: no more frames"))
+    assert len(rows[note]) == 110 and "to rest …" in rows[note + 1], pane  # the terminal wrapped it
+    assert "│" not in rows[note + 1] and "━" not in rows[note + 1], pane  # and nothing of the panel beside it
+    assert rows[note + 2].startswith("╭"), pane
