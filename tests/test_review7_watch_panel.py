@@ -101,7 +101,6 @@ def test_the_terminal_shows_the_whole_last_panel_at_the_end(monkeypatch):
 
 @pytest.mark.realtime
 @pytest.mark.skipif(shutil.which("tmux") is None, reason="needs tmux")
-@pytest.mark.xfail(strict=True, reason="live_lines: a note the terminal wraps leaves its second row beside the panel's old line")
 def test_a_message_the_terminal_wraps_leaves_no_remnant_in_the_panel():
     """On a real terminal 110 columns wide, Ctrl-C's note (some 130 characters, soft-wrapped: the
     terminal wraps it) is printed above the panel: its second row once kept the rest of the

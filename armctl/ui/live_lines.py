@@ -58,13 +58,13 @@ class LiveLines:
 
     def print_above(self, renderable) -> None:
         """Print ``renderable`` (a message: soft-wrapped, the terminal wraps it) where the panel
-        begins, and the panel again below it."""
+        begins, and the panel again below it.  The panel's rows are erased first, as rich's
+        ``Live`` does: a message the terminal wraps covers rows no line of it erases."""
         with self._lock:
             with self.console.capture() as capture:
                 self.console.print(renderable, soft_wrap=True)
             shown, self._shown = self._shown, []
-            text = _up(len(shown)) + "".join(ERASE_LINE + line + "\n" for line in capture.get().split("\n")[:-1])
-            self._write(text + self._whole(shown))
+            self._write(ERASE_LINE + "\x1b[1A\x1b[2K" * len(shown) + capture.get() + self._whole(shown))
             self._shown = shown
 
     def _whole(self, lines: list[str]) -> str:
