@@ -77,6 +77,15 @@ class CheckedScript:
             return self
         return replace(self, from_line=from_line, from_line_error=from_line_errors(self.snapshot, from_line))
 
+    def frames(self) -> int | None:
+        """How many frames the job sends from ``from_line`` (None when it does not compile): its
+        statements, one frame each, compiled again (some 6 µs a line; the frames not held) — what
+        ``prepare``'s estimate counts from the arm's report, which sets values, never which lines
+        run.  For a summary of a job stopped before it was planned (``armctl run --json``)."""
+        compilation = self.snapshot.compile(initial=self.initial, from_line=self.from_line)
+        count = sum(1 for _ in compilation)
+        return None if compilation.error_count else count
+
     def checks(self, profile, initial, from_line: int) -> bool:
         """This is the check ``check(self.snapshot, profile, initial, from_line)`` would make."""
         return self.profile is profile and self.initial == initial and self.from_line == from_line

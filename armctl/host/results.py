@@ -77,10 +77,12 @@ class RunResult:
                    view.frames_unseen)
 
     @classmethod
-    def nothing_sent(cls, outcome: str, *, exit_code: int | None = None, message: str | None = None) -> RunResult:
+    def nothing_sent(cls, outcome: str, *, exit_code: int | None = None, message: str | None = None,
+                     total_frames: int = 0) -> RunResult:
         """A job that sent nothing: nothing left to send ("finished"), or (``armctl run``)
-        refused, failed before the first frame, interrupted while starting."""
-        return cls(outcome, 0, 0, None, None, None if outcome != "finished" else 0.0, 0.0, None,
+        refused, failed before the first frame, interrupted while starting (``total_frames``: the
+        job's, when it is known)."""
+        return cls(outcome, 0, total_frames, None, None, None if outcome != "finished" else 0.0, 0.0, None,
                    messages=() if message is None else (message,), exit_code=exit_code_of(outcome) if exit_code is None else exit_code)
 
     def to_json(self) -> dict:

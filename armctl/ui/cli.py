@@ -317,7 +317,7 @@ def _connect(port: str | None, baud: int | None, **link_options):
 @main.command()
 @port_option
 @baud_option
-@click.option("--once", is_flag=True, help="Wait until all 9 status kinds were seen, print them, exit.")
+@click.option("--once", is_flag=True, help="Read the arm as a job does before its first frame (all 9 status kinds, then until two rotations agree), print it, exit.")
 @click.option("--watch", is_flag=True, help="A live view, refreshed 12 times a second, until Ctrl-C.")
 @click.option("--json", "as_json", is_flag=True, help="JSON (one object; with --watch, JSON lines).")
 @click.option("--timeout", type=number(*STATUS_TIMEOUT_RANGE_S), default=2.0, show_default=True,

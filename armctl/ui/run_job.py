@@ -37,7 +37,7 @@ from ..core.job_end import PROBE_HINT
 from ..core.protocol import describe
 from ..core.streamer import DEFAULT_LEAD_S
 
-LIVE_REFRESH_S = 0.1
+LIVE_REFRESH_S = 0.25  # the panel is drawn at most 4 times a second (ui/live_lines.py: only the lines that changed)
 PLAIN_PROGRESS_S = 2.0
 # The least terminal the panel's map is drawn in: its ~24 rows with the map, a few lines of
 # notes above; the map's rows are 60 columns with their label.
@@ -292,6 +292,13 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
                 if error.result is None:
                     raise
                 result = error.result
+            except KeyboardInterrupt:  # Ctrl-C before the first frame (``_stop_signals``): nothing sent, of the job's
+                # frames (a resume's first line is the arm's report's to decide: its total is not known yet)
+                if events is not None and watch.view is None and resume is None:
+                    from .run_json import failure_result
+
+                    events.summary(failure_result("interrupted", EXIT_INTERRUPTED, total_frames=checked.frames() or 0))
+                raise
             finally:
                 watch.display.__exit__(None, None, None)
         return _report(result, watch, options, events)  # before the port and the log close, as the job's end
@@ -429,16 +436,17 @@ def _job_grid(job, model):
 
 
 class _Display:
-    """A rich Live panel on a terminal, plain progress lines elsewhere; throttled.
+    """A live panel on a terminal (ui/live_lines.py: the lines that changed, at most every
+    ``LIVE_REFRESH_S``), plain progress lines elsewhere; throttled.
 
-    While the panel is live it owns the screen: rich redraws it by moving the cursor up over
-    the lines it drew last, so a line written past it (a raw write to stderr) makes the next
+    While the panel is live it owns the screen: it is redrawn by moving the cursor up over
+    the lines drawn last, so a line written past it (a raw write to stderr) makes the next
     redraw land too low and leaves a stray partial panel above the real one.  Every message
     printed during the job therefore goes through ``note``, which prints it above the panel.
 
     The job's map (``grid``, a path_map.PathGrid, or None) is drawn while the terminal has room
-    for it (MAP_MIN_WIDTH × MAP_MIN_HEIGHT, checked at every redraw, so a resize counts); rich
-    would crop a panel taller than the screen.
+    for it (MAP_MIN_WIDTH × MAP_MIN_HEIGHT, checked at every redraw, so a resize counts); the
+    lines of a panel taller than the screen would be cut.
     """
 
     def __init__(self, title: str, live: bool, console=None, grid=None, footer: str | None = None) -> None:
@@ -449,11 +457,14 @@ class _Display:
 
     def __enter__(self):
         if self.live:
-            from rich.live import Live
+            from rich.console import Console
+
+            from .live_lines import LiveLines
+
             from rich.text import Text
 
-            self._live = Live(Text("starting …"), console=self._console, refresh_per_second=10, transient=False)
-            self._live.__enter__()
+            self._live = LiveLines(self._console or Console()).__enter__()
+            self._live.draw(Text("starting …"))
         return self
 
     def __exit__(self, *exc):
@@ -466,9 +477,9 @@ class _Display:
         if self._live is not None and sys.stderr.isatty():
             from rich.text import Text
 
-            # rich erases the panel, prints the text, redraws the panel below it; the leading
+            # printed where the panel begins, the panel drawn again below it; the leading
             # newline that moves past an echoed ^C on a plain terminal is not needed here
-            self._live.console.print(Text(text.lstrip("\n")), soft_wrap=True)
+            self._live.print_above(Text(text.lstrip("\n")))
         else:
             click.echo(text, err=True)
 
@@ -478,7 +489,7 @@ class _Display:
             if now - self._last >= LIVE_REFRESH_S or view.outcome != "running":
                 from .run_panel import render_run
 
-                self._live.update(render_run(view, self.title, self._map_room(), self.footer), refresh=True)  # throttled: draw now
+                self._live.draw(render_run(view, self.title, self._map_room(), self.footer))  # the lines that changed
                 self._last = now
         elif now - self._last >= PLAIN_PROGRESS_S:
             from .run_panel import progress_line
