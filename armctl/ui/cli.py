@@ -41,6 +41,14 @@ class ArmctlGroup(click.Group):
         _tolerant_output()
         return super().main(*args, **kwargs)
 
+    def _main_shell_completion(self, ctx_args, prog_name, complete_var=None):
+        """click's answer to the shell (the hook ``main`` calls first): a request it cannot read is
+        one line and exit 2, not its traceback (armctl/ui/completion.py's ``request_errors``)."""
+        from .completion import complete_var as derived, request_errors
+
+        with _exit_codes(), request_errors(complete_var or derived(prog_name)):
+            super()._main_shell_completion(ctx_args, prog_name, complete_var)
+
     def make_context(self, *args, **kwargs):
         """The group's own options (``--help``, ``--version``) write before any command runs:
         a full disk or a reader gone is the same exit there (2, 141) as in a command."""
