@@ -111,7 +111,6 @@ TOML_POSITIONS = {  # text → (line, column, tomllib's message without its "(at
 }
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: the position is a suffix of the message: 'FILE: invalid TOML: … (at line L, column C)'")
 @pytest.mark.parametrize("case", TOML_POSITIONS)
 def test_in_process_a_toml_error_leads_with_file_line_column(case):
     from armctl.core.toml_reading import parse_toml
@@ -123,7 +122,6 @@ def test_in_process_a_toml_error_leads_with_file_line_column(case):
     assert str(caught.value) == f"x.toml:{line}:{column}: invalid TOML: {message}"
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: the position is a suffix of the message: 'FILE: invalid TOML: … (at line L, column C)'")
 def test_the_position_tomllib_gives_as_attributes_is_taken_as_given():
     # Python 3.14's TOMLDecodeError carries msg, lineno and colno (3.11–3.13: only the message's
     # words): the same line is printed from either
@@ -147,7 +145,6 @@ def test_the_position_tomllib_gives_as_attributes_is_taken_as_given():
     assert str(caught.value) == BAD_PROFILE_LINE
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: the position is a suffix of the message: 'FILE: invalid TOML: … (at line L, column C)'")
 @pytest.mark.parametrize("how", ["--profile", "sim://?profile=", "armctl.toml profile =", "armctl.toml"])
 def test_the_installed_command_prints_file_line_column_exit_2(how, tmp_path):
     (tmp_path / "job.txt").write_text(JOB)
