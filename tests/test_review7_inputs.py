@@ -164,3 +164,41 @@ def test_the_installed_command_prints_file_line_column_exit_2(how, tmp_path):
         done = installed("config", cwd=tmp_path)
         expected = f"armctl: {tmp_path / 'armctl.toml'}:1:15: invalid TOML: Illegal character '\\n'"
     assert (done.returncode, one_line(done.stderr)) == (2, expected), done
+
+
+# --- 3. `armctl config` shows the profile's name with its control characters escaped ------------------
+
+EVIL_NAME = "evil\x1b[2J\x1b]0;pwned\x07\x9b31m"  # clear the screen, retitle the terminal, C1 CSI
+EVIL_TOML = '[profile]\nname = "evil\\u001b[2J\\u001b]0;pwned\\u0007\\u009b31m"\n'
+CONTROLS = ("\x1b", "\x07", "\x9b")
+
+
+@pytest.mark.xfail(strict=True, reason="review 7: config writes the profile's name raw (OSC and C1 CSI reach the terminal)")
+def test_the_installed_config_escapes_the_profiles_name(tmp_path):
+    (tmp_path / "armctl.toml").write_text(EVIL_TOML)
+    done = installed("config", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    line = next(line for line in done.stdout.splitlines() if line.startswith("profile "))
+    assert not any(c in done.stdout for c in CONTROLS), repr(line)
+    assert r"(evil\x1b[2J\x1b]0;pwned\x07\x9b31m)" in line, repr(line)
+
+
+@pytest.mark.xfail(strict=True, reason="review 7: config writes the profile's name raw (on a terminal click strips nothing)")
+def test_in_process_config_on_a_terminal_escapes_the_profiles_name(tmp_path, monkeypatch):
+    (tmp_path / "armctl.toml").write_text(EVIL_TOML)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("ARMCTL_PORT", raising=False)
+    result = CliRunner().invoke(main, ["config"], color=True)  # as on a terminal: click strips no CSI
+    assert result.exit_code == 0, result.output
+    assert not any(c in result.stdout for c in CONTROLS), repr(result.stdout)
+    assert r"evil\x1b[2J" in result.stdout
+
+
+def test_config_json_keeps_the_name_as_it_is(tmp_path):
+    # JSON is data, its escapes are JSON's: the name reads back exactly
+    import json
+
+    (tmp_path / "armctl.toml").write_text(EVIL_TOML)
+    done = installed("config", "--json", cwd=tmp_path)
+    assert done.returncode == 0 and not any(c in done.stdout for c in "\x1b\x07"), done
+    assert json.loads(done.stdout)["settings"]["profile"]["value"] == f"[profile] table ({EVIL_NAME})"
