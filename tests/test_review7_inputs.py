@@ -173,7 +173,6 @@ EVIL_TOML = '[profile]\nname = "evil\\u001b[2J\\u001b]0;pwned\\u0007\\u009b31m"\
 CONTROLS = ("\x1b", "\x07", "\x9b")
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: config writes the profile's name raw (OSC and C1 CSI reach the terminal)")
 def test_the_installed_config_escapes_the_profiles_name(tmp_path):
     (tmp_path / "armctl.toml").write_text(EVIL_TOML)
     done = installed("config", cwd=tmp_path)
@@ -183,7 +182,6 @@ def test_the_installed_config_escapes_the_profiles_name(tmp_path):
     assert r"(evil\x1b[2J\x1b]0;pwned\x07\x9b31m)" in line, repr(line)
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: config writes the profile's name raw (on a terminal click strips nothing)")
 def test_in_process_config_on_a_terminal_escapes_the_profiles_name(tmp_path, monkeypatch):
     (tmp_path / "armctl.toml").write_text(EVIL_TOML)
     monkeypatch.chdir(tmp_path)
