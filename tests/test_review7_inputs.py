@@ -200,3 +200,112 @@ def test_config_json_keeps_the_name_as_it_is(tmp_path):
     done = installed("config", "--json", cwd=tmp_path)
     assert done.returncode == 0 and not any(c in done.stdout for c in "\x1b\x07"), done
     assert json.loads(done.stdout)["settings"]["profile"]["value"] == f"[profile] table ({EVIL_NAME})"
+
+
+# --- 4. a sim://?profile=FILE is read once: the profile checked is the profile the simulator uses --
+
+def _profile_text(name: str) -> str:
+    return f'name = "{name}"\n'
+
+
+def _swap_after_first_read(monkeypatch, path: Path, then: str) -> list:
+    """Every read of ``path`` counted; after the first, the file is replaced by ``then`` (an edit
+    made between the port's check and its opening)."""
+    import armctl.host.profile as profile_module
+
+    reads, real = [], profile_module.read_toml
+
+    def read_toml(target, *args, **kwargs):
+        data = real(target, *args, **kwargs)
+        if Path(target).resolve() == path.resolve():
+            reads.append(data)
+            if len(reads) == 1:
+                path.write_text(then)
+        return data
+
+    monkeypatch.setattr(profile_module, "read_toml", read_toml)
+    return reads
+
+
+@pytest.mark.xfail(strict=True, reason="review 7: check_sim_url reads the file, the simulator reads it again when it opens")
+def test_in_process_the_simulator_runs_the_profile_that_was_checked(tmp_path, monkeypatch):
+    from armctl.host.link import connect
+
+    path = tmp_path / "p.toml"
+    path.write_text(_profile_text("checked"))
+    reads = _swap_after_first_read(monkeypatch, path, _profile_text("edited later"))
+    link, _ = connect(f"sim://?clock=virtual&profile={path}", None)
+    try:
+        assert link.port.model.profile.name == "checked"
+    finally:
+        link.close()
+    assert len(reads) == 1
+
+
+@pytest.mark.xfail(strict=True, reason="review 7: check_sim_url reads the file, the simulator reads it again when it opens")
+def test_in_process_run_is_not_refused_for_a_file_spoilt_after_its_check(tmp_path, monkeypatch):
+    (tmp_path / "job.txt").write_text(JOB)
+    path = tmp_path / "p.toml"
+    path.write_text(_profile_text("checked"))
+    reads = _swap_after_first_read(monkeypatch, path, BAD_PROFILE)
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.delenv("ARMCTL_PORT", raising=False)
+    result = CliRunner().invoke(main, ["run", "--port", "sim://?clock=virtual&profile=p.toml", "--no-live", "job.txt"])
+    assert result.exit_code == 0, result.output
+    assert len(reads) == 1
+
+
+@pytest.mark.xfail(strict=True, reason="review 7: `armctl sim --url` checks the profile, then SimulatedArm reads it again")
+@pytest.mark.parametrize("serve", ["--pty", "--tcp"])
+def test_in_process_a_served_simulator_runs_the_profile_that_was_checked(serve, tmp_path, monkeypatch):
+    import armctl.sim.bridge as bridge
+
+    path = tmp_path / "p.toml"
+    path.write_text(_profile_text("checked"))
+    reads = _swap_after_first_read(monkeypatch, path, _profile_text("edited later"))
+    served = []
+
+    def serve_pty(options, ready, keep_serving, model, on_arm):
+        served.append(model.profile.name)
+
+    def serve_tcp(port, options, ready, keep_serving):
+        served.append(bridge.SimulatedArm(options).profile.name)
+
+    monkeypatch.setattr(bridge, "serve_pty", serve_pty)
+    monkeypatch.setattr(bridge, "serve_tcp", serve_tcp)
+    arguments = ["--pty"] if serve == "--pty" else ["--tcp", "50007"]
+    result = CliRunner().invoke(main, ["sim", *arguments, "--url", f"sim://?profile={path}"])
+    assert result.exit_code == 0, result.output
+    assert served == ["checked"] and len(reads) == 1
+
+
+SWAP_HOOK = '''
+import atexit, os, sys
+target, then, tally = os.environ["REVIEW7_PROFILE"], os.environ["REVIEW7_THEN"], os.environ["REVIEW7_TALLY"]
+opens, busy = [], []
+def hook(event, args):
+    if event == "open" and not busy and isinstance(args[0], str) and os.path.abspath(args[0]) == target:
+        opens.append(1)
+        if len(opens) == 2:  # a second read: the file was edited after the first
+            busy.append(1)
+            with open(target, "w") as file:
+                file.write(then)
+atexit.register(lambda: open(tally, "w").write(str(len(opens))))
+sys.addaudithook(hook)
+'''
+
+
+@pytest.mark.xfail(strict=True, reason="review 7: the installed command opens the profile twice (check, then the simulator)")
+def test_the_installed_command_opens_the_profile_once(tmp_path):
+    # an audit hook in the child (sitecustomize) counts the opens of the file and spoils it before
+    # a second one: read once, the job runs on the profile checked
+    (tmp_path / "job.txt").write_text(JOB)
+    (tmp_path / "p.toml").write_text(_profile_text("checked"))
+    (tmp_path / "hook").mkdir()
+    (tmp_path / "hook" / "sitecustomize.py").write_text(SWAP_HOOK)
+    env = {"PYTHONPATH": str(tmp_path / "hook"), "REVIEW7_PROFILE": str(tmp_path / "p.toml"),
+           "REVIEW7_THEN": BAD_PROFILE, "REVIEW7_TALLY": str(tmp_path / "tally")}
+    done = installed("run", "--port", "sim://?clock=virtual&profile=p.toml", "--no-live", "-q", "job.txt",
+                     env=env, cwd=tmp_path)
+    assert (tmp_path / "tally").read_text() == "1", done.stderr
+    assert done.returncode == 0, done.stderr
