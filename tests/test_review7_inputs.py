@@ -227,7 +227,6 @@ def _swap_after_first_read(monkeypatch, path: Path, then: str) -> list:
     return reads
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: check_sim_url reads the file, the simulator reads it again when it opens")
 def test_in_process_the_simulator_runs_the_profile_that_was_checked(tmp_path, monkeypatch):
     from armctl.host.link import connect
 
@@ -242,7 +241,6 @@ def test_in_process_the_simulator_runs_the_profile_that_was_checked(tmp_path, mo
     assert len(reads) == 1
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: check_sim_url reads the file, the simulator reads it again when it opens")
 def test_in_process_run_is_not_refused_for_a_file_spoilt_after_its_check(tmp_path, monkeypatch):
     (tmp_path / "job.txt").write_text(JOB)
     path = tmp_path / "p.toml"
@@ -255,7 +253,6 @@ def test_in_process_run_is_not_refused_for_a_file_spoilt_after_its_check(tmp_pat
     assert len(reads) == 1
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: `armctl sim --url` checks the profile, then SimulatedArm reads it again")
 @pytest.mark.parametrize("serve", ["--pty", "--tcp"])
 def test_in_process_a_served_simulator_runs_the_profile_that_was_checked(serve, tmp_path, monkeypatch):
     import armctl.sim.bridge as bridge
@@ -295,7 +292,6 @@ sys.addaudithook(hook)
 '''
 
 
-@pytest.mark.xfail(strict=True, reason="review 7: the installed command opens the profile twice (check, then the simulator)")
 def test_the_installed_command_opens_the_profile_once(tmp_path):
     # an audit hook in the child (sitecustomize) counts the opens of the file and spoils it before
     # a second one: read once, the job runs on the profile checked

@@ -486,10 +486,12 @@ def sim(use_pty, tcp_port, sim_url, stats_path):
         raise UsageFailure("choose one of --pty or --tcp PORT")
     try:
         options = parse_sim_url(sim_url)
-        if isinstance(options.profile, str):  # read now, not when the first client connects
-            from ..host.profile import load_profile
+        if isinstance(options.profile, str):  # read now, once, not when the first client connects
+            from dataclasses import replace
 
-            load_profile(options.profile)
+            from ..host.port_choice import read_sim_profile
+
+            options = replace(options, profile=read_sim_profile(options))
     except (ConfigError, ProfileError) as error:
         raise ConfigError(f"--url: {error}") from None
     if options.virtual_clock:
