@@ -1,5 +1,8 @@
 """Review 7's faults of armctl's inputs, each through the installed command in a fresh process and
-in-process: a malformed shell-completion request is one line and exit 2, never click's traceback.
+in-process: (1) a malformed shell-completion request is one line and exit 2, never click's
+traceback; (2) a TOML syntax error leads with FILE:LINE:COLUMN; (3) `armctl config` escapes the
+control characters of a profile's name; (4) a ``sim://?profile=FILE`` is read once, so the
+profile checked is the profile the simulator runs.
 """
 
 from __future__ import annotations
@@ -128,18 +131,16 @@ def test_the_position_tomllib_gives_as_attributes_is_taken_as_given():
     import tomllib
 
     from armctl.core.toml_reading import parse_toml
+    from armctl.errors import ProfileError
 
-    class WithAttributes(tomllib.TOMLDecodeError):
+    class WithAttributes(tomllib.TOMLDecodeError):  # and a message whose words would give another place
         msg, lineno, colno = "Expected ']' at the end of a table declaration", 2, 11
 
     def loads(text):
-        raise WithAttributes("Expected ']' at the end of a table declaration (at line 2, column 11)")
-
-    from armctl.errors import ProfileError
-    import armctl.core.toml_reading as reading
+        raise WithAttributes("Expected ']' at the end of a table declaration (at line 9, column 9)")
 
     with pytest.MonkeyPatch.context() as patch:
-        patch.setattr(reading.tomllib, "loads", loads)
+        patch.setattr(tomllib, "loads", loads)
         with pytest.raises(ProfileError) as caught:
             parse_toml(BAD_PROFILE.encode(), "p.toml")
     assert str(caught.value) == BAD_PROFILE_LINE
