@@ -123,13 +123,13 @@ def test_missing_file_named_by_armctl_toml(tmp_path):
 
 def test_bad_toml_names_line_and_column(tmp_path):
     path = write(tmp_path / "bad.toml", "[speed]\nmax_joint_deg_s = = 3\n")
-    with pytest.raises(ProfileError, match=r"bad\.toml: invalid TOML: .*line 2, column 19"):
+    with pytest.raises(ProfileError, match=r"bad\.toml:2:19: invalid TOML: "):
         load_profile(path)
 
 
 def test_bad_armctl_toml(tmp_path):
     write(tmp_path / "armctl.toml", "port = \n")
-    with pytest.raises(ProfileError, match=r"armctl\.toml: invalid TOML: .*line 1"):
+    with pytest.raises(ProfileError, match=r"armctl\.toml:1:\d+: invalid TOML: "):
         find_config(tmp_path)
 
 

@@ -2,13 +2,15 @@
 
 Strategy: ``tomllib`` does the parsing; this module adds what it leaves open — the input must be
 UTF-8 (a byte-order mark is dropped), whole numbers must be TOML's 64-bit ones and nesting is
-bounded (``MAX_TOML_DEPTH``), checked iteratively so nothing can recurse out of stack.  Bytes
+bounded (``MAX_TOML_DEPTH``), checked iteratively so nothing can recurse out of stack.  A syntax
+error leads with its place, ``FILE:LINE:COLUMN: invalid TOML: …``, as a script's errors do.  Bytes
 in, a dict out: pure.  Reading the file (through the bounded reader, so ``/dev/zero`` is no
 profile) is armctl/host/config_file.py's ``read_toml``, on the host's side with the other files.
 """
 
 from __future__ import annotations
 
+import re
 import tomllib
 from typing import Any
 
@@ -31,13 +33,40 @@ def parse_toml(data: bytes, source: str) -> dict:
     try:
         parsed = tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
-        raise ProfileError(f"{source}: invalid TOML: {error}") from None
+        raise ProfileError(f"{source}{toml_error_place(error, text)}: invalid TOML: {toml_error_words(error)}") from None
     except RecursionError:
         raise ProfileError(f"{source}: invalid TOML: arrays or tables nested more than {MAX_TOML_DEPTH} deep") from None
     except ValueError:  # int() past sys.get_int_max_str_digits(): thousands of digits
         raise ProfileError(f"{source}: invalid TOML: a whole number outside {TOML_INT_RANGE[0]}…{TOML_INT_RANGE[1]}") from None
     _check_toml_values(parsed, source)
     return parsed
+
+
+# where tomllib (3.11–3.13) puts the place of a syntax error: the end of its message
+_PLACE = re.compile(r" \(at (?:line (\d+), column (\d+)|end of document)\)$")
+
+
+def toml_error_place(error: tomllib.TOMLDecodeError, text: str) -> str:
+    """``:LINE:COLUMN`` of tomllib's syntax error in ``text`` (1-based; "" if it names none): its
+    ``lineno``/``colno`` where it has them (Python 3.14), else read from its message, as 3.11 to
+    3.13 write it; "at end of document" is the place 3.14 gives it, past the last character."""
+    line, column = getattr(error, "lineno", None), getattr(error, "colno", None)
+    if isinstance(line, int) and isinstance(column, int):
+        return f":{line}:{column}"
+    match = _PLACE.search(str(error))
+    if match is None:
+        return ""
+    if match.group(1):
+        return f":{match.group(1)}:{match.group(2)}"
+    document = text.replace("\r\n", "\n")  # as tomllib reads it
+    line, column = document.count("\n") + 1, len(document) - document.rfind("\n")
+    return f":{line}:{column}"
+
+
+def toml_error_words(error: tomllib.TOMLDecodeError) -> str:
+    """tomllib's message without the place it appends (``toml_error_place`` names it)."""
+    words = getattr(error, "msg", None)
+    return words if isinstance(words, str) else _PLACE.sub("", str(error))
 
 
 def _check_toml_values(document: dict, source: str) -> None:

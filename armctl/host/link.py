@@ -62,7 +62,7 @@ def connect(port: "str | PortChoice | None", baud: int | None, announce: Callabl
     if profile is None:
         profile = arm_profile(port=choice)
     link_options.setdefault("state", plausible_state(profile))
-    return Link.open(choice.url, baud, **link_options), baud
+    return Link.open(choice.url, baud, sim_profile=choice.sim_profile, **link_options), baud
 
 
 def fifo_proven(url: str, connector) -> bool:
@@ -128,11 +128,15 @@ def plausible_state(profile) -> ArmState:
                     max_joint_speed_deg_s=factor * speed.max_joint_deg_s)
 
 
-def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_S, write_timeout: float | None = 2.0):
-    """Open any pyserial URL or device path, mapping failures to PortError."""
+def open_port(url: str, baud: int = DEFAULT_BAUD, timeout: float = READ_TIMEOUT_S, write_timeout: float | None = 2.0,
+              sim_profile=None):
+    """Open any pyserial URL or device path, mapping failures to PortError.  ``sim_profile``: a
+    ``sim://?profile=FILE``'s profile, read already (``PortChoice.sim_profile``): not read again."""
     import serial  # armctl/__init__.py adds the sim:// scheme as pyserial loads
 
     kwargs = {"baudrate": baud, "timeout": timeout, "write_timeout": write_timeout}
+    if sim_profile is not None:
+        kwargs["profile"] = sim_profile
     if "://" not in url:
         kwargs["exclusive"] = True  # a second armctl on the same arm would interleave frames
         _refuse_unless_device(url)
@@ -239,8 +243,8 @@ class Link:
         self._thread = threading.Thread(target=self._read_loop, name="armctl-reader", daemon=True)
 
     @classmethod
-    def open(cls, url: str, baud: int = DEFAULT_BAUD, **kwargs) -> "Link":
-        link = cls(open_port(url, baud), url, **kwargs)
+    def open(cls, url: str, baud: int = DEFAULT_BAUD, sim_profile=None, **kwargs) -> "Link":
+        link = cls(open_port(url, baud, sim_profile=sim_profile), url, **kwargs)
         link.start()
         return link
 

@@ -10,7 +10,7 @@ reader, the link's thread machinery or the simulator.
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 from ..errors import ConfigError
@@ -27,6 +27,9 @@ class PortChoice:
     # the arm on it, once read (``calibration.with_arm``: its identity, what ``armctl probe`` kept
     # for it): the command or ``Arm`` that chose the port reads it once and passes the choice on
     arm: Any = field(default=None, compare=False, repr=False)
+    # a ``sim://?profile=FILE``'s profile, read once by the check (``check_sim_url``): the simulator
+    # opened for this choice is given it (``link.connect``), so the file checked is the file run
+    sim_profile: Any = field(default=None, compare=False, repr=False)
 
     @property
     def from_file(self) -> bool:
@@ -89,24 +92,23 @@ def choose_port(port: "str | PortChoice | None", config=None, origin: str = "--p
 
     config = config or load_config()
     choice = resolve_port(port, config=config.values, config_path=config.path_of("port"), origin=origin)
-    check_port_url(choice)
-    return choice
+    return check_port_url(choice)
 
 
 # schemes every command meets, known without asking pyserial (which ``check_port_url`` asks for the rest)
 _KNOWN_SCHEMES = ("sim", "socket", "rfc2217")
 
 
-def check_port_url(choice: PortChoice) -> None:
+def check_port_url(choice: PortChoice) -> PortChoice:
     """A URL whose scheme no pyserial handler takes (``http://``, `` sim://``) or a bad ``sim://``
     option is a usage error (exit 2) naming where the URL came from, raised before anything
-    opens — by ``armctl config`` as by the commands that would open it."""
+    opens — by ``armctl config`` as by the commands that would open it.  Returns ``choice``, with
+    its ``sim_profile`` read."""
     scheme, separator, _ = choice.url.partition("://")
     if separator and scheme not in _KNOWN_SCHEMES and not _pyserial_takes(scheme):
         raise ConfigError(f"{_where(choice)}: {choice.url!r}: no port type {scheme!r} (a device path such as /dev/ttyUSB0, "
                           "socket://HOST:PORT, rfc2217://HOST:PORT or sim://[?options])")
-    if choice.is_simulator:
-        check_sim_url(choice)
+    return check_sim_url(choice) if choice.is_simulator else choice
 
 
 def _where(choice: PortChoice) -> str:
@@ -132,13 +134,13 @@ def _pyserial_takes(scheme: str) -> bool:
     return False
 
 
-def check_sim_url(choice: PortChoice) -> None:
+def check_sim_url(choice: PortChoice) -> PortChoice:
     """A bad ``sim://`` option is a usage error (exit 2) naming where the URL came from, raised
     before anything opens: the one parse is armctl/sim/protocol_sim.py's.  A ``profile`` option's
-    file is read here too, as ``sim --url`` reads it (a missing or bad one is refused by
-    ``armctl config`` as by the command that would open the port)."""
+    file is read here (``read_sim_profile``; a missing or bad one is refused by ``armctl config`` as
+    by the command that would open the port), the only time: ``choice`` is returned with it."""
     if choice.url in ("sim://", "sim:///", "sim://?"):
-        return  # the default arm: nothing to parse, and lint or estimate need not load the simulator
+        return choice  # the default arm: nothing to parse, and lint or estimate need not load the simulator
     from ..errors import ProfileError
     from ..sim.protocol_sim import parse_sim_url
 
@@ -147,10 +149,22 @@ def check_sim_url(choice: PortChoice) -> None:
         options = parse_sim_url(choice.url)
     except ConfigError as error:
         raise ConfigError(f"{where}: {error}") from None
-    if isinstance(options.profile, str):
-        from .profile import load_profile
+    try:
+        return replace(choice, sim_profile=read_sim_profile(options))
+    except (ConfigError, ProfileError) as error:
+        raise ConfigError(f"{where}: sim:// option profile: {error}") from None
 
-        try:
-            load_profile(options.profile)
-        except (ConfigError, ProfileError) as error:
-            raise ConfigError(f"{where}: sim:// option profile: {error}") from None
+
+def read_sim_profile(options):
+    """The profile a ``sim://`` URL's ``profile`` option names (None: it names none), read once for
+    the simulator to be given (``PortChoice.sim_profile``, ``armctl sim``'s arm) — the profile as the
+    simulator takes it (``chosen_profile``: no armctl.toml ``[connector]`` laid over; its
+    connector is its options'), armctl.toml's ``[connector]`` checked as every command checks it."""
+    if not isinstance(options.profile, str):
+        return None
+    from .profile import chosen_profile, load_config, with_file_connector
+
+    config = load_config()
+    profile = chosen_profile(options.profile, config=config)
+    with_file_connector(profile, config)  # (the check ``load_profile`` made here before)
+    return profile

@@ -21,6 +21,7 @@ import re
 import tomllib
 from pathlib import Path
 
+from ..core.toml_reading import toml_error_place, toml_error_words
 from ..errors import ConfigError
 
 TABLE = "connector"
@@ -42,7 +43,8 @@ def parse(text: str, where: str) -> dict:
     try:
         return tomllib.loads(text)
     except tomllib.TOMLDecodeError as error:
-        raise ConfigError(f"{where} is not valid TOML ({error}): not written; fix or move it first") from None
+        raise ConfigError(f"{where}{toml_error_place(error, text)}: not valid TOML ({toml_error_words(error)}): not "
+                          "written; fix or move it first") from None
 
 
 def updated(text: str, values: dict, where: str = "armctl.toml", drop=()) -> str:

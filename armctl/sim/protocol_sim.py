@@ -65,6 +65,7 @@ Registered by importing ``armctl.sim`` (it appends itself to
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import math
 import numbers
@@ -255,6 +256,9 @@ class Serial(SerialBase):
         self._received = bytearray()  # status bytes that reached the host, not yet read
         self._noise: LineNoise | None = None  # set when the port's rate is not the arm's
         self._wake = threading.Event()
+        # its URL's profile file read already (``serial_for_url(url, profile=…)``: armctl's port
+        # check read it), used as it was read rather than read a second time
+        self._profile = kwargs.pop("profile", None)
         super().__init__(*args, **kwargs)
 
     # --- opening and closing -------------------------------------------------------------------
@@ -265,6 +269,8 @@ class Serial(SerialBase):
         if self._port is None:
             raise SerialException("Port must be configured before it can be used.")
         options = parse_sim_url(self.portstr, baud=self._baudrate)
+        if self._profile is not None and isinstance(options.profile, str):
+            options = dataclasses.replace(options, profile=self._profile)
         try:
             self.model = SimulatedArm(options)
         except Exception as error:  # a bad profile path or a profile that makes no sense

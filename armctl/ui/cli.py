@@ -41,6 +41,14 @@ class ArmctlGroup(click.Group):
         _tolerant_output()
         return super().main(*args, **kwargs)
 
+    def _main_shell_completion(self, ctx_args, prog_name, complete_var=None):
+        """click's answer to the shell (the hook ``main`` calls first): a request it cannot read is
+        one line and exit 2, not its traceback (armctl/ui/completion.py's ``request_errors``)."""
+        from .completion import complete_var as derived, request_errors
+
+        with _exit_codes(), request_errors(complete_var or derived(prog_name)):
+            super()._main_shell_completion(ctx_args, prog_name, complete_var)
+
     def make_context(self, *args, **kwargs):
         """The group's own options (``--help``, ``--version``) write before any command runs:
         a full disk or a reader gone is the same exit there (2, 141) as in a command."""
@@ -478,10 +486,12 @@ def sim(use_pty, tcp_port, sim_url, stats_path):
         raise UsageFailure("choose one of --pty or --tcp PORT")
     try:
         options = parse_sim_url(sim_url)
-        if isinstance(options.profile, str):  # read now, not when the first client connects
-            from ..host.profile import load_profile
+        if isinstance(options.profile, str):  # read now, once, not when the first client connects
+            from dataclasses import replace
 
-            load_profile(options.profile)
+            from ..host.port_choice import read_sim_profile
+
+            options = replace(options, profile=read_sim_profile(options))
     except (ConfigError, ProfileError) as error:
         raise ConfigError(f"--url: {error}") from None
     if options.virtual_clock:

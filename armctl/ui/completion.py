@@ -10,11 +10,20 @@ shell completes.  Only click is imported; armctl/ui/cli.py registers ``completio
 ``main.add_command(completion)``.
 
 Exit codes: 0 the script was printed, 2 a shell click cannot complete for (a usage error).
+
+The shell's request itself (``COMP_WORDS``, ``COMP_CWORD``) is click's to read; one it cannot read
+(``COMP_CWORD=abc``, a variable unset, a word that is not UTF-8) is a usage error here
+(``request_errors``: one line, exit 2), where click would raise a traceback.
 """
 
 from __future__ import annotations
 
+import os
+from contextlib import contextmanager
+
 import click
+
+from ..errors import UsageFailure
 
 PROG_NAME = "armctl"  # the console script in pyproject.toml's [project.scripts]
 SHELLS = ("bash", "zsh", "fish", "powershell")  # powershell: click 8.5's PowerShellComplete
@@ -43,3 +52,29 @@ def completion(ctx: click.Context, shell: str):
     completer = get_completion_class(shell)  # never None: SHELLS are click's built-in shells
     root = ctx.find_root().command  # the whole `armctl` group, so every command completes
     click.echo(completer(root, {}, PROG_NAME, complete_var()).source(), nl=False)  # as click prints it
+
+
+@contextmanager
+def request_errors(variable: str):
+    """Click answering the shell's request (``variable``: ``_ARMCTL_COMPLETE``, whose value names
+    the shell): what it raises on a request it cannot read — ``int("abc")``, ``os.environ["COMP_CWORD"]``
+    unset, fish's blank word, an answer that is not UTF-8 — as a ``UsageFailure`` naming it."""
+    try:
+        yield
+    except UnicodeEncodeError:  # click encodes its answer strictly; a file name's bytes need not be UTF-8
+        raise UsageFailure("shell completion: the word to complete is not UTF-8 text, which click cannot "
+                           "answer for") from None
+    except (KeyError, ValueError, IndexError):
+        raise UsageFailure(f"shell completion: {_request_problem(os.environ, variable)}") from None
+
+
+def _request_problem(environ, variable: str) -> str:
+    from ..core.toml_reading import short_repr
+
+    for name in ("COMP_WORDS", "COMP_CWORD"):
+        if name not in environ:
+            return f"{name} is not set ({variable} asks for an answer to COMP_WORDS and COMP_CWORD, as the " \
+                   "script of `armctl completion SHELL` sets them)"
+    shell = environ.get(variable, "").partition("_")[0]
+    wanted = "the word to complete" if shell == "fish" else "the index of the word to complete, a whole number"
+    return f"COMP_CWORD={short_repr(environ['COMP_CWORD'])} is not {wanted}"

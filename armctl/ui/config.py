@@ -145,6 +145,10 @@ _ORIGINS = {"default": "built-in default", "document": "the document's default"}
 
 
 def settings_text(settings: list[Setting], config) -> str:
+    """The settings for people, with their control characters escaped: a profile's name, a file's
+    path or an arm's identity is not ours, and must not drive the terminal (clear, retitle it)."""
+    from .decode_output import plain_text
+
     lines = []
     for s in settings:
         value = s.value if isinstance(s.value, str) else json.dumps(s.value, ensure_ascii=False)
@@ -153,7 +157,7 @@ def settings_text(settings: list[Setting], config) -> str:
     project = config.project_path or "none found from the working directory up"
     user = f"{config.user_path}{'' if config.user_path.is_file() else ' (not present)'}"
     lines += [f"project file: {project}", f"user file:    {user}"]
-    return "\n".join(lines)
+    return "\n".join(map(plain_text, lines))
 
 
 @click.command()

@@ -55,12 +55,12 @@ def describe_job(job: dict) -> str:
     """A log's job record for people: ``job JOB.txt from line 1 on port /dev/ttyUSB0 (usb 0403:6001
     serial A1)`` — the port and the identity of the arm on it."""
     port, arm = job.get("port"), job.get("arm")
-    where = (f"on port {_plain(port)} ({_plain(arm) if isinstance(arm, str) else 'arm unknown'})"
+    where = (f"on port {plain_text(port)} ({plain_text(arm) if isinstance(arm, str) else 'arm unknown'})"
              if isinstance(port, str) else "port unknown (a log written before armctl recorded it)")
-    return f"job {_plain(job.get('script'))} from line {_plain(job.get('from_line'))} {where}"
+    return f"job {plain_text(job.get('script'))} from line {plain_text(job.get('from_line'))} {where}"
 
 
-def _plain(value) -> str:
+def plain_text(value) -> str:
     """``value`` as text with its control characters escaped (``\\x1b``): a log's names are the
     log's, and a log from elsewhere must not drive the terminal (retitle, clear, recolour it)."""
     text = str(value)
