@@ -23,7 +23,6 @@ OPS = [("joint", 4, 30.0, 3), ("arc", 4, 0), ("accel", 4, 0), ("accel", 3, 2), (
 
 
 @pytest.mark.timeout(60)
-@pytest.mark.xfail(strict=True, reason="the held job waits for ever: the rest at pose 2 is taken as maybe a rest in M9")
 @pytest.mark.parametrize("speed_factor", (0.7, 1.0))
 def test_a_held_job_goes_on_when_the_arm_rests_away_from_the_frames_that_move_nothing(speed_factor):
     check_random_job(OPS, 8, "queued", "worktable", speed_factor, 1.0, None, 0.0, 1, 2.0, time_limit_s=600.0)

@@ -112,6 +112,25 @@ class Arrival:
             return True
         return max(abs(a - b) for a, b in zip(pose.xyz, end.xyz)) <= 2 * TARGET_MM
 
+    def may_rest_at(self, pose) -> bool:
+        """Whether the arm's readings may be the model's ``pose``: they cannot only where the pose
+        is known in a kind they hold (X/Y/Z, or joints, not derived through the profile's
+        unverified kinematics), in the worktable the readings are in (the last frame's), and the
+        readings are more than twice its tolerance from it.  (Read elsewhere, the arm rests past
+        the frames that leave it at ``pose``: ``JobEnd.resting_before_last_move``.  Asked only of
+        the last target, the rest at POSE 2 — compared in joints, which a PWM-only move's pose has
+        only through the profile's kinematics — once held an 8-frame FIFO's job for ever.)"""
+        readings, verified = self.readings, self.streamer.kinematics_verified
+        recent = self.written.recent
+        if recent and pose.origin_mm != recent[-1].segment.end.origin_mm:
+            return True
+        position, joints = readings.position, readings.joints
+        if (verified or not pose.xyz_derived) and position is not None and max(
+                abs(a - b) for a, b in zip(position, pose.xyz)) > 2 * TARGET_MM:
+            return False
+        return not ((verified or not pose.joints_derived) and len(joints) == 6 and max(
+            abs(a - b) for a, b in zip(joints, pose.joints)) > 2 * TARGET_DEG)
+
     def done_at(self, now: float) -> float:
         """When the arm finished: the end of its last motion seen, plus the model's time for
         the frames after that motion, which move nothing (delays, M codes, control frames,
