@@ -271,9 +271,13 @@ class FakeLink:
         self.calls = 0
         self.fail_after = fail_after
 
+    on_status = None  # set by the watch: it shows only what two consecutive reports of a kind agree on
+
     def snapshot(self):
         state = self.states[min(self.calls, len(self.states) - 1)]
         self.calls += 1
+        for frame in 2 * getattr(state, "frames_read", []) if self.on_status else []:  # each report read twice
+            self.on_status(frame, 0.0)
         if self.fail_after is not None and self.calls >= self.fail_after:
             self.error = PortError("the port fake://arm went away: unplugged")
         return state, 100 * self.calls, 0, 9 * self.calls
@@ -300,7 +304,8 @@ class VirtualTime:
 
 def a_state(x: float, paused: int = 0) -> ArmState:
     state = ArmState()
-    for frame in (PositionStatus(x, 0, 300), JointsLowStatus(1, 2, 3), PauseStatus(paused, 1500), FileLengthStatus(10)):
+    state.frames_read = [PositionStatus(x, 0, 300), JointsLowStatus(1, 2, 3), PauseStatus(paused, 1500), FileLengthStatus(10)]
+    for frame in state.frames_read:
         state.update(frame, 0.0)
     return state
 

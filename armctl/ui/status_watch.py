@@ -7,7 +7,10 @@ elsewhere — never cursor codes into a pipe).  The first reading shown is the o
 start from (armctl/host/jobflow.py ``read_arm``, nothing sent: every kind, two more rotations, two
 states a rotation apart agreeing): the first report of a kind is judged against nothing, and on a
 noisy line it may be corrupted (J5 322.96° for 90° on ``sim://?noise=0.05&corrupt=0.05&seed=2``).
-Until then the live panel shows the link and each kind's age, and no value.
+Until then the live panel shows the link and each kind's age, and no value.  Every value shown,
+then as later, is one the last two reports of its kind agree on (armctl/core/agreed_view.py: a
+kind no rule judges, w0 1.58° for 0° on seed 18, is shown as not known until they agree);
+``--once`` waits for them within its timeout, and says which kinds never agreed.
 """
 
 from __future__ import annotations
@@ -21,8 +24,10 @@ from contextlib import contextmanager
 
 import click
 
+from ..core.agreed_view import AgreedReports
 from ..core.armstate import ArmState
 from ..errors import ArmctlError
+from .output import announce
 from .status_panel import LinkHealth, render_status, status_line
 
 WATCH_REFRESH_S = 1 / 12  # the issue asks for ≥ 10 refreshes a second
@@ -36,7 +41,12 @@ class NoStatus(ArmctlError):
 
 
 def print_once(link, baud: int, timeout_s: float, as_json: bool) -> None:
-    state = read_state(link, timeout_s)
+    reports = _agreed_reports(link)
+    state = read_state(link, timeout_s, reports)
+    unknown = reports.unknown()
+    if unknown:
+        announce(f"armctl: not known (no two consecutive reports agreed within {timeout_s:g} s; the arm moving, or "
+                 f"a noisy line): {', '.join(unknown)}")
     if as_json:
         click.echo(json.dumps(state.to_json()))
     else:
@@ -64,25 +74,38 @@ def watch_status(link, baud: int, as_json: bool, timeout_s: float | None = None)
     with ``read_state``'s (``NoStatus`` after ``timeout_s``), so the first record holds values
     the reports prove, not nulls; each JSON record carries ``t``, seconds since the watch
     began on the port's clock."""
+    reports = _agreed_reports(link)
     if as_json or not sys.stdout.isatty():
-        first = None if timeout_s is None else read_state(link, timeout_s)
+        first = None if timeout_s is None else read_state(link, timeout_s, reports)
         started_s = link.clock()
         if as_json:
-            _watch_lines(link, JSON_LINE_S, lambda s, h, now: json.dumps({"t": round(now - started_s, 3), **s.to_json()}), first)
+            _watch_lines(link, reports, JSON_LINE_S,
+                         lambda s, h, now: json.dumps({"t": round(now - started_s, 3), **s.to_json()}), first)
         else:
-            _watch_lines(link, PLAIN_LINE_S, lambda s, h, now: status_line(s), first)
+            _watch_lines(link, reports, PLAIN_LINE_S, lambda s, h, now: status_line(s), first)
     else:
-        _watch_live(link, baud, timeout_s)
+        _watch_live(link, reports, baud, timeout_s)
 
 
-def read_state(link, timeout_s: float):
+def _agreed_reports(link) -> AgreedReports:
+    """Every status frame the link reads from now on also goes to the view's ``AgreedReports``."""
+    reports = AgreedReports()
+    link.on_status = reports.read
+    return reports
+
+
+def read_state(link, timeout_s: float, reports: AgreedReports):
     """The arm's state as a job reads it before its first frame (``jobflow.read_arm``, nothing
-    sent); ``NoStatus`` when not every kind was seen within ``timeout_s``."""
+    sent), then until every kind's last two reports agree (at most ``timeout_s`` more), with only
+    the values they agree on (``AgreedReports.shown``); ``NoStatus`` when not every kind was seen
+    within ``timeout_s``."""
     from ..host.jobflow import read_arm
 
     if not link.wait_until(lambda s: s.complete, timeout_s):
         raise NoStatus(link.silence_message(timeout_s))
-    return read_arm(link, timeout_s, unpause=False)
+    read_arm(link, timeout_s, unpause=False)
+    link.wait_until(lambda s: not reports.unknown(), timeout_s)
+    return reports.shown(link.snapshot()[0])
 
 
 def _health(link, baud, rate, now):
@@ -91,20 +114,21 @@ def _health(link, baud, rate, now):
     return state, health
 
 
-def _watch_lines(link, period_s, render, first=None) -> None:
-    """A line each ``period_s`` until Ctrl-C; ``first``: the state the first line shows (``read_state``'s)."""
+def _watch_lines(link, reports, period_s, render, first=None) -> None:
+    """A line each ``period_s`` until Ctrl-C, of the values ``reports`` agree on; ``first``: the
+    state the first line shows (``read_state``'s)."""
     rate = _Rate()
     while True:
         if link.error is not None:
             raise link.error
         now = link.clock()
         state, health = _health(link, link.port.baudrate, rate, now)
-        click.echo(render(state if first is None else first, health, now))
+        click.echo(render(reports.shown(state) if first is None else first, health, now))
         first = None
         time.sleep(period_s)
 
 
-def _watch_live(link, baud, timeout_s: float | None) -> None:
+def _watch_live(link, reports, baud, timeout_s: float | None) -> None:
     from rich.console import Console
     from rich.live import Live
 
@@ -112,7 +136,7 @@ def _watch_live(link, baud, timeout_s: float | None) -> None:
     now = link.clock()
     state, health = _health(link, baud, rate, now)
     read, done = threading.Event(), threading.Event()
-    threading.Thread(target=_read_until_read, args=(link, timeout_s or READ_TRY_S, read, done), daemon=True,
+    threading.Thread(target=_read_until_read, args=(link, reports, timeout_s or READ_TRY_S, read, done), daemon=True,
                      name="armctl-status-read").start()
     try:
         with _ctrl_c_between_frames() as interrupted:
@@ -124,18 +148,18 @@ def _watch_live(link, baud, timeout_s: float | None) -> None:
                     time.sleep(WATCH_REFRESH_S)
                     now = link.clock()
                     state, health = _health(link, baud, rate, now)
-                    live.update(render_status(state if read.is_set() else _ages_only(state), health, now))
+                    live.update(render_status(reports.shown(state) if read.is_set() else _ages_only(state), health, now))
     finally:
         done.set()
     raise KeyboardInterrupt  # after Live has drawn its last frame and shown the cursor again
 
 
-def _read_until_read(link, timeout_s: float, read: threading.Event, done: threading.Event) -> None:
+def _read_until_read(link, reports, timeout_s: float, read: threading.Event, done: threading.Event) -> None:
     """The live panel's ``read_state``, tried again while the arm is silent (the panel waits for
     it as long as it is watched), until it returns (``read`` set) or the watch ends (``done``)."""
     while not done.is_set():
         try:
-            read_state(link, timeout_s)
+            read_state(link, timeout_s, reports)
         except NoStatus:
             continue
         except ArmctlError:  # the port went away: the panel raises ``link.error``
