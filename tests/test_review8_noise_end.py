@@ -54,12 +54,18 @@ def _overran(times: dict) -> dict:
             if outcome != "finished" or not truth_s - 0.01 <= arm_s <= truth_s + 2 * ROTATION_S + 0.1}
 
 
-@pytest.mark.xfail(strict=True, reason=FAULT_2)
 def test_pick_and_place_arm_time_on_a_noisy_line_is_the_arms(monkeypatch):
-    assert _overran(_arm_times(monkeypatch, PICK_AND_PLACE, range(1, 21))) == {}
+    """Seeds 1-20 but 12 (below)."""
+    assert _overran(_arm_times(monkeypatch, PICK_AND_PLACE, [seed for seed in range(1, 21) if seed != 12])) == {}
 
 
-@pytest.mark.xfail(strict=True, reason=FAULT_2)
+@pytest.mark.xfail(strict=True, reason="seed 12: 31.965 s for 31.245 s — no POSE blip: joints 4-6 went unread at the "
+                                       "arrival (a report lost), then a corrupted joints 1-3 report 0.15 deg off (within a "
+                                       "reading's jitter, which 'Blips' lets date the motion: the arm settling) came back")
+def test_pick_and_place_seed_12(monkeypatch):
+    assert _overran(_arm_times(monkeypatch, PICK_AND_PLACE, [12])) == {}
+
+
 @pytest.mark.parametrize("seed", [3, 18])
 def test_the_installed_command_s_arm_time_is_the_clean_line_s(seed, tmp_path):
     """``armctl run --json`` in a fresh process: the noisy line's arm time within two rotations
@@ -74,3 +80,85 @@ def test_the_installed_command_s_arm_time_is_the_clean_line_s(seed, tmp_path):
 
     clean_s = arm_time("sim://?clock=virtual")
     assert clean_s - 0.01 <= arm_time(f"sim://?clock=virtual&noise=0.05&corrupt=0.05&seed={seed}") <= clean_s + 2 * ROTATION_S + 0.1
+
+
+# --- Written.over on its own: what proves a fixed pose's motion over, and what does not ----------
+
+from types import SimpleNamespace  # noqa: E402
+
+from armctl.core.job_readings import ARRIVAL_SLACK_S, Written  # noqa: E402
+from armctl.core.protocol import ArcEnd, GoToPose, LinearMove  # noqa: E402
+
+POSE0 = (0.0, 0.0, 0.0, 0.0, 90.0, 0.0)  # the default profile's pose 0
+HOME_XYZ = (210.0, 0.0, 300.0)  # where the arm reports it there
+
+
+def _end(xyz=None, joints=None):
+    return SimpleNamespace(xyz=xyz or (0.0, 0.0, 0.0), joints=joints or (0.0,) * 6, xyz_derived=xyz is None,
+                           joints_derived=joints is None, pwm_us=(), origin_mm=(0.0, 0.0, 0.0))
+
+
+def _frame(index, command, kind, start, end, path_known=True, wire_end_s=0.0, certain_end_s=99.0):
+    segment = SimpleNamespace(kind=kind, start=start, end=end, moves_reported=True)
+    return SimpleNamespace(index=index, command=command, segment=segment, path_known=path_known, wire_end_s=wire_end_s,
+                           certain_end_s=certain_end_s, tag=None)
+
+
+def _written(before_kind: str = "line"):
+    """Frame 0 lifts the tool from (250, 120, 60) to (250, 120, 150) (a line; or an arc through
+    there), frame 1 is POSE 0 (its path unknown), both landed by t = 1 s; nothing known finished."""
+    written = Written()
+    command = LinearMove(250, 120, 150, 180, 0, 0, 1000, 1500) if before_kind == "line" else ArcEnd(250, 120, 150, 180, 0, 0, 1000, 1500)
+    written.note(_frame(0, command, before_kind, _end(xyz=(250.0, 120.0, 60.0)), _end(xyz=(250.0, 120.0, 150.0))))
+    written.note(_frame(1, GoToPose(0), "joint", _end(xyz=(250.0, 120.0, 150.0)), _end(joints=POSE0), path_known=False,
+                        wire_end_s=0.5))
+    return written
+
+
+def _read_at_pose(written, position, first_s=2.0):
+    """Two agreeing reports of each kind: the position at ``position``, the joints at pose 0."""
+    written.over({0: (position, first_s, first_s + 0.27), 1: (POSE0[:3], first_s + 0.03, first_s + 0.3),
+                  2: (POSE0[3:], first_s + 0.06, first_s + 0.33)})
+
+
+def test_the_pose_read_at_its_end_off_the_path_of_every_frame_before_it_is_over():
+    written = _written()
+    assert written.explains(0, (491.6, 0.0, 300.0), 3.0)  # before: any reading, until its time bound
+    _read_at_pose(written, HOME_XYZ)
+    assert written.over_s == {1: 2.06}
+    assert not written.explains(0, (491.6, 0.0, 300.0), 3.0)  # a corrupted report after that: no motion of it
+    assert written.explains(0, (491.6, 0.0, 300.0), 2.0)  # (read before it was proven over: as before)
+
+
+def test_a_reading_on_the_path_of_a_frame_before_it_proves_nothing():
+    """The lift may still run where the arm reads (250, 120, 100): POSE 0 may not have begun."""
+    written = _written()
+    _read_at_pose(written, (250.0, 120.0, 100.0))
+    assert written.over_s == {}
+    assert written.explains(0, (491.6, 0.0, 300.0), 3.0)
+
+
+def test_an_arc_before_it_proves_nothing():
+    """An arc's path leaves the span of its ends: a reading off that span may be on the arc."""
+    written = _written("arc")
+    _read_at_pose(written, HOME_XYZ)
+    assert written.over_s == {}
+
+
+def test_a_reading_before_the_pose_landed_proves_nothing():
+    written = _written()
+    _read_at_pose(written, HOME_XYZ, first_s=0.5 + ARRIVAL_SLACK_S - 0.1)
+    assert written.over_s == {}
+
+
+def test_joints_elsewhere_than_the_pose_prove_nothing():
+    written = _written()
+    written.over({0: (HOME_XYZ, 2.0, 2.27), 1: ((0.0, 0.5, 0.0), 2.03, 2.3), 2: (POSE0[3:], 2.06, 2.33)})
+    assert written.over_s == {}
+
+
+def test_every_frame_before_it_known_finished_proves_it_began():
+    written = _written()
+    written.done(1, 1.5)  # the lift known finished (by a report read at 1.5 s)
+    _read_at_pose(written, (250.0, 120.0, 100.0))  # (the position then proves nothing more)
+    assert written.over_s == {1: 2.06}

@@ -47,7 +47,15 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
   undo its motion (``Readings.away``).  What the other kinds showed meanwhile still counts.  The
   rest proof stays the careful
   one: ``rest`` dates from the blip's end, a rest is proven REST_CHECK_S after it, and the end of
-  the job waits for that proof (armctl/core/job_end.py).
+  the job waits for that proof (armctl/core/job_end.py).  A frame that explains any reading (a
+  fixed pose, a joint move from where only the kinematics put the arm) explains none read after
+  its motion is proven over (``Written.over``): both joint halves read at its end (two agreeing
+  reports each: corrupted ones never agree) after it began — every frame before it known
+  finished, or a reading off each one's path, where its span surely holds it (``began_by``).
+  Sound: a move to one target reads its target only at its end (or it began there and moves
+  nothing), so a later excursion that comes back is no part of it; any other frame that may
+  still run explains its own readings as before.  (On pick_and_place's noisy line the arm
+  rested at POSE 0 and a corrupted report then counted as its motion: 6 of seeds 1-20 overran.)
 
 ``Written`` is the other half of the record: the last ``RECENT_FRAMES`` frames written (the
 trailing frames that move nothing are judged on them), the last that moves the arm, the job's
@@ -71,8 +79,8 @@ from operator import attrgetter
 from .commands import OWN_MOTION_COMMANDS
 from .evidence import AGREEING_REPORTS, agreed, known_still_s
 from .protocol import (
-    CONTROL_COMMANDS, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus, RunPositionStatus,
-    RunProgram, SetWorktableOrigin,
+    CONTROL_COMMANDS, GoToPose, JointMove, JointsHighStatus, JointsLowStatus, PauseStatus, PauseToggle, PositionStatus,
+    RunPositionStatus, RunProgram, SetWorktableOrigin,
 )
 from .streamer import ARRIVAL_SLACK_S
 from .streamer.geometry import in_frame
@@ -103,6 +111,8 @@ class Written:
         self.control_sent = 0  # the other control frames written after a first frame (POSE, PROGRAM, G54…: H5 says when they act)
         self.finished: deque = deque(maxlen=RECENT_FRAMES)  # (when, frames known finished by then): ``done``
         self.paths_unknown: deque = deque()  # recent frames whose path is not the planned one (``rests_at``)
+        self.open_ends: deque = deque()  # the frames ``over`` may prove over (``ends_exactly``), not yet proven
+        self.over_s: dict = {}  # index → when its motion was proven over (``over``): it explains no later reading
         self.reports_robot_xyz = reports_robot_xyz  # the engine's X/Y/Z readings: robot ones less the last frame's origin
 
     def note(self, sent) -> None:
@@ -115,6 +125,10 @@ class Written:
             self.control_sent += 1
         if not sent.path_known:
             self.paths_unknown.append(sent)
+        if ends_exactly(sent):
+            self.open_ends.append(sent)
+            if len(self.open_ends) > RECENT_FRAMES:
+                self.open_ends.popleft()
         if sent.segment.moves_reported:  # (``moves_arm``)
             self.last_move = sent
         elif isinstance(command, RunProgram):
@@ -169,28 +183,77 @@ class Written:
                 match = index
         return match if match is not None and match >= unknown[0].index else None
 
+    def over(self, read: dict) -> None:
+        """Prove the motion of each frame of ``open_ends`` over whose end both joint halves have been
+        read at after it began (``read``: kind 0, 1, 2 → (the value its last two reports agreed on,
+        when the first and the second were read)): a move to one target that reads its target after it began is
+        over — it has no other place to go, and if it began there it moves nothing.  From then on it
+        explains no reading (``explains``; see "Blips")."""
+        low, high = read.get(1), read.get(2)
+        if low is None or high is None:
+            return
+        for sent in tuple(self.open_ends):
+            if sent.index < self.done_by(min(low[2], high[2])):
+                self.open_ends.remove(sent)  # known finished: it explains nothing now anyway
+                continue
+            joints = sent.segment.end.joints
+            if slot_moved(1, low[0], joints[:3]) or slot_moved(2, high[0], joints[3:]):
+                continue
+            began_s = self.began_by(sent, read)
+            if began_s is None:
+                continue
+            at_end_s = [first_s if first_s >= began_s else second_s for _, first_s, second_s in (low, high)]
+            if min(at_end_s) >= began_s:  # (each half read there after it began: by the first report or the second)
+                self.over_s[sent.index] = max(at_end_s)
+                self.open_ends.remove(sent)
+        while len(self.over_s) > RECENT_FRAMES:
+            del self.over_s[next(iter(self.over_s))]
+
+    def began_by(self, frame, read: dict) -> float | None:
+        """A time by which ``frame`` had begun, proven by a reading (``read``, as ``over`` takes it)
+        read after it landed (the first of its two reports: both read it); None when none proves it.  It had begun once every frame before it
+        finished: the frames known finished by then, and each other one by the reading — a frame
+        landed runs as soon as the one before it ends, and the arm is on its path while it runs (at
+        its start while it waits), so a reading off every one of their paths, each judged in a kind
+        whose span surely holds its path (``_span_holds``), says none of them still runs."""
+        for kind, (values, read_s, _) in read.items():
+            if read_s <= landed_s(frame):
+                continue
+            done = self.done_by(read_s)
+            if done >= frame.index:
+                return read_s
+            recent = self.recent
+            if done < recent[0].index:
+                continue  # (a frame not known finished is no longer kept)
+            before = islice(recent, done - recent[0].index, frame.index - recent[0].index)
+            # (X/Y/Z read in the frame its span is in: the worktable's in force, or the last frame's for robot reports)
+            origin = recent[-1].segment.end.origin_mm if self.reports_robot_xyz else None
+            if all(sent.certain_end_s < read_s or (sent.path_known and _span_holds(sent.segment, kind, origin)
+                                                   and not _in_span(sent.segment, kind, values)) for sent in before):
+                return read_s
+        return None
+
+    def done_by(self, read_s: float) -> int:
+        """The frames known finished by a report read before one read at ``read_s`` (status frames come
+        in order: that one was built after it), whatever their time bound."""
+        return next((frames for when, frames in reversed(self.finished) if when < read_s), 0)
+
     def explains(self, kind: int, values: tuple, read_s: float) -> bool:
         """Some recent frame the arm may still have been running at ``read_s`` (its time bound not
         yet run out, and not known finished before: an SD program's or a first move of U/V's bound
         never runs out) passes within a reading's jitter of ``values`` (one kind's readings: 0
         position, 1 and 2 the joint halves): each within the span of its start and end; or is
         one whose motion no model knows (``OWN_MOTION_COMMANDS``, a start a program left)."""
-        limit = TARGET_MM if kind == 0 else TARGET_DEG
-        first = 3 * (kind - 1)
-        # the frames known finished by a report read before this one (status frames come in order:
-        # this one was built after it), whatever their time bound
-        done = next((frames for when, frames in reversed(self.finished) if when < read_s), 0)
+        done = self.done_by(read_s)
+        over_s = self.over_s
         for sent in self.recent:
             if sent.certain_end_s < read_s or sent.index < done:
                 continue
             if isinstance(sent.command, OWN_MOTION_COMMANDS) or not sent.path_known:
+                if over_s and over_s.get(sent.index, read_s) < read_s:
+                    continue  # (read at its end after it began: its motion was over, ``over``)
                 return True  # (the arm's own motion, or from where a program left it: it may pass anywhere)
-            start, end = sent.segment.start, sent.segment.end
-            if kind == 0:
-                a, b = start.xyz, end.xyz
-            else:
-                a, b = start.joints[first:first + 3], end.joints[first:first + 3]
-            if all(min(p, q) - limit <= v <= max(p, q) + limit for p, q, v in zip(a, b, values)):
+            if _in_span(sent.segment, kind, values):
                 return True
         return False
 
@@ -240,6 +303,8 @@ class Readings:
         self.reported: dict = {}  # kind → its readings (position: in the worktable, ``worktable_xyz``)
         self.pause_reports: deque = deque(maxlen=AGREEING_REPORTS)  # the last pause states reported
         self.pause_read_s: deque = deque(maxlen=AGREEING_REPORTS)  # ... and when they were read
+        # kind 0, 1, 2 → (the value its last two reports agreed on, when the first and the second were read): ``over``
+        self.agreed_read: dict = {}
 
     def take(self, kind: int, values: tuple, now: float) -> bool:
         """One kind's readings read at ``now``; True when they changed (or are the first read)."""
@@ -251,6 +316,9 @@ class Readings:
         read_at[kind] = now
         agreed = self.agreed_values.get(kind) if kind != PAUSE_KIND else None
         if not changed:  # two reports in a row agree: a new value agreed on may show work (``_agreed``)
+            if self.written.open_ends and kind != PAUSE_KIND:
+                self.agreed_read[kind] = (values, before_s, now)
+                self.written.over(self.agreed_read)
             if kind != PAUSE_KIND and (agreed is None or agreed[0] != values):
                 self._agreed(kind, values, before_s, slot_moved)
                 if self.written.paths_unknown and self.paused is False and self.on_rest is not None:
@@ -433,6 +501,40 @@ class Readings:
     def joints(self) -> tuple:
         """The six joints as last reported (fewer while a half was never read)."""
         return (self.reported.get(1) or ()) + (self.reported.get(2) or ())
+
+
+def _in_span(segment, kind: int, values: tuple) -> bool:
+    """One kind's readings (0 position, 1 and 2 the joint halves) within a reading's jitter of the
+    span of ``segment``'s start and end in that kind."""
+    limit = TARGET_MM if kind == 0 else TARGET_DEG
+    start, end = segment.start, segment.end
+    if kind == 0:
+        a, b = start.xyz, end.xyz
+    else:
+        first = 3 * (kind - 1)
+        a, b = start.joints[first:first + 3], end.joints[first:first + 3]
+    return all(min(p, q) - limit <= v <= max(p, q) + limit for p, q, v in zip(a, b, values))
+
+
+def _span_holds(segment, kind: int, origin: tuple | None = None) -> bool:
+    """The span of ``segment``'s start and end in ``kind`` (``_in_span``) holds its whole path, as the
+    arm runs it: a line's or a still frame's X/Y/Z, a joint move's or a still frame's joints (a
+    straight line in that space), each where the job knows both ends exactly (not from the
+    profile's kinematics), the X/Y/Z in one worktable frame (``origin``, when not None: the one the
+    readings are in).  An arc's path leaves its ends' span; a line's joints may too."""
+    start, end = segment.start, segment.end
+    if kind == 0:
+        return (segment.kind in ("line", "still") and not (start.xyz_derived or end.xyz_derived)
+                and start.origin_mm == end.origin_mm and origin in (None, end.origin_mm))
+    return segment.kind in ("joint", "still") and not (start.joints_derived or end.joints_derived)
+
+
+def ends_exactly(sent) -> bool:
+    """A frame that explains any reading (``Written.explains``: the arm's own motion, or a path not
+    the planned one) whose end the job knows in joints — a fixed pose's (the profile's), a joint
+    move's: ``Written.over`` may prove its motion over."""
+    return (isinstance(sent.command, (GoToPose, JointMove)) and not sent.segment.end.joints_derived
+            and (isinstance(sent.command, GoToPose) or not sent.path_known))
 
 
 def landed_s(sent) -> float:
