@@ -149,3 +149,28 @@ def test_a_lone_corrupted_report_keeps_the_agreed_value_two_different_ones_unkno
                         (WristStatus(0, 91), None), (WristStatus(0, 91), WristStatus(0, 91))]:
         reports.read(read)
         assert reports.value(WristStatus.KIND) == shown
+
+
+@pytest.mark.realtime
+def test_watch_json_of_the_installed_command_shows_only_agreed_values(tmp_path):
+    """``armctl status --watch --json`` in a fresh process on the noisy simulator at 20x (wall
+    clock): 15 lines (some 80 rotations of the arm), each value the arm's or null."""
+    import select
+    import signal
+
+    process = subprocess.Popen([*ARMCTL, "status", "--watch", "--json", "--timeout", "60", "--port",
+                                "sim://?speed=20&noise=0.05&corrupt=0.05&seed=2"], cwd=tmp_path, env=ENV,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        lines = []
+        while len(lines) < 15:
+            assert select.select([process.stdout], [], [], 20)[0], "no line within 20 s"
+            lines.append(process.stdout.readline())
+        process.send_signal(signal.SIGINT)
+        assert process.wait(timeout=20) == 130
+    finally:
+        process.kill()
+    wrong = [record for record in map(json.loads, lines)
+             if not all(_home_or_unknown(value, HOME[key]) for key, value in record.items() if key != "t")]
+    assert wrong == []
