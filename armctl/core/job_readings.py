@@ -283,16 +283,19 @@ class Readings:
         self.moved_from: tuple | None = None  # the readings when they last changed by more than jitter
         self.run_position: float | None = None  # the SD program's run position last reported
         self.changed_s = 0.0  # when any kind's readings last changed, blips left out ("Blips")
-        self.other_changed_s = 0.0  # ... the pause-and-PWM kind's
+        # ... the position's and joints', and the pause-and-PWM kind's: the later of the two is
+        # ``changed_s``, and a blip of one puts back only its own (the two overlap on a noisy line)
+        self.readings_changed_s = 0.0
+        self.other_changed_s = 0.0
         self.motion_active_s: float | None = None  # ``active_s`` by the position and joints, blips left out
         self.program_active_s: float | None = None  # ... by an SD program's run position, blips left out
         self.last_run_change: tuple | None = None  # (the run position before its last change, program_active_s)
         # the position and joints kinds away from their readings, each a blip if it comes back
         # ("Blips"), oldest first: [its kind, its readings before, how many readings since (0:
         # back, waiting for the later ones), what its leaving replaced of motion, moved_from,
-        # active_s and changed_s]
+        # active_s and readings_changed_s]
         self.away: list = []
-        self.last_pause_change: tuple | None = None  # (the readings before, changed_s, other_changed_s)
+        self.last_pause_change: tuple | None = None  # (the readings before, other_changed_s)
         self.settled: tuple | None = None  # the last change within jitter while a kind was away: (when, last read before)
         self.work_s = -math.inf  # the arm worked after this time, by its reports (``worked_after``)
         self.on_rest = None  # told ``Written.rests_at``'s frame (armctl/core/job_arrival.py ``Arrival.rested``)
@@ -346,10 +349,11 @@ class Readings:
                     and (old[1] == values[1] or not self.written.sets_pwm(old[1]))):
                 # a pause state or a PWM alone between two equal readings, one no recent frame
                 # written sets: a blip
-                self.changed_s, self.other_changed_s = blip[1], blip[2]
+                self.other_changed_s = blip[1]
+                self.changed_s = max(self.readings_changed_s, blip[1])
                 self.last_pause_change = None
                 return True
-            self.last_pause_change = (old, self.changed_s, self.other_changed_s)
+            self.last_pause_change = (old, self.other_changed_s)
             self.other_changed_s = now
         else:
             away = self.away
@@ -376,13 +380,14 @@ class Readings:
                     entry = None  # settling within a reading's jitter, or away too long: motion
                 if entry is None:
                     self._moved(kind)
-                    away.append([kind, old, 1, (motion, self.moved_from, self.motion_active_s, self.changed_s)])
+                    away.append([kind, old, 1, (motion, self.moved_from, self.motion_active_s, self.readings_changed_s)])
             elif away and old is not None and not slot_moved(kind, old, values):
                 # another kind within a reading's jitter: no excursion, and a blip before it may
                 # still be one (the same kind read again near its blip value: that was no blip)
                 self.settled = (now, before_s)
             elif old is not None:
-                away.append([kind, old, 1, (motion, self.moved_from, self.motion_active_s, self.changed_s)])
+                away.append([kind, old, 1, (motion, self.moved_from, self.motion_active_s, self.readings_changed_s)])
+            self.readings_changed_s = now
         self.changed_s = now
         if kind != PAUSE_KIND or motion is None:
             moving_s = motion[2] if motion is not None else None
@@ -400,15 +405,17 @@ class Readings:
 
     def _undo(self, before: tuple, rest: tuple) -> None:
         """Put back what the readings were before a blip (``before``: motion, moved_from, active_s
-        and changed_s then), but for another kind's change within jitter meanwhile, which still
-        dates the motion (the arm settling, read late)."""
+        and readings_changed_s then), but for another kind's change within jitter meanwhile, which
+        still dates the motion (the arm settling, read late); the pause-and-PWM kind's last change
+        stays its own (``other_changed_s``: a blip of it meanwhile put back only that)."""
         motion, self.moved_from, self.motion_active_s, changed_s = before
-        self.changed_s = max(changed_s, self.other_changed_s)
         settled = self.settled
         if settled is not None and settled[0] > changed_s:
             moving_s = settled[1] if motion is None or motion[2] is None else max(settled[1], motion[2])
             motion = (rest[0][:3], settled[0], moving_s)
-            self.changed_s = max(self.changed_s, settled[0])
+            changed_s = settled[0]
+        self.readings_changed_s = changed_s
+        self.changed_s = max(changed_s, self.other_changed_s)
         self.motion = motion
 
     def _moved(self, kind: int) -> None:
