@@ -32,9 +32,9 @@ whose readings say whether the arm is at rest); nothing here decides what to wri
   Once the next report of its kind comes back to the value before it, a reading that stood alone
   and that no recent frame's motion explains (``Written.explains``: a wrist turned away and back
   within one rotation is read once, alone, between two readings at its start) is taken for such
-  a blip, and the motion, the arm's activity and the last change
-  (``changed_s``) are what they were before it, so the arm's time and a "kept working" note
-  never count from a blip.  Which readings: a position or joints reading — or up to
+  a blip, and the motion, the arm's activity and the last change (``changed_s``, the pause-and-PWM
+  kind's apart: two blips that overlap put back neither's) are what they were before it, so the
+  arm's time and a "kept working" note never count from a blip.  Which readings: a position or joints reading — or up to
   ``BLIP_READINGS`` in a row, each beyond jitter from the one before (a reading settling within
   jitter is the arm's) — if every other of those kinds that left its value meanwhile came back
   too (a noisy line corrupts two kinds in one rotation now and then; the arm cannot go somewhere
