@@ -287,6 +287,7 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
             control.request_stop()
         _started(observer, runner, job)
         outcome = drive(runner, abort_frames(spec.abort, arrival), on_stopping=lambda why: observer.note(
+            f"\narmctl: {why}: before the first frame, nothing was sent" if runner.job.stop.nothing_to_stop else
             f"\narmctl: {why}: no more frames are sent; sending the abort sequence ({spec.abort}) and waiting for "
             "the arm to come to rest …"))
     finally:

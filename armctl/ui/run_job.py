@@ -583,7 +583,8 @@ def _summary(result, view, wall_s: float, estimate, options: JobOptions, departu
                        "runs again" + (f" (`--resume {options.log_path}` continues after the last that ran)"
                                        if options.log_path else ""))
     if result.outcome == "interrupted":
-        click.echo(f"stopped: interrupted; abort sequence: {options.abort}", err=True)
+        click.echo("stopped: interrupted before the first frame" if result.frames_sent == 0 else
+                   f"stopped: interrupted; abort sequence: {options.abort}", err=True)
     else:
         click.echo(f"stopped: {result.outcome}", err=True)
     return result.exit_code
