@@ -5,6 +5,10 @@
    the abort sequence's pause toggle to an arm that was sent nothing of the job, and left it
    paused.  Nothing of the job is queued then: nothing is sent, the arm is left as it was, the
    job ends "interrupted" at its first line.
+2. A resume refused by the journal's reader (armctl/core/joblog.py: no job record, resumed already,
+   a format-1 log, the arm not where the log leaves it) named ``armctl run``'s ``--from-line`` and
+   ``--resume`` to a program that called ``Arm.run(resume=)`` (the server's side:
+   tests/test_serve_review8.py).
 
 In virtual time (``sim://?clock=virtual``) in-process; the installed command in a fresh process
 on ``armctl sim --pty`` (its own process, so what it was sent is counted there).
@@ -118,3 +122,58 @@ def test_ctrl_c_of_armctl_run_before_the_first_frame_sends_nothing(job, tmp_path
     assert "stopped: interrupted before the first frame" in done.stderr, done.stderr
     assert status.returncode == 0 and json.loads(status.stdout)["paused"] is False, status.stdout
     assert json.loads(stats.read_text())["frames"] == []  # nothing landed at the arm
+
+
+# -- 2. a refused resume in the API's words -------------------------------------------------------
+
+CLI_WORDS = ("--resume", "--from-line", "--log", "--port")
+
+
+def _journal(tmp_path: Path, job: Path, stop_after: int) -> Path:
+    """A ``log=`` journal of ``job`` stopped after its frame ``stop_after`` (virtual time)."""
+    log = tmp_path / "stopped.log"
+    with Arm.open(VIRTUAL) as arm, open(log, "w", encoding="utf-8") as file:
+        result = arm.run(job, log=file, on_progress=lambda p: p.frames_sent >= stop_after and arm.stop())
+    assert result.outcome == "interrupted" and result.frames_sent == stop_after, result
+    return log
+
+
+def _refusals(tmp_path: Path, job: Path) -> dict:
+    """Each refusal of the journal's reader, as ``Arm.run(resume=)`` meets it: (type, message)."""
+    from armctl.core.joblog import job_record, seal
+    from armctl.host.jobflow import mark_resumed
+
+    logs = {"no job record": "", "format 1": '{"t": 0.0, "dir": "job", "script": "job.txt"}\n'}
+    for name, text in logs.items():
+        (tmp_path / f"{name}.log").write_text(text)
+    once = tmp_path / "resumed already.log"
+    once.write_text(seal(job_record(str(job), job.read_bytes(), 1, 2.0), 0) + "\n")
+    mark_resumed(str(once), 1, None)  # resumed once, by a run that kept no journal
+    stopped = _journal(tmp_path, job, 2)
+    # the journal up to the second frame's progress record: nothing proven done; the arm, moved, is
+    # neither where the job started nor where line 1 or 2 leaves it
+    kept = stopped.read_text().splitlines(keepends=True)
+    last = min(i for i, line in enumerate(kept) if '"dir": "progress"' in line and '"frames_sent": 2' in line)
+    (tmp_path / "not proven.log").write_text("".join(kept[:last + 1]))
+    answers = {}
+    with Arm.open(VIRTUAL) as arm:
+        arm.move(x=200, y=50, z=200, f=3000)
+        moved = len(received(arm))
+        for name in ("no job record", "format 1", "resumed already", "not proven"):
+            with pytest.raises(Exception) as refused:
+                arm.run(job, resume=tmp_path / f"{name}.log")
+            answers[name] = (type(refused.value).__name__, str(refused.value))
+        assert len(received(arm)) == moved  # nothing sent by the resumes
+    return answers
+
+
+@pytest.mark.xfail(strict=True, reason="joblog's refusals name --from-line and --resume to the API")
+def test_the_journal_s_refusals_speak_the_api_words(job, tmp_path):
+    answers = _refusals(tmp_path, job)
+    assert {name: kind for name, (kind, _) in answers.items()} == {
+        "no job record": "ResumeRefused", "format 1": "ResumeRefused", "resumed already": "ResumeRefused",
+        "not proven": "NotProven"}
+    for name, (_, message) in answers.items():
+        assert not any(word in message for word in CLI_WORDS), (name, message)
+        assert "from_line" in message, (name, message)
+    assert "resume=" in answers["no job record"][1]
