@@ -167,7 +167,6 @@ def _refusals(tmp_path: Path, job: Path) -> dict:
     return answers
 
 
-@pytest.mark.xfail(strict=True, reason="joblog's refusals name --from-line and --resume to the API")
 def test_the_journal_s_refusals_speak_the_api_words(job, tmp_path):
     answers = _refusals(tmp_path, job)
     assert {name: kind for name, (kind, _) in answers.items()} == {

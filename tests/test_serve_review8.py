@@ -55,7 +55,6 @@ def _refusals(tmp_path) -> dict:
     return answers
 
 
-@pytest.mark.xfail(strict=True, reason="joblog's refusals name --from-line and --resume to the server's clients")
 def test_the_journal_s_refusals_speak_the_server_words(tmp_path):
     answers = _refusals(tmp_path)
     assert "resumed already" in answers["resumed already"] and "no job record" in answers["no job record"], answers
