@@ -9,6 +9,9 @@
    a format-1 log, the arm not where the log leaves it) named ``armctl run``'s ``--from-line`` and
    ``--resume`` to a program that called ``Arm.run(resume=)`` (the server's side:
    tests/test_serve_review8.py).
+3. An exception an observer's ``warning()`` or ``note()`` raised before the first frame came out of
+   ``Arm.run`` raw (``started()``'s ends the job: tests/test_review7_api.py): now the same —
+   ``JobFailed`` from it, outcome "failed", nothing sent, the arm left as it was.
 
 In virtual time (``sim://?clock=virtual``) in-process; the installed command in a fresh process
 on ``armctl sim --pty`` (its own process, so what it was sent is counted there).
@@ -26,7 +29,7 @@ from pathlib import Path
 
 import pytest
 
-from armctl import Arm, JobObserver
+from armctl import Arm, JobFailed, JobObserver
 
 pytestmark = pytest.mark.timeout(30)
 
@@ -176,3 +179,72 @@ def test_the_journal_s_refusals_speak_the_api_words(job, tmp_path):
         assert not any(word in message for word in CLI_WORDS), (name, message)
         assert "from_line" in message, (name, message)
     assert "resume=" in answers["no job record"][1]
+
+
+# -- 3. an observer's warning() or note() that raises before the first frame ---------------------
+
+class _Raises(JobObserver):
+    def __init__(self, where: str) -> None:
+        self.where, self.error, self.updates = where, ValueError(f"no room for a {where}"), 0
+
+    def warning(self, diagnostic) -> None:
+        if self.where == "warning":
+            raise self.error
+
+    def note(self, text: str) -> None:
+        if self.where == "note":
+            raise self.error
+
+    def update(self, view) -> None:
+        self.updates += 1
+
+
+def _failed_by(observer: _Raises, run) -> object:
+    with pytest.raises(JobFailed) as failed:
+        run()
+    assert failed.value.__cause__ is observer.error, failed.value
+    assert f"the observer's {observer.where}() raised ValueError: no room for a {observer.where}" in str(failed.value)
+    result = failed.value.result
+    assert result.outcome == "failed" and result.frames_sent == 0 and result.exit_code == 1, result
+    assert observer.updates == 0
+    return result
+
+
+@pytest.mark.xfail(strict=True, reason="a warning() that raises comes out of Arm.run raw")
+def test_a_warning_that_raises_fails_the_job_with_nothing_sent(tmp_path):
+    job = tmp_path / "warned.txt"
+    job.write_text("#<unused> = 5\n" + JOB)  # L401: assigned but never read (a warning)
+    observer = _Raises("warning")
+    with Arm.open(VIRTUAL) as arm:
+        result = _failed_by(observer, lambda: arm.run(job, observer=observer))
+        assert result.resume_line == 1, result
+        arm._call(lambda: arm._link.wait_until(lambda state: False, 2.0))  # 2 s of the arm's clock
+        assert received(arm) == [] and arm.status().paused is False
+        assert arm.run(job).finished
+
+
+@pytest.mark.xfail(strict=True, reason="a note() that raises comes out of Arm.run raw")
+def test_a_note_that_raises_fails_the_job_and_leaves_a_paused_arm_paused(job):
+    observer = _Raises("note")
+    with Arm.open(VIRTUAL) as arm:
+        assert arm.pause() and arm.status().paused  # the run finds the arm paused: it notes the toggle it sends
+        before = received(arm)
+        result = _failed_by(observer, lambda: arm.run(job, observer=observer))
+        assert result.resume_line == 1, result
+        assert received(arm) == before and arm.status().paused is True  # left as it was
+        assert arm.run(job).finished
+
+
+@pytest.mark.xfail(strict=True, reason="a note() that raises during a resume comes out of Arm.run raw")
+def test_a_note_that_raises_in_a_resume_fails_it_and_the_log_can_be_resumed(job, tmp_path):
+    log = tmp_path / "job.log"
+    with Arm.open(VIRTUAL) as arm:
+        with open(log, "w", encoding="utf-8") as file:
+            stopped = arm.run(job, log=file, on_progress=lambda p: p.frames_sent >= 1 and arm.stop())
+        assert stopped.outcome == "interrupted" and stopped.frames_sent == 1, stopped
+        before = received(arm)
+        observer = _Raises("note")
+        _failed_by(observer, lambda: arm.run(job, resume=log, observer=observer))
+        assert received(arm) == before
+        resumed = arm.run(job, resume=log)  # the log was not marked resumed: nothing of it ran
+        assert resumed.finished and resumed.frames_sent == 1, resumed
