@@ -210,7 +210,6 @@ def _failed_by(observer: _Raises, run) -> object:
     return result
 
 
-@pytest.mark.xfail(strict=True, reason="a warning() that raises comes out of Arm.run raw")
 def test_a_warning_that_raises_fails_the_job_with_nothing_sent(tmp_path):
     job = tmp_path / "warned.txt"
     job.write_text("#<unused> = 5\n" + JOB)  # L401: assigned but never read (a warning)
@@ -223,7 +222,6 @@ def test_a_warning_that_raises_fails_the_job_with_nothing_sent(tmp_path):
         assert arm.run(job).finished
 
 
-@pytest.mark.xfail(strict=True, reason="a note() that raises comes out of Arm.run raw")
 def test_a_note_that_raises_fails_the_job_and_leaves_a_paused_arm_paused(job):
     observer = _Raises("note")
     with Arm.open(VIRTUAL) as arm:
@@ -235,7 +233,6 @@ def test_a_note_that_raises_fails_the_job_and_leaves_a_paused_arm_paused(job):
         assert arm.run(job).finished
 
 
-@pytest.mark.xfail(strict=True, reason="a note() that raises during a resume comes out of Arm.run raw")
 def test_a_note_that_raises_in_a_resume_fails_it_and_the_log_can_be_resumed(job, tmp_path):
     log = tmp_path / "job.log"
     with Arm.open(VIRTUAL) as arm:
