@@ -269,7 +269,6 @@ with Arm.open("sim://?clock=virtual") as arm:
 """
 
 
-@pytest.mark.xfail(strict=True, reason="the API's result says total_frames 0")
 def test_a_job_stopped_while_the_arm_comes_to_rest_gives_its_total(job):
     done = subprocess.run([sys.executable, "-c", textwrap.dedent(STOPPED_WHILE_WAITING)], capture_output=True, text=True,
                           timeout=25, cwd=job.parent, env=ENV)
@@ -285,7 +284,6 @@ class _StopsAtWarning(JobObserver):
         self.arm.stop()  # while the job is being planned: nothing goes
 
 
-@pytest.mark.xfail(strict=True, reason="the API's result says total_frames 0")
 def test_a_job_stopped_while_it_is_planned_gives_its_total(tmp_path):
     job = tmp_path / "warned.txt"
     job.write_text("#<unused> = 5\n" + JOB)

@@ -263,7 +263,7 @@ def _run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Call
                      unpause=spec.resume is None, stopped=stopped,
                      rest_s=None if spec.resume is not None else rest_wait_s(arm.status_timeout_s, arm.lead_s))
     if state is None:  # stop() (Ctrl-C) while an arm still moving was waited for: no frame goes
-        return RunResult.nothing_sent("interrupted")
+        return RunResult.interrupted_before_start(checked if spec.resume is None else None)
     if spec.resume is not None:
         resumed = _resume(arm, checked, spec, journal, stopped, early)
         if isinstance(resumed, RunResult):
@@ -281,7 +281,7 @@ def _run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Call
         where = f" from line {job.from_line}" if job.from_line > 1 else ""
         return RunResult.nothing_sent("finished", message=f"nothing to send: the script has no frames{where}")
     if stopped():  # stop() (Ctrl-C) while the arm was read: no frame goes
-        return RunResult.nothing_sent("interrupted")
+        return RunResult.interrupted_before_start(checked)
     runner = start_job(link, arm.model, job, journal)
     if journal is not None:  # which script it records (resume= checks it); a failed write stops the job like any
         _journal_job(runner, job, state, arrival, link.url if arm.port is None else arm.port)
@@ -374,7 +374,7 @@ def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[],
         observer.note(f"armctl: --resume: {told}")
     started = resume_start(arm.link, spec.resume, arm.status_timeout_s, arm.lead_s, stopped=stopped, note=observer.note)
     if started is None:  # stop() (Ctrl-C) while the arm ran out its queue: no frame goes
-        return RunResult.nothing_sent("interrupted")
+        return RunResult.interrupted_before_start()
     state, from_line, again = started
     if from_line is None:
         return _nothing_to_resume(arm, state)
