@@ -61,7 +61,6 @@ def _watched(seconds: float) -> bytes:
     return output
 
 
-@pytest.mark.xfail(strict=True, reason="rich's Live redraws the whole status panel 12 times a second (~32 KB/s)")
 @pytest.mark.realtime
 @pytest.mark.timeout(60)
 def test_the_watch_panel_writes_the_lines_that_change():
