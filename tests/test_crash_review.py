@@ -91,8 +91,10 @@ def _sound(crash, log: bytes) -> str:
 
 
 def test_a_log_without_a_job_record_does_not_send_the_user_back_to_line_1():
-    with pytest.raises(ResumeRefused) as refused:
-        read_resume_lines(io.StringIO(""), "job.txt", b"G1 X200\n")
+    from armctl.host.resume_words import CLI
+
+    with pytest.raises(ResumeRefused) as refused:  # (as armctl run's --resume reads it: in its words)
+        read_resume_lines(io.StringIO(""), "job.txt", b"G1 X200\n", words=CLI)
     message = str(refused.value)
     assert "run the job from its start" not in message
     assert "--resume" in message and "--from-line" in message  # the ways that run may have been started

@@ -292,12 +292,15 @@ def test_a_port_lost_while_sending_the_abort_says_it_was_not_sent():
                 from armctl.errors import PortError
 
                 raise PortError("the port /dev/ttyUSB0 went away")
+            runner.request_stop()  # Ctrl-C once a frame of the job is written (before it, nothing is aborted)
 
         def wait(self, until_s) -> None:
             pass
 
     job = make_job()
-    runner = JobRunner(LostPort(), job.streamer, [], job.view)
+    runner = JobRunner(LostPort(), job.streamer, job.statements, job.view)
+    with pytest.raises(KeyboardInterrupt):
+        runner.run()
     runner.abort((PauseToggle(),))
     assert runner.view.outcome == "port lost"
     assert runner.view.messages == ["the abort sequence was NOT sent: the port /dev/ttyUSB0 went away"]

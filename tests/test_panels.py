@@ -73,9 +73,9 @@ EMPTY_STATUS_PANEL = """\
 │ SD program    —                                                                                  │
 │                                                                                                  │
 │ status kinds (age)                                                                               │
-│               joints     joints  worktable   pause and           SD file     SD file     SD run  │
-│  position        1-3        4-6     origin         PWM  wrist     length      status   position  │
-│     never      never      never      never       never  never      never       never      never  │
+│               joints     joints  worktable  pause and            SD file     SD file     SD run  │
+│  position        1-3        4-6     origin        PWM   wrist     length      status   position  │
+│     never      never      never      never      never   never      never       never      never  │
 │ loop:// @ 9600 baud · 0.0 status frames/s · 0 bytes read · 0 skipped · 0 suspect                 │
 ╰──────────────────────────────────────────────────────────────────────────────────────────────────╯"""
 

@@ -40,7 +40,8 @@ Rules of the façade:
   is paused, which would resume it — then the engine waits for the arm to come to rest and
   ends INTERRUPTED (or FAILED, with the reason among the messages).  The control mode shapes
   the sequence and the start of the next run (``abort_frames``, ``resume_frames``), so an abort
-  and its resume line run every line once.
+  and its resume line run every line once.  Before the first frame there is nothing to stop:
+  no abort sequence, the job ends at once (``Stop.begin``).
 - Paused means two agreeing pause reports (``agreed_pause``, armctl/core/evidence.py): one corrupted
   byte must never make armctl toggle the arm.  ``armctl run``'s start-up check uses the same rule.
 - The resume line is the first statement not known finished (an arc's G301 resumes at its G300).

@@ -10,6 +10,9 @@ is over and what its reports prove ran.  What it may conclude, from what evidenc
   PAUSE paused: a toggle would resume it.  The control mode shapes the sequence and the start
   of the next run (``abort_frames``, ``resume_frames``), so an abort and its resume line run
   every line once.
+- Nothing to stop: a stop before the job's first frame (and no pause of the user's on its way)
+  finds nothing of the job queued: no abort sequence goes, the job ends at once and the arm is
+  left as it was (a pause toggle would leave it paused, a RESET CONNECTOR clear another's queue).
 - Settling: the job ends INTERRUPTED (FAILED with a failure) once the arm is still
   (armctl/core/evidence.py's rest) and paused, or at rest with the job's time over — or at the
   deadline.  Paused on an arm that acts on control frames as they land, only the moves whose
@@ -27,6 +30,8 @@ from collections import deque
 from .evidence import REST_CHECK_S
 from .job_end import Outcome
 from .protocol import PauseToggle, ResetConnector
+
+NOTHING_SENT = "stopped before the first frame: nothing was sent, the arm is left as it was"
 
 ABORT_SEQUENCES = {
     "pause": (PauseToggle(),),  # H5: takes effect after the frames already queued
@@ -69,12 +74,24 @@ class Stop:
         self.written = end.written
         self.streamer = end.streamer
         self.frames: deque = deque()  # abort frames still to write
+        self.needless = False  # begun with nothing of the job written: nothing to stop, nothing to wait for
+
+    @property
+    def nothing_to_stop(self) -> bool:
+        """Nothing of the job was written and no pause toggle of the user's is due or on its way:
+        nothing the job sent is queued, so a stop sends no abort sequence and waits for nothing."""
+        return self.view.frames_sent == 0 and not self.control.busy
 
     def begin(self, sequence: tuple) -> None:
-        """Nothing more of the job is written; the abort ``sequence`` goes instead.  A pause
-        toggle is not sent to an arm that reports it is paused: it would resume it."""
+        """Nothing more of the job is written; the abort ``sequence`` goes instead — none when there
+        is nothing to stop.  A pause toggle is not sent to an arm that reports it is paused: it
+        would resume it."""
         view, control, written = self.view, self.control, self.written
         view.outcome = Outcome.INTERRUPTED
+        if self.nothing_to_stop:
+            self.needless = True
+            view.messages.append(NOTHING_SENT)
+            return
         if self.streamer.control_on_arrival and sequence == abort_frames("pause", True):
             view.messages.append("the arm acts on control frames as they land: the pause froze the move in progress "
                                  "and a RESET CONNECTOR cleared the frames queued behind it; the resume command resumes "
@@ -102,7 +119,7 @@ class Stop:
         to wait until; None when a RESET CONNECTOR is to go first (``paused_on_arrival``)."""
         outcome = Outcome.FAILED if failure else Outcome.INTERRUPTED
         end, arrival = self.end, self.arrival
-        if now >= end.deadline_s:
+        if now >= end.deadline_s or self.needless:
             return outcome
         still = self.readings.rest_s() >= REST_CHECK_S
         paused = self.readings.paused

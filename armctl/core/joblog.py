@@ -163,6 +163,24 @@ class NotProven(ArmctlError):
     """The log and the arm's report at rest do not prove which line to continue at (exit 1)."""
 
 
+class PlainWords:
+    """How a refusal names a resume and the line to start at when no interface passed its words:
+    each interface has its ``ResumeWords`` (armctl/host/resume_words.py), handed down to the reader
+    and kept with the ``ResumePoint``; the core names no interface's flags."""
+
+    bare = "a resume"
+    from_line = "a line you choose"
+
+    @staticmethod
+    def naming(log) -> str:
+        return str(log)
+
+
+def _by_hand(words) -> str:
+    """The way out of a resume the log cannot prove: the user decides the line."""
+    return f"check the arm and continue by hand with {words.from_line}"
+
+
 @dataclass(frozen=True)
 class FrameEntry:
     n: int
@@ -221,6 +239,8 @@ class ResumePoint:
     port: str | None = None  # the port the job ran on (None: a log written before armctl recorded it)
     sim_process: str | None = None  # a sim:// port's: the process its simulated arm lived (and died) in
     arm: str | None = None  # the identity of the arm on ``port`` when the job began (None: unknown, an older log)
+    # how the interface that read it names a resume and a line in its refusals (``PlainWords`` by default)
+    words: Any = field(default=None, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         if not isinstance(self.frames, Frames):
@@ -238,7 +258,7 @@ class ResumePoint:
     def frames_run(self, position_mm, joints_deg) -> int:
         """How many of the log's frames ran, given where the arm reports it rests now;
         ``NotProven`` when the report and the log prove no single count."""
-        written = len(self.frames)
+        written, words = len(self.frames), self.words or PlainWords
         if written == 0:
             return 0  # nothing was written: a frame is written only after its record
         if self.done == written:
@@ -246,7 +266,7 @@ class ResumePoint:
         if self.cleared is not None:
             raise NotProven(f"{self.cleared}, so the frames after the last one the arm's reports proved done "
                             f"({self.done} of {written} written) may or may not have run: armctl cannot prove "
-                            "which lines ran; nothing was sent (check the arm and continue by hand with --from-line)")
+                            f"which lines ran; nothing was sent ({_by_hand(words)})")
         first = max(self.confirmed, self.done)
         candidates = [e for e in range(first, written + 1) if _at(self._target(e), position_mm, joints_deg)]
         if len(candidates) == 1:
@@ -255,11 +275,10 @@ class ResumePoint:
         if not candidates:
             raise NotProven(f"the arm is not at rest where the log's last frame{'s' if written > first else ''} "
                             f"({lines}) leave{'' if written > first else 's'} it: armctl cannot prove which lines ran; "
-                            "nothing was sent (check the arm and continue by hand with --from-line)")
+                            f"nothing was sent ({_by_hand(words)})")
         ends = ", ".join(str(self.frames[e - 1].line) if e else "the start" for e in candidates)
         raise NotProven(f"the arm rests where {ends} all leave it and the log cannot prove which of them ran last: "
-                        "armctl cannot prove the line to continue at; nothing was sent (check the arm and continue "
-                        "by hand with --from-line)")
+                        f"armctl cannot prove the line to continue at; nothing was sent ({_by_hand(words)})")
 
     def moved_from(self, position_mm, joints_deg) -> int | None:
         """The line of the log's last frame when the arm's reports proved every frame written done
@@ -336,9 +355,10 @@ def _is_hex_frame(value) -> bool:
 class _Reader:
     """One pass over the sealed records of a log; ``point`` once all were read."""
 
-    def __init__(self, name: str, data: bytes, log: str | None = None) -> None:
+    def __init__(self, name: str, data: bytes, log: str | None = None, words=None) -> None:
         self.name, self.data = name, data
         self.log = log  # the log's name, for messages (file:line); None: "line N"
+        self.words = words or PlainWords  # how the interface reading it names a resume and a line
         self.header: dict | None = None
         self.frames = Frames()
         self.confirmed = self.done = 0
@@ -421,14 +441,14 @@ class _Reader:
         self.confirmed, self.done = max(self.confirmed, sent), max(self.done, done)
 
     def point(self, notes: tuple) -> ResumePoint:
-        header = self.header
+        header, words = self.header, self.words
         if header is None:
             # that run may itself have been a resume, or have started at a --from-line: "from the
             # start" would run again the lines an earlier run executed
             raise ResumeRefused("it has no job record: the run that wrote it stopped before its first frame, so no "
-                                "frame of the job was sent (or an armctl without --resume wrote it): start again the "
-                                "way that run started — from its start, at its --from-line, or with --resume and the "
-                                "log that run resumed")
+                                "frame of the job was sent (or an armctl that could not resume wrote it): start again "
+                                f"the way that run started — from its start, at the line it started at "
+                                f"({words.from_line}), or as a resume of the log that run resumed ({words.bare})")
         if header.get("sha256") != script_digest(self.data):  # the last job it records (runs may be appended)
             logged = header.get("script")
             same = "the same name" if logged == self.name else f"{logged!r}"
@@ -436,13 +456,13 @@ class _Reader:
                                 f"{self.name} is {script_digest(self.data)[:12]}…): the script was edited or is another one")
         if self.resumed is not None:  # the lines that resume ran would run a second time
             at, into = self.resumed["at"], self.resumed["into"]
-            instead = (f"resume {into} instead (the log that resume wrote)" if into is not None else
-                       "that resume kept no --log: check the arm and continue by hand with --from-line")
+            instead = (f"{words.naming(into)} instead (the log that resume wrote)" if into is not None else
+                       f"that resume kept no log: {_by_hand(words)}")
             raise ResumeRefused(f"it was resumed already, at line {at}: resuming it again would run the lines that "
                                 f"resume ran a second time; {instead}")
         return ResumePoint(header["from_line"], float(header["lead_s"]), self.frames, self.confirmed,
                            self.done, header["start"], self.cleared, notes, port=header.get("port"),
-                           sim_process=header.get("sim_process"), arm=header.get("arm"))
+                           sim_process=header.get("sim_process"), arm=header.get("arm"), words=self.words)
 
 
 def _clears(frame_hex: str, control_on_arrival: bool, who: str) -> str | None:
@@ -460,13 +480,15 @@ def _clears(frame_hex: str, control_on_arrival: bool, who: str) -> str | None:
     return None
 
 
-def read_resume_lines(lines: Iterable[str], name: str, data: bytes, log: str | None = None) -> ResumePoint:
+def read_resume_lines(lines: Iterable[str], name: str, data: bytes, log: str | None = None,
+                      words=None) -> ResumePoint:
     """The resume point a ``--log`` records for the script ``name`` whose snapshot is ``data``,
     the log given line by line (each with its line break, the last without one if the log does
     not end with one: ``io.StringIO(text)`` gives a text so): a day's log is read as it streams
     by (``jobflow.read_resume_point``).  ``log``: its name, which a damaged line's message gives
-    with the line's number."""
-    reader = _Reader(name, data, log)
+    with the line's number; ``words``: how its refusals name a resume and a line (the interface's
+    ``ResumeWords``; ``PlainWords`` by default)."""
+    reader = _Reader(name, data, log, words)
     expected = 0  # each run's records count from 0 (a log may hold several runs, appended)
     for number, line in enumerate(lines, 1):
         complete = line.endswith("\n")
@@ -490,8 +512,7 @@ def _damaged(reader: _Reader, line: str, number: int, last: bool) -> ResumePoint
     if reader.header is None:
         if _old_record(line):
             raise ResumeRefused("it was written by an armctl before the checksummed journal (format 1): nothing "
-                                "in it tells a crash's cut from a corrupted record; check the arm and continue by "
-                                "hand with --from-line")
+                                f"in it tells a crash's cut from a corrupted record; {_by_hand(reader.words)}")
         if last and (number > 1 or line.startswith(_RECORD_START) or _RECORD_START.startswith(line)):
             return reader.point(())  # the job record torn by the crash: no job record, no frame sent
         raise ResumeRefused(f"line {number} is not an intact journal record: not a `run --log` file")

@@ -284,7 +284,8 @@ class Arm:
         job, send the abort sequence (a pause toggle, not sent to an arm that reports it is
         paused) and wait for the arm; the job's ``run`` returns outcome "interrupted".  The next
         job resumes an arm left paused.  Nothing to stop: does nothing.  A job being read or
-        planned when it comes sends nothing (outcome "interrupted").  ``why``: a note the
+        planned when it comes, or not yet past its first frame, sends nothing — no abort sequence
+        either: the arm is left as it was (outcome "interrupted").  ``why``: a note the
         result's ``messages`` carry (``armctl run``: "stopped by SIGTERM").  Called again while
         the job stops: the wait for the arm to come to rest is cut short (a second Ctrl-C)."""
         self._tasks.stop(why)

@@ -239,7 +239,17 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     the runner, report.  ``from_arm``: a move's one line, checked again from the arm's report (the
     words it leaves out are the arm's).  ``stopped()``: a ``stop()`` came since the call — before
     the first frame it ends the job with nothing sent.  ``attach(control)`` makes the job
-    reachable by ``pause``/``stop`` (True: a stop came meanwhile); ``detach`` when it ended."""
+    reachable by ``pause``/``stop`` (True: a stop came meanwhile); ``detach`` when it ended.
+    An exception the observer raises before the first frame ends the job (``_BeforeFirstFrame``)."""
+    early = _BeforeFirstFrame(spec.observer, checked.from_line if spec.resume is None else None)
+    try:
+        return _run_job(arm, checked, spec, from_arm, stopped, attach, detach, early)
+    except _ObserverFailed as failed:
+        raise JobFailed(f"the job ended failed: {failed.told}", failed.result) from failed.error
+
+
+def _run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Callable[[], bool],
+             attach: Callable[[JobControl], bool], detach: Callable[[JobControl], None], early) -> RunResult:
     from ..core import checked as checking
     from .calibration import stale_notes
     from .jobflow import JournalFile, drive, journal_for, mark_resumed, read_arm, rest_wait_s, start_job
@@ -249,13 +259,13 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     arrival = arm.profile.connector.control_on_arrival
     journal = None if spec.log is None else JournalFile(spec.log, sync=not getattr(link.clock, "virtual", False))
     # a resume decides from the arm as it is, paused or not: it continues or refuses before it sends anything
-    state = read_arm(link, arm.status_timeout_s, journal, note=observer.note, control_on_arrival=arrival,
+    state = read_arm(link, arm.status_timeout_s, journal, note=early.note, control_on_arrival=arrival,
                      unpause=spec.resume is None, stopped=stopped,
                      rest_s=None if spec.resume is not None else rest_wait_s(arm.status_timeout_s, arm.lead_s))
     if state is None:  # stop() (Ctrl-C) while an arm still moving was waited for: no frame goes
-        return RunResult.nothing_sent("interrupted")
+        return RunResult.interrupted_before_start(checked if spec.resume is None else None)
     if spec.resume is not None:
-        resumed = _resume(arm, checked, spec, journal, stopped)
+        resumed = _resume(arm, checked, spec, journal, stopped, early)
         if isinstance(resumed, RunResult):
             return resumed
         state, checked = resumed
@@ -265,13 +275,13 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
             raise checked.refusal()
     for diagnostic in checked.diagnostics:  # for people, not the result (armctl run prints its own, before)
         if diagnostic.severity != "error":
-            observer.warning(diagnostic)
+            early.warning(diagnostic)
     job = checking.prepare(checked, arm.model, state, arm.lead_s, arm.baud)
     if job.estimate.frames == 0:
         where = f" from line {job.from_line}" if job.from_line > 1 else ""
         return RunResult.nothing_sent("finished", message=f"nothing to send: the script has no frames{where}")
     if stopped():  # stop() (Ctrl-C) while the arm was read: no frame goes
-        return RunResult.nothing_sent("interrupted")
+        return RunResult.interrupted_before_start(checked)
     runner = start_job(link, arm.model, job, journal)
     if journal is not None:  # which script it records (resume= checks it); a failed write stops the job like any
         _journal_job(runner, job, state, arrival, link.url if arm.port is None else arm.port)
@@ -285,8 +295,9 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     try:
         if attach(control):  # a stop() between the check above and here
             control.request_stop()
-        _started(observer, runner, job)
+        early.started(runner, job)
         outcome = drive(runner, abort_frames(spec.abort, arrival), on_stopping=lambda why: observer.note(
+            f"\narmctl: {why}: before the first frame, nothing was sent" if runner.job.stop.nothing_to_stop else
             f"\narmctl: {why}: no more frames are sent; sending the abort sequence ({spec.abort}) and waiting for "
             "the arm to come to rest …"))
     finally:
@@ -305,33 +316,65 @@ def run_job(arm: ArmLine, checked, spec: JobSpec, from_arm: bool, stopped: Calla
     return _result(runner, outcome, job, control, spec)
 
 
-def _started(observer: JobObserver, runner, job) -> None:
-    """``observer.started``, before the first frame.  An exception it raises ends the job there,
+class _ObserverFailed(Exception):
+    """An observer's call before the first frame raised ``error`` (``run_job`` raises ``JobFailed``
+    from it: not one itself, which the waits for the arm would take for their own)."""
+
+    def __init__(self, told: str, result: RunResult, error: Exception) -> None:
+        super().__init__(told)
+        self.told, self.result, self.error = told, result, error
+
+
+class _BeforeFirstFrame:
+    """The observer's calls before the job's first frame — ``note`` and ``warning`` while the arm
+    is read and the script checked, then ``started``.  An exception one raises ends the job there,
     nothing sent, the arm left as it is (no abort sequence: nothing of the job is queued) —
     ``JobFailed`` from it, outcome "failed", as an observer's exception stops a job; the job
-    resumes at its first line.  Ctrl-C or ``sys.exit()`` there leave ``run`` as raised."""
-    from dataclasses import replace
+    resumes at its first line (``from_line``; None: a resume's, which its log decides).  Ctrl-C or
+    ``sys.exit()`` there leave ``run`` as raised."""
 
-    try:
-        observer.started(runner.view, job)
-    except Exception as error:
-        told = f"the observer's started() raised {type(error).__name__}: {error}: nothing was sent"
-        runner.view.messages.append(told)
-        result = RunResult.of(runner.view, "failed", (), estimated_job_s=job.estimate.job_s)
-        raise JobFailed(f"the job ended failed: {told}", replace(result, resume_line=job.from_line)) from error
+    def __init__(self, observer: JobObserver, from_line: int | None) -> None:
+        self.observer, self.from_line = observer, from_line
+        self.runner = self.job = None  # once built: the result is the runner's view's
+
+    def note(self, text: str) -> None:
+        self._call("note", text)
+
+    def warning(self, diagnostic) -> None:
+        self._call("warning", diagnostic)
+
+    def started(self, runner, job) -> None:
+        self.runner, self.job, self.from_line = runner, job, job.from_line
+        self._call("started", runner.view, job)
+
+    def _call(self, name: str, *args) -> None:
+        try:
+            getattr(self.observer, name)(*args)
+        except Exception as error:
+            told = f"the observer's {name}() raised {type(error).__name__}: {error}: nothing was sent"
+            raise _ObserverFailed(told, self._result(told), error) from error
+
+    def _result(self, told: str) -> RunResult:
+        from dataclasses import replace
+
+        if self.runner is None:
+            result = RunResult.nothing_sent("failed", message=told)
+        else:
+            self.runner.view.messages.append(told)
+            result = RunResult.of(self.runner.view, "failed", (), estimated_job_s=self.job.estimate.job_s)
+        return replace(result, resume_line=self.from_line)
 
 
-def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[], bool]):
+def _resume(arm: ArmLine, checked, spec: JobSpec, journal, stopped: Callable[[], bool], observer: _BeforeFirstFrame):
     """Wait for the arm to come to rest, then (its state, ``checked`` from the line the log and
     its report prove); a ``RunResult`` with nothing sent when a stop came or nothing is left."""
     from .jobflow import resume_paused, resume_start
 
-    observer = spec.observer
     for told in spec.resume.notes:  # e.g. the torn last line a crash left, ignored
         observer.note(f"armctl: --resume: {told}")
     started = resume_start(arm.link, spec.resume, arm.status_timeout_s, arm.lead_s, stopped=stopped, note=observer.note)
     if started is None:  # stop() (Ctrl-C) while the arm ran out its queue: no frame goes
-        return RunResult.nothing_sent("interrupted")
+        return RunResult.interrupted_before_start()
     state, from_line, again = started
     if from_line is None:
         return _nothing_to_resume(arm, state)

@@ -398,7 +398,7 @@ def read_resume_point(log, script, from_line: int = 1, words=None):
         raise ResumeRefused(f"{named}: the log decides the line to continue at: drop {words.from_line}")
     if isinstance(log, ResumePoint):
         refuse_gone_simulator(log, words)
-        return log
+        return log if log.words is not None else replace(log, words=words)  # (read by another interface: its words)
     name, named = str(log), words.naming(log)
     try:  # bounded: an endless file is an error, not a hang; a device (/dev/zero) is no log (open_regular)
         with open_regular(name, named) as stream:
@@ -406,7 +406,7 @@ def read_resume_point(log, script, from_line: int = 1, words=None):
                 raise ResumeRefused(IN_USE)
             lines = (raw.decode("utf-8", errors="replace")
                      for raw in read_lines_bounded(stream, named, MAX_LOG_BYTES))
-            point = read_resume_lines(lines, script.name, script.data, name)
+            point = read_resume_lines(lines, script.name, script.data, name, words)
         if not os.access(name, os.W_OK):
             raise ResumeRefused("it cannot be written, and a resume marks the log it continues so that it is never "
                                 "resumed twice (mark_resumed): make it writable, or resume a writable copy")

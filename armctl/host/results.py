@@ -85,6 +85,14 @@ class RunResult:
         return cls(outcome, 0, total_frames, None, None, None if outcome != "finished" else 0.0, 0.0, None,
                    messages=() if message is None else (message,), exit_code=exit_code_of(outcome) if exit_code is None else exit_code)
 
+    @classmethod
+    def interrupted_before_start(cls, checked=None) -> RunResult:
+        """A job stopped before its first frame (Ctrl-C, ``stop()`` while the arm is read or the
+        job planned): nothing sent, of ``checked``'s frames (``CheckedScript.frames``: the
+        estimate's count); None — a resume whose first line the arm's report has yet to decide:
+        its total is not known (0)."""
+        return cls.nothing_sent("interrupted", total_frames=(None if checked is None else checked.frames()) or 0)
+
     def to_json(self) -> dict:
         """The result as a JSON object's fields (``armctl run --json``'s summary)."""
         return {f.name: list(value) if isinstance(value, tuple) else value

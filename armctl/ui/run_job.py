@@ -245,6 +245,7 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
     from dataclasses import replace
 
     from ..host.api import Arm
+    from ..host.results import RunResult
     from ..host.jobflow import read_resume_point
     from ..host.log_lock import resume_claim
     from ..host.link import choose_port
@@ -294,10 +295,8 @@ def _run_job(options: JobOptions, script, connect, events=None) -> int:
                 result = error.result
             except KeyboardInterrupt:  # Ctrl-C before the first frame (``_stop_signals``): nothing sent, of the job's
                 # frames (a resume's first line is the arm's report's to decide: its total is not known yet)
-                if events is not None and watch.view is None and resume is None:
-                    from .run_json import failure_result
-
-                    events.summary(failure_result("interrupted", EXIT_INTERRUPTED, total_frames=checked.frames() or 0))
+                if events is not None and watch.view is None:
+                    events.summary(RunResult.interrupted_before_start(checked if resume is None else None).to_json())
                 raise
             finally:
                 watch.display.__exit__(None, None, None)
@@ -583,7 +582,8 @@ def _summary(result, view, wall_s: float, estimate, options: JobOptions, departu
                        "runs again" + (f" (`--resume {options.log_path}` continues after the last that ran)"
                                        if options.log_path else ""))
     if result.outcome == "interrupted":
-        click.echo(f"stopped: interrupted; abort sequence: {options.abort}", err=True)
+        click.echo("stopped: interrupted before the first frame" if result.frames_sent == 0 else
+                   f"stopped: interrupted; abort sequence: {options.abort}", err=True)
     else:
         click.echo(f"stopped: {result.outcome}", err=True)
     return result.exit_code

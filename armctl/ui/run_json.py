@@ -83,16 +83,15 @@ class JsonEvents:
             self.emit("summary", **result)
 
 
-def failure_result(outcome: str, exit_code: int, *, message: str | None = None, diagnostics=(),
-                   total_frames: int = 0) -> dict:
+def failure_result(outcome: str, exit_code: int, *, message: str | None = None, diagnostics=()) -> dict:
     """The summary of a run that sent nothing (``RunResult.nothing_sent``): refused (the
     script's errors, which it adds as ``diagnostics``: lint's JSON records), failed before the
-    first frame (no arm, a bad --resume LOG), interrupted while starting (``total_frames``: the
-    job's, once it was checked), or nothing to send."""
+    first frame (no arm, a bad --resume LOG), interrupted before the job was checked, or nothing
+    to send (interrupted once it was: ``RunResult.interrupted_before_start``)."""
     from ..host.api import RunResult
     from ..lint.formatters import as_record
 
-    result = RunResult.nothing_sent(outcome, exit_code=exit_code, message=message, total_frames=total_frames).to_json()
+    result = RunResult.nothing_sent(outcome, exit_code=exit_code, message=message).to_json()
     if diagnostics:
         result["diagnostics"] = [as_record(diagnostic) for diagnostic in diagnostics]
     return result

@@ -46,8 +46,8 @@ def render_status(state: ArmState, health: LinkHealth, now: float) -> Panel:
     pose.add_row("SD program", _program_row(state))
 
     kinds = Table(title="status kinds (age)", title_justify="left", box=None, padding=(0, 1))
-    for kind in STATUS_ROTATION:
-        kinds.add_column(STATUS_KINDS[kind].NAME, justify="right")
+    for kind in STATUS_ROTATION:  # (as wide as an age under a second: the columns hold still as the ages change)
+        kinds.add_column(STATUS_KINDS[kind].NAME, justify="right", min_width=len("999 ms"))
     cells = []
     for kind in STATUS_ROTATION:
         age = state.age(kind, now)

@@ -129,8 +129,11 @@ def _watch_lines(link, reports, period_s, render, first=None) -> None:
 
 
 def _watch_live(link, reports, baud, timeout_s: float | None) -> None:
+    """The panel, drawn ``WATCH_REFRESH_S`` apart: only its lines that changed are written
+    (ui/live_lines.py: the kinds' ages and the link's counts, each refresh; a position as it moves)."""
     from rich.console import Console
-    from rich.live import Live
+
+    from .live_lines import LiveLines
 
     rate = _Rate()
     now = link.clock()
@@ -140,18 +143,18 @@ def _watch_live(link, reports, baud, timeout_s: float | None) -> None:
                      name="armctl-status-read").start()
     try:
         with _ctrl_c_between_frames() as interrupted:
-            with Live(render_status(_ages_only(state), health, now), console=Console(), refresh_per_second=12,
-                      transient=False) as live:
+            with LiveLines(Console()) as live:
+                live.draw(render_status(_ages_only(state), health, now))
                 while not interrupted.is_set():
                     if link.error is not None:
                         raise link.error
                     time.sleep(WATCH_REFRESH_S)
                     now = link.clock()
                     state, health = _health(link, baud, rate, now)
-                    live.update(render_status(reports.shown(state) if read.is_set() else _ages_only(state), health, now))
+                    live.draw(render_status(reports.shown(state) if read.is_set() else _ages_only(state), health, now))
     finally:
         done.set()
-    raise KeyboardInterrupt  # after Live has drawn its last frame and shown the cursor again
+    raise KeyboardInterrupt  # after the last panel was drawn and the cursor shown again
 
 
 def _read_until_read(link, reports, timeout_s: float, read: threading.Event, done: threading.Event) -> None:
@@ -176,8 +179,8 @@ def _ages_only(state: ArmState) -> ArmState:
 @contextmanager
 def _ctrl_c_between_frames():
     """Ctrl-C sets an event instead of raising wherever the main thread happens to be: a
-    KeyboardInterrupt inside rich's write of a frame cuts an escape sequence in half and leaves
-    its console buffering for ever, so the cursor is never shown again."""
+    KeyboardInterrupt inside the write of a panel cuts an escape sequence in half and leaves
+    the console buffering for ever, so the cursor is never shown again."""
     interrupted = threading.Event()
     previous = signal.getsignal(signal.SIGINT)
     if threading.current_thread() is not threading.main_thread() or previous is signal.SIG_IGN:
