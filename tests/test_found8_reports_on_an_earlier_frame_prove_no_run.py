@@ -23,8 +23,6 @@ check_refused_job = prop.hypothesis.inner_test
 
 
 @pytest.mark.timeout(60)
-@pytest.mark.xfail(strict=True, reason="reports on the line before the refused move, which runs back over its path, "
-                                       "count as the arm on the refused move: the job ends finished, exit 0")
 def test_reports_on_the_line_before_a_refused_move_do_not_prove_it_ran(tmp_path_factory):
     check_refused_job(tmp_path_factory, before=(220.0, 0.0, 150.0, 3000), far_mm=500, feed=1500,
                       following="joint-move", joints=(0.0, 0.0, 0.0), last=(200.0, 0.0, 100.0))
@@ -34,12 +32,16 @@ JOB = ("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X220 Y0 Z150 F3000\nG1 X500 Y
        "G6 J1=0 J2=0 J3=0 J4=0 J5=90 J6=0 F30\nG1 X200 Y0 Z100 A180 B0 C0 F3000\n")
 
 
-@pytest.mark.timeout(60)
-@pytest.mark.xfail(strict=True, reason="the same job through the installed command ends finished, exit 0")
-def test_the_same_job_through_the_installed_command_does_not_end_finished(tmp_path):
-    (tmp_path / "job.txt").write_text(JOB)
+def assert_refused_line_3_named(tmp_path, job: str) -> None:
+    """``job`` through the installed command in a fresh process: exit 1, not "finished", frame 3 named."""
+    (tmp_path / "job.txt").write_text(job)
     done = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", "sim://?clock=virtual"],
                           cwd=tmp_path, capture_output=True, text=True, timeout=50)
     summary = json.loads(done.stdout.splitlines()[-1])
     assert done.returncode == 1 and summary["outcome"] != "finished", (done.stderr, summary)
     assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
+
+
+@pytest.mark.timeout(60)
+def test_the_same_job_through_the_installed_command_does_not_end_finished(tmp_path):
+    assert_refused_line_3_named(tmp_path, JOB)

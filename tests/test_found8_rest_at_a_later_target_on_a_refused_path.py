@@ -12,20 +12,15 @@ The simulator's record: frame 3 refused.
 
 from __future__ import annotations
 
-import json
-import subprocess
-import sys
-
 import pytest
 
+from test_found8_reports_on_an_earlier_frame_prove_no_run import assert_refused_line_3_named
 from test_refused_unseen import test_a_refused_target_never_ends_finished_whatever_joint_move_or_pose_follows as prop
 
 check_refused_job = prop.hypothesis.inner_test
 
 
 @pytest.mark.timeout(60)
-@pytest.mark.xfail(strict=True, reason="the arm at rest at the last target, on the refused move's path past its start, "
-                                       "counts as two reports of the arm on that move: finished, exit 0")
 def test_the_arm_at_rest_at_a_later_target_on_a_refused_path_does_not_prove_it_ran(tmp_path_factory):
     check_refused_job(tmp_path_factory, before=(220.0, 0.0, 120.0, 1500), far_mm=500, feed=3000,
                       following="pose", joints=(0.0, 0.0, 0.0), last=(225.0, 0.0, 121.0))
@@ -36,11 +31,5 @@ JOB = ("G1 X250 Y0 Z150 A180 B0 C0 S1000 F3000\nG1 X220 Y0 Z120 F1500\nG1 X500 Y
 
 
 @pytest.mark.timeout(60)
-@pytest.mark.xfail(strict=True, reason="the same job through the installed command ends finished, exit 0")
 def test_the_same_job_through_the_installed_command_does_not_end_finished(tmp_path):
-    (tmp_path / "job.txt").write_text(JOB)
-    done = subprocess.run([sys.executable, "-m", "armctl", "run", "job.txt", "--json", "--port", "sim://?clock=virtual"],
-                          cwd=tmp_path, capture_output=True, text=True, timeout=50)
-    summary = json.loads(done.stdout.splitlines()[-1])
-    assert done.returncode == 1 and summary["outcome"] != "finished", (done.stderr, summary)
-    assert any("frame 3 (line 3)" in m for m in summary["messages"]), summary["messages"]
+    assert_refused_line_3_named(tmp_path, JOB)
