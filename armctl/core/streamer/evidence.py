@@ -39,6 +39,7 @@ from .geometry import (
     TimeMemo, distance_to_chord_mm, estimate_off_s, in_frame, joint_half_fraction, start_unknown, trace_deviation_mm,
 )
 from .ledger import Ledger
+from .run_proof import OthersOnPath, run_seen
 
 RUN_SCAN_MOVES = 3  # the long moves not proven yet that one position report is matched against (``note_runs``)
 # How many windows short of a path's end a report lies inside it (``count_inside``):
@@ -86,6 +87,7 @@ class Sightings:
         self.joints_unknown: deque[int] = deque()  # ... joint frames whose path is not the planned one (joint halves stop past them)
         self.long_moves: deque[SentFrame] = deque()  # the straight moves a refusal of would show (``written``): long, or foreseen
         self.blind_through = -1  # the last frame written whose X/Y/Z no report can judge
+        self.position_reports = 0  # the X/Y/Z reports read: which one came just before another (``note_runs``)
 
     def written(self, frame: SentFrame) -> None:
         """Note what a frame just written lets each stream judge."""
@@ -128,13 +130,23 @@ class Sightings:
         """One position report at ``xyz`` (``match``: where it lies on a frame's path) on the long
         moves still pending (``written``) and the frame after each (``count_inside``,
         ``off_the_refused_way``), whatever else it may lie on (a frame no stream can judge before
-        them, an SD program): it proves only a run.
+        them, an SD program): it proves only a run.  On a move's own path it counts only where it
+        may not be the arm on another pending frame (``run_proof.run_seen``): the line before a
+        refused move, running back over its start, and the target after it, on its path, each put
+        two reports "on" it (tests/test_found8_*.py).
         For a flat cost, only the oldest ``RUN_SCAN_MOVES`` not proven yet: the arm runs them in
         order (a move missed costs only the weaker claim, never a false one)."""
         moves, pending = self.long_moves, self.ledger.pending
         first = pending[0].index if pending else self.ledger.sent
         while moves and (moves[0].index + 1 < first or moves[0].moved_seen >= 2):
             moves.popleft()  # proven, or it and the frame after it consumed: judged (``Ledger.prove_ran``)
+        robot = self.reports_robot_xyz
+
+        def off_way(move: SentFrame, after: SentFrame) -> bool:
+            return off_the_refused_way(move, after, in_frame(xyz, after.segment.start.origin_mm) if robot else xyz,
+                                       self.start_error_mm(move))
+
+        others = OthersOnPath(pending, match, off_way)
         scanned = 0
         for sent in moves:
             k = sent.index - first
@@ -142,14 +154,12 @@ class Sightings:
                 continue  # proven already
             if k >= 0:
                 found = match(sent)
-                if found is not None and found[0] > 0.0:
-                    sent.moved_seen += 1  # past its start: the arm moved along it
+                if found is not None:
+                    sent.moved_seen += run_seen(sent, found[0], self.position_reports, others)
             if k + 1 < len(pending) and pending[k + 1].path_known:
                 after = pending[k + 1]
                 found = match(after)
-                if found is not None and count_inside(*found) and off_the_refused_way(
-                        sent, after, in_frame(xyz, after.segment.start.origin_mm) if self.reports_robot_xyz else xyz,
-                        self.start_error_mm(sent)):
+                if found is not None and count_inside(*found) and off_way(sent, after):
                     after.inside_seen += 1
             scanned += 1
             if scanned == RUN_SCAN_MOVES:
@@ -194,6 +204,7 @@ class Sightings:
     def position(self, xyz, now: float) -> Sighting | None:
         """A reported X/Y/Z at ``now``; None when it can say nothing."""
         robot, verified = self.reports_robot_xyz, self.kinematics_verified
+        self.position_reports += 1
 
         def match(sent: SentFrame):
             segment = sent.segment

@@ -80,6 +80,9 @@ class SentFrame:
     # off the way from its start (``Sightings.note_runs``, which counts them on every such move)
     needs_run_proof: bool = False
     moved_seen: int = 0
+    last_on_path: tuple | None = None  # the last report on its path: number, window start, waiting (``run_seen``)
+    near: list | None = None  # the pending frames whose path may meet its own (``run_proof.near_frames``)
+    near_through: int = -1  # ... of those written up to this one
     inside_seen: int = 0
 
 
