@@ -32,7 +32,7 @@ each may conclude, from what evidence:
 
 from __future__ import annotations
 
-from .job_readings import TARGET_DEG, TARGET_MM, landed_s, moves_arm, values_text
+from .job_readings import TARGET_DEG, TARGET_MM, changes_readings, landed_s, moves_arm, values_text
 from .evidence import REST_CHECK_S
 from .motion import distance_to_path
 from .protocol import CONTROL_COMMANDS, ArcEnd, GoToPose, RunProgram
@@ -112,24 +112,18 @@ class Arrival:
             return True
         return max(abs(a - b) for a, b in zip(pose.xyz, end.xyz)) <= 2 * TARGET_MM
 
-    def may_rest_at(self, pose) -> bool:
-        """Whether the arm's readings may be the model's ``pose``: they cannot only where the pose
-        is known in a kind they hold (X/Y/Z, or joints, not derived through the profile's
-        unverified kinematics), in the worktable the readings are in (the last frame's), and the
-        readings are more than twice its tolerance from it.  (Read elsewhere, the arm rests past
-        the frames that leave it at ``pose``: ``JobEnd.resting_before_last_move``.  Asked only of
-        the last target, the rest at POSE 2 — compared in joints, which a PWM-only move's pose has
-        only through the profile's kinematics — once held an 8-frame FIFO's job for ever.)"""
-        readings, verified = self.readings, self.streamer.kinematics_verified
-        recent = self.written.recent
-        if recent and pose.origin_mm != recent[-1].segment.end.origin_mm:
-            return True
-        position, joints = readings.position, readings.joints
-        if (verified or not pose.xyz_derived) and position is not None and max(
-                abs(a - b) for a, b in zip(position, pose.xyz)) > 2 * TARGET_MM:
+    def moved_past(self, run: list) -> bool:
+        """The reports prove the arm is past ``run``, frames that move nothing and change no
+        reading (``changes_readings``: no G54, no path unknown): it moved after every frame before
+        them was known finished (``Readings.worked_after``: a change two reports agree on, from a
+        value read after that).  A change proves motion whatever frame the readings are in; a
+        difference from a pose would not (an unprobed arm's X/Y/Z may be in another frame than
+        the profile says).  An 8-frame FIFO's job once waited for ever at POSE 2, the arm taken to
+        be maybe resting in the PWM-only move before it."""
+        if any(changes_readings(sent) for sent in run):
             return False
-        return not ((verified or not pose.joints_derived) and len(joints) == 6 and max(
-            abs(a - b) for a, b in zip(joints, pose.joints)) > 2 * TARGET_DEG)
+        since_s = self.written.finished_s(run[0].index)
+        return since_s is not None and self.readings.worked_after(since_s)
 
     def done_at(self, now: float) -> float:
         """When the arm finished: the end of its last motion seen, plus the model's time for

@@ -222,17 +222,17 @@ class JobEnd:
         ``slowest_factor`` times slower, fed each frame at the line's pace, leaves a shorter run
         (a G54, an M code) before the rest check could see it still — and where the arm rests
         there may read as the last target in one of them (``Arrival.may_read_as_end_of``; a G54
-        among them changes what the worktable X/Y/Z read) and the readings may be its pose
-        (``Arrival.may_rest_at``): at rest far from the last target, the arm is plainly not done."""
+        among them changes what the worktable X/Y/Z read) and the arm did not move since the frames
+        before them finished (``Arrival.moved_past``): at rest far from it, the arm is plainly not done."""
         if (last := self.written.last_move) is None:
             return []
         streamer, resting, run, hold_s = self.streamer, [], [], ARRIVAL_SLACK_S
         target = self.written.recent[-1].segment  # what ``at_last_target`` compares the readings with
-        may_read_as_end_of, may_rest_at = self.arrival.may_read_as_end_of, self.arrival.may_rest_at
+        may_read_as_end_of = self.arrival.may_read_as_end_of
         for sent in streamer.pending:
             if sent.index >= last.index or moves_arm(sent.segment) or isinstance(sent.command, ArcStart):
-                if hold_s >= REST_CHECK_S and any(may_read_as_end_of(r.segment.end, target) and may_rest_at(r.segment.end)
-                                                  for r in run):
+                if hold_s >= REST_CHECK_S and any(may_read_as_end_of(r.segment.end, target) for r in run) and not \
+                        self.arrival.moved_past(run):
                     resting += run  # (a G300 runs with its G301: no rest in it)
                 run, hold_s = [], ARRIVAL_SLACK_S
                 if sent.index >= last.index:

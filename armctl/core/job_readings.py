@@ -233,6 +233,11 @@ class Written:
                 return read_s
         return None
 
+    def finished_s(self, frames: int) -> float | None:
+        """The earliest time kept by which the lower bound had ``frames`` frames finished (None:
+        not kept, or not yet): the arm was past them then."""
+        return next((when for when, count in self.finished if count >= frames), None)
+
     def done_by(self, read_s: float) -> int:
         """The frames known finished by a report read before one read at ``read_s`` (status frames come
         in order: that one was built after it), whatever their time bound."""
