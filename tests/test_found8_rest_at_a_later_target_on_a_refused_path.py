@@ -14,10 +14,7 @@ from __future__ import annotations
 
 import pytest
 
-from test_found8_reports_on_an_earlier_frame_prove_no_run import assert_refused_line_3_named
-from test_refused_unseen import test_a_refused_target_never_ends_finished_whatever_joint_move_or_pose_follows as prop
-
-check_refused_job = prop.hypothesis.inner_test
+from test_found8_reports_on_an_earlier_frame_prove_no_run import assert_refused_line_3_named, check_refused_job
 
 
 @pytest.mark.timeout(60)

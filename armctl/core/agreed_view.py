@@ -39,31 +39,27 @@ class AgreedReports:
     """The last ``AGREEING_REPORTS`` frames of each kind, as read (a held-back one included)."""
 
     def __init__(self) -> None:
-        self.latest: dict = {kind: deque(maxlen=AGREEING_REPORTS) for kind in STATUS_ROTATION}
+        # kind -> its last three reports (frame, read at): the last two judge agreement, all three a move
+        self.reports: dict = {kind: deque(maxlen=3) for kind in STATUS_ROTATION}
         self.agreed: dict = {}  # kind -> the last frame AGREEING_REPORTS consecutive reports agreed on
-        self.moving: dict = {kind: deque(maxlen=3) for kind in MOVING_KINDS}  # (frame, read at): the last three
 
     def read(self, frame, now: float = 0.0) -> None:
         """One status frame read (``Link.on_status``'s signature: from its reader thread)."""
-        kind = frame.KIND
-        latest = self.latest[kind]
-        latest.append(frame)
-        if agreed(latest) is not None:
-            self.agreed[kind] = frame
-        if kind in MOVING_KINDS:
-            self.moving[kind].append((frame, now))
+        reports = self.reports[frame.KIND]
+        reports.append((frame, now))
+        if agreed(report for report, _ in reports) is not None:
+            self.agreed[frame.KIND] = frame
 
     def value(self, kind: int, state: ArmState):
         """The frame of ``kind`` shown: the last one agreed on, while one of the last reports
         reads it; else, of a position or joints kind, the report before the latest when the
         latest shows it was no blip (module docstring; ``state`` judges the reach)."""
-        frame = self.agreed.get(kind)
-        if frame is not None and frame in tuple(self.latest[kind]):
+        frame, reports = self.agreed.get(kind), self.reports[kind]
+        if frame is not None and any(report == frame for report, _ in list(reports)[-AGREEING_REPORTS:]):
             return frame
-        moving = self.moving.get(kind)
-        if moving is None or len(moving) < 3:
+        if kind not in MOVING_KINDS or len(reports) < 3:
             return None
-        (first, first_s), (middle, middle_s), (last, last_s) = moving
+        (first, first_s), (middle, middle_s), (last, last_s) = reports
         jump = state.jump_between
         if jump(first, middle, middle_s - first_s) or jump(middle, last, last_s - middle_s) or _back(first, last):
             return None

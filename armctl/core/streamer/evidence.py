@@ -140,6 +140,8 @@ class Sightings:
         first = pending[0].index if pending else self.ledger.sent
         while moves and (moves[0].index + 1 < first or moves[0].moved_seen >= 2):
             moves.popleft()  # proven, or it and the frame after it consumed: judged (``Ledger.prove_ran``)
+        if not moves:
+            return  # (nothing to scan: no closure or matcher built, once a report)
         robot = self.reports_robot_xyz
 
         def off_way(move: SentFrame, after: SentFrame) -> bool:
